@@ -1,0 +1,5 @@
+import sys
+
+from bayesupdate.cli import main
+
+sys.exit(main())

@@ -1,0 +1,80 @@
+"""The ``bayesupdate`` command.
+
+Each sub-command lives in its own module under ``bayesupdate/commands/`` and defines
+``NAME`` (str), ``HELP`` (one line), ``add_arguments(parser)`` and ``run(args) -> int``.
+Modules there are discovered automatically, so a command is added by adding a file.
+
+Exit codes: 0 success, 1 the run failed (e.g. did not converge, internal error), 2 user error
+(bad input, bad value, unknown name) - always one line on stderr, never a traceback.
+Set ``BAYESUPDATE_DEBUG=1`` to see the traceback of an internal error.
+"""
+
+import argparse
+import importlib
+import os
+import pkgutil
+import sys
+
+from bayesupdate import __version__, commands
+from bayesupdate.errors import BayesUpdateError
+
+
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse prints usage plus an error on two lines and exits 2; we want one line."""
+
+    def error(self, message):
+        raise BayesUpdateError(f"{self.prog}: {message} (see --help)")
+
+
+def _command_modules():
+    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda i: i.name):
+        if not info.name.startswith("_"):
+            yield importlib.import_module(f"bayesupdate.commands.{info.name}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _OneLineParser(
+        prog="bayesupdate",
+        description="Probabilistic FE model updating: modal solve, modal identification, "
+        "calibration with uncertainty, discovery of missing physics.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="Exit codes: 0 success, 1 failed run, 2 user error.",
+    )
+    parser.add_argument("--version", action="version", version=f"bayesupdate {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_OneLineParser)
+    for module in _command_modules():
+        p = sub.add_parser(
+            module.NAME,
+            help=module.HELP,
+            description=getattr(module, "DESCRIPTION", module.HELP),
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if getattr(args, "_run", None) is None:
+            parser.print_help()
+            return 2
+        return int(args._run(args) or 0)
+    except BayesUpdateError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal fault: one line unless debugging
+        if os.environ.get("BAYESUPDATE_DEBUG"):
+            raise
+        print(f"internal error: {type(exc).__name__}: {exc} "
+              "(set BAYESUPDATE_DEBUG=1 for a traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,100 @@
+"""``ModalData``: the hand-off between a modal test (or any source of modes) and a model.
+
+Frequencies in Hz, damping as ratio of critical, shapes as a (n_dof, n_modes) array at named sensor
+DOFs (labels such as ``"7V"`` / ``"7H"``; see DESIGN.md vocabulary).  Shapes may be complex (as
+identified) or real (as computed by FE).  All optional fields may be ``None``.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+
+
+@dataclass(frozen=True)
+class ModalData:
+    """Modal parameters of one structure.
+
+    Attributes
+    ----------
+    frequencies_hz : (m,) float, natural (undamped) frequencies [Hz], ascending.
+    damping_ratio : (m,) float or None, viscous damping ratio [-].
+    shapes : (n_dof, m) complex or float or None, mode shapes at ``dof_labels``.
+    dof_labels : tuple of n_dof str, e.g. ``("1V", "1H", ...)``.
+    frequency_sd_hz : (m,) float or None, standard deviation of each frequency [Hz].
+    weights : (m,) float or None, importance weights w_i of seed eq. 19.
+    mpc : (m,) float or None, modal phase collinearity of each identified shape [-].
+    source : str, where the data came from (file name, ``paper:ema``, ...).
+    """
+
+    frequencies_hz: np.ndarray
+    damping_ratio: np.ndarray | None = None
+    shapes: np.ndarray | None = None
+    dof_labels: tuple[str, ...] = ()
+    frequency_sd_hz: np.ndarray | None = None
+    weights: np.ndarray | None = None
+    mpc: np.ndarray | None = None
+    source: str = ""
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        f = np.asarray(self.frequencies_hz, dtype=float).reshape(-1)
+        where = f"modal data {self.source!r}" if self.source else "modal data"
+        if f.size == 0:
+            raise BayesUpdateError(f"{where}: no frequencies; give at least one mode")
+        if not np.all(np.isfinite(f)) or np.any(f <= 0):
+            raise BayesUpdateError(f"{where}: frequencies must be finite and > 0 Hz")
+        object.__setattr__(self, "frequencies_hz", f)
+        m = f.size
+        for name in ("damping_ratio", "frequency_sd_hz", "weights", "mpc"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=float).reshape(-1)
+            if arr.size != m:
+                raise BayesUpdateError(
+                    f"{where}: {name} has {arr.size} values but there are {m} frequencies"
+                )
+            if not np.all(np.isfinite(arr)):
+                raise BayesUpdateError(f"{where}: {name} contains NaN or inf")
+            if name in ("frequency_sd_hz", "weights") and np.any(arr < 0):
+                raise BayesUpdateError(f"{where}: {name} must be >= 0")
+            object.__setattr__(self, name, arr)
+        labels = tuple(str(label) for label in self.dof_labels)
+        object.__setattr__(self, "dof_labels", labels)
+        if len(set(labels)) != len(labels):
+            dup = sorted({lab for lab in labels if labels.count(lab) > 1})
+            raise BayesUpdateError(f"{where}: duplicated DOF labels {dup}")
+        if self.shapes is not None:
+            shapes = np.asarray(self.shapes)
+            if shapes.ndim != 2 or shapes.shape != (len(labels), m):
+                raise BayesUpdateError(
+                    f"{where}: shapes must be (n_dof={len(labels)}, n_modes={m}), "
+                    f"got {shapes.shape}"
+                )
+            if not np.all(np.isfinite(shapes)):
+                raise BayesUpdateError(f"{where}: shapes contain NaN or inf")
+            object.__setattr__(self, "shapes", shapes)
+
+    @property
+    def n_modes(self) -> int:
+        return int(self.frequencies_hz.size)
+
+    def subset(self, modes) -> "ModalData":
+        """Return the modes with indices ``modes`` (any numpy index)."""
+        idx = np.arange(self.n_modes)[modes]
+
+        def pick(a, axis=0):
+            return None if a is None else np.take(a, idx, axis=axis)
+
+        return ModalData(
+            frequencies_hz=self.frequencies_hz[idx],
+            damping_ratio=pick(self.damping_ratio),
+            shapes=pick(self.shapes, axis=1),
+            dof_labels=self.dof_labels,
+            frequency_sd_hz=pick(self.frequency_sd_hz),
+            weights=pick(self.weights),
+            mpc=pick(self.mpc),
+            source=self.source,
+        )

@@ -1,0 +1,243 @@
+"""Assembly of the global stiffness K and mass M, vectorised over elements.
+
+``Assembler`` precomputes everything that depends on geometry and connectivity only (element frames,
+DOF maps, the sparse pattern, a bandwidth-reducing ordering).  ``assemble(props)`` then builds K and
+M for any element property values in one pass with no per-element Python loop: element matrices are
+computed as (n_e, 12, 12) stacks and scattered into the fixed CSR pattern by ``np.bincount``.
+
+Density, Young's modulus, point masses and spring stiffnesses enter K and M linearly (``PartTerms``
+gives the exact affine terms); wall thickness does not (area and second moments are polynomials in t
+and the Timoshenko shear parameter is rational in them), so those parts are re-assembled.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
+from bayesupdate.fe.sections import section_properties
+from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
+
+
+def _skew(v):
+    """(..., 3) -> (..., 3, 3) with skew(v) @ w = v x w."""
+    s = np.zeros(v.shape[:-1] + (3, 3))
+    s[..., 0, 1], s[..., 0, 2] = -v[..., 2], v[..., 1]
+    s[..., 1, 0], s[..., 1, 2] = v[..., 2], -v[..., 0]
+    s[..., 2, 0], s[..., 2, 1] = -v[..., 1], v[..., 0]
+    return s
+
+
+@dataclass(frozen=True)
+class ElementProperties:
+    """Per-element property values used by one assembly (all SI).
+
+    beam_thickness, beam_rho, beam_E, beam_bend_factor : (E,) - the last multiplies the B31.3 factor
+    (1 = none); mass_scale : (P,) factors on point masses; spring_scale : (S,) factors on springs.
+    """
+
+    beam_thickness: np.ndarray
+    beam_rho: np.ndarray
+    beam_E: np.ndarray
+    beam_bend_factor: np.ndarray
+    mass_scale: np.ndarray
+    spring_scale: np.ndarray
+
+
+def rigid_body_basis(nodes: np.ndarray, centre=None) -> np.ndarray:
+    """(6N, 6) rigid-body motions of all nodes: 3 translations and 3 rotations about ``centre``."""
+    n = nodes.shape[0]
+    c = nodes.mean(axis=0) if centre is None else np.asarray(centre, dtype=float)
+    R = np.zeros((n, 6, 6))
+    R[:, :3, :3] = np.eye(3)
+    R[:, 3:, 3:] = np.eye(3)
+    R[:, :3, 3:] = -_skew(nodes - c)
+    return R.reshape(6 * n, 6)
+
+
+class Assembler:
+    """Geometry-dependent precomputation for fast repeated assembly of one ``Structure``."""
+
+    def __init__(self, structure: Structure):
+        self.structure = s = structure
+        self.n_dof = s.n_dof
+        x1 = s.nodes[s.beam_nodes[:, 0]]
+        x2 = s.nodes[s.beam_nodes[:, 1]]
+        self.frames, self.lengths = element_frames(x1, x2, s.beam_up)
+        self.beam_dofs = (6 * s.beam_nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
+        self.mass_dofs = 6 * s.mass_node[:, None] + np.arange(6)
+        # rigid link of point masses: node DOFs -> DOFs at the mass centre
+        T = np.zeros((len(s.mass_node), 6, 6))
+        T[:, :3, :3] = np.eye(3)
+        T[:, 3:, 3:] = np.eye(3)
+        T[:, :3, 3:] = -_skew(s.mass_offset)
+        self._mass_T = T
+        grounded = s.spring_nodes[:, 1] < 0
+        b_nodes = np.where(grounded, s.spring_nodes[:, 0], s.spring_nodes[:, 1])
+        self.spring_dofs = np.concatenate(
+            [6 * s.spring_nodes[:, :1] + np.arange(6), 6 * b_nodes[:, None] + np.arange(6)], axis=1
+        )
+        self.spring_grounded = grounded
+        self._build_pattern()
+
+    # -- sparse pattern ------------------------------------------------------------------------
+    def _build_pattern(self):
+        n = self.n_dof
+        blocks = [self.beam_dofs, self.mass_dofs, self.spring_dofs]
+        rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks])
+        cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in blocks])
+        # every node gets its diagonal so the pattern is never structurally singular
+        rows = np.concatenate([rows, np.arange(n)])
+        cols = np.concatenate([cols, np.arange(n)])
+        key = rows.astype(np.int64) * n + cols
+        uniq, inverse = np.unique(key, return_inverse=True)
+        self.nnz = uniq.size
+        self.pattern_rows = (uniq // n).astype(np.int32)
+        self.pattern_cols = (uniq % n).astype(np.int32)
+        counts = [d.shape[0] * d.shape[1] ** 2 for d in blocks]
+        splits = np.cumsum(counts)
+        self._pos_beam = inverse[: splits[0]]
+        self._pos_mass = inverse[splits[0] : splits[1]]
+        self._pos_spring = inverse[splits[1] : splits[2]]
+        indptr = np.zeros(n + 1, dtype=np.int32)
+        np.add.at(indptr, self.pattern_rows + 1, 1)
+        self.indptr = np.cumsum(indptr).astype(np.int32)
+
+    def to_csr(self, data: np.ndarray) -> sp.csr_matrix:
+        """CSR matrix on the fixed pattern from its (nnz,) data."""
+        return sp.csr_matrix((data, self.pattern_cols, self.indptr), shape=(self.n_dof,) * 2)
+
+    # -- element matrices ----------------------------------------------------------------------
+    def default_properties(self) -> ElementProperties:
+        s = self.structure
+        return ElementProperties(
+            beam_thickness=s.beam_thickness.copy(),
+            beam_rho=s.beam_rho.copy(),
+            beam_E=s.beam_E.copy(),
+            beam_bend_factor=np.ones(len(s.beam_part)),
+            mass_scale=np.ones(len(s.mass_node)),
+            spring_scale=np.ones(len(s.spring_part)),
+        )
+
+    def beam_matrices(self, props: ElementProperties, elements=None):
+        """Global-axis beam matrices (n_e, 12, 12) for ``elements`` (index array, default all)."""
+        s = self.structure
+        e = slice(None) if elements is None else elements
+        t = props.beam_thickness[e]
+        sec = section_properties(
+            s.beam_shape[e], s.beam_width[e], s.beam_height[e], t, s.beam_nu[e]
+        )
+        E = props.beam_E[e]
+        G = E / (2.0 * (1.0 + s.beam_nu[e]))
+        elbow = np.where(
+            s.beam_elbow[e],
+            _bend_flexibility_factor(t, s.beam_bend_radius[e], s.beam_width[e]),
+            1.0,
+        )
+        Kl, Ml = local_beam_matrices(
+            self.lengths[e],
+            E,
+            G,
+            props.beam_rho[e],
+            sec["A"],
+            sec["Iy"],
+            sec["Iz"],
+            sec["J"],
+            sec["Asy"],
+            sec["Asz"],
+            shear=s.shear,
+            bend_factor=elbow * props.beam_bend_factor[e],
+            rotary_inertia=s.rotary_inertia,
+        )
+        R = self.frames[e]
+        return to_global(Kl, R), to_global(Ml, R)
+
+    def mass_matrices(self, props: ElementProperties) -> np.ndarray:
+        """(P, 6, 6) point-mass matrices at their nodes (rigid offset included)."""
+        s = self.structure
+        D = np.zeros((len(s.mass_node), 6, 6))
+        D[:, :3, :3] = (s.mass_value * props.mass_scale)[:, None, None] * np.eye(3)
+        D[:, 3:, 3:] = s.mass_inertia * props.mass_scale[:, None, None]
+        T = self._mass_T
+        return np.einsum("pji,pjk,pkl->pil", T, D, T)
+
+    def spring_matrices(self, props: ElementProperties) -> np.ndarray:
+        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs]; grounded springs have zero
+        blocks on their (dummy) second node."""
+        s = self.structure
+        Rb = np.zeros((len(s.spring_part), 6, 6))
+        Rb[:, :3, :3] = s.spring_frame
+        Rb[:, 3:, 3:] = s.spring_frame
+        k = s.spring_k * props.spring_scale[:, None]
+        kg = np.einsum("sji,sj,sjl->sil", Rb, k, Rb)
+        out = np.zeros((len(s.spring_part), 12, 12))
+        out[:, :6, :6] = kg
+        free = ~self.spring_grounded
+        out[free, 6:, 6:] = kg[free]
+        out[free, :6, 6:] = -kg[free]
+        out[free, 6:, :6] = -kg[free]
+        return out
+
+    def assemble(self, props: ElementProperties | None = None):
+        """Global K and M as CSR matrices, plus the element matrices used (for energies).
+
+        Returns (K, M, parts) where parts = dict(beam_K, beam_M, mass_M, spring_K).
+        """
+        props = self.default_properties() if props is None else props
+        check_properties(self.structure, props)
+        bK, bM = self.beam_matrices(props)
+        mM = self.mass_matrices(props)
+        sK = self.spring_matrices(props)
+        K = np.bincount(self._pos_beam, bK.ravel(), self.nnz)
+        K += np.bincount(self._pos_spring, sK.ravel(), self.nnz)
+        M = np.bincount(self._pos_beam, bM.ravel(), self.nnz)
+        M += np.bincount(self._pos_mass, mM.ravel(), self.nnz)
+        return self.to_csr(K), self.to_csr(M), dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK)
+
+    def total_mass(self, props: ElementProperties | None = None):
+        """Total mass [kg] and centre of gravity (3,) [m] from the beams and point masses."""
+        props = self.default_properties() if props is None else props
+        s = self.structure
+        sec = section_properties(
+            s.beam_shape, s.beam_width, s.beam_height, props.beam_thickness, s.beam_nu
+        )
+        m_beam = props.beam_rho * sec["A"] * self.lengths
+        mid = 0.5 * (s.nodes[s.beam_nodes[:, 0]] + s.nodes[s.beam_nodes[:, 1]])
+        m_point = s.mass_value * props.mass_scale
+        pos_point = s.nodes[s.mass_node] + s.mass_offset
+        total = m_beam.sum() + m_point.sum()
+        cog = (m_beam @ mid + m_point @ pos_point) / total
+        return float(total), cog
+
+
+def check_properties(structure: Structure, props: ElementProperties) -> None:
+    """Raise BayesUpdateError naming the part if a property is non-physical."""
+    checks = (
+        ("thickness", props.beam_thickness, structure.beam_part, True),
+        ("density", props.beam_rho, structure.beam_part, True),
+        ("Young's modulus", props.beam_E, structure.beam_part, True),
+        ("bend factor", props.beam_bend_factor, structure.beam_part, True),
+        ("point-mass factor", props.mass_scale, structure.mass_part, False),
+        ("spring factor", props.spring_scale, structure.spring_part, False),
+    )
+    for name, values, parts, strictly in checks:
+        bad = ~np.isfinite(values) | ((values <= 0) if strictly else (values < 0))
+        if np.any(bad):
+            part = structure.parts[parts[np.flatnonzero(bad)[0]]]
+            limit = "> 0" if strictly else ">= 0"
+            raise BayesUpdateError(
+                f"part {part!r}: {name} must be finite and {limit}, got "
+                f"{values[np.flatnonzero(bad)[0]]}"
+            )
+    tube = structure.beam_shape != 2
+    too_thick = tube & (
+        2 * props.beam_thickness >= np.minimum(structure.beam_width, structure.beam_height)
+    )
+    if np.any(too_thick):
+        i = np.flatnonzero(too_thick)[0]
+        raise BayesUpdateError(
+            f"part {structure.parts[structure.beam_part[i]]!r}: wall thickness "
+            f"{props.beam_thickness[i]} m is not less than half the section size"
+        )

@@ -1,0 +1,474 @@
+"""Building a 3D frame structure in Python: nodes, beams, pipe runs with bends, point masses,
+springs and sensors, every element in a named part.
+
+``StructureBuilder`` is the user-facing, mutable builder; ``build()`` returns a frozen
+``Structure`` holding plain arrays, which the assembly and solver read.  Lengths in m, masses in kg,
+stiffness in N/m and N m/rad, inertia in kg m^2.
+
+Bends follow ASME B31.3 (Appendix D): flexibility characteristic h = t R / r^2 with r the mean pipe
+radius, flexibility factor k = max(1, 1.65 / h); the bend's bending stiffness is divided by k.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.sections import _SHAPE_CODE, Section
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear elastic isotropic material: Young's modulus [Pa], Poisson ratio, density [kg/m^3]."""
+
+    youngs_modulus: float
+    poisson: float
+    density: float
+    name: str = ""
+
+    def __post_init__(self):
+        if not (self.youngs_modulus > 0 and self.density > 0 and -1 < self.poisson < 0.5):
+            raise BayesUpdateError(
+                f"material {self.name!r}: need E > 0, density > 0 and -1 < poisson < 0.5"
+            )
+
+
+STEEL = Material(210e9, 0.3, 7850.0, "steel")
+
+#: sensor direction letters (DESIGN.md: V = vertical z, H = horizontal y) and axis names
+DIRECTIONS = {
+    "V": (0.0, 0.0, 1.0),
+    "H": (0.0, 1.0, 0.0),
+    "X": (1.0, 0.0, 0.0),
+    "x": (1.0, 0.0, 0.0),
+    "y": (0.0, 1.0, 0.0),
+    "z": (0.0, 0.0, 1.0),
+}
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A frame structure as arrays (built by ``StructureBuilder.build``).
+
+    nodes : (N, 3) coordinates [m]; 6 DOFs per node (ux uy uz rx ry rz), DOF = 6 * node + i.
+    Beams (E of them): beam_nodes (E, 2), beam_part (E,), beam_shape (E,) codes of
+    ``sections.SHAPES``, beam_width / beam_height / beam_thickness (E,) [m], beam_E, beam_nu,
+    beam_rho (E,), beam_up (E, 3) local-z reference, beam_bend (E,) index into ``bends`` or -1,
+    beam_bend_radius (E,) [m] (0 for straight), beam_elbow (E,) bool: apply the B31.3 factor.
+    Point masses (P): mass_node, mass_value [kg], mass_inertia (P, 3, 3) about their own centre
+    [kg m^2], mass_offset (P, 3) from the node [m], mass_part.
+    Springs (S): spring_nodes (S, 2) with -1 for ground, spring_k (S, 6) in the spring frame,
+    spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part.
+    Sensors: sensor_labels, sensor_node, sensor_direction (n_s, 3) unit vectors.
+    parts, bends : names.
+    """
+
+    nodes: np.ndarray
+    beam_nodes: np.ndarray
+    beam_part: np.ndarray
+    beam_shape: np.ndarray
+    beam_width: np.ndarray
+    beam_height: np.ndarray
+    beam_thickness: np.ndarray
+    beam_E: np.ndarray
+    beam_nu: np.ndarray
+    beam_rho: np.ndarray
+    beam_up: np.ndarray
+    beam_bend: np.ndarray
+    beam_bend_radius: np.ndarray
+    beam_elbow: np.ndarray
+    mass_node: np.ndarray
+    mass_value: np.ndarray
+    mass_inertia: np.ndarray
+    mass_offset: np.ndarray
+    mass_part: np.ndarray
+    spring_nodes: np.ndarray
+    spring_k: np.ndarray
+    spring_frame: np.ndarray
+    spring_part: np.ndarray
+    sensor_labels: tuple[str, ...]
+    sensor_node: np.ndarray
+    sensor_direction: np.ndarray
+    parts: tuple[str, ...]
+    bends: tuple[str, ...]
+    shear: bool = True
+    rotary_inertia: bool = True
+    metadata: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.nodes.shape[0])
+
+    @property
+    def n_dof(self) -> int:
+        return 6 * self.n_nodes
+
+    def part_index(self, name: str) -> int:
+        if name not in self.parts:
+            raise BayesUpdateError(f"unknown part {name!r}; parts are {list(self.parts)}")
+        return self.parts.index(name)
+
+    def sensor_dofs(self) -> tuple[np.ndarray, np.ndarray]:
+        """Translational DOF indices (n_s, 3) of each sensor's node and its direction (n_s, 3)."""
+        dofs = 6 * self.sensor_node[:, None] + np.arange(3)[None, :]
+        return dofs, self.sensor_direction
+
+
+def _bend_flexibility_factor(thickness, bend_radius, outer_diameter):
+    """ASME B31.3 flexibility factor k = max(1, 1.65/h), h = t R / r^2 (r mean radius). (n,)"""
+    r = 0.5 * (outer_diameter - thickness)
+    h = thickness * bend_radius / r**2
+    with np.errstate(divide="ignore"):
+        return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
+
+
+class StructureBuilder:
+    """Mutable builder of a ``Structure``.
+
+    Example
+    -------
+    >>> b = StructureBuilder()
+    >>> n = b.add_pipe_run([(0, 0, 0), (1, 0, 0), (1, 1, 0)], circular_tube(0.045, 1.5e-3), STEEL,
+    ...                    part="pipe", bend_radii=[0.1], bend_names=["elbow"])
+    >>> s = b.build()
+    """
+
+    def __init__(self, shear: bool = True, rotary_inertia: bool = True):
+        self._nodes: list[tuple[float, float, float]] = []
+        self._beams: list[dict] = []
+        self._masses: list[dict] = []
+        self._springs: list[dict] = []
+        self._sensors: list[tuple[str, int, tuple]] = []
+        self._parts: list[str] = []
+        self._bends: list[str] = []
+        self.shear = shear
+        self.rotary_inertia = rotary_inertia
+        self.metadata: dict = {}
+
+    # -- nodes and parts ------------------------------------------------------------------
+    def add_node(self, xyz) -> int:
+        p = tuple(float(v) for v in xyz)
+        if len(p) != 3 or not all(np.isfinite(p)):
+            raise BayesUpdateError(f"node coordinates must be 3 finite numbers, got {xyz}")
+        self._nodes.append(p)
+        return len(self._nodes) - 1
+
+    def node_xyz(self, node: int) -> np.ndarray:
+        return np.array(self._nodes[node])
+
+    def _part(self, name: str) -> int:
+        if not name or not isinstance(name, str):
+            raise BayesUpdateError("every element needs a part name (a non-empty string)")
+        if name not in self._parts:
+            self._parts.append(name)
+        return self._parts.index(name)
+
+    def _check_node(self, node):
+        if not (0 <= int(node) < len(self._nodes)):
+            raise BayesUpdateError(f"node {node} does not exist (there are {len(self._nodes)})")
+        return int(node)
+
+    # -- elements ---------------------------------------------------------------------------
+    def add_beam(
+        self,
+        n1,
+        n2,
+        section: Section,
+        material: Material,
+        part: str,
+        up=None,
+        bend: str | None = None,
+        bend_radius: float = 0.0,
+        elbow_flexibility: bool = True,
+    ) -> int:
+        """One beam element between existing nodes.  ``up``: local z reference (default global
+        z, or global y for a vertical element).  Returns the element index."""
+        n1, n2 = self._check_node(n1), self._check_node(n2)
+        x1, x2 = self.node_xyz(n1), self.node_xyz(n2)
+        axis = x2 - x1
+        length = np.linalg.norm(axis)
+        if length <= 0:
+            raise BayesUpdateError(f"beam in part {part!r}: nodes {n1} and {n2} coincide")
+        if up is None:
+            up = (0.0, 0.0, 1.0) if abs(axis[2]) < 0.99 * length else (0.0, 1.0, 0.0)
+        up = np.asarray(up, dtype=float)
+        if np.linalg.norm(np.cross(up, axis)) < 1e-6 * length * np.linalg.norm(up):
+            raise BayesUpdateError(f"beam in part {part!r}: 'up' vector is parallel to the beam")
+        bend_index = -1
+        if bend is not None:
+            if bend not in self._bends:
+                self._bends.append(bend)
+            bend_index = self._bends.index(bend)
+        self._beams.append(
+            dict(
+                nodes=(n1, n2),
+                part=self._part(part),
+                section=section,
+                material=material,
+                up=tuple(up),
+                bend=bend_index,
+                bend_radius=float(bend_radius),
+                elbow=bool(elbow_flexibility),
+            )
+        )
+        return len(self._beams) - 1
+
+    def add_line(self, n1, n2, section, material, part, element_length=0.1, up=None) -> list[int]:
+        """A straight run from node n1 to node n2 meshed into equal elements no longer than
+        ``element_length``.  Returns the node indices along the run (n1 first, n2 last)."""
+        n1, n2 = self._check_node(n1), self._check_node(n2)
+        x1, x2 = self.node_xyz(n1), self.node_xyz(n2)
+        n_el = max(1, int(np.ceil(np.linalg.norm(x2 - x1) / element_length - 1e-9)))
+        ids = [n1]
+        for k in range(1, n_el):
+            ids.append(self.add_node(x1 + (x2 - x1) * k / n_el))
+        ids.append(n2)
+        for a, b in zip(ids[:-1], ids[1:], strict=True):
+            self.add_beam(a, b, section, material, part, up=up)
+        return ids
+
+    def add_pipe_run(
+        self,
+        points,
+        section: Section,
+        material: Material,
+        part: str,
+        bend_radii=None,
+        bend_names=None,
+        element_length: float = 0.1,
+        max_bend_angle_deg: float = 15.0,
+        start_node: int | None = None,
+        end_node: int | None = None,
+        elbow_flexibility: bool = True,
+        up=None,
+    ) -> list[int]:
+        """A pipe along a centre-line polyline with circular-arc bends at its interior vertices.
+
+        points : (k, 3) polyline vertices [m].  bend_radii : (k-2,) bend radius at each interior
+        vertex (0 = sharp corner).  bend_names : optional names (None entries allowed), used by
+        ``bend_flexibility@NAME``.  Arcs are meshed into straight elements spanning at most
+        ``max_bend_angle_deg``.  ``start_node`` / ``end_node`` reuse existing nodes (must coincide
+        with the first / last point).  Returns the node indices along the run.
+        """
+        pts = np.asarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 2:
+            raise BayesUpdateError(f"pipe run {part!r}: points must be (k>=2, 3)")
+        k_int = len(pts) - 2
+        radii = np.zeros(k_int) if bend_radii is None else np.asarray(bend_radii, dtype=float)
+        names = [None] * k_int if bend_names is None else list(bend_names)
+        if radii.shape != (k_int,) or len(names) != k_int:
+            raise BayesUpdateError(
+                f"pipe run {part!r}: need one bend radius/name per interior vertex ({k_int})"
+            )
+        outer_radius = 0.5 * section.width
+        # centre-line as a list of (kind, geometry): straight from a to b, or arc
+        path = []
+        cursor = pts[0]
+        for i in range(1, len(pts) - 1):
+            d1 = pts[i] - pts[i - 1]
+            d2 = pts[i + 1] - pts[i]
+            d1 /= np.linalg.norm(d1)
+            d2 /= np.linalg.norm(d2)
+            angle = np.arccos(np.clip(d1 @ d2, -1.0, 1.0))
+            R = radii[i - 1]
+            if R > 0 and R <= outer_radius:
+                raise BayesUpdateError(
+                    f"pipe run {part!r}: bend radius {R} m at vertex {i} is not larger than the "
+                    f"pipe's outer radius {outer_radius} m"
+                )
+            if R <= 0 or angle < 1e-9:
+                path.append(("line", cursor, pts[i]))
+                cursor = pts[i]
+                continue
+            tangent = R * np.tan(angle / 2)
+            a = pts[i] - tangent * d1
+            b = pts[i] + tangent * d2
+            if (
+                tangent > np.linalg.norm(pts[i] - cursor) + 1e-12
+                or tangent > np.linalg.norm(pts[i + 1] - pts[i]) + 1e-12
+            ):
+                raise BayesUpdateError(
+                    f"pipe run {part!r}: bend radius {R} m at vertex {i} does not fit between "
+                    "the neighbouring straight segments"
+                )
+            normal = d2 - (d1 @ d2) * d1
+            normal /= np.linalg.norm(normal)
+            centre = a + R * normal
+            if np.linalg.norm(a - cursor) > 1e-12:
+                path.append(("line", cursor, a))
+            path.append(("arc", centre, -normal, d1, R, angle, names[i - 1]))
+            cursor = b
+        path.append(("line", cursor, pts[-1]))
+
+        if start_node is None:
+            ids = [self.add_node(pts[0])]
+        else:
+            if np.linalg.norm(self.node_xyz(start_node) - pts[0]) > 1e-9:
+                raise BayesUpdateError(f"pipe run {part!r}: start_node is not at the first point")
+            ids = [self._check_node(start_node)]
+        for seg_index, seg in enumerate(path):
+            last_segment = seg_index == len(path) - 1
+            if seg[0] == "line":
+                _, a, b = seg
+                length = np.linalg.norm(b - a)
+                if length < 1e-12:
+                    continue
+                n_el = max(1, int(np.ceil(length / element_length - 1e-9)))
+                new_pts = [a + (b - a) * j / n_el for j in range(1, n_el + 1)]
+                bend_info = [(None, 0.0)] * n_el
+            else:
+                _, centre, u, v, R, angle, name = seg
+                n_el = max(
+                    2,
+                    int(np.ceil(np.degrees(angle) / max_bend_angle_deg - 1e-9)),
+                    int(np.ceil(R * angle / element_length - 1e-9)),
+                )
+                phis = angle * np.arange(1, n_el + 1) / n_el
+                new_pts = [centre + R * (np.cos(p) * u + np.sin(p) * v) for p in phis]
+                bend_name = name if name is not None else f"{part}_bend{len(self._bends)}"
+                bend_info = [(bend_name, R)] * n_el
+            for j, p in enumerate(new_pts):
+                is_end = last_segment and j == len(new_pts) - 1
+                if is_end and end_node is not None:
+                    if np.linalg.norm(self.node_xyz(end_node) - p) > 1e-9:
+                        raise BayesUpdateError(
+                            f"pipe run {part!r}: end_node is not at the last point"
+                        )
+                    nid = self._check_node(end_node)
+                else:
+                    nid = self.add_node(p)
+                bname, R = bend_info[j]
+                self.add_beam(
+                    ids[-1],
+                    nid,
+                    section,
+                    material,
+                    part,
+                    up=up,
+                    bend=bname,
+                    bend_radius=R,
+                    elbow_flexibility=elbow_flexibility,
+                )
+                ids.append(nid)
+        return ids
+
+    def add_point_mass(self, node, mass: float, part: str, inertia=None, offset=(0, 0, 0)) -> int:
+        """Rigid point mass [kg] with a 3x3 inertia tensor about its own centre [kg m^2] (global
+        axes), at ``offset`` [m] from ``node`` (rigid link)."""
+        node = self._check_node(node)
+        if not np.isfinite(mass) or mass < 0:
+            raise BayesUpdateError(f"point mass in part {part!r}: mass must be >= 0 kg, got {mass}")
+        J = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float)
+        if J.shape == (3,):
+            J = np.diag(J)
+        if J.shape != (3, 3) or np.any(np.linalg.eigvalsh(0.5 * (J + J.T)) < -1e-12):
+            raise BayesUpdateError(f"point mass in part {part!r}: inertia must be a 3x3 PSD tensor")
+        self._masses.append(
+            dict(
+                node=node,
+                mass=float(mass),
+                inertia=0.5 * (J + J.T),
+                offset=np.asarray(offset, dtype=float),
+                part=self._part(part),
+            )
+        )
+        return len(self._masses) - 1
+
+    def add_spring(self, node_a, node_b, stiffness, part: str, frame=None) -> int:
+        """6-DOF spring between ``node_a`` and ``node_b`` (None = ground).
+
+        stiffness : 6 values (kx, ky, kz [N/m], krx, kry, krz [N m/rad]) along the rows of
+        ``frame`` (3x3, default global axes).  Nodes should coincide (zero-length spring)."""
+        node_a = self._check_node(node_a)
+        node_b = -1 if node_b is None else self._check_node(node_b)
+        k = np.asarray(stiffness, dtype=float).reshape(-1)
+        if k.shape != (6,) or np.any(~np.isfinite(k)) or np.any(k < 0):
+            raise BayesUpdateError(f"spring in part {part!r}: stiffness must be 6 values >= 0")
+        R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+            raise BayesUpdateError(f"spring in part {part!r}: frame must be a 3x3 rotation")
+        self._springs.append(dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part)))
+        return len(self._springs) - 1
+
+    def add_sensor(self, label: str, node, direction) -> None:
+        """A measurement DOF: translation of ``node`` along ``direction`` ('V', 'H', 'x', ... or a
+        vector)."""
+        node = self._check_node(node)
+        if isinstance(direction, str):
+            if direction not in DIRECTIONS:
+                raise BayesUpdateError(f"sensor {label}: unknown direction {direction!r}")
+            direction = DIRECTIONS[direction]
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        if any(s[0] == label for s in self._sensors):
+            raise BayesUpdateError(f"sensor label {label!r} used twice")
+        self._sensors.append((str(label), node, tuple(d)))
+
+    # -- build ---------------------------------------------------------------------------------
+    def build(self) -> "Structure":
+        if not self._nodes:
+            raise BayesUpdateError("the structure has no nodes")
+        beams = self._beams
+        nb = len(beams)
+
+        def col(fn, dtype=float):
+            return np.array([fn(b) for b in beams], dtype=dtype).reshape(nb, *([] if nb else []))
+
+        structure = Structure(
+            nodes=np.array(self._nodes, dtype=float),
+            beam_nodes=np.array([b["nodes"] for b in beams], dtype=int).reshape(nb, 2),
+            beam_part=col(lambda b: b["part"], int),
+            beam_shape=col(lambda b: _SHAPE_CODE[b["section"].shape], int),
+            beam_width=col(lambda b: b["section"].width),
+            beam_height=col(lambda b: b["section"].height),
+            beam_thickness=col(lambda b: b["section"].thickness),
+            beam_E=col(lambda b: b["material"].youngs_modulus),
+            beam_nu=col(lambda b: b["material"].poisson),
+            beam_rho=col(lambda b: b["material"].density),
+            beam_up=np.array([b["up"] for b in beams], dtype=float).reshape(nb, 3),
+            beam_bend=col(lambda b: b["bend"], int),
+            beam_bend_radius=col(lambda b: b["bend_radius"]),
+            beam_elbow=col(lambda b: b["elbow"], bool),
+            mass_node=np.array([m["node"] for m in self._masses], dtype=int),
+            mass_value=np.array([m["mass"] for m in self._masses], dtype=float),
+            mass_inertia=np.array([m["inertia"] for m in self._masses]).reshape(-1, 3, 3),
+            mass_offset=np.array([m["offset"] for m in self._masses]).reshape(-1, 3),
+            mass_part=np.array([m["part"] for m in self._masses], dtype=int),
+            spring_nodes=np.array([s["nodes"] for s in self._springs], dtype=int).reshape(-1, 2),
+            spring_k=np.array([s["k"] for s in self._springs]).reshape(-1, 6),
+            spring_frame=np.array([s["frame"] for s in self._springs]).reshape(-1, 3, 3),
+            spring_part=np.array([s["part"] for s in self._springs], dtype=int),
+            sensor_labels=tuple(s[0] for s in self._sensors),
+            sensor_node=np.array([s[1] for s in self._sensors], dtype=int),
+            sensor_direction=np.array([s[2] for s in self._sensors], dtype=float).reshape(-1, 3),
+            parts=tuple(self._parts),
+            bends=tuple(self._bends),
+            shear=self.shear,
+            rotary_inertia=self.rotary_inertia,
+            metadata=dict(self.metadata),
+        )
+        check_connected(structure)
+        return structure
+
+
+def check_connected(structure: Structure) -> None:
+    """Raise BayesUpdateError if some nodes are not connected to the rest by any element."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = structure.n_nodes
+    pairs = [structure.beam_nodes]
+    sp = structure.spring_nodes[(structure.spring_nodes >= 0).all(axis=1)]
+    pairs.append(sp)
+    edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    n_comp, labels = connected_components(graph, directed=False)
+    if n_comp > 1:
+        sizes = np.bincount(labels)
+        main = np.argmax(sizes)
+        lonely = np.flatnonzero(labels != main)
+        raise BayesUpdateError(
+            f"the structure is disconnected: {n_comp} separate pieces; nodes {lonely[:10].tolist()}"
+            f"{' ...' if lonely.size > 10 else ''} are not connected to the main piece "
+            "(add a beam or spring)"
+        )

@@ -1,0 +1,26 @@
+"""Built-in structures, looked up by name with ``get_model``.
+
+``exhaust``: the seed's exhaust system (Lupea 2013).  ``shear_building``: the two-DOF shear building
+used to verify the sampler against quadrature.  Each factory returns a ``ParametricModel``.
+"""
+
+import importlib
+
+from bayesupdate.errors import BayesUpdateError
+
+#: model name -> "module:factory" (imported lazily, so the CLI starts fast)
+BUILTIN_MODELS = {
+    "exhaust": "bayesupdate.models.exhaust:build_exhaust_model",
+    "shear_building": "bayesupdate.models.shear_building:build_shear_building_model",
+}
+
+
+def get_model(name: str, **options):
+    """Return the built-in model ``name`` (see ``BUILTIN_MODELS``)."""
+    if name not in BUILTIN_MODELS:
+        raise BayesUpdateError(
+            f"unknown model {name!r}; built-in models are {sorted(BUILTIN_MODELS)} "
+            "or give 'package.module:function'"
+        )
+    module_name, factory = BUILTIN_MODELS[name].split(":")
+    return getattr(importlib.import_module(module_name), factory)(**options)

@@ -71,8 +71,11 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # an internal fault: one line unless debugging
         if os.environ.get("BAYESUPDATE_DEBUG"):
             raise
-        print(f"internal error: {type(exc).__name__}: {exc} "
-              "(set BAYESUPDATE_DEBUG=1 for a traceback)", file=sys.stderr)
+        print(
+            f"internal error: {type(exc).__name__}: {exc} "
+            "(set BAYESUPDATE_DEBUG=1 for a traceback)",
+            file=sys.stderr,
+        )
         return 1
 
 

@@ -10,7 +10,8 @@ import numpy as np
 def mac_matrix(shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
     """Modal assurance criterion between every column of ``shapes_a`` and of ``shapes_b``.
 
-    shapes_a : (n_dof, m_a), shapes_b : (n_dof, m_b), real or complex.  Returns (m_a, m_b) in [0, 1].
+    shapes_a : (n_dof, m_a), shapes_b : (n_dof, m_b), real or complex.
+    Returns (m_a, m_b) values in [0, 1].
     A zero vector gives MAC 0.
     """
     a = np.asarray(shapes_a)
@@ -53,9 +54,7 @@ def comac(shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
         return np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
 
 
-def pair_by_mac(
-    shapes_test: np.ndarray, shapes_model: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def pair_by_mac(shapes_test: np.ndarray, shapes_model: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pair each test mode with a distinct model mode maximising total MAC (Hungarian method).
 
     Returns (model_index (m_test,), mac (m_test,)).  Needs m_model >= m_test.

@@ -1,6 +1,6 @@
 """The one exception type for errors a user can cause (bad file, bad value, unknown key).
 
-The CLI prints ``str(error)`` on one line and exits with code 2; nothing else is printed, no traceback.
+The CLI prints ``str(error)`` on one line and exits with code 2; nothing else, no traceback.
 Messages name the file or field at fault and what to do about it.
 """
 

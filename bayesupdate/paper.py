@@ -8,9 +8,7 @@ converted to SI (m, kg/m^3) in the others.
 import numpy as np
 
 #: Seed Table 1: FE normal modes of the initial model, first 12 elastic modes [Hz].
-TABLE1_FEA_HZ = np.array(
-    [9.13, 10.6, 24.4, 26.4, 34.7, 48.7, 52.7, 62.0, 71.0, 88.6, 114.2, 128.8]
-)
+TABLE1_FEA_HZ = np.array([9.13, 10.6, 24.4, 26.4, 34.7, 48.7, 52.7, 62.0, 71.0, 88.6, 114.2, 128.8])
 
 #: Seed Table 2: EMA natural frequencies [Hz] and the plane in which each mode is better seen.
 TABLE2_EMA_HZ = np.array(
@@ -29,8 +27,13 @@ TABLE4_FINAL_HZ = np.array(
 )
 
 #: Seed Table 3: the five design variables (DESIGN.md names), initial and optimal values, in SI.
-DESIGN_VARIABLES = ("t_hot_pipe", "t_cold_pipe", "t_main_muffler", "rho_catalyst",
-                    "rho_intermediate_muffler")
+DESIGN_VARIABLES = (
+    "t_hot_pipe",
+    "t_cold_pipe",
+    "t_main_muffler",
+    "rho_catalyst",
+    "rho_intermediate_muffler",
+)
 TABLE3_INITIAL_SI = {
     "t_hot_pipe": 1.0e-3,
     "t_cold_pipe": 1.0e-3,

@@ -1,5 +1,5 @@
-"""Finite-element layer: build a 3D frame structure, assemble K(theta), M(theta), solve the free-free
-modes.  Knows nothing of tests or statistics.
+"""Finite-element layer: build a 3D frame structure, assemble K(theta), M(theta), solve the
+free-free modes.  Knows nothing of tests or statistics.
 
 Public names: ``StructureBuilder``, ``Structure``, ``Material``, ``STEEL``, sections
 (``circular_tube``, ``oval_tube``, ``solid_round``), ``FEModel``, ``Binding``, ``FEResult``,

@@ -190,11 +190,21 @@ class Assembler:
         bK, bM = self.beam_matrices(props)
         mM = self.mass_matrices(props)
         sK = self.spring_matrices(props)
-        K = np.bincount(self._pos_beam, bK.ravel(), self.nnz)
-        K += np.bincount(self._pos_spring, sK.ravel(), self.nnz)
-        M = np.bincount(self._pos_beam, bM.ravel(), self.nnz)
-        M += np.bincount(self._pos_mass, mM.ravel(), self.nnz)
+        K = self._scatter(self._pos_beam, bK) + self._scatter(self._pos_spring, sK)
+        M = self._scatter(self._pos_beam, bM) + self._scatter(self._pos_mass, mM)
         return self.to_csr(K), self.to_csr(M), dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK)
+
+    def ground_stiffness(self, element_matrices: dict):
+        """CSR stiffness of the springs to ground alone (None if there are none)."""
+        if not np.any(self.spring_grounded):
+            return None
+        pos = self._pos_spring.reshape(len(self.spring_grounded), -1)[self.spring_grounded]
+        sK = element_matrices["spring_K"][self.spring_grounded]
+        return self.to_csr(self._scatter(pos.ravel(), sK))
+
+    def _scatter(self, positions, element_matrices):
+        """Sum element entries into the (nnz,) CSR data (float even for no elements)."""
+        return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)
 
     def total_mass(self, props: ElementProperties | None = None):
         """Total mass [kg] and centre of gravity (3,) [m] from the beams and point masses."""

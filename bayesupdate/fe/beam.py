@@ -82,7 +82,8 @@ def local_beam_matrices(
 
     L, E, G, rho, A, Iy, Iz, J, Asy, Asz : (n,) arrays (SI).  ``shear=False`` gives Euler-Bernoulli.
     ``rotary_inertia=False`` drops the rotary inertia of bending (with ``shear=False``: the
-    classical Euler-Bernoulli beam).  ``bend_factor`` (n,) divides the bending stiffness EI (elbow flexibility k of ASME B31.3).
+    classical Euler-Bernoulli beam).  ``bend_factor`` (n,) divides the bending stiffness EI
+    (the elbow flexibility factor k of ASME B31.3).
     Returns (K, M), each (n, 12, 12), in local axes.
     """
     L = np.asarray(L, dtype=float)

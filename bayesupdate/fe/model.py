@@ -190,7 +190,15 @@ class FEModel:
         p = self.full_parameters(params)
         props = self.element_properties(p)
         K, M, elem = self.assembler.assemble(props)
-        modes = solve_modes(K, M, n_modes, self.rigid_basis, self.banded, method=method)
+        modes = solve_modes(
+            K,
+            M,
+            n_modes,
+            self.rigid_basis,
+            self.banded,
+            method=method,
+            ground_stiffness=self.assembler.ground_stiffness(elem),
+        )
         mass, cog = self.assembler.total_mass(props)
         en = modal_energies(self.assembler, elem, modes.shapes) if energies else None
         return FEResult(

@@ -8,7 +8,8 @@ All lengths in m, results in m^2 and m^4.  Local axes: x along the beam, y "widt
   Cowper (1966) for hollow circles.
 * ``oval_tube``: thin-walled elliptical tube (width W, height H, wall t) - muffler and catalyst
   shells. Properties by integration along the mid-line ellipse (thin-wall theory), torsion by
-  Bredt-Batho J = 4 A_m^2 t / P_m.  Shear area A_s,y = t * int (dy/ds)^2 ds (exact A/2 for a circle).
+  Bredt-Batho J = 4 A_m^2 t / P_m.  Shear area A_s,y = t * int (dy/ds)^2 ds (exactly A/2 for a
+  circle).
 * ``solid_round``: solid bar of diameter d (hanger rods), Cowper's 6(1+nu)/(7+6nu).
 """
 

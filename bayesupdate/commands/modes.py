@@ -1,0 +1,84 @@
+"""``bayesupdate modes``: the FE modal analysis of a built-in model at a parameter point."""
+
+import json
+
+import numpy as np
+
+from bayesupdate.units import parse_assignments
+
+NAME = "modes"
+HELP = "FE normal modes of a built-in model (frequencies, mass, strain-energy shares)"
+DESCRIPTION = """Free-free modal analysis (seed section 3, eqs 1-2) of a built-in model.
+
+Examples:
+  bayesupdate modes --model exhaust
+  bayesupdate modes --model exhaust --set t_hot_pipe=2.08mm --set rho_catalyst=8.9e-9t/mm3 --json
+
+Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
+each mode's frequency and the share of its strain energy in each part (seed section 3.2)."""
+
+
+def add_arguments(parser):
+    parser.add_argument("--model", default="exhaust", help="built-in model name (default exhaust)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="parameter value, repeatable (e.g. t_hot_pipe=2.08mm)",
+    )
+    parser.add_argument("--modes", type=int, default=12, help="number of elastic modes (12)")
+    parser.add_argument(
+        "--geometry", default=None, help="exhaust only: 'best' or the index of a runner-up geometry"
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def run(args) -> int:
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.models import get_model
+
+    if args.modes < 1:
+        raise BayesUpdateError(f"--modes must be >= 1, got {args.modes}")
+    options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
+    model = get_model(args.model, **options)
+    params = parse_assignments(args.set)
+    if not hasattr(model, "solve"):
+        raise BayesUpdateError(f"model {args.model!r} is not an FE model; 'modes' needs one")
+    result = model.solve(params, n_modes=args.modes, energies=True)
+    if args.json:
+        print(
+            json.dumps(
+                {
+                    "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
+                    "mass_kg": float(result.mass_kg),
+                    "parameters": {k: float(v) for k, v in result.parameters.items()},
+                }
+            )
+        )
+        return 0
+    print(format_modes_table(result))
+    return 0
+
+
+def _geometry(text):
+    return int(text) if text.lstrip("-").isdigit() else text
+
+
+def format_modes_table(result) -> str:
+    """Readable table: mode, frequency, and strain-energy share per part (% of the mode)."""
+    energies = result.energies
+    parts = list(energies.parts)
+    shares = energies.strain_by_part * 100.0
+    keep = np.flatnonzero(shares.max(axis=1) >= 1.0)  # parts that carry >= 1 % in some mode
+    short = [p if len(p) <= 12 else p[:11] + "." for p in (parts[i] for i in keep)]
+    lines = [
+        f"mass {result.mass_kg:.3f} kg, centre of gravity "
+        f"({', '.join(f'{c:.3f}' for c in result.centre_of_gravity)}) m",
+        "strain-energy share of each part [% of the mode]",
+        f"{'mode':>4} {'f [Hz]':>9}  " + " ".join(f"{s:>12}" for s in short),
+    ]
+    for i, f in enumerate(result.frequencies_hz):
+        lines.append(f"{i + 1:>4} {f:>9.3f}  " + " ".join(f"{shares[k, i]:>12.1f}" for k in keep))
+    lines.append("parameters: " + ", ".join(f"{k}={v:.6g}" for k, v in result.parameters.items()))
+    return "\n".join(lines)

@@ -10,6 +10,7 @@ property           acts on                                      unit      enters
 thickness          wall of the part's beams                     m         non-linear (re-assembled)
 density            the part's beams                             kg/m^3    M linear
 youngs_modulus     the part's beams                             Pa        K linear
+modulus_factor     factor on the nominal E of the part's beams  -         K linear
 mass               total of the part's point masses (scaled)    kg        M linear
 mass_factor        factor on the part's point masses            -         M linear
 stiffness_factor   factor on the part's springs                 -         K linear
@@ -33,6 +34,7 @@ PROPERTIES = (
     "thickness",
     "density",
     "youngs_modulus",
+    "modulus_factor",
     "mass",
     "mass_factor",
     "stiffness_factor",
@@ -168,6 +170,8 @@ class FEModel:
                 rho[mask] = value
             elif prop == "youngs_modulus":
                 E[mask] = value
+            elif prop == "modulus_factor":
+                E[mask] = base.beam_E[mask] * value
             elif prop == "mass":
                 ms[mask] = value / s.mass_value[mask].sum()
             elif prop == "mass_factor":

@@ -1,0 +1,2 @@
+"""Discovery: find where simulation and test disagree, name the missing physical effect from a
+library (``effects``), add it, and show the gap shrink."""

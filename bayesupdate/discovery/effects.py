@@ -1,0 +1,287 @@
+"""The library of named physical effects a model may be missing (DESIGN.md vocabulary), their
+spec syntax ``KIND@LOCATION[:name=value,...]`` and how each extends an ``FEModel``.
+
+Each kind has its own parameters (SI, with bounds and a prior in the study-file prior syntax) and
+a rule for where it may sit:
+
+=================  =====================  ============================================  =========
+kind               location               parameters                                    prior
+=================  =====================  ============================================  =========
+added_mass         sensor point (1..20)   m [kg] in [0, 2]                              uniform
+joint_flexibility  joint ``partA/partB``  k_rot [N m/rad] in [1e2, 1e6], both planes    lognormal
+bend_flexibility   a named bend           factor [-] in [1, 6] dividing EI              uniform
+boundary_spring    sensor point (1..20)   k [N/m] in [0, 1e5], 3 translations           uniform
+stiffness_change   a part                 factor [-] on Young's modulus in [0.5, 1.5]   uniform
+=================  =====================  ============================================  =========
+
+A user adds a kind with ``register_effect_kind``.  Extended models name their extra parameters
+``KIND@LOCATION:NAME`` (e.g. ``added_mass@14:m``).
+"""
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.model import Binding, FEModel
+from bayesupdate.fe.modify import split_joint_bending, with_point_mass, with_spring
+
+
+@dataclass(frozen=True)
+class EffectParameter:
+    """One parameter of an effect kind: default value, bounds and prior (SI units)."""
+
+    name: str
+    default: float
+    bounds: tuple[float, float]
+    prior: dict
+    unit: str
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class EffectKind:
+    """A kind of effect: its parameters, where it may sit, and how it extends a model.
+
+    ``locations(model)`` lists admissible locations; ``extend(model, location, tag)`` returns
+    (structure, {param_name: Binding}) for the extended model, the bindings keyed by the short
+    parameter names of ``parameters``.
+    """
+
+    name: str
+    parameters: tuple[EffectParameter, ...]
+    locations: Callable
+    extend: Callable
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A concrete effect: kind, location and (possibly partial) parameter values."""
+
+    kind: str
+    location: str
+    parameters: dict = field(default_factory=dict)
+
+    @property
+    def tag(self) -> str:
+        return f"{self.kind}@{self.location}"
+
+    def spec(self) -> str:
+        values = ",".join(f"{k}={v:g}" for k, v in self.parameters.items())
+        return self.tag + (f":{values}" if values else "")
+
+
+# -- locations --------------------------------------------------------------------------------
+def _sensor_points(model: FEModel) -> list[str]:
+    numbers = sorted(
+        {
+            int(m.group(1))
+            for lab in model.structure.sensor_labels
+            if (m := re.fullmatch(r"(\d+)[A-Za-z]+", lab))
+        }
+    )
+    return [str(n) for n in numbers]
+
+
+def _sensor_node(model: FEModel, location: str) -> int:
+    s = model.structure
+    for label, node in zip(s.sensor_labels, s.sensor_node, strict=True):
+        if re.fullmatch(rf"{re.escape(location)}[A-Za-z]+", label):
+            return int(node)
+    raise BayesUpdateError(f"unknown sensor point {location!r}; points are {_sensor_points(model)}")
+
+
+def _joints(model: FEModel) -> list[str]:
+    s = model.structure
+    return [p for i, p in enumerate(s.parts) if "/" in p and np.any(s.spring_part == i)]
+
+
+def _bends(model: FEModel) -> list[str]:
+    return list(model.structure.bends)
+
+
+def _beam_parts(model: FEModel) -> list[str]:
+    s = model.structure
+    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i)]
+
+
+# -- extensions -------------------------------------------------------------------------------
+def _extend_added_mass(model, location, tag):
+    s = with_point_mass(model.structure, _sensor_node(model, location), 1.0, tag)
+    return s, {"m": Binding(tag, "mass")}
+
+
+def _extend_boundary_spring(model, location, tag):
+    s = with_spring(
+        model.structure, _sensor_node(model, location), None, [1.0, 1.0, 1.0, 0.0, 0.0, 0.0], tag
+    )
+    return s, {"k": Binding(tag, "stiffness_factor")}
+
+
+def _extend_joint(model, location, tag):
+    if location not in _joints(model):
+        raise BayesUpdateError(f"unknown joint {location!r}; joints are {_joints(model)}")
+    return split_joint_bending(model.structure, location, tag), {
+        "k_rot": Binding(tag, "stiffness_factor")
+    }
+
+
+def _extend_bend(model, location, tag):
+    if location not in model.structure.bends:
+        raise BayesUpdateError(f"unknown bend {location!r}; bends are {_bends(model)}")
+    return model.structure, {"factor": Binding(location, "bend_factor")}
+
+
+def _extend_stiffness(model, location, tag):
+    if location not in _beam_parts(model):
+        raise BayesUpdateError(f"unknown part {location!r}; parts are {_beam_parts(model)}")
+    return model.structure, {"factor": Binding(location, "modulus_factor")}
+
+
+_UNIFORM = {"kind": "uniform"}
+EFFECT_KINDS: dict[str, EffectKind] = {}
+
+
+def register_effect_kind(kind: EffectKind) -> None:
+    """Add (or replace) an effect kind in the library."""
+    EFFECT_KINDS[kind.name] = kind
+
+
+for _kind in (
+    EffectKind(
+        "added_mass",
+        (EffectParameter("m", 0.3, (0.0, 2.0), _UNIFORM, "kg", "point mass at the sensor point"),),
+        _sensor_points,
+        _extend_added_mass,
+        "an unmodelled mass (bracket, sensor cable, heat shield) at a point",
+    ),
+    EffectKind(
+        "joint_flexibility",
+        (
+            EffectParameter(
+                "k_rot",
+                3e3,
+                (1e2, 1e6),
+                {"kind": "lognormal", "mu": float(np.log(1e4)), "sigma": 2.0},
+                "N m/rad",
+                "bending stiffness of the joint in both planes",
+            ),
+        ),
+        _joints,
+        _extend_joint,
+        "a connection more flexible than modelled",
+    ),
+    EffectKind(
+        "bend_flexibility",
+        (
+            EffectParameter(
+                "factor", 2.0, (1.0, 6.0), _UNIFORM, "-", "factor dividing the bend's EI"
+            ),
+        ),
+        _bends,
+        _extend_bend,
+        "ovalisation of a bend beyond the B31.3 factor",
+    ),
+    EffectKind(
+        "boundary_spring",
+        (
+            EffectParameter(
+                "k", 2e3, (0.0, 1e5), _UNIFORM, "N/m", "translational stiffness to ground"
+            ),
+        ),
+        _sensor_points,
+        _extend_boundary_spring,
+        "the test suspension (elastic cords) acting at a point",
+    ),
+    EffectKind(
+        "stiffness_change",
+        (
+            EffectParameter(
+                "factor", 0.8, (0.5, 1.5), _UNIFORM, "-", "factor on the part's Young's modulus"
+            ),
+        ),
+        _beam_parts,
+        _extend_stiffness,
+        "a part stiffer or softer than modelled",
+    ),
+):
+    register_effect_kind(_kind)
+
+
+# -- specs ------------------------------------------------------------------------------------
+_SPEC = re.compile(r"^\s*([A-Za-z_][\w]*)@([^:]+?)\s*(?::(.*))?$")
+
+
+def parse_effect_spec(text: str) -> Effect:
+    """``KIND@LOCATION[:name=value,...]`` -> Effect (values SI, units allowed: ``m=400g``)."""
+    from bayesupdate.units import parse_quantity
+
+    match = _SPEC.match(str(text))
+    if not match:
+        raise BayesUpdateError(
+            f"effect {text!r}: expected KIND@LOCATION[:name=value,...], e.g. added_mass@14:m=0.4"
+        )
+    kind_name, location, rest = match.groups()
+    if kind_name not in EFFECT_KINDS:
+        raise BayesUpdateError(
+            f"effect {text!r}: unknown kind {kind_name!r}; kinds are {sorted(EFFECT_KINDS)}"
+        )
+    kind = EFFECT_KINDS[kind_name]
+    known = {p.name: p for p in kind.parameters}
+    values = {}
+    for item in filter(None, (rest or "").split(",")):
+        if "=" not in item:
+            raise BayesUpdateError(f"effect {text!r}: {item!r} is not name=value")
+        name, value = (x.strip() for x in item.split("=", 1))
+        if name not in known:
+            raise BayesUpdateError(
+                f"effect {text!r}: {kind_name} has no parameter {name!r}; it has {sorted(known)}"
+            )
+        v = parse_quantity(value, f"effect {kind_name} {name}")
+        lo, hi = known[name].bounds
+        if not lo <= v <= hi:
+            raise BayesUpdateError(
+                f"effect {text!r}: {name}={v:g} is outside the bounds [{lo:g}, {hi:g}] "
+                f"[{known[name].unit}]"
+            )
+        values[name] = v
+    return Effect(kind_name, location.strip(), values)
+
+
+def effect_locations(model: FEModel, kind: str) -> list[str]:
+    """Admissible locations of ``kind`` on ``model``."""
+    return list(EFFECT_KINDS[kind].locations(model))
+
+
+def extend_model(model: FEModel, effect: Effect) -> FEModel:
+    """``model`` with ``effect`` added: new parameters ``KIND@LOCATION:NAME`` whose defaults are
+    the effect's given values (else the kind's defaults) and whose bounds are the kind's."""
+    if effect.kind not in EFFECT_KINDS:
+        raise BayesUpdateError(
+            f"unknown effect kind {effect.kind!r}; kinds: {sorted(EFFECT_KINDS)}"
+        )
+    kind = EFFECT_KINDS[effect.kind]
+    if effect.location not in kind.locations(model):
+        raise BayesUpdateError(
+            f"effect {effect.tag}: unknown location {effect.location!r} for {effect.kind}; "
+            f"locations are {kind.locations(model)}"
+        )
+    structure, short_bindings = kind.extend(model, effect.location, effect.tag)
+    bindings, defaults, bounds = {}, {}, {}
+    for p in kind.parameters:
+        full = f"{effect.tag}:{p.name}"
+        bindings[full] = short_bindings[p.name]
+        defaults[full] = float(effect.parameters.get(p.name, p.default))
+        bounds[full] = p.bounds
+    return model.with_structure(
+        structure, bindings, defaults, bounds, name=f"{model.name}+{effect.tag}"
+    )
+
+
+def effect_priors(effect: Effect) -> dict[str, dict]:
+    """Prior spec per extended parameter name (study-file syntax)."""
+    kind = EFFECT_KINDS[effect.kind]
+    return {f"{effect.tag}:{p.name}": dict(p.prior) for p in kind.parameters}

@@ -131,3 +131,15 @@ def test_unknown_part_or_property_is_rejected():
         FEModel(s, {"t": Binding("muffler", "thickness")}, {"t": 1e-3}, {"t": (1e-4, 1e-2)})
     with pytest.raises(BayesUpdateError, match="unknown property"):
         FEModel(s, {"t": Binding("pipe", "colour")}, {"t": 1e-3}, {"t": (1e-4, 1e-2)})
+
+
+def test_reassembly_reusing_unchanged_beams_equals_a_fresh_assembly():
+    s = l_pipe()
+    bindings = {"t": Binding("pipe", "thickness"), "rho": Binding("pipe", "density")}
+    defaults, bounds = {"t": 1.5e-3, "rho": 7850.0}, {"t": (5e-4, 3e-3), "rho": (2e3, 2e4)}
+    m = FEModel(s, bindings, defaults, bounds)
+    for point in ({"t": 2e-3}, {"t": 2e-3, "rho": 9e3}, {"t": 1e-3}):
+        fresh = FEModel(s, bindings, defaults, bounds).solve(point, n_modes=6)
+        np.testing.assert_array_equal(
+            m.solve(point, n_modes=6).frequencies_hz, fresh.frequencies_hz
+        )

@@ -187,12 +187,28 @@ class Assembler:
         """
         props = self.default_properties() if props is None else props
         check_properties(self.structure, props)
-        bK, bM = self.beam_matrices(props)
+        bK, bM = self._beam_matrices_reusing(props)
         mM = self.mass_matrices(props)
         sK = self.spring_matrices(props)
         K = self._scatter(self._pos_beam, bK) + self._scatter(self._pos_spring, sK)
         M = self._scatter(self._pos_beam, bM) + self._scatter(self._pos_mass, mM)
         return self.to_csr(K), self.to_csr(M), dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK)
+
+    def _beam_matrices_reusing(self, props: ElementProperties):
+        """Beam matrices at ``props``, recomputing only the beams whose properties differ from
+        the previous call (a calibration changes a few parts at a time).  The memo holds copies,
+        so callers may keep what they get."""
+        key = np.stack([props.beam_thickness, props.beam_rho, props.beam_E, props.beam_bend_factor])
+        memo = getattr(self, "_beam_memo", None)
+        if memo is None or memo[0].shape != key.shape:
+            bK, bM = self.beam_matrices(props)
+        else:
+            changed = np.flatnonzero(np.any(memo[0] != key, axis=0))
+            bK, bM = memo[1].copy(), memo[2].copy()
+            if changed.size:
+                bK[changed], bM[changed] = self.beam_matrices(props, elements=changed)
+        self._beam_memo = (key, bK.copy(), bM.copy())
+        return bK, bM
 
     def ground_stiffness(self, element_matrices: dict):
         """CSR stiffness of the springs to ground alone (None if there are none)."""

@@ -185,32 +185,46 @@ def _rayleigh_ritz(Kr, Mr, n_want):
     return lam[:n_want], y
 
 
-def _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift, max_blocks=12, min_blocks=4):
-    """Shift-invert block Krylov + Rayleigh-Ritz; V, M V and K V are kept so that each new block
-    costs one banded solve and two sparse products."""
+def _m_orthonormal_columns(Y, MY):
+    """Y, MY scaled so that Y^T M Y = I: Cholesky QR, or an eigen-decomposition that drops
+    directions with negligible M-norm when the block is (numerically) rank deficient."""
+    G = Y.T @ MY
+    G = 0.5 * (G + G.T)
+    try:
+        L = np.linalg.cholesky(G)
+        if np.min(np.diag(L)) > 1e-7 * np.max(np.diag(L)):
+            inv_lt = sl.solve_triangular(L, np.eye(L.shape[0]), lower=True).T
+            return Y @ inv_lt, MY @ inv_lt
+    except np.linalg.LinAlgError:
+        pass
+    w, U = np.linalg.eigh(G)
+    keep = w > 1e-12 * max(w.max(), 1e-300)
+    scale = U[:, keep] / np.sqrt(w[keep])
+    return Y @ scale, MY @ scale
+
+
+def _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift, max_blocks=12, min_blocks=3):
+    """Shift-invert block Krylov + Rayleigh-Ritz.
+
+    The rigid-body motions span the null space of a free body exactly, so they are the first
+    columns of the basis and the Krylov blocks start from a random block M-orthogonal to them
+    (A^-1 M keeps that orthogonality, so later blocks do not lose rank).  V, M V and K V are kept,
+    so each new block costs one banded solve and two sparse products.
+    """
     n = K.shape[0]
     chol = banded.factor(K.data, M.data, shift)
-    block = min(n_want + 8, n)
+    block = max(1, min(n_want + 2, n - rigid_basis.shape[1]))
+    V, MV = _m_orthonormal_columns(rigid_basis, M @ rigid_basis)
+    KV = K @ V
     rng = np.random.default_rng(20130220)  # fixed: the solver is deterministic
-    start = np.concatenate(
-        [rigid_basis, rng.standard_normal((n, block - rigid_basis.shape[1]))], axis=1
-    )
-    V = np.zeros((n, 0))
-    MV = np.zeros((n, 0))
-    KV = np.zeros((n, 0))
-    Y = banded.solve(chol, M @ start)
+    Y = banded.solve(chol, M @ rng.standard_normal((n, block)))
     lam = phi = None
     for it in range(max_blocks):
         for _ in range(2):  # classical Gram-Schmidt, twice is enough (Giraud et al. 2005)
             Y = Y - V @ (MV.T @ Y)
-        MY = M @ Y
-        G = Y.T @ MY
-        w, U = np.linalg.eigh(0.5 * (G + G.T))
-        keep = w > 1e-12 * max(w.max(), 1e-300)
-        if not np.any(keep):
+        Y, MY = _m_orthonormal_columns(Y, M @ Y)
+        if Y.shape[1] == 0:
             break
-        scale = U[:, keep] / np.sqrt(w[keep])
-        Y, MY = Y @ scale, MY @ scale
         V = np.concatenate([V, Y], axis=1)
         MV = np.concatenate([MV, MY], axis=1)
         KV = np.concatenate([KV, K @ Y], axis=1)

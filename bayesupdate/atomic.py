@@ -26,8 +26,15 @@ def check_output_path(path: str | os.PathLike, force: bool = False) -> Path:
         raise BayesUpdateError(f"{target}: already exists; use --force to overwrite it")
     if not folder.is_dir():
         raise BayesUpdateError(f"{target}: folder {folder} does not exist; create it first")
-    if not os.access(folder, os.W_OK):
-        raise BayesUpdateError(f"{target}: folder {folder} is not writable; choose another --out")
+    # os.access says yes to root even where nothing can be created (read-only mounts, /sys):
+    # try it for real
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError:
+        raise BayesUpdateError(
+            f"{target}: folder {folder} is not writable; choose another --out"
+        ) from None
     return target
 
 

@@ -40,9 +40,9 @@ def run(args) -> int:
 
     if args.modes < 1:
         raise BayesUpdateError(f"--modes must be >= 1, got {args.modes}")
+    params = parse_assignments(args.set)
     options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
     model = get_model(args.model, **options)
-    params = parse_assignments(args.set)
     if not hasattr(model, "solve"):
         raise BayesUpdateError(f"model {args.model!r} is not an FE model; 'modes' needs one")
     result = model.solve(params, n_modes=args.modes, energies=True)

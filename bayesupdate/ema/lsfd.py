@@ -1,0 +1,165 @@
+"""Least-squares frequency-domain (LSFD) residues, mode shapes and modal phase collinearity.
+
+With the poles s_r fixed (from LSCE), every FRF is linear in its residues (seed eq. 4):
+  H_k(jw) = sum_r [A_kr (jw)^p / (jw - s_r) + conj(A_kr) (jw)^p / (jw - conj s_r)]
+            + LR_k (jw)^p / (jw)^2 + UR_k (jw)^p,
+p = 0, 1, 2 for receptance, mobility, accelerance; LR (lower residual: modes below the range)
+and UR (upper residual: modes above it) are real.  Writing A = a + j b keeps the conjugate pair
+structure with real unknowns; one real least-squares solve serves all FRFs (shared basis).
+
+Mode shapes: for a fixed DOF q of a test set and roving DOFs i, A_iqr = psi_ir psi_qr / (2 j
+w_dr) for mass-normalised (unit modal-A) scaling, so with the driving point i = q,
+psi_qr = sqrt(2 j w_dr A_qqr) and psi_ir = 2 j w_dr A_iqr / psi_qr.
+"""
+
+import numpy as np
+
+from bayesupdate.ema.frf_set import KIND_POWER
+from bayesupdate.ema.synthesis import frf_basis
+
+
+def lsfd_residues(
+    frequencies_hz: np.ndarray,
+    frf: np.ndarray,
+    poles: np.ndarray,
+    kind: str = "accelerance",
+    residuals: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Residues (n_frf, m) complex and real lower/upper residuals (n_frf,) by least squares.
+
+    frequencies_hz (n_f,) [Hz], frf (n_frf, n_f), poles (m,) [rad/s] with Im > 0.  Lines at
+    0 Hz are left out (the lower-residual term is singular there).
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    keep = f > 0
+    f = f[keep]
+    h = np.atleast_2d(frf)[:, keep]
+    poles = np.asarray(poles, dtype=complex)
+    m = poles.size
+    pos, neg = frf_basis(f, poles, kind)
+    cols = [pos + neg, 1j * (pos - neg)]
+    if residuals:
+        jw = 2j * np.pi * f
+        factor = jw ** KIND_POWER[kind]
+        cols += [(factor / jw**2)[:, None], factor[:, None]]
+    basis = np.hstack(cols)
+    scale = np.linalg.norm(basis, axis=0)
+    scale[scale == 0] = 1.0
+    design = np.vstack([basis.real, basis.imag]) / scale
+    rhs = np.vstack([h.real.T, h.imag.T])
+    coef = np.linalg.lstsq(design, rhs, rcond=None)[0] / scale[:, None]
+    residues = (coef[:m] + 1j * coef[m : 2 * m]).T
+    if residuals:
+        lower, upper = coef[2 * m], coef[2 * m + 1]
+    else:
+        lower = upper = np.zeros(h.shape[0])
+    return residues, lower, upper
+
+
+def mpc(shapes: np.ndarray) -> np.ndarray:
+    """Modal phase collinearity (Pappa et al. 1993) of each column of (n_dof, m) shapes, in [0, 1].
+
+    MPC = ((l1 - l2) / (l1 + l2))^2 with l1 >= l2 the eigenvalues of the 2x2 covariance of the
+    real and imaginary parts; 1 for a real (normal) mode, 0 for a circularly spread one.
+    """
+    x = np.atleast_2d(np.asarray(shapes, dtype=complex).T.T)
+    re, im = x.real, x.imag
+    sxx = np.sum(re * re, axis=0)
+    syy = np.sum(im * im, axis=0)
+    sxy = np.sum(re * im, axis=0)
+    tr = sxx + syy
+    det = sxx * syy - sxy**2
+    disc = np.sqrt(np.maximum(tr**2 / 4 - det, 0.0))
+    l1, l2 = tr / 2 + disc, tr / 2 - disc
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(tr > 0, ((l1 - l2) / np.where(tr > 0, tr, 1.0)) ** 2, 0.0)
+
+
+def realise(shapes: np.ndarray) -> np.ndarray:
+    """Real shapes (n_dof, m): each column rotated to its best-fit real line, real part kept."""
+    x = np.asarray(shapes, dtype=complex)
+    # the angle maximising sum Re(e^{-j t} x)^2 is half the angle of sum x^2
+    theta = 0.5 * np.angle(np.sum(x**2, axis=0))
+    return np.real(x * np.exp(-1j * theta)[None, :])
+
+
+def shapes_from_residues(
+    residues: np.ndarray,
+    poles: np.ndarray,
+    sets: list[dict],
+    reliable_fraction: float = 0.02,
+) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
+    """Mode shapes (n_dof, m) at the roving DOFs of all sets, scaled consistently.
+
+    residues (n_frf, m), poles (m,), sets from :meth:`FrfSet.sets`.  Each set is scaled by its
+    driving point (mass-normalised) when that residue is reliable (at least ``reliable_fraction``
+    of the set's largest and the set itself at least that fraction of the strongest set);
+    otherwise, or when there is no driving point, the set is aligned to an already scaled set
+    on shared DOF labels (complex least-squares scale), or, lacking both, left at the common
+    scale sqrt(max driving residue).  A weak set (norm below ``reliable_fraction`` of the
+    strongest) only holds noise for this mode and keeps the common scale.  Shared labels are
+    averaged over the sets that see the mode.  Returns (labels, shapes,
+    mass_normalised (m,) bool: every set of the mode was scaled by its own driving point).
+    """
+    wd = np.imag(poles)
+    prod = residues * (2j * wd)[None, :]  # psi_i psi_q
+    n_modes = prod.shape[1]
+    set_norm = np.array([np.linalg.norm(prod[s["rows"]], axis=0) for s in sets])  # (n_set, m)
+    dp = np.array(
+        [
+            prod[s["driving_row"]] if s["driving_row"] is not None else np.zeros(n_modes)
+            for s in sets
+        ]
+    )
+    common = np.sqrt(np.maximum(np.max(np.abs(dp), axis=0), 1e-300))
+    labels = tuple(dict.fromkeys(lab for s in sets for lab in s["roving"]))
+    index = {lab: i for i, lab in enumerate(labels)}
+    total = np.zeros((len(labels), n_modes), complex)
+    count = np.zeros((len(labels), n_modes))
+    massnorm = np.ones(n_modes, bool)
+    per_set = [None] * len(sets)
+    reliable = np.zeros((len(sets), n_modes), bool)
+    for k, s in enumerate(sets):
+        if s["driving_row"] is None:
+            continue
+        rows_max = np.max(np.abs(prod[s["rows"]]), axis=0)
+        reliable[k] = (np.abs(dp[k]) >= reliable_fraction * rows_max) & (
+            set_norm[k] >= reliable_fraction * set_norm.max(axis=0)
+        )
+    weak = set_norm < reliable_fraction * set_norm.max(axis=0)
+    for k, s in enumerate(sets):
+        root = np.sqrt(dp[k].astype(complex))
+        root = np.where(root.real < 0, -root, root)  # sign convention: driving point positive
+        scale = np.where(reliable[k], root, common)
+        per_set[k] = prod[s["rows"]] / scale[None, :]
+    # align unreliable sets (or sets without driving point) to reliable ones on shared labels;
+    # reliable sets also get their sign aligned, since sqrt leaves each set's sign free
+    order = sorted(range(len(sets)), key=lambda k: -set_norm[k].sum())
+    done: list[int] = []
+    for k in order:
+        psi = per_set[k]
+        for other in done:
+            shared = [lab for lab in sets[k]["roving"] if lab in sets[other]["roving"]]
+            if not shared:
+                continue
+            ia = [sets[k]["roving"].index(lab) for lab in shared]
+            ib = [sets[other]["roving"].index(lab) for lab in shared]
+            a, b = psi[ia], per_set[other][ib]
+            num = np.sum(a.conj() * b, axis=0)
+            den = np.sum(np.abs(a) ** 2, axis=0)
+            factor = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
+            # reliable sets keep their magnitude (mass-normalised) and take only the sign
+            sign = np.where(np.real(factor) < 0, -1.0, 1.0)
+            factor = np.where(reliable[k], sign, factor)
+            # a set that barely sees the mode holds noise: scaling it up would amplify noise
+            factor = np.where(weak[k], 1.0, factor)
+            psi = psi * factor[None, :]
+            break
+        per_set[k] = psi
+        done.append(k)
+        weight = np.where(weak[k], 1e-6, 1.0)  # a weak set only fills DOFs no other set has
+        for j, lab in enumerate(sets[k]["roving"]):
+            total[index[lab]] += weight * psi[j]
+            count[index[lab]] += weight
+    massnorm = np.all(reliable | weak, axis=0)
+    return labels, total / np.where(count > 0, count, 1.0), massnorm

@@ -1,0 +1,68 @@
+"""Modal data to and from HDF5.
+
+Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (m,),
+``shapes_real`` and ``shapes_imag`` (n_dof, m), ``dof_labels`` (n_dof,) strings, optional
+``mpc``, ``frequency_sd_hz``, ``weights`` (m,), any ``extra`` arrays under ``/modes/extra``;
+attribute ``source``.  Written atomically.
+"""
+
+import os
+
+import h5py
+import numpy as np
+
+from bayesupdate.atomic import atomic_path
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.modal_data import ModalData
+
+_OPTIONAL = ("damping_ratio", "mpc", "frequency_sd_hz", "weights")
+
+
+def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:
+    """Write ``modes`` to ``path`` (HDF5) atomically."""
+    with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
+        g = fh.create_group("modes")
+        g.attrs["source"] = modes.source
+        g["frequencies_hz"] = modes.frequencies_hz
+        for name in _OPTIONAL:
+            value = getattr(modes, name)
+            if value is not None:
+                g[name] = value
+        if modes.shapes is not None:
+            g["shapes_real"] = np.real(modes.shapes)
+            g["shapes_imag"] = np.imag(modes.shapes)
+        g["dof_labels"] = np.array(modes.dof_labels, dtype=h5py.string_dtype())
+        extra = g.create_group("extra")
+        for key, value in modes.extra.items():
+            arr = np.asarray(value)
+            if arr.dtype.kind in "biuf":
+                extra[key] = arr
+
+
+def read_modal_h5(path: str | os.PathLike) -> ModalData:
+    """Read ModalData written by :func:`write_modal_h5`."""
+    if not os.path.isfile(path):
+        raise BayesUpdateError(f"{path}: file not found")
+    try:
+        with h5py.File(path, "r") as fh:
+            g = fh["modes"]
+            kwargs = {name: g[name][()] for name in _OPTIONAL if name in g}
+            shapes = None
+            if "shapes_real" in g:
+                shapes = g["shapes_real"][()] + 1j * g["shapes_imag"][()]
+                if not np.any(shapes.imag):
+                    shapes = shapes.real
+            labels = tuple(
+                x.decode() if isinstance(x, bytes) else str(x) for x in g["dof_labels"][()]
+            )
+            extra = {k: v[()] for k, v in g["extra"].items()} if "extra" in g else {}
+            return ModalData(
+                frequencies_hz=g["frequencies_hz"][()],
+                shapes=shapes,
+                dof_labels=labels,
+                source=str(g.attrs.get("source", "")),
+                extra=extra,
+                **kwargs,
+            )
+    except (OSError, KeyError) as exc:
+        raise BayesUpdateError(f"{path}: not a modal-data HDF5 file ({exc})") from None

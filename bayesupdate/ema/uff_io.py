@@ -1,0 +1,227 @@
+"""UFF (universal file) I/O through pyuff: dataset 58 (FRFs) and 55 (modes).
+
+DOF labels map to UFF node/direction: ``"7V"`` = node 7, direction 3 (+Z); ``"7H"`` = node 7,
+direction 2 (+Y); ``"7L"`` = node 7, direction 1 (+X).  A negative direction on reading flips
+the FRF sign.  pyuff pitfalls guarded here: it writes NaN silently as 0 (we refuse NaN/inf
+before writing), it chokes on numpy integer node numbers (cast to int), it returns a single set
+as a dict instead of a list (wrapped), and a truncated or corrupt file raises arbitrary errors
+(turned into one BayesUpdateError); pyuff also silently drops a dataset cut off at the end of
+a truncated file, so the ``-1`` delimiters are counted first; and entity names longer than 10
+characters shift its fixed-width fields (we leave them at the default).
+"""
+
+import os
+import re
+
+import numpy as np
+
+from bayesupdate.atomic import atomic_path
+from bayesupdate.ema.frf_set import FrfSet
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.modal_data import ModalData
+
+DIRECTION_OF_LETTER = {"L": 1, "H": 2, "V": 3}
+LETTER_OF_DIRECTION = {v: k for k, v in DIRECTION_OF_LETTER.items()}
+#: UFF ordinate specific data type of each FRF kind (8 displacement, 11 velocity, 12 accel.)
+ORDINATE_TYPE = {"receptance": 8, "mobility": 11, "accelerance": 12}
+KIND_OF_ORDINATE = {v: k for k, v in ORDINATE_TYPE.items()}
+
+
+def parse_label(label: str) -> tuple[int, int]:
+    """``"7V"`` -> (7, 3); BayesUpdateError for labels that are not <number><L|H|V>."""
+    match = re.fullmatch(r"(\d+)([LHV])", str(label).strip().upper())
+    if not match:
+        raise BayesUpdateError(
+            f"DOF label {label!r}: UFF needs <node number><L|H|V>, e.g. '7V'; rename the DOF"
+        )
+    return int(match.group(1)), DIRECTION_OF_LETTER[match.group(2)]
+
+
+def make_label(node, direction) -> str:
+    """(7, 3) -> ``"7V"``; the sign of the direction is dropped."""
+    d = abs(int(direction))
+    if d not in LETTER_OF_DIRECTION:
+        raise BayesUpdateError(f"UFF direction {direction}: only translations 1..3 are supported")
+    return f"{int(node)}{LETTER_OF_DIRECTION[d]}"
+
+
+def _check_delimiters(path: str | os.PathLike) -> None:
+    """Every dataset sits between two ``-1`` lines; a truncated file breaks that pattern."""
+    with open(path, "rb") as fh:
+        lines = [line.strip() for line in fh.read().splitlines() if line.strip()]
+    n_delim = sum(1 for line in lines if line == b"-1")
+    if not lines or n_delim < 2 or n_delim % 2 or lines[-1] != b"-1":
+        raise BayesUpdateError(
+            f"{path}: UFF datasets are not closed by '-1' lines; the file is truncated or corrupt"
+        )
+
+
+def _read_sets(path: str | os.PathLike) -> list[dict]:
+    import pyuff
+
+    if not os.path.isfile(path):
+        raise BayesUpdateError(f"{path}: file not found")
+    _check_delimiters(path)
+    try:
+        sets = pyuff.UFF(str(path)).read_sets()
+    except Exception as exc:  # pyuff raises anything on a truncated or corrupt file
+        raise BayesUpdateError(
+            f"{path}: not a readable UFF file ({type(exc).__name__}); is it truncated?"
+        ) from None
+    if isinstance(sets, dict):  # pyuff returns one set as a bare dict
+        sets = [sets]
+    return list(sets)
+
+
+def write_uff58(path: str | os.PathLike, frfs: FrfSet) -> None:
+    """Write every FRF of ``frfs`` as a dataset 58 (complex, even abscissa) atomically."""
+    import pyuff
+
+    if not np.all(np.isfinite(frfs.frf)):  # pyuff would write NaN as 0 without a word
+        raise BayesUpdateError(f"{path}: FRFs contain NaN or inf; refusing to write them")
+    datasets = []
+    for k in range(frfs.n_frf):
+        rn, rd = parse_label(frfs.response_labels[k])
+        fn, fd = parse_label(frfs.reference_labels[k])
+        datasets.append(
+            pyuff.prepare_58(
+                func_type=4,
+                rsp_node=int(rn),
+                rsp_dir=int(rd),
+                ref_node=int(fn),
+                ref_dir=int(fd),
+                ordinate_spec_data_type=ORDINATE_TYPE[frfs.kind],
+                orddenom_spec_data_type=13,
+                abscissa_spec_data_type=18,
+                data=np.asarray(frfs.frf[k], dtype=complex),
+                x=np.asarray(frfs.frequencies_hz, dtype=float),
+                abscissa_spacing=1,
+                abscissa_min=float(frfs.frequencies_hz[0]),
+                abscissa_inc=float(frfs.df_hz),
+                id1=f"FRF {frfs.response_labels[k]}/{frfs.reference_labels[k]}",
+                id2=(frfs.source or "bayesupdate")[:80],
+            )
+        )
+    with atomic_path(path, suffix=".uff") as tmp:
+        tmp.unlink()  # pyuff appends to an existing file
+        pyuff.UFF(str(tmp)).write_sets(datasets, mode="add")
+
+
+def read_uff58(path: str | os.PathLike) -> FrfSet:
+    """Read all FRF datasets (58, function type 4) of a UFF file into one FrfSet."""
+    sets = [s for s in _read_sets(path) if s.get("type") == 58]
+    if not sets:
+        raise BayesUpdateError(f"{path}: holds no dataset 58 (FRF); export the FRFs as UFF 58")
+    frf_sets = [s for s in sets if int(s.get("func_type", 4)) == 4] or sets
+    x0 = np.asarray(frf_sets[0]["x"], dtype=float)
+    rows, resp, ref = [], [], []
+    for s in frf_sets:
+        x = np.asarray(s["x"], dtype=float)
+        if x.shape != x0.shape or not np.allclose(x, x0, rtol=1e-9, atol=1e-9):
+            raise BayesUpdateError(f"{path}: FRFs have different frequency axes; resample them")
+        data = np.asarray(s["data"])
+        if data.shape != x0.shape:
+            raise BayesUpdateError(
+                f"{path}: a dataset 58 has {data.size} values for "
+                f"{x0.size} frequencies; the file is corrupt"
+            )
+        sign = np.sign(int(s["rsp_dir"])) * np.sign(int(s["ref_dir"]))
+        rows.append(sign * data)
+        resp.append(make_label(s["rsp_node"], s["rsp_dir"]))
+        ref.append(make_label(s["ref_node"], s["ref_dir"]))
+    kind = KIND_OF_ORDINATE.get(int(frf_sets[0].get("ordinate_spec_data_type", 12)), "accelerance")
+    return FrfSet(
+        frequencies_hz=x0,
+        frf=np.array(rows),
+        response_labels=tuple(resp),
+        reference_labels=tuple(ref),
+        kind=kind,
+        source=os.path.basename(str(path)),
+    )
+
+
+def write_uff55(path: str | os.PathLike, modes: ModalData) -> None:
+    """Write modes as dataset 55 (normal modes, 3 translations per node; real shapes).
+
+    Complex shapes are realised first (rotated to their best real line).  Missing DOFs of a
+    node are written as 0; on reading, a DOF that is 0 in every mode is dropped.
+    """
+    import pyuff
+
+    from bayesupdate.ema.lsfd import realise
+
+    if modes.shapes is None:
+        raise BayesUpdateError(f"{path}: modal data has no shapes; UFF 55 needs them")
+    shapes = realise(modes.shapes) if np.iscomplexobj(modes.shapes) else np.asarray(modes.shapes)
+    if not np.all(np.isfinite(shapes)):
+        raise BayesUpdateError(f"{path}: shapes contain NaN or inf; refusing to write them")
+    parsed = [parse_label(lab) for lab in modes.dof_labels]
+    nodes = sorted({n for n, _ in parsed})
+    node_row = {n: i for i, n in enumerate(nodes)}
+    damping = modes.damping_ratio if modes.damping_ratio is not None else np.zeros(modes.n_modes)
+    datasets = []
+    for r in range(modes.n_modes):
+        comp = np.zeros((len(nodes), 3))
+        for (n, d), value in zip(parsed, shapes[:, r], strict=True):
+            comp[node_row[n], d - 1] = value
+        datasets.append(
+            pyuff.prepare_55(
+                model_type=1,
+                analysis_type=2,
+                data_ch=2,
+                spec_data_type=8,
+                data_type=2,
+                n_data_per_node=3,
+                load_case=1,
+                mode_n=r + 1,
+                freq=float(modes.frequencies_hz[r]),
+                modal_m=1.0,
+                modal_damp_vis=float(damping[r]),
+                modal_damp_his=0.0,
+                node_nums=np.array([int(n) for n in nodes]),
+                r1=comp[:, 0],
+                r2=comp[:, 1],
+                r3=comp[:, 2],
+                r4=np.zeros(len(nodes)),
+                r5=np.zeros(len(nodes)),
+                r6=np.zeros(len(nodes)),
+                id1=f"mode {r + 1}",
+                id2=(modes.source or "bayesupdate")[:80],
+                id3="NONE",
+                id4="NONE",
+                id5="NONE",
+            )
+        )
+    with atomic_path(path, suffix=".uff") as tmp:
+        tmp.unlink()
+        pyuff.UFF(str(tmp)).write_sets(datasets, mode="add")
+
+
+def read_uff55(path: str | os.PathLike) -> ModalData:
+    """Read dataset-55 modes into ModalData (labels like ``"7V"``; all-zero DOFs dropped)."""
+    sets = [s for s in _read_sets(path) if s.get("type") == 55]
+    if not sets:
+        raise BayesUpdateError(f"{path}: holds no dataset 55 (modes)")
+    nodes = np.asarray(sets[0]["node_nums"]).astype(int)
+    cols, freq, damp = [], [], []
+    for s in sets:
+        if not np.array_equal(np.asarray(s["node_nums"]).astype(int), nodes):
+            raise BayesUpdateError(f"{path}: modes are given at different nodes")
+        cols.append(np.stack([np.asarray(s[f"r{d}"], dtype=float) for d in (1, 2, 3)], axis=1))
+        freq.append(float(s["freq"]))
+        damp.append(float(s.get("modal_damp_vis", 0.0)))
+    stack = np.stack(cols, axis=-1)  # (n_node, 3, m)
+    labels, shapes = [], []
+    for d in (3, 2, 1):  # V first, then H, then L, node order within each
+        for i, n in enumerate(nodes):
+            if np.any(stack[i, d - 1] != 0):
+                labels.append(make_label(n, d))
+                shapes.append(stack[i, d - 1])
+    order = np.argsort(freq)
+    return ModalData(
+        frequencies_hz=np.array(freq)[order],
+        damping_ratio=np.array(damp)[order],
+        shapes=np.array(shapes)[:, order],
+        dof_labels=tuple(labels),
+        source=os.path.basename(str(path)),
+    )

@@ -1,0 +1,121 @@
+"""UFF 58/55 and HDF5 round trips, pyuff pitfalls, bad input."""
+
+import numpy as np
+import pytest
+
+from bayesupdate.ema.frf_set import FrfSet
+from bayesupdate.ema.modal_h5 import read_modal_h5, write_modal_h5
+from bayesupdate.ema.uff_io import read_uff55, read_uff58, write_uff55, write_uff58
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.modal_data import ModalData
+
+
+def _frfs(n=3):
+    f = np.arange(0, 50.5, 0.5)
+    rng = np.random.default_rng(0)
+    h = rng.normal(size=(n, f.size)) + 1j * rng.normal(size=(n, f.size))
+    resp = ("1V", "1V", "1H")[:n]
+    ref = ("1V", "12V", "3H")[:n]
+    return FrfSet(f, h, resp, ref, kind="mobility")
+
+
+def test_uff58_round_trip(tmp_path):
+    frfs = _frfs()
+    write_uff58(tmp_path / "a.uff", frfs)
+    back = read_uff58(tmp_path / "a.uff")
+    assert np.max(np.abs(back.frf - frfs.frf)) < 1e-10 * np.abs(frfs.frf).max()
+    assert back.response_labels == frfs.response_labels
+    assert back.reference_labels == frfs.reference_labels
+    assert back.kind == "mobility"
+    assert np.allclose(back.frequencies_hz, frfs.frequencies_hz)
+
+
+def test_uff58_single_set_comes_back_as_frf_set(tmp_path):
+    # pyuff returns a lone dataset as a dict, not a list
+    frfs = _frfs(1)
+    write_uff58(tmp_path / "one.uff", frfs)
+    back = read_uff58(tmp_path / "one.uff")
+    assert back.n_frf == 1
+    assert back.frf[0, 7] == pytest.approx(frfs.frf[0, 7], rel=1e-10)
+
+
+def test_uff58_refuses_nan_and_truncated(tmp_path):
+    frfs = _frfs()
+    write_uff58(tmp_path / "a.uff", frfs)
+    text = (tmp_path / "a.uff").read_text()
+    (tmp_path / "cut.uff").write_text(text[: len(text) // 2])  # mid-dataset
+    with pytest.raises(BayesUpdateError, match="truncated"):
+        read_uff58(tmp_path / "cut.uff")
+    # FrfSet refuses NaN, so a NaN can only reach the writer by bypassing it
+    object.__setattr__(frfs, "frf", np.where(np.arange(frfs.frf.shape[1]) == 3, np.nan, frfs.frf))
+    with pytest.raises(BayesUpdateError, match="NaN"):
+        write_uff58(tmp_path / "nan.uff", frfs)
+    assert not (tmp_path / "nan.uff").exists()
+
+
+def test_uff55_round_trip_with_numpy_int_nodes(tmp_path):
+    rng = np.random.default_rng(2)
+    labels = tuple(f"{np.int64(k)}V" for k in range(1, 6)) + ("3H", "5H")
+    modes = ModalData(
+        np.array([12.5, 30.25]), np.array([0.01, 0.02]), rng.normal(size=(7, 2)), labels
+    )
+    write_uff55(tmp_path / "m.uff", modes)
+    back = read_uff55(tmp_path / "m.uff")
+    assert back.dof_labels == labels
+    assert np.allclose(back.frequencies_hz, modes.frequencies_hz)
+    assert np.allclose(back.damping_ratio, modes.damping_ratio)
+    # pyuff writes dataset 55 values with 6 significant digits
+    assert np.max(np.abs(back.shapes - modes.shapes)) < 1e-5 * np.abs(modes.shapes).max()
+
+
+def test_modal_h5_round_trip(tmp_path):
+    shapes = np.array([[1.0 + 0.1j, 0.5], [0.2, -1.0 + 0.0j]])
+    modes = ModalData(
+        np.array([10.0, 20.0]),
+        np.array([0.01, 0.02]),
+        shapes,
+        ("1V", "2H"),
+        mpc=np.array([0.99, 1.0]),
+        source="x",
+        extra={"stable_orders": np.array([7, 9])},
+    )
+    write_modal_h5(tmp_path / "m.h5", modes)
+    back = read_modal_h5(tmp_path / "m.h5")
+    assert np.array_equal(back.shapes, shapes)
+    assert back.dof_labels == ("1V", "2H")
+    assert np.array_equal(back.extra["stable_orders"], [7, 9])
+    assert back.mpc[0] == pytest.approx(0.99)
+
+
+@pytest.mark.parametrize(
+    "freqs, match",
+    [
+        (np.array([0.0, 1.0, 2.0, 2.5, 4.0]), "not uniform"),
+        (np.array([4.0, 3.0, 2.0, 1.0, 0.0]), "not strictly increasing"),
+    ],
+)
+def test_bad_frequency_axis(freqs, match):
+    with pytest.raises(BayesUpdateError, match=match):
+        FrfSet(freqs, np.ones((1, 5)), ("1V",), ("1V",))
+
+
+def test_nan_and_mismatched_shapes():
+    f = np.arange(5.0)
+    with pytest.raises(BayesUpdateError, match="NaN"):
+        FrfSet(f, np.array([[1, 2, np.inf, 4, 5]]), ("1V",), ("1V",))
+    with pytest.raises(BayesUpdateError, match="n_frf"):
+        FrfSet(f, np.ones((2, 4)), ("1V", "2V"), ("1V", "1V"))
+    with pytest.raises(BayesUpdateError, match="labels"):
+        FrfSet(f, np.ones((2, 5)), ("1V",), ("1V", "1V"))
+
+
+def test_mismatched_inputs_of_estimation_and_virtual_test():
+    from bayesupdate.ema.frf_estimation import h1_h2_coherence
+    from bayesupdate.ema.virtual_test import virtual_impact_test
+
+    with pytest.raises(BayesUpdateError, match="equal length"):
+        h1_h2_coherence(np.ones(100), np.ones(99), 100.0)
+    with pytest.raises(BayesUpdateError, match="shapes"):
+        virtual_impact_test([10.0, 20.0], [0.01, 0.01], np.ones((3, 3)), ("1V", "2V", "3V"))
+    with pytest.raises(BayesUpdateError, match="no shape values"):
+        virtual_impact_test([10.0], [0.01], np.ones((1, 1)), ("1V",), layout=[("1V", "2V")])

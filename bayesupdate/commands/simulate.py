@@ -53,18 +53,26 @@ def add_arguments(parser):
 def simulate_test(model, params, effects, noise, seed, n_modes=20):
     """The virtual test of ``model`` with ``effects`` at ``params``: (FrfSet, truth dict)."""
     from bayesupdate.discovery.effects import extend_model
-    from bayesupdate.ema.virtual_test import virtual_impact_test
+    from bayesupdate.ema.virtual_test import (
+        best_reference_points,
+        seed_layout,
+        virtual_impact_test,
+    )
 
     for effect in effects:
         model = extend_model(model, effect)
     result = model.solve(params, n_modes=n_modes)
     rng = np.random.default_rng(seed)
     damping = rng.uniform(0.005, 0.03, size=n_modes)
+    # like a test engineer, place the accelerometers where the (nominal) modes in band are seen
+    in_band = result.frequencies_hz <= 150.0
+    ref_v, ref_h = best_reference_points(result.sensor_shapes[:, in_band], result.sensor_labels)
     frfs = virtual_impact_test(
         result.frequencies_hz,
         damping,
         result.sensor_shapes,
         result.sensor_labels,
+        layout=seed_layout(20, ref_v, ref_h),
         noise=noise,
         seed=rng,
     )
@@ -76,6 +84,7 @@ def simulate_test(model, params, effects, noise, seed, n_modes=20):
         "effects": [e.spec() for e in effects],
         "shapes": result.sensor_shapes,
         "dof_labels": result.sensor_labels,
+        "reference_points": (ref_v, ref_h),
     }
     return frfs, truth
 
@@ -108,6 +117,7 @@ def run(args) -> int:
         "true_frequencies_hz": [round(float(f), 6) for f in truth["frequencies_hz"][in_band]],
         "true_damping_ratio": [round(float(z), 6) for z in truth["damping_ratio"][in_band]],
         "mass_kg": float(truth["mass_kg"]),
+        "reference_points": {"V": truth["reference_points"][0], "H": truth["reference_points"][1]},
     }
     if args.json:
         print(json.dumps(summary))

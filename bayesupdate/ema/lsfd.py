@@ -91,15 +91,15 @@ def shapes_from_residues(
 ) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
     """Mode shapes (n_dof, m) at the roving DOFs of all sets, scaled consistently.
 
-    residues (n_frf, m), poles (m,), sets from :meth:`FrfSet.sets`.  Each set is scaled by its
-    driving point (mass-normalised) when that residue is reliable (at least ``reliable_fraction``
-    of the set's largest and the set itself at least that fraction of the strongest set);
-    otherwise, or when there is no driving point, the set is aligned to an already scaled set
-    on shared DOF labels (complex least-squares scale), or, lacking both, left at the common
-    scale sqrt(max driving residue).  A weak set (norm below ``reliable_fraction`` of the
-    strongest) only holds noise for this mode and keeps the common scale.  Shared labels are
-    averaged over the sets that see the mode.  Returns (labels, shapes,
-    mass_normalised (m,) bool: every set of the mode was scaled by its own driving point).
+    residues (n_frf, m), poles (m,), sets from :meth:`FrfSet.sets`.  For each mode the set whose
+    driving point sees the mode most strongly is the anchor: it is mass-normalised by its driving
+    point (psi_q = sqrt(2 j w_d A_qq)).  Every other set is scaled onto the already scaled sets
+    through their shared DOF labels (complex least squares: magnitude and sign), because a set
+    whose own driving point barely moves in this mode would give a noisy sqrt; only a set that
+    shares no label with a scaled set uses its own driving point.  A weak set (norm below
+    ``reliable_fraction`` of the strongest) only holds noise for this mode: it keeps the common
+    scale and only fills DOFs no other set has.  Shared labels are averaged over the sets.
+    Returns (labels, shapes, mass_normalised (m,) bool: the anchor had a driving point).
     """
     wd = np.imag(poles)
     prod = residues * (2j * wd)[None, :]  # psi_i psi_q
@@ -114,52 +114,44 @@ def shapes_from_residues(
     common = np.sqrt(np.maximum(np.max(np.abs(dp), axis=0), 1e-300))
     labels = tuple(dict.fromkeys(lab for s in sets for lab in s["roving"]))
     index = {lab: i for i, lab in enumerate(labels)}
-    total = np.zeros((len(labels), n_modes), complex)
-    count = np.zeros((len(labels), n_modes))
-    massnorm = np.ones(n_modes, bool)
-    per_set = [None] * len(sets)
-    reliable = np.zeros((len(sets), n_modes), bool)
-    for k, s in enumerate(sets):
-        if s["driving_row"] is None:
-            continue
-        rows_max = np.max(np.abs(prod[s["rows"]]), axis=0)
-        reliable[k] = (np.abs(dp[k]) >= reliable_fraction * rows_max) & (
-            set_norm[k] >= reliable_fraction * set_norm.max(axis=0)
-        )
+    shapes = np.zeros((len(labels), n_modes), complex)
+    massnorm = np.zeros(n_modes, bool)
     weak = set_norm < reliable_fraction * set_norm.max(axis=0)
-    for k, s in enumerate(sets):
-        root = np.sqrt(dp[k].astype(complex))
-        root = np.where(root.real < 0, -root, root)  # sign convention: driving point positive
-        scale = np.where(reliable[k], root, common)
-        per_set[k] = prod[s["rows"]] / scale[None, :]
-    # align unreliable sets (or sets without driving point) to reliable ones on shared labels;
-    # reliable sets also get their sign aligned, since sqrt leaves each set's sign free
-    order = sorted(range(len(sets)), key=lambda k: -set_norm[k].sum())
-    done: list[int] = []
-    for k in order:
-        psi = per_set[k]
-        for other in done:
-            shared = [lab for lab in sets[k]["roving"] if lab in sets[other]["roving"]]
-            if not shared:
-                continue
-            ia = [sets[k]["roving"].index(lab) for lab in shared]
-            ib = [sets[other]["roving"].index(lab) for lab in shared]
-            a, b = psi[ia], per_set[other][ib]
-            num = np.sum(a.conj() * b, axis=0)
-            den = np.sum(np.abs(a) ** 2, axis=0)
-            factor = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
-            # reliable sets keep their magnitude (mass-normalised) and take only the sign
-            sign = np.where(np.real(factor) < 0, -1.0, 1.0)
-            factor = np.where(reliable[k], sign, factor)
-            # a set that barely sees the mode holds noise: scaling it up would amplify noise
-            factor = np.where(weak[k], 1.0, factor)
-            psi = psi * factor[None, :]
-            break
-        per_set[k] = psi
-        done.append(k)
-        weight = np.where(weak[k], 1e-6, 1.0)  # a weak set only fills DOFs no other set has
-        for j, lab in enumerate(sets[k]["roving"]):
-            total[index[lab]] += weight * psi[j]
-            count[index[lab]] += weight
-    massnorm = np.all(reliable | weak, axis=0)
-    return labels, total / np.where(count > 0, count, 1.0), massnorm
+
+    def own_scale(k, r):
+        root = np.sqrt(complex(dp[k, r]))
+        return -root if root.real < 0 else root  # sign convention: driving point positive
+
+    for r in range(n_modes):  # a few modes: the per-mode anchor logic reads best as a loop
+        order = sorted(range(len(sets)), key=lambda k: -abs(dp[k, r]))
+        scaled: dict[int, np.ndarray] = {}
+        total = np.zeros(len(labels), complex)
+        count = np.zeros(len(labels))
+        for k in order:
+            col = prod[sets[k]["rows"], r]
+            if not scaled:
+                has_dp = sets[k]["driving_row"] is not None and abs(dp[k, r]) > 0
+                psi = col / (own_scale(k, r) if has_dp else common[r])
+                massnorm[r] = has_dp
+            else:
+                psi = None
+                for other, psi_other in scaled.items():
+                    shared = [lab for lab in sets[k]["roving"] if lab in sets[other]["roving"]]
+                    if not shared:
+                        continue
+                    a = col[[sets[k]["roving"].index(lab) for lab in shared]]
+                    b = psi_other[[sets[other]["roving"].index(lab) for lab in shared]]
+                    den = np.sum(np.abs(a) ** 2)
+                    if den > 0 and not weak[k, r]:
+                        psi = col * (np.sum(a.conj() * b) / den)
+                    break
+                if psi is None:  # no link to a scaled set (or too weak to scale through it)
+                    has_dp = sets[k]["driving_row"] is not None and abs(dp[k, r]) > 0
+                    psi = col / (own_scale(k, r) if has_dp and not weak[k, r] else common[r])
+            scaled[k] = psi
+            weight = 1e-6 if weak[k, r] else 1.0
+            for j, lab in enumerate(sets[k]["roving"]):
+                total[index[lab]] += weight * psi[j]
+                count[index[lab]] += weight
+        shapes[:, r] = total / np.where(count > 0, count, 1.0)
+    return labels, shapes, massnorm

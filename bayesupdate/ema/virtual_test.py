@@ -24,12 +24,49 @@ from bayesupdate.ema.synthesis import synthesize_from_modes
 from bayesupdate.errors import BayesUpdateError
 
 
-def seed_layout(n_points: int = 20) -> list[tuple[str, str]]:
-    """(response, reference) pairs of the seed's layout: 19 V + 20 H + 1 cross FRF = 40 FRFs."""
-    pairs = [("1V", f"{k}V") for k in range(1, n_points)]
-    pairs += [("1H", f"{k}H") for k in range(1, n_points + 1)]
-    pairs.append(("1H", "1V"))
+def seed_layout(
+    n_points: int = 20, reference_v: int = 1, reference_h: int = 1
+) -> list[tuple[str, str]]:
+    """(response, reference) pairs of the seed's layout: 19 V + 20 H + 1 cross FRF = 40 FRFs.
+
+    The V accelerometer sits at point ``reference_v`` and the hammer roves over 19 of the points
+    (all but the last one that is not the reference point, so the driving point is included);
+    the H accelerometer at ``reference_h`` sees hammer hits at all points; the cross FRF
+    (H accelerometer, V hit at ``reference_v``) ties the signs of the two sets.
+    """
+    skip_v = n_points if reference_v != n_points else n_points - 1
+    pairs = [(f"{reference_v}V", f"{k}V") for k in range(1, n_points + 1) if k != skip_v]
+    pairs += [(f"{reference_h}H", f"{k}H") for k in range(1, n_points + 1)]
+    pairs.append((f"{reference_h}H", f"{reference_v}V"))
     return pairs
+
+
+def best_reference_points(
+    shapes: np.ndarray, dof_labels: tuple[str, ...], n_points: int = 20, significant: float = 0.05
+) -> tuple[int, int]:
+    """Pre-test analysis: the accelerometer points (V, H) from which every mode is best seen.
+
+    A roving-hammer set measures psi_i psi_ref, so its reference must move in every mode that has
+    motion in the set's direction.  For the V set, the modes whose V part holds at least
+    ``significant`` of the shape's norm count; the point maximising the worst |phi_ref| / max|phi|
+    (V part) over those modes wins.  Likewise for H.  shapes : (n_dof, m) at ``dof_labels``.
+    """
+    index = {lab: i for i, lab in enumerate(dof_labels)}
+    total = np.linalg.norm(shapes, axis=0)
+
+    def best(direction):
+        rows = [
+            index[f"{k}{direction}"] for k in range(1, n_points + 1) if f"{k}{direction}" in index
+        ]
+        points = [k for k in range(1, n_points + 1) if f"{k}{direction}" in index]
+        part = np.abs(shapes[rows])  # (n_points, m)
+        matters = np.linalg.norm(part, axis=0) >= significant * np.where(total > 0, total, 1.0)
+        if not np.any(matters):
+            return points[0]
+        vis = part[:, matters] / np.max(part[:, matters], axis=0)
+        return points[int(np.argmax(vis.min(axis=1)))]
+
+    return best("V"), best("H")
 
 
 def half_sine_pulse(t: np.ndarray, duration_s: float, peak_n: float = 100.0) -> np.ndarray:

@@ -12,6 +12,7 @@ characters shift its fixed-width fields (we leave them at the default).
 
 import os
 import re
+import warnings
 
 import numpy as np
 
@@ -63,7 +64,10 @@ def _read_sets(path: str | os.PathLike) -> list[dict]:
         raise BayesUpdateError(f"{path}: file not found")
     _check_delimiters(path)
     try:
-        sets = pyuff.UFF(str(path)).read_sets()
+        # a non-finite value makes pyuff's numpy complain; read_uff58 reports it as one error
+        with warnings.catch_warnings(), np.errstate(invalid="ignore", over="ignore"):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sets = pyuff.UFF(str(path)).read_sets()
     except Exception as exc:  # pyuff raises anything on a truncated or corrupt file
         raise BayesUpdateError(
             f"{path}: not a readable UFF file ({type(exc).__name__}); is it truncated?"
@@ -126,7 +130,8 @@ def read_uff58(path: str | os.PathLike) -> FrfSet:
                 f"{x0.size} frequencies; the file is corrupt"
             )
         sign = np.sign(int(s["rsp_dir"])) * np.sign(int(s["ref_dir"]))
-        rows.append(sign * data)
+        with np.errstate(invalid="ignore"):  # NaN/inf are rejected by FrfSet with one message
+            rows.append(sign * data)
         resp.append(make_label(s["rsp_node"], s["rsp_dir"]))
         ref.append(make_label(s["ref_node"], s["ref_dir"]))
     kind = KIND_OF_ORDINATE.get(int(frf_sets[0].get("ordinate_spec_data_type", 12)), "accelerance")

@@ -240,8 +240,9 @@ class Assembler:
 
 def check_properties(structure: Structure, props: ElementProperties) -> None:
     """Raise BayesUpdateError naming the part if a property is non-physical."""
+    tube = structure.beam_shape != 2  # solid bars have no wall
     checks = (
-        ("thickness", props.beam_thickness, structure.beam_part, True),
+        ("thickness", props.beam_thickness[tube], structure.beam_part[tube], True),
         ("density", props.beam_rho, structure.beam_part, True),
         ("Young's modulus", props.beam_E, structure.beam_part, True),
         ("bend factor", props.beam_bend_factor, structure.beam_part, True),
@@ -257,7 +258,6 @@ def check_properties(structure: Structure, props: ElementProperties) -> None:
                 f"part {part!r}: {name} must be finite and {limit}, got "
                 f"{values[np.flatnonzero(bad)[0]]}"
             )
-    tube = structure.beam_shape != 2
     too_thick = tube & (
         2 * props.beam_thickness >= np.minimum(structure.beam_width, structure.beam_height)
     )

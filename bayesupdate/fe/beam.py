@@ -70,8 +70,11 @@ def _bending_mass(L, rhoA, rhoI, phi):
     return mt * (rhoA * L / den)[:, None, None] + mr * (rhoI / (L * den))[:, None, None]
 
 
+_UPPER = {k: np.triu_indices(k, 1) for k in (2, 4, 12)}
+
+
 def _symmetrize_upper(a):
-    i, j = np.triu_indices(a.shape[-1], 1)
+    i, j = _UPPER[a.shape[-1]]
     a[..., j, i] = a[..., i, j]
 
 
@@ -139,4 +142,4 @@ def to_global(K_local, R):
     T = np.zeros((n, 12, 12))
     for b in range(4):
         T[:, 3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = R
-    return np.einsum("nji,njk,nkl->nil", T, K_local, T, optimize=True)
+    return np.matmul(np.matmul(T.transpose(0, 2, 1), K_local), T)

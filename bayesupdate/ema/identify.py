@@ -118,6 +118,13 @@ def identify(
         )
     poles = np.array([p.pole for p in selected])
     fit_lo, fit_hi = bands[0].lo, bands[-1].hi
+    # End the fits at the sum-FRF minimum above the highest selected mode: a resonance just
+    # beyond the analysed range is not among the poles, and its rising flank is not the smooth
+    # upper residual the fit assumes (seed sec. 4.1: band limits at local minima).
+    f_top = max(p.frequency_hz for p in selected)
+    above = np.flatnonzero((f > f_top) & (np.arange(f.size) <= fit_hi))
+    if above.size > 2:
+        fit_hi = int(above[np.argmin(np.sum(np.abs(h[:, above]), axis=0))])
     f_fit = f[fit_lo : fit_hi + 1]
     residues, lower, upper = lsfd_residues(f_fit, h[:, fit_lo : fit_hi + 1], poles, frfs.kind)
     labels, shapes, massnorm = shapes_from_residues(residues, poles, frfs.sets())

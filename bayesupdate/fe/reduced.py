@@ -38,6 +38,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg.lapack import dsygvd as _dsygvd
 from scipy.linalg.lapack import dtrtri as _dtrtri
 from scipy.stats import qmc
 
@@ -392,6 +393,18 @@ class _Decomposition:
         return 0.5 * (out + out.transpose(0, 2, 1))
 
 
+def _compress_terms(terms: np.ndarray, rel: float = 1e-14) -> tuple[np.ndarray, np.ndarray]:
+    """(n_terms, r*r) projected terms -> (C (n_terms, k), B (k, r*r)) with terms ~= C @ B.
+
+    The interpolation nodes of one part give nearly dependent matrices (smooth in the
+    parameter), so k is about 40 % of n_terms; dropping singular values below ``rel`` times the
+    largest changes reduced entries by < 1e-14 ||K_r||, far below the certified tolerance (and
+    the certification is run on the compressed terms)."""
+    U, sv, Vt = np.linalg.svd(terms, full_matrices=False)
+    k = max(1, int(np.sum(sv > rel * sv[0])))
+    return U[:, :k] * sv[:k], Vt[:k]
+
+
 def _rel_err(approx: np.ndarray, exact: np.ndarray) -> float:
     """Largest entry error of each element matrix relative to its largest entry."""
     scale = np.abs(exact).max(axis=(-2, -1))
@@ -407,16 +420,31 @@ def batched_elastic_eigenvalues(
 
     K_ww : (B, r_e, r_e) elastic block of K; M_full : (B, r, r), r = n_rigid + r_e.
     The rigid coordinates are eliminated exactly: K_ww x = lambda S x with the Schur complement
-    S = M_ww - M_wr M_rr^-1 M_rw; S = L L^T (stacked Cholesky), C = L^-1 K_ww L^-T, eigvalsh.
+    S = M_ww - M_wr M_rr^-1 M_rw.  Eigenvalues only: LAPACK dsygvd per point (Cholesky of S,
+    reduction to standard form, divide and conquer; ~1.5x faster than stacked numpy steps for
+    r ~ 40-70, the loop costs ~1 us per point).  With ``vectors``: S = L L^T (the trailing block
+    of the stacked Cholesky of M), C = L^-1 K_ww L^-T, stacked eigh.
     Returns (B, n_modes) eigenvalues [rad^2/s^2] (and, with ``vectors``, the (B, r, n_modes)
     reduced eigenvectors, mass-normalised: y^T M y = 1).
     """
     nr = n_rigid
+    M_full = 0.5 * (M_full + M_full.transpose(0, 2, 1))
+    if not vectors:
+        M_rw = M_full[:, :nr, nr:]
+        S = M_full[:, nr:, nr:] - M_rw.transpose(0, 2, 1) @ np.linalg.solve(
+            M_full[:, :nr, :nr], M_rw
+        )
+        lam = np.empty((K_ww.shape[0], n_modes))
+        for i in range(K_ww.shape[0]):
+            out = _dsygvd(K_ww[i], S[i], jobz="N")  # (w, [a,] info)
+            w, info = out[0], out[-1]
+            if info != 0:
+                raise np.linalg.LinAlgError(f"reduced pencil not definite (LAPACK info {info})")
+            lam[i] = w[:n_modes]
+        return lam
     # the trailing block of chol(M) is chol(S): no separate Schur complement is formed
-    L_full = np.linalg.cholesky(0.5 * (M_full + M_full.transpose(0, 2, 1)))
-    L = L_full[:, nr:, nr:]
-    # LAPACK trtri per matrix: n^3/3 flops against ~2 n^3 for a batched LU solve (numpy has no
-    # batched triangular solve); the Python loop costs ~1 us per point
+    L = np.linalg.cholesky(M_full)[:, nr:, nr:]
+    # LAPACK trtri per matrix: n^3/3 flops against ~2 n^3 for a batched LU solve
     L_inv = np.empty_like(L)
     for i in range(L.shape[0]):
         L_inv[i], info = _dtrtri(L[i], lower=1)
@@ -424,8 +452,6 @@ def batched_elastic_eigenvalues(
             raise np.linalg.LinAlgError("singular reduced mass matrix")
     C = L_inv @ K_ww @ L_inv.transpose(0, 2, 1)
     C = 0.5 * (C + C.transpose(0, 2, 1))
-    if not vectors:
-        return np.linalg.eigvalsh(C)[:, :n_modes]
     lam, Z = np.linalg.eigh(C)
     b = L_inv.transpose(0, 2, 1) @ Z[:, :, :n_modes]
     a = -np.linalg.solve(M_full[:, :nr, :nr], M_full[:, :nr, nr:] @ b)
@@ -634,15 +660,15 @@ class ReducedFEModel:
         nr = self._n_rigid
         Kt = self.decomp.project(V, self.decomp.k_stacks)[:, nr:, nr:]
         Mt = self.decomp.project(V, self.decomp.m_stacks)
-        self._Kt = Kt.reshape(Kt.shape[0], -1)
-        self._Mt = Mt.reshape(Mt.shape[0], -1)
+        self._K_terms = _compress_terms(Kt.reshape(Kt.shape[0], -1))
+        self._M_terms = _compress_terms(Mt.reshape(Mt.shape[0], -1))
 
     # -- online --------------------------------------------------------------------------------
     def _reduced_eigenvalues(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
         cK, cM = self.decomp.coefficients(theta_full)
         r, nr = self.size, self._n_rigid
-        K = (cK @ self._Kt).reshape(-1, r - nr, r - nr)
-        M = (cM @ self._Mt).reshape(-1, r, r)
+        K = ((cK @ self._K_terms[0]) @ self._K_terms[1]).reshape(-1, r - nr, r - nr)
+        M = ((cM @ self._M_terms[0]) @ self._M_terms[1]).reshape(-1, r, r)
         return batched_elastic_eigenvalues(K, M, nr, n_modes, vectors=vectors)
 
     def _compare(self, theta: np.ndarray, f_full: np.ndarray) -> Certificate:

@@ -1,0 +1,305 @@
+"""The TOML study file (``tomllib``): one frozen dataclass per table, strict keys and types.
+
+Example (issue 4 item 9)::
+
+    [model]
+    source = "exhaust"              # built-in name, or "package.module:function"
+    options = {}                    # keyword arguments of the built-in model's factory
+    sensors = ["1", "2"]            # custom model only: labels of the rows of its shapes
+    [data]
+    source = "paper:ema"            # or a file (.csv, .h5, .uff), or inline:
+    # frequencies_hz = [...], weights = [...], sd_hz = [...]
+    [parameters.t_hot_pipe]         # optional for built-in models (defaults from the model)
+    bounds = [0.5e-3, 3.0e-3]
+    prior = { kind = "uniform" }    # lognormal {mu, sigma} | normal {mean, sd} | halfnormal {scale}
+    start = 1.0e-3
+    [pairing]
+    method = "auto"                 # auto | order | tracked | mac
+    extra_modes = 2
+    [objective]
+    mass_kg = 12.29                 # measured mass, for the optional mass term
+    mass_weight = 0.0
+    mac_weight = 0.0
+    [optimizer]
+    starts = 16
+    method = "least_squares"        # or "global" (differential evolution first)
+    design = "sobol"                # or "lhs"
+    seed = 0
+    [likelihood]
+    sigma = 0.05                    # fixed, or sigma_prior = { kind = "halfnormal", scale = 0.1 }
+    mass_sd = 0.01                  # optional relative sd of the mass observation
+    pairing = "order"               # "order" (batched) or "problem" (the pairing above)
+    [sampler]
+    walkers = 32
+    steps = 5000
+    seed = 1
+    min_autocorr_times = 50
+    check_every = 500
+    predictive_draws = 400
+    hdi_prob = 0.9
+
+Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
+``file: table.key``.  Other layers add their own tables (e.g. ``[effects]``, ``[discovery]``) with
+``register_table(name, parser)``; the parsed value lands in ``StudyConfig.extensions[name]``.
+"""
+
+import dataclasses
+import os
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from bayesupdate.errors import BayesUpdateError
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    source: str = "exhaust"
+    options: dict = field(default_factory=dict)
+    sensors: tuple = ()
+
+
+@dataclass(frozen=True)
+class DataConfig:
+    source: str | None = "paper:ema"
+    frequencies_hz: tuple | None = None
+    weights: tuple | None = None
+    sd_hz: tuple | None = None
+
+    def as_source(self):
+        """What ``inference.data.load_modal_data`` takes."""
+        if self.frequencies_hz is not None:
+            table = {"frequencies_hz": self.frequencies_hz}
+            if self.weights is not None:
+                table["weights"] = self.weights
+            if self.sd_hz is not None:
+                table["sd_hz"] = self.sd_hz
+            return table
+        return self.source
+
+
+@dataclass(frozen=True)
+class PairingConfig:
+    method: str = "auto"
+    extra_modes: int = 2
+
+
+@dataclass(frozen=True)
+class ObjectiveConfig:
+    mass_kg: float | None = None
+    mass_weight: float = 0.0
+    mac_weight: float = 0.0
+
+
+@dataclass(frozen=True)
+class OptimizerConfig:
+    starts: int = 16
+    method: str = "least_squares"
+    design: str = "sobol"
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class LikelihoodConfig:
+    sigma: float | None = 0.05
+    sigma_prior: dict | None = None
+    mass_sd: float | None = None
+    pairing: str = "order"
+
+
+@dataclass(frozen=True)
+class SamplerConfig:
+    walkers: int = 32
+    steps: int = 5000
+    seed: int = 1
+    min_autocorr_times: float = 50.0
+    check_every: int = 500
+    predictive_draws: int = 400
+    hdi_prob: float = 0.9
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """A whole study.  ``parameters``: {name: {bounds, prior, start}} (checked against the model
+    when the problem is built).  ``extensions``: tables registered by other layers."""
+
+    model: ModelConfig = field(default_factory=ModelConfig)
+    data: DataConfig = field(default_factory=DataConfig)
+    parameters: dict = field(default_factory=dict)
+    pairing: PairingConfig = field(default_factory=PairingConfig)
+    objective: ObjectiveConfig = field(default_factory=ObjectiveConfig)
+    optimizer: OptimizerConfig = field(default_factory=OptimizerConfig)
+    likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
+    sampler: SamplerConfig = field(default_factory=SamplerConfig)
+    extensions: dict = field(default_factory=dict)
+    path: str = ""
+
+    def to_dict(self) -> dict:
+        """Plain dict (JSON-able) of everything but ``path``; stored in result files."""
+        out = dataclasses.asdict(self)
+        out.pop("path")
+        return out
+
+
+_SECTIONS = {
+    "model": ModelConfig,
+    "data": DataConfig,
+    "pairing": PairingConfig,
+    "objective": ObjectiveConfig,
+    "optimizer": OptimizerConfig,
+    "likelihood": LikelihoodConfig,
+    "sampler": SamplerConfig,
+}
+_PARAMETER_KEYS = {"bounds": list, "prior": dict, "start": float}
+_TABLE_PARSERS: dict[str, Callable[[Mapping, str], Any]] = {}
+
+
+def register_table(name: str, parser: Callable[[Mapping, str], Any]) -> None:
+    """Accept a top-level table ``[name]``; ``parser(table, where)`` returns its parsed value."""
+    if name in _SECTIONS or name == "parameters":
+        raise ValueError(f"study table {name!r} is built in")
+    _TABLE_PARSERS[name] = parser
+
+
+def _check_type(value, annotation, where: str):
+    """Convert/validate a TOML value against a field annotation; raises naming ``where``."""
+    text = str(annotation)
+    allows_none = "None" in text
+    if value is None and allows_none:
+        return None
+    if "float" in text and not isinstance(value, bool) and isinstance(value, int | float):
+        return float(value)
+    if ("int" in text) and isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if "str" in text and isinstance(value, str):
+        return value
+    if "dict" in text and isinstance(value, dict):
+        return value
+    if "tuple" in text and isinstance(value, list):
+        return tuple(value)
+    wanted = (
+        "a number"
+        if "float" in text
+        else "an integer"
+        if "int" in text
+        else "a string"
+        if "str" in text
+        else "a table"
+        if "dict" in text
+        else "a list"
+    )
+    raise BayesUpdateError(f"{where}: must be {wanted}, got {type(value).__name__} {value!r}")
+
+
+def _parse_section(cls, table, where: str):
+    if not isinstance(table, Mapping):
+        raise BayesUpdateError(f"{where}: must be a table [{where.split(': ')[-1]}]")
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    kwargs = {}
+    for key, value in table.items():
+        if key not in fields:
+            raise BayesUpdateError(f"{where}.{key}: unknown key; valid keys are {sorted(fields)}")
+        kwargs[key] = _check_type(value, fields[key].type, f"{where}.{key}")
+    return cls(**kwargs)
+
+
+def _parse_parameters(table, where: str) -> dict:
+    if not isinstance(table, Mapping):
+        raise BayesUpdateError(f"{where}: must hold tables [parameters.NAME]")
+    out = {}
+    for name, entry in table.items():
+        here = f"{where}.{name}"
+        if not isinstance(entry, Mapping):
+            raise BayesUpdateError(f"{here}: must be a table with bounds, prior, start")
+        clean = {}
+        for key, value in entry.items():
+            if key not in _PARAMETER_KEYS:
+                raise BayesUpdateError(
+                    f"{here}.{key}: unknown key; valid keys are bounds, prior, start"
+                )
+            if key == "bounds":
+                ok = (
+                    isinstance(value, list)
+                    and len(value) == 2
+                    and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+                )
+                if not ok:
+                    raise BayesUpdateError(
+                        f"{here}.bounds: must be [low, high] numbers, got {value!r}"
+                    )
+                if not value[0] < value[1]:
+                    raise BayesUpdateError(f"{here}.bounds: low must be < high, got {value!r}")
+                clean[key] = [float(v) for v in value]
+            elif key == "prior":
+                if not isinstance(value, dict):
+                    raise BayesUpdateError(
+                        f'{here}.prior: must be a table like {{ kind = "uniform" }}'
+                    )
+                clean[key] = dict(value)
+            else:
+                clean[key] = _check_type(value, "float", f"{here}.{key}")
+        out[name] = clean
+    return out
+
+
+def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
+    """StudyConfig from a parsed TOML document; ``where`` prefixes error messages (file name)."""
+    kwargs: dict[str, Any] = {}
+    extensions = {}
+    for key, table in document.items():
+        if key in _SECTIONS:
+            kwargs[key] = _parse_section(_SECTIONS[key], table, f"{where}: {key}")
+        elif key == "parameters":
+            kwargs[key] = _parse_parameters(table, f"{where}: parameters")
+        elif key in _TABLE_PARSERS:
+            extensions[key] = _TABLE_PARSERS[key](table, f"{where}: {key}")
+        else:
+            valid = sorted([*_SECTIONS, "parameters", *_TABLE_PARSERS])
+            raise BayesUpdateError(f"{where}: unknown table [{key}]; valid tables are {valid}")
+    likelihood = document.get("likelihood", {})
+    if "sigma_prior" in likelihood and "sigma" not in likelihood:
+        # sigma inferred: the default fixed value no longer applies
+        kwargs["likelihood"] = dataclasses.replace(kwargs["likelihood"], sigma=None)
+    data = kwargs.get("data")
+    if data is not None and "source" not in document.get("data", {}):
+        if data.frequencies_hz is None:
+            raise BayesUpdateError(f"{where}: data: give source = ... or frequencies_hz = [...]")
+        kwargs["data"] = dataclasses.replace(data, source=None)
+    if data is not None and "source" in document["data"] and data.frequencies_hz is not None:
+        raise BayesUpdateError(f"{where}: data: give source or frequencies_hz, not both")
+    return StudyConfig(**kwargs, extensions=extensions, path=where)
+
+
+def load_study(path: str | os.PathLike) -> StudyConfig:
+    """Read and validate a TOML study file."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            document = tomllib.load(fh)
+    except FileNotFoundError as exc:
+        raise BayesUpdateError(f"{path}: study file not found") from exc
+    except OSError as exc:
+        raise BayesUpdateError(f"{path}: cannot read ({exc.strerror})") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise BayesUpdateError(f"{path}: not valid TOML ({exc})") from exc
+    return dataclasses.replace(parse_study(document, str(path)), path=str(path))
+
+
+def with_overrides(study: StudyConfig, **changes) -> StudyConfig:
+    """Copy of ``study`` with command-line overrides such as ``sampler__seed=3`` applied
+    (``None`` values are ignored)."""
+    sections: dict[str, dict] = {}
+    top = {}
+    for key, value in changes.items():
+        if value is None:
+            continue
+        if "__" in key:
+            section, name = key.split("__", 1)
+            sections.setdefault(section, {})[name] = value
+        else:
+            top[key] = value
+    for section, values in sections.items():
+        top[section] = dataclasses.replace(getattr(study, section), **values)
+    return dataclasses.replace(study, **top)

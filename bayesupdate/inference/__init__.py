@@ -1,0 +1,74 @@
+"""Calibration with uncertainty: data in, pairing, seed eq. 19, point optimum, emcee posterior.
+
+Typical use (a thin script)::
+
+    from bayesupdate.inference import (build_problem, calibrate, LikelihoodSpec, LogPosterior,
+                                       sample_posterior, summarise, load_modal_data)
+    problem = build_problem(model, load_modal_data("paper:ema"))
+    optimum = calibrate(problem, starts=16, seed=0)
+    log_post = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    posterior = sample_posterior(log_post, optimum, walkers=32, steps=5000, seed=1)
+    table = summarise(posterior)
+"""
+
+from bayesupdate.inference.data import load_modal_data, register_loader
+from bayesupdate.inference.diagnostics import posterior_predictive, summarise
+from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
+from bayesupdate.inference.optimize import CalibrationResult, calibrate, pareto_front_mass
+from bayesupdate.inference.pairing import ModePairing, ResidualTable, pair_modes
+from bayesupdate.inference.priors import Prior, prior_from_mapping
+from bayesupdate.inference.problem import (
+    CalibrationProblem,
+    ObjectiveSpec,
+    ParameterSpec,
+    build_parameter_specs,
+    build_problem,
+)
+from bayesupdate.inference.results import (
+    export_netcdf,
+    read_result,
+    read_sampler_state,
+    to_datatree,
+    write_result,
+)
+from bayesupdate.inference.sampling import (
+    PosteriorResult,
+    SamplerState,
+    default_moves,
+    sample_posterior,
+)
+from bayesupdate.inference.user_model import FunctionModel, load_user_model, resolve_model
+
+__all__ = [
+    "CalibrationProblem",
+    "CalibrationResult",
+    "FunctionModel",
+    "LikelihoodSpec",
+    "LogPosterior",
+    "ModePairing",
+    "ObjectiveSpec",
+    "ParameterSpec",
+    "PosteriorResult",
+    "Prior",
+    "ResidualTable",
+    "SamplerState",
+    "build_parameter_specs",
+    "build_problem",
+    "calibrate",
+    "default_moves",
+    "export_netcdf",
+    "load_modal_data",
+    "load_user_model",
+    "pair_modes",
+    "pareto_front_mass",
+    "posterior_predictive",
+    "prior_from_mapping",
+    "read_result",
+    "read_sampler_state",
+    "register_loader",
+    "resolve_model",
+    "sample_posterior",
+    "summarise",
+    "to_datatree",
+    "write_result",
+]

@@ -1,0 +1,156 @@
+"""Test data in: frequency tables (CSV or inline), the seed's Table 2, and (hook) EMA files.
+
+``load_modal_data(source)`` is the one entry point.  ``source`` is
+
+* a ``ModalData`` (returned as is),
+* ``"paper:ema"``: seed Table 2 (12 EMA frequencies, unit weights),
+* a mapping with ``frequencies_hz`` and optional ``weights``, ``sd_hz`` (inline in a study file),
+* a path: ``.csv`` (columns ``frequency_hz``, optional ``weight``, ``sd_hz``, ``mode``), or any
+  suffix registered with ``register_loader`` (the EMA layer registers ``.h5`` / ``.uff``).
+"""
+
+import csv
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.modal_data import ModalData
+
+#: suffix (lower case, with dot) -> loader(path) -> ModalData
+_LOADERS: dict[str, Callable[[Path], ModalData]] = {}
+
+#: lazily imported loaders of other layers: suffix -> "module:function"
+_LAZY_LOADERS = {
+    ".h5": "bayesupdate.ema.modal_h5:read_modal_h5",
+    ".hdf5": "bayesupdate.ema.modal_h5:read_modal_h5",
+    ".uff": "bayesupdate.ema.uff_io:read_uff55",
+    ".unv": "bayesupdate.ema.uff_io:read_uff55",
+}
+
+CSV_COLUMNS = ("frequency_hz", "weight", "sd_hz", "mode")
+INLINE_KEYS = ("frequencies_hz", "weights", "sd_hz")
+
+
+def register_loader(suffix: str, loader: Callable[[Path], ModalData]) -> None:
+    """Make ``load_modal_data`` read files ending in ``suffix`` with ``loader(path)``."""
+    _LOADERS[suffix.lower()] = loader
+
+
+def paper_ema() -> ModalData:
+    """Seed Table 2: the 12 EMA natural frequencies [Hz] of the exhaust, unit weights."""
+    from bayesupdate.paper import TABLE2_EMA_HZ
+
+    return ModalData(frequencies_hz=TABLE2_EMA_HZ.copy(), source="paper:ema")
+
+
+def modal_data_from_mapping(table: Mapping, where: str = "data") -> ModalData:
+    """Inline data such as ``{frequencies_hz = [...], weights = [...], sd_hz = [...]}``."""
+    unknown = sorted(set(table) - set(INLINE_KEYS))
+    if unknown:
+        raise BayesUpdateError(f"{where}: unknown key(s) {unknown}; valid: {list(INLINE_KEYS)}")
+    if "frequencies_hz" not in table:
+        raise BayesUpdateError(f"{where}: give frequencies_hz = [...] or source = ...")
+    arrays = {}
+    for key in INLINE_KEYS:
+        if key in table:
+            try:
+                arrays[key] = np.asarray(table[key], dtype=float).reshape(-1)
+            except (TypeError, ValueError) as exc:
+                raise BayesUpdateError(f"{where}.{key}: must be a list of numbers") from exc
+    return ModalData(
+        frequencies_hz=arrays["frequencies_hz"],
+        weights=arrays.get("weights"),
+        frequency_sd_hz=arrays.get("sd_hz"),
+        source=f"inline:{where}",
+    )
+
+
+def read_frequency_csv(path: str | os.PathLike) -> ModalData:
+    """A CSV frequency table with a header row; ``#`` lines are comments.
+
+    Columns: ``frequency_hz`` (required), ``weight``, ``sd_hz`` [Hz], ``mode`` (label, ignored).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise BayesUpdateError(f"{path}: cannot read ({exc.strerror}); check the path") from exc
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise BayesUpdateError(f"{path}: empty; give a header frequency_hz[,weight,sd_hz]")
+    rows = list(csv.reader(lines))
+    header = [h.strip() for h in rows[0]]
+    unknown = sorted(set(header) - set(CSV_COLUMNS))
+    if unknown or "frequency_hz" not in header:
+        raise BayesUpdateError(
+            f"{path}: header must name frequency_hz and optionally weight, sd_hz, mode; "
+            f"got {header}"
+        )
+    columns: dict[str, list[float]] = {h: [] for h in header}
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise BayesUpdateError(
+                f"{path}: row {number} has {len(row)} fields, header {len(header)}"
+            )
+        for name, value in zip(header, row, strict=True):
+            if name == "mode":
+                continue
+            try:
+                columns[name].append(float(value))
+            except ValueError as exc:
+                raise BayesUpdateError(
+                    f"{path}: row {number}, {name}: {value!r} is not a number"
+                ) from exc
+    if not columns["frequency_hz"]:
+        raise BayesUpdateError(f"{path}: no data rows")
+    return ModalData(
+        frequencies_hz=np.array(columns["frequency_hz"]),
+        weights=np.array(columns["weight"]) if "weight" in columns else None,
+        frequency_sd_hz=np.array(columns["sd_hz"]) if "sd_hz" in columns else None,
+        source=str(path),
+    )
+
+
+register_loader(".csv", read_frequency_csv)
+
+
+def load_modal_data(source) -> ModalData:
+    """Test modal data from any supported ``source`` (see module docstring)."""
+    if isinstance(source, ModalData):
+        return source
+    if isinstance(source, Mapping):
+        return modal_data_from_mapping(source)
+    if not isinstance(source, str | os.PathLike):
+        raise BayesUpdateError(f"data: cannot read test data from {type(source).__name__}")
+    text = str(source)
+    if text.startswith("paper:"):
+        if text == "paper:ema":
+            return paper_ema()
+        raise BayesUpdateError(f"data {text!r}: unknown paper data; use 'paper:ema' (seed Table 2)")
+    path = Path(text)
+    suffix = path.suffix.lower()
+    if not path.exists():
+        raise BayesUpdateError(f"{path}: file not found; give a CSV table, .h5/.uff or paper:ema")
+    if suffix in _LOADERS:
+        return _LOADERS[suffix](path)
+    if suffix in _LAZY_LOADERS:
+        import importlib
+
+        module_name, func = _LAZY_LOADERS[suffix].split(":")
+        try:
+            loader = getattr(importlib.import_module(module_name), func)
+        except (ImportError, AttributeError) as exc:
+            raise BayesUpdateError(
+                f"{path}: reading {suffix} modal data needs {_LAZY_LOADERS[suffix]}, "
+                "not available in this installation; export a CSV frequency table instead"
+            ) from exc
+        data = loader(path)
+        if not isinstance(data, ModalData):
+            raise BayesUpdateError(f"{path}: loader did not return ModalData")
+        return data
+    raise BayesUpdateError(
+        f"{path}: unknown data format {suffix!r}; use .csv, .h5, .uff or paper:ema"
+    )

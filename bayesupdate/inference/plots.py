@@ -1,0 +1,163 @@
+"""Figures from a result file (``read_result`` dict): trace, pair, predictive, residuals, Table 3.
+
+All functions take the dict returned by ``results.read_result`` and return a matplotlib Figure
+(Agg backend, nothing shown); ``save_all`` writes the set as PNG files.
+"""
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from bayesupdate.paper import TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI  # noqa: E402
+
+
+def _posterior(result: dict):
+    post = result["posterior"]
+    names = list(post["attrs"]["names"])
+    return names, post["chain"], int(post["attrs"]["burn"])
+
+
+def plot_trace(result: dict):
+    """Every walker's path per parameter; the warm-up is shaded."""
+    names, chain, burn = _posterior(result)
+    fig, axes = plt.subplots(
+        len(names), 1, figsize=(8, 1.8 * len(names)), sharex=True, squeeze=False
+    )
+    for j, (ax, name) in enumerate(zip(axes[:, 0], names, strict=True)):
+        ax.plot(chain[:, :, j], lw=0.4, alpha=0.5)
+        ax.axvspan(0, burn, color="0.9", zorder=-1)
+        ax.set_ylabel(name)
+    axes[-1, 0].set_xlabel("step")
+    fig.tight_layout()
+    return fig
+
+
+def plot_pair(result: dict, max_points: int = 4000, seed: int = 0):
+    """Corner plot: histograms on the diagonal, scatter of post-burn-in draws below."""
+    names, chain, burn = _posterior(result)
+    flat = chain[burn:].reshape(-1, chain.shape[-1])
+    rng = np.random.default_rng(seed)
+    pick = flat[rng.choice(flat.shape[0], size=min(max_points, flat.shape[0]), replace=False)]
+    d = len(names)
+    fig, axes = plt.subplots(d, d, figsize=(2.2 * d, 2.2 * d), squeeze=False)
+    for i in range(d):
+        for j in range(d):
+            ax = axes[i, j]
+            if j > i:
+                ax.axis("off")
+            elif i == j:
+                ax.hist(flat[:, i], bins=50, color="C0")
+            else:
+                ax.plot(pick[:, j], pick[:, i], ".", ms=1, alpha=0.3)
+            if i == d - 1:
+                ax.set_xlabel(names[j])
+            if j == 0 and i > 0:
+                ax.set_ylabel(names[i])
+    fig.tight_layout()
+    return fig
+
+
+def plot_predictive(result: dict, prob: float = 0.9):
+    """Posterior predictive frequencies per mode (median, ``prob`` interval) against the test,
+    as relative error [%] so all modes share one axis."""
+    test = result["inputs"]["frequencies_hz"]
+    pred = result["posterior"]["predictions"]
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    modes = np.arange(1, test.size + 1)
+    lo, hi = 50 * (1 - prob), 100 - 50 * (1 - prob)
+    for key, colour, label, shift in (
+        ("predictive_hz", "C0", f"predictive {prob:.0%}", -0.1),
+        ("frequencies_hz", "C1", f"model {prob:.0%}", 0.1),
+    ):
+        err = 100 * (pred[key] - test) / test
+        med = np.median(err, axis=0)
+        band = np.percentile(err, [lo, hi], axis=0)
+        ax.errorbar(
+            modes + shift,
+            med,
+            yerr=[med - band[0], band[1] - med],
+            fmt="o",
+            color=colour,
+            label=label,
+            capsize=3,
+        )
+    ax.axhline(0, color="k", lw=0.8, label="test")
+    ax.set_xlabel("mode")
+    ax.set_ylabel("(f - f_test) / f_test [%]")
+    ax.set_xticks(modes)
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def plot_residuals(result: dict):
+    """Per-mode error [%] at the optimum; bars are labelled with MAC and swapped modes flagged."""
+    table = result["optimum"]["residuals"]
+    modes = np.arange(1, table["test_hz"].size + 1)
+    swapped = table["model_mode"] != modes
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    ax.bar(modes, table["error_pct"], color=np.where(swapped, "C3", "C0"))
+    for m, err, mac in zip(modes, table["error_pct"], table["mac"], strict=True):
+        if np.isfinite(mac):
+            ax.annotate(f"{mac:.2f}", (m, err), ha="center", va="bottom", fontsize=7)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xlabel("test mode (red: paired with a swapped model mode)")
+    ax.set_ylabel("error at optimum [%]")
+    ax.set_xticks(modes)
+    fig.tight_layout()
+    return fig
+
+
+def plot_design_vs_table3(result: dict):
+    """Posterior of each design variable (normalised by its Table 3 initial value) beside the
+    seed's Table 3 optimum; only parameters named as in Table 3.  None if there are none."""
+    names, chain, burn = _posterior(result)
+    shared = [n for n in names if n in TABLE3_OPTIMUM_SI]
+    if not shared:
+        return None
+    flat = chain[burn:].reshape(-1, chain.shape[-1])
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    data = [flat[:, names.index(n)] / TABLE3_INITIAL_SI[n] for n in shared]
+    ax.violinplot(data, showmedians=True)
+    x = np.arange(1, len(shared) + 1)
+    ax.plot(
+        x,
+        [TABLE3_OPTIMUM_SI[n] / TABLE3_INITIAL_SI[n] for n in shared],
+        "r*",
+        ms=12,
+        label="seed Table 3 optimum",
+    )
+    opt = dict(
+        zip(result["optimum"]["attrs"]["parameter_names"], result["optimum"]["theta"], strict=True)
+    )
+    ax.plot(x, [opt[n] / TABLE3_INITIAL_SI[n] for n in shared], "kx", ms=9, label="our optimum")
+    ax.set_xticks(x, shared, rotation=20)
+    ax.set_ylabel("value / Table 3 initial")
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def save_all(result: dict, folder: str | Path) -> list[Path]:
+    """Write every applicable figure as PNG into ``folder``; returns the paths."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    makers = {"residuals": plot_residuals}
+    if "posterior" in result and "autocorr_time" in result["posterior"]:
+        makers.update(trace=plot_trace, pair=plot_pair, design_vs_table3=plot_design_vs_table3)
+        if "predictions" in result["posterior"]:
+            makers["predictive"] = plot_predictive
+    paths = []
+    for name, maker in makers.items():
+        fig = maker(result)
+        if fig is None:
+            continue
+        path = folder / f"{name}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths

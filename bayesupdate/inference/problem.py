@@ -1,0 +1,302 @@
+"""A calibration problem: a model, test data, the parameters to fit, the pairing and objective.
+
+``build_problem`` validates everything a user can get wrong (names, bounds, starts, priors, mode
+counts, weights) before any computation; ``CalibrationProblem.evaluate`` gives the paired
+prediction at one parameter point and never raises for a failed model evaluation (it returns
+``ok=False``; failures are counted by the callers).
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.pairing import (
+    PAIRING_METHODS,
+    ModePairing,
+    PairedModes,
+    ResidualTable,
+    pair_modes,
+    residual_table,
+    shapes_at,
+)
+from bayesupdate.inference.priors import Prior, prior_from_mapping
+from bayesupdate.modal_data import ModalData
+from bayesupdate.model_protocol import ParametricModel, Prediction
+from bayesupdate.paper import objective_expr
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One calibrated parameter: SI bounds, prior (truncated to the bounds), start value."""
+
+    name: str
+    bounds: tuple[float, float]
+    prior: Prior
+    start: float
+
+
+@dataclass(frozen=True)
+class ObjectiveSpec:
+    """Extra terms of the fit objective beside seed eq. 19.
+
+    mass_target_kg / mass_weight : adds mass_weight * ((m - m_T) / m_T)^2 (the seed's mass check).
+    mac_weight : adds mac_weight * sum_i (1 - MAC_i) over paired modes (needs shapes).
+    """
+
+    mass_target_kg: float | None = None
+    mass_weight: float = 0.0
+    mac_weight: float = 0.0
+
+
+def build_parameter_specs(
+    model: ParametricModel, table: Mapping[str, Mapping] | None = None
+) -> tuple[ParameterSpec, ...]:
+    """Parameters to calibrate from a study's ``[parameters.NAME]`` tables.
+
+    Each table may hold ``bounds = [low, high]``, ``prior = {...}``, ``start = value``; missing
+    entries come from ``model.default_bounds()`` / ``default_parameters()``.  With no tables, every
+    parameter that has default bounds is calibrated.
+    """
+    defaults = dict(model.default_parameters())
+    default_bounds = dict(model.default_bounds())
+    names = list(table) if table else list(default_bounds)
+    if not names:
+        raise BayesUpdateError(
+            "parameters: the model has no default bounds; list [parameters.NAME]"
+        )
+    specs = []
+    for name in names:
+        entry = dict(table[name]) if table else {}
+        where = f"parameters.{name}"
+        if name not in model.parameter_names:
+            raise BayesUpdateError(
+                f"{where}: unknown parameter; the model has {list(model.parameter_names)}"
+            )
+        unknown = sorted(set(entry) - {"bounds", "prior", "start"})
+        if unknown:
+            raise BayesUpdateError(
+                f"{where}: unknown key(s) {unknown}; valid: bounds, prior, start"
+            )
+        bounds = entry.get("bounds", default_bounds.get(name))
+        if bounds is None:
+            raise BayesUpdateError(f"{where}: no default bounds; give bounds = [low, high]")
+        try:
+            low, high = (float(b) for b in bounds)
+        except (TypeError, ValueError) as exc:
+            raise BayesUpdateError(f"{where}.bounds: must be two numbers [low, high]") from exc
+        if not (np.isfinite(low) and np.isfinite(high) and low < high):
+            raise BayesUpdateError(f"{where}.bounds: need finite low < high, got {[low, high]}")
+        start = entry.get("start", defaults.get(name, 0.5 * (low + high)))
+        if isinstance(start, bool) or not isinstance(start, int | float):
+            raise BayesUpdateError(f"{where}.start: must be a number, got {start!r}")
+        start = float(start)
+        if not low <= start <= high:
+            raise BayesUpdateError(
+                f"{where}: start/default value {start} is outside bounds {[low, high]}; "
+                "move it inside or widen the bounds"
+            )
+        prior = entry.get("prior")
+        if prior is not None and not isinstance(prior, Mapping):
+            raise BayesUpdateError(f'{where}.prior: must be a table like {{kind = "uniform"}}')
+        specs.append(
+            ParameterSpec(name, (low, high), prior_from_mapping(prior, (low, high), name), start)
+        )
+    return tuple(specs)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Paired prediction at one point: frequencies (n_test,) [Hz] in test order, MAC, mass."""
+
+    ok: bool
+    frequencies_hz: np.ndarray
+    all_frequencies_hz: np.ndarray
+    paired: PairedModes | None = None
+    mass_kg: float | None = None
+    error: str = ""
+
+
+@dataclass
+class CalibrationProblem:
+    """Everything needed to evaluate the objective or the likelihood at a parameter vector.
+
+    parameters : the calibrated parameters (order of theta vectors).  fixed : other model
+    parameters held at these values.  pairing : see ``pairing.ModePairing``.
+    """
+
+    model: ParametricModel
+    data: ModalData
+    parameters: tuple[ParameterSpec, ...]
+    pairing: ModePairing
+    objective: ObjectiveSpec = field(default_factory=ObjectiveSpec)
+    fixed: dict[str, float] = field(default_factory=dict)
+    reference: Prediction | None = None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def lower(self) -> np.ndarray:
+        return np.array([p.bounds[0] for p in self.parameters])
+
+    @property
+    def upper(self) -> np.ndarray:
+        return np.array([p.bounds[1] for p in self.parameters])
+
+    @property
+    def start(self) -> np.ndarray:
+        return np.array([p.start for p in self.parameters])
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Seed eq. 19 weights w_i (unit unless the data give weights), (n_test,)."""
+        w = self.data.weights
+        return np.ones(self.data.n_modes) if w is None else np.asarray(w, dtype=float)
+
+    def as_mapping(self, theta: np.ndarray) -> dict[str, float]:
+        return {**self.fixed, **dict(zip(self.names, map(float, theta), strict=True))}
+
+    def evaluate(self, theta: np.ndarray) -> Evaluation:
+        """Predict and pair at theta (n_params,).  A raising or NaN model gives ``ok=False``."""
+        nan = np.full(self.data.n_modes, np.nan)
+        try:
+            prediction = self.model.predict(self.as_mapping(theta), n_modes=self.pairing.n_model)
+            freqs = np.asarray(prediction.frequencies_hz, dtype=float)
+            if freqs.size < self.pairing.n_model or not np.all(np.isfinite(freqs)):
+                return Evaluation(False, nan, freqs, error="non-finite or missing frequencies")
+            paired = pair_modes(prediction, self.pairing)
+        except Exception as exc:  # a user's model may fail anywhere; count it, do not crash
+            return Evaluation(False, nan, nan, error=f"{type(exc).__name__}: {exc}")
+        return Evaluation(True, freqs[paired.model_index], freqs, paired, prediction.mass_kg)
+
+    def expr(self, frequencies_hz: np.ndarray) -> np.ndarray:
+        """Seed eq. 19 with the data's weights; frequencies (..., n_test) -> (...)."""
+        return objective_expr(frequencies_hz, self.data.frequencies_hz, self.weights)
+
+    def residual_vector(self, evaluation: Evaluation) -> np.ndarray:
+        """Weighted residuals whose squared sum is the fit objective (eq. 19 + extra terms)."""
+        f_test = self.data.frequencies_hz
+        parts = [np.sqrt(self.weights) * (evaluation.frequencies_hz - f_test) / f_test]
+        spec = self.objective
+        if spec.mass_weight > 0 and spec.mass_target_kg is not None:
+            mass = np.nan if evaluation.mass_kg is None else evaluation.mass_kg
+            parts.append(
+                [np.sqrt(spec.mass_weight) * (mass - spec.mass_target_kg) / spec.mass_target_kg]
+            )
+        if spec.mac_weight > 0:
+            parts.append(np.sqrt(spec.mac_weight * np.clip(1.0 - evaluation.paired.mac, 0, 1)))
+        return np.concatenate([np.asarray(p, dtype=float) for p in parts])
+
+    def table(self, evaluation: Evaluation) -> ResidualTable:
+        return residual_table(
+            self.data.frequencies_hz,
+            evaluation.all_frequencies_hz,
+            evaluation.paired,
+            self.pairing.method,
+        )
+
+    def check_theta(self, theta: np.ndarray, where: str = "parameters") -> np.ndarray:
+        """Raise BayesUpdateError if theta has the wrong length or lies outside the bounds."""
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.size != len(self.parameters):
+            raise BayesUpdateError(f"{where}: {theta.size} values for {len(self.parameters)} names")
+        bad = [
+            f"{p.name}={v:g} not in [{p.bounds[0]:g}, {p.bounds[1]:g}]"
+            for p, v in zip(self.parameters, theta, strict=True)
+            if not p.bounds[0] <= v <= p.bounds[1]
+        ]
+        if bad:
+            raise BayesUpdateError(f"{where}: outside bounds: {'; '.join(bad)}")
+        return theta
+
+
+def build_problem(
+    model: ParametricModel,
+    data: ModalData,
+    parameters: tuple[ParameterSpec, ...] | Mapping | None = None,
+    pairing: str = "auto",
+    extra_modes: int = 2,
+    objective: ObjectiveSpec | None = None,
+    fixed: Mapping[str, float] | None = None,
+) -> CalibrationProblem:
+    """Validate inputs and set up the pairing at the model's reference design.
+
+    parameters : ParameterSpecs, or a ``{name: {bounds, prior, start}}`` mapping, or None (model
+    defaults).  pairing : one of ``PAIRING_METHODS``; "auto" = "mac" if the test has shapes, else
+    "tracked" if the model gives shapes, else "order".  extra_modes : model modes computed beyond
+    the test's, so a tracked mode can be found after a swap (dropped if the model has fewer).
+    fixed : values of model parameters that are not calibrated (default: the model's defaults).
+    """
+    if pairing not in PAIRING_METHODS:
+        raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
+    if not isinstance(parameters, tuple):
+        parameters = build_parameter_specs(model, parameters)
+    objective = objective or ObjectiveSpec()
+    if objective.mass_weight < 0 or objective.mac_weight < 0:
+        raise BayesUpdateError("objective: mass_weight and mac_weight must be >= 0")
+    if objective.mass_weight > 0 and not (objective.mass_target_kg or 0) > 0:
+        raise BayesUpdateError("objective.mass_kg: give the measured mass (> 0) for the mass term")
+    if data.weights is not None and np.all(data.weights == 0):
+        raise BayesUpdateError(f"data {data.source!r}: all weights are zero")
+    n_test = data.n_modes
+    reference_params = dict(model.default_parameters())
+    calibrated = {p.name for p in parameters}
+    for name, value in (fixed or {}).items():
+        if name not in model.parameter_names or name in calibrated:
+            raise BayesUpdateError(
+                f"fixed parameter {name!r}: not a model parameter, or also calibrated"
+            )
+        reference_params[name] = float(value)
+    reference_params.update({p.name: p.start for p in parameters})
+    reference = None
+    n_model = n_test
+    for n_try in (n_test + max(int(extra_modes), 0), n_test):
+        try:
+            reference = model.predict(reference_params, n_modes=n_try)
+        except BayesUpdateError as exc:
+            if n_try == n_test:
+                raise BayesUpdateError(
+                    f"model: cannot compute the {n_test} modes of the test data ({exc})"
+                ) from exc
+            continue
+        n_model = n_try
+        break
+    freqs = np.asarray(reference.frequencies_hz)
+    if freqs.size < n_test:
+        raise BayesUpdateError(
+            f"model: computed {freqs.size} modes but the test data have {n_test}; "
+            "request fewer modes or give a model with more"
+        )
+    method = pairing
+    if method == "auto":
+        method = (
+            "mac"
+            if data.shapes is not None
+            else ("tracked" if reference.shapes is not None else "order")
+        )
+    labels: tuple[str, ...] = ()
+    ref_shapes = test_shapes = None
+    if method == "mac":
+        if data.shapes is None:
+            raise BayesUpdateError("pairing 'mac' needs test shapes; use 'tracked' or 'order'")
+        labels = data.dof_labels
+        test_shapes = data.shapes
+        shapes_at(reference, labels, f"data {data.source!r}")
+    elif reference.shapes is not None:
+        labels = tuple(reference.dof_labels)
+        ref_shapes = np.asarray(reference.shapes)[:, :n_test]
+    elif method == "tracked":
+        raise BayesUpdateError("pairing 'tracked' needs model shapes; use 'order'")
+    fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}
+    return CalibrationProblem(
+        model=model,
+        data=data,
+        parameters=parameters,
+        pairing=ModePairing(method, n_test, n_model, labels, ref_shapes, test_shapes),
+        objective=objective,
+        fixed=fixed,
+        reference=reference,
+    )

@@ -1,0 +1,314 @@
+"""Posterior sampling with emcee: DE moves, start around the optimum, stop at 50 tau, resume.
+
+Moves (default): differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
+mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
+x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not
+used: it misweights multi-modal posteriors.
+
+Walkers start in small balls around the distinct optima of the multi-start fit (so every mode
+found by the optimiser holds walkers from the start; the DE moves then set the weights).  The run
+is cut in blocks of ``check_every`` steps; after each block the integrated autocorrelation time
+tau is estimated (emcee) and the run stops once steps >= ``min_autocorr_times`` * max(tau) or the
+step budget ends.  Block boundaries are fixed multiples of ``check_every`` counted from the first
+step, and the emcee random state is saved with each checkpoint, so an interrupted run resumed with
+``resume=`` ends with exactly the chain of an uninterrupted run.
+"""
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import emcee
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.likelihood import LogPosterior
+from bayesupdate.inference.optimize import CalibrationResult
+
+
+def default_moves() -> list:
+    """DE 0.7, DE with gamma = 1 (mode jumps) 0.1, DE snooker 0.2 (see module docstring)."""
+    return [
+        (emcee.moves.DEMove(), 0.7),
+        (emcee.moves.DEMove(gamma0=1.0), 0.1),
+        (emcee.moves.DESnookerMove(), 0.2),
+    ]
+
+
+@dataclass(frozen=True)
+class SamplerState:
+    """What resuming needs: the chain so far and the state after its last step.
+
+    chain : (n_steps, n_walkers, d); log_prob : (n_steps, n_walkers); coords (n_walkers, d) and
+    last_log_prob (n_walkers,) are the last step; random_state : emcee's MT19937 state tuple.
+    """
+
+    chain: np.ndarray
+    log_prob: np.ndarray
+    coords: np.ndarray
+    last_log_prob: np.ndarray
+    random_state: tuple
+    accepted: np.ndarray
+    evaluations: int
+    failed: int
+    wall_s: float
+    finished: bool = False
+
+    @property
+    def steps_done(self) -> int:
+        return int(self.chain.shape[0])
+
+
+@dataclass(frozen=True)
+class PosteriorResult:
+    """A finished (or interrupted) sampling run.
+
+    chain : (n_steps, n_walkers, d) all steps, names order; log_prob : (n_steps, n_walkers).
+    burn : steps discarded as warm-up.  autocorr_time : (d,) tau per parameter [steps].
+    diagnostics : see ``diagnostics.summarise``.  predictions : see ``posterior_predictive``.
+    """
+
+    names: tuple[str, ...]
+    chain: np.ndarray
+    log_prob: np.ndarray
+    burn: int
+    autocorr_time: np.ndarray
+    acceptance: np.ndarray
+    evaluations: int
+    failed_evaluations: int
+    wall_s: float
+    converged: bool
+    interrupted: bool
+    state: SamplerState
+    seed: int
+    diagnostics: dict = field(default_factory=dict)
+    predictions: dict = field(default_factory=dict)
+
+    def samples(self) -> np.ndarray:
+        """Post-burn-in draws flattened over walkers, (n_draws, d)."""
+        return self.chain[self.burn :].reshape(-1, self.chain.shape[-1])
+
+
+def initial_walkers(
+    log_posterior: LogPosterior,
+    calibration: CalibrationResult,
+    n_walkers: int,
+    rng: np.random.Generator,
+    ball: float = 1e-3,
+    sigma_start: float | None = None,
+) -> np.ndarray:
+    """Walker positions (n_walkers, d) in balls around the distinct optima, all with finite lp.
+
+    ball : radius as a fraction of each parameter's bounds width.  The sigma column (if sampled)
+    starts near the rms relative error at the optimum (or ``sigma_start``), within its prior.
+    """
+    problem = log_posterior.problem
+    low, high = problem.lower, problem.upper
+    centres = calibration.end_points[list(calibration.distinct_optima or (0,))]
+    d = log_posterior.ndim
+    columns = []
+    if log_posterior.spec.infer_sigma:
+        prior = log_posterior.spec.sigma_prior
+        rms = np.sqrt(calibration.expr / max(problem.data.n_modes, 1))
+        s0 = sigma_start if sigma_start is not None else rms
+        s0 = float(np.clip(max(s0, 1e-3), *prior.bounds))
+        if not np.isfinite(prior.logpdf(s0)):
+            s0 = float(prior.sample(rng, 1)[0])
+        columns.append(s0)
+    positions = np.empty((n_walkers, d))
+    for attempt in range(100):
+        which = np.arange(n_walkers) % centres.shape[0]
+        base = (
+            np.hstack([centres[which], np.tile(columns, (n_walkers, 1))])
+            if columns
+            else (centres[which])
+        )
+        scale = np.concatenate([high - low, np.abs(columns) + 1e-3])[:d]
+        trial = base + ball * scale * rng.standard_normal((n_walkers, d))
+        trial[:, : low.size] = np.clip(trial[:, : low.size], low, high)
+        if columns:
+            trial[:, -1] = np.abs(trial[:, -1])
+        lp = log_posterior(trial)
+        ok = np.isfinite(lp)
+        positions = np.where(ok[:, None], trial, positions) if attempt else trial
+        if np.all(np.isfinite(log_posterior(positions))):
+            return positions
+        ball *= 0.5
+    raise BayesUpdateError(
+        "sampler: cannot start walkers with finite log-posterior near the optimum; "
+        f"check priors and the model (last model error: {log_posterior.last_error})"
+    )
+
+
+def _autocorr(chain: np.ndarray) -> np.ndarray:
+    """Integrated autocorrelation time per parameter (emcee, walker-averaged), (d,)."""
+    if chain.shape[0] < 20:
+        return np.full(chain.shape[-1], np.inf)
+    # emcee logs a warning for short chains even with quiet=True; our stopping rule handles it
+    logger = logging.getLogger("emcee.autocorr")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        return np.asarray(emcee.autocorr.integrated_time(chain, c=5, quiet=True), dtype=float)
+    finally:
+        logger.setLevel(level)
+
+
+def sample_posterior(
+    log_posterior: LogPosterior,
+    calibration: CalibrationResult | None = None,
+    walkers: int = 32,
+    steps: int = 5000,
+    seed: int = 1,
+    min_autocorr_times: float = 50.0,
+    check_every: int = 500,
+    progress: bool = False,
+    checkpoint: Callable[[SamplerState], None] | None = None,
+    resume: SamplerState | None = None,
+    moves: list | None = None,
+    initial: np.ndarray | None = None,
+) -> PosteriorResult:
+    """Run emcee until steps >= min_autocorr_times * max(tau) or ``steps`` steps.
+
+    log_posterior : vectorised, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
+    (walkers start around its distinct optima) unless ``initial`` (n_walkers, d) is given.
+    checkpoint : called with a SamplerState after every block (write it to disk there).
+    resume : a SamplerState from an interrupted run with the same settings.
+    Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
+    ``interrupted=True`` and its ``state`` resumes it.
+    """
+    if walkers < 2 * log_posterior.ndim or walkers < 4:
+        raise BayesUpdateError(
+            f"sampler.walkers: {walkers} is too few for {log_posterior.ndim} parameters; "
+            f"use at least {max(2 * log_posterior.ndim, 4)}"
+        )
+    if steps < 1 or check_every < 1:
+        raise BayesUpdateError("sampler.steps and sampler.check_every must be >= 1")
+    d = log_posterior.ndim
+    stop = {"requested": False}
+
+    def guarded(theta: np.ndarray) -> np.ndarray:
+        # Ctrl-C inside the model: finish the step without evaluating (it is discarded below);
+        # raising through emcee would print every walker's parameters and a traceback
+        if not stop["requested"]:
+            try:
+                return log_posterior(theta)
+            except KeyboardInterrupt:
+                stop["requested"] = True
+        return np.full(np.shape(theta)[0], -np.inf)
+
+    sampler = emcee.EnsembleSampler(
+        walkers, d, guarded, moves=moves or default_moves(), vectorize=True
+    )
+    if resume is not None:
+        if resume.coords.shape != (walkers, d):
+            raise BayesUpdateError(
+                f"resume: checkpoint has {resume.coords.shape} walkers x parameters, "
+                f"settings give {(walkers, d)}; resume with the same study"
+            )
+        chain_parts, lp_parts = [resume.chain], [resume.log_prob]
+        accepted = resume.accepted.copy()
+        state = emcee.State(
+            resume.coords.copy(),
+            log_prob=resume.last_log_prob.copy(),
+            random_state=resume.random_state,
+        )
+        log_posterior.evaluations += resume.evaluations
+        log_posterior.failed += resume.failed
+        wall_before = resume.wall_s
+    else:
+        rng = np.random.default_rng(seed)
+        if initial is None:
+            if calibration is None:
+                raise BayesUpdateError("sampler: give a calibration result or initial walkers")
+            initial = initial_walkers(log_posterior, calibration, walkers, rng)
+        mt = np.random.RandomState(np.random.MT19937(np.random.SeedSequence([seed, 7])))
+        state = emcee.State(np.asarray(initial, dtype=float), random_state=mt.get_state())
+        chain_parts, lp_parts = [np.empty((0, walkers, d))], [np.empty((0, walkers))]
+        accepted = np.zeros(walkers)
+        wall_before = 0.0
+    if state.log_prob is None:
+        # what emcee would compute first; done here so a checkpoint always has it (no RNG use)
+        state.log_prob = log_posterior(state.coords)
+    if not np.all(np.isfinite(state.log_prob)):
+        raise BayesUpdateError("sampler: some initial walkers have zero posterior density")
+    t0 = time.perf_counter()
+    done = sum(part.shape[0] for part in chain_parts)
+    interrupted = converged = False
+    tau = np.full(d, np.inf)
+
+    def snapshot(finished: bool) -> SamplerState:
+        return SamplerState(
+            chain=np.concatenate(chain_parts),
+            log_prob=np.concatenate(lp_parts),
+            coords=state.coords.copy(),
+            last_log_prob=np.asarray(state.log_prob).copy(),
+            random_state=state.random_state,
+            accepted=accepted.copy(),
+            evaluations=log_posterior.evaluations,
+            failed=log_posterior.failed,
+            wall_s=wall_before + time.perf_counter() - t0,
+            finished=finished,
+        )
+
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=steps, initial=done, disable=not progress, desc="sampling", unit="step")
+    while done < steps:
+        block = min(check_every - done % check_every, steps - done)
+        coords, lps = [], []
+        try:
+            sampler.reset()
+            for step in sampler.sample(state, iterations=block, store=True):
+                if stop["requested"]:
+                    raise KeyboardInterrupt
+                # emcee updates its state object in place during the next step, so a Ctrl-C
+                # there would leave it half-updated: keep copies of each completed step
+                coords.append(step.coords.copy())
+                lps.append(np.asarray(step.log_prob).copy())
+                state = emcee.State(
+                    coords[-1].copy(), log_prob=lps[-1].copy(), random_state=step.random_state
+                )
+                bar.update(1)
+        except KeyboardInterrupt:
+            interrupted = True
+        n_new = len(coords)
+        if n_new:
+            chain_parts.append(np.array(coords))
+            lp_parts.append(np.array(lps))
+            accepted += sampler.backend.accepted
+            done += n_new
+        if interrupted:
+            break
+        chain_so_far = np.concatenate(chain_parts)
+        tau = _autocorr(chain_so_far)
+        converged = bool(np.all(np.isfinite(tau)) and done >= min_autocorr_times * np.max(tau))
+        if checkpoint is not None:
+            checkpoint(snapshot(finished=converged or done >= steps))
+        if converged:
+            break
+    bar.close()
+    final = snapshot(finished=not interrupted)
+    chain = final.chain
+    if chain.shape[0] >= 20:
+        tau = _autocorr(chain)
+    # warm-up: 5 tau (emcee's advice is "a few times tau"), never more than half the chain
+    burn = chain.shape[0] // 2
+    if np.all(np.isfinite(tau)):
+        burn = int(min(burn, np.ceil(5 * np.max(tau))))
+    return PosteriorResult(
+        names=log_posterior.names,
+        chain=chain,
+        log_prob=final.log_prob,
+        burn=burn,
+        autocorr_time=tau,
+        acceptance=final.accepted / max(chain.shape[0], 1),
+        evaluations=log_posterior.evaluations,
+        failed_evaluations=log_posterior.failed,
+        wall_s=final.wall_s,
+        converged=converged,
+        interrupted=interrupted,
+        state=final,
+        seed=seed,
+    )

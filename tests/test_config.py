@@ -1,0 +1,123 @@
+"""Study file: parsing, defaults, unknown keys and wrong types named in the error."""
+
+import textwrap
+
+import pytest
+
+from bayesupdate.config import load_study, parse_study, register_table, with_overrides
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.runner import prepare
+
+FULL = """
+[model]
+source = "shear_building"
+[data]
+frequencies_hz = [4.2, 10.96]
+weights = [1.0, 2.0]
+[parameters.theta_1]
+bounds = [0.2, 3.0]
+prior = { kind = "lognormal", mu = 0.0, sigma = 0.5 }
+[parameters.theta_2]
+bounds = [0.2, 3]
+prior = { kind = "normal", mean = 1.0, sd = 0.3 }
+start = 1.1
+[likelihood]
+sigma_prior = { kind = "halfnormal", scale = 0.1 }
+[sampler]
+walkers = 16
+steps = 200
+seed = 4
+"""
+
+
+def _write(tmp_path, text, name="study.toml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_full_study_parses_and_prepares(tmp_path):
+    study = load_study(_write(tmp_path, FULL))
+    assert study.sampler.walkers == 16 and study.sampler.seed == 4
+    assert study.likelihood.sigma is None  # sigma_prior given: sigma inferred
+    assert study.data.as_source() == {"frequencies_hz": (4.2, 10.96), "weights": (1.0, 2.0)}
+    prepared = prepare(study)
+    assert prepared.problem.names == ("theta_1", "theta_2")
+    assert prepared.problem.start.tolist() == [1.0, 1.1]
+    assert prepared.problem.parameters[0].prior.kind == "lognormal"
+    assert prepared.likelihood.infer_sigma
+    assert prepared.problem.weights.tolist() == [1.0, 2.0]
+
+
+def test_parameters_default_from_the_model():
+    study = parse_study(
+        {"model": {"source": "shear_building"}, "data": {"frequencies_hz": [4, 11]}}
+    )
+    prepared = prepare(study)
+    assert prepared.problem.names == ("theta_1", "theta_2")
+    assert prepared.problem.lower.tolist() == [0.1, 0.1]
+    assert prepared.problem.upper.tolist() == [4.0, 4.0]
+    assert prepared.likelihood.sigma == 0.05
+
+
+@pytest.mark.parametrize(
+    "document, match",
+    [
+        ({"sampler": {"walker": 3}}, r"sampler\.walker: unknown key"),
+        ({"samplr": {}}, r"unknown table \[samplr\]"),
+        ({"sampler": {"walkers": "many"}}, r"sampler\.walkers: must be an integer"),
+        ({"sampler": {"walkers": 3.5}}, r"sampler\.walkers: must be an integer"),
+        ({"likelihood": {"sigma": "small"}}, r"likelihood\.sigma: must be a number"),
+        ({"parameters": {"t": {"bound": [1, 2]}}}, r"parameters\.t\.bound: unknown key"),
+        ({"parameters": {"t": {"bounds": [2, 1]}}}, r"parameters\.t\.bounds: low must be < high"),
+        ({"parameters": {"t": {"bounds": [1]}}}, r"parameters\.t\.bounds: must be \[low, high\]"),
+        ({"data": {"weights": [1.0]}}, r"data: give source"),
+        ({"data": {"source": "paper:ema", "frequencies_hz": [1.0]}}, r"not both"),
+        ({"model": {"source": 3}}, r"model\.source: must be a string"),
+    ],
+)
+def test_bad_study_documents_name_the_key(document, match):
+    with pytest.raises(BayesUpdateError, match=match):
+        parse_study(document, "s.toml")
+
+
+def test_errors_found_when_preparing(tmp_path):
+    cases = [
+        (
+            '[model]\nsource = "shear_building"\n[data]\nfrequencies_hz = [4, 11]\n'
+            "[parameters.theta_1]\nbounds = [0.2, 0.5]\n",
+            "outside bounds",
+        ),
+        (
+            '[model]\nsource = "shear_building"\n[data]\nfrequencies_hz = [4, 11]\n'
+            '[parameters.theta_1]\nprior = { kind = "normal", mean = 40.0, sd = 0.1 }\n',
+            "no support",
+        ),
+        (
+            '[model]\nsource = "no_such_mod:fn"\n[parameters.a]\nbounds = [0, 1]\n',
+            "does not import",
+        ),
+        ('[model]\nsource = "beam"\n', "unknown"),
+        ('[data]\nsource = "missing.csv"\n[model]\nsource = "shear_building"\n', "not found"),
+    ]
+    for text, match in cases:
+        with pytest.raises(BayesUpdateError, match=match):
+            prepare(load_study(_write(tmp_path, text)))
+
+
+def test_invalid_toml_and_missing_file(tmp_path):
+    with pytest.raises(BayesUpdateError, match="not valid TOML"):
+        load_study(_write(tmp_path, "[model\n"))
+    with pytest.raises(BayesUpdateError, match="not found"):
+        load_study(tmp_path / "nope.toml")
+
+
+def test_other_layers_can_register_tables():
+    register_table("effects_test", lambda table, where: dict(table))
+    study = parse_study({"effects_test": {"kind": "added_mass"}})
+    assert study.extensions == {"effects_test": {"kind": "added_mass"}}
+
+
+def test_overrides():
+    study = with_overrides(parse_study({}), sampler__seed=9, sampler__steps=None)
+    assert study.sampler.seed == 9 and study.sampler.steps == 5000

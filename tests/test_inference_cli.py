@@ -1,0 +1,219 @@
+"""CLI calibrate/sample: JSON keys, result file schema, reproducibility, Ctrl-C and --resume."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from bayesupdate.cli import main
+from bayesupdate.inference import load_modal_data, read_result, to_datatree
+from bayesupdate.inference.likelihood import LogPosterior
+from bayesupdate.paper import TABLE2_EMA_HZ
+
+STUDY = """
+[model]
+source = "shear_building"
+[data]
+source = "{csv}"
+[parameters.theta_1]
+bounds = [0.2, 3.0]
+[parameters.theta_2]
+bounds = [0.2, 3.0]
+[optimizer]
+starts = 8
+[sampler]
+walkers = 16
+steps = 400
+check_every = 100
+min_autocorr_times = 1e9
+predictive_draws = 50
+"""
+
+
+@pytest.fixture
+def study(tmp_path):
+    csv = tmp_path / "freqs.csv"
+    csv.write_text("# two floors\nmode,frequency_hz,weight\n1,4.30,1\n2,10.80,1\n")
+    path = tmp_path / "study.toml"
+    path.write_text(STUDY.format(csv=csv))
+    return path
+
+
+def test_csv_and_paper_data():
+    data = load_modal_data("paper:ema")
+    np.testing.assert_array_equal(data.frequencies_hz, TABLE2_EMA_HZ)
+
+
+def test_calibrate_json_and_file(study, tmp_path, capsys):
+    out = tmp_path / "cal.h5"
+    assert main(["calibrate", str(study), "--out", str(out), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert set(result) == {
+        "parameters",
+        "objective",
+        "mass_kg",
+        "frequencies_hz",
+        "targets_hz",
+        "starts",
+        "converged_starts",
+    }
+    assert result["targets_hz"] == [4.30, 10.80]
+    assert result["objective"] < 1e-14  # two frequencies, two stiffnesses: an exact fit
+    assert result["starts"] == 9 and result["converged_starts"] == 9
+    saved = read_result(out)
+    assert saved["attrs"]["schema"] == "bayesupdate-result/1"
+    assert saved["attrs"]["kind"] == "calibration"
+    np.testing.assert_allclose(saved["optimum"]["residuals"]["model_hz"], [4.30, 10.80], rtol=1e-7)
+    # an existing output without --force: exit 2, one line, file untouched
+    before = out.read_bytes()
+    assert main(["calibrate", str(study), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "already exists" in err and err.count("\n") == 1
+    assert out.read_bytes() == before
+
+
+def test_bad_input_leaves_no_file(tmp_path, capsys):
+    out = tmp_path / "x.h5"
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[model]\nsource = "shear_building"\n[sampler]\nwalkerz = 4\n')
+    assert main(["sample", str(bad), "--out", str(out)]) == 2
+    assert "sampler.walkerz: unknown key" in capsys.readouterr().err
+    assert (
+        main(
+            [
+                "calibrate",
+                "--model",
+                "shear_building",
+                "--data",
+                str(tmp_path / "no.csv"),
+                "--out",
+                str(out),
+            ]
+        )
+        == 2
+    )
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.toml"]
+
+
+def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
+    outs = [tmp_path / "a.h5", tmp_path / "b.h5"]
+    for out in outs:
+        assert main(["sample", str(study), "--out", str(out), "--json", "--seed", "3"]) == 0
+    result = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert set(result["parameters"]) == {"theta_1", "theta_2"}
+    for row in result["parameters"].values():
+        assert set(row) == {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}
+        assert row["hdi_low"] < row["mean"] < row["hdi_high"]
+    assert result["sigma"] == {"fixed": 0.05}
+    # one model call per proposal inside the bounds (+ the starting walkers)
+    assert 0.5 * 400 * 16 < result["evaluations"] <= 400 * 16 + 3 * 16 and result["wall_s"] > 0
+    assert len(result["autocorr_time"]) == 2
+    with h5py.File(outs[0]) as a, h5py.File(outs[1]) as b:
+        assert a.attrs["status"] == "complete"
+        for key in ("chain", "log_prob", "predictions/predictive_hz", "predictions/frequencies_hz"):
+            assert np.array_equal(a["posterior"][key][()], b["posterior"][key][()])
+        assert a["posterior/chain"].shape == (400, 16, 2)
+        assert a["posterior/predictions/frequencies_hz"].shape == (50, 2)
+    tree = to_datatree(outs[0])
+    assert tree["posterior"]["theta_1"].shape[0] == 16
+    assert tree["posterior_predictive"]["frequencies_hz"].shape == (1, 50, 2)
+
+
+def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monkeypatch, capsys):
+    reference = tmp_path / "ref.h5"
+    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
+    original = LogPosterior.__call__
+    calls = {"n": 0}
+
+    def interrupting(self, theta):
+        calls["n"] += 1
+        if calls["n"] == 500:
+            raise KeyboardInterrupt
+        return original(self, theta)
+
+    monkeypatch.setattr(LogPosterior, "__call__", interrupting)
+    partial = tmp_path / "run.h5"
+    assert main(["sample", str(study), "--out", str(partial), "--json"]) == 130
+    with h5py.File(partial) as h5:
+        assert h5.attrs["status"] == "partial"
+        assert 0 < h5["posterior/chain"].shape[0] < 400
+    monkeypatch.setattr(LogPosterior, "__call__", original)
+    assert main(["sample", str(study), "--out", str(partial), "--resume", "--json"]) == 0
+    with h5py.File(partial) as a, h5py.File(reference) as b:
+        assert a.attrs["status"] == "complete"
+        assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])
+    # resuming a finished run, or with other settings, is refused
+    assert main(["sample", str(study), "--out", str(partial), "--resume"]) == 2
+    assert main(["sample", str(study), "--out", str(partial), "--resume", "--seed", "9"]) == 2
+    assert "different study" in capsys.readouterr().err
+
+
+def test_modal_data_from_ema_h5_with_shapes_pairs_by_mac(tmp_path):
+    modal_h5 = pytest.importorskip("bayesupdate.ema.modal_h5")
+    from bayesupdate.inference import ObjectiveSpec, build_problem, calibrate
+    from bayesupdate.modal_data import ModalData
+    from bayesupdate.models import get_model
+
+    model = get_model("shear_building")
+    truth = model.predict({"theta_1": 1.2, "theta_2": 0.8}, 2)
+    path = tmp_path / "modes.h5"
+    modal_h5.write_modal_h5(
+        path,
+        ModalData(frequencies_hz=truth.frequencies_hz, shapes=truth.shapes, dof_labels=("1", "2")),
+    )
+    data = load_modal_data(path)
+    problem = build_problem(model, data, objective=ObjectiveSpec(mac_weight=1.0))
+    assert problem.pairing.method == "mac"
+    result = calibrate(problem, starts=8, seed=0)
+    # with MAC terms the shapes break the two-fold symmetry of frequencies alone
+    np.testing.assert_allclose(result.theta, [1.2, 0.8], rtol=1e-5)
+    assert len(result.distinct_optima) == 1
+    np.testing.assert_allclose(result.table.mac, 1.0, atol=1e-9)
+
+
+def test_plots_from_a_result_file(study, tmp_path, capsys):
+    from bayesupdate.inference.plots import save_all
+
+    out = tmp_path / "post.h5"
+    assert main(["sample", str(study), "--out", str(out), "--json"]) == 0
+    paths = save_all(read_result(out), tmp_path / "figs")
+    # no Table 3 names in the shear building: that figure is skipped
+    assert sorted(p.stem for p in paths) == ["pair", "predictive", "residuals", "trace"]
+    assert all(p.stat().st_size > 5000 for p in paths)
+
+
+def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    text = study.read_text().replace("steps = 400", "steps = 1500")
+    study.write_text(text)
+    reference = tmp_path / "ref.h5"
+    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
+    out = tmp_path / "run.h5"
+    cmd = [sys.executable, "-m", "bayesupdate", "sample", str(study), "--out", str(out), "--json"]
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": os.getcwd()},
+    )
+    deadline = time.monotonic() + 60
+    while not out.exists() and time.monotonic() < deadline:  # first checkpoint written
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "--resume" in err
+    with h5py.File(out) as h5:
+        assert h5.attrs["status"] == "partial"
+        assert h5["posterior/chain"].shape[0] < 1500
+    assert main(["sample", str(study), "--out", str(out), "--resume", "--json"]) == 0
+    with h5py.File(out) as a, h5py.File(reference) as b:
+        assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])

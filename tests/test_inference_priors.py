@@ -1,0 +1,81 @@
+"""Priors: log densities against scipy.stats truncated distributions, and bad priors."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference import Prior, prior_from_mapping
+
+X = np.linspace(0.55, 2.9, 9)
+BOUNDS = (0.5, 3.0)
+
+
+def _truncated(dist, x, low, high):
+    return dist.logpdf(x) - np.log(dist.cdf(high) - dist.cdf(low))
+
+
+def test_uniform():
+    prior = prior_from_mapping({"kind": "uniform"}, BOUNDS)
+    np.testing.assert_allclose(prior.logpdf(X), stats.uniform(0.5, 2.5).logpdf(X), rtol=1e-12)
+
+
+def test_normal_is_truncated_normal():
+    prior = prior_from_mapping({"kind": "normal", "mean": 1.0, "sd": 0.4}, BOUNDS)
+    a, b = (0.5 - 1.0) / 0.4, (3.0 - 1.0) / 0.4
+    np.testing.assert_allclose(
+        prior.logpdf(X), stats.truncnorm(a, b, loc=1.0, scale=0.4).logpdf(X), rtol=1e-10
+    )
+
+
+def test_lognormal_by_mu_sigma_of_the_log():
+    prior = prior_from_mapping({"kind": "lognormal", "mu": 0.2, "sigma": 0.5}, BOUNDS)
+    dist = stats.lognorm(s=0.5, scale=np.exp(0.2))
+    np.testing.assert_allclose(prior.logpdf(X), _truncated(dist, X, *BOUNDS), rtol=1e-10)
+
+
+def test_halfnormal_for_sigma():
+    prior = prior_from_mapping({"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf))
+    x = np.array([0.001, 0.05, 0.2, 0.5])
+    np.testing.assert_allclose(prior.logpdf(x), stats.halfnorm(scale=0.1).logpdf(x), rtol=1e-10)
+    assert prior.logpdf(np.array([-0.01]))[0] == -np.inf
+
+
+def test_outside_bounds_is_minus_infinity():
+    prior = prior_from_mapping({"kind": "normal", "mean": 1.0, "sd": 0.4}, BOUNDS)
+    assert np.all(prior.logpdf(np.array([0.49, 3.01])) == -np.inf)
+
+
+def test_samples_follow_the_truncated_prior():
+    prior = prior_from_mapping({"kind": "lognormal", "mu": 0.2, "sigma": 0.5}, BOUNDS)
+    draws = prior.sample(np.random.default_rng(0), 20000)
+    assert draws.min() >= 0.5 and draws.max() <= 3.0
+    grid = np.linspace(0.5, 3.0, 20001)
+    p = np.exp(prior.logpdf(grid))
+    mean = np.trapezoid(grid * p, grid)
+    assert draws.mean() == pytest.approx(mean, abs=0.01)
+
+
+def test_prior_with_no_support_inside_bounds_is_an_error():
+    with pytest.raises(BayesUpdateError, match="no support inside bounds"):
+        prior_from_mapping({"kind": "normal", "mean": 50.0, "sd": 0.1}, BOUNDS, "t_hot_pipe")
+
+
+@pytest.mark.parametrize(
+    "spec, match",
+    [
+        ({"kind": "gamma"}, "unknown kind"),
+        ({"kind": "normal", "mean": 1.0}, "missing"),
+        ({"kind": "normal", "mean": 1.0, "sd": -1.0}, "sd must be > 0"),
+        ({"kind": "uniform", "low": 1.0}, "unknown"),
+        ({"mean": 1.0}, "kind"),
+    ],
+)
+def test_bad_prior_specs(spec, match):
+    with pytest.raises(BayesUpdateError, match=match):
+        prior_from_mapping(spec, BOUNDS, "x")
+
+
+def test_inverted_bounds_are_an_error():
+    with pytest.raises(BayesUpdateError, match="low < high"):
+        Prior("uniform", (2.0, 1.0))

@@ -1,0 +1,165 @@
+"""Sampling: seeded reproducibility, resume after interruption, failures counted, bad inputs."""
+
+import numpy as np
+import pytest
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference import (
+    FunctionModel,
+    LikelihoodSpec,
+    LogPosterior,
+    build_problem,
+    calibrate,
+    load_user_model,
+    prior_from_mapping,
+    read_sampler_state,
+    sample_posterior,
+    write_result,
+)
+from bayesupdate.modal_data import ModalData
+from bayesupdate.models import get_model
+from bayesupdate.models.shear_building import shear_building_frequencies
+
+DATA = ModalData(frequencies_hz=shear_building_frequencies(np.array([1.1, 0.9])) * [1.01, 0.99])
+
+
+@pytest.fixture(scope="module")
+def setup():
+    # theta_2 fixed: two frequencies, one parameter and sigma, so the residual is not zero
+    problem = build_problem(get_model("shear_building"), DATA, {"theta_1": {}}, pairing="order")
+    return problem, calibrate(problem, starts=8, seed=0)
+
+
+def _run(problem, optimum, **kwargs):
+    spec = LikelihoodSpec(
+        sigma=None,
+        sigma_prior=prior_from_mapping(
+            {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
+        ),
+    )
+    options = dict(walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9)
+    options.update(kwargs)
+    return sample_posterior(LogPosterior(problem, spec), optimum, **options)
+
+
+def test_seeded_runs_are_identical_and_seeds_differ(setup):
+    problem, optimum = setup
+    a = _run(problem, optimum)
+    b = _run(problem, optimum)
+    assert a.chain.shape == (300, 16, 2)
+    assert np.array_equal(a.chain, b.chain) and np.array_equal(a.log_prob, b.log_prob)
+    c = _run(problem, optimum, seed=6)
+    assert not np.array_equal(a.chain, c.chain)
+
+
+class _InterruptAt(LogPosterior):
+    """Raises KeyboardInterrupt (as Ctrl-C would) at the n-th call."""
+
+    def __init__(self, problem, spec, at):
+        super().__init__(problem, spec)
+        self.calls, self.at = 0, at
+
+    def __call__(self, theta):
+        self.calls += 1
+        if self.calls == self.at:
+            raise KeyboardInterrupt
+        return super().__call__(theta)
+
+
+def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path):
+    problem, optimum = setup
+    full = _run(problem, optimum)
+    spec = LikelihoodSpec(
+        sigma=None,
+        sigma_prior=prior_from_mapping(
+            {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
+        ),
+    )
+    broken = sample_posterior(
+        _InterruptAt(problem, spec, at=333),
+        optimum,
+        walkers=16,
+        steps=300,
+        seed=5,
+        check_every=100,
+        min_autocorr_times=1e9,
+    )
+    assert broken.interrupted and 0 < broken.chain.shape[0] < 300
+    np.testing.assert_array_equal(broken.chain, full.chain[: broken.chain.shape[0]])
+    # through the result file, as `sample --resume` does
+    path = tmp_path / "partial.h5"
+    write_result(path, problem, optimum, {"x": 1}, state=broken.state)
+    state = read_sampler_state(path)
+    resumed = sample_posterior(
+        LogPosterior(problem, spec),
+        optimum,
+        walkers=16,
+        steps=300,
+        seed=5,
+        check_every=100,
+        min_autocorr_times=1e9,
+        resume=state,
+    )
+    assert np.array_equal(resumed.chain, full.chain)
+    assert np.array_equal(resumed.log_prob, full.log_prob)
+
+
+def test_stops_at_fifty_autocorrelation_times(setup):
+    problem, optimum = setup
+    result = _run(problem, optimum, walkers=16, steps=20000, check_every=250, min_autocorr_times=50)
+    assert result.converged
+    assert result.chain.shape[0] >= 50 * np.max(result.autocorr_time)
+    assert result.chain.shape[0] < 20000
+
+
+def flaky(params):
+    """Raises in one region and returns NaN in another (a user's fragile model)."""
+    if params["a"] > 1.5:
+        raise RuntimeError("solver diverged")
+    if params["a"] < 0.7:
+        return [np.nan, np.nan]
+    return np.array([10.0 * params["a"], 25.0 * params["a"]])
+
+
+def test_custom_model_failures_count_as_minus_infinity():
+    model = FunctionModel(flaky, ("a",), (("a", 1.0),), (("a", (0.5, 2.0)),), label="flaky")
+    problem = build_problem(model, ModalData(frequencies_hz=[10.0, 25.0]), pairing="order")
+    log_post = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    lp = log_post(np.array([[1.0], [1.8], [0.6]]))
+    assert np.isfinite(lp[0]) and lp[1] == -np.inf and lp[2] == -np.inf
+    assert log_post.failed == 2 and log_post.evaluations == 3
+    optimum = calibrate(problem, starts=8, seed=0)
+    assert optimum.parameters["a"] == pytest.approx(1.0, rel=1e-6)
+    assert optimum.failed_evaluations > 0
+    result = sample_posterior(
+        log_post, optimum, walkers=8, steps=400, seed=1, min_autocorr_times=1e9
+    )
+    assert np.all(np.isfinite(result.log_prob))
+
+
+def test_user_model_import(tmp_path, monkeypatch):
+    (tmp_path / "my_beam.py").write_text(
+        "def model(p):\n"
+        "    return {'frequencies_hz': [5.0 * p['k'], 9.0 * p['k']], 'mass_kg': 2.0}\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    model = load_user_model("my_beam:model", {"k": {"bounds": [0.5, 2.0], "start": 1.0}})
+    problem = build_problem(model, ModalData(frequencies_hz=[6.0, 10.8]))
+    assert calibrate(problem, starts=4, seed=0).parameters["k"] == pytest.approx(1.2, rel=1e-6)
+    with pytest.raises(BayesUpdateError, match="does not import"):
+        load_user_model("no_such_package.sub:model", {"k": {"bounds": [0.5, 2.0]}})
+    with pytest.raises(BayesUpdateError, match="has no function"):
+        load_user_model("my_beam:missing", {"k": {"bounds": [0.5, 2.0]}})
+
+
+def test_parameter_outside_bounds_is_an_error():
+    with pytest.raises(BayesUpdateError, match="outside bounds"):
+        build_problem(get_model("shear_building"), DATA, {"theta_1": {"bounds": [0.2, 0.8]}})
+    with pytest.raises(BayesUpdateError, match="unknown parameter"):
+        build_problem(get_model("shear_building"), DATA, {"theta_9": {}})
+
+
+def test_too_few_walkers_is_an_error(setup):
+    problem, optimum = setup
+    with pytest.raises(BayesUpdateError, match="too few"):
+        _run(problem, optimum, walkers=3)

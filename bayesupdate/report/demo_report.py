@@ -47,7 +47,7 @@ def _fe_section(fe, out) -> Section:
         tuple(rows),
         caption="FE normal modes vs seed Table 1",
     )
-    return Section("1. The FE model and seed Table 1", (text, table, *_figures(fe["figures"], out)))
+    return Section("The FE model and seed Table 1", (text, table, *_figures(fe["figures"], out)))
 
 
 def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
@@ -185,10 +185,10 @@ def _discovery_section(title, part, out) -> Section:
 
 def build_demo_report(settings, results, out) -> tuple[Path, Path]:
     sections = [_fe_section(results["fe"], out)]
-    sections += _calibration_sections("seed", "2. Seed case (Table 2)", results["seed"], out)
+    sections += _calibration_sections("seed", "Seed case (Table 2)", results["seed"], out)
     if "seed_discovery" in results:
         sections.append(
-            _discovery_section("3. Seed case: what is missing", results["seed_discovery"], out)
+            _discovery_section("Seed case: what is missing", results["seed_discovery"], out)
         )
     sections += _virtual_sections(results["virtual_test"], results["identified"], out)
     truth = dict(results["virtual_test"]["truth"]["parameters"])

@@ -1,6 +1,6 @@
 """Real data check: modes of a free plate from five swept-sine repetitions (60-500 Hz).
 
-Data: /work/shared/data/plate_sweep (ladisk/mssp-image-tutorial, MIT; see its README): force and
+Data: ../shared/data/plate_sweep beside the checkout (ladisk/mssp-image-tutorial, MIT; see its README): force and
 acceleration at 25.6 kHz, 2 s per repetition, one driving-point-like FRF each.
 
 For every repetition: H1 from the signals (Hann window, 1 s segments, 75 % overlap: df = 1 Hz),
@@ -17,13 +17,18 @@ import glob
 import os
 import sys
 import warnings
+from pathlib import Path
 
 import h5py
 import numpy as np
 
 from bayesupdate.ema import FrfSet, h1_h2_coherence, identify
 
-DATA = os.environ.get("PLATE_SWEEP_DIR", "/work/shared/data/plate_sweep")
+# the shared data sit beside the checkout: <parent>/shared/data/plate_sweep
+DATA = os.environ.get(
+    "PLATE_SWEEP_DIR",
+    str(Path(__file__).resolve().parents[2] / "shared" / "data" / "plate_sweep"),
+)
 BAND_HZ = (60.0, 500.0)
 
 

@@ -127,8 +127,10 @@ def test_exhaust_matches_opensees():
     model = get_model("exhaust", elbow_flexibility=False)
     params = dict(TABLE3_OPTIMUM_SI)
     ours = model.solve(params, n_modes=N_MODES).frequencies_hz
+    # OpenSees' banded ARPACK (shift 0) hits a zero pivot on this free body with solid hanger
+    # rods; its dense generalized LAPACK solver does not
     peer = opensees_frame.opensees_frequencies(
-        model.structure, N_MODES, model.element_properties(params)
+        model.structure, N_MODES, model.element_properties(params), solver="-fullGenLapack"
     )
     np.testing.assert_allclose(ours, peer, rtol=REL_TOL)
 

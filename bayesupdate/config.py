@@ -28,7 +28,8 @@ Example (issue 4 item 9)::
     [likelihood]
     sigma = 0.05                    # fixed, or sigma_prior = { kind = "halfnormal", scale = 0.1 }
     mass_sd = 0.01                  # optional relative sd of the mass observation
-    pairing = "order"               # "order" (batched) or "problem" (the pairing above)
+    pairing = "auto"                # "auto": the pairing above, batched when the model gives
+                                    # batch shapes; "order" (batched, in order); "problem"
     [sampler]
     walkers = 32
     steps = 5000
@@ -37,6 +38,9 @@ Example (issue 4 item 9)::
     check_every = 500
     predictive_draws = 400
     hdi_prob = 0.9
+    reduced = true                  # built-in FE models: certified reduced basis (false = --full)
+    reduced_tol = 1e-4              # its relative frequency tolerance
+    transform = "logit"             # walk in unconstrained coordinates ("none": in theta)
 
 Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
 ``file: table.key``.  Other layers add their own tables (e.g. ``[effects]``, ``[discovery]``) with
@@ -106,7 +110,7 @@ class LikelihoodConfig:
     sigma: float | None = 0.05
     sigma_prior: dict | None = None
     mass_sd: float | None = None
-    pairing: str = "order"
+    pairing: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -118,6 +122,9 @@ class SamplerConfig:
     check_every: int = 500
     predictive_draws: int = 400
     hdi_prob: float = 0.9
+    reduced: bool = True
+    reduced_tol: float = 1e-4
+    transform: str = "logit"
 
 
 @dataclass(frozen=True)
@@ -169,6 +176,10 @@ def _check_type(value, annotation, where: str):
     allows_none = "None" in text
     if value is None and allows_none:
         return None
+    if "bool" in text:
+        if isinstance(value, bool):
+            return value
+        raise BayesUpdateError(f"{where}: must be true or false, got {value!r}")
     if "float" in text and not isinstance(value, bool) and isinstance(value, int | float):
         return float(value)
     if ("int" in text) and isinstance(value, int) and not isinstance(value, bool):
@@ -284,6 +295,11 @@ def load_study(path: str | os.PathLike) -> StudyConfig:
         raise BayesUpdateError(f"{path}: cannot read ({exc.strerror})") from exc
     except tomllib.TOMLDecodeError as exc:
         raise BayesUpdateError(f"{path}: not valid TOML ({exc})") from exc
+    except UnicodeDecodeError as exc:
+        raise BayesUpdateError(f"{path}: not UTF-8 text ({exc.reason}); save it as UTF-8") from exc
+    if not document:
+        # an empty file would silently run the default study (exhaust vs paper data)
+        raise BayesUpdateError(f"{path}: empty study file; give at least [model] and [data]")
     return dataclasses.replace(parse_study(document, str(path)), path=str(path))
 
 

@@ -20,6 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
 from bayesupdate.inference import (  # noqa: E402
     ObjectiveSpec,
     build_problem,
@@ -41,8 +42,12 @@ from bayesupdate.paper import (  # noqa: E402
 )
 
 
-def calibrate_exhaust(geometry, starts: int, seed: int, mass_weight: float):
+def calibrate_exhaust(geometry, starts: int, seed: int, mass_weight: float, full=False):
+    """Mass-kept multi-start optimum; on the certified reduced model (14 modes, tol 1e-4, the
+    full model's optimum to within that tolerance, ~20x faster) unless ``full``."""
     model = get_model("exhaust", geometry=geometry)
+    if not full:
+        model = reduced_model_for(model, tol=1e-4, seed=0, n_modes=14)
     data = load_modal_data("paper:ema")
     objective = ObjectiveSpec(mass_target_kg=MEASURED_MASS_KG, mass_weight=mass_weight)
     problem = build_problem(model, data, None, pairing="tracked", objective=objective)
@@ -74,12 +79,13 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--mass-weight", type=float, default=10.0)
     parser.add_argument("--runner-ups", type=int, default=2)
+    parser.add_argument("--full", action="store_true", help="full FE solves (no reduced model)")
     parser.add_argument("--out", default="studies/out/paper_optimum")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
-    problem, best = calibrate_exhaust("best", args.starts, args.seed, args.mass_weight)
+    problem, best = calibrate_exhaust("best", args.starts, args.seed, args.mass_weight, args.full)
     write_result(out / "optimum_best.h5", problem, best, vars(args), command="paper_optimum")
     print(
         f"Expr (eq. 19, Table 2) = {best.expr:.4f}   paper: {EXPR_FINAL_REPORTED} "
@@ -90,6 +96,11 @@ def main(argv=None):
         f"paper optimum {OPTIMUM_MASS_KG}"
     )
     print(f"starts reaching the best (Expr within 1 %): {best.converged_starts}/{best.starts}")
+    near = np.sum(best.end_objectives <= 1.05 * best.objective)
+    print(
+        f"starts within 5 % of the best: {near}/{best.starts} (the swap-free optima lie on the "
+        "kink where the tracked pairing of modes 6/7 flips; see tests/test_calibration_exhaust.py)"
+    )
     print("\nTable 3 (SI)            initial      paper       ours   same direction")
     rows = table3(best)
     for r in rows:
@@ -130,7 +141,7 @@ def main(argv=None):
     runner_ups = []
     for k in range(1, args.runner_ups + 1):
         try:
-            p_k, r_k = calibrate_exhaust(k, args.starts, args.seed, args.mass_weight)
+            p_k, r_k = calibrate_exhaust(k, args.starts, args.seed, args.mass_weight, args.full)
         except Exception as exc:  # a geometry that is not stored: report and go on
             print(f"geometry {k}: skipped ({exc})")
             continue

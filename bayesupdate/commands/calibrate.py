@@ -33,6 +33,11 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
         parser.add_argument("--walkers", type=int, help="number of walkers")
         parser.add_argument("--resume", action="store_true", help="continue a partial --out")
         parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+        parser.add_argument(
+            "--full",
+            action="store_true",
+            help="full FE solves (no certified reduced basis) for built-in FE models",
+        )
 
 
 def study_from_args(args):
@@ -50,6 +55,7 @@ def study_from_args(args):
         "sampler__seed": args.seed,
         "sampler__steps": getattr(args, "steps", None),
         "sampler__walkers": getattr(args, "walkers", None),
+        "sampler__reduced": False if getattr(args, "full", False) else None,
     }
     study = with_overrides(study, **changes)
     # --data replaces inline data of the study file entirely

@@ -655,6 +655,9 @@ class ReducedFEModel:
         W = W @ (Q / np.sqrt(s))
         V = np.concatenate([Rr, W], axis=1)
         self.V = V
+        # sensor read-out is linear in the shape: sensor shapes of a reduced solution y are
+        # V_sensor @ y, so a batch of shapes costs (n_sensors x r x n_modes) per point
+        self._V_sensor = fe.sensor_shapes(V)
         self.size = V.shape[1]
         self._n_rigid = Rr.shape[1]
         nr = self._n_rigid
@@ -719,6 +722,44 @@ class ReducedFEModel:
                 full[outside], self.parameter_names, n_modes
             )
         return out
+
+    @property
+    def sensor_labels(self) -> tuple[str, ...]:
+        return tuple(self.fe.structure.sensor_labels)
+
+    def predict_batch_with_shapes(
+        self, theta: np.ndarray, names: tuple[str, ...] | None = None, n_modes: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Frequencies (B, n_modes) [Hz] and sensor shapes (B, n_sensors, n_modes) at theta
+        (B, len(names)), rows on ``sensor_labels``; shapes are not normalised (MAC ignores scale).
+
+        Reduced points: one batched solve with eigenvectors, phi_sensors = V_sensor @ y (no
+        full-size shape is formed).  Points outside the box, more modes than certified or an
+        uncertified model: full solves (``predict``) one by one.  Failed points: NaN."""
+        names = tuple(self.parameter_names if names is None else names)
+        n_modes = self.n_modes if n_modes is None else int(n_modes)
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        full = self._theta_full(theta, names)
+        n_s = len(self.sensor_labels)
+        freqs = np.full((theta.shape[0], n_modes), np.nan)
+        shapes = np.full((theta.shape[0], n_s, n_modes), np.nan)
+        finite = np.all(np.isfinite(full), axis=1)
+        inside = finite & np.all((full >= self.low) & (full <= self.high), axis=1)
+        if not self.certified or n_modes > self.n_modes:
+            inside[:] = False
+        if np.any(inside):
+            lam, y = self._reduced_eigenvalues(full[inside], n_modes, vectors=True)
+            freqs[inside] = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+            shapes[inside] = np.einsum("sr,brm->bsm", self._V_sensor, y)
+        model = self.outer if self.certified else self.fe
+        for i in np.flatnonzero(finite & ~inside):
+            try:
+                pred = model.predict(self._mapping(full[i]), n_modes)
+            except BayesUpdateError:
+                continue
+            freqs[i] = pred.frequencies_hz
+            shapes[i] = pred.shapes
+        return freqs, shapes
 
     def predict(self, params: Mapping[str, float] | None = None, n_modes: int = 12) -> Prediction:
         """Prediction with reduced frequencies and shapes (full solve outside the certified use)."""

@@ -42,11 +42,13 @@ def interval_coverage(
     steps: int = 2000,
     starts: int = 8,
     pairing: str = "order",
+    transform: str = "none",
+    max_nfev: int | None = None,
 ) -> dict:
     """Coverage of the ``prob`` HDI over ``replicates`` synthetic data sets (sigma = noise_rel).
 
     Returns {"coverage": {name: share}, "replicates", "prob", "intervals": {name: (R, 2)},
-    "binomial_sd"}.
+    "binomial_sd"}.  transform : the sampler's (``sample_posterior``); max_nfev : per start.
     """
     rng = np.random.default_rng(seed)
     hits: dict[str, list[bool]] = {}
@@ -61,9 +63,11 @@ def interval_coverage(
             pairing=pairing,
             fixed={k: v for k, v in truth.items() if k not in problem.names},
         )
-        optimum = calibrate(problem, starts=starts, seed=seed + r)
+        optimum = calibrate(problem, starts=starts, seed=seed + r, max_nfev=max_nfev)
         log_post = LogPosterior(problem, LikelihoodSpec(sigma=noise_rel))
-        posterior = sample_posterior(log_post, optimum, walkers=walkers, steps=steps, seed=seed + r)
+        posterior = sample_posterior(
+            log_post, optimum, walkers=walkers, steps=steps, seed=seed + r, transform=transform
+        )
         summary = summarise(posterior, hdi_prob=prob)
         for name in problem.names:
             low, high = summary[name]["hdi_low"], summary[name]["hdi_high"]

@@ -78,6 +78,10 @@ def read_frequency_csv(path: str | os.PathLike) -> ModalData:
         text = path.read_text()
     except OSError as exc:
         raise BayesUpdateError(f"{path}: cannot read ({exc.strerror}); check the path") from exc
+    except UnicodeDecodeError as exc:  # a binary file (e.g. a spreadsheet) named .csv
+        raise BayesUpdateError(
+            f"{path}: not a text CSV file ({exc.reason}); export the table as UTF-8 CSV"
+        ) from exc
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise BayesUpdateError(f"{path}: empty; give a header frequency_hz[,weight,sd_hz]")

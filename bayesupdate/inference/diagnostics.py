@@ -57,8 +57,9 @@ def posterior_predictive(
 
     Returns {"draw_index": (n,) rows of the flattened post-burn chain, "frequencies_hz": (n, m)
     model frequencies, "predictive_hz": (n, m) with the likelihood's noise added,
-    "swap_fraction": share of ``check_swaps`` draws whose shape-tracked pairing differs from
-    the order used in the likelihood (NaN when the model gives no shapes)}.
+    "swap_fraction": share of draws whose shape pairing differs from the order pairing (all
+    draws when the likelihood pairs by shape in batches; else ``check_swaps`` draws checked
+    with the problem's pairing when the likelihood pairs by order; NaN when no shapes)}.
     """
     samples = result.samples()
     rng = np.random.default_rng([seed, 11])
@@ -66,7 +67,10 @@ def posterior_predictive(
     index = np.sort(rng.choice(samples.shape[0], size=n, replace=False))
     theta = samples[index]
     d = len(log_posterior.problem.parameters)
+    checked, differs = log_posterior.pair_checked, log_posterior.pair_differs
     freqs, _ = log_posterior.predict_frequencies(theta[:, :d])
+    checked = log_posterior.pair_checked - checked
+    differs = log_posterior.pair_differs - differs
     if log_posterior.spec.infer_sigma:
         sigma = theta[:, d]
     else:
@@ -80,7 +84,8 @@ def posterior_predictive(
             + (0.0 if sd is None else (sd / f_test) ** 2)
         )
     predictive = freqs * (1.0 + rel_sd * rng.standard_normal(freqs.shape))
-    swap_fraction = float("nan")
+    # shape-paired batches: the share of draws whose modes are out of order
+    swap_fraction = differs / checked if checked else float("nan")
     problem = log_posterior.problem
     if problem.pairing.method != "order" and log_posterior.spec.pairing == "order" and check_swaps:
         picks = theta[: min(check_swaps, n), :d]

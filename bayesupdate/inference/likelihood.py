@@ -10,9 +10,20 @@ sum_i e_i^2 / s_i^2 + const: with equal s_i it is seed eq. 19 divided by sigma^2
 or sampled as one more parameter (named ``sigma``) with its own prior (e.g. halfnormal).
 Optional mass term: (m - m_T)/m_T ~ N(0, mass_sd_rel^2).
 
-``LogPosterior`` maps walkers (n_walkers, d) to (n_walkers,) log-posterior values.  It uses the
-model's ``predict_frequencies_batch`` when it has one and the likelihood needs frequencies in
-order only; otherwise it loops over points with ``predict`` (shape-tracked pairing, mass term).
+``LogPosterior`` maps walkers (n_walkers, d) to (n_walkers,) log-posterior values.  Three ways
+to get the paired frequencies (``mode``):
+
+* ``"shape-batch"``: the problem pairs by shape (tracked against the reference design, or MAC to
+  test shapes) and the model gives frequencies *and sensor shapes* for a whole batch
+  (``predict_batch_with_shapes``, e.g. the reduced FE model): one batched solve, then a batched
+  MAC assignment (``pairing.pair_batch``).  Default for such models: a posterior never compares
+  swapped modes silently.  ``pair_differs / pair_checked`` is the share of evaluated points whose
+  pairing differs from the order pairing.
+* ``"order-batch"``: frequencies in order from ``predict_frequencies_batch`` (the problem pairs by
+  order, or ``pairing="order"`` was asked for).
+* ``"points"``: one ``problem.evaluate`` per point (the problem's pairing, mass term, models
+  without batch support).
+
 A point where the model raises or returns NaN gets -inf and is counted in ``failed``.
 """
 
@@ -21,11 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import Prior, joint_log_prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
+PAIRING_CHOICES = ("auto", "tracked", "problem", "order")
 
 
 @dataclass(frozen=True)
@@ -33,14 +46,16 @@ class LikelihoodSpec:
     """sigma : fixed relative noise level, or None to infer it with ``sigma_prior``.
 
     mass_sd_rel : relative sd of the mass observation (None: mass not in the likelihood).
-    pairing : "problem" (use the problem's pairing, per-point predictions when it needs shapes)
-    or "order" (frequencies in order; batch predictions; swaps are checked on draws afterwards).
+    pairing : "auto" (default: the problem's pairing, batched when the model gives batch shapes,
+    else per point; batched in order when the problem pairs by order), "tracked" (same as auto),
+    "problem" (the problem's pairing, per-point predictions when it needs shapes) or "order"
+    (frequencies in order; batch predictions; swaps are only checked on draws afterwards).
     """
 
     sigma: float | None = 0.05
     sigma_prior: Prior | None = None
     mass_sd_rel: float | None = None
-    pairing: str = "order"
+    pairing: str = "auto"
 
     def __post_init__(self):
         if self.sigma is None and self.sigma_prior is None:
@@ -53,8 +68,8 @@ class LikelihoodSpec:
             raise BayesUpdateError("likelihood.sigma_prior: bounds must be >= 0")
         if self.mass_sd_rel is not None and not self.mass_sd_rel > 0:
             raise BayesUpdateError("likelihood.mass_sd: must be > 0")
-        if self.pairing not in ("problem", "order"):
-            raise BayesUpdateError("likelihood.pairing: use 'order' or 'problem'")
+        if self.pairing not in PAIRING_CHOICES:
+            raise BayesUpdateError(f"likelihood.pairing: use one of {list(PAIRING_CHOICES)}")
 
     @property
     def infer_sigma(self) -> bool:
@@ -80,9 +95,17 @@ class LogPosterior:
         self.sd_rel2 = (
             np.zeros(self.f_test.size) if sd is None else (sd[self.mask] / self.f_test) ** 2
         )
-        needs_points = spec.pairing == "problem" and problem.pairing.method != "order"
-        needs_points = needs_points or spec.mass_sd_rel is not None
-        self.batched = isinstance(problem.model, BatchParametricModel) and not needs_points
+        self.mode = likelihood_mode(problem, spec)
+        self.batched = self.mode != "points"
+        if self.mode == "shape-batch":
+            pairing = problem.pairing
+            self._reference = (
+                pairing.test_shapes if pairing.method == "mac" else pairing.reference_shapes
+            )
+            rows = {label: i for i, label in enumerate(problem.model.sensor_labels)}
+            self._shape_rows = np.array([rows[label] for label in pairing.dof_labels])
+        self.pair_checked = 0
+        self.pair_differs = 0
         # fixed (not calibrated) parameters go to the batch call too: its defaults may differ
         self.fixed_names = tuple(k for k in problem.fixed if k in problem.model.parameter_names)
         self.fixed_values = np.array([problem.fixed[k] for k in self.fixed_names], dtype=float)
@@ -103,15 +126,18 @@ class LogPosterior:
         theta = np.atleast_2d(theta)
         n_test = self.problem.data.n_modes
         if self.batched:
+            full_theta = np.hstack([theta, np.tile(self.fixed_values, (theta.shape[0], 1))])
+            names = self.problem.names + self.fixed_names
             try:
-                freqs = np.asarray(
-                    self.problem.model.predict_frequencies_batch(
-                        np.hstack([theta, np.tile(self.fixed_values, (theta.shape[0], 1))]),
-                        self.problem.names + self.fixed_names,
-                        n_modes=n_test,
-                    ),
-                    dtype=float,
-                )
+                if self.mode == "shape-batch":
+                    freqs = self._shape_paired(full_theta, names)
+                else:
+                    freqs = np.asarray(
+                        self.problem.model.predict_frequencies_batch(
+                            full_theta, names, n_modes=n_test
+                        ),
+                        dtype=float,
+                    )
             except Exception as exc:  # a failing batch: fall back to points to find the culprits
                 self.last_error = f"{type(exc).__name__}: {exc}"
                 freqs = None
@@ -130,6 +156,24 @@ class LogPosterior:
             )
             mass[k] = np.nan if evaluation.mass_kg is None else evaluation.mass_kg
         return freqs, mass
+
+    def _shape_paired(self, theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+        """Frequencies (B, n_test) paired by batched MAC against the reference shapes."""
+        pairing = self.problem.pairing
+        freqs, shapes = self.problem.model.predict_batch_with_shapes(
+            theta, names, n_modes=pairing.n_model
+        )
+        index, _ = pair_batch(self._reference, shapes[:, self._shape_rows, :])
+        ok = np.all(np.isfinite(freqs), axis=1)
+        self.pair_checked += int(ok.sum())
+        self.pair_differs += int(np.sum(np.any(index != np.arange(pairing.n_test), axis=1) & ok))
+        return np.take_along_axis(freqs, index, axis=1)
+
+    @property
+    def pair_differs_fraction(self) -> float:
+        """Share of evaluated points whose shape pairing differs from the order pairing (NaN if
+        the likelihood does not pair by shape in batches)."""
+        return self.pair_differs / self.pair_checked if self.pair_checked else float("nan")
 
     def log_likelihood(self, freqs: np.ndarray, sigma: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """freqs (n, n_test) [Hz], sigma (n,), mass (n,) -> (n,) log-likelihood (NaN -> -inf)."""
@@ -164,3 +208,17 @@ class LogPosterior:
         self.failed += int(np.sum(failed))
         out[inside] = lp[inside] + self.log_likelihood(freqs, sigma[inside], mass)
         return out
+
+
+def likelihood_mode(problem: CalibrationProblem, spec: LikelihoodSpec) -> str:
+    """ "shape-batch", "order-batch" or "points" for this problem and spec (module docstring)."""
+    model = problem.model
+    if spec.mass_sd_rel is not None:
+        return "points"
+    if spec.pairing == "order" or problem.pairing.method == "order":
+        return "order-batch" if isinstance(model, BatchParametricModel) else "points"
+    if spec.pairing in ("auto", "tracked") and hasattr(model, "predict_batch_with_shapes"):
+        labels = set(getattr(model, "sensor_labels", ()))
+        if set(problem.pairing.dof_labels) <= labels:
+            return "shape-batch"
+    return "points"

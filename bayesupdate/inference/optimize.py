@@ -167,10 +167,16 @@ def calibrate(
     ends = np.array(ends)
     objectives = np.array(objectives)
     order = np.argsort(objectives, kind="stable")
-    best = int(order[0])
-    theta = low + ends[best] * span
-    evaluation = problem.evaluate(theta)
-    if not evaluation.ok:
+    # re-evaluate the best end point; a failure there (a one-off eigen-solve failure) falls back
+    # to the next best end point instead of ending the run
+    for best in map(int, order):
+        theta = low + ends[best] * span
+        evaluation = problem.evaluate(theta)
+        counter.evaluations += 1
+        if evaluation.ok:
+            break
+        counter.failed += 1
+    else:
         raise BayesUpdateError(f"calibration: the model failed at every start ({evaluation.error})")
     best_obj = objectives[best]
     tol = 0.01 * max(best_obj, 1e-12)

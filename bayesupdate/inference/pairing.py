@@ -144,3 +144,36 @@ def residual_table(
         swapped=paired.swapped,
         pairing_method=method,
     )
+
+
+def pair_batch(reference: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Batched MAC pairing: each reference mode takes a distinct current mode maximising the
+    total MAC, for every point of a batch at once (same result as ``pair_by_mac`` per point).
+
+    reference : (n_dof, n_test) shapes to find (reference design or test); shapes : (B, n_dof,
+    n_model) current shapes, n_model >= n_test, on the same DOFs.  Returns (model_index (B,
+    n_test), mac (B, n_test)); rows of NaN shapes give index = order and MAC NaN.
+    When every reference mode's best MAC falls on a different model mode, that argmax
+    assignment is optimal (each row at its maximum), so only the rare points with a contested
+    mode go through the Hungarian method.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    ref = np.asarray(reference, dtype=float)
+    cur = np.asarray(shapes, dtype=float)
+    n_test = ref.shape[1]
+    cross = np.einsum("dt,bdm->btm", ref, cur) ** 2
+    denom = np.sum(ref * ref, axis=0)[None, :, None] * np.sum(cur * cur, axis=1)[:, None, :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mac = np.clip(np.where(denom > 0, cross / np.where(denom > 0, denom, 1.0), 0.0), 0, 1)
+    bad = ~np.all(np.isfinite(mac), axis=(1, 2))
+    index = np.argmax(np.where(np.isfinite(mac), mac, -1.0), axis=2)
+    ordered = np.sort(index, axis=1)
+    contested = np.any(ordered[:, 1:] == ordered[:, :-1], axis=1) & ~bad
+    for b in np.flatnonzero(contested):
+        rows, cols = linear_sum_assignment(-mac[b])
+        index[b, rows] = cols
+    index[bad] = np.arange(n_test)
+    paired_mac = np.take_along_axis(mac, index[:, :, None], axis=2)[:, :, 0]
+    paired_mac[bad] = np.nan
+    return index, paired_mac

@@ -88,6 +88,7 @@ def build_parameter_specs(
             raise BayesUpdateError(f"{where}.bounds: must be two numbers [low, high]") from exc
         if not (np.isfinite(low) and np.isfinite(high) and low < high):
             raise BayesUpdateError(f"{where}.bounds: need finite low < high, got {[low, high]}")
+        _check_physical_bounds(model, name, (low, high), where)
         start = entry.get("start", defaults.get(name, 0.5 * (low + high)))
         if isinstance(start, bool) or not isinstance(start, int | float):
             raise BayesUpdateError(f"{where}.start: must be a number, got {start!r}")
@@ -104,6 +105,23 @@ def build_parameter_specs(
             ParameterSpec(name, (low, high), prior_from_mapping(prior, (low, high), name), start)
         )
     return tuple(specs)
+
+
+def _check_physical_bounds(model, name: str, bounds: tuple[float, float], where: str) -> None:
+    """Reject bounds that reach non-physical values (e.g. a zero or negative thickness or
+    density) when the model can say so cheaply (FE models: ``element_properties``), so that a
+    run does not silently spend its budget on failing points."""
+    check = getattr(model, "element_properties", None)
+    if check is None:
+        return
+    for value in bounds:
+        try:
+            check({name: value})
+        except BayesUpdateError as exc:
+            raise BayesUpdateError(
+                f"{where}.bounds: {[bounds[0], bounds[1]]} reaches a non-physical value ({exc}); "
+                "give bounds inside the physical range"
+            ) from exc
 
 
 @dataclass(frozen=True)
@@ -239,6 +257,8 @@ def build_problem(
         raise BayesUpdateError("objective: mass_weight and mac_weight must be >= 0")
     if objective.mass_weight > 0 and not (objective.mass_target_kg or 0) > 0:
         raise BayesUpdateError("objective.mass_kg: give the measured mass (> 0) for the mass term")
+    if int(extra_modes) < 0:
+        raise BayesUpdateError(f"pairing.extra_modes: must be >= 0, got {extra_modes}")
     if data.weights is not None and np.all(data.weights == 0):
         raise BayesUpdateError(f"data {data.source!r}: all weights are zero")
     n_test = data.n_modes

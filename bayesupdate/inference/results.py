@@ -19,7 +19,9 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
                        wall_s, converged, interrupted, seed
 /posterior/state       coords (walkers, d), last_log_prob (walkers,), accepted (walkers,),
                        rng_keys (624,) uint32, attrs: rng_pos, rng_has_gauss, rng_cached_gaussian
-/posterior/diagnostics attrs: summary_json (see diagnostics.summarise)
+/posterior/diagnostics attrs: summary_json (see diagnostics.summarise), sampling_json
+                       ({"pairing_mode", "pair_differs_fraction", "rom": {size,
+                       max_rel_error, certified, tol, n_modes, error_at (posterior mean)}})
 /posterior/predictions draw_index (n,), frequencies_hz (n, m), predictive_hz (n, m),
                        attrs: swap_fraction
 """
@@ -167,7 +169,11 @@ def write_result(
                     seed=posterior.seed,
                 )
             if diagnostics is not None:
-                post.create_group("diagnostics").attrs["summary_json"] = json.dumps(diagnostics)
+                group = post.create_group("diagnostics")
+                group.attrs["summary_json"] = json.dumps(diagnostics)
+                extra = {k: v for k, v in posterior.diagnostics.items() if k != "summary"}
+                if extra:
+                    group.attrs["sampling_json"] = json.dumps(extra, default=float)
             if predictions is not None:
                 pred = post.create_group("predictions")
                 for name in ("draw_index", "frequencies_hz", "predictive_hz"):

@@ -5,7 +5,8 @@ before any heavy computation; ``run_calibration`` / ``run_sampling`` then do the
 the result file atomically (with checkpoints while sampling).
 """
 
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +76,10 @@ def prepare(study: StudyConfig) -> PreparedStudy:
     for key in ("steps", "check_every", "predictive_draws"):
         if getattr(study.sampler, key) < 1:
             raise BayesUpdateError(f"sampler.{key}: must be >= 1")
+    if study.sampler.transform not in ("none", "logit"):
+        raise BayesUpdateError(
+            f"sampler.transform: {study.sampler.transform!r}; use 'logit' or 'none'"
+        )
     if not 0 < study.sampler.hdi_prob < 1:
         raise BayesUpdateError("sampler.hdi_prob: must be in (0, 1)")
     return PreparedStudy(study, problem, likelihood)
@@ -113,9 +118,20 @@ def run_sampling(
         state = read_sampler_state(out)
         if status == "complete":
             raise BayesUpdateError(f"{out}: the run is already complete; nothing to resume")
-    calibration = calibration or run_calibration(prepared)
-    log_post = LogPosterior(prepared.problem, prepared.likelihood)
     cfg = study.sampler
+    # the reduced model first: the multi-start optimum is then cheap too (checked in full at
+    # the optimum below; a miss there falls back to full solves)
+    problem, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
+    if calibration is None:
+        opt = study.optimizer
+        calibration = calibrate(
+            problem, starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design
+        )
+    if rom is not None:
+        certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")
+        if not rom.certified:
+            problem, rom = prepared.problem, None
+    log_post = LogPosterior(problem, prepared.likelihood)
 
     def checkpoint(sampler_state):
         if out is not None and not sampler_state.finished:
@@ -131,6 +147,7 @@ def run_sampling(
         seed=cfg.seed,
         min_autocorr_times=cfg.min_autocorr_times,
         check_every=cfg.check_every,
+        transform=cfg.transform,
         progress=progress,
         checkpoint=checkpoint,
         resume=state,
@@ -142,6 +159,11 @@ def run_sampling(
             )
         return calibration, posterior, {}, {}
     summary = summarise(posterior, hdi_prob=cfg.hdi_prob)
+    extra = {"pairing_mode": log_post.mode, "pair_differs_fraction": log_post.pair_differs_fraction}
+    if rom is not None:
+        mean = posterior.samples()[:, : len(problem.names)].mean(axis=0)
+        extra["rom"] = certify_rom(rom, mean[None, :], problem.names, "the posterior mean")
+    posterior = replace(posterior, diagnostics={**posterior.diagnostics, **extra})
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     if out is not None:
         write_result(
@@ -155,6 +177,57 @@ def run_sampling(
             command="sample",
         )
     return calibration, posterior, summary, predictions
+
+
+def sampling_problem(
+    problem: CalibrationProblem,
+    calibration: CalibrationResult | None = None,
+    reduced: bool = True,
+    tol: float = 1e-4,
+    seed: int = 0,
+) -> tuple[CalibrationProblem, object | None]:
+    """The problem the sampler uses: a built-in FE model gets a certified reduced basis
+    (``fe.reduced.reduced_model_for``) over the calibrated parameters' bounds, with the model
+    modes the pairing needs (test modes + extra modes), certified again at the optimum.
+    Fixed parameters keep a narrow box (+-0.1 %) around their value.  Returns (problem, rom);
+    rom is None with ``reduced=False``, for other models, or when no certified basis exists
+    (then a RuntimeWarning says full solves are used)."""
+    from bayesupdate.fe.model import FEModel
+    from bayesupdate.fe.reduced import ReducedFEModel, reduced_model_for
+
+    model = problem.model
+    if not reduced or not isinstance(model, FEModel):
+        return problem, None
+    bounds = {p.name: p.bounds for p in problem.parameters}
+    for name, value in problem.fixed.items():
+        if name in model.parameter_names and value > 0:
+            bounds[name] = (value * (1 - 1e-3), value * (1 + 1e-3))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rom = reduced_model_for(model, bounds, tol=tol, seed=seed, n_modes=problem.pairing.n_model)
+    for w in caught:
+        warnings.warn(str(w.message), RuntimeWarning, stacklevel=2)
+    if not isinstance(rom, ReducedFEModel) or not rom.certified:
+        return problem, None
+    if calibration is not None:
+        certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")
+        if not rom.certified:
+            return problem, None
+    return replace(problem, model=rom), rom
+
+
+def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> dict:
+    """Full solve(s) at theta (k, len(names)); warn (suggesting --full) when the reduced model
+    misses its tolerance there.  Returns the ROM's ``summary()`` plus ``error_at`` there."""
+    err = rom.certify_at(theta, names)
+    if not rom.certified or not err <= rom.tol:
+        warnings.warn(
+            f"reduced model not certified at {where} (relative frequency error {err:.2e}, tol "
+            f"{rom.tol:g}); the posterior may carry reduced-basis error: rerun with --full",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return {**rom.summary(), "error_at": float(err)}
 
 
 def _jsonable(obj):
@@ -174,8 +247,11 @@ def sample_json(
     predictions: dict | None = None,
 ) -> dict:
     """The ``sample --json`` object (issue 4 item 10), plus failed_evaluations, steps, walkers,
-    converged and swap_fraction (share of checked draws whose modes are swapped; None if the
-    model gives no shapes)."""
+    converged, swap_fraction (share of checked draws whose modes are swapped against their
+    order; None if the model gives no shapes), "rom" ({"size", "max_rel_error", "error_at"} of
+    the reduced basis used, null with --full), "pairing" (likelihood mode) and
+    "pair_differs_fraction" (share of likelihood evaluations paired differently from the order
+    pairing; null unless the likelihood paired by shape in batches)."""
     keys = ("mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk")
     params = {
         name: {k: summary[name][k] for k in keys} for name in posterior.names if name != "sigma"
@@ -194,7 +270,26 @@ def sample_json(
         "steps": int(posterior.chain.shape[0]),
         "walkers": int(posterior.chain.shape[1]),
         "converged": bool(posterior.converged),
+        "rom": _rom_json(posterior.diagnostics.get("rom")),
+        "pairing": posterior.diagnostics.get("pairing_mode"),
+        "pair_differs_fraction": _finite_or_none(
+            posterior.diagnostics.get("pair_differs_fraction")
+        ),
         "swap_fraction": None
         if not predictions or not np.isfinite(predictions["swap_fraction"])
         else float(predictions["swap_fraction"]),
     }
+
+
+def _rom_json(rom: dict | None) -> dict | None:
+    if not rom:
+        return None
+    return {
+        "size": int(rom["size"]),
+        "max_rel_error": float(rom["max_rel_error"]),
+        "error_at_posterior_mean": _finite_or_none(rom.get("error_at")),
+    }
+
+
+def _finite_or_none(value) -> float | None:
+    return None if value is None or not np.isfinite(value) else float(value)

@@ -37,7 +37,13 @@ class FunctionModel:
         unknown = sorted(set(params) - set(self.parameter_names))
         if unknown:
             raise BayesUpdateError(f"model {self.label}: unknown parameter(s) {unknown}")
-        out = self.function({**self.default_parameters(), **params})
+        values = {**self.default_parameters(), **params}
+        try:
+            out = self.function(values)
+        except Exception as exc:  # the user's code: name it (callers count failing points)
+            raise BayesUpdateError(
+                f"model {self.label}: raised {type(exc).__name__}: {exc} at {values}"
+            ) from exc
         shapes = mass = None
         if isinstance(out, Mapping):
             if "frequencies_hz" not in out:

@@ -388,14 +388,38 @@ def envelope(structure) -> dict:
     return {"length": float(span[0]), "width": float(span[1]), "height": float(span[2])}
 
 
+#: joint spring parts (flow order), the connections a shell model resolves and a beam model
+#: lumps into springs: their stiffness is the model-form uncertainty of the connections
+JOINT_PARTS = (
+    "hot_pipe/catalyst",
+    "catalyst/cold_pipe",
+    "cold_pipe/intermediate_muffler",
+    "intermediate_muffler/cold_pipe",
+    "cold_pipe/main_muffler",
+    "main_muffler/tail_pipe",
+)
+#: bounds of the joint stiffness factors (nuisance parameters; factor 1 = the fitted geometry)
+JOINT_FACTOR_BOUNDS = (0.1, 10.0)
+
+
+def joint_parameter(part: str) -> str:
+    """Parameter name of a joint spring part "A/B": ``k_A__B``."""
+    return "k_" + part.replace("/", "__")
+
+
 def build_exhaust_model(
-    geometry: str | int | dict = "best", elbow_flexibility: bool = True
+    geometry: str | int | dict = "best",
+    elbow_flexibility: bool = True,
+    joint_nuisance: bool = False,
 ) -> FEModel:
     """The exhaust ``FEModel`` with the five design variables of seed Table 3.
 
     geometry : "best" (the stored best fit), an index (0 = best, 1.. = runner-up fits) or a dict
     of fitted quantities (see ``GEOMETRY_QUANTITIES``).  elbow_flexibility : apply the ASME B31.3
-    flexibility factor to the bends.
+    flexibility factor to the bends.  joint_nuisance : also bind each joint spring part "A/B"
+    (``JOINT_PARTS``) to a parameter ``k_A__B`` (property stiffness_factor, default 1, bounds
+    ``JOINT_FACTOR_BOUNDS``), so the connection stiffnesses can be sampled as nuisance
+    parameters; off (default) the model is unchanged.
     """
     fitted = geometry if isinstance(geometry, dict) else fitted_geometry(geometry)
     structure = build_exhaust_structure(full_geometry(fitted), elbow_flexibility)
@@ -403,7 +427,14 @@ def build_exhaust_model(
         raise BayesUpdateError(
             "exhaust geometry: the shells alone weigh more than 12.29 kg; reduce the sizes"
         )
-    return FEModel(structure, DESIGN_BINDINGS, DESIGN_DEFAULTS, DESIGN_BOUNDS, name="exhaust")
+    bindings, defaults, bounds = dict(DESIGN_BINDINGS), dict(DESIGN_DEFAULTS), dict(DESIGN_BOUNDS)
+    if joint_nuisance:
+        for part in JOINT_PARTS:
+            name = joint_parameter(part)
+            bindings[name] = Binding(part, "stiffness_factor")
+            defaults[name] = 1.0
+            bounds[name] = JOINT_FACTOR_BOUNDS
+    return FEModel(structure, bindings, defaults, bounds, name="exhaust")
 
 
 def mode_character(structure, shapes: np.ndarray, threshold: float = 0.05) -> list[dict]:

@@ -226,10 +226,13 @@ class Assembler:
         """Total mass [kg] and centre of gravity (3,) [m] from the beams and point masses."""
         props = self.default_properties() if props is None else props
         s = self.structure
-        sec = section_properties(
-            s.beam_shape, s.beam_width, s.beam_height, props.beam_thickness, s.beam_nu
-        )
-        m_beam = props.beam_rho * sec["A"] * self.lengths
+        memo = getattr(self, "_area_memo", None)  # areas change only with the wall thickness
+        if memo is None or not np.array_equal(memo[0], props.beam_thickness):
+            area = section_properties(
+                s.beam_shape, s.beam_width, s.beam_height, props.beam_thickness, s.beam_nu
+            )["A"]
+            self._area_memo = memo = (props.beam_thickness.copy(), area)
+        m_beam = props.beam_rho * memo[1] * self.lengths
         mid = 0.5 * (s.nodes[s.beam_nodes[:, 0]] + s.nodes[s.beam_nodes[:, 1]])
         m_point = s.mass_value * props.mass_scale
         pos_point = s.nodes[s.mass_node] + s.mass_offset

@@ -5,17 +5,19 @@ BLAS is pinned to one thread (set below, before numpy is imported).
 
 Run:
   .venv/bin/python benchmarks/posterior_speed.py --save rom.npz   # reduced basis (default)
-  .venv/bin/python benchmarks/posterior_speed.py --full --steps 1000 --save full.npz
+  .venv/bin/python benchmarks/posterior_speed.py --full --steps 1000 --starts 1 --save full.npz
   .venv/bin/python benchmarks/posterior_speed.py --compare rom.npz full.npz   # no sampling
 
-Pipeline (both): the exhaust model -> [reduced: ``reduced_model_for`` (whole prior box)] ->
-multi-start point optimum (``bayesupdate.inference.calibrate``) -> [reduced: ``certify_at`` the
-optimum] -> emcee with DE moves (``sample_posterior``), 32 walkers started around the optimum,
-stopped at 50 autocorrelation times; Gaussian likelihood on relative errors with
-sigma_i = sigma / sqrt(w_i), sigma inferred (half-normal prior, scale 0.1), uniform priors on the
-model bounds.  With ``--local`` (default for the reduced run) a pilot of ``--pilot`` steps is run
-first and the main run uses ``ReducedFEModel.localized`` on the pilot's box (certified again;
-points outside it use the whole-box model).  Wall time counts everything from building the model.
+Pipeline (the CLI's, ``runner.run_sampling``): the exhaust model, tracked pairing at the
+reference design -> [reduced: ``runner.sampling_problem``: certified reduced basis over the
+prior box, 14 modes] -> multi-start optimum (``--starts``, ``--max-nfev`` per start) -> [reduced:
+``certify_at`` the optimum] -> emcee with DE moves, ``--walkers`` walkers started around the
+optimum, in logit coordinates (``--transform``), checked every ``--check-every`` steps and run
+until R-hat <= 1.01 and bulk ESS >= 1000 for every parameter (or ``--steps``); likelihood on
+relative errors with sigma inferred (half-normal prior, scale 0.1), uniform priors on the
+model bounds, modes paired by shape for every walker (batched on the reduced model, per point
+in full).  Wall and CPU time count everything from building the model; the reduced run is
+checked in full at the posterior mean too.
 """
 
 import os

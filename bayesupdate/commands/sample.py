@@ -16,10 +16,16 @@ walkers started at the multi-start optimum, run until 50 autocorrelation times o
   bayesupdate sample study.toml --out post.h5
   bayesupdate sample --model shear_building --data freqs.csv --out post.h5 --json
 
+Built-in FE models are sampled on a certified reduced basis (checked in full at the optimum and
+the posterior mean; a warning suggests --full when it misses its tolerance); --full forces full
+solves.  With frequency-only data, model modes are tracked by shape against the reference
+design for every walker (no silent mode swaps).
+
 Ctrl-C (or SIGTERM) keeps a valid partial result in --out; --resume continues it and, with the
 same seed, ends with the same chain as an uninterrupted run.  --json prints {"parameters": {NAME:
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
-"autocorr_time", ...}."""
+"autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
+"pairing", "pair_differs_fraction", ...}."""
 
 
 def add_arguments(parser) -> None:
@@ -60,6 +66,18 @@ def run(args) -> int:
             f"({out['failed_evaluations']} failed), {out['wall_s']:.1f} s, "
             f"converged (>= {study.sampler.min_autocorr_times:g} tau): {out['converged']}"
         )
+        rom = out["rom"]
+        print(
+            "full FE solves"
+            if rom is None
+            else f"reduced basis: size {rom['size']}, max relative frequency error "
+            f"{rom['max_rel_error']:.1e}"
+        )
+        if out["pair_differs_fraction"] is not None:
+            print(
+                f"pairing by shape: {out['pair_differs_fraction']:.0%} of evaluations pair "
+                "differently from the mode order"
+            )
         print("name                      mean         sd     hdi_low    hdi_high  r_hat  ess_bulk")
         for name, row in summary.items():
             print(

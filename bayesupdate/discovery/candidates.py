@@ -1,0 +1,155 @@
+"""Candidate effects and the coordinates they are fitted in.
+
+A *candidate* is one effect kind at one location (``effects.Effect``).  Each is fitted together
+with the design variables, so every parameter (design variable or effect parameter) is described
+by a ``ParameterAxis``: bounds, prior, and whether it is fitted in log coordinates (when its
+bounds span >= 2 decades, e.g. a joint stiffness in [1e2, 1e6] N m/rad).  The optimiser works in
+unit-box coordinates u in [0, 1]; the Laplace approximation in z = theta or z = log(theta).
+
+The *null value* of an effect parameter is the value at which the extended model equals the
+model without the effect (zero added mass, zero spring, factor 1, the joint's modelled
+stiffness): the localisation step probes each candidate by a small step away from it.
+"""
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.discovery.effects import EFFECT_KINDS, Effect, effect_locations, extend_model
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.priors import Prior, prior_from_mapping
+from bayesupdate.inference.problem import ParameterSpec
+
+#: bounds ratio from which a positive parameter is fitted in log coordinates
+LOG_AXIS_RATIO = 100.0
+
+
+@dataclass(frozen=True)
+class ParameterAxis:
+    """One fitted parameter: SI bounds, prior (truncated to the bounds), log or linear axis."""
+
+    name: str
+    bounds: tuple[float, float]
+    prior: Prior
+    log: bool
+
+    @property
+    def z_bounds(self) -> tuple[float, float]:
+        low, high = self.bounds
+        return (np.log(low), np.log(high)) if self.log else (low, high)
+
+    def to_z(self, theta):
+        return np.log(theta) if self.log else np.asarray(theta, dtype=float)
+
+    def from_z(self, z):
+        return np.exp(z) if self.log else np.asarray(z, dtype=float)
+
+    def log_prior_z(self, z):
+        """Log density of the prior in z coordinates, including |d theta / d z| (any shape)."""
+        z = np.asarray(z, dtype=float)
+        value = self.prior.logpdf(self.from_z(z))
+        return value + z if self.log else value
+
+
+def axis_for(spec: ParameterSpec) -> ParameterAxis:
+    """The axis of a calibrated parameter (log when positive and spanning >= 2 decades)."""
+    low, high = spec.bounds
+    return ParameterAxis(
+        spec.name, spec.bounds, spec.prior, low > 0 and high / low >= LOG_AXIS_RATIO
+    )
+
+
+# -- null values ------------------------------------------------------------------------------
+def _joint_null(model, location: str) -> float:
+    """Geometric mean of the joint springs' modelled bending stiffnesses [N m/rad]."""
+    s = model.structure
+    k = s.spring_k[s.spring_part == s.parts.index(location)][:, 4:6]
+    return float(np.exp(np.mean(np.log(np.maximum(k, 1e-300)))))
+
+
+#: kind -> (model, location) -> {parameter: null value}
+NULL_VALUES: dict[str, Callable] = {
+    "added_mass": lambda model, loc: {"m": 0.0},
+    "boundary_spring": lambda model, loc: {"k": 0.0},
+    "bend_flexibility": lambda model, loc: {"factor": 1.0},
+    "stiffness_change": lambda model, loc: {"factor": 1.0},
+    "joint_flexibility": lambda model, loc: {"k_rot": _joint_null(model, loc)},
+}
+
+
+def register_null_value(kind: str, function: Callable) -> None:
+    """For a user's effect kind: ``function(model, location) -> {parameter: value}`` at which the
+    extended model equals the model (else the kind's lower bounds are taken as null)."""
+    NULL_VALUES[kind] = function
+
+
+def null_values(model, effect: Effect) -> dict[str, float]:
+    """Null value of each effect parameter, clipped into its bounds."""
+    kind = EFFECT_KINDS[effect.kind]
+    given = NULL_VALUES.get(effect.kind)
+    values = given(model, effect.location) if given else {}
+    out = {}
+    for p in kind.parameters:
+        v = values.get(p.name, p.bounds[0])
+        out[p.name] = float(np.clip(v, *p.bounds))
+    return out
+
+
+# -- candidates -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Candidate:
+    """One effect at one location, with its extended model and the axes of its parameters."""
+
+    effect: Effect
+    model: object
+    axes: tuple[ParameterAxis, ...]
+    null: dict  # full parameter name -> null value (SI)
+
+    @property
+    def label(self) -> str:
+        return self.effect.tag
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(a.name for a in self.axes)
+
+
+def make_candidate(model, effect: Effect) -> Candidate:
+    """Extend ``model`` by ``effect`` and describe the effect's parameters."""
+    extended = extend_model(model, effect)
+    kind = EFFECT_KINDS[effect.kind]
+    nulls = null_values(model, effect)
+    axes, null = [], {}
+    for p in kind.parameters:
+        full = f"{effect.tag}:{p.name}"
+        prior = prior_from_mapping(p.prior, p.bounds, full)
+        low, high = p.bounds
+        axes.append(ParameterAxis(full, p.bounds, prior, low > 0 and high / low >= LOG_AXIS_RATIO))
+        null[full] = nulls[p.name]
+    return Candidate(effect, extended, tuple(axes), null)
+
+
+def enumerate_effects(
+    model, kinds=None, locations: Mapping[str, list] | None = None
+) -> list[Effect]:
+    """Every (kind, location) pair to consider: all kinds of the library (or ``kinds``) at all
+    their admissible locations (or those listed in ``locations[kind]``)."""
+    kinds = list(EFFECT_KINDS) if kinds is None else list(kinds)
+    out = []
+    for kind in kinds:
+        if kind not in EFFECT_KINDS:
+            raise BayesUpdateError(
+                f"discovery: unknown effect kind {kind!r}; kinds are {sorted(EFFECT_KINDS)}"
+            )
+        admissible = effect_locations(model, kind)
+        chosen = admissible if not locations or kind not in locations else list(locations[kind])
+        bad = [loc for loc in chosen if loc not in admissible]
+        if bad:
+            raise BayesUpdateError(
+                f"discovery: unknown location(s) {bad} for {kind}; locations are {admissible}"
+            )
+        out.extend(Effect(kind, str(loc)) for loc in chosen)
+    if not out:
+        raise BayesUpdateError("discovery: no candidate effects (no kind has a location here)")
+    return out

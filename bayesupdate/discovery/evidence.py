@@ -1,0 +1,374 @@
+"""Name: refit a model (baseline or baseline + one effect) and compute its evidence.
+
+Likelihood (relative frequency errors e_i, noise s_i from ``flagging.NoiseModel``):
+
+* known noise: log L = -1/2 sum r_i^2 - sum log s_i - m/2 log 2 pi, with r_i = e_i / s_i;
+* inferred noise: sigma is integrated out under a log-uniform prior on [a, b] =
+  [``SIGMA_FLOOR``, ``SIGMA_MAX``], with r_i = e_i sqrt(w_i) and R = sum r_i^2:
+  log L = -m/2 log 2 pi + 1/2 sum log w_i - log log(b/a) - log 2 + m/2 log(2/R)
+  + log Gamma(m/2) + log[P(m/2, R/2a^2) - P(m/2, R/2b^2)]  (P: regularised lower incomplete gamma),
+  the exact integral of prod_i N(e_i; 0, sigma^2/w_i) d(log sigma) / log(b/a).
+
+Evidence by the Laplace approximation (MacKay 2003 ch. 27; Kass & Raftery 1995 eq. 4) in the fit
+coordinates z (``candidates.ParameterAxis``):
+
+    log Z = log L(z*) + log p(z*) + d/2 log 2 pi - 1/2 log det H + sum_j log T_j,
+
+H = J^T J / c + diag(prior curvature) the Gauss-Newton Hessian of the negative log posterior
+(J: Jacobian of r in z; c = 1 for known noise, c = R/m for inferred noise), and
+T_j = Phi((z_hi - z*_j)/s_j) - Phi((z_lo - z*_j)/s_j), s_j^2 = (H^-1)_jj, the Gaussian mass
+inside the prior box (so a parameter at its bound, or one the data do not constrain, is not
+over-counted).  Starts that end in distinct optima (Mahalanobis distance > 3 under H) have their
+evidences summed (log-sum-exp); the same optimum found twice counts once.
+
+PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods, via
+``arviz_stats.loo_approximate_posterior``: draws from the Laplace Gaussian (truncated to the
+box), residuals linearised with the same Jacobian (r = r* + J (z - z*), the approximation the
+Laplace evidence already makes; no extra model solves), importance-corrected with log p - log q.
+"""
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize, special, stats
+
+from bayesupdate.discovery.candidates import ParameterAxis
+from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel
+
+#: upper end of the log-uniform prior of an inferred relative noise level
+SIGMA_MAX = 0.5
+#: residual given where the model fails (large, finite)
+_FAILED = 1e3
+_LOG_2PI = float(np.log(2 * np.pi))
+
+
+@dataclass(frozen=True)
+class FitSpace:
+    """What a fit needs: the calibration problem of the (extended) model, the axes of its
+    parameters (problem order) and the noise model."""
+
+    problem: object
+    axes: tuple[ParameterAxis, ...]
+    noise: NoiseModel
+
+    @property
+    def z_low(self) -> np.ndarray:
+        return np.array([a.z_bounds[0] for a in self.axes])
+
+    @property
+    def z_high(self) -> np.ndarray:
+        return np.array([a.z_bounds[1] for a in self.axes])
+
+    def z_from_u(self, u):
+        return self.z_low + np.clip(u, 0.0, 1.0) * (self.z_high - self.z_low)
+
+    def u_from_theta(self, theta) -> np.ndarray:
+        z = np.array([a.to_z(t) for a, t in zip(self.axes, theta, strict=True)], dtype=float)
+        return (z - self.z_low) / (self.z_high - self.z_low)
+
+    def theta_from_z(self, z) -> np.ndarray:
+        return np.array([a.from_z(v) for a, v in zip(self.axes, z, strict=True)], dtype=float)
+
+    def log_prior_z(self, z: np.ndarray) -> np.ndarray:
+        """z (n, d) -> (n,) joint log prior density in z coordinates."""
+        z = np.atleast_2d(z)
+        return sum(a.log_prior_z(z[:, j]) for j, a in enumerate(self.axes))
+
+    def relative_errors(self, theta) -> tuple[np.ndarray, object]:
+        """e (m,) at theta and the problem's Evaluation (e NaN where the model failed)."""
+        evaluation = self.problem.evaluate(np.asarray(theta, dtype=float))
+        f_test = self.problem.data.frequencies_hz
+        return (evaluation.frequencies_hz - f_test) / f_test, evaluation
+
+    def residuals(self, e: np.ndarray) -> np.ndarray:
+        """Normalised residuals r of the used modes (module docstring)."""
+        used = self.noise.used
+        if self.noise.inferred:
+            return e[used] * self.noise.weights_sqrt[used]
+        return e[used] / self.noise.scale[used]
+
+
+def log_likelihood(r: np.ndarray, noise: NoiseModel) -> float:
+    """log L from the normalised residuals r (module docstring)."""
+    used = noise.used
+    m = int(np.sum(used))
+    rss = float(np.sum(r * r))
+    if not noise.inferred:
+        return -0.5 * rss - float(np.sum(np.log(noise.scale[used]))) - 0.5 * m * _LOG_2PI
+    a, b = SIGMA_FLOOR, SIGMA_MAX
+    rss = max(rss, 1e-3 * m * a * a)  # keeps P(m/2, R/2a^2) representable; sigma << floor anyway
+    k = 0.5 * m
+    mass = special.gammainc(k, rss / (2 * a * a)) - special.gammainc(k, rss / (2 * b * b))
+    return float(
+        -0.5 * m * _LOG_2PI
+        + np.sum(np.log(noise.weights_sqrt[used]))
+        - np.log(np.log(b / a))
+        - np.log(2.0)
+        + k * np.log(2.0 / rss)
+        + special.gammaln(k)
+        + np.log(max(mass, 1e-300))
+    )
+
+
+def _noise_curvature(r: np.ndarray, noise: NoiseModel) -> float:
+    """c in H = J^T J / c: 1 for known noise, the fitted sigma^2 (floored) for inferred noise."""
+    if not noise.inferred:
+        return 1.0
+    return max(float(np.sum(r * r)) / r.size, SIGMA_FLOOR**2)
+
+
+@dataclass
+class Optimum:
+    """One end point of a fit: z (d,), normalised residuals r (m_used,), Jacobian J (m_used, d)."""
+
+    z: np.ndarray
+    r: np.ndarray
+    jac_z: np.ndarray
+    log_like: float
+    log_prior: float
+    log_evidence: float
+    hessian: np.ndarray
+
+
+def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) -> Optimum:
+    """Laplace log-evidence around one optimum (module docstring)."""
+    d = z.size
+    span = space.z_high - space.z_low
+    log_like = log_likelihood(r, space.noise)
+    log_prior = float(space.log_prior_z(z[None])[0])
+    h = 1e-4 * span
+    curv = np.zeros(d)
+    for j in range(d):  # priors are closed-form; a 3-point second difference per axis is exact
+        zp, zm = z.copy(), z.copy()
+        zp[j] = min(z[j] + h[j], space.z_high[j])
+        zm[j] = max(z[j] - h[j], space.z_low[j])
+        lp = space.log_prior_z(np.vstack([zm, z, zp]))
+        step = 0.5 * (zp[j] - zm[j])
+        if np.all(np.isfinite(lp)) and step > 0:
+            curv[j] = max(-(lp[0] - 2 * lp[1] + lp[2]) / step**2, 0.0)
+    hessian = jac_z.T @ jac_z / _noise_curvature(r, space.noise) + np.diag(curv)
+    # a direction the data do not see: a tiny curvature (1e-8 per prior width^2) keeps H
+    # invertible; the box truncation below then caps its contribution at the prior volume
+    hessian = hessian + np.diag(1e-8 / span**2)
+    sign, logdet = np.linalg.slogdet(hessian)
+    cov = np.linalg.inv(hessian)
+    sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+    inside = stats.norm.cdf((space.z_high - z) / sd) - stats.norm.cdf((space.z_low - z) / sd)
+    log_trunc = float(np.sum(np.log(np.maximum(inside, 1e-300))))
+    log_z = log_like + log_prior + 0.5 * d * _LOG_2PI - 0.5 * logdet + log_trunc
+    return Optimum(z, r, jac_z, log_like, log_prior, float(log_z), hessian)
+
+
+@dataclass
+class ModelFit:
+    """A fitted model (baseline or one candidate) with its evidence.
+
+    label : "baseline" or ``KIND@LOCATION``.  theta : best parameters (SI), ``names`` order.
+    residual_rel : (m,) relative errors at theta (test order).  optima : distinct optima found.
+    log_evidence : Laplace log Z summed over the distinct optima.  loo : PSIS-LOO elpd (None
+    unless computed).
+    """
+
+    label: str
+    kind: str | None
+    location: str | None
+    names: tuple[str, ...]
+    theta: np.ndarray
+    residual_rel: np.ndarray
+    frequencies_hz: np.ndarray
+    expr: float
+    optima: list
+    log_evidence: float
+    evaluations: int
+    wall_s: float
+    space: FitSpace = field(repr=False)
+    loo: dict | None = None
+    stage: str = "full"
+
+    @property
+    def best(self) -> Optimum:
+        return self.optima[0]
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        return dict(zip(self.names, map(float, self.theta), strict=True))
+
+    @property
+    def effect_parameters(self) -> dict[str, float]:
+        """The effect's own parameters, by short name (``m``, ``k_rot``...)."""
+        if self.kind is None:
+            return {}
+        prefix = f"{self.kind}@{self.location}:"
+        return {k[len(prefix) :]: v for k, v in self.parameters.items() if k.startswith(prefix)}
+
+    @property
+    def chi2(self) -> float:
+        return float(np.sum(self.best.r**2))
+
+
+def _forward_jacobian(fun, u: np.ndarray, r0: np.ndarray, step: float = 1e-4) -> np.ndarray:
+    """dr/du (m, d) by forward differences, each step pointing into the unit box."""
+    jac = np.empty((r0.size, u.size))
+    for j in range(u.size):
+        h = step if u[j] + step <= 1.0 else -step
+        up = u.copy()
+        up[j] += h
+        jac[:, j] = (fun(up) - r0) / h
+    return jac
+
+
+def fit_model(
+    space: FitSpace,
+    starts_theta: list[np.ndarray],
+    label: str = "baseline",
+    kind: str | None = None,
+    location: str | None = None,
+    max_nfev: int = 30,
+    stage: str = "full",
+    best_start_only: bool = False,
+) -> ModelFit:
+    """Bounded least squares (TRF, unit-box coordinates, forward-difference Jacobians with step
+    1e-4, recomputed at each end point) from each start, then the Laplace evidence of the
+    distinct optima (module doc).
+
+    best_start_only : evaluate every start once and fit from the one with the smallest chi^2
+    only (the cheap quick tier)."""
+    t0 = time.perf_counter()
+    n_eval = [0]
+    span = space.z_high - space.z_low
+    m_used = int(np.sum(space.noise.used))
+
+    def fun(u):
+        n_eval[0] += 1
+        e, evaluation = space.relative_errors(space.theta_from_z(space.z_from_u(u)))
+        r = space.residuals(e) if evaluation.ok else None
+        if r is None or not np.all(np.isfinite(r)):
+            return np.full(m_used, _FAILED)
+        return r
+
+    u_starts = [np.clip(space.u_from_theta(t), 0.0, 1.0) for t in starts_theta]
+    if best_start_only and len(u_starts) > 1:
+        u_starts = [min(u_starts, key=lambda u: float(np.sum(fun(u) ** 2)))]
+    ends = []
+    for u0 in u_starts:
+        fit = optimize.least_squares(
+            fun,
+            u0,
+            bounds=(np.zeros(u0.size), np.ones(u0.size)),
+            method="trf",
+            diff_step=1e-4,
+            xtol=1e-7,
+            ftol=1e-7,
+            gtol=1e-8,
+            max_nfev=max_nfev,
+        )
+        u = np.clip(fit.x, 0.0, 1.0)
+        r = np.asarray(fit.fun)
+        # our own Jacobian: TRF's ``fit.jac`` is rescaled near the bounds (zero at a bound)
+        jac_z = _forward_jacobian(fun, u, r) / span
+        ends.append(laplace(space, space.z_from_u(u), r, jac_z))
+    ends.sort(key=lambda o: -o.log_evidence)
+    distinct: list[Optimum] = []
+    for o in ends:
+        same = False
+        for kept in distinct:
+            dz = o.z - kept.z
+            if float(dz @ kept.hessian @ dz) < 9.0 or np.max(np.abs(dz / span)) < 0.02:
+                same = True
+                break
+        if not same:
+            distinct.append(o)
+    log_z = float(special.logsumexp([o.log_evidence for o in distinct]))
+    best = distinct[0]
+    theta = space.theta_from_z(best.z)
+    e, evaluation = space.relative_errors(theta)
+    n_eval[0] += 1
+    return ModelFit(
+        label=label,
+        kind=kind,
+        location=location,
+        names=tuple(a.name for a in space.axes),
+        theta=theta,
+        residual_rel=e,
+        frequencies_hz=evaluation.frequencies_hz,
+        expr=float(space.problem.expr(evaluation.frequencies_hz)),
+        optima=distinct,
+        log_evidence=log_z,
+        evaluations=n_eval[0],
+        wall_s=time.perf_counter() - t0,
+        space=space,
+        stage=stage,
+    )
+
+
+def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
+    """PSIS-LOO elpd of ``fit`` from Laplace draws (module docstring).
+
+    Returns {"elpd", "se", "p_loo", "pareto_k_max", "draws", "method"}.
+    """
+    import arviz_base
+    import arviz_stats
+
+    space, best = fit.space, fit.best
+    rng = np.random.default_rng(seed)
+    cov = np.linalg.inv(best.hessian)
+    cov = 0.5 * (cov + cov.T)
+    d = best.z.size
+    # rejection to the box: keep the first ``draws`` inside (the box holds most of the mass
+    # unless a parameter sits at its bound, where about half is kept)
+    z = np.empty((0, d))
+    for _ in range(20):
+        more = rng.multivariate_normal(best.z, cov, size=4 * draws, method="cholesky")
+        ok = np.all((more >= space.z_low) & (more <= space.z_high), axis=1)
+        z = np.vstack([z, more[ok]])
+        if z.shape[0] >= draws:
+            break
+    method = "Laplace draws, linearised residuals, PSIS-LOO (approximate posterior)"
+    if z.shape[0] < draws:
+        # the box holds little of the Gaussian (an unconstrained parameter): clip instead
+        more = rng.multivariate_normal(best.z, cov, size=draws, method="cholesky")
+        z = np.vstack([z, np.clip(more, space.z_low, space.z_high)])
+        method += "; draws clipped to the bounds"
+    z = z[:draws]
+    n = z.shape[0]
+    r = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, m_used) linearised residuals
+    noise = space.noise
+    used = noise.used
+    log_q = stats.multivariate_normal(best.z, cov, allow_singular=True).logpdf(z)
+    log_q = np.atleast_1d(log_q)
+    if noise.inferred:
+        m = r.shape[1]
+        sigma_hat = np.sqrt(_noise_curvature(best.r, noise))
+        log_sigma = rng.normal(np.log(sigma_hat), np.sqrt(1.0 / (2 * m)), size=n)
+        sigma = np.exp(log_sigma)[:, None]
+        pointwise = (
+            -0.5 * (r / sigma) ** 2
+            - np.log(sigma)
+            + np.log(noise.weights_sqrt[used])[None, :]
+            - 0.5 * _LOG_2PI
+        )
+        log_q = log_q + stats.norm.logpdf(log_sigma, np.log(sigma_hat), np.sqrt(1.0 / (2 * m)))
+        log_sigma_prior = -np.log(np.log(SIGMA_MAX / SIGMA_FLOOR))
+    else:
+        pointwise = -0.5 * r**2 - np.log(noise.scale[used])[None, :] - 0.5 * _LOG_2PI
+        log_sigma_prior = 0.0
+    log_p = pointwise.sum(axis=1) + space.log_prior_z(z) + log_sigma_prior
+    tree = arviz_base.from_dict(
+        {"posterior": {"z": z[None]}, "log_likelihood": {"f": pointwise[None]}},
+        dims={"f": ["mode"], "z": ["parameter"]},
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = arviz_stats.loo_approximate_posterior(
+            tree, log_p[None], log_q[None], pointwise=True, var_name="f"
+        )
+    return {
+        "elpd": float(result.elpd),
+        "se": float(result.se),
+        "p_loo": float(result.p),
+        "pareto_k_max": float(np.max(result.pareto_k.values)),
+        "draws": int(n),
+        "method": method,
+    }

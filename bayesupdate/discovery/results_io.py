@@ -1,0 +1,188 @@
+"""A discovery result on disk (HDF5, written atomically) and the extended model as a source.
+
+Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_test):
+
+/                   attrs: schema, kind = "discovery", verdict, reason, created_utc, command,
+                    model (base model name), base_effects_json (effects the model had before),
+                    effects_json (spec list of the extended model: base effects + the named one),
+                    summary_json (the ``discover --json`` object), settings_json, config_json
+/versions           attrs: package versions
+/inputs             frequencies_hz (m,), [weights (m,)], [sd_hz (m,)], attrs: source
+/baseline           theta (d,), residual_rel (m,), frequencies_hz (m,), attrs: names,
+                    log_evidence, expr, loo_json
+/final              the re-calibrated model (baseline when nothing was named): same datasets,
+                    attrs: names, label, expr, effects_json
+/flags              z (m,), p_value (m,), flagged (m,) bool, mac (m,), attrs: chi2, chi2_dof,
+                    chi2_p, noise_source, noise_sigma
+/localization       candidate (n,) str, delta_chi2 (n,), step_theta (n,); location (k,) str,
+                    location_score (k,); part (p,) str, strain_excess (p,), kinetic_excess (p,);
+                    comac_label (s,) str, comac (s,)
+/final/posterior    (with --posterior-steps) chain (steps, walkers, d), log_prob, attrs: names,
+                    burn, summary_json
+/candidates/NNN     theta, residual_rel, frequencies_hz, attrs: label, kind, location, names,
+                    log_evidence, log_bayes_factor, expr, stage, optima, loo_json
+
+``extended_model_from_result(path)`` rebuilds the final model (base model + effects at their
+fitted values, design variables at their re-fitted values as defaults): a model source.
+"""
+
+import json
+from datetime import UTC, datetime
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from bayesupdate.atomic import atomic_path
+from bayesupdate.errors import BayesUpdateError
+
+SCHEMA = "bayesupdate-discovery/1"
+
+
+def _strings(values) -> np.ndarray:
+    return np.array([str(v) for v in values], dtype=h5py.string_dtype())
+
+
+def _write_fit(group, fit) -> None:
+    group["theta"] = np.asarray(fit.theta, float)
+    group["residual_rel"] = np.asarray(fit.residual_rel, float)
+    group["frequencies_hz"] = np.asarray(fit.frequencies_hz, float)
+    group.attrs.update(
+        names=json.dumps(list(fit.names)),
+        label=fit.label,
+        log_evidence=float(fit.log_evidence),
+        expr=float(fit.expr),
+        stage=fit.stage,
+        optima=len(fit.optima),
+        loo_json=json.dumps(fit.loo),
+    )
+
+
+def write_discovery(
+    path,
+    result,
+    base_effects=(),
+    config: dict | None = None,
+    command: str = "discover",
+    posterior=None,
+):
+    """Write ``result`` (workflow.DiscoveryResult) to ``path`` atomically (schema above).
+    posterior : optional (PosteriorResult, summary dict) of the final model."""
+    from bayesupdate.inference.results import package_versions
+
+    summary = result.to_json()
+    problem = result.baseline.space.problem
+    data = problem.data
+    effects = list(base_effects) + result.effects
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as h5:
+        h5.attrs.update(
+            schema=SCHEMA,
+            kind="discovery",
+            verdict=result.verdict,
+            reason=result.reason,
+            created_utc=datetime.now(UTC).isoformat(timespec="seconds"),
+            command=command,
+            model=str(result.model_name).split("+")[0],
+            base_effects_json=json.dumps(list(base_effects)),
+            effects_json=json.dumps(effects),
+            summary_json=json.dumps(summary),
+            settings_json=json.dumps(result.settings.__dict__, default=str),
+            config_json=json.dumps(config or {}, default=str),
+        )
+        h5.create_group("versions").attrs.update(package_versions())
+        g = h5.create_group("inputs")
+        g["frequencies_hz"] = data.frequencies_hz
+        if data.weights is not None:
+            g["weights"] = data.weights
+        if data.frequency_sd_hz is not None:
+            g["sd_hz"] = data.frequency_sd_hz
+        g.attrs["source"] = data.source
+        _write_fit(h5.create_group("baseline"), result.baseline)
+        final = h5.create_group("final")
+        _write_fit(final, result.final)
+        final.attrs["effects_json"] = json.dumps(effects)
+        if posterior is not None:
+            chain, summary_post = posterior
+            g = final.create_group("posterior")
+            g["chain"], g["log_prob"] = chain.chain, chain.log_prob
+            g.attrs.update(
+                names=json.dumps(list(chain.names)),
+                burn=int(chain.burn),
+                summary_json=json.dumps(summary_post, default=float),
+            )
+        f = result.flags
+        g = h5.create_group("flags")
+        g["z"], g["p_value"], g["flagged"], g["mac"] = f.z, f.p_value, f.flagged, f.mac
+        g.attrs.update(
+            chi2=f.chi2,
+            chi2_dof=f.chi2_dof,
+            chi2_p=f.chi2_p,
+            noise_source=result.noise.source,
+            noise_sigma=result.noise.sigma,
+        )
+        loc = result.localization
+        g = h5.create_group("localization")
+        g["candidate"] = _strings(s.label for s in loc.scores)
+        g["delta_chi2"] = np.array([s.delta_chi2 for s in loc.scores], float)
+        g["step_theta"] = np.array([s.step_theta for s in loc.scores], float)
+        g["location"] = _strings(item[0] for item in loc.locations)
+        g["location_score"] = np.array([item[1] for item in loc.locations], float)
+        g["part"] = _strings(item[0] for item in loc.part_energy)
+        g["strain_excess"] = np.array([item[1] for item in loc.part_energy], float)
+        g["kinetic_excess"] = np.array([item[2] for item in loc.part_energy], float)
+        g["comac_label"] = _strings(loc.comac)
+        g["comac"] = np.array(list(loc.comac.values()), float)
+        cands = h5.create_group("candidates")
+        for i, fit in enumerate(result.fits):
+            c = cands.create_group(f"{i:03d}")
+            _write_fit(c, fit)
+            c.attrs.update(
+                kind=fit.kind,
+                location=fit.location,
+                log_bayes_factor=result.log_bayes_factor(fit),
+            )
+    return Path(path)
+
+
+def read_discovery_summary(path) -> dict:
+    """The JSON summary and the effect list of a discovery result file."""
+    try:
+        with h5py.File(path, "r") as h5:
+            if h5.attrs.get("schema") != SCHEMA:
+                raise BayesUpdateError(f"{path}: not a discovery result ({SCHEMA})")
+            out = json.loads(h5.attrs["summary_json"])
+            out["model"] = str(h5.attrs["model"])
+            out["effects"] = json.loads(h5.attrs["effects_json"])
+            final = h5["final"]
+            names = json.loads(final.attrs["names"])
+            out["final_parameters"] = dict(zip(names, map(float, final["theta"][()]), strict=True))
+            return out
+    except OSError as exc:
+        raise BayesUpdateError(f"{path}: cannot read discovery result ({exc})") from exc
+
+
+def extend_with_specs(model, specs) -> object:
+    """``model`` extended by each effect spec (``KIND@LOCATION[:name=value]``) in turn."""
+    from bayesupdate.discovery.effects import extend_model, parse_effect_spec
+
+    if specs and not hasattr(model, "structure"):
+        raise BayesUpdateError(
+            "effects need an FE model (a built-in model such as 'exhaust'); "
+            "a package.module:function model cannot be extended"
+        )
+    for spec in specs:
+        model = extend_model(model, parse_effect_spec(spec))
+    return model
+
+
+def extended_model_from_result(path):
+    """(model, parameters): the final model of a discovery result as a model source.
+
+    The base model is rebuilt by name (built-in models), extended by the stored effect specs
+    (their fitted values become the effect parameters' defaults); ``parameters`` holds the
+    re-fitted design variables and effect parameters (SI)."""
+    from bayesupdate.models import get_model
+
+    summary = read_discovery_summary(path)
+    model = extend_with_specs(get_model(summary["model"]), summary["effects"])
+    return model, summary["final_parameters"]

@@ -1,0 +1,436 @@
+"""Discovery end to end: baseline -> flag -> localise -> name -> add and show.
+
+``discover(model, data, settings)`` returns a ``DiscoveryResult``:
+
+1. the baseline calibration of the design variables (or the one given), its noise model and
+   Laplace evidence (``flagging``, ``evidence``);
+2. flagged modes (z-scores, p-values, MAC);
+3. the localisation views; every candidate of the library at every admissible location gets a
+   score test (``localization``);
+4. two-tier refits with the design variables.  Quick tier: the ``quick_refits`` best candidates
+   by score, plus the best ``per_kind`` of every kind (the broad-scan fallback: the linear score
+   misjudges large effects, whose baseline optimum sits far from the truth), each a few
+   Gauss-Newton iterations (``quick_nfev``) from the best (smallest chi^2) of 12-18 starts: the
+   score test's suggestion, 3x and 10x that step, and the screen grid, each with the design
+   variables at the baseline optimum, the reference design and the centre of the bounds box.
+   Full tier: the ``max_refits`` best by quick evidence, re-fitted to convergence from two
+   starts (the quick end point, and the box centre with the quick fit's effect value).  All
+   are compared by Laplace evidence (quick fits keep their quick value, a lower bound in
+   practice, and are marked ``stage: quick``); the best few also by PSIS-LOO;
+5. the verdict (``decide``):
+
+   * ``explained``: ln BF(best vs baseline) > ``threshold_ln_bf`` (3: "strong" on the
+     Kass-Raftery scale), ln BF(best vs runner-up) >= ``margin_ln_bf`` (2: the runner-up is
+     e^2 ~ 7 times less probable), and the extended model fits within the noise (no flagged mode,
+     and for known noise the chi^2 p-value > ``adequacy_p``; for inferred noise its own robust
+     noise level <= ``max_noise_rel``);
+   * ``no discrepancy``: no candidate beats the baseline by the threshold and the baseline fits
+     within the noise (for inferred noise: no flagged mode and an inferred level <=
+     ``max_noise_rel`` = 1 %, the scatter of a repeated modal test; a larger "noise" is model
+     error, not noise);
+   * ``unexplained``: misfit remains and no single library effect explains it, or the best
+     candidates cannot be told apart (listed in ``ambiguous_with``; identifiability: an added
+     mass and a softer joint nearby can move the same frequencies).
+
+The named effect's model (baseline + effect at its fitted values, design variables re-fitted)
+is the re-calibrated model; ``effects`` holds its spec list for later use as a model source.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.discovery.candidates import Candidate, axis_for, enumerate_effects, make_candidate
+from bayesupdate.discovery.effects import Effect
+from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
+from bayesupdate.discovery.flagging import ModeFlags, NoiseModel, flag_modes, noise_model
+from bayesupdate.discovery.localization import (
+    Localization,
+    candidate_problem,
+    localize,
+    screen_grid,
+)
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.optimize import calibrate
+from bayesupdate.inference.problem import build_problem
+
+VERDICTS = ("explained", "no discrepancy", "unexplained")
+
+
+@dataclass(frozen=True)
+class DiscoverySettings:
+    """Knobs of a discovery run (defaults as documented in the module docstring).
+
+    kinds / locations : restrict the library (None: all kinds at all admissible locations).
+    sigma : fixed relative noise level (None: the data's sd, else inferred).
+    """
+
+    kinds: tuple | None = None
+    locations: dict | None = None
+    sigma: float | None = None
+    baseline_starts: int = 4
+    seed: int = 0
+    quick_refits: int = 14
+    per_kind: int = 3
+    quick_nfev: int = 4
+    max_refits: int = 5
+    max_nfev: int = 25
+    threshold_ln_bf: float = 3.0
+    margin_ln_bf: float = 2.0
+    adequacy_p: float = 1e-3
+    max_noise_rel: float = 0.01
+    alpha: float = 0.05
+    loo_top: int = 3
+    loo_draws: int = 400
+
+    def __post_init__(self):
+        if self.sigma is not None and not (np.isfinite(self.sigma) and self.sigma > 0):
+            raise BayesUpdateError(f"discovery.sigma: must be > 0, got {self.sigma}")
+        for name in (
+            "baseline_starts",
+            "quick_refits",
+            "quick_nfev",
+            "max_refits",
+            "max_nfev",
+            "loo_draws",
+        ):
+            if int(getattr(self, name)) < 1:
+                raise BayesUpdateError(f"discovery.{name}: must be >= 1")
+        if not (0 <= self.threshold_ln_bf < np.inf and 0 <= self.margin_ln_bf < np.inf):  # NaN too
+            raise BayesUpdateError(
+                "discovery: thresholds on ln BF (threshold_ln_bf, margin_ln_bf, --threshold) "
+                "must be finite numbers >= 0"
+            )
+
+
+@dataclass
+class DiscoveryResult:
+    """Everything a discovery run found (see module docstring)."""
+
+    verdict: str
+    reason: str
+    baseline: ModelFit
+    noise: NoiseModel
+    flags: ModeFlags
+    localization: Localization
+    fits: list  # ModelFit of the refitted candidates, best evidence first
+    named: ModelFit | None
+    ambiguous_with: list
+    settings: DiscoverySettings
+    wall_s: float
+    data_source: str = ""
+    model_name: str = ""
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> ModelFit | None:
+        return self.fits[0] if self.fits else None
+
+    def log_bayes_factor(self, fit: ModelFit) -> float:
+        return float(fit.log_evidence - self.baseline.log_evidence)
+
+    @property
+    def effects(self) -> list[str]:
+        """Spec list of the extended model (empty when nothing was named)."""
+        if self.named is None:
+            return []
+        return [Effect(self.named.kind, self.named.location, self.named.effect_parameters).spec()]
+
+    @property
+    def final(self) -> ModelFit:
+        return self.named if self.named is not None else self.baseline
+
+    def to_json(self) -> dict:
+        """The ``discover --json`` object (issue 6 item 7), plus documented extras."""
+        scores = {s.label: s.delta_chi2 for s in self.localization.scores}
+
+        def candidate(fit: ModelFit) -> dict:
+            return {
+                "kind": fit.kind,
+                "location": fit.location,
+                "log_evidence": float(fit.log_evidence),
+                "loo": None if fit.loo is None else fit.loo["elpd"],
+                "log_bayes_factor": self.log_bayes_factor(fit),
+                "expr": float(fit.expr),
+                "parameters": fit.effect_parameters,
+                "score_delta_chi2": float(scores.get(fit.label, np.nan)),
+                "optima": len(fit.optima),
+                "stage": fit.stage,
+            }
+
+        named = None
+        if self.named is not None:
+            named = {
+                "kind": self.named.kind,
+                "location": self.named.location,
+                "parameters": self.named.effect_parameters,
+            }
+        return {
+            "verdict": self.verdict,
+            "flagged_modes": self.flags.flagged_modes,
+            "named_effect": named,
+            "candidates": [candidate(f) for f in self.fits],
+            "gap_before": float(self.baseline.expr),
+            "gap_after": float(self.final.expr),
+            "reason": self.reason,
+            "ambiguous_with": [f.label for f in self.ambiguous_with],
+            "baseline": {
+                "log_evidence": float(self.baseline.log_evidence),
+                "loo": None if self.baseline.loo is None else self.baseline.loo["elpd"],
+                "parameters": self.baseline.parameters,
+            },
+            "design_after": self.final.parameters,
+            "error_pct_before": [float(v) for v in 100 * self.baseline.residual_rel],
+            "error_pct_after": [float(v) for v in 100 * self.final.residual_rel],
+            "noise": {"source": self.noise.source, "sigma_rel": float(self.noise.sigma)},
+            "effects": self.effects,
+            "scanned": len(self.localization.scores),
+            "wall_s": float(self.wall_s),
+        }
+
+
+def decide(
+    baseline: ModelFit, fits: list, flags: ModeFlags, noise: NoiseModel, s: DiscoverySettings
+) -> tuple[str, str, ModelFit | None, list]:
+    """Verdict, reason, named fit (or None), ambiguous fits (module docstring, step 5)."""
+    baseline_ok = not flags.flagged_modes and (
+        noise.sigma <= s.max_noise_rel if noise.inferred else flags.chi2_p > s.adequacy_p
+    )
+    if not fits:
+        if baseline_ok:
+            return "no discrepancy", "no candidate fitted; the baseline fits within noise", None, []
+        return "unexplained", "misfit remains and no candidate could be fitted", None, []
+    best = fits[0]
+    ln_bf = best.log_evidence - baseline.log_evidence
+    if ln_bf <= s.threshold_ln_bf:
+        if baseline_ok:
+            return (
+                "no discrepancy",
+                f"baseline fits within noise; best candidate {best.label} has ln BF "
+                f"{ln_bf:.2f} <= {s.threshold_ln_bf:g}",
+                None,
+                [],
+            )
+        return (
+            "unexplained",
+            f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
+            f"beats the baseline (best {best.label}, ln BF {ln_bf:.2f})",
+            None,
+            [],
+        )
+    close = [f for f in fits[1:] if best.log_evidence - f.log_evidence < s.margin_ln_bf]
+    if close:
+        return (
+            "unexplained",
+            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) but the data cannot tell it "
+            f"from {[f.label for f in close]} (ln BF difference < {s.margin_ln_bf:g})",
+            None,
+            close,
+        )
+    d = len(best.names)
+    if noise.inferred:  # judged against its own residual scale, which must look like test noise
+        own = noise_model(baseline.space.problem.data, best.residual_rel, d)
+        after = flag_modes(best.residual_rel, own, d, alpha=s.alpha)
+        adequate = not after.flagged_modes and own.sigma <= s.max_noise_rel
+    else:
+        after = flag_modes(best.residual_rel, noise, d, alpha=s.alpha)
+        adequate = not after.flagged_modes and after.chi2_p > s.adequacy_p
+    if not adequate:
+        return (
+            "unexplained",
+            f"{best.label} improves the fit (ln BF {ln_bf:.2f}) but misfit remains "
+            f"(modes {after.flagged_modes}, chi2 p {after.chi2_p:.2g}); nothing in the library "
+            "explains it all",
+            None,
+            [],
+        )
+    return (
+        "explained",
+        f"{best.label}: ln BF {ln_bf:.2f} vs baseline, "
+        + (
+            f"{best.log_evidence - fits[1].log_evidence:.2f} vs runner-up {fits[1].label}"
+            if len(fits) > 1
+            else "no runner-up"
+        ),
+        best,
+        [],
+    )
+
+
+def _select(scores, settings: DiscoverySettings) -> list:
+    """Top ``quick_refits`` by score plus the best ``per_kind`` of every kind, score order."""
+    chosen = list(scores[: settings.quick_refits])
+    seen = {s.label for s in chosen}
+    per_kind: dict[str, int] = {}
+    for s in scores:
+        kind = s.candidate.effect.kind
+        per_kind[kind] = per_kind.get(kind, 0) + 1
+        if per_kind[kind] <= settings.per_kind and s.label not in seen:
+            chosen.append(s)
+            seen.add(s.label)
+    return chosen
+
+
+def _candidate_starts(design_theta, score, reference_theta=()) -> list[np.ndarray]:
+    """Refit starts.  Effect values: the score test's suggestion, 3x and 10x its step from null
+    (the linear step underestimates large effects), and the screen grid on both sides of null
+    (``localization.screen_grid``; the linear step can even point the wrong way when the
+    baseline sits at a bound).  Each with the design variables at the baseline optimum and
+    (if given) at the reference design: a baseline that absorbed a large effect can sit at a
+    bound, far from the truth.  The first start is the score's suggestion at the baseline."""
+    axis = score.candidate.axes[0]
+    null = score.candidate.null[axis.name]
+    z0, z1 = float(axis.to_z(null)), float(axis.to_z(score.step_theta))
+    lo, hi = axis.z_bounds
+    if abs(z1 - z0) < 0.05 * (hi - lo):
+        # the suggested step is tiny (or blocked at a bound): try a quarter of the range inward
+        z1 = z0 + (0.25 if z0 - lo <= hi - z0 else -0.25) * (hi - lo)
+    far = [float(np.clip(z0 + f * (z1 - z0), lo, hi)) for f in (3.0, 10.0)]
+    designs = [np.asarray(design_theta, dtype=float)]
+    for other in reference_theta or ():
+        designs.append(np.asarray(other, dtype=float))
+    values = [z1, *far, *screen_grid(axis, z0)]
+    return [np.append(d, axis.from_z(z)) for d in designs for z in values]
+
+
+def check_enough_modes(problem, n_extra: int = 1) -> None:
+    """Clear error when the data have too few modes to compare candidates: each candidate fits
+    d design variables + its effect parameters and needs at least one more mode to be tested."""
+    used = int(np.sum(problem.weights > 0))
+    d = len(problem.parameters)
+    if used < d + n_extra + 1:
+        raise BayesUpdateError(
+            f"data {problem.data.source!r}: {used} modes with weight > 0 cannot decide between "
+            f"effects with {d} design variables + {n_extra} effect parameter(s); give at least "
+            f"{d + n_extra + 1} modes or fix some design variables ([parameters])"
+        )
+
+
+def discover(
+    model,
+    data,
+    settings: DiscoverySettings | None = None,
+    parameters=None,
+    baseline=None,
+    pairing: str = "auto",
+    predictive_rel_var: np.ndarray | None = None,
+    progress=None,
+) -> DiscoveryResult:
+    """Run discovery (module docstring).
+
+    model : an ``FEModel`` (effects extend its structure).  data : ``ModalData``.
+    parameters : the design variables to calibrate (as ``build_problem``; None: model defaults).
+    baseline : a ``CalibrationResult`` of the same problem to start from (else calibrated here).
+    predictive_rel_var : (m,) posterior-predictive variance of the relative frequencies, if a
+    posterior is available (widens the flagging z-scores).
+    progress : optional callable(str) for progress messages.
+    pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise: test
+    frequencies without shapes are sorted, so the honest likelihood compares them with the
+    model's sorted frequencies.  (Shape tracking against the reference design, the calibration
+    default, puts a wall in the objective wherever a hidden effect reorders two close modes: a
+    refit then stalls there.)
+    """
+    settings = settings or DiscoverySettings()
+    say = progress or (lambda message: None)
+    t0 = time.perf_counter()
+    timings = {}
+    if pairing == "auto":
+        pairing = "mac" if data.shapes is not None else "order"
+    problem = build_problem(model, data, parameters, pairing=pairing)
+    check_enough_modes(problem)
+    effects = enumerate_effects(model, settings.kinds, settings.locations)
+    if baseline is None:
+        say(f"baseline calibration ({settings.baseline_starts} starts)")
+        baseline = calibrate(
+            problem, starts=settings.baseline_starts, seed=settings.seed, max_nfev=100
+        )
+    timings["baseline_calibration_s"] = time.perf_counter() - t0
+    f_test = data.frequencies_hz
+    e0 = (baseline.frequencies_hz - f_test) / f_test
+    noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
+    axes = tuple(axis_for(p) for p in problem.parameters)
+    # the baseline gets the same design starts as the candidates' full tier (its optimum and the
+    # box centre), so that both sides of every Bayes factor sum over the same basins
+    centre = 0.5 * (problem.lower + problem.upper)
+    base_fit = fit_model(
+        FitSpace(problem, axes, noise),
+        [baseline.theta, centre],
+        "baseline",
+        max_nfev=settings.max_nfev,
+    )
+    mac = baseline.table.mac if data.shapes is not None else None
+    flags = flag_modes(
+        base_fit.residual_rel, noise, len(axes), predictive_rel_var, mac, settings.alpha
+    )
+    say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
+    t1 = time.perf_counter()
+    candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
+    residuals_fn = FitSpace(problem, axes, noise).residuals
+    model_modes = baseline.table.model_mode - 1
+    chi2_unit = noise.sigma**2 if noise.inferred else 1.0
+    where = localize(
+        problem,
+        base_fit.theta,
+        base_fit.best.jac_z,
+        residuals_fn,
+        candidates,
+        model_modes,
+        flags.flagged,
+        chi2_unit,
+    )
+    timings["localization_s"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    quick = []
+    for score in _select(where.scores, settings):
+        problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
+        space = FitSpace(problem_c, axes + score.candidate.axes, noise)
+        effect = score.candidate.effect
+        fit = fit_model(
+            space,
+            _candidate_starts(base_fit.theta, score, (problem.start, centre)),
+            score.label,
+            effect.kind,
+            effect.location,
+            max_nfev=settings.quick_nfev,
+            stage="quick",
+            best_start_only=True,
+        )
+        quick.append((fit, score))
+    quick.sort(key=lambda item: -item[0].log_evidence)
+    say("quick refits: " + ", ".join(f"{f.label} {f.log_evidence:.1f}" for f, _ in quick))
+    fits = [f for f, _ in quick[settings.max_refits :]]
+    for fit, score in quick[: settings.max_refits]:
+        say(f"full refit {score.label}")
+        # the quick end point, plus the box centre with the quick fit's effect value: the
+        # design variables of a far-off baseline can hold the fit in another basin
+        starts = [fit.theta, np.append(centre, fit.theta[len(axes) :])]
+        full = fit_model(
+            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.max_nfev
+        )
+        full.evaluations += fit.evaluations
+        fits.append(full)
+    fits.sort(key=lambda f: -f.log_evidence)
+    timings["refits_s"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    for k, fit in enumerate([base_fit, *fits[: settings.loo_top]]):
+        fit.loo = laplace_loo(fit, settings.loo_draws, seed=settings.seed + k)
+    timings["loo_s"] = time.perf_counter() - t3
+    verdict, reason, named, ambiguous = decide(base_fit, fits, flags, noise, settings)
+    say(f"verdict: {verdict} ({reason})")
+    return DiscoveryResult(
+        verdict=verdict,
+        reason=reason,
+        baseline=base_fit,
+        noise=noise,
+        flags=flags,
+        localization=where,
+        fits=fits,
+        named=named,
+        ambiguous_with=ambiguous,
+        settings=settings,
+        wall_s=time.perf_counter() - t0,
+        data_source=data.source,
+        model_name=getattr(model, "name", ""),
+        timings=timings,
+    )

@@ -1,0 +1,258 @@
+"""Hidden-effect virtual tests for discovery (issue 6 item 9).
+
+The "real" exhaust is the model at a true design (seed Table 3 optimum) with one effect hidden
+in it (each kind at several locations and magnitudes), or no effect, or a change the library
+cannot represent (two effects at once, a longer tail pipe, a wider S-jog).  Test data:
+
+* ``--path fast`` (default): the true first 12 frequencies with relative Gaussian noise
+  (``--noise``, default 0.3 %, also given to discovery as the data's frequency sd);
+* ``--path identify``: the virtual roving-hammer test (``commands.simulate.simulate_test``), then
+  ``ema.identify`` (modes with shapes, paired by MAC), frequency sd = ``--noise``.
+
+Each case runs the whole ``discover`` (baseline calibration of the five design variables,
+flagging, score-test scan of the library, refits, evidence).  Prints one line per case, the
+confusion table (true kind vs named kind), location accuracy, and the gap shrink.
+
+    .venv/bin/python studies/hidden_effect_study.py --jobs 2 --json-out study.json
+    .venv/bin/python studies/hidden_effect_study.py --quick          # a 10-case subset
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from collections import Counter
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
+
+N_MODES = 12
+
+EFFECT_CASES = [
+    *[f"added_mass@{p}:m={m}" for p in (4, 14, 19) for m in (0.2, 0.5)],
+    *[
+        f"joint_flexibility@{j}:k_rot={k}"
+        for j in ("hot_pipe/catalyst", "cold_pipe/main_muffler")
+        for k in (1e3, 3e3)
+    ],
+    *[f"bend_flexibility@{b}:factor={f}" for b in ("elbow", "hot_bend1") for f in (2, 4)],
+    *[f"boundary_spring@{p}:k={k}" for p in (1, 20) for k in (5e3, 3e4)],
+    *[f"stiffness_change@{p}:factor={f}" for p in ("cold_pipe", "tail_pipe") for f in (0.7, 1.3)],
+]
+NULL_CASES = ["none#1", "none#2", "none#3", "none#4"]
+OUT_OF_LIBRARY = [
+    "added_mass@4:m=0.5+stiffness_change@tail_pipe:factor=0.6",
+    "added_mass@18:m=0.6+joint_flexibility@hot_pipe/catalyst:k_rot=2e3",
+    "geometry:tail_length=0.30",
+    "geometry:jog_dy=0.35",
+]
+QUICK = [
+    "added_mass@14:m=0.5",
+    "joint_flexibility@cold_pipe/main_muffler:k_rot=1e3",
+    "bend_flexibility@elbow:factor=4",
+    "boundary_spring@20:k=3e4",
+    "stiffness_change@cold_pipe:factor=0.7",
+    "none#1",
+    "none#2",
+    OUT_OF_LIBRARY[0],
+    OUT_OF_LIBRARY[2],
+    "added_mass@4:m=0.2",
+]
+
+
+def truth_model(case: str):
+    """(true model, effect specs, base model) of a case."""
+    from bayesupdate.discovery.results_io import extend_with_specs
+    from bayesupdate.models import get_model
+    from bayesupdate.models.exhaust import build_exhaust_model, fitted_geometry
+
+    base = get_model("exhaust")
+    if case.startswith("none"):
+        return base, [], base
+    if case.startswith("geometry:"):
+        name, value = case.split(":", 1)[1].split("=")
+        geometry = fitted_geometry("best")
+        geometry[name] = float(value)
+        return build_exhaust_model(geometry), [], base
+    specs = case.split("+")
+    return extend_with_specs(base, specs), specs, base
+
+
+def case_data(case: str, path: str, noise: float, seed: int):
+    """(ModalData, max |shift| / noise of the effect at the true design, base model)."""
+    from bayesupdate.modal_data import ModalData
+
+    true_model, specs, base = truth_model(case)
+    f_true = true_model.solve(TABLE3_OPTIMUM_SI, N_MODES).frequencies_hz
+    f_base = base.solve(TABLE3_OPTIMUM_SI, N_MODES).frequencies_hz
+    shift = float(np.max(np.abs(f_true - f_base) / f_base) / noise)
+    rng = np.random.default_rng(seed)
+    if path == "fast":
+        f = f_true * (1 + noise * rng.normal(size=f_true.size))
+        data = ModalData(f, frequency_sd_hz=noise * f, source=f"virtual:{case}")
+        return data, shift, base
+    from bayesupdate.commands.simulate import simulate_test
+    from bayesupdate.discovery.effects import parse_effect_spec
+    from bayesupdate.ema.identify import identify
+
+    if case.startswith("geometry:"):
+        raise SystemExit("--path identify supports effect and null cases only")
+    effects = [parse_effect_spec(s) for s in specs]
+    frfs, _ = simulate_test(base, dict(TABLE3_OPTIMUM_SI), effects, 0.01, seed)
+    modes = identify(frfs).modes
+    keep = np.argsort(modes.frequencies_hz)[:N_MODES]
+    modes = modes.subset(keep)
+    data = ModalData(
+        modes.frequencies_hz,
+        shapes=modes.shapes,
+        dof_labels=modes.dof_labels,
+        frequency_sd_hz=noise * modes.frequencies_hz,
+        source=f"identified:{case}",
+    )
+    return data, shift, base
+
+
+def run_case(args_tuple):
+    case, path, noise, seed = args_tuple
+    from bayesupdate.discovery.effects import parse_effect_spec
+    from bayesupdate.discovery.workflow import discover
+
+    t0 = time.perf_counter()
+    data, shift, base = case_data(case, path, noise, seed)
+    result = discover(base, data)
+    out = result.to_json()
+    named = out["named_effect"]
+    if case.startswith("none"):
+        category, true_kind, true_loc = "null", "none", "-"
+    elif "+" in case or case.startswith("geometry:"):
+        category, true_kind, true_loc = "out-of-library", "other", "-"
+    else:
+        effect = parse_effect_spec(case)
+        category, true_kind, true_loc = "effect", effect.kind, effect.location
+    correct = bool(named and named["kind"] == true_kind and named["location"] == true_loc)
+    rms_after = float(np.sqrt(np.mean(result.final.residual_rel**2)))
+    return {
+        "case": case,
+        "category": category,
+        "true_kind": true_kind,
+        "true_location": true_loc,
+        "max_shift_over_noise": shift,
+        "verdict": out["verdict"],
+        "named": None if named is None else f"{named['kind']}@{named['location']}",
+        "named_kind": None if named is None else named["kind"],
+        "named_parameters": None if named is None else named["parameters"],
+        "correct": correct,
+        "best_candidate": out["candidates"][0]["kind"] + "@" + out["candidates"][0]["location"]
+        if out["candidates"]
+        else None,
+        "best_ln_bf": out["candidates"][0]["log_bayes_factor"] if out["candidates"] else None,
+        "ambiguous_with": out["ambiguous_with"],
+        "gap_before": out["gap_before"],
+        "gap_after": out["gap_after"],
+        "rms_after_over_noise": rms_after / noise,
+        "flagged_modes": out["flagged_modes"],
+        "reason": out["reason"],
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def report(rows, noise):
+    header = f"{'case':62s} {'shift/s':>7s} {'verdict':15s} {'named':38s} ok"
+    print("\n" + header + "  Expr before->after  rms/s")
+    for r in rows:
+        named = r["named"] or (
+            f"({r['best_candidate']}?)" if r["verdict"] == "unexplained" else "-"
+        )
+        mark = "Y" if r["correct"] else ("-" if r["category"] != "effect" else "N")
+        print(
+            f"{r['case'][:62]:62s} {r['max_shift_over_noise']:7.1f} {r['verdict']:15s} "
+            f"{named[:38]:38s} {mark}"
+            f"   {r['gap_before']:.2e} -> {r['gap_after']:.2e}  {r['rms_after_over_noise']:5.2f}"
+        )
+    effect_rows = [r for r in rows if r["category"] == "effect"]
+    detectable = [r for r in effect_rows if r["max_shift_over_noise"] > 2]
+    kinds = sorted({r["true_kind"] for r in effect_rows})
+    columns = kinds + ["unexplained", "no discrepancy"]
+    print("\nconfusion (rows: true kind; columns: named kind, or the verdict when nothing named)")
+    print(f"{'':18s}" + "".join(f"{c[:14]:>15s}" for c in columns))
+    for true_kind in kinds + ["none", "other"]:
+        sub = [r for r in rows if r["true_kind"] == true_kind]
+        if not sub:
+            continue
+        counts = Counter(r["named_kind"] or r["verdict"] for r in sub)
+        print(f"{true_kind:18s}" + "".join(f"{counts.get(c, 0):15d}" for c in columns))
+    n_ok = sum(r["correct"] for r in detectable)
+    print(
+        f"\neffect cases moving a frequency by > 2x noise: {n_ok}/{len(detectable)} named with "
+        f"kind AND location correct ({100 * n_ok / max(len(detectable), 1):.0f} %)"
+    )
+    named_ok = [r for r in detectable if r["correct"]]
+    within = sum(r["rms_after_over_noise"] <= 2 for r in named_ok)
+    print(f"  of those named, gap after (rms error) within 2x noise: {within}/{len(named_ok)}")
+    wrong = [r for r in effect_rows if r["named"] and not r["correct"]]
+    print(f"  wrong confident names among effect cases: {len(wrong)} {[r['case'] for r in wrong]}")
+    nulls = [r for r in rows if r["category"] == "null"]
+    print(
+        f"no-effect cases: {sum(r['verdict'] == 'no discrepancy' for r in nulls)}/{len(nulls)} "
+        '"no discrepancy"'
+    )
+    ool = [r for r in rows if r["category"] == "out-of-library"]
+    print(
+        f"out-of-library cases: {sum(r['verdict'] == 'unexplained' for r in ool)}/{len(ool)} "
+        f'"unexplained", confident names: {sum(bool(r["named"]) for r in ool)}'
+    )
+    walls = [r["wall_s"] for r in rows]
+    print(
+        f"wall per case: median {np.median(walls):.1f} s, max {np.max(walls):.1f} s (noise {noise})"
+    )
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--path", choices=("fast", "identify"), default="fast")
+    parser.add_argument("--noise", type=float, default=0.003, help="relative frequency sd")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--jobs", type=int, default=1, help="parallel processes")
+    parser.add_argument("--quick", action="store_true", help="10-case subset")
+    parser.add_argument("--cases", nargs="*", help="explicit cases (effect specs, none#k, ...)")
+    parser.add_argument("--json-out", help="write the per-case rows as JSON")
+    args = parser.parse_args(argv)
+    cases = args.cases or (QUICK if args.quick else EFFECT_CASES + NULL_CASES + OUT_OF_LIBRARY)
+    work = [(c, args.path, args.noise, args.seed + 17 * i) for i, c in enumerate(cases)]
+    t0 = time.perf_counter()
+    if args.jobs > 1:
+        import multiprocessing as mp
+
+        with mp.get_context("fork").Pool(args.jobs) as pool:
+            rows = []
+            for row in pool.imap(run_case, work):
+                rows.append(row)
+                print(
+                    f"[{len(rows)}/{len(work)}] {row['case']}: {row['verdict']} {row['named']}",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    else:
+        rows = []
+        for item in work:
+            rows.append(run_case(item))
+            print(
+                f"[{len(rows)}/{len(work)}] {item[0]}: {rows[-1]['verdict']} {rows[-1]['named']}",
+                file=sys.stderr,
+                flush=True,
+            )
+    report(rows, args.noise)
+    print(f"total wall {time.perf_counter() - t0:.0f} s")
+    if args.json_out:
+        with open(args.json_out, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,170 @@
+"""Issue 4 checks on the exhaust (seed Table 2), run on the certified reduced model so they are
+fast: shape-tracked batched pairing, the mass-kept optimum, the joint nuisance option."""
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
+from bayesupdate.inference import (  # noqa: E402
+    LikelihoodSpec,
+    LogPosterior,
+    ObjectiveSpec,
+    build_problem,
+    calibrate,
+    load_modal_data,
+)
+from bayesupdate.inference.pairing import pair_batch  # noqa: E402
+from bayesupdate.inference.runner import sampling_problem  # noqa: E402
+from bayesupdate.models import get_model  # noqa: E402
+from bayesupdate.models.exhaust import JOINT_PARTS, joint_parameter  # noqa: E402
+from bayesupdate.paper import (  # noqa: E402
+    DESIGN_VARIABLES,
+    MEASURED_MASS_KG,
+    TABLE3_INITIAL_SI,
+    TABLE3_OPTIMUM_SI,
+)
+
+
+@pytest.fixture(scope="module")
+def rom():
+    # 14 modes: the 12 test modes + the 2 extra modes the tracked pairing computes
+    return reduced_model_for(get_model("exhaust"), tol=1e-4, seed=0, n_modes=14)
+
+
+@pytest.fixture(scope="module")
+def mass_kept(rom):
+    data = load_modal_data("paper:ema")
+    problem = build_problem(rom, data, objective=ObjectiveSpec(MEASURED_MASS_KG, mass_weight=10.0))
+    return problem, calibrate(problem, starts=8, seed=0)
+
+
+def test_pair_batch_equals_hungarian_per_point():
+    rng = np.random.default_rng(4)
+    reference = rng.standard_normal((10, 4))
+    # current shapes: the reference permuted, noisy, with two extra modes
+    perm = np.array([1, 0, 3, 2, 5, 4])
+    shapes = np.empty((6, 10, 6))
+    for b in range(6):
+        base = np.hstack([reference, rng.standard_normal((10, 2))])[:, np.roll(perm, b)]
+        shapes[b] = base + 0.3 * rng.standard_normal(base.shape)
+    index, mac = pair_batch(reference, shapes)
+    from bayesupdate.correlation import pair_by_mac
+
+    for b in range(6):
+        expected, expected_mac = pair_by_mac(reference, shapes[b])
+        np.testing.assert_array_equal(index[b], expected)
+        np.testing.assert_allclose(mac[b], expected_mac, rtol=1e-12)
+
+
+def test_batched_shape_pairing_equals_per_point_tracking(rom):
+    """The vectorised likelihood pairs every walker as build_problem's tracked pairing does, and
+    on the exhaust's prior box a large share of points pair differently from the order."""
+    problem = build_problem(rom, load_modal_data("paper:ema"))
+    assert problem.pairing.method == "tracked"
+    batched = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    assert batched.mode == "shape-batch"
+    rng = np.random.default_rng(0)
+    theta = problem.lower + rng.random((24, 5)) * (problem.upper - problem.lower)
+    freqs, _ = batched.predict_frequencies(theta)
+    for k, point in enumerate(theta):
+        evaluation = problem.evaluate(point)
+        np.testing.assert_allclose(freqs[k], evaluation.frequencies_hz, rtol=1e-8)
+    # order pairing would compare swapped modes at these points
+    assert batched.pair_checked == 24
+    assert batched.pair_differs_fraction >= 0.25
+
+
+def test_mass_kept_optimum_table2(mass_kept):
+    """Seed Table 2 with the measured mass as a response: what this beam model reaches.
+
+    The paper's 0.0406 is out of reach with the mass kept (its point lies below our front of
+    Expr vs mass error, see studies/paper_optimum.py); the largest residuals are modes 5, 9, 10
+    and 1 (shell/joint physics the beam model lumps)."""
+    problem, opt = mass_kept
+    assert 0.0406 < opt.expr <= 0.070
+    assert abs(opt.mass_kg / MEASURED_MASS_KG - 1.0) <= 0.015
+    assert not opt.table.swapped
+    np.testing.assert_array_equal(opt.table.model_mode, np.arange(1, 13))
+    # every design variable moves the way seed Table 3 does (initial -> optimum)
+    for name in DESIGN_VARIABLES:
+        paper = np.sign(TABLE3_OPTIMUM_SI[name] - TABLE3_INITIAL_SI[name])
+        ours = np.sign(opt.parameters[name] - TABLE3_INITIAL_SI[name])
+        assert ours == paper, name
+    worst = np.argsort(-np.abs(opt.table.error_pct))[:4] + 1
+    assert set(worst) == {1, 5, 9, 10}
+
+
+def test_mass_kept_starts_end_on_the_mode_6_7_pairing_boundary(mass_kept):
+    """Few starts reach the best within 1 % (1 of 9) but every swap-free start ends within 3 %
+    of it: the swap-free optima lie on the boundary where the tracked pairing of modes 6 and 7
+    flips (their shapes veer: MAC to the reference 0.55 / 0.33), so the starts stop at
+    different points of that kink, not in distinct basins.  A 1 % step of one variable
+    crosses it."""
+    problem, opt = mass_kept
+    assert opt.converged_starts / opt.starts < 0.8
+    span = problem.upper - problem.lower
+    on_boundary = 0
+    unswapped = 0
+    for end, value in zip(opt.end_points, opt.end_objectives, strict=True):
+        here = problem.evaluate(end)
+        if here.paired.swapped:
+            continue
+        unswapped += 1
+        assert value <= 1.03 * opt.objective
+        flips = set()
+        for k in range(5):
+            for h in (-0.01, 0.01):
+                step = np.clip(end + h * span[k] * np.eye(5)[k], problem.lower, problem.upper)
+                moved = problem.evaluate(step).paired.model_index
+                flips |= set((np.flatnonzero(moved != here.paired.model_index) + 1).tolist())
+        on_boundary += flips == {6, 7}
+    assert unswapped >= 6
+    assert on_boundary == unswapped
+
+
+def test_sampling_problem_uses_certified_rom_and_full_on_request():
+    fe = get_model("exhaust")
+    problem = build_problem(fe, load_modal_data("paper:ema"))
+    full_problem, none = sampling_problem(problem, reduced=False)
+    assert none is None and full_problem.model is fe
+    reduced_problem, rom = sampling_problem(problem)
+    assert rom.certified and rom.max_rel_error <= 1e-4 and rom.n_modes == 14
+    assert LogPosterior(reduced_problem, LikelihoodSpec(sigma=0.05)).mode == "shape-batch"
+    assert LogPosterior(full_problem, LikelihoodSpec(sigma=0.05)).mode == "points"
+
+
+def test_joint_nuisance_option():
+    base = get_model("exhaust")
+    model = get_model("exhaust", joint_nuisance=True)
+    names = [joint_parameter(p) for p in JOINT_PARTS]
+    assert names[0] == "k_hot_pipe__catalyst"
+    assert set(names) <= set(model.parameter_names)
+    assert set(base.parameter_names) == set(DESIGN_VARIABLES)
+    f0 = base.predict({}, 12).frequencies_hz
+    np.testing.assert_allclose(model.predict({}, 12).frequencies_hz, f0, rtol=1e-12)
+    assert model.default_bounds()[names[4]] == (0.1, 10.0)
+    # softer springs can only lower eigenvalues (Rayleigh quotient, same mass)
+    soft = model.predict({names[4]: 0.3}, 12).frequencies_hz
+    assert np.all(soft <= f0 * (1 + 1e-9))
+    assert np.min(soft / f0 - 1) < -0.1
+
+
+def test_box_transform_round_trip_and_jacobian():
+    from bayesupdate.inference.sampling import BoxTransform
+
+    box = BoxTransform(np.array([0.4e-3, 0.0, -np.inf]), np.array([3e-3, np.inf, np.inf]))
+    z = np.array([[-2.0, 0.3, 5.0], [1.5, -4.0, -1.0], [30.0, 2.0, 0.0]])
+    theta = box.to_theta(z)
+    assert np.all(theta[:, 0] > 0.4e-3) and np.all(theta[:, 0] <= 3e-3)
+    np.testing.assert_allclose(box.to_z(theta[:2], margin=0.0), z[:2], rtol=1e-9)
+    # log |d theta / d z| against central differences (diagonal map)
+    h = 1e-6
+    for row in z[:2]:
+        d = [(box.to_theta(row + h * e) - box.to_theta(row - h * e))[k] / (2 * h) for k, e in
+             enumerate(np.eye(3))]  # fmt: skip
+        assert box.log_jacobian(row[None, :])[0] == pytest.approx(np.sum(np.log(d)), rel=1e-6)
+    assert np.isfinite(box.log_jacobian(z[2:]))[0]

@@ -1,0 +1,135 @@
+"""Evidence maths of discovery against closed forms: Laplace = exact evidence of a linear-Gaussian
+model, the sigma-marginal likelihood = quadrature, PSIS-LOO = exact leave-one-out predictive."""
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from bayesupdate.discovery.candidates import ParameterAxis
+from bayesupdate.discovery.evidence import (
+    SIGMA_MAX,
+    FitSpace,
+    ModelFit,
+    laplace,
+    laplace_loo,
+    log_likelihood,
+)
+from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel, flag_modes, noise_model
+from bayesupdate.inference.priors import prior_from_mapping
+from bayesupdate.modal_data import ModalData
+
+TAU = 2.0
+
+
+def _linear_case(seed=0, m=10, d=2):
+    """y = J theta + noise (unit sd), prior theta_j ~ N(0, TAU^2) on a wide box (+-40 TAU)."""
+    rng = np.random.default_rng(seed)
+    jac = rng.normal(size=(m, d))
+    y = jac @ rng.normal(scale=TAU, size=d) + rng.normal(size=m)
+    axes = tuple(
+        ParameterAxis(
+            f"p{j}",
+            (-40 * TAU, 40 * TAU),
+            prior_from_mapping({"kind": "normal", "mean": 0.0, "sd": TAU}, (-40 * TAU, 40 * TAU)),
+            False,
+        )
+        for j in range(d)
+    )
+    noise = NoiseModel(np.ones(m), np.ones(m), False, "fixed", 1.0)
+    space = FitSpace(None, axes, noise)
+    a = jac.T @ jac + np.eye(d) / TAU**2
+    theta_map = np.linalg.solve(a, jac.T @ y)
+    return space, jac, y, theta_map
+
+
+def test_laplace_is_exact_for_a_linear_gaussian_model():
+    space, jac, y, theta_map = _linear_case()
+    r = jac @ theta_map - y  # residuals are model - data
+    result = laplace(space, theta_map, r, jac)
+    m = y.size
+    exact = stats.multivariate_normal(np.zeros(m), np.eye(m) + TAU**2 * jac @ jac.T).logpdf(y)
+    assert result.log_evidence == pytest.approx(exact, abs=1e-6)
+
+
+def test_laplace_caps_an_unconstrained_parameter_at_its_prior_volume():
+    """A parameter the data do not see contributes log(1) = 0: its prior integrates to one."""
+    space, jac, y, theta_map = _linear_case(d=2)
+    blind = np.column_stack([jac[:, 0], np.zeros(y.size)])  # second parameter has no effect
+    a = blind.T @ blind + np.eye(2) / TAU**2
+    theta = np.linalg.solve(a, blind.T @ y)
+    one = laplace(
+        FitSpace(None, space.axes[:1], space.noise),
+        theta[:1],
+        blind[:, :1] @ theta[:1] - y,
+        blind[:, :1],
+    )
+    two = laplace(space, theta, blind @ theta - y, blind)
+    assert two.log_evidence == pytest.approx(one.log_evidence, abs=1e-6)
+
+
+def test_sigma_marginal_likelihood_matches_quadrature():
+    rng = np.random.default_rng(3)
+    m = 8
+    r = rng.normal(scale=0.01, size=m)
+    noise = NoiseModel(np.full(m, np.nan), np.ones(m), True, "inferred (robust)", 0.01)
+
+    def integrand(log_sigma):
+        s = np.exp(log_sigma)
+        return np.exp(np.sum(stats.norm.logpdf(r, scale=s)) + 40.0)  # scaled to avoid underflow
+
+    value, _ = integrate.quad(
+        integrand, np.log(SIGMA_FLOOR), np.log(SIGMA_MAX), points=[np.log(0.01)], limit=200
+    )
+    expected = np.log(value) - 40.0 - np.log(np.log(SIGMA_MAX / SIGMA_FLOOR))
+    assert log_likelihood(r, noise) == pytest.approx(expected, abs=1e-6)
+
+
+def test_laplace_loo_matches_exact_leave_one_out():
+    space, jac, y, theta_map = _linear_case(seed=5, m=12)
+    r = jac @ theta_map - y
+    best = laplace(space, theta_map, r, jac)
+    fit = ModelFit(
+        "linear",
+        None,
+        None,
+        ("p0", "p1"),
+        theta_map,
+        r,
+        y,
+        0.0,
+        [best],
+        best.log_evidence,
+        0,
+        0.0,
+        space,
+    )
+    loo = laplace_loo(fit, draws=4000, seed=1)
+    exact = 0.0
+    for i in range(y.size):
+        keep = np.arange(y.size) != i
+        a = jac[keep].T @ jac[keep] + np.eye(2) / TAU**2
+        cov = np.linalg.inv(a)
+        mean = cov @ jac[keep].T @ y[keep]
+        var = 1.0 + jac[i] @ cov @ jac[i]
+        exact += stats.norm.logpdf(y[i], jac[i] @ mean, np.sqrt(var))
+    assert loo["elpd"] == pytest.approx(exact, abs=0.15)
+    assert loo["pareto_k_max"] < 0.7
+
+
+def test_noise_model_sources_and_flags():
+    f = np.array([10.0, 20.0, 30.0, 40.0, 50.0, 60.0])
+    with_sd = ModalData(f, frequency_sd_hz=0.01 * f)
+    e = np.array([0.0, 0.01, -0.01, 0.05, 0.0, 0.005])
+    noise = noise_model(with_sd, e, n_params=1)
+    assert noise.source == "data sd" and noise.scale == pytest.approx(np.full(6, 0.01))
+    flags = flag_modes(e, noise, n_params=1)
+    # z = 5 for mode 4: p = 5.7e-7 < 0.05 / 6; z = 1 elsewhere is not flagged
+    assert flags.flagged_modes == [4]
+    assert flags.z[3] == pytest.approx(5.0)
+    assert flags.chi2 == pytest.approx(1 + 1 + 25 + 0.25)
+    inferred = noise_model(ModalData(f), e, n_params=1)
+    # robust: 1.4826 * median(|e|) * sqrt(6 / 5); median of |e| = 0.0075
+    assert inferred.sigma == pytest.approx(1.4826 * 0.0075 * np.sqrt(6 / 5))
+    assert inferred.inferred
+    fixed = noise_model(ModalData(f, weights=np.array([1, 1, 4, 1, 1, 0.0])), e, 1, sigma=0.02)
+    assert fixed.scale[2] == pytest.approx(0.01) and not fixed.used[5]

@@ -134,7 +134,17 @@ def test_sampling_problem_uses_certified_rom_and_full_on_request():
     reduced_problem, rom = sampling_problem(problem)
     assert rom.certified and rom.max_rel_error <= 1e-4 and rom.n_modes == 14
     assert LogPosterior(reduced_problem, LikelihoodSpec(sigma=0.05)).mode == "shape-batch"
-    assert LogPosterior(full_problem, LikelihoodSpec(sigma=0.05)).mode == "points"
+    full = LogPosterior(full_problem, LikelihoodSpec(sigma=0.05))
+    reduced = LogPosterior(reduced_problem, LikelihoodSpec(sigma=0.05))
+    assert full.mode == "points"
+    # the same pairing and frequencies (to the ROM tolerance) per point, in full and reduced
+    rng = np.random.default_rng(2)
+    theta = problem.lower + rng.random((6, 5)) * (problem.upper - problem.lower)
+    f_full, _ = full.predict_frequencies(theta)
+    f_rom, _ = reduced.predict_frequencies(theta)
+    np.testing.assert_allclose(f_rom, f_full, rtol=1e-4)
+    assert full.pair_checked == reduced.pair_checked == 6
+    assert full.pair_differs == reduced.pair_differs
 
 
 def test_joint_nuisance_option():

@@ -166,7 +166,8 @@ class ModelFit:
     """A fitted model (baseline or one candidate) with its evidence.
 
     label : "baseline" or ``KIND@LOCATION``.  theta : best parameters (SI), ``names`` order.
-    residual_rel : (m,) relative errors at theta (test order).  optima : distinct optima found.
+    residual_rel : (m,) relative errors at theta (test order).  optima : distinct optima found,
+    best fit (smallest chi^2) first; theta is that optimum.
     log_evidence : Laplace log Z summed over the distinct optima.  loo : PSIS-LOO elpd (None
     unless computed).
     """
@@ -281,6 +282,9 @@ def fit_model(
         if not same:
             distinct.append(o)
     log_z = float(special.logsumexp([o.log_evidence for o in distinct]))
+    # report the best-fitting optimum (the calibrated point; also the centre of the LOO draws);
+    # the evidence is the sum over all distinct optima either way
+    distinct.sort(key=lambda o: float(np.sum(o.r**2)))
     best = distinct[0]
     theta = space.theta_from_z(best.z)
     e, evaluation = space.relative_errors(theta)

@@ -154,6 +154,9 @@ class LogPosterior:
             freqs[k] = (
                 evaluation.all_frequencies_hz[:n_test] if use_order else evaluation.frequencies_hz
             )
+            if not use_order and self.problem.pairing.method != "order":
+                self.pair_checked += 1
+                self.pair_differs += int(evaluation.paired.swapped)
             mass[k] = np.nan if evaluation.mass_kg is None else evaluation.mass_kg
         return freqs, mass
 
@@ -172,7 +175,7 @@ class LogPosterior:
     @property
     def pair_differs_fraction(self) -> float:
         """Share of evaluated points whose shape pairing differs from the order pairing (NaN if
-        the likelihood does not pair by shape in batches)."""
+        the likelihood does not pair by shape)."""
         return self.pair_differs / self.pair_checked if self.pair_checked else float("nan")
 
     def log_likelihood(self, freqs: np.ndarray, sigma: np.ndarray, mass: np.ndarray) -> np.ndarray:

@@ -251,7 +251,7 @@ def sample_json(
     order; None if the model gives no shapes), "rom" ({"size", "max_rel_error", "error_at"} of
     the reduced basis used, null with --full), "pairing" (likelihood mode) and
     "pair_differs_fraction" (share of likelihood evaluations paired differently from the order
-    pairing; null unless the likelihood paired by shape in batches)."""
+    pairing; null unless the likelihood paired by shape)."""
     keys = ("mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk")
     params = {
         name: {k: summary[name][k] for k in keys} for name in posterior.names if name != "sigma"

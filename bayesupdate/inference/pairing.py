@@ -159,11 +159,11 @@ def pair_batch(reference: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, n
     """
     from scipy.optimize import linear_sum_assignment
 
-    ref = np.asarray(reference, dtype=float)
+    ref = np.asarray(reference)  # identified test shapes are complex
     cur = np.asarray(shapes, dtype=float)
     n_test = ref.shape[1]
-    cross = np.einsum("dt,bdm->btm", ref, cur) ** 2
-    denom = np.sum(ref * ref, axis=0)[None, :, None] * np.sum(cur * cur, axis=1)[:, None, :]
+    cross = np.abs(np.einsum("dt,bdm->btm", ref.conj(), cur)) ** 2
+    denom = np.sum(np.abs(ref) ** 2, axis=0)[None, :, None] * np.sum(cur * cur, axis=1)[:, None, :]
     with np.errstate(invalid="ignore", divide="ignore"):
         mac = np.clip(np.where(denom > 0, cross / np.where(denom > 0, denom, 1.0), 0.0), 0, 1)
     bad = ~np.all(np.isfinite(mac), axis=(1, 2))

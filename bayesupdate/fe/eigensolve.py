@@ -132,6 +132,7 @@ def solve_modes(
         raise BayesUpdateError(f"asked for {n_modes} modes but the model has only {n} DOFs")
     if method == "krylov" and n <= 3 * (n_want + 8):
         method = "dense"  # a Krylov space would span nearly everything: LAPACK is cheaper
+    share = None
     if method == "dense":
         lam, phi = sl.eigh(
             K.toarray(), M.toarray(), subset_by_index=[0, n_want - 1], check_finite=False
@@ -139,14 +140,16 @@ def solve_modes(
     elif method == "krylov":
         if banded is None:
             raise ValueError("method='krylov' needs a BandedShiftInvert")
-        lam, phi = _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift)
+        lam, phi, share = _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift)
     else:
         raise BayesUpdateError(f"unknown eigen-solver method {method!r}; use 'krylov' or 'dense'")
     if not np.all(np.isfinite(lam)):
         raise BayesUpdateError("the eigen-solve produced non-finite eigenvalues")
     rigid = np.zeros(lam.size, bool)
     if remove_rigid:
-        rigid_shaped = _rigid_share(phi, M, rigid_basis) > 0.5
+        if share is None:
+            share = _rigid_share(phi, M, rigid_basis)
+        rigid_shaped = share > 0.5
         zero = np.abs(lam) < 1e-8 * np.abs(lam).max()
         if ground_stiffness is None:
             on_springs = np.zeros(lam.size, bool)
@@ -249,8 +252,10 @@ def _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift, max_blocks=12, 
             res = np.linalg.norm(KV @ y_e - (MV @ y_e) * lam[elastic], axis=0)
             ref = lam_abs[elastic] * np.linalg.norm(MV @ y_e, axis=0)
             if np.all(res < tol * ref) or V.shape[1] + block > n:
-                return lam, phi
+                # V is M-orthonormal with the rigid motions as its first columns, so a Ritz
+                # vector's rigid-body share is the squared norm of those coefficients
+                return lam, phi, np.sum(y[:n_rigid] ** 2, axis=0)
         Y = banded.solve(chol, MY)
     if lam is None:
         raise BayesUpdateError("eigen-solve failed: the Krylov space collapsed")
-    return lam, phi
+    return lam, phi, np.sum(y[:n_rigid] ** 2, axis=0)

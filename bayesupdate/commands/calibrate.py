@@ -28,6 +28,14 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     parser.add_argument("--seed", type=int, help="random seed (optimizer and sampler)")
     parser.add_argument("--starts", type=int, help="number of optimizer starts")
+    parser.add_argument(
+        "--effect",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="extend the model by an effect KIND@LOCATION[:name=value] (repeatable), e.g. one "
+        "named by 'discover'",
+    )
     if sampling:
         parser.add_argument("--steps", type=int, help="step budget of the sampler")
         parser.add_argument("--walkers", type=int, help="number of walkers")
@@ -42,6 +50,7 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
 
 def study_from_args(args):
     """StudyConfig from a study file and/or --model/--data flags (flags win)."""
+    import bayesupdate.discovery.study  # noqa: F401  (registers the [effects] table)
     from bayesupdate.config import StudyConfig, load_study, with_overrides
 
     if args.study is None and args.model is None:
@@ -68,6 +77,21 @@ def study_from_args(args):
     return study
 
 
+def model_extension(args, study):
+    """The effects of ``[effects] add`` and ``--effect``, as the ``extend`` of ``prepare``
+    (None when there are none)."""
+    from bayesupdate.discovery.effects import parse_effect_spec
+
+    specs = tuple(study.extensions.get("effects", ())) + tuple(args.effect)
+    for spec in specs:
+        parse_effect_spec(spec)  # a bad spec is a user error before any work
+    if not specs:
+        return None
+    from bayesupdate.discovery.results_io import extend_with_specs
+
+    return lambda model: extend_with_specs(model, specs)
+
+
 def add_arguments(parser) -> None:
     add_study_arguments(parser)
 
@@ -80,7 +104,7 @@ def run(args) -> int:
     study = study_from_args(args)
     if args.out:
         check_output_path(args.out, args.force)
-    prepared = prepare(study)
+    prepared = prepare(study, extend=model_extension(args, study))
     result = run_calibration(prepared)
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)

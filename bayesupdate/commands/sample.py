@@ -4,7 +4,7 @@ import json
 import signal
 import sys
 
-from bayesupdate.commands.calibrate import add_study_arguments, study_from_args
+from bayesupdate.commands.calibrate import add_study_arguments, model_extension, study_from_args
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sample"
@@ -45,7 +45,7 @@ def run(args) -> int:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
     if args.out:
         check_output_path(args.out, force=args.force or args.resume)
-    prepared = prepare(study)
+    prepared = prepare(study, extend=model_extension(args, study))
     previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     try:
         _, posterior, summary, predictions = run_sampling(

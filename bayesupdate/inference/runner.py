@@ -47,11 +47,17 @@ def likelihood_spec(study: StudyConfig) -> LikelihoodSpec:
     )
 
 
-def prepare(study: StudyConfig) -> PreparedStudy:
-    """Build model, data and problem from a study; raises BayesUpdateError on any bad input."""
+def prepare(study: StudyConfig, extend=None) -> PreparedStudy:
+    """Build model, data and problem from a study; raises BayesUpdateError on any bad input.
+
+    extend : optional callable model -> model applied after the model is resolved (the command
+    layer passes the discovery effects of ``--effect`` / ``[effects]`` this way, so inference
+    does not import discovery)."""
     model = resolve_model(
         study.model.source, study.parameters, study.model.sensors, study.model.options
     )
+    if extend is not None:
+        model = extend(model)
     data = load_modal_data(study.data.as_source())
     objective = ObjectiveSpec(
         mass_target_kg=study.objective.mass_kg,

@@ -26,21 +26,10 @@ inferred from the baseline residuals (robust) and integrated out in the evidence
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("study", nargs="?", help="TOML study file (optional)")
-    parser.add_argument("--model", help="built-in model name (an FE model, e.g. exhaust)")
-    parser.add_argument("--data", help="test data: paper:ema, a CSV frequency table, .h5 or .uff")
-    parser.add_argument("--out", help="result file (HDF5)")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing --out")
-    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    parser.add_argument("--seed", type=int, help="random seed")
-    parser.add_argument("--starts", type=int, help="baseline calibration starts")
-    parser.add_argument(
-        "--effect",
-        action="append",
-        default=[],
-        metavar="SPEC",
-        help="extend the model first by KIND@LOCATION[:name=value] (repeatable)",
-    )
+    from bayesupdate.commands.calibrate import add_study_arguments
+
+    # study, --model, --data, --out, --force, --json, --seed, --starts, --effect: as calibrate
+    add_study_arguments(parser)
     parser.add_argument("--kinds", help="comma-separated effect kinds to consider (default all)")
     parser.add_argument("--sigma", type=float, help="fixed relative frequency noise level")
     parser.add_argument("--threshold", type=float, help="ln Bayes factor to beat (default 3)")

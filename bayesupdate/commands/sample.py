@@ -47,12 +47,16 @@ def run(args) -> int:
         check_output_path(args.out, force=args.force or args.resume)
     prepared = prepare(study, extend=model_extension(args, study))
     previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    # a process started in the background by a non-interactive shell inherits SIGINT ignored,
+    # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         _, posterior, summary, predictions = run_sampling(
             prepared, args.out, resume=args.resume, progress=not (args.json or args.no_progress)
         )
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
     if posterior.interrupted:
         where = f"; partial result in {args.out}, continue with --resume" if args.out else ""
         print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)

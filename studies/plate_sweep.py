@@ -1,7 +1,7 @@
 """Real data check: modes of a free plate from five swept-sine repetitions (60-500 Hz).
 
-Data: ../shared/data/plate_sweep beside the checkout (ladisk/mssp-image-tutorial, MIT; see its README): force and
-acceleration at 25.6 kHz, 2 s per repetition, one driving-point-like FRF each.
+Data: ../shared/data/plate_sweep beside the checkout (ladisk/mssp-image-tutorial, MIT; see its
+README): force and acceleration at 25.6 kHz, 2 s per repetition, one driving-point-like FRF each.
 
 For every repetition: H1 from the signals (Hann window, 1 s segments, 75 % overlap: df = 1 Hz),
 then ``identify`` on 60-500 Hz (automatic narrow bands, no frequency guesses).  Modes of the

@@ -83,18 +83,6 @@ class BandedShiftInvert:
         return x[self.inv_perm]
 
 
-def _m_orthonormalize(Y, M, V_blocks):
-    """Orthogonalize Y against the M-orthonormal blocks (twice, classical Gram-Schmidt), then
-    M-orthonormalize Y itself; directions with negligible M-norm are dropped."""
-    for _ in range(2):
-        for V in V_blocks:
-            Y = Y - V @ (V.T @ (M @ Y))
-    G = Y.T @ (M @ Y)
-    w, U = np.linalg.eigh(0.5 * (G + G.T))
-    keep = w > 1e-12 * max(w.max(), 1e-300)
-    return Y @ (U[:, keep] / np.sqrt(w[keep]))
-
-
 def _rigid_share(shapes, M, rigid_basis):
     """Share of each (M-normalised) mode's M-norm inside span(rigid_basis), (m,) in [0, 1]."""
     MR = M @ rigid_basis

@@ -43,15 +43,19 @@ from bayesupdate.paper import (  # noqa: E402
 
 
 def calibrate_exhaust(geometry, starts: int, seed: int, mass_weight: float, full=False):
-    """Mass-kept multi-start optimum; on the certified reduced model (14 modes, tol 1e-4, the
-    full model's optimum to within that tolerance, ~20x faster) unless ``full``."""
-    model = get_model("exhaust", geometry=geometry)
-    if not full:
-        model = reduced_model_for(model, tol=1e-4, seed=0, n_modes=14)
+    """Mass-kept multi-start optimum.  Unless ``full``, the starts search on the certified reduced
+    model (14 modes, tol 1e-4, ~20x faster) and every end near the best is polished on the full
+    model (``calibrate(..., refine=...)``), so the reported optimum is the full model's.
+    Returns (full problem, reduced problem or None, result)."""
+    fe = get_model("exhaust", geometry=geometry)
     data = load_modal_data("paper:ema")
     objective = ObjectiveSpec(mass_target_kg=MEASURED_MASS_KG, mass_weight=mass_weight)
-    problem = build_problem(model, data, None, pairing="tracked", objective=objective)
-    return problem, calibrate(problem, starts=starts, seed=seed)
+    problem = build_problem(fe, data, None, pairing="tracked", objective=objective)
+    if full:
+        return problem, None, calibrate(problem, starts=starts, seed=seed)
+    rom = reduced_model_for(fe, tol=1e-4, seed=0, n_modes=14)
+    search = build_problem(rom, data, None, pairing="tracked", objective=objective)
+    return problem, search, calibrate(search, starts=starts, seed=seed, refine=problem)
 
 
 def table3(result) -> list[dict]:
@@ -85,7 +89,9 @@ def main(argv=None):
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
-    problem, best = calibrate_exhaust("best", args.starts, args.seed, args.mass_weight, args.full)
+    problem, search, best = calibrate_exhaust(
+        "best", args.starts, args.seed, args.mass_weight, args.full
+    )
     write_result(out / "optimum_best.h5", problem, best, vars(args), command="paper_optimum")
     print(
         f"Expr (eq. 19, Table 2) = {best.expr:.4f}   paper: {EXPR_FINAL_REPORTED} "
@@ -96,10 +102,14 @@ def main(argv=None):
         f"paper optimum {OPTIMUM_MASS_KG}"
     )
     print(f"starts reaching the best (Expr within 1 %): {best.converged_starts}/{best.starts}")
-    near = np.sum(best.end_objectives <= 1.05 * best.objective)
+    span = problem.upper - problem.lower
+    close = best.end_objectives <= 1.01 * best.objective
+    spread = np.ptp(best.end_points[close], axis=0) / span if close.sum() > 1 else np.zeros(5)
     print(
-        f"starts within 5 % of the best: {near}/{best.starts} (the swap-free optima lie on the "
-        "kink where the tracked pairing of modes 6/7 flips; see tests/test_calibration_exhaust.py)"
+        "  their spread (% of each bound's width): "
+        + ", ".join(f"{n} {100 * s:.1f}" for n, s in zip(best.names, spread, strict=True))
+        + "\n  (the optimum lies on the kink where the tracked pairing of modes 6/7 flips, in a"
+        " flat thickness-density valley; see tests/test_calibration_exhaust.py)"
     )
     print("\nTable 3 (SI)            initial      paper       ours   same direction")
     rows = table3(best)
@@ -120,8 +130,14 @@ def main(argv=None):
     if best.swapped:
         print("WARNING: the optimum swaps modes relative to the initial design (see model mode)")
 
+    # the front's points are TRF ends (no Nelder-Mead polish, ~10x cheaper): each may sit up
+    # to ~3 % above its polished value on the mode 6/7 kink, far less than the front's range
     front = pareto_front_mass(
-        problem, MEASURED_MASS_KG, starts=max(args.starts // 2, 4), seed=args.seed
+        search or problem,
+        MEASURED_MASS_KG,
+        starts=max(args.starts // 2, 4),
+        seed=args.seed,
+        polish=False,
     )
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot([p["mass_error_pct"] for p in front], [p["expr"] for p in front], "o-", label="ours")
@@ -141,7 +157,7 @@ def main(argv=None):
     runner_ups = []
     for k in range(1, args.runner_ups + 1):
         try:
-            p_k, r_k = calibrate_exhaust(k, args.starts, args.seed, args.mass_weight, args.full)
+            _, _, r_k = calibrate_exhaust(k, args.starts, args.seed, args.mass_weight, args.full)
         except Exception as exc:  # a geometry that is not stored: report and go on
             print(f"geometry {k}: skipped ({exc})")
             continue

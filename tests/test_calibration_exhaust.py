@@ -37,9 +37,13 @@ def rom():
 
 @pytest.fixture(scope="module")
 def mass_kept(rom):
+    """The seed's calibration with the mass kept: search on the reduced model, every end near the
+    best polished on the full model (the result is the full model's)."""
     data = load_modal_data("paper:ema")
-    problem = build_problem(rom, data, objective=ObjectiveSpec(MEASURED_MASS_KG, mass_weight=10.0))
-    return problem, calibrate(problem, starts=8, seed=0)
+    objective = ObjectiveSpec(MEASURED_MASS_KG, mass_weight=10.0)
+    search = build_problem(rom, data, objective=objective)
+    problem = build_problem(get_model("exhaust"), data, objective=objective)
+    return problem, calibrate(search, starts=8, seed=0, refine=problem)
 
 
 def test_pair_batch_equals_hungarian_per_point():
@@ -82,10 +86,10 @@ def test_mass_kept_optimum_table2(mass_kept):
     """Seed Table 2 with the measured mass as a response: what this beam model reaches.
 
     The paper's 0.0406 is out of reach with the mass kept (its point lies below our front of
-    Expr vs mass error, see studies/paper_optimum.py); the largest residuals are modes 5, 9, 10
-    and 1 (shell/joint physics the beam model lumps)."""
+    Expr vs mass error, see studies/paper_optimum.py); the largest residuals are modes 5 and 9
+    (shell/joint physics the beam model lumps)."""
     problem, opt = mass_kept
-    assert 0.0406 < opt.expr <= 0.070
+    assert 0.0406 < opt.expr <= 0.068
     assert abs(opt.mass_kg / MEASURED_MASS_KG - 1.0) <= 0.015
     assert not opt.table.swapped
     np.testing.assert_array_equal(opt.table.model_mode, np.arange(1, 13))
@@ -94,36 +98,30 @@ def test_mass_kept_optimum_table2(mass_kept):
         paper = np.sign(TABLE3_OPTIMUM_SI[name] - TABLE3_INITIAL_SI[name])
         ours = np.sign(opt.parameters[name] - TABLE3_INITIAL_SI[name])
         assert ours == paper, name
-    worst = np.argsort(-np.abs(opt.table.error_pct))[:4] + 1
-    assert set(worst) == {1, 5, 9, 10}
+    # modes 5 (+13 %) and 9 (-12 %) dominate; 4, 10 and 11 follow at 7-8 %
+    worst = np.argsort(-np.abs(opt.table.error_pct))[:2] + 1
+    assert set(worst) == {5, 9}
 
 
-def test_mass_kept_starts_end_on_the_mode_6_7_pairing_boundary(mass_kept):
-    """Few starts reach the best within 1 % (1 of 9) but every swap-free start ends within 3 %
-    of it: the swap-free optima lie on the boundary where the tracked pairing of modes 6 and 7
-    flips (their shapes veer: MAC to the reference 0.55 / 0.33), so the starts stop at
-    different points of that kink, not in distinct basins.  A 1 % step of one variable
-    crosses it."""
+def test_mass_kept_starts_reach_one_optimum_on_the_mode_6_7_kink(mass_kept):
+    """>= 80 % of the starts end within 1 % of the best (issue 4), all swap-free.  The optimum
+    lies on the boundary where the tracked pairing of modes 6 and 7 flips (their shapes veer:
+    MAC to the reference ~0.5 / ~0.3; 11 and 12 veer too), so a 1 % step of some variable flips
+    that pair: the kink on which gradient steps stall and the Nelder-Mead polish walks."""
     problem, opt = mass_kept
-    assert opt.converged_starts / opt.starts < 0.8
+    close = opt.end_objectives <= 1.01 * opt.objective
+    assert close.sum() / opt.starts >= 0.8
     span = problem.upper - problem.lower
-    on_boundary = 0
-    unswapped = 0
-    for end, value in zip(opt.end_points, opt.end_objectives, strict=True):
-        here = problem.evaluate(end)
-        if here.paired.swapped:
-            continue
-        unswapped += 1
-        assert value <= 1.03 * opt.objective
-        flips = set()
-        for k in range(5):
-            for h in (-0.01, 0.01):
-                step = np.clip(end + h * span[k] * np.eye(5)[k], problem.lower, problem.upper)
-                moved = problem.evaluate(step).paired.model_index
-                flips |= set((np.flatnonzero(moved != here.paired.model_index) + 1).tolist())
-        on_boundary += flips == {6, 7}
-    assert unswapped >= 6
-    assert on_boundary == unswapped
+    for end in opt.end_points[close]:
+        assert not problem.evaluate(end).paired.swapped
+    here = problem.evaluate(opt.theta)
+    flips = set()
+    for k in range(5):
+        for h in (-0.01, 0.01):
+            step = np.clip(opt.theta + h * span[k] * np.eye(5)[k], problem.lower, problem.upper)
+            moved = problem.evaluate(step).paired.model_index
+            flips |= set((np.flatnonzero(moved != here.paired.model_index) + 1).tolist())
+    assert {6, 7} <= flips <= {6, 7, 11, 12}
 
 
 def test_sampling_problem_uses_certified_rom_and_full_on_request():

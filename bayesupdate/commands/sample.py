@@ -4,7 +4,12 @@ import json
 import signal
 import sys
 
-from bayesupdate.commands.calibrate import add_study_arguments, model_extension, study_from_args
+from bayesupdate.commands.calibrate import (
+    add_full_argument,
+    add_study_arguments,
+    model_extension,
+    study_from_args,
+)
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sample"
@@ -30,6 +35,7 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 
 def add_arguments(parser) -> None:
     add_study_arguments(parser, sampling=True)
+    add_full_argument(parser)
 
 
 def _sigterm_as_interrupt(signum, frame):

@@ -92,9 +92,19 @@ def prepare(study: StudyConfig, extend=None) -> PreparedStudy:
 
 
 def run_calibration(prepared: PreparedStudy) -> CalibrationResult:
+    """Multi-start optimum.  Built-in FE models search on their certified reduced basis and
+    polish every end point on the full model (``calibrate(..., refine=...)``), so the result is
+    the full model's; ``sampler.reduced = false`` (``--full``) searches on full solves."""
     opt = prepared.study.optimizer
+    cfg = prepared.study.sampler
+    search, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
     return calibrate(
-        prepared.problem, starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design
+        search,
+        starts=opt.starts,
+        seed=opt.seed,
+        method=opt.method,
+        design=opt.design,
+        refine=None if rom is None else prepared.problem,
     )
 
 

@@ -40,17 +40,15 @@ def _shape_mac(identified):
 
 def test_identified_shapes_match_the_fe_shapes(identified):
     mac = _shape_mac(identified)
-    assert np.mean(mac) >= 0.99
-    assert np.sum(mac >= 0.98) >= 11
+    assert np.mean(mac) >= 0.995
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known shortfall: mode 11 (117.8 Hz) reaches MAC 0.978; "
-    "its H part (5 % of the motion) is seen weakly from the H reference point",
-)
 def test_every_identified_shape_reaches_mac_098(identified):
-    assert _shape_mac(identified).min() >= 0.98
+    """Mode 11 (117.8 Hz) has a weak H part (a fifth of its norm) next to an unmeasured mode at
+    150.5 Hz; without that mode's edge pole in the LSFD basis its MAC was 0.978."""
+    mac = _shape_mac(identified)
+    assert mac.min() >= 0.98
+    assert mac[10] >= 0.99
 
 
 def test_hidden_effect_moves_the_identified_frequencies():

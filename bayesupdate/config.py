@@ -25,6 +25,7 @@ Example (issue 4 item 9)::
     method = "least_squares"        # or "global" (differential evolution first)
     design = "sobol"                # or "lhs"
     seed = 0
+    polish = true                   # Nelder-Mead polish of every end (optima on pairing kinks)
     [likelihood]
     sigma = 0.05                    # fixed, or sigma_prior = { kind = "halfnormal", scale = 0.1 }
     mass_sd = 0.01                  # optional relative sd of the mass observation
@@ -103,6 +104,7 @@ class OptimizerConfig:
     method: str = "least_squares"
     design: str = "sobol"
     seed: int = 0
+    polish: bool = True
 
 
 @dataclass(frozen=True)

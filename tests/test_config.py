@@ -74,6 +74,7 @@ def test_parameters_default_from_the_model():
         ({"data": {"weights": [1.0]}}, r"data: give source"),
         ({"data": {"source": "paper:ema", "frequencies_hz": [1.0]}}, r"not both"),
         ({"model": {"source": 3}}, r"model\.source: must be a string"),
+        ({"optimizer": {"polish": 1}}, r"optimizer\.polish: must be"),
     ],
 )
 def test_bad_study_documents_name_the_key(document, match):

@@ -63,6 +63,7 @@ def study_from_args(args):
         "sampler__steps": getattr(args, "steps", None),
         "sampler__walkers": getattr(args, "walkers", None),
         "sampler__reduced": False if getattr(args, "full", False) else None,
+        "optimizer__polish": False if getattr(args, "no_polish", False) else None,
     }
     study = with_overrides(study, **changes)
     # --data replaces inline data of the study file entirely
@@ -101,6 +102,11 @@ def add_full_argument(parser) -> None:
 def add_arguments(parser) -> None:
     add_study_arguments(parser)
     add_full_argument(parser)
+    parser.add_argument(
+        "--no-polish",
+        action="store_true",
+        help="skip the Nelder-Mead polish of each start (faster; ends may stop on a kink)",
+    )
 
 
 def run(args) -> int:

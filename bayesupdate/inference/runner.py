@@ -104,6 +104,7 @@ def run_calibration(prepared: PreparedStudy) -> CalibrationResult:
         seed=opt.seed,
         method=opt.method,
         design=opt.design,
+        polish=opt.polish,
         refine=None if rom is None else prepared.problem,
     )
 

@@ -117,6 +117,35 @@ def case_data(case: str, path: str, noise: float, seed: int):
     return data, shift, base
 
 
+def specs_of(case: str) -> list[str]:
+    """Effect specs of a case (empty for null and geometry cases)."""
+    if case.startswith(("none", "geometry:")):
+        return []
+    return case.split("+")
+
+
+def _tags(case: str) -> set[str]:
+    return {spec.split(":", 1)[0] for spec in specs_of(case)}
+
+
+def shift_after_recalibration(base, data, case: str, path: str) -> float:
+    """max_i |f_i(recalibrated) - f_i(true)| / f_i(true) after the same 5-variable baseline
+    calibration as discovery (4 starts) on the *noise-free* true frequencies.  What the
+    design variables cannot absorb is what any frequency-based discovery can see: an effect
+    moving a frequency by > 2x noise but absorbed below it here is unidentifiable from
+    frequencies alone."""
+    from bayesupdate.inference.optimize import calibrate
+    from bayesupdate.inference.problem import build_problem
+    from bayesupdate.modal_data import ModalData
+
+    true_model = truth_model(case)[0]
+    f_true = np.sort(true_model.solve(TABLE3_OPTIMUM_SI, N_MODES).frequencies_hz)
+    clean = ModalData(f_true, frequency_sd_hz=0.003 * f_true, source=f"noise-free:{case}")
+    problem = build_problem(base, clean, None, pairing="order")
+    fit = calibrate(problem, starts=4, seed=0, max_nfev=100)
+    return float(np.max(np.abs(fit.frequencies_hz - f_true) / f_true))
+
+
 def run_case(args_tuple):
     case, path, noise, seed = args_tuple
     from bayesupdate.discovery.effects import parse_effect_spec
@@ -135,6 +164,11 @@ def run_case(args_tuple):
         effect = parse_effect_spec(case)
         category, true_kind, true_loc = "effect", effect.kind, effect.location
     correct = bool(named and named["kind"] == true_kind and named["location"] == true_loc)
+    # a named component of a two-effect case (out of library as a whole) is not a wrong name
+    component = bool(
+        named and "+" in case and f"{named['kind']}@{named['location']}" in _tags(case)
+    )
+    shift_after = shift_after_recalibration(base, data, case, path) if specs_of(case) else 0.0
     rms_after = float(np.sqrt(np.mean(result.final.residual_rel**2)))
     return {
         "case": case,
@@ -142,6 +176,10 @@ def run_case(args_tuple):
         "true_kind": true_kind,
         "true_location": true_loc,
         "max_shift_over_noise": shift,
+        "max_shift_after_recalibration_over_noise": shift_after / noise,
+        "named_component": component,
+        "rms_before_over_noise": float(np.sqrt(np.mean(result.baseline.residual_rel**2))) / noise,
+        "baseline_chi2_p": float(result.flags.chi2_p),
         "verdict": out["verdict"],
         "named": None if named is None else f"{named['kind']}@{named['location']}",
         "named_kind": None if named is None else named["kind"],
@@ -162,17 +200,19 @@ def run_case(args_tuple):
 
 
 def report(rows, noise):
-    header = f"{'case':62s} {'shift/s':>7s} {'verdict':15s} {'named':38s} ok"
-    print("\n" + header + "  Expr before->after  rms/s")
+    header = f"{'case':62s} {'shift/s':>7s} {'recal':>6s} {'verdict':15s} {'named':38s} ok"
+    print("\n" + header + "  Expr before->after  rms/s before->after")
     for r in rows:
         named = r["named"] or (
             f"({r['best_candidate']}?)" if r["verdict"] == "unexplained" else "-"
         )
         mark = "Y" if r["correct"] else ("-" if r["category"] != "effect" else "N")
         print(
-            f"{r['case'][:62]:62s} {r['max_shift_over_noise']:7.1f} {r['verdict']:15s} "
+            f"{r['case'][:62]:62s} {r['max_shift_over_noise']:7.1f} "
+            f"{r['max_shift_after_recalibration_over_noise']:6.1f} {r['verdict']:15s} "
             f"{named[:38]:38s} {mark}"
-            f"   {r['gap_before']:.2e} -> {r['gap_after']:.2e}  {r['rms_after_over_noise']:5.2f}"
+            f"   {r['gap_before']:.2e} -> {r['gap_after']:.2e}  "
+            f"{r['rms_before_over_noise']:5.2f} -> {r['rms_after_over_noise']:5.2f}"
         )
     effect_rows = [r for r in rows if r["category"] == "effect"]
     detectable = [r for r in effect_rows if r["max_shift_over_noise"] > 2]
@@ -191,6 +231,18 @@ def report(rows, noise):
         f"\neffect cases moving a frequency by > 2x noise: {n_ok}/{len(detectable)} named with "
         f"kind AND location correct ({100 * n_ok / max(len(detectable), 1):.0f} %)"
     )
+    print(
+        "  (shift/s: max |frequency shift| / noise at the true design, the issue's definition; "
+        "recal: the same after re-calibrating the 5 design variables to the noise-free truth)"
+    )
+    visible = [r for r in detectable if r["max_shift_after_recalibration_over_noise"] > 2]
+    n_vis = sum(r["correct"] for r in visible)
+    print(
+        f"effect cases still moving a frequency by > 2x noise AFTER the baseline recalibration: "
+        f"{n_vis}/{len(visible)} named correctly ({100 * n_vis / max(len(visible), 1):.0f} %); "
+        f"absorbed by the design variables: "
+        f"{[r['case'] for r in detectable if r not in visible]}"
+    )
     named_ok = [r for r in detectable if r["correct"]]
     within = sum(r["rms_after_over_noise"] <= 2 for r in named_ok)
     print(f"  of those named, gap after (rms error) within 2x noise: {within}/{len(named_ok)}")
@@ -204,7 +256,10 @@ def report(rows, noise):
     ool = [r for r in rows if r["category"] == "out-of-library"]
     print(
         f"out-of-library cases: {sum(r['verdict'] == 'unexplained' for r in ool)}/{len(ool)} "
-        f'"unexplained", confident names: {sum(bool(r["named"]) for r in ool)}'
+        f'"unexplained", confident names: {sum(bool(r["named"]) for r in ool)} '
+        f"(of which one true component of a two-effect case: "
+        f"{sum(r['named_component'] for r in ool)}; wrong: "
+        f"{[(r['case'], r['named']) for r in ool if r['named'] and not r['named_component']]})"
     )
     walls = [r["wall_s"] for r in rows]
     print(

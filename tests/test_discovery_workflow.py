@@ -154,9 +154,14 @@ def test_bad_inputs_are_clear_errors(frame):
         extend_with_specs(frame, ["added_mass@2:m=7"])
 
 
-def test_result_file_round_trip_and_extended_model(frame, tmp_path):
-    spec = "added_mass@2:m=0.3"
-    result = discover(frame, synthetic(frame, [spec], seed=2), FAST)
+@pytest.fixture(scope="module")
+def named_mass(frame):
+    """A run that names added_mass@2 (shared: each discover run on the frame costs seconds)."""
+    return discover(frame, synthetic(frame, ["added_mass@2:m=0.3"], seed=2), FAST)
+
+
+def test_result_file_round_trip_and_extended_model(frame, named_mass, tmp_path):
+    result = named_mass
     assert result.verdict == "explained"
     path = tmp_path / "d.h5"
     write_discovery(path, result, config={"note": "test"})
@@ -183,3 +188,30 @@ def test_result_file_round_trip_and_extended_model(frame, tmp_path):
     written = save_plots(result, tmp_path / "figs", frame.structure)
     assert [p.name for p in written] == ["residuals.png", "localization.png", "ranking.png"]
     assert all(p.stat().st_size > 5000 for p in written)
+
+
+def test_an_effect_pinned_on_its_bound_is_never_named(named_mass):
+    """The out-of-library guard: the same winning fit, with its effect parameter moved onto the
+    bound, is "unexplained" (a library effect stretched to its limit absorbs something else)."""
+    import dataclasses
+
+    from bayesupdate.discovery.workflow import _effect_at_bound, decide
+
+    result = named_mass
+    assert result.verdict == "explained" and result.named.label == "added_mass@2"
+    d = len(result.baseline.names)
+    assert _effect_at_bound(result.named, d, 0.005) == []
+    theta = result.named.theta.copy()
+    theta[d] = 2.0  # added_mass m bounds (0, 2) kg
+    pinned = dataclasses.replace(result.named, theta=theta)
+    assert _effect_at_bound(pinned, d, 0.005) == ["added_mass@2:m"]
+    fits = [pinned, *result.fits[1:]]
+    verdict, reason, named, _ = decide(
+        result.baseline, fits, result.flags, result.noise, result.settings
+    )
+    assert (verdict, named) == ("unexplained", None)
+    assert "on its bound" in reason
+    verdict, _, named, _ = decide(
+        result.baseline, result.fits, result.flags, result.noise, result.settings
+    )
+    assert verdict == "explained" and named is result.fits[0]

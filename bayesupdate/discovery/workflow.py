@@ -10,9 +10,11 @@
 4. two-tier refits with the design variables.  Quick tier: the ``quick_refits`` best candidates
    by score, plus the best ``per_kind`` of every kind (the broad-scan fallback: the linear score
    misjudges large effects, whose baseline optimum sits far from the truth), each a few
-   Gauss-Newton iterations (``quick_nfev``) from the best (smallest chi^2) of 12-18 starts: the
-   score test's suggestion, 3x and 10x that step, and the screen grid, each with the design
-   variables at the baseline optimum, the reference design and the centre of the bounds box.
+   Gauss-Newton iterations (``quick_nfev``) from the best (smallest chi^2) of 30-51 starts: the
+   score test's suggestion, 3x and 10x that step, and the screen grid (7 magnitudes per side),
+   each with the design variables at the baseline optimum, the reference design and the centre
+   of the bounds box (one model solve per start: a cheap multi-start search, without which a
+   large effect's refit stalls in the basin of the baseline that absorbed it).
    Full tier: the ``max_refits`` best by quick evidence, re-fitted to convergence from two
    starts (the quick end point, and the box centre with the quick fit's effect value).  All
    are compared by Laplace evidence (quick fits keep their quick value, a lower bound in
@@ -21,7 +23,9 @@
 
    * ``explained``: ln BF(best vs baseline) > ``threshold_ln_bf`` (3: "strong" on the
      Kass-Raftery scale), ln BF(best vs runner-up) >= ``margin_ln_bf`` (2: the runner-up is
-     e^2 ~ 7 times less probable), and the extended model fits within the noise (no flagged mode,
+     e^2 ~ 7 times less probable), its fitted effect parameters sit off their bounds (by >
+     ``bound_tolerance`` = 0.5 % of the range: an effect pinned on a bound is absorbing a change
+     the library does not describe), and the extended model fits within the noise (no flagged mode,
      and for known noise the chi^2 p-value > ``adequacy_p``; for inferred noise its own robust
      noise level <= ``max_noise_rel``);
    * ``no discrepancy``: no candidate beats the baseline by the threshold and the baseline fits
@@ -71,13 +75,14 @@ class DiscoverySettings:
     sigma: float | None = None
     baseline_starts: int = 4
     seed: int = 0
-    quick_refits: int = 14
+    quick_refits: int = 20
     per_kind: int = 3
     quick_nfev: int = 4
     max_refits: int = 5
     max_nfev: int = 25
     threshold_ln_bf: float = 3.0
     margin_ln_bf: float = 2.0
+    bound_tolerance: float = 0.005
     adequacy_p: float = 1e-3
     max_noise_rel: float = 0.01
     alpha: float = 0.05
@@ -228,6 +233,15 @@ def decide(
             None,
             close,
         )
+    at_bound = _effect_at_bound(best, len(baseline.names), s.bound_tolerance)
+    if at_bound:
+        return (
+            "unexplained",
+            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) only with {at_bound} on its "
+            "bound: the library effect is stretched to absorb a change it does not describe",
+            None,
+            [],
+        )
     d = len(best.names)
     if noise.inferred:  # judged against its own residual scale, which must look like test noise
         own = noise_model(baseline.space.problem.data, best.residual_rel, d)
@@ -256,6 +270,20 @@ def decide(
         best,
         [],
     )
+
+
+def _effect_at_bound(fit: ModelFit, n_design: int, tolerance: float) -> list[str]:
+    """Names of the fit's effect parameters within ``tolerance`` (fraction of the z range) of
+    a bound.  A library effect pinned on a bound is a symptom of a change outside the library
+    (e.g. a longer pipe mimicked by the softest joint), so it is never named confidently."""
+    axes = fit.space.axes[n_design:]
+    z = [float(axis.to_z(v)) for axis, v in zip(axes, fit.theta[n_design:], strict=True)]
+    return [
+        axis.name
+        for axis, zi in zip(axes, z, strict=True)
+        if min(zi - axis.z_bounds[0], axis.z_bounds[1] - zi)
+        <= tolerance * (axis.z_bounds[1] - axis.z_bounds[0])
+    ]
 
 
 def _select(scores, settings: DiscoverySettings) -> list:

@@ -30,20 +30,22 @@ Offline (``ReducedFEModel.build``):
 
 Online (``predict_frequencies_batch``): reduced K and M for all points by one matrix product each,
 the rigid-body coordinates eliminated exactly (K R = 0 for a free body, so the elastic pencil is
-K_ww x = lambda (M_ww - M_wr M_rr^-1 M_rw) x), then stacked Cholesky + ``eigvalsh`` for all points.
+K_ww x = lambda (M_ww - M_wr M_rr^-1 M_rw) x), then stacked Cholesky + ``eigvalsh`` for all points,
+the batch split over threads (``fe.batched_eigen``).
 """
 
+import copy
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg.lapack import dsygvd as _dsygvd
-from scipy.linalg.lapack import dtrtri as _dtrtri
 from scipy.stats import qmc
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import ElementProperties
+from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.model_protocol import Prediction
 
@@ -66,26 +68,36 @@ def barycentric_weights(x: np.ndarray, pieces: np.ndarray, degree: int) -> np.nd
     weight of each piece's node values, zero outside the piece holding x (Berrut & Trefethen 2004,
     eq. 4.2 with the second-kind weights (-1)^j, halved at the ends).
     """
-    x = np.asarray(x, dtype=float)
+    x = np.asarray(x, dtype=float).reshape(-1, 1)
+    return barycentric_weights_columns(x, np.asarray(pieces, dtype=float)[None, :], degree)[:, 0]
+
+
+def barycentric_weights_columns(x: np.ndarray, pieces: np.ndarray, degree: int) -> np.ndarray:
+    """``barycentric_weights`` for G interpolants of the same degree and piece count at once:
+    x (B, G), pieces (G, P + 1) -> (B, G, P * (degree + 1)).  Vectorised over points, columns
+    and pieces: it runs in every likelihood call."""
+    B, G = x.shape
     n = degree + 1
+    P = pieces.shape[1] - 1
     w = (-1.0) ** np.arange(n)
     w[0] *= 0.5
     w[-1] *= 0.5
-    out = np.zeros((x.size, (pieces.size - 1) * n))
-    which = np.clip(np.searchsorted(pieces, x, side="right") - 1, 0, pieces.size - 2)
-    for p in range(pieces.size - 1):
-        sel = which == p
-        if not np.any(sel):
-            continue
-        nodes = chebyshev_nodes(pieces[p], pieces[p + 1], degree)
-        d = x[sel, None] - nodes[None, :]
-        exact = d == 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            q = w / d
-            lag = q / q.sum(axis=1, keepdims=True)
-        hit = exact.any(axis=1)
+    which = np.empty((B, G), dtype=int)
+    for g in range(G):  # G is the number of interpolated parameters (a handful)
+        which[:, g] = np.searchsorted(pieces[g], x[:, g], side="right") - 1
+    np.clip(which, 0, P - 1, out=which)
+    cols = np.arange(G)[None, :]
+    low, high = pieces[cols, which], pieces[cols, which + 1]
+    unit = 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / degree))
+    d = x[..., None] - (low[..., None] + (high - low)[..., None] * unit)  # (B, G, n)
+    exact = d == 0.0
+    q = w / np.where(exact, 1.0, d)
+    lag = q / q.sum(axis=-1, keepdims=True)
+    hit = exact.any(axis=-1)
+    if np.any(hit):
         lag[hit] = exact[hit].astype(float)
-        out[np.ix_(sel, np.arange(p * n, (p + 1) * n))] = lag
+    out = np.zeros((B, G, P * n))
+    np.put_along_axis(out, which[..., None] * n + np.arange(n), lag, axis=-1)
     return out
 
 
@@ -372,12 +384,39 @@ class _Decomposition:
             np.prod([(p.size - 1) * (d + 1) for p, d in zip(g.pieces, g.degrees, strict=True)])
         )
 
+    def _one_d_batches(self) -> list[tuple[list[int], list[int], np.ndarray, int]]:
+        """Groups interpolated in one parameter, batched by (degree, piece count): (group
+        indices, parameter indices, stacked log breakpoints (G, P + 1), degree)."""
+        batches: dict[tuple[int, int], list[int]] = {}
+        for g, group in enumerate(self.groups):
+            if len(group.nonaffine) == 1:
+                key = (group.degrees[0], group.pieces[0].size)
+                batches.setdefault(key, []).append(g)
+        return [
+            (
+                gs,
+                [self.groups[g].nonaffine[0] for g in gs],
+                np.array([self.groups[g].pieces[0] for g in gs]),
+                degree,
+            )
+            for (degree, _), gs in batches.items()
+        ]
+
     def coefficients(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(B, n_k_terms), (B, n_m_terms) coefficients at theta (B, n_params) (all names)."""
         if not hasattr(self, "_k_gather"):
             self._k_gather = self._gather_indices(self._k_rules)
             self._m_gather = self._gather_indices(self._m_rules)
-        weights = [self._interp_weights(g, theta[:, list(g.nonaffine)]) for g in self.groups]
+        if not hasattr(self, "_one_d"):
+            self._one_d = self._one_d_batches()
+        weights: list = [None] * len(self.groups)
+        for groups, params, pieces, degree in self._one_d:
+            w = barycentric_weights_columns(np.log(theta[:, params]), pieces, degree)
+            for c, g in enumerate(groups):
+                weights[g] = w[:, c]
+        for g, group in enumerate(self.groups):
+            if weights[g] is None:
+                weights[g] = self._interp_weights(group, theta[:, list(group.nonaffine)])
         F = np.concatenate([np.ones((theta.shape[0], 1)), theta, *weights], axis=1)
         return tuple(F[:, a] * F[:, b] * c for a, b, c in (self._k_gather, self._m_gather))
 
@@ -412,50 +451,23 @@ def _rel_err(approx: np.ndarray, exact: np.ndarray) -> float:
 
 
 # -- batched eigen-solve --------------------------------------------------------------------------
-def batched_elastic_eigenvalues(
-    K_ww: np.ndarray, M_full: np.ndarray, n_rigid: int, n_modes: int, vectors: bool = False
-):
-    """Lowest elastic eigenvalues of reduced pencils whose first ``n_rigid`` coordinates are the
-    rigid-body motions (K R = 0).
-
-    K_ww : (B, r_e, r_e) elastic block of K; M_full : (B, r, r), r = n_rigid + r_e.
-    The rigid coordinates are eliminated exactly: K_ww x = lambda S x with the Schur complement
-    S = M_ww - M_wr M_rr^-1 M_rw.  Eigenvalues only: LAPACK dsygvd per point (Cholesky of S,
-    reduction to standard form, divide and conquer; ~1.5x faster than stacked numpy steps for
-    r ~ 40-70, the loop costs ~1 us per point).  With ``vectors``: S = L L^T (the trailing block
-    of the stacked Cholesky of M), C = L^-1 K_ww L^-T, stacked eigh.
-    Returns (B, n_modes) eigenvalues [rad^2/s^2] (and, with ``vectors``, the (B, r, n_modes)
-    reduced eigenvectors, mass-normalised: y^T M y = 1).
-    """
+def sygvd_elastic_eigenvalues(K_ww: np.ndarray, M_full: np.ndarray, n_rigid: int, n_modes: int):
+    """Reference path for ``batched_eigen.batched_elastic_eigenvalues`` (eigenvalues only): the
+    Schur complement S formed explicitly, then LAPACK dsygvd (Cholesky of S, reduction to
+    standard form, divide and conquer) per point.  Kept for the benchmark and the tests: it
+    shares no code with the threaded path."""
     nr = n_rigid
     M_full = 0.5 * (M_full + M_full.transpose(0, 2, 1))
-    if not vectors:
-        M_rw = M_full[:, :nr, nr:]
-        S = M_full[:, nr:, nr:] - M_rw.transpose(0, 2, 1) @ np.linalg.solve(
-            M_full[:, :nr, :nr], M_rw
-        )
-        lam = np.empty((K_ww.shape[0], n_modes))
-        for i in range(K_ww.shape[0]):
-            out = _dsygvd(K_ww[i], S[i], jobz="N")  # (w, [a,] info)
-            w, info = out[0], out[-1]
-            if info != 0:
-                raise np.linalg.LinAlgError(f"reduced pencil not definite (LAPACK info {info})")
-            lam[i] = w[:n_modes]
-        return lam
-    # the trailing block of chol(M) is chol(S): no separate Schur complement is formed
-    L = np.linalg.cholesky(M_full)[:, nr:, nr:]
-    # LAPACK trtri per matrix: n^3/3 flops against ~2 n^3 for a batched LU solve
-    L_inv = np.empty_like(L)
-    for i in range(L.shape[0]):
-        L_inv[i], info = _dtrtri(L[i], lower=1)
+    M_rw = M_full[:, :nr, nr:]
+    S = M_full[:, nr:, nr:] - M_rw.transpose(0, 2, 1) @ np.linalg.solve(M_full[:, :nr, :nr], M_rw)
+    lam = np.empty((K_ww.shape[0], n_modes))
+    for i in range(K_ww.shape[0]):
+        out = _dsygvd(K_ww[i], S[i], jobz="N")  # (w, [a,] info)
+        w, info = out[0], out[-1]
         if info != 0:
-            raise np.linalg.LinAlgError("singular reduced mass matrix")
-    C = L_inv @ K_ww @ L_inv.transpose(0, 2, 1)
-    C = 0.5 * (C + C.transpose(0, 2, 1))
-    lam, Z = np.linalg.eigh(C)
-    b = L_inv.transpose(0, 2, 1) @ Z[:, :, :n_modes]
-    a = -np.linalg.solve(M_full[:, :nr, :nr], M_full[:, :nr, nr:] @ b)
-    return lam[:, :n_modes], np.concatenate([a, b], axis=1)
+            raise np.linalg.LinAlgError(f"reduced pencil not definite (LAPACK info {info})")
+        lam[i] = w[:n_modes]
+    return lam
 
 
 # -- the reduced model ----------------------------------------------------------------------------
@@ -669,12 +681,23 @@ class ReducedFEModel:
         self._M_terms = _compress_terms(Mt.reshape(Mt.shape[0], -1))
 
     # -- online --------------------------------------------------------------------------------
-    def _reduced_eigenvalues(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
+    def reduced_matrices(self, theta_full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reduced pencils at theta_full (B, n_params) (all parameters, SI): the elastic block of
+        K (B, r_e, r_e) and the whole M (B, r, r), the first ``n_rigid`` coordinates being the
+        rigid-body motions.  Two matrix products over the projected affine terms."""
         cK, cM = self.decomp.coefficients(theta_full)
         r, nr = self.size, self._n_rigid
         K = ((cK @ self._K_terms[0]) @ self._K_terms[1]).reshape(-1, r - nr, r - nr)
         M = ((cM @ self._M_terms[0]) @ self._M_terms[1]).reshape(-1, r, r)
-        return batched_elastic_eigenvalues(K, M, nr, n_modes, vectors=vectors)
+        return K, M
+
+    @property
+    def n_rigid(self) -> int:
+        return self._n_rigid
+
+    def _reduced_eigenvalues(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
+        K, M = self.reduced_matrices(theta_full)
+        return batched_elastic_eigenvalues(K, M, self._n_rigid, n_modes, vectors=vectors)
 
     def _compare(self, theta: np.ndarray, f_full: np.ndarray) -> Certificate:
         ok = np.all(np.isfinite(f_full), axis=1)
@@ -684,6 +707,8 @@ class ReducedFEModel:
         return Certificate(float(np.max(np.abs(signed))), float(np.min(signed)), int(ok.sum()))
 
     def _theta_full(self, theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+        if names == self.parameter_names:  # the sampler's case: no defaults to fill in
+            return np.array(theta, dtype=float)
         unknown = [n for n in names if n not in self.parameter_names]
         if unknown:
             raise BayesUpdateError(
@@ -742,17 +767,20 @@ class ReducedFEModel:
         n_modes = self.n_modes if n_modes is None else int(n_modes)
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         full = self._theta_full(theta, names)
+        usable = self.certified and n_modes <= self.n_modes
+        if usable and np.all((full >= self.low) & (full <= self.high)):
+            # every point inside the box (the sampler's usual batch): one batched solve
+            lam, y = self._reduced_eigenvalues(full, n_modes, vectors=True)
+            return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), self._V_sensor @ y
         n_s = len(self.sensor_labels)
         freqs = np.full((theta.shape[0], n_modes), np.nan)
         shapes = np.full((theta.shape[0], n_s, n_modes), np.nan)
         finite = np.all(np.isfinite(full), axis=1)
-        inside = finite & np.all((full >= self.low) & (full <= self.high), axis=1)
-        if not self.certified or n_modes > self.n_modes:
-            inside[:] = False
+        inside = finite & np.all((full >= self.low) & (full <= self.high), axis=1) & usable
         if np.any(inside):
             lam, y = self._reduced_eigenvalues(full[inside], n_modes, vectors=True)
             freqs[inside] = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
-            shapes[inside] = np.einsum("sr,brm->bsm", self._V_sensor, y)
+            shapes[inside] = self._V_sensor @ y  # (s, r) @ (B, r, m): BLAS, unlike einsum
         model = self.outer if self.certified else self.fe
         for i in np.flatnonzero(finite & ~inside):
             try:
@@ -782,6 +810,72 @@ class ReducedFEModel:
         mass, _ = self.fe.assembler.total_mass(props)
         freqs = np.sqrt(np.maximum(lam[0], 0.0)) / (2 * np.pi)
         return Prediction(freqs, self.fe.sensor_shapes(phi), self.fe.structure.sensor_labels, mass)
+
+    def coarsened(
+        self, tol: float = 5e-3, n_train: int = 128, n_check: int = 64, min_size: int | None = None
+    ) -> "ReducedFEModel":
+        """A smaller reduced model for screening proposals (delayed-acceptance sampling), built
+        without any full solve: a second Rayleigh-Ritz level inside this basis.
+
+        Elastic reduced eigenvectors of this model at ``n_train`` seeded Sobol points of the box,
+        each scaled to unit strain energy at the box centre, are compressed by POD in that
+        energy norm; the smallest rank whose frequencies stay within ``tol`` (relative) of this
+        model's on ``n_check`` fresh points is kept (``min_size`` elastic vectors at least,
+        default ``n_modes``).  The affine terms are projected once more, so an evaluation costs
+        an eigen-solve of size 6 + m.  Its values are Rayleigh-Ritz values of this model's
+        pencils: upper bounds of this model's frequencies, hence of the full ones.
+        ``max_rel_error`` of the result is the measured error against this model (its own
+        error against full solves adds to it).  Raises ``BayesUpdateError`` on an uncertified
+        model."""
+        if not self.certified:
+            raise BayesUpdateError("coarsened: the reduced model is not certified")
+        nr, re = self._n_rigid, self.size - self._n_rigid
+        dim = len(self.parameter_names)
+        train = self._scale(qmc.Sobol(dim, scramble=True, seed=self.seed + 77).random(n_train))
+        check = self._scale(qmc.Sobol(dim, scramble=True, seed=self.seed + 78).random(n_check))
+        _, y = self._reduced_eigenvalues(train, self.n_modes, vectors=True)
+        lam_check = self._reduced_eigenvalues(check, self.n_modes)
+        Y = np.moveaxis(y[:, nr:, :], 1, 0).reshape(re, -1)  # (r_e, n_train * n_modes)
+        cK, _ = self.decomp.coefficients(self._centre()[None, :])
+        Kc = ((cK @ self._K_terms[0]) @ self._K_terms[1]).reshape(re, re)
+        G = np.linalg.cholesky(0.5 * (Kc + Kc.T))  # energy norm ||x||^2 = |G^T x|^2
+        Z = G.T @ Y
+        Z = Z / np.linalg.norm(Z, axis=0)
+        U = np.linalg.svd(Z, full_matrices=False)[0]
+        start = self.n_modes if min_size is None else int(min_size)
+        best = None
+        for m in range(min(start, re), re + 1, 2):
+            Q = np.linalg.qr(np.linalg.solve(G.T, U[:, :m]))[0]  # same span, orthonormal
+            coarse = self._projected(Q)
+            lam = coarse._reduced_eigenvalues(check, self.n_modes)
+            err = float(np.max(np.abs(np.sqrt(lam / lam_check) - 1.0)))
+            best = (coarse, err)
+            if err <= tol:
+                break
+        coarse, err = best
+        coarse.max_rel_error = err
+        coarse.tol = float(tol)
+        coarse.name = f"{self.fe.name} (reduced, screening)"
+        return coarse
+
+    def _projected(self, Q: np.ndarray) -> "ReducedFEModel":
+        """A copy restricted to the elastic subspace Q (r_e, m) of this basis (rigid kept)."""
+        nr, re = self._n_rigid, self.size - self._n_rigid
+        m = Q.shape[1]
+        Qf = np.zeros((self.size, nr + m))
+        Qf[:nr, :nr] = np.eye(nr)
+        Qf[nr:, nr:] = Q
+        BK = self._K_terms[1].reshape(-1, re, re)
+        BM = self._M_terms[1].reshape(-1, self.size, self.size)
+        out = copy.copy(self)
+        out._K_terms = (self._K_terms[0], (Q.T @ BK @ Q).reshape(BK.shape[0], -1))
+        out._M_terms = (self._M_terms[0], (Qf.T @ BM @ Qf).reshape(BM.shape[0], -1))
+        out.V = self.V @ Qf
+        out._V_sensor = self._V_sensor @ Qf
+        out.size = nr + m
+        out.history = list(self.history)
+        out._checked = list(self._checked)
+        return out
 
     def localized(
         self, samples: np.ndarray, names: tuple[str, ...] | None = None, widen: float = 0.5, **kw

@@ -162,7 +162,7 @@ def pair_batch(reference: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, n
     ref = np.asarray(reference)  # identified test shapes are complex
     cur = np.asarray(shapes, dtype=float)
     n_test = ref.shape[1]
-    cross = np.abs(np.einsum("dt,bdm->btm", ref.conj(), cur)) ** 2
+    cross = np.abs(ref.conj().T @ cur) ** 2  # (t, d) @ (B, d, m): BLAS, unlike einsum
     denom = np.sum(np.abs(ref) ** 2, axis=0)[None, :, None] * np.sum(cur * cur, axis=1)[:, None, :]
     with np.errstate(invalid="ignore", divide="ignore"):
         mac = np.clip(np.where(denom > 0, cross / np.where(denom > 0, denom, 1.0), 0.0), 0, 1)

@@ -1,0 +1,121 @@
+"""Batched dense eigen-solves of small reduced free-free pencils, split over threads.
+
+The reduced model (``fe.reduced``) gives, for a batch of B parameter points, pencils
+(K_r, M_r) of size r whose first ``n_rigid`` coordinates are the rigid-body motions (K R = 0).
+The rigid coordinates are eliminated exactly: the elastic pencil is K_ww x = lambda S x with the
+Schur complement S = M_ww - M_wr M_rr^-1 M_rw, and S = L L^T is the trailing block of the Cholesky
+factor of M_r (no separate Schur complement is formed).  Standard form C = L^-1 K_ww L^-T, then
+the symmetric tridiagonal eigen-solver (LAPACK syevd via numpy's stacked ``eigvalsh`` / ``eigh``).
+
+Why threads: numpy's stacked linear-algebra loops (Cholesky, matmul, eigvalsh, eigh) release the
+GIL, so the batch split into contiguous chunks runs on all cores from one process; each matrix is
+solved by the same LAPACK calls whatever the split, so the result does not depend on the thread
+count (bit for bit).  The triangular inverse (LAPACK trtri, r^3/3 flops, through scipy, which
+holds the GIL) is the only serial part.  Why not LAPACK sygvd per matrix: through scipy it holds
+the GIL, so it cannot use the second core, and on one core it is no faster (see
+``benchmarks/likelihood_speed.py``).
+
+``BAYESUPDATE_SOLVER_THREADS`` sets the thread count (default: the CPUs this process may use, at
+most 8); worker processes of a pool set it to 1.
+"""
+
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+from scipy.linalg.lapack import dtrtri as _dtrtri
+
+THREADS_VARIABLE = "BAYESUPDATE_SOLVER_THREADS"
+# a thread hand-off costs tens of microseconds: chunks smaller than this run in the caller
+MIN_CHUNK = 4
+
+_pool: ThreadPoolExecutor | None = None
+_pool_size = 0
+_lock = threading.Lock()
+
+
+def solver_threads() -> int:
+    """Threads for batched solves: ``BAYESUPDATE_SOLVER_THREADS`` or the usable CPUs (<= 8)."""
+    value = os.environ.get(THREADS_VARIABLE, "").strip()
+    if value:
+        try:
+            return max(1, int(value))
+        except ValueError:
+            pass
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, 8))
+
+
+def _executor(n: int) -> ThreadPoolExecutor:
+    global _pool, _pool_size
+    with _lock:
+        if _pool is None or _pool_size < n:
+            if _pool is not None:
+                _pool.shutdown(wait=False)
+            _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="bayesupdate-eig")
+            _pool_size = n
+        return _pool
+
+
+def _triangular_inverse(L: np.ndarray) -> np.ndarray:
+    """(B, n, n) inverses of lower-triangular factors (LAPACK trtri, n^3/3 flops each)."""
+    out = np.empty_like(L)
+    for i in range(L.shape[0]):
+        out[i], info = _dtrtri(L[i], lower=1)
+        if info != 0:
+            raise np.linalg.LinAlgError("singular reduced mass matrix")
+    return out
+
+
+def _solve_chunk(K_ww: np.ndarray, M_full: np.ndarray, n_rigid: int, n_modes: int, vectors: bool):
+    nr = n_rigid
+    M_full = 0.5 * (M_full + M_full.transpose(0, 2, 1))
+    # raises LinAlgError for an indefinite reduced mass (a non-physical parameter point)
+    L = np.linalg.cholesky(M_full)[:, nr:, nr:]
+    L_inv = _triangular_inverse(L)
+    C = L_inv @ K_ww @ L_inv.transpose(0, 2, 1)
+    C = 0.5 * (C + C.transpose(0, 2, 1))
+    if not vectors:
+        return np.linalg.eigvalsh(C)[:, :n_modes]
+    lam, Z = np.linalg.eigh(C)
+    b = L_inv.transpose(0, 2, 1) @ Z[:, :, :n_modes]
+    a = -np.linalg.solve(M_full[:, :nr, :nr], M_full[:, :nr, nr:] @ b)
+    return lam[:, :n_modes], np.concatenate([a, b], axis=1)
+
+
+def batched_elastic_eigenvalues(
+    K_ww: np.ndarray,
+    M_full: np.ndarray,
+    n_rigid: int,
+    n_modes: int,
+    vectors: bool = False,
+    threads: int | None = None,
+):
+    """Lowest elastic eigenvalues of reduced pencils whose first ``n_rigid`` coordinates are the
+    rigid-body motions (module docstring).
+
+    K_ww : (B, r_e, r_e) elastic block of K [N/m in reduced units]; M_full : (B, r, r),
+    r = n_rigid + r_e.  threads : split the batch over this many threads (default
+    ``solver_threads()``; chunks of fewer than ``MIN_CHUNK`` points are not split off).
+    Returns (B, n_modes) eigenvalues [rad^2/s^2] ascending and, with ``vectors``, the
+    (B, r, n_modes) reduced eigenvectors, mass-normalised (y^T M_r y = 1).
+    Raises ``numpy.linalg.LinAlgError`` when a reduced mass matrix is not positive definite.
+    """
+    B = K_ww.shape[0]
+    n = min(threads or solver_threads(), max(1, B // MIN_CHUNK))
+    if n <= 1:
+        return _solve_chunk(K_ww, M_full, n_rigid, n_modes, vectors)
+    bounds = np.linspace(0, B, n + 1).astype(int)
+    parts = list(
+        _executor(n).map(
+            lambda s: _solve_chunk(K_ww[s], M_full[s], n_rigid, n_modes, vectors),
+            [slice(lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)],
+        )
+    )
+    if not vectors:
+        return np.concatenate(parts)
+    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])

@@ -36,11 +36,14 @@ Example (issue 4 item 9)::
     steps = 5000
     seed = 1
     min_autocorr_times = 50
+    target_rhat = 1.01              # optional: also run until R-hat <= this for every parameter
+    target_ess = 1000               # optional: ... and bulk ESS >= this (default: not checked)
     check_every = 500
     predictive_draws = 400
     hdi_prob = 0.9
     reduced = true                  # built-in FE models: certified reduced basis (false = --full)
     reduced_tol = 1e-4              # its relative frequency tolerance
+    screen = true                   # delayed acceptance: proposals screened on a coarser basis
     transform = "logit"             # walk in unconstrained coordinates ("none": in theta)
 
 Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
@@ -121,11 +124,14 @@ class SamplerConfig:
     steps: int = 5000
     seed: int = 1
     min_autocorr_times: float = 50.0
+    target_rhat: float | None = None
+    target_ess: float | None = None
     check_every: int = 500
     predictive_draws: int = 400
     hdi_prob: float = 0.9
     reduced: bool = True
     reduced_tol: float = 1e-4
+    screen: bool = True
     transform: str = "logit"
 
 

@@ -74,7 +74,7 @@ def run(args) -> int:
         print(
             f"{out['steps']} steps x {out['walkers']} walkers, {out['evaluations']} evaluations "
             f"({out['failed_evaluations']} failed), {out['wall_s']:.1f} s, "
-            f"converged (>= {study.sampler.min_autocorr_times:g} tau): {out['converged']}"
+            f"converged ({_criteria(study.sampler)}): {out['converged']}"
         )
         rom = out["rom"]
         print(
@@ -95,3 +95,13 @@ def run(args) -> int:
                 f"{row['hdi_high']:10.5g} {row['r_hat']:6.3f} {row['ess_bulk']:8.0f}"
             )
     return 0
+
+
+def _criteria(sampler) -> str:
+    """The stopping rule in words, e.g. ">= 50 tau, R-hat <= 1.01, ESS >= 1000"."""
+    parts = [f">= {sampler.min_autocorr_times:g} tau"]
+    if sampler.target_rhat is not None:
+        parts.append(f"R-hat <= {sampler.target_rhat:g}")
+    if sampler.target_ess is not None:
+        parts.append(f"ESS >= {sampler.target_ess:g}")
+    return ", ".join(parts)

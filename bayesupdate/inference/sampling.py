@@ -8,8 +8,13 @@ used: it misweights multi-modal posteriors.
 Walkers start in small balls around the distinct optima of the multi-start fit (so every mode
 found by the optimiser holds walkers from the start; the DE moves then set the weights).  The run
 is cut in blocks of ``check_every`` steps; after each block the integrated autocorrelation time
-tau is estimated (emcee) and the run stops once steps >= ``min_autocorr_times`` * max(tau) or the
-step budget ends.  Block boundaries are fixed multiples of ``check_every`` counted from the first
+tau is estimated (emcee) and the run stops once steps >= ``min_autocorr_times`` * max(tau) and,
+when asked for, the convergence targets hold (``target_rhat``: rank-normalised split R-hat of
+every parameter at most this; ``target_ess``: bulk ESS at least this, the smaller of ArviZ's and
+emcee's n_draws * n_walkers / tau, after the warm-up ``burn_in``), or the step budget ends.
+Why both: R-hat <= 1.01 needs each walker ~100 tau long whatever the number of walkers, while
+ESS grows with the walkers, so the targets, not 50 tau, decide when the run has converged.
+Block boundaries are fixed multiples of ``check_every`` counted from the first
 step, and the emcee random state is saved with each checkpoint, so an interrupted run resumed with
 ``resume=`` ends with exactly the chain of an uninterrupted run.
 """
@@ -23,6 +28,7 @@ import emcee
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.optimize import CalibrationResult
 
@@ -140,6 +146,7 @@ class PosteriorResult:
     seed: int
     diagnostics: dict = field(default_factory=dict)
     predictions: dict = field(default_factory=dict)
+    screen_evaluations: int = 0
 
     def samples(self) -> np.ndarray:
         """Post-burn-in draws flattened over walkers, (n_draws, d)."""
@@ -211,6 +218,33 @@ def _autocorr(chain: np.ndarray) -> np.ndarray:
         logger.setLevel(level)
 
 
+def burn_in(n_steps: int, tau: np.ndarray) -> int:
+    """Warm-up steps: 5 tau (emcee's advice is "a few times tau"), never more than half."""
+    burn = n_steps // 2
+    tau = np.asarray(tau, dtype=float)
+    if tau.size and np.all(np.isfinite(tau)):
+        burn = int(min(burn, np.ceil(5 * np.max(tau))))
+    return burn
+
+
+def convergence(chain: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(r_hat (d,), ess_bulk (d,)) of a chain (n_steps, n_walkers, d) after ``burn_in``, walkers
+    as chains (Vehtari et al. 2021, ArviZ); ess_bulk is the smaller of ArviZ's and emcee's
+    n_draws * n_walkers / tau (walkers of an ensemble are not independent)."""
+    import arviz_stats
+
+    post = chain[burn_in(chain.shape[0], tau) :]
+    if post.shape[0] < 4:
+        return np.full(chain.shape[-1], np.inf), np.zeros(chain.shape[-1])
+    by_chain = np.moveaxis(post, 1, 0)
+    rhat = np.atleast_1d(np.asarray(arviz_stats.rhat(by_chain, chain_axis=0, draw_axis=1)))
+    ess = np.atleast_1d(np.asarray(arviz_stats.ess(by_chain, chain_axis=0, draw_axis=1)))
+    tau = np.asarray(tau, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ess_tau = np.where(np.isfinite(tau) & (tau > 0), post.shape[0] * post.shape[1] / tau, 0.0)
+    return rhat.astype(float), np.minimum(ess, ess_tau).astype(float)
+
+
 def sample_posterior(
     log_posterior: LogPosterior,
     calibration: CalibrationResult | None = None,
@@ -225,8 +259,12 @@ def sample_posterior(
     moves: list | None = None,
     initial: np.ndarray | None = None,
     transform: str = "none",
+    target_rhat: float | None = None,
+    target_ess: float | None = None,
+    screen: LogPosterior | None = None,
 ) -> PosteriorResult:
-    """Run emcee until steps >= min_autocorr_times * max(tau) or ``steps`` steps.
+    """Run emcee until steps >= min_autocorr_times * max(tau) and the convergence targets hold
+    (``target_rhat``, ``target_ess``; None: not checked), or ``steps`` steps.
 
     log_posterior : vectorised, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
     (walkers start around its distinct optima) unless ``initial`` (n_walkers, d) is given.
@@ -236,6 +274,11 @@ def sample_posterior(
     ``interrupted=True`` and its ``state`` resumes it.
     transform : "none" (walk in theta) or "logit" (walk in unconstrained z, ``BoxTransform``;
     the chain and log_prob are returned in theta all the same).  A resume must use the same.
+    screen : a cheap surrogate of ``log_posterior`` (same parameters, e.g. on a coarser reduced
+    basis): delayed acceptance (``inference.delayed_acceptance``) - proposals are screened with
+    it and only the survivors get an exact evaluation; the chain still targets
+    ``log_posterior`` exactly.  ``evaluations`` counts exact evaluations,
+    ``screen_evaluations`` the surrogate's.
     """
     if transform not in ("none", "logit"):
         raise BayesUpdateError(f"sampler.transform: {transform!r}; use 'none' or 'logit'")
@@ -246,6 +289,10 @@ def sample_posterior(
         )
     if steps < 1 or check_every < 1:
         raise BayesUpdateError("sampler.steps and sampler.check_every must be >= 1")
+    if target_rhat is not None and not target_rhat > 1.0:
+        raise BayesUpdateError(f"sampler.target_rhat: must be > 1, got {target_rhat}")
+    if target_ess is not None and not target_ess > 0:
+        raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {target_ess}")
     d = log_posterior.ndim
     stop = {"requested": False}
 
@@ -257,21 +304,30 @@ def sample_posterior(
     def log_jacobian(x: np.ndarray) -> np.ndarray:
         return np.zeros(np.shape(x)[:-1]) if box is None else box.log_jacobian(x)
 
-    def guarded(x: np.ndarray) -> np.ndarray:
-        # Ctrl-C inside the model: finish the step without evaluating (it is discarded below);
-        # raising through emcee would print every walker's parameters and a traceback
-        if not stop["requested"]:
-            try:
-                if box is None:
-                    return log_posterior(x)
-                return log_posterior(box.to_theta(x)) + box.log_jacobian(x)
-            except KeyboardInterrupt:
-                stop["requested"] = True
-        return np.full(np.shape(x)[0], -np.inf)
+    def guard(density: LogPosterior) -> Callable[[np.ndarray], np.ndarray]:
+        def guarded(x: np.ndarray) -> np.ndarray:
+            # Ctrl-C inside the model: finish the step without evaluating (it is discarded
+            # below); raising through emcee would print every walker's parameters and a traceback
+            if not stop["requested"]:
+                try:
+                    if box is None:
+                        return density(x)
+                    return density(box.to_theta(x)) + box.log_jacobian(x)
+                except KeyboardInterrupt:
+                    stop["requested"] = True
+            return np.full(np.shape(x)[0], -np.inf)
 
-    sampler = emcee.EnsembleSampler(
-        walkers, d, guarded, moves=moves or default_moves(), vectorize=True
-    )
+        return guarded
+
+    guarded = guard(log_posterior)
+    moves = moves or default_moves()
+    screened = None
+    if screen is not None:
+        if screen.ndim != d:
+            raise BayesUpdateError("sampler: the screening posterior has other parameters")
+        screened = ScreenedLogDensity(guard(screen), guarded)
+        moves = delayed_acceptance_moves(moves, screened)
+    sampler = emcee.EnsembleSampler(walkers, d, guarded, moves=moves, vectorize=True)
     if resume is not None:
         if resume.coords.shape != (walkers, d):
             raise BayesUpdateError(
@@ -363,6 +419,12 @@ def sample_posterior(
         chain_so_far = np.concatenate(chain_parts)
         tau = _autocorr(chain_so_far)
         converged = bool(np.all(np.isfinite(tau)) and done >= min_autocorr_times * np.max(tau))
+        if converged and (target_rhat is not None or target_ess is not None):
+            rhat, ess = convergence(chain_so_far, tau)
+            converged = bool(
+                (target_rhat is None or np.all(rhat <= target_rhat))
+                and (target_ess is None or np.all(ess >= target_ess))
+            )
         if checkpoint is not None:
             checkpoint(snapshot(finished=converged or done >= steps))
         if converged:
@@ -372,10 +434,7 @@ def sample_posterior(
     chain = final.chain
     if chain.shape[0] >= 20:
         tau = _autocorr(chain)
-    # warm-up: 5 tau (emcee's advice is "a few times tau"), never more than half the chain
-    burn = chain.shape[0] // 2
-    if np.all(np.isfinite(tau)):
-        burn = int(min(burn, np.ceil(5 * np.max(tau))))
+    burn = burn_in(chain.shape[0], tau)
     return PosteriorResult(
         names=log_posterior.names,
         chain=chain,
@@ -390,4 +449,5 @@ def sample_posterior(
         interrupted=interrupted,
         state=final,
         seed=seed,
+        screen_evaluations=0 if screened is None else screened.screen_evaluations,
     )

@@ -176,3 +176,52 @@ def test_box_transform_round_trip_and_jacobian():
              enumerate(np.eye(3))]  # fmt: skip
         assert box.log_jacobian(row[None, :])[0] == pytest.approx(np.sum(np.log(d)), rel=1e-6)
     assert np.isfinite(box.log_jacobian(z[2:]))[0]
+
+
+def test_screening_posteriors_for_reduced_and_full_sampling(rom):
+    from bayesupdate.inference.runner import screening_posterior
+
+    problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
+    reduced_problem, _ = sampling_problem(problem)
+    spec = LikelihoodSpec(sigma=0.05)
+    exact = LogPosterior(reduced_problem, spec)
+    coarse = screening_posterior(reduced_problem, reduced_problem.model, spec)
+    # the coarse basis lives inside the certified one: smaller, within its own stated error
+    assert coarse.problem.model.size < reduced_problem.model.size
+    assert coarse.problem.model.max_rel_error <= 1e-2
+    rng = np.random.default_rng(4)
+    theta = problem.lower + rng.random((8, 5)) * (problem.upper - problem.lower)
+    f_exact, _ = exact.predict_frequencies(theta)
+    f_coarse = coarse.problem.model.predict_frequencies_batch(theta, problem.names, 12)
+    f_fine = reduced_problem.model.predict_frequencies_batch(theta, problem.names, 12)
+    # Rayleigh-Ritz inside Rayleigh-Ritz: the coarse values bound the certified ones from above
+    assert np.all(f_coarse >= f_fine * (1 - 1e-9))
+    assert np.max(f_coarse / f_fine - 1) <= 1.2e-2
+    assert np.all(np.isfinite(f_exact))
+    # on full solves (--full) the screen is the certified reduced model itself
+    full_screen = screening_posterior(problem, None, spec)
+    assert full_screen.problem.model.certified and full_screen.problem.model.size == rom.size
+
+
+def test_vectorised_prior_equals_the_sum_of_priors():
+    from bayesupdate.inference.priors import joint_log_prior
+
+    problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
+    lp = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    rng = np.random.default_rng(1)
+    span = problem.upper - problem.lower
+    theta = problem.lower - 0.1 * span + rng.random((50, 5)) * 1.2 * span  # some outside
+    expected = joint_log_prior(lp.priors, theta)
+    assert np.array_equal(np.isfinite(lp.log_prior(theta)), np.isfinite(expected))
+    ok = np.isfinite(expected)
+    assert 0 < ok.sum() < 50
+    np.testing.assert_allclose(lp.log_prior(theta)[ok], expected[ok], rtol=1e-12)
+    # a non-uniform prior goes through its own logpdf
+    params = {name: {} for name in problem.names}
+    params["t_hot_pipe"] = {"prior": {"kind": "normal", "mean": 1e-3, "sd": 2e-4}}
+    mixed = build_problem(get_model("exhaust"), load_modal_data("paper:ema"), params)
+    lp_mixed = LogPosterior(mixed, LikelihoodSpec(sigma=0.05))
+    assert lp_mixed.priors[0].kind == "normal"
+    expected = joint_log_prior(lp_mixed.priors, theta)
+    np.testing.assert_allclose(lp_mixed.log_prior(theta)[ok], expected[ok], rtol=1e-12)
+    assert not np.allclose(expected[ok], joint_log_prior(lp.priors, theta)[ok])

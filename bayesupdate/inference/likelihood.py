@@ -33,7 +33,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.pairing import pair_batch
-from bayesupdate.inference.priors import Prior, joint_log_prior
+from bayesupdate.inference.priors import Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
 
@@ -112,6 +112,17 @@ class LogPosterior:
         self.evaluations = 0
         self.failed = 0
         self.last_error = ""
+        # uniform priors (the usual case) as one vectorised box check: priors are evaluated for
+        # every walker at every step, and one call per parameter costs more than the check
+        self._uniform = np.array([p.kind == "uniform" for p in self.priors], dtype=bool)
+        bounds = np.array([p.bounds for p in self.priors], dtype=float).reshape(-1, 2)
+        self._uniform_low, self._uniform_high = bounds[self._uniform].T
+        self._uniform_log_density = -float(
+            np.sum(np.log(bounds[self._uniform, 1] - bounds[self._uniform, 0]))
+        )
+        self._other_priors = tuple(
+            (j, p) for j, p in enumerate(self.priors) if not self._uniform[j]
+        )
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -126,7 +137,10 @@ class LogPosterior:
         theta = np.atleast_2d(theta)
         n_test = self.problem.data.n_modes
         if self.batched:
-            full_theta = np.hstack([theta, np.tile(self.fixed_values, (theta.shape[0], 1))])
+            if self.fixed_names:
+                full_theta = np.hstack([theta, np.tile(self.fixed_values, (theta.shape[0], 1))])
+            else:
+                full_theta = theta
             names = self.problem.names + self.fixed_names
             try:
                 if self.mode == "shape-batch":
@@ -192,10 +206,19 @@ class LogPosterior:
             ll = ll - 0.5 * (em * em / s2 + np.log(s2) + _LOG_2PI)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
+    def log_prior(self, theta: np.ndarray) -> np.ndarray:
+        """Joint log prior of the model parameters, theta (n, d) -> (n,) (= joint_log_prior)."""
+        u = theta[:, self._uniform]
+        inside = np.all((u >= self._uniform_low) & (u <= self._uniform_high), axis=1)
+        lp = np.where(inside, self._uniform_log_density, -np.inf)
+        for j, prior in self._other_priors:
+            lp = lp + prior.logpdf(theta[:, j])
+        return lp
+
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         d = len(self.priors)
-        lp = joint_log_prior(self.priors, theta[:, :d])
+        lp = self.log_prior(theta[:, :d])
         if self.spec.infer_sigma:
             sigma = theta[:, d]
             lp = lp + self.spec.sigma_prior.logpdf(sigma)

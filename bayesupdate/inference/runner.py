@@ -86,6 +86,11 @@ def prepare(study: StudyConfig, extend=None) -> PreparedStudy:
         raise BayesUpdateError(
             f"sampler.transform: {study.sampler.transform!r}; use 'logit' or 'none'"
         )
+    cfg = study.sampler
+    if cfg.target_rhat is not None and not cfg.target_rhat > 1.0:
+        raise BayesUpdateError(f"sampler.target_rhat: must be > 1, got {cfg.target_rhat}")
+    if cfg.target_ess is not None and not cfg.target_ess > 0:
+        raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {cfg.target_ess}")
     if not 0 < study.sampler.hdi_prob < 1:
         raise BayesUpdateError("sampler.hdi_prob: must be in (0, 1)")
     return PreparedStudy(study, problem, likelihood)
@@ -156,6 +161,11 @@ def run_sampling(
         if not rom.certified:
             problem, rom = prepared.problem, None
     log_post = LogPosterior(problem, prepared.likelihood)
+    screen = (
+        screening_posterior(problem, rom, prepared.likelihood, cfg.reduced_tol)
+        if cfg.screen
+        else None
+    )
 
     def checkpoint(sampler_state):
         if out is not None and not sampler_state.finished:
@@ -172,6 +182,9 @@ def run_sampling(
         min_autocorr_times=cfg.min_autocorr_times,
         check_every=cfg.check_every,
         transform=cfg.transform,
+        target_rhat=cfg.target_rhat,
+        target_ess=cfg.target_ess,
+        screen=screen,
         progress=progress,
         checkpoint=checkpoint,
         resume=state,
@@ -187,6 +200,12 @@ def run_sampling(
     if rom is not None:
         mean = posterior.samples()[:, : len(problem.names)].mean(axis=0)
         extra["rom"] = certify_rom(rom, mean[None, :], problem.names, "the posterior mean")
+    if screen is not None:
+        extra["screen"] = {
+            "size": int(screen.problem.model.size),
+            "max_rel_error": float(screen.problem.model.max_rel_error),
+            "evaluations": int(posterior.screen_evaluations),
+        }
     posterior = replace(posterior, diagnostics={**posterior.diagnostics, **extra})
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     if out is not None:
@@ -240,6 +259,25 @@ def sampling_problem(
     return replace(problem, model=rom), rom
 
 
+def screening_posterior(
+    problem: CalibrationProblem, rom, likelihood: LikelihoodSpec, tol: float = 1e-4
+) -> LogPosterior | None:
+    """The surrogate posterior for delayed-acceptance sampling (``inference.delayed_acceptance``).
+
+    With a reduced model (``rom``): the same problem on a coarser basis inside it
+    (``ReducedFEModel.coarsened``).  On full solves of a built-in FE model (``--full``): the
+    certified reduced model itself, so the exact full-model posterior is sampled with full
+    solves only for the proposals the reduced model lets through.  None for other models."""
+    if rom is not None:
+        return LogPosterior(replace(problem, model=rom.coarsened()), likelihood)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no reduced model: plain sampling, nothing to warn about
+        screen_problem, screen_rom = sampling_problem(problem, None, True, tol)
+    if screen_rom is None:
+        return None
+    return LogPosterior(screen_problem, likelihood)
+
+
 def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> dict:
     """Full solve(s) at theta (k, len(names)); warn (suggesting --full) when the reduced model
     misses its tolerance there.  Returns the ROM's ``summary()`` plus ``error_at`` there."""
@@ -273,7 +311,9 @@ def sample_json(
     """The ``sample --json`` object (issue 4 item 10), plus failed_evaluations, steps, walkers,
     converged, swap_fraction (share of checked draws whose modes are swapped against their
     order; None if the model gives no shapes), "rom" ({"size", "max_rel_error", "error_at"} of
-    the reduced basis used, null with --full), "pairing" (likelihood mode) and
+    the reduced basis used, null with --full), "screen" ({"size", "max_rel_error" against the
+    reduced basis, "evaluations"} of the delayed-acceptance surrogate, null without), "pairing"
+    (likelihood mode) and
     "pair_differs_fraction" (share of likelihood evaluations paired differently from the order
     pairing; null unless the likelihood paired by shape)."""
     keys = ("mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk")
@@ -295,6 +335,7 @@ def sample_json(
         "walkers": int(posterior.chain.shape[1]),
         "converged": bool(posterior.converged),
         "rom": _rom_json(posterior.diagnostics.get("rom")),
+        "screen": posterior.diagnostics.get("screen"),
         "pairing": posterior.diagnostics.get("pairing_mode"),
         "pair_differs_fraction": _finite_or_none(
             posterior.diagnostics.get("pair_differs_fraction")

@@ -1,0 +1,130 @@
+"""Delayed-acceptance ensemble moves: screen every proposal with a cheap surrogate posterior and
+spend the exact posterior only on the proposals the surrogate lets through.
+
+Christen & Fox (2005), "Markov chain Monte Carlo using an approximation", J. Comput. Graph.
+Stat. 14(4) 795-810.  For a proposal y from x with the move's log proposal factor f (zero for
+differential evolution, (d - 1) log(|y - z| / |x - z|) for the snooker move):
+
+    stage 1:  accept with  a1 = min(1, exp(f + log q(y) - log q(x)))      (q: surrogate)
+    stage 2:  only then compute the exact log p(y); accept with
+              a2 = min(1, exp(log p(y) - log p(x) - (log q(y) - log q(x))))
+
+The composed kernel satisfies detailed balance with respect to the exact posterior p whatever
+q is, so the chain's target is unchanged; a good surrogate only makes stage 2 accept almost
+every survivor, and stage 1 rejects most bad proposals without an exact evaluation.  The
+surrogate here is a coarser reduced basis (``ReducedFEModel.coarsened``), typically 1e-4-1e-2
+away from the exact model in frequency against a likelihood noise of several per cent.
+
+The surrogate must be finite wherever the posterior is (a walker at a point the surrogate
+calls impossible could never move); ``ScreenedLogDensity`` evaluates the exact posterior at
+such points and uses that value as the surrogate there.  The surrogate values of the current
+walkers are kept in a cache keyed by position, so each position is screened once.
+"""
+
+from collections.abc import Callable
+
+import emcee
+import numpy as np
+
+
+class ScreenedLogDensity:
+    """The surrogate log-density q with a cache of the current walkers' values.
+
+    screen, exact : vectorised (n, d) -> (n,) log-densities in the sampler's coordinates.
+    ``screen_evaluations`` / ``exact_fallbacks`` count the calls per point.
+    """
+
+    def __init__(self, screen: Callable, exact: Callable):
+        self.screen = screen
+        self.exact = exact
+        self._cache: dict[bytes, float] = {}
+        self.screen_evaluations = 0
+        self.exact_fallbacks = 0
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        q = np.asarray(self.screen(x), dtype=float)
+        self.screen_evaluations += x.shape[0]
+        bad = ~np.isfinite(q)
+        if np.any(bad):
+            # the surrogate failed (or is -inf) there: use the exact value, so q is finite
+            # wherever p is (else the walker there could never leave)
+            q[bad] = np.asarray(self.exact(x[bad]), dtype=float)
+            self.exact_fallbacks += int(bad.sum())
+        return q
+
+    def at(self, x: np.ndarray) -> np.ndarray:
+        """Surrogate values at the rows of x, from the cache where known."""
+        keys = [row.tobytes() for row in np.ascontiguousarray(x)]
+        missing = [i for i, k in enumerate(keys) if k not in self._cache]
+        if missing:
+            for i, v in zip(missing, self(x[missing]), strict=True):
+                self._cache[keys[i]] = float(v)
+        return np.array([self._cache[k] for k in keys])
+
+    def remember(self, x: np.ndarray, values: np.ndarray) -> None:
+        for row, v in zip(np.ascontiguousarray(x), values, strict=True):
+            self._cache[row.tobytes()] = float(v)
+
+    def keep_only(self, coords: np.ndarray) -> None:
+        """Forget every position that no walker holds any more."""
+        live = {row.tobytes() for row in np.ascontiguousarray(coords)}
+        self._cache = {k: v for k, v in self._cache.items() if k in live}
+
+
+class DelayedAcceptanceMove(emcee.moves.Move):
+    """A red-blue ensemble move (DE, DE snooker, ...) with two-stage acceptance (module
+    docstring).  ``base`` gives the proposals and the ensemble split; ``screen`` the
+    surrogate, shared by all moves of a sampler."""
+
+    def __init__(self, base: emcee.moves.RedBlueMove, screen: ScreenedLogDensity):
+        self.base = base
+        self.screen = screen
+        self.exact_evaluations = 0
+
+    def propose(self, model, state):
+        n_walkers, _ = state.coords.shape
+        base = self.base
+        base.setup(state.coords)
+        accepted = np.zeros(n_walkers, dtype=bool)
+        all_inds = np.arange(n_walkers)
+        groups = all_inds % base.nsplits
+        if base.randomize_split:
+            model.random.shuffle(groups)
+        for split in range(base.nsplits):
+            active = groups == split
+            sets = [state.coords[groups == j] for j in range(base.nsplits)]
+            current = sets[split]
+            proposal, factors = base.get_proposal(
+                current, sets[:split] + sets[split + 1 :], model.random
+            )
+            idx = all_inds[active]
+            q_current = self.screen.at(current)
+            q_proposal = self.screen(proposal)
+            stage1 = factors + q_proposal - q_current > np.log(model.random.rand(idx.size))
+            exact = np.full(idx.size, -np.inf)
+            if np.any(stage1):
+                exact[stage1] = model.compute_log_prob_fn(proposal[stage1])[0]
+                self.exact_evaluations += int(stage1.sum())
+            log_u2 = np.log(model.random.rand(idx.size))
+            with np.errstate(invalid="ignore"):
+                stage2 = exact - state.log_prob[idx] - (q_proposal - q_current) > log_u2
+            ok = stage1 & stage2
+            accepted[idx] = ok
+            self.screen.remember(proposal[ok], q_proposal[ok])
+            new = emcee.State(proposal, log_prob=exact, blobs=None)
+            state = self.update(state, new, accepted, active)
+        self.screen.keep_only(state.coords)
+        return state, accepted
+
+
+def delayed_acceptance_moves(
+    moves: list, screen: ScreenedLogDensity
+) -> list[tuple[DelayedAcceptanceMove, float]]:
+    """Wrap (move, weight) pairs of red-blue moves; every wrapped move shares ``screen``."""
+    out = []
+    for move, weight in moves:
+        if not isinstance(move, emcee.moves.RedBlueMove):
+            raise TypeError(f"delayed acceptance needs red-blue moves, got {type(move).__name__}")
+        out.append((DelayedAcceptanceMove(move, screen), weight))
+    return out

@@ -13,6 +13,9 @@ plus the Gaussian log-likelihood of seed Table 2 on relative errors) for:
   rom-post ReducedFEModel.localized on a box around the seed's Table 3 optimum (+-25 %), the box a
            posterior pilot would give; points outside it go to the whole-box model
 and the largest relative frequency error against full solves on fresh uniform points of each box.
+The reduced rows are timed three ways in the same run: the default threaded solve
+(``fe.batched_eigen``, one thread per core), the same on one thread, and the independent
+per-point LAPACK dsygvd path (``fe.reduced.sygvd_elastic_eigenvalues``).
 """
 
 import os
@@ -25,7 +28,8 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
+from bayesupdate.fe.batched_eigen import THREADS_VARIABLE, solver_threads  # noqa: E402
+from bayesupdate.fe.reduced import reduced_model_for, sygvd_elastic_eigenvalues  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.paper import TABLE2_EMA_HZ, TABLE3_OPTIMUM_SI  # noqa: E402
 
@@ -51,6 +55,30 @@ def per_walker_us(model, theta, names, repeats) -> tuple[float, float]:
         cpu.append(time.process_time() - c0)
     n = theta.shape[0]
     return float(np.median(wall)) / n * 1e6, float(np.median(cpu)) / n * 1e6
+
+
+class SygvdPath:
+    """The reduced model's frequencies through the per-point dsygvd reference path."""
+
+    def __init__(self, rom):
+        self.rom = rom
+
+    def predict_frequencies_batch(self, theta, names, n_modes):
+        K, M = self.rom.reduced_matrices(theta)  # theta holds all parameters in order
+        lam = sygvd_elastic_eigenvalues(K, M, self.rom.n_rigid, n_modes)
+        return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+
+
+def with_threads(n: int, fn, *args):
+    previous = os.environ.get(THREADS_VARIABLE)
+    os.environ[THREADS_VARIABLE] = str(n)
+    try:
+        return fn(*args)
+    finally:
+        if previous is None:
+            del os.environ[THREADS_VARIABLE]
+        else:
+            os.environ[THREADS_VARIABLE] = previous
 
 
 def uniform(rng, low, high, n):
@@ -80,8 +108,12 @@ def main() -> None:
     theta_all = uniform(rng, rom.low, rom.high, BATCH)
     theta_post = uniform(rng, local.low, local.high, BATCH)
     full_us = per_walker_us(fe, theta_all, names, max(3, args.repeats // 10))
+    threads = solver_threads()
     rom_us = per_walker_us(rom, theta_all, names, args.repeats)
+    rom1_us = with_threads(1, per_walker_us, rom, theta_all, names, args.repeats)
+    sygvd_us = per_walker_us(SygvdPath(rom), theta_all, names, args.repeats)
     local_us = per_walker_us(local, theta_post, names, args.repeats)
+    local1_us = with_threads(1, per_walker_us, local, theta_post, names, args.repeats)
 
     errors = {}
     for label, model in (("rom", rom), ("rom-post", local)):
@@ -91,7 +123,10 @@ def main() -> None:
         rel = f_red / f_full - 1
         errors[label] = (float(np.nanmax(np.abs(rel))), float(np.nanmin(rel)))
 
-    print(f"\nlikelihood per walker, batch of {BATCH}, median, BLAS threads = 1")
+    print(
+        f"\nlikelihood per walker, batch of {BATCH}, median, BLAS threads = 1, "
+        f"solver threads = {threads}"
+    )
     print(
         f"{'model':<10}{'size':>6}{'wall us':>10}{'cpu us':>10}{'speed-up':>10}"
         f"{'max rel err':>14}{'min':>11}"
@@ -100,8 +135,15 @@ def main() -> None:
         f"{'full':<10}{fe.structure.n_dof:>6}{full_us[0]:>10.0f}{full_us[1]:>10.0f}{1:>10.0f}"
         f"{'-':>14}{'-':>11}"
     )
-    for label, model, us in (("rom", rom, rom_us), ("rom-post", local, local_us)):
-        e_max, e_min = errors[label]
+    rows = (
+        ("rom", rom, rom_us, "rom"),
+        ("rom 1thr", rom, rom1_us, "rom"),
+        ("rom sygvd", rom, sygvd_us, "rom"),
+        ("rom-post", local, local_us, "rom-post"),
+        ("post 1thr", local, local1_us, "rom-post"),
+    )
+    for label, model, us, box_label in rows:
+        e_max, e_min = errors[box_label]
         print(
             f"{label:<10}{model.size:>6}{us[0]:>10.1f}{us[1]:>10.1f}{full_us[1] / us[1]:>10.0f}"
             f"{e_max:>14.2e}{e_min:>11.1e}"

@@ -77,3 +77,30 @@ def test_surrogate_failing_where_the_posterior_is_finite_falls_back_to_exact():
     draws = result.samples()
     # walkers on the broken side still move: both halves are visited in the right proportion
     assert np.mean(draws[:, 0] > MEAN[0]) == pytest.approx(0.5, abs=0.06)
+
+
+def test_interrupted_screened_run_resumes_to_the_identical_chain():
+    class InterruptAt(Gaussian):
+        def __init__(self, mean, cov, at):
+            super().__init__(mean, cov)
+            self.calls, self.at = 0, at
+
+        def __call__(self, x):
+            self.calls += 1
+            if self.calls == self.at:
+                raise KeyboardInterrupt
+            return super().__call__(x)
+
+    rng = np.random.default_rng(3)
+    start = MEAN + 0.1 * rng.standard_normal((16, 2))
+    options = dict(walkers=16, steps=600, seed=4, min_autocorr_times=1e9, check_every=100)
+    surrogate = Gaussian(MEAN + 0.3, COV)
+    whole = sample_posterior(Gaussian(MEAN, COV), initial=start, screen=surrogate, **options)
+    broken = sample_posterior(
+        InterruptAt(MEAN, COV, at=700), initial=start, screen=Gaussian(MEAN + 0.3, COV), **options
+    )
+    assert broken.interrupted and 0 < broken.chain.shape[0] < 600
+    resumed = sample_posterior(
+        Gaussian(MEAN, COV), screen=Gaussian(MEAN + 0.3, COV), resume=broken.state, **options
+    )
+    assert np.array_equal(resumed.chain, whole.chain)

@@ -36,8 +36,8 @@ Example (issue 4 item 9)::
     steps = 5000
     seed = 1
     min_autocorr_times = 50
-    target_rhat = 1.01              # optional: also run until R-hat <= this for every parameter
-    target_ess = 1000               # optional: ... and bulk ESS >= this (default: not checked)
+    target_rhat = 1.01              # and run until R-hat <= this for every parameter
+    target_ess = 400                # ... and bulk ESS >= this (Vehtari et al. 2021); 0 = off
     check_every = 500
     predictive_draws = 400
     hdi_prob = 0.9
@@ -124,8 +124,8 @@ class SamplerConfig:
     steps: int = 5000
     seed: int = 1
     min_autocorr_times: float = 50.0
-    target_rhat: float | None = None
-    target_ess: float | None = None
+    target_rhat: float | None = 1.01
+    target_ess: float | None = 400.0
     check_every: int = 500
     predictive_draws: int = 400
     hdi_prob: float = 0.9

@@ -100,6 +100,16 @@ def test_errors_found_when_preparing(tmp_path):
         ),
         ('[model]\nsource = "beam"\n', "unknown"),
         ('[data]\nsource = "missing.csv"\n[model]\nsource = "shear_building"\n', "not found"),
+        (
+            '[model]\nsource = "shear_building"\n[data]\nfrequencies_hz = [4, 11]\n'
+            "[sampler]\ntarget_rhat = 0.9\n",
+            "target_rhat: must be >= 1",
+        ),
+        (
+            '[model]\nsource = "shear_building"\n[data]\nfrequencies_hz = [4, 11]\n'
+            "[sampler]\ntarget_ess = -5.0\n",
+            "target_ess: must be >= 0",
+        ),
     ]
     for text, match in cases:
         with pytest.raises(BayesUpdateError, match=match):

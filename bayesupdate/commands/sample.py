@@ -102,6 +102,6 @@ def _criteria(sampler) -> str:
     parts = [f">= {sampler.min_autocorr_times:g} tau"]
     if sampler.target_rhat is not None:
         parts.append(f"R-hat <= {sampler.target_rhat:g}")
-    if sampler.target_ess is not None:
+    if sampler.target_ess:
         parts.append(f"ESS >= {sampler.target_ess:g}")
     return ", ".join(parts)

@@ -87,10 +87,10 @@ def prepare(study: StudyConfig, extend=None) -> PreparedStudy:
             f"sampler.transform: {study.sampler.transform!r}; use 'logit' or 'none'"
         )
     cfg = study.sampler
-    if cfg.target_rhat is not None and not cfg.target_rhat > 1.0:
-        raise BayesUpdateError(f"sampler.target_rhat: must be > 1, got {cfg.target_rhat}")
-    if cfg.target_ess is not None and not cfg.target_ess > 0:
-        raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {cfg.target_ess}")
+    if cfg.target_rhat is not None and not cfg.target_rhat >= 1.0:
+        raise BayesUpdateError(f"sampler.target_rhat: must be >= 1, got {cfg.target_rhat}")
+    if cfg.target_ess is not None and not cfg.target_ess >= 0:
+        raise BayesUpdateError(f"sampler.target_ess: must be >= 0, got {cfg.target_ess}")
     if not 0 < study.sampler.hdi_prob < 1:
         raise BayesUpdateError("sampler.hdi_prob: must be in (0, 1)")
     return PreparedStudy(study, problem, likelihood)
@@ -183,7 +183,7 @@ def run_sampling(
         check_every=cfg.check_every,
         transform=cfg.transform,
         target_rhat=cfg.target_rhat,
-        target_ess=cfg.target_ess,
+        target_ess=cfg.target_ess or None,
         screen=screen,
         progress=progress,
         checkpoint=checkpoint,

@@ -289,8 +289,8 @@ def sample_posterior(
         )
     if steps < 1 or check_every < 1:
         raise BayesUpdateError("sampler.steps and sampler.check_every must be >= 1")
-    if target_rhat is not None and not target_rhat > 1.0:
-        raise BayesUpdateError(f"sampler.target_rhat: must be > 1, got {target_rhat}")
+    if target_rhat is not None and not target_rhat >= 1.0:
+        raise BayesUpdateError(f"sampler.target_rhat: must be >= 1, got {target_rhat}")
     if target_ess is not None and not target_ess > 0:
         raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {target_ess}")
     d = log_posterior.ndim

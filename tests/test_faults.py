@@ -312,3 +312,52 @@ def test_eigen_solve_failure_in_the_fe_model_is_counted(tmp_path, monkeypatch, c
     assert np.isfinite(result["objective"]) and calls["raised"] > 0
     with h5py.File(out) as h5:
         assert 0 < int(h5["optimum"].attrs["failed_evaluations"]) < calls["raised"]
+
+
+def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path, monkeypatch):
+    # a SIGTERM whose KeyboardInterrupt a compiled extension swallowed (scipy's Sobol set-up
+    # reports "Exception ignored" and goes on): the recorded request stops the run at the next
+    # optimiser start, exit 130, and nothing is written
+    import bayesupdate.inference.runner as runner
+    from bayesupdate import interrupts
+
+    original = runner.sampling_problem
+
+    def swallowed(*args, **kwargs):
+        interrupts.request()  # what the handler did before the exception was lost
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "sampling_problem", swallowed)
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY.format(steps=300, check=50))
+    out = tmp_path / "run.h5"
+    assert main(["sample", str(study), "--out", str(out), "--no-progress"]) == 130
+    assert _files(tmp_path) == ["study.toml"]
+    assert not interrupts.requested()  # cleared for the next command in this process
+
+
+def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
+    import gc
+    import sys
+
+    from bayesupdate import interrupts
+
+    class RaisesOnDelete:  # an exception Python can only report as "Exception ignored"
+        def __init__(self, exc):
+            self.exc = exc
+
+        def __del__(self):
+            raise self.exc
+
+    previous, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
+    interrupts.request()
+    try:
+        RaisesOnDelete(KeyboardInterrupt())
+        gc.collect()
+        assert capsys.readouterr().err == ""
+        RaisesOnDelete(ValueError("real problem"))
+        gc.collect()
+        assert "real problem" in capsys.readouterr().err
+    finally:
+        sys.unraisablehook = previous
+        interrupts.clear()

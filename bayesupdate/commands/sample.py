@@ -4,6 +4,7 @@ import json
 import signal
 import sys
 
+from bayesupdate import interrupts
 from bayesupdate.commands.calibrate import (
     add_full_argument,
     add_study_arguments,
@@ -38,10 +39,6 @@ def add_arguments(parser) -> None:
     add_full_argument(parser)
 
 
-def _sigterm_as_interrupt(signum, frame):
-    raise KeyboardInterrupt
-
-
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.inference.runner import prepare, run_sampling, sample_json
@@ -52,10 +49,12 @@ def run(args) -> int:
     if args.out:
         check_output_path(args.out, force=args.force or args.resume)
     prepared = prepare(study, extend=model_extension(args, study))
-    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    interrupts.clear()
+    previous_hook, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
+    previous = signal.signal(signal.SIGTERM, interrupts.stop_handler)
     # a process started in the background by a non-interactive shell inherits SIGINT ignored,
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
-    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    previous_int = signal.signal(signal.SIGINT, interrupts.stop_handler)
     try:
         _, posterior, summary, predictions = run_sampling(
             prepared, args.out, resume=args.resume, progress=not (args.json or args.no_progress)
@@ -63,6 +62,8 @@ def run(args) -> int:
     finally:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
+        sys.unraisablehook = previous_hook
+        interrupts.clear()
     if posterior.interrupted:
         where = f"; partial result in {args.out}, continue with --resume" if args.out else ""
         print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
+from bayesupdate import interrupts
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.pairing import ResidualTable
 from bayesupdate.inference.problem import CalibrationProblem
@@ -189,6 +190,7 @@ def calibrate(
         u_starts = np.vstack([de.x, u_starts])
     ends, objectives = [], []
     for u0 in u_starts:
+        interrupts.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
         fit = optimize.least_squares(
             residuals,
             np.clip(u0, 0.0, 1.0),

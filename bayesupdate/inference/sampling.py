@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import emcee
 import numpy as np
 
+from bayesupdate import interrupts
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
@@ -394,7 +395,7 @@ def sample_posterior(
         try:
             sampler.reset()
             for step in sampler.sample(state, iterations=block, store=True):
-                if stop["requested"]:
+                if stop["requested"] or interrupts.requested():
                     raise KeyboardInterrupt
                 # emcee updates its state object in place during the next step, so a Ctrl-C
                 # there would leave it half-updated: keep copies of each completed step

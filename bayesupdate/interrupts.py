@@ -1,0 +1,45 @@
+"""Cooperative interruption: a SIGTERM / SIGINT handler records the request, long loops check it.
+
+Why: the handler raises ``KeyboardInterrupt`` where the signal lands, but a compiled extension
+may swallow it (scipy's Sobol initialisation reports "Exception ignored" and carries on), and
+the run would then finish as if never asked to stop.  The recorded request is checked again at
+safe points (between optimiser starts, between sampler steps), so the stop always happens;
+``quiet_unraisable`` keeps the extension's "Exception ignored" traceback off the terminal.
+"""
+
+import sys
+
+_state = {"requested": False}
+
+
+def request() -> None:
+    """Record a stop request (called from a signal handler)."""
+    _state["requested"] = True
+
+
+def clear() -> None:
+    _state["requested"] = False
+
+
+def requested() -> bool:
+    return _state["requested"]
+
+
+def check() -> None:
+    """Raise ``KeyboardInterrupt`` if a stop was requested."""
+    if _state["requested"]:
+        raise KeyboardInterrupt
+
+
+def quiet_unraisable(unraisable) -> None:
+    """``sys.unraisablehook`` that drops the "Exception ignored" report of a swallowed stop
+    request (the request itself is recorded and acted on); anything else goes to the default."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt) and requested():
+        return
+    sys.__unraisablehook__(unraisable)
+
+
+def stop_handler(signum, frame) -> None:
+    """A signal handler: record the request and interrupt where the signal lands."""
+    request()
+    raise KeyboardInterrupt

@@ -87,5 +87,7 @@ def test_thread_count_from_the_environment(monkeypatch):
     assert solver_threads() == 3
     monkeypatch.setenv(THREADS_VARIABLE, "0")
     assert solver_threads() == 1
+    monkeypatch.setenv(THREADS_VARIABLE, "many")
+    assert solver_threads() == 1
     monkeypatch.delenv(THREADS_VARIABLE)
-    assert 1 <= solver_threads() <= 8
+    assert solver_threads() == 1

@@ -17,20 +17,24 @@ NAME = "sample"
 HELP = "posterior of the parameters with emcee (DE moves), diagnostics, predictive bands"
 DESCRIPTION = """Sample the posterior: Gaussian likelihood on relative frequency errors
 (sigma_i = sigma / sqrt(w_i)), priors per parameter, emcee with differential-evolution moves,
-walkers started at the multi-start optimum, run until 50 autocorrelation times or --steps.
+walkers started at the multi-start optimum, run until 50 autocorrelation times and R-hat <= 1.01,
+bulk ESS >= 400 (sampler.target_rhat / target_ess) or --steps.
 
   bayesupdate sample study.toml --out post.h5
   bayesupdate sample --model shear_building --data freqs.csv --out post.h5 --json
 
 Built-in FE models are sampled on a certified reduced basis (checked in full at the optimum and
 the posterior mean; a warning suggests --full when it misses its tolerance); --full forces full
-solves.  With frequency-only data, model modes are tracked by shape against the reference
+solves.  Proposals are first screened on a coarser basis (delayed acceptance; exact, only the
+survivors are solved; with --full the certified basis screens the full solves; sampler.screen).
+With frequency-only data, model modes are tracked by shape against the reference
 design for every walker (no silent mode swaps).
 
 Ctrl-C (or SIGTERM) keeps a valid partial result in --out; --resume continues it and, with the
 same seed, ends with the same chain as an uninterrupted run.  --json prints {"parameters": {NAME:
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
 "autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
+"screen": {"size", "max_rel_error", "evaluations"} | null,
 "pairing", "pair_differs_fraction", ...}."""
 
 

@@ -188,7 +188,7 @@ def test_screening_posteriors_for_reduced_and_full_sampling(rom):
     coarse = screening_posterior(reduced_problem, reduced_problem.model, spec)
     # the coarse basis lives inside the certified one: smaller, within its own stated error
     assert coarse.problem.model.size < reduced_problem.model.size
-    assert coarse.problem.model.max_rel_error <= 1e-2
+    assert coarse.problem.model.max_rel_error <= 5e-3  # coarsened()'s default tolerance
     rng = np.random.default_rng(4)
     theta = problem.lower + rng.random((8, 5)) * (problem.upper - problem.lower)
     f_exact, _ = exact.predict_frequencies(theta)
@@ -196,7 +196,8 @@ def test_screening_posteriors_for_reduced_and_full_sampling(rom):
     f_fine = reduced_problem.model.predict_frequencies_batch(theta, problem.names, 12)
     # Rayleigh-Ritz inside Rayleigh-Ritz: the coarse values bound the certified ones from above
     assert np.all(f_coarse >= f_fine * (1 - 1e-9))
-    assert np.max(f_coarse / f_fine - 1) <= 1.2e-2
+    # fresh points: within the error measured on the coarsening's own check points (+ 50 %)
+    assert np.max(f_coarse / f_fine - 1) <= 1.5 * coarse.problem.model.max_rel_error
     assert np.all(np.isfinite(f_exact))
     # on full solves (--full) the screen is the certified reduced model itself
     full_screen = screening_posterior(problem, None, spec)

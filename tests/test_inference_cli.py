@@ -233,7 +233,7 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     assert main(["sample", str(study), "--out", str(out), "--json"]) == 0
     result = json.loads(capsys.readouterr().out.splitlines()[-1])
     assert result["rom"]["size"] > result["screen"]["size"] > 6
-    assert result["rom"]["max_rel_error"] <= 1e-4 and result["screen"]["max_rel_error"] <= 1e-2
+    assert result["rom"]["max_rel_error"] <= 1e-4 and result["screen"]["max_rel_error"] <= 5e-3
     # every proposal is screened, only the survivors are solved on the certified basis
     proposals = result["steps"] * result["walkers"]
     assert result["screen"]["evaluations"] >= proposals > 2 * result["evaluations"]

@@ -836,8 +836,7 @@ class ReducedFEModel:
         _, y = self._reduced_eigenvalues(train, self.n_modes, vectors=True)
         lam_check = self._reduced_eigenvalues(check, self.n_modes)
         Y = np.moveaxis(y[:, nr:, :], 1, 0).reshape(re, -1)  # (r_e, n_train * n_modes)
-        cK, _ = self.decomp.coefficients(self._centre()[None, :])
-        Kc = ((cK @ self._K_terms[0]) @ self._K_terms[1]).reshape(re, re)
+        Kc = self.reduced_matrices(self._centre()[None, :])[0][0]
         G = np.linalg.cholesky(0.5 * (Kc + Kc.T))  # energy norm ||x||^2 = |G^T x|^2
         Z = G.T @ Y
         Z = Z / np.linalg.norm(Z, axis=0)

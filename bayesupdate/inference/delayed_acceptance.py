@@ -31,7 +31,7 @@ class ScreenedLogDensity:
     """The surrogate log-density q with a cache of the current walkers' values.
 
     screen, exact : vectorised (n, d) -> (n,) log-densities in the sampler's coordinates.
-    ``screen_evaluations`` / ``exact_fallbacks`` count the calls per point.
+    ``screen_evaluations`` counts the surrogate's evaluations (points).
     """
 
     def __init__(self, screen: Callable, exact: Callable):
@@ -39,7 +39,6 @@ class ScreenedLogDensity:
         self.exact = exact
         self._cache: dict[bytes, float] = {}
         self.screen_evaluations = 0
-        self.exact_fallbacks = 0
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         x = np.atleast_2d(x)
@@ -50,7 +49,6 @@ class ScreenedLogDensity:
             # the surrogate failed (or is -inf) there: use the exact value, so q is finite
             # wherever p is (else the walker there could never leave)
             q[bad] = np.asarray(self.exact(x[bad]), dtype=float)
-            self.exact_fallbacks += int(bad.sum())
         return q
 
     def at(self, x: np.ndarray) -> np.ndarray:
@@ -80,7 +78,6 @@ class DelayedAcceptanceMove(emcee.moves.Move):
     def __init__(self, base: emcee.moves.RedBlueMove, screen: ScreenedLogDensity):
         self.base = base
         self.screen = screen
-        self.exact_evaluations = 0
 
     def propose(self, model, state):
         n_walkers, _ = state.coords.shape
@@ -105,7 +102,6 @@ class DelayedAcceptanceMove(emcee.moves.Move):
             exact = np.full(idx.size, -np.inf)
             if np.any(stage1):
                 exact[stage1] = model.compute_log_prob_fn(proposal[stage1])[0]
-                self.exact_evaluations += int(stage1.sum())
             log_u2 = np.log(model.random.rand(idx.size))
             with np.errstate(invalid="ignore"):
                 stage2 = exact - state.log_prob[idx] - (q_proposal - q_current) > log_u2

@@ -12,7 +12,7 @@ import arviz_stats
 import numpy as np
 
 from bayesupdate.inference.likelihood import LogPosterior
-from bayesupdate.inference.sampling import PosteriorResult
+from bayesupdate.inference.sampling import PosteriorResult, rhat_and_ess
 
 
 def summarise(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
@@ -20,14 +20,10 @@ def summarise(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
     ess_autocorr.  Uses the post-burn-in chain, walkers as chains (module docstring)."""
     post = result.chain[result.burn :]  # (draws, walkers, d)
     by_chain = np.moveaxis(post, 1, 0)  # (walkers, draws, d)
-    n_draws, n_walkers = post.shape[0], post.shape[1]
-    rhat = np.atleast_1d(arviz_stats.rhat(by_chain, chain_axis=0, draw_axis=1))
-    ess_b = np.atleast_1d(arviz_stats.ess(by_chain, chain_axis=0, draw_axis=1))
+    rhat, ess_b, ess_tau = rhat_and_ess(post, result.autocorr_time)
     ess_t = np.atleast_1d(
         arviz_stats.ess(by_chain, method="tail", prob=(0.05, 0.95), chain_axis=0, draw_axis=1)
     )
-    tau = np.asarray(result.autocorr_time, dtype=float)
-    ess_tau = np.where(np.isfinite(tau) & (tau > 0), n_draws * n_walkers / tau, np.nan)
     flat = post.reshape(-1, post.shape[-1])
     out = {}
     for j, name in enumerate(result.names):

@@ -228,22 +228,32 @@ def burn_in(n_steps: int, tau: np.ndarray) -> int:
     return burn
 
 
-def convergence(chain: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(r_hat (d,), ess_bulk (d,)) of a chain (n_steps, n_walkers, d) after ``burn_in``, walkers
-    as chains (Vehtari et al. 2021, ArviZ); ess_bulk is the smaller of ArviZ's and emcee's
-    n_draws * n_walkers / tau (walkers of an ensemble are not independent)."""
+def rhat_and_ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(r_hat, ess_arviz, ess_autocorr), each (d,), of a post-warm-up chain (n_draws, n_walkers,
+    d), walkers as chains (Vehtari et al. 2021, ArviZ): rank-normalised split R-hat, ArviZ's
+    bulk ESS, and emcee's n_draws * n_walkers / tau (NaN where tau is not finite)."""
     import arviz_stats
 
-    post = chain[burn_in(chain.shape[0], tau) :]
-    if post.shape[0] < 4:
-        return np.full(chain.shape[-1], np.inf), np.zeros(chain.shape[-1])
     by_chain = np.moveaxis(post, 1, 0)
     rhat = np.atleast_1d(np.asarray(arviz_stats.rhat(by_chain, chain_axis=0, draw_axis=1)))
     ess = np.atleast_1d(np.asarray(arviz_stats.ess(by_chain, chain_axis=0, draw_axis=1)))
     tau = np.asarray(tau, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ess_tau = np.where(np.isfinite(tau) & (tau > 0), post.shape[0] * post.shape[1] / tau, 0.0)
-    return rhat.astype(float), np.minimum(ess, ess_tau).astype(float)
+        ess_tau = np.where(
+            np.isfinite(tau) & (tau > 0), post.shape[0] * post.shape[1] / tau, np.nan
+        )
+    return rhat.astype(float), ess.astype(float), ess_tau
+
+
+def convergence(chain: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(r_hat (d,), ess_bulk (d,)) of a chain (n_steps, n_walkers, d) after ``burn_in``;
+    ess_bulk is the smaller of ArviZ's and emcee's ESS (walkers of an ensemble are not
+    independent), 0 where tau is not finite yet."""
+    post = chain[burn_in(chain.shape[0], tau) :]
+    if post.shape[0] < 4:
+        return np.full(chain.shape[-1], np.inf), np.zeros(chain.shape[-1])
+    rhat, ess, ess_tau = rhat_and_ess(post, tau)
+    return rhat, np.minimum(ess, np.nan_to_num(ess_tau, nan=0.0))
 
 
 def sample_posterior(

@@ -79,13 +79,28 @@ def frame():
     return frame_model()
 
 
-def synthetic(model, specs=(), n_modes=8, seed=0, truth_model=None):
+def synthetic(model, specs=(), n_modes=8, seed=0, truth_model=None, shape_noise=0.0):
+    """Noisy frequencies of the truth; with ``shape_noise`` > 0 also its shapes at the 12
+    sensor DOFs with Gaussian noise of that fraction of each shape's RMS amplitude."""
     truth = truth_model or model
     for spec in specs:
         truth = extend_model(truth, parse_effect_spec(spec))
-    f = truth.solve({"t_a": TRUE_T}, n_modes).frequencies_hz
-    f = f * (1 + NOISE * np.random.default_rng(seed).normal(size=f.size))
-    return ModalData(f, frequency_sd_hz=NOISE * f, source="synthetic")
+    prediction = truth.predict({"t_a": TRUE_T}, n_modes)
+    rng = np.random.default_rng(seed)
+    f = prediction.frequencies_hz * (1 + NOISE * rng.normal(size=n_modes))
+    if shape_noise <= 0:
+        return ModalData(f, frequency_sd_hz=NOISE * f, source="synthetic")
+    shapes = prediction.shapes
+    rms = np.linalg.norm(shapes, axis=0) / np.sqrt(shapes.shape[0])
+    shapes = shapes + shape_noise * rms * rng.normal(size=shapes.shape)
+    order = np.argsort(f)
+    return ModalData(
+        f[order],
+        shapes=shapes[:, order],
+        dof_labels=prediction.dof_labels,
+        frequency_sd_hz=NOISE * f[order],
+        source="synthetic with shapes",
+    )
 
 
 @pytest.mark.parametrize(
@@ -123,6 +138,44 @@ def test_no_effect_gives_no_discrepancy(frame):
     assert out["verdict"] == "no discrepancy"
     assert out["named_effect"] is None and out["flagged_modes"] == []
     assert out["gap_after"] == out["gap_before"]
+
+
+def test_shapes_name_a_mass_the_frequencies_alone_cannot(frame):
+    """A 50 g mass at point 3 moves frequencies by ~2x noise: from frequencies alone the best
+    candidate cannot be told apart; the shapes (3 % noise, 1 - MAC ~ 1e-3) name it."""
+    spec = "added_mass@3:m=0.05"
+    without = discover(frame, synthetic(frame, [spec]), FAST).to_json()
+    assert without["verdict"] != "explained"
+    with_shapes = discover(frame, synthetic(frame, [spec], shape_noise=0.03), FAST).to_json()
+    assert with_shapes["verdict"] == "explained", with_shapes["reason"]
+    named = with_shapes["named_effect"]
+    assert (named["kind"], named["location"]) == ("added_mass", "3")
+    assert named["parameters"]["m"] == pytest.approx(0.05, rel=0.15)
+    assert with_shapes["candidates"][0]["log_bayes_factor"] > 10
+
+
+def test_noisy_and_biased_shapes_cause_no_false_discovery(frame):
+    """No effect; shapes with 3 % noise, and one mode's shape biased to 1 - MAC ~ 2e-2 (as the
+    virtual roving-hammer test identifies three of the exhaust's twelve modes): its own
+    integrated noise level absorbs it, and nothing in the library is named."""
+    data = synthetic(frame, [], seed=4, shape_noise=0.03)
+    shapes = np.array(data.shapes)
+    rng = np.random.default_rng(9)
+    bias = rng.normal(size=shapes.shape[0])
+    bias -= shapes[:, 2] * (bias @ shapes[:, 2]) / (shapes[:, 2] @ shapes[:, 2])
+    shapes[:, 2] += 0.15 * np.linalg.norm(shapes[:, 2]) * bias / np.linalg.norm(bias)
+    biased = ModalData(
+        data.frequencies_hz,
+        shapes=shapes,
+        dof_labels=data.dof_labels,
+        frequency_sd_hz=data.frequency_sd_hz,
+        source="biased shapes",
+    )
+    result = discover(frame, biased, FAST)
+    out = result.to_json()
+    assert 1 - result.baseline.mac[2] > 1e-2
+    assert out["verdict"] == "no discrepancy", out["reason"]
+    assert out["named_effect"] is None
 
 
 def test_geometry_change_outside_the_library_is_unexplained(frame):

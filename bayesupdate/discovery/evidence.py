@@ -21,10 +21,15 @@ inside the prior box (so a parameter at its bound, or one the data do not constr
 over-counted).  Starts that end in distinct optima (Mahalanobis distance > 3 under H) have their
 evidences summed (log-sum-exp); the same optimum found twice counts once.
 
-PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods, via
-``arviz_stats.loo_approximate_posterior``: draws from the Laplace Gaussian (truncated to the
-box), residuals linearised with the same Jacobian (r = r* + J (z - z*), the approximation the
-Laplace evidence already makes; no extra model solves), importance-corrected with log p - log q.
+When the test has shapes, the residual vector also holds the shape residuals of
+``shape_evidence`` (per-mode noise levels integrated out the same way, each on its own block), and
+H sums J_b^T J_b / c_b over the blocks.
+
+PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
+shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
+Gaussian (truncated to the box), residuals linearised with the same Jacobian (r = r* + J (z - z*),
+the approximation the Laplace evidence already makes; no extra model solves), importance-corrected
+with log p - log q.
 """
 
 import time
@@ -36,6 +41,11 @@ from scipy import optimize, special, stats
 
 from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel
+from bayesupdate.discovery.shape_evidence import (
+    SHAPE_SIGMA_FLOOR,
+    SHAPE_SIGMA_MAX,
+    ShapeEvidence,
+)
 
 #: upper end of the log-uniform prior of an inferred relative noise level
 SIGMA_MAX = 0.5
@@ -52,6 +62,17 @@ class FitSpace:
     problem: object
     axes: tuple[ParameterAxis, ...]
     noise: NoiseModel
+    shapes: ShapeEvidence | None = None
+
+    @property
+    def n_frequency(self) -> int:
+        """Residuals of the frequency block (the used modes)."""
+        return int(np.sum(self.noise.used))
+
+    @property
+    def size(self) -> int:
+        """Length of the residual vector: frequencies, then shapes mode after mode."""
+        return self.n_frequency + (0 if self.shapes is None else self.shapes.size)
 
     @property
     def z_low(self) -> np.ndarray:
@@ -83,11 +104,51 @@ class FitSpace:
         return (evaluation.frequencies_hz - f_test) / f_test, evaluation
 
     def residuals(self, e: np.ndarray) -> np.ndarray:
-        """Normalised residuals r of the used modes (module docstring)."""
+        """Normalised frequency residuals r of the used modes (module docstring)."""
         used = self.noise.used
         if self.noise.inferred:
             return e[used] * self.noise.weights_sqrt[used]
         return e[used] / self.noise.scale[used]
+
+    def residual_vector(self, e: np.ndarray, model_shapes: np.ndarray | None) -> np.ndarray:
+        """(size,) the whole residual vector: ``residuals(e)``, then the scaled shape residuals.
+
+        model_shapes : (n_dof, m) paired model shapes on the test DOFs (NaN where missing)."""
+        r = self.residuals(e)
+        if self.shapes is None:
+            return r
+        if model_shapes is None:
+            return np.concatenate([r, np.full(self.shapes.size, np.nan)])
+        return np.concatenate([r, self.shapes.residuals(model_shapes)])
+
+    def log_likelihood(self, r: np.ndarray) -> float:
+        """log L of the whole residual vector: frequencies + one integrated block per shape."""
+        n_f = self.n_frequency
+        value = log_likelihood(r[:n_f], self.noise)
+        if self.shapes is not None:
+            for rss in self.shapes.rss(r[n_f:]):
+                value += inferred_block_log_likelihood(
+                    float(rss), self.shapes.dof, 0.0, SHAPE_SIGMA_FLOOR, SHAPE_SIGMA_MAX
+                )
+        return value
+
+    def curvature_weights(self, r: np.ndarray) -> np.ndarray:
+        """(size,) w with H = J^T diag(w) J: 1/c per block (``_noise_curvature``); a shape
+        block's r_i = d_i / s_i, so its weight is s_i^2 / sigma_i^2 at the profile level."""
+        n_f = self.n_frequency
+        w = np.full(r.size, 1.0 / _noise_curvature(r[:n_f], self.noise))
+        if self.shapes is not None:
+            level = self.shapes.fitted_level(r[n_f:])
+            w[n_f:] = np.repeat((self.shapes.scale / level) ** 2, self.shapes.n_dof)
+        return w
+
+    def whitening(self) -> np.ndarray:
+        """(size,) factors that put every residual in noise units at the baseline's levels
+        (frequencies: 1 / the robust level for inferred noise; shapes are scaled already),
+        so that score-test chi^2 drops of both blocks add up."""
+        n_f = self.n_frequency
+        level = self.noise.sigma if self.noise.inferred else 1.0
+        return np.concatenate([np.full(n_f, 1.0 / level), np.ones(self.size - n_f)])
 
 
 def log_likelihood(r: np.ndarray, noise: NoiseModel) -> float:
@@ -97,13 +158,22 @@ def log_likelihood(r: np.ndarray, noise: NoiseModel) -> float:
     rss = float(np.sum(r * r))
     if not noise.inferred:
         return -0.5 * rss - float(np.sum(np.log(noise.scale[used]))) - 0.5 * m * _LOG_2PI
-    a, b = SIGMA_FLOOR, SIGMA_MAX
+    log_weights = float(np.sum(np.log(noise.weights_sqrt[used])))
+    return inferred_block_log_likelihood(rss, m, log_weights, SIGMA_FLOOR, SIGMA_MAX)
+
+
+def inferred_block_log_likelihood(
+    rss: float, m: int, log_weight_sum: float, a: float, b: float
+) -> float:
+    """The closed form of the module docstring: m residuals with sum of squares ``rss``, their
+    common level integrated out under a log-uniform prior on [a, b]; log_weight_sum = 1/2 sum
+    log w_i."""
     rss = max(rss, 1e-3 * m * a * a)  # keeps P(m/2, R/2a^2) representable; sigma << floor anyway
     k = 0.5 * m
     mass = special.gammainc(k, rss / (2 * a * a)) - special.gammainc(k, rss / (2 * b * b))
     return float(
         -0.5 * m * _LOG_2PI
-        + np.sum(np.log(noise.weights_sqrt[used]))
+        + log_weight_sum
         - np.log(np.log(b / a))
         - np.log(2.0)
         + k * np.log(2.0 / rss)
@@ -136,7 +206,7 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
     """Laplace log-evidence around one optimum (module docstring)."""
     d = z.size
     span = space.z_high - space.z_low
-    log_like = log_likelihood(r, space.noise)
+    log_like = space.log_likelihood(r)
     log_prior = float(space.log_prior_z(z[None])[0])
     h = 1e-4 * span
     curv = np.zeros(d)
@@ -148,7 +218,7 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
         step = 0.5 * (zp[j] - zm[j])
         if np.all(np.isfinite(lp)) and step > 0:
             curv[j] = max(-(lp[0] - 2 * lp[1] + lp[2]) / step**2, 0.0)
-    hessian = jac_z.T @ jac_z / _noise_curvature(r, space.noise) + np.diag(curv)
+    hessian = jac_z.T @ (space.curvature_weights(r)[:, None] * jac_z) + np.diag(curv)
     # a direction the data do not see: a tiny curvature (1e-8 per prior width^2) keeps H
     # invertible; the box truncation below then caps its contribution at the prior volume
     hessian = hessian + np.diag(1e-8 / span**2)
@@ -169,7 +239,7 @@ class ModelFit:
     residual_rel : (m,) relative errors at theta (test order).  optima : distinct optima found,
     best fit (smallest chi^2) first; theta is that optimum.
     log_evidence : Laplace log Z summed over the distinct optima.  loo : PSIS-LOO elpd (None
-    unless computed).
+    unless computed).  mac : (m,) MAC of the paired shapes at theta (None without test shapes).
     """
 
     label: str
@@ -187,6 +257,7 @@ class ModelFit:
     space: FitSpace = field(repr=False)
     loo: dict | None = None
     stage: str = "full"
+    mac: np.ndarray | None = None
 
     @property
     def best(self) -> Optimum:
@@ -239,12 +310,15 @@ def fit_model(
     t0 = time.perf_counter()
     n_eval = [0]
     span = space.z_high - space.z_low
-    m_used = int(np.sum(space.noise.used))
+    m_used = space.size
 
     def fun(u):
         n_eval[0] += 1
         e, evaluation = space.relative_errors(space.theta_from_z(space.z_from_u(u)))
-        r = space.residuals(e) if evaluation.ok else None
+        r = None
+        if evaluation.ok:
+            shapes = None if evaluation.paired is None else evaluation.paired.shapes
+            r = space.residual_vector(e, shapes)
         if r is None or not np.all(np.isfinite(r)):
             return np.full(m_used, _FAILED)
         return r
@@ -304,6 +378,9 @@ def fit_model(
         wall_s=time.perf_counter() - t0,
         space=space,
         stage=stage,
+        mac=None
+        if space.shapes is None or evaluation.paired is None
+        else np.asarray(evaluation.paired.mac, dtype=float),
     )
 
 
@@ -337,14 +414,16 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
         method += "; draws clipped to the bounds"
     z = z[:draws]
     n = z.shape[0]
-    r = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, m_used) linearised residuals
+    r_all = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, size) linearised residuals
+    n_f = space.n_frequency
+    r = r_all[:, :n_f]
     noise = space.noise
     used = noise.used
     log_q = stats.multivariate_normal(best.z, cov, allow_singular=True).logpdf(z)
     log_q = np.atleast_1d(log_q)
     if noise.inferred:
         m = r.shape[1]
-        sigma_hat = np.sqrt(_noise_curvature(best.r, noise))
+        sigma_hat = np.sqrt(_noise_curvature(best.r[:n_f], noise))
         log_sigma = rng.normal(np.log(sigma_hat), np.sqrt(1.0 / (2 * m)), size=n)
         sigma = np.exp(log_sigma)[:, None]
         pointwise = (
@@ -358,6 +437,22 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
     else:
         pointwise = -0.5 * r**2 - np.log(noise.scale[used])[None, :] - 0.5 * _LOG_2PI
         log_sigma_prior = 0.0
+    if space.shapes is not None:  # each shape's level drawn like sigma above; added to its mode
+        shapes = space.shapes
+        dof, k = shapes.dof, shapes.scale.size
+        level_hat = shapes.fitted_level(best.r[n_f:])
+        log_level = rng.normal(np.log(level_hat), np.sqrt(1.0 / (2 * dof)), size=(n, k))
+        log_q = log_q + np.sum(
+            stats.norm.logpdf(log_level, np.log(level_hat), np.sqrt(1.0 / (2 * dof))), axis=1
+        )
+        log_sigma_prior = log_sigma_prior - k * np.log(np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR))
+        rss = shapes.rss(r_all[:, n_f:])  # (n, k)
+        level = np.exp(log_level)
+        # the scale factor's degree of freedom: dof (not n_dof) Gaussian terms per shape
+        shape_terms = -0.5 * rss / level**2 - dof * (log_level + 0.5 * _LOG_2PI)
+        column = np.searchsorted(np.flatnonzero(used), shapes.modes)
+        pointwise = pointwise.copy()
+        pointwise[:, column] += shape_terms  # shapes.modes are distinct
     log_p = pointwise.sum(axis=1) + space.log_prior_z(z) + log_sigma_prior
     tree = arviz_base.from_dict(
         {"posterior": {"z": z[None]}, "log_likelihood": {"f": pointwise[None]}},

@@ -4,7 +4,8 @@ Three views, each a ranked list:
 
 1. **Sensitivity (score test).**  Each candidate effect is probed by one small step dz (2 % of
    its z range, ``candidates``) from its null value at the baseline optimum: g = dr/dz, the
-   change of the normalised residuals.  Since the design variables are re-fitted with the
+   change of the residuals in noise units (frequencies, and the shape residuals of
+   ``shape_evidence`` when the test has shapes).  Since the design variables are re-fitted with the
    effect, only the part of g outside their span counts: g_perp = (I - J_d J_d^+) g (J_d: their
    Jacobian at the optimum).  The one linear step alpha = -g_perp.r / |g_perp|^2 (clipped to the
    effect's bounds) predicts the drop in chi^2 = |r|^2 - |r + alpha g_perp|^2: the Lagrange
@@ -98,19 +99,22 @@ def _probe(axis: ParameterAxis, null: float) -> tuple[float, float]:
     return z0, (dz if z0 + dz <= z_hi else -dz)
 
 
-def _paired_frequencies(problem, model, params) -> np.ndarray | None:
-    """Test-ordered frequencies of ``model`` at ``params`` under ``problem``'s pairing; with
-    "order" pairing a direct solve (no calibration problem needed).  None where it fails."""
+def _paired_prediction(problem, model, params) -> tuple | None:
+    """(test-ordered frequencies (m,), paired model shapes (n_dof, m) on the test DOFs or None)
+    of ``model`` at ``params`` under ``problem``'s pairing; with "order" pairing a direct solve
+    (no calibration problem needed).  None where it fails."""
     n_test = problem.data.n_modes
     try:
         if problem.pairing.method == "order":
             f = np.asarray(model.predict(params, n_modes=n_test).frequencies_hz, dtype=float)
-            return f[:n_test] if f.size >= n_test and np.all(np.isfinite(f)) else None
+            ok = f.size >= n_test and np.all(np.isfinite(f))
+            return (f[:n_test], None) if ok else None
         from bayesupdate.inference.pairing import pair_modes
 
         prediction = model.predict(params, n_modes=problem.pairing.n_model)
         paired = pair_modes(prediction, problem.pairing)
-        return np.asarray(prediction.frequencies_hz, dtype=float)[paired.model_index]
+        f = np.asarray(prediction.frequencies_hz, dtype=float)[paired.model_index]
+        return f, paired.shapes
     except Exception:  # a failed probe scores zero; it is reported, not fatal
         return None
 
@@ -118,7 +122,9 @@ def _paired_frequencies(problem, model, params) -> np.ndarray | None:
 def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, candidate):
     """Score test of a candidate along its first parameter (module docstring, item 1).
 
-    residuals_fn(e) -> normalised residuals of the used modes.  design_jac : (m_used, d) J_d.
+    residuals_fn(e, shapes) -> residuals in noise units (``FitSpace.residual_vector`` times
+    ``FitSpace.whitening``) from the relative frequency errors e (m,) and the paired model
+    shapes (or None).  design_jac : (size, d) J_d of the same residuals.
     One model solve for kinds whose null value reproduces the model exactly (added mass, spring,
     factors), two for a joint (its null only approximates two different bending stiffnesses).
     """
@@ -127,21 +133,26 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
     f_test = baseline_problem.data.frequencies_hz
     params = baseline_problem.as_mapping(np.asarray(design_theta, float))
     params.update(candidate.null)
+
+    def residuals(paired):
+        f, shapes = paired
+        return residuals_fn((f - f_test) / f_test, shapes)
+
     if candidate.effect.kind in EXACT_NULL_KINDS:
-        f_null = _paired_frequencies(
+        at_null = _paired_prediction(
             baseline_problem,
             baseline_problem.model,
             baseline_problem.as_mapping(np.asarray(design_theta, float)),
         )
     else:
-        f_null = _paired_frequencies(baseline_problem, candidate.model, params)
+        at_null = _paired_prediction(baseline_problem, candidate.model, params)
     z0, dz = _probe(axis, null)
     params[axis.name] = float(axis.from_z(z0 + dz))
-    f_step = _paired_frequencies(baseline_problem, candidate.model, params)
-    if f_null is None or f_step is None:
+    at_step = _paired_prediction(baseline_problem, candidate.model, params)
+    if at_null is None or at_step is None:
         return CandidateScore(candidate, 0.0, null, np.zeros(design_jac.shape[0]))
-    r0 = residuals_fn((f_null - f_test) / f_test)
-    g = (residuals_fn((f_step - f_test) / f_test) - r0) / dz
+    r0 = residuals(at_null)
+    g = (residuals(at_step) - r0) / dz
     pinv = np.linalg.pinv(design_jac)
     g_perp = g - design_jac @ (pinv @ g)
     r_perp = r0 - design_jac @ (pinv @ r0)
@@ -157,10 +168,12 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
     # magnitudes and correct the design variables by one linear least-squares step there.
     for z in screen_grid(axis, z0):
         params[axis.name] = float(axis.from_z(z))
-        f = _paired_frequencies(baseline_problem, candidate.model, params)
-        if f is None:
+        paired = _paired_prediction(baseline_problem, candidate.model, params)
+        if paired is None:
             continue
-        r = residuals_fn((f - f_test) / f_test)
+        r = residuals(paired)
+        if not np.all(np.isfinite(r)):
+            continue
         r = r - design_jac @ (pinv @ r)
         grid_drop = float(r_perp @ r_perp - r @ r)
         if grid_drop > drop:
@@ -246,17 +259,12 @@ def localize(
     candidates: list[Candidate],
     model_modes: np.ndarray,
     flagged: np.ndarray,
-    chi2_unit: float = 1.0,
 ) -> Localization:
-    """All three views (module docstring).  chi2_unit divides the chi^2 drops (the squared
-    robust noise level when the noise is inferred, so drops read in noise units)."""
+    """All three views (module docstring).  residuals_fn and design_jac are in noise units
+    (``score_candidate``), so the chi^2 drops are too."""
     scores = [
         score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, c)
         for c in candidates
-    ]
-    scores = [
-        CandidateScore(s.candidate, s.delta_chi2 / chi2_unit, s.step_theta, s.sensitivity)
-        for s in scores
     ]
     scores.sort(key=lambda s: -s.delta_chi2)
     structure = (

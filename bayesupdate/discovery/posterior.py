@@ -3,8 +3,10 @@ variables and the named effect's parameters, walkers started from the Laplace Ga
 
 The likelihood is the calibration layer's (``inference.LikelihoodSpec``) with the noise model
 discovery used: the data's frequency sd (sigma ~ 0, the sd added in quadrature), a fixed sigma,
-or an inferred sigma with a half-normal prior (scale 5 %).  Costs ``walkers x steps`` model
-solves (e.g. 16 x 500 = 8,000 solves, minutes on the exhaust), hence off by default.
+or an inferred sigma with a half-normal prior (scale 5 %).  It is a likelihood of the frequencies
+only: test shapes (``shape_evidence``) shape the evidence and the optimum, not this posterior.
+Costs ``walkers x steps`` model solves (e.g. 16 x 500 = 8,000 solves, minutes on the exhaust),
+hence off by default.
 """
 
 import numpy as np
@@ -42,7 +44,7 @@ def sample_final(result, steps: int = 500, walkers: int | None = None, seed: int
     theta = np.array([space.theta_from_z(row) for row in z])
     if spec.infer_sigma:
         m = int(np.sum(result.noise.used))
-        rss = float(np.sum(fit.best.r**2))
+        rss = float(np.sum(fit.best.r[: space.n_frequency] ** 2))  # the frequency block
         sigma = np.sqrt(max(rss / m, 1e-8)) * np.exp(rng.normal(0, np.sqrt(0.5 / m), walkers))
         theta = np.column_stack([theta, sigma])
     posterior = sample_posterior(

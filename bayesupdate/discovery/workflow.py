@@ -55,6 +55,7 @@ from bayesupdate.discovery.localization import (
     localize,
     screen_grid,
 )
+from bayesupdate.discovery.shape_evidence import shape_evidence
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
@@ -245,10 +246,10 @@ def decide(
     d = len(best.names)
     if noise.inferred:  # judged against its own residual scale, which must look like test noise
         own = noise_model(baseline.space.problem.data, best.residual_rel, d)
-        after = flag_modes(best.residual_rel, own, d, alpha=s.alpha)
+        after = flag_modes(best.residual_rel, own, d, mac=best.mac, alpha=s.alpha)
         adequate = not after.flagged_modes and own.sigma <= s.max_noise_rel
     else:
-        after = flag_modes(best.residual_rel, noise, d, alpha=s.alpha)
+        after = flag_modes(best.residual_rel, noise, d, mac=best.mac, alpha=s.alpha)
         adequate = not after.flagged_modes and after.chi2_p > s.adequacy_p
     if not adequate:
         return (
@@ -378,11 +379,17 @@ def discover(
     e0 = (baseline.frequencies_hz - f_test) / f_test
     noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
     axes = tuple(axis_for(p) for p in problem.parameters)
+    shapes = None
+    if problem.pairing.method == "mac":  # the test's shapes are evidence too (shape_evidence)
+        at_baseline = problem.evaluate(baseline.theta)
+        if at_baseline.ok:
+            shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
     # the baseline gets the same design starts as the candidates' full tier (its optimum and the
     # box centre), so that both sides of every Bayes factor sum over the same basins
     centre = 0.5 * (problem.lower + problem.upper)
+    base_space = FitSpace(problem, axes, noise, shapes)
     base_fit = fit_model(
-        FitSpace(problem, axes, noise),
+        base_space,
         [baseline.theta, centre],
         "baseline",
         max_nfev=settings.max_nfev,
@@ -394,25 +401,27 @@ def discover(
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     t1 = time.perf_counter()
     candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
-    residuals_fn = FitSpace(problem, axes, noise).residuals
+    whiten = base_space.whitening()
+
+    def residuals_fn(e, model_shapes):
+        return whiten * base_space.residual_vector(e, model_shapes)
+
     model_modes = baseline.table.model_mode - 1
-    chi2_unit = noise.sigma**2 if noise.inferred else 1.0
     where = localize(
         problem,
         base_fit.theta,
-        base_fit.best.jac_z,
+        whiten[:, None] * base_fit.best.jac_z,
         residuals_fn,
         candidates,
         model_modes,
         flags.flagged,
-        chi2_unit,
     )
     timings["localization_s"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     quick = []
     for score in _select(where.scores, settings):
         problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
-        space = FitSpace(problem_c, axes + score.candidate.axes, noise)
+        space = FitSpace(problem_c, axes + score.candidate.axes, noise, shapes)
         effect = score.candidate.effect
         fit = fit_model(
             space,

@@ -47,11 +47,14 @@ class PairedModes:
 
     model_index : (n_test,) 0-based model mode of each test mode.  mac : (n_test,) MAC of the pair
     (NaN when no shapes).  swapped : a test mode is not paired with the model mode of its order.
+    shapes : (n_labels, n_test) the paired model shapes at the pairing's ``dof_labels`` (the test
+    DOFs for "mac"), or None for "order".
     """
 
     model_index: np.ndarray
     mac: np.ndarray
     swapped: bool
+    shapes: np.ndarray | None = None
 
 
 def shapes_at(prediction: Prediction, labels: tuple[str, ...], where: str) -> np.ndarray:
@@ -86,7 +89,8 @@ def pair_modes(prediction: Prediction, pairing: ModePairing) -> PairedModes:
     reference = pairing.test_shapes if pairing.method == "mac" else pairing.reference_shapes
     current = shapes_at(prediction, pairing.dof_labels, "pairing")
     model_index, mac = pair_by_mac(reference, current)
-    return PairedModes(model_index, mac, bool(np.any(model_index != order)))
+    swapped = bool(np.any(model_index != order))
+    return PairedModes(model_index, mac, swapped, current[:, model_index])
 
 
 @dataclass(frozen=True)

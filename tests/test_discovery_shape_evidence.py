@@ -1,0 +1,139 @@
+"""Mode shapes as discovery evidence: the residual is the MAC deficit spread over the sensors, the
+per-mode noise level is integrated out exactly, and the Laplace evidence of a linear model with a
+shape block equals the quadrature of its exact marginal."""
+
+import numpy as np
+import pytest
+from scipy import integrate, optimize
+
+from bayesupdate.correlation import mac_matrix
+from bayesupdate.discovery.candidates import ParameterAxis
+from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
+from bayesupdate.discovery.flagging import NoiseModel
+from bayesupdate.discovery.shape_evidence import (
+    SHAPE_SIGMA_FLOOR,
+    SHAPE_SIGMA_MAX,
+    ShapeEvidence,
+    shape_evidence,
+    shape_residuals,
+    unit_real_shapes,
+)
+from bayesupdate.inference.priors import prior_from_mapping
+from bayesupdate.modal_data import ModalData
+
+
+def test_shape_residual_norm_is_the_mac_deficit_for_any_model_scaling():
+    rng = np.random.default_rng(0)
+    test = unit_real_shapes(rng.normal(size=(15, 4)))
+    model = test + 0.2 * rng.normal(size=(15, 4))
+    mac = np.diag(mac_matrix(test, model))
+    for scaling in (1.0, -3.0, 1e-4):  # mass normalisation and sign do not matter
+        d = shape_residuals(test, scaling * model)
+        np.testing.assert_allclose(np.sum(d * d, axis=0), 1.0 - mac, rtol=1e-10)
+        # the residual is orthogonal to the model shape (least-squares scale factor)
+        np.testing.assert_allclose(np.sum(d * model, axis=0), 0.0, atol=1e-12)
+
+
+def test_unit_real_shapes_undo_a_complex_rotation():
+    rng = np.random.default_rng(1)
+    real = rng.normal(size=(12, 3))
+    rotated = real * np.exp(1j * np.array([0.3, -2.0, 1.2]))[None, :]
+    unit = unit_real_shapes(rotated)
+    expected = real / np.linalg.norm(real, axis=0)
+    np.testing.assert_allclose(np.abs(np.sum(unit * expected, axis=0)), 1.0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(unit, axis=0), 1.0, atol=1e-12)
+
+
+def test_shape_evidence_uses_the_weighted_modes_and_the_baseline_level():
+    rng = np.random.default_rng(2)
+    shapes = rng.normal(size=(10, 3))
+    data = ModalData(np.array([5.0, 9.0, 14.0]), shapes=shapes, dof_labels=tuple("abcdefghij"))
+    model = shapes + 0.05 * rng.normal(size=shapes.shape)
+    used = np.array([True, False, True])
+    ev = shape_evidence(data, model, used)
+    np.testing.assert_array_equal(ev.modes, [0, 2])
+    deficit = 1 - np.diag(mac_matrix(shapes, model))[[0, 2]]
+    np.testing.assert_allclose(ev.scale, np.sqrt(deficit / 9), rtol=1e-10)
+    r = ev.residuals(model)
+    assert r.shape == (20,)
+    # the scaled residuals of the baseline are unit-level by construction: R_i / s_i^2 = dof
+    np.testing.assert_allclose(ev.rss(r) / ev.scale**2, 9.0, rtol=1e-10)
+    assert shape_evidence(ModalData(np.array([5.0])), None, np.array([True])) is None
+
+
+def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):
+    rng = np.random.default_rng(seed)
+    m_f = 4
+    noise = NoiseModel(np.full(m_f, 0.01), np.ones(m_f), False, "fixed", 0.01)
+    test = unit_real_shapes(rng.normal(size=(n_dof, k)))
+    shapes = ShapeEvidence(np.arange(k), test, np.full(k, level))
+    axis = ParameterAxis(
+        "p",
+        (-50.0, 50.0),
+        prior_from_mapping({"kind": "normal", "mean": 0.0, "sd": 3.0}, (-50.0, 50.0)),
+        False,
+    )
+    return FitSpace(None, (axis,), noise, shapes), rng
+
+
+def test_shape_block_likelihood_matches_quadrature_over_each_level():
+    space, rng = _space_with_shapes()
+    k, n = space.shapes.scale.size, space.shapes.n_dof
+    r_f = rng.normal(size=space.n_frequency)
+    d = 0.03 * rng.normal(size=(k, n))  # unscaled shape residuals of the two modes
+    r = np.concatenate([r_f, (d / space.shapes.scale[:, None]).reshape(-1)])
+    expected = log_likelihood(r_f, space.noise)
+    dof = n - 1
+    for rss in np.sum(d * d, axis=1):
+
+        def integrand(log_s, rss=rss):
+            s = np.exp(log_s)
+            return np.exp(-0.5 * rss / s**2 - dof * (log_s + 0.5 * np.log(2 * np.pi)) - 50.0)
+
+        value, _ = integrate.quad(
+            integrand,
+            np.log(SHAPE_SIGMA_FLOOR),
+            np.log(SHAPE_SIGMA_MAX),
+            points=[0.5 * np.log(rss / dof)],
+            limit=200,
+            epsabs=0.0,
+            epsrel=1e-10,
+        )
+        expected += np.log(value) + 50.0 - np.log(np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR))
+    assert space.log_likelihood(r) == pytest.approx(expected, abs=1e-6)
+
+
+def test_laplace_with_a_shape_block_matches_the_exact_marginal_of_a_linear_model():
+    """One parameter p, frequency residuals r_f = a p + b (known unit noise), shape residuals
+    d = c p + e (levels integrated).  The exact evidence is a 1-D integral over p of the
+    likelihood (with the closed-form level marginal) times the prior; Laplace uses the
+    Gauss-Newton Hessian of both blocks at the optimum.  They agree to the Laplace error, which
+    shrinks as the data grow."""
+    space, rng = _space_with_shapes(k=2, n_dof=30, level=0.02)
+    shapes = space.shapes
+    n_f, n_s = space.n_frequency, shapes.size
+    a, b = rng.normal(size=n_f), rng.normal(size=n_f)
+    c = 0.002 * rng.normal(size=n_s)
+    e = 0.02 * rng.normal(size=n_s)
+    scale = np.repeat(shapes.scale, shapes.n_dof)
+
+    def residual(p):
+        return np.concatenate([a * p + b, (c * p + e) / scale])
+
+    def log_post(p):
+        return space.log_likelihood(residual(p)) + float(space.log_prior_z(np.array([[p]]))[0])
+
+    grid = np.linspace(-20, 20, 4001)
+    values = np.array([log_post(p) for p in grid])
+    top = values.max()
+    exact = np.log(integrate.trapezoid(np.exp(values - top), grid)) + top
+    p_star = grid[np.argmax(values)]
+    p_star = optimize.minimize_scalar(lambda p: -log_post(p), bracket=(p_star - 1, p_star + 1)).x
+    jac = np.concatenate([a, c / scale])[:, None]
+    result = laplace(space, np.array([p_star]), residual(p_star), jac)
+    assert result.log_evidence == pytest.approx(exact, abs=0.05)
+    # and the curvature is the sum over blocks: sum a^2 + sum_i |c_i|^2 / sigma_i^2
+    levels = np.sqrt(shapes.rss(residual(p_star)[n_f:]) / shapes.dof)
+    c_blocks = c.reshape(shapes.scale.size, shapes.n_dof)
+    expected = np.sum(a * a) + np.sum(np.sum(c_blocks**2, axis=1) / levels**2) + 1 / 9.0
+    assert result.hessian[0, 0] == pytest.approx(expected, rel=1e-4)

@@ -4,7 +4,9 @@ Why: the handler raises ``KeyboardInterrupt`` where the signal lands, but a comp
 may swallow it (scipy's Sobol initialisation reports "Exception ignored" and carries on), and
 the run would then finish as if never asked to stop.  The recorded request is checked again at
 safe points (between optimiser starts, between sampler steps), so the stop always happens;
-``quiet_unraisable`` keeps the extension's "Exception ignored" traceback off the terminal.
+``quiet_unraisable`` keeps the extension's "Exception ignored" report off the terminal, and
+``quiet_excepthook`` the traceback a Cython function prints first (``__Pyx_WriteUnraisable``
+calls ``PyErr_PrintEx``, i.e. ``sys.excepthook``, before the unraisable hook).
 """
 
 import sys
@@ -37,6 +39,14 @@ def quiet_unraisable(unraisable) -> None:
     if isinstance(unraisable.exc_value, KeyboardInterrupt) and requested():
         return
     sys.__unraisablehook__(unraisable)
+
+
+def quiet_excepthook(exc_type, exc_value, traceback) -> None:
+    """``sys.excepthook`` that drops the traceback of a swallowed stop request; anything else
+    goes to the default."""
+    if issubclass(exc_type, KeyboardInterrupt) and requested():
+        return
+    sys.__excepthook__(exc_type, exc_value, traceback)
 
 
 def stop_handler(signum, frame) -> None:

@@ -361,3 +361,24 @@ def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
     finally:
         sys.unraisablehook = previous
         interrupts.clear()
+
+
+def test_swallowed_stop_traceback_printed_by_an_extension_is_silenced(capsys):
+    """Cython prints a swallowed exception with sys.excepthook (PyErr_PrintEx) before the
+    unraisable hook: a recorded stop request's traceback is dropped, anything else is shown."""
+    from bayesupdate import interrupts
+
+    def report(exc):
+        try:
+            raise exc
+        except BaseException as caught:
+            interrupts.quiet_excepthook(type(caught), caught, caught.__traceback__)
+        return capsys.readouterr().err
+
+    assert "KeyboardInterrupt" in report(KeyboardInterrupt())  # no stop request: a real one
+    interrupts.request()
+    try:
+        assert report(KeyboardInterrupt()) == ""
+        assert "real problem" in report(ValueError("real problem"))
+    finally:
+        interrupts.clear()

@@ -55,6 +55,7 @@ def run(args) -> int:
     prepared = prepare(study, extend=model_extension(args, study))
     interrupts.clear()
     previous_hook, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
+    previous_excepthook, sys.excepthook = sys.excepthook, interrupts.quiet_excepthook
     previous = signal.signal(signal.SIGTERM, interrupts.stop_handler)
     # a process started in the background by a non-interactive shell inherits SIGINT ignored,
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
@@ -67,6 +68,7 @@ def run(args) -> int:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
         sys.unraisablehook = previous_hook
+        sys.excepthook = previous_excepthook
         interrupts.clear()
     if posterior.interrupted:
         where = f"; partial result in {args.out}, continue with --resume" if args.out else ""

@@ -152,6 +152,8 @@ def test_shapes_name_a_mass_the_frequencies_alone_cannot(frame):
     assert (named["kind"], named["location"]) == ("added_mass", "3")
     assert named["parameters"]["m"] == pytest.approx(0.05, rel=0.15)
     assert with_shapes["candidates"][0]["log_bayes_factor"] > 10
+    # PSIS-LOO, with each mode's frequency and shape as one observation, agrees
+    assert with_shapes["candidates"][0]["loo"] > with_shapes["baseline"]["loo"]
 
 
 def test_noisy_and_biased_shapes_cause_no_false_discovery(frame):

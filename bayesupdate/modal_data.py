@@ -98,3 +98,31 @@ class ModalData:
             mpc=pick(self.mpc),
             source=self.source,
         )
+
+
+def noisy_modes(
+    prediction,
+    frequency_noise: float,
+    shape_noise: float,
+    rng: np.random.Generator,
+    source: str,
+) -> ModalData:
+    """Virtual test data from a model ``Prediction``: frequencies times (1 + frequency_noise N(0,1))
+    (also given as their sd), and with ``shape_noise`` > 0 the shapes plus Gaussian noise of that
+    fraction of each shape's RMS amplitude (so 1 - MAC ~ shape_noise^2).  Modes are listed by
+    noisy frequency, as a test lists them; ``shape_noise`` 0 gives frequencies only."""
+    f_true = np.asarray(prediction.frequencies_hz, dtype=float)
+    f = f_true * (1 + frequency_noise * rng.normal(size=f_true.size))
+    if shape_noise <= 0:
+        return ModalData(f, frequency_sd_hz=frequency_noise * f, source=source)
+    shapes = np.asarray(prediction.shapes, dtype=float)
+    rms = np.linalg.norm(shapes, axis=0) / np.sqrt(shapes.shape[0])
+    shapes = shapes + shape_noise * rms[None, :] * rng.normal(size=shapes.shape)
+    order = np.argsort(f)
+    return ModalData(
+        f[order],
+        shapes=shapes[:, order],
+        dof_labels=tuple(prediction.dof_labels),
+        frequency_sd_hz=frequency_noise * f[order],
+        source=source,
+    )

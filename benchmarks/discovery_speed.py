@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 from bayesupdate.discovery.effects import EFFECT_KINDS, effect_locations  # noqa: E402
 from bayesupdate.discovery.results_io import extend_with_specs  # noqa: E402
 from bayesupdate.discovery.workflow import discover  # noqa: E402
-from bayesupdate.modal_data import ModalData  # noqa: E402
+from bayesupdate.modal_data import noisy_modes  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
 
@@ -38,8 +38,6 @@ def main() -> None:
     counts = {k: len(effect_locations(model, k)) for k in EFFECT_KINDS}
     print(f"library: {counts} -> {sum(counts.values())} candidates")
     truth = extend_with_specs(model, [HIDDEN]).predict(TABLE3_OPTIMUM_SI, 12)
-    f = truth.frequencies_hz
-    rms = np.linalg.norm(truth.shapes, axis=0) / np.sqrt(truth.shapes.shape[0])
     print(
         f"data: 12 frequencies (noise {NOISE})"
         + (
@@ -50,16 +48,7 @@ def main() -> None:
     )
     walls, cpus = [], []
     for k in range(args.repeats):
-        rng = np.random.default_rng(k)
-        noisy = f * (1 + NOISE * rng.normal(size=f.size))
-        shapes = truth.shapes + args.shape_noise * rms * rng.normal(size=truth.shapes.shape)
-        data = ModalData(
-            noisy,
-            shapes=shapes if args.shape_noise > 0 else None,
-            dof_labels=truth.dof_labels if args.shape_noise > 0 else (),
-            frequency_sd_hz=NOISE * noisy,
-            source="benchmark",
-        )
+        data = noisy_modes(truth, NOISE, args.shape_noise, np.random.default_rng(k), "benchmark")
         t0, c0 = time.perf_counter(), time.process_time()
         result = discover(model, data)
         walls.append(time.perf_counter() - t0)

@@ -89,7 +89,7 @@ def truth_model(case: str):
 
 def case_data(case: str, path: str, noise: float, seed: int, shape_noise: float = 0.0):
     """(ModalData, max |shift| / noise of the effect at the true design, base model)."""
-    from bayesupdate.modal_data import ModalData
+    from bayesupdate.modal_data import ModalData, noisy_modes
 
     true_model, specs, base = truth_model(case)
     truth = true_model.predict(TABLE3_OPTIMUM_SI, N_MODES)
@@ -98,22 +98,7 @@ def case_data(case: str, path: str, noise: float, seed: int, shape_noise: float 
     shift = float(np.max(np.abs(f_true - f_base) / f_base) / noise)
     rng = np.random.default_rng(seed)
     if path == "fast":
-        f = f_true * (1 + noise * rng.normal(size=f_true.size))
-        if shape_noise <= 0:
-            data = ModalData(f, frequency_sd_hz=noise * f, source=f"virtual:{case}")
-            return data, shift, base
-        # sort noisy frequencies as a test would list them; shapes follow their modes
-        order = np.argsort(f)
-        shapes = np.asarray(truth.shapes, dtype=float)
-        rms = np.linalg.norm(shapes, axis=0) / np.sqrt(shapes.shape[0])
-        shapes = shapes + shape_noise * rms[None, :] * rng.normal(size=shapes.shape)
-        data = ModalData(
-            f[order],
-            shapes=shapes[:, order],
-            dof_labels=tuple(truth.dof_labels),
-            frequency_sd_hz=noise * f[order],
-            source=f"virtual:{case}",
-        )
+        data = noisy_modes(truth, noise, shape_noise, rng, f"virtual:{case}")
         return data, shift, base
     from bayesupdate.commands.simulate import simulate_test
     from bayesupdate.discovery.effects import parse_effect_spec

@@ -19,7 +19,8 @@ from bayesupdate.discovery.shape_evidence import (
     unit_real_shapes,
 )
 from bayesupdate.inference.priors import prior_from_mapping
-from bayesupdate.modal_data import ModalData
+from bayesupdate.modal_data import ModalData, noisy_modes
+from bayesupdate.model_protocol import Prediction
 
 
 def test_shape_residual_norm_is_the_mac_deficit_for_any_model_scaling():
@@ -137,3 +138,16 @@ def test_laplace_with_a_shape_block_matches_the_exact_marginal_of_a_linear_model
     c_blocks = c.reshape(shapes.scale.size, shapes.n_dof)
     expected = np.sum(a * a) + np.sum(np.sum(c_blocks**2, axis=1) / levels**2) + 1 / 9.0
     assert result.hessian[0, 0] == pytest.approx(expected, rel=1e-4)
+
+
+def test_noisy_modes_sets_the_mac_deficit_and_lists_modes_by_frequency():
+    rng = np.random.default_rng(4)
+    shapes = rng.normal(size=(400, 3))
+    truth = Prediction(np.array([10.0, 10.01, 30.0]), shapes, tuple(f"{i}V" for i in range(400)))
+    data = noisy_modes(truth, 0.003, 0.03, rng, "virtual")
+    assert np.all(np.diff(data.frequencies_hz) > 0)
+    np.testing.assert_allclose(data.frequency_sd_hz, 0.003 * data.frequencies_hz)
+    mac = mac_matrix(shapes, data.shapes).max(axis=0)
+    # 1 - MAC ~ shape_noise^2 (400 DOFs: chi^2 scatter ~7 %)
+    np.testing.assert_allclose(1 - mac, 0.03**2, rtol=0.25)
+    assert noisy_modes(truth, 0.003, 0.0, rng, "virtual").shapes is None

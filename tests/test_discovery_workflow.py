@@ -16,7 +16,7 @@ from bayesupdate.discovery.results_io import (
 from bayesupdate.discovery.workflow import DiscoverySettings, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, Binding, FEModel, StructureBuilder, circular_tube
-from bayesupdate.modal_data import ModalData
+from bayesupdate.modal_data import ModalData, noisy_modes
 
 SEC = circular_tube(0.045, 1.5e-3)
 NOISE = 0.002  # relative frequency sd of the synthetic tests
@@ -87,20 +87,8 @@ def synthetic(model, specs=(), n_modes=8, seed=0, truth_model=None, shape_noise=
         truth = extend_model(truth, parse_effect_spec(spec))
     prediction = truth.predict({"t_a": TRUE_T}, n_modes)
     rng = np.random.default_rng(seed)
-    f = prediction.frequencies_hz * (1 + NOISE * rng.normal(size=n_modes))
-    if shape_noise <= 0:
-        return ModalData(f, frequency_sd_hz=NOISE * f, source="synthetic")
-    shapes = prediction.shapes
-    rms = np.linalg.norm(shapes, axis=0) / np.sqrt(shapes.shape[0])
-    shapes = shapes + shape_noise * rms * rng.normal(size=shapes.shape)
-    order = np.argsort(f)
-    return ModalData(
-        f[order],
-        shapes=shapes[:, order],
-        dof_labels=prediction.dof_labels,
-        frequency_sd_hz=NOISE * f[order],
-        source="synthetic with shapes",
-    )
+    source = "synthetic with shapes" if shape_noise > 0 else "synthetic"
+    return noisy_modes(prediction, NOISE, shape_noise, rng, source)
 
 
 @pytest.mark.parametrize(

@@ -108,7 +108,6 @@ def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     modes = np.flatnonzero(np.asarray(used, dtype=bool) & finite)
     if modes.size == 0 or test.shape[0] < 3:
         return None
-    d = shape_residuals(test[:, modes], np.asarray(baseline_model_shapes)[:, modes])
-    dof = test.shape[0] - 1
-    scale = np.maximum(np.sqrt(np.sum(d * d, axis=0) / dof), SHAPE_SIGMA_FLOOR)
+    unscaled = ShapeEvidence(modes, test[:, modes], np.ones(modes.size))
+    scale = unscaled.fitted_level(unscaled.residuals(baseline_model_shapes))
     return ShapeEvidence(modes, test[:, modes], scale)

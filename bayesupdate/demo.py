@@ -306,11 +306,27 @@ def _discovery_part(settings, data_source, path, figures, tag):
         f"scanned in {summary['wall_s']:.0f} s. {summary['reason']}"
     )
     rows = tuple(
-        (c["kind"], c["location"], c["log_evidence"], c["log_bayes_factor"], c["loo"], c["expr"])
+        (
+            c["kind"],
+            c["location"],
+            c["log_evidence"],
+            c["log_bayes_factor"],
+            c["posterior_probability"],
+            c["loo"],
+            c["expr"],
+        )
         for c in summary["candidates"][:10]
     )
     table = Table(
-        ("kind", "location", "log evidence", "ln BF vs baseline", "LOO elpd", "Expr after refit"),
+        (
+            "kind",
+            "location",
+            "log evidence",
+            "ln BF vs baseline",
+            "posterior probability",
+            "LOO elpd",
+            "Expr after refit",
+        ),
         rows,
         caption="Candidate ranking (best evidence first)",
     )

@@ -25,6 +25,9 @@ class ModalData:
     frequency_sd_hz : (m,) float or None, standard deviation of each frequency [Hz].
     weights : (m,) float or None, importance weights w_i of seed eq. 19.
     mpc : (m,) float or None, modal phase collinearity of each identified shape [-].
+    shape_sd_rel : (m,) float or None, standard deviation of each shape's components as a
+        fraction of that shape's RMS amplitude [-] (known shape noise: 1 - MAC ~ shape_sd_rel^2);
+        None when unknown (discovery then infers a level per mode).
     source : str, where the data came from (file name, ``paper:ema``, ...).
     """
 
@@ -35,6 +38,7 @@ class ModalData:
     frequency_sd_hz: np.ndarray | None = None
     weights: np.ndarray | None = None
     mpc: np.ndarray | None = None
+    shape_sd_rel: np.ndarray | None = None
     source: str = ""
     extra: dict = field(default_factory=dict, compare=False)
 
@@ -47,7 +51,7 @@ class ModalData:
             raise BayesUpdateError(f"{where}: frequencies must be finite and > 0 Hz")
         object.__setattr__(self, "frequencies_hz", f)
         m = f.size
-        for name in ("damping_ratio", "frequency_sd_hz", "weights", "mpc"):
+        for name in ("damping_ratio", "frequency_sd_hz", "weights", "mpc", "shape_sd_rel"):
             value = getattr(self, name)
             if value is None:
                 continue
@@ -60,6 +64,12 @@ class ModalData:
                 raise BayesUpdateError(f"{where}: {name} contains NaN or inf")
             if name in ("frequency_sd_hz", "weights") and np.any(arr < 0):
                 raise BayesUpdateError(f"{where}: {name} must be >= 0")
+            if name == "shape_sd_rel" and (np.any(arr <= 0) or self.shapes is None):
+                raise BayesUpdateError(
+                    f"{where}: shape_sd_rel must be > 0 and needs shapes"
+                    if self.shapes is None
+                    else f"{where}: shape_sd_rel must be > 0"
+                )
             object.__setattr__(self, name, arr)
         labels = tuple(str(label) for label in self.dof_labels)
         object.__setattr__(self, "dof_labels", labels)
@@ -96,6 +106,7 @@ class ModalData:
             frequency_sd_hz=pick(self.frequency_sd_hz),
             weights=pick(self.weights),
             mpc=pick(self.mpc),
+            shape_sd_rel=pick(self.shape_sd_rel),
             source=self.source,
         )
 
@@ -109,8 +120,9 @@ def noisy_modes(
 ) -> ModalData:
     """Virtual test data from a model ``Prediction``: frequencies times (1 + frequency_noise N(0,1))
     (also given as their sd), and with ``shape_noise`` > 0 the shapes plus Gaussian noise of that
-    fraction of each shape's RMS amplitude (so 1 - MAC ~ shape_noise^2).  Modes are listed by
-    noisy frequency, as a test lists them; ``shape_noise`` 0 gives frequencies only."""
+    fraction of each shape's RMS amplitude (so 1 - MAC ~ shape_noise^2), also given as their
+    ``shape_sd_rel``.  Modes are listed by noisy frequency, as a test lists them;
+    ``shape_noise`` 0 gives frequencies only."""
     f_true = np.asarray(prediction.frequencies_hz, dtype=float)
     f = f_true * (1 + frequency_noise * rng.normal(size=f_true.size))
     if shape_noise <= 0:
@@ -124,5 +136,6 @@ def noisy_modes(
         shapes=shapes[:, order],
         dof_labels=tuple(prediction.dof_labels),
         frequency_sd_hz=frequency_noise * f[order],
+        shape_sd_rel=np.full(f.size, float(shape_noise)),
         source=source,
     )

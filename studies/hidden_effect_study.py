@@ -2,7 +2,9 @@
 
 The "real" exhaust is the model at a true design (seed Table 3 optimum) with one effect hidden
 in it (each kind at several locations and magnitudes), or no effect, or a change the library
-cannot represent (two effects at once, a longer tail pipe, a wider S-jog).  Test data:
+cannot represent (two effects at once; ``geometry:NAME=VALUE``: one dimension of the exhaust
+builder's geometry set to VALUE metres, e.g. the tail pipe 0.15 m long instead of 0.10 m, a
+wider S-jog, a shorter main muffler, a wider elbow, a longer cold pipe).  Test data:
 
 * ``--path fast`` (default): the true first 12 frequencies with relative Gaussian noise
   (``--noise``, default 0.3 %, also given to discovery as the data's frequency sd) and the true
@@ -54,6 +56,19 @@ OUT_OF_LIBRARY = [
     "added_mass@18:m=0.6+joint_flexibility@hot_pipe/catalyst:k_rot=2e3",
     "geometry:tail_length=0.30",
     "geometry:jog_dy=0.35",
+    # added after the 2026-11-23 session: the four cases first run outside the suite (the
+    # 0.15 m tail was named as a mass before the multiplicity prior) and six never run before
+    # the prior was chosen (robustness check, not used to choose it)
+    "added_mass@4:m=0.5+stiffness_change@cold_pipe:factor=0.7",
+    "bend_flexibility@elbow:factor=3+boundary_spring@20:k=5e3",
+    "geometry:tail_length=0.15",
+    "geometry:jog_dy=0.2",
+    "geometry:tail_length=0.125",
+    "geometry:tail_length=0.20",
+    "geometry:jog_dy=0.30",
+    "geometry:mm_length=0.27",
+    "geometry:elbow_radius=0.11",
+    "geometry:cold2_length=0.65",
 ]
 QUICK = [
     "added_mass@14:m=0.5",
@@ -148,6 +163,67 @@ def shift_after_recalibration(base, data, case: str, path: str) -> float:
     problem = build_problem(base, clean, None, pairing="order")
     fit = calibrate(problem, starts=4, seed=0, max_nfev=100)
     return float(np.max(np.abs(fit.frequencies_hz - f_true) / f_true))
+
+
+def divergences(rows, noise: float, shape_noise: float) -> list[dict]:
+    """For each out-of-library row: D (nats, ``discovery.equivalence``) from the noise-free truth
+    to the baseline and to the row's named effect (else its best candidate), each re-fitted with
+    the five design variables at the study's noise levels.  A confident name with a D of a few
+    nats names a change the test cannot tell from that library effect."""
+    from bayesupdate.discovery.effects import Effect
+    from bayesupdate.discovery.equivalence import fit_to_truth, noise_free_modes
+
+    out = []
+    for row in rows:
+        if row["category"] != "out-of-library":
+            continue
+        true_model, _, base = truth_model(row["case"])
+        truth = noise_free_modes(true_model.predict(TABLE3_OPTIMUM_SI, N_MODES))
+        start = dict(TABLE3_OPTIMUM_SI)
+        label = row["named"] or row["best_candidate"]
+        baseline = fit_to_truth(base, truth, start, None, noise, shape_noise)
+        kind, location = label.split("@", 1)
+        fit = fit_to_truth(base, truth, start, Effect(kind, location), noise, shape_noise)
+        out.append(
+            {
+                "case": row["case"],
+                "verdict": row["verdict"],
+                "candidate": label,
+                "named": bool(row["named"]),
+                "named_component": row["named_component"],
+                "divergence_baseline": baseline.divergence,
+                "divergence_candidate": fit.divergence,
+                "candidate_max_abs_z": float(np.max(np.abs(fit.frequency_z))),
+                "candidate_max_mac_deficit": float(np.max(fit.mac_deficit)),
+            }
+        )
+    return out
+
+
+def report_divergences(items, noise: float, shape_noise: float) -> None:
+    print(
+        f"\nout-of-library truths vs the library (noise-free, {noise:g} frequency / "
+        f"{shape_noise:g} shape noise; D = min chi^2 / 2 in nats, discovery.equivalence)"
+    )
+    print(f"{'case':58s} {'verdict':12s} {'candidate':38s} {'D base':>9s} {'D cand':>9s} max|z|")
+    for d in items:
+        print(
+            f"{d['case'][:58]:58s} {d['verdict'][:12]:12s} {d['candidate'][:38]:38s} "
+            f"{d['divergence_baseline']:9.1f} {d['divergence_candidate']:9.1f} "
+            f"{d['candidate_max_abs_z']:6.2f}"
+        )
+    wrong = [d for d in items if d["named"] and not d["named_component"]]
+    print(
+        "confident names of an out-of-library change: "
+        + (
+            ", ".join(
+                f"{d['case']} -> {d['candidate']} (D {d['divergence_candidate']:.1f})"
+                for d in wrong
+            )
+            if wrong
+            else "none"
+        )
+    )
 
 
 def run_case(args_tuple):
@@ -287,7 +363,19 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="10-case subset")
     parser.add_argument("--cases", nargs="*", help="explicit cases (effect specs, none#k, ...)")
     parser.add_argument("--json-out", help="write the per-case rows as JSON")
+    parser.add_argument(
+        "--divergence-from",
+        metavar="JSON",
+        help="only compute the out-of-library divergences of a saved --json-out (fast path)",
+    )
     args = parser.parse_args(argv)
+    if args.divergence_from:
+        with open(args.divergence_from) as fh:
+            saved = json.load(fh)
+        report_divergences(
+            divergences(saved, args.noise, args.shape_noise), args.noise, args.shape_noise
+        )
+        return 0
     cases = args.cases or (QUICK if args.quick else EFFECT_CASES + NULL_CASES + OUT_OF_LIBRARY)
     if not (0.0 <= args.shape_noise < 1.0):
         parser.error(f"--shape-noise must be in [0, 1), got {args.shape_noise}")
@@ -318,6 +406,10 @@ def main(argv=None) -> int:
                 flush=True,
             )
     report(rows, args.noise, args.shape_noise if args.path == "fast" else 0.0)
+    if args.path == "fast" and args.shape_noise > 0:
+        report_divergences(
+            divergences(rows, args.noise, args.shape_noise), args.noise, args.shape_noise
+        )
     print(f"total wall {time.perf_counter() - t0:.0f} s")
     if args.json_out:
         with open(args.json_out, "w") as fh:

@@ -9,7 +9,7 @@ from scipy import integrate, optimize
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
-from bayesupdate.discovery.flagging import NoiseModel
+from bayesupdate.discovery.flagging import NoiseModel, flag_modes
 from bayesupdate.discovery.shape_evidence import (
     SHAPE_SIGMA_FLOOR,
     SHAPE_SIGMA_MAX,
@@ -60,6 +60,44 @@ def test_shape_evidence_uses_the_weighted_modes_and_the_baseline_level():
     # the scaled residuals of the baseline are unit-level by construction: R_i / s_i^2 = dof
     np.testing.assert_allclose(ev.rss(r) / ev.scale**2, 9.0, rtol=1e-10)
     assert shape_evidence(ModalData(np.array([5.0])), None, np.array([True])) is None
+
+
+def test_known_shape_noise_is_a_fixed_gaussian_block():
+    """With ``shape_sd_rel`` the level is the data's (sd / sqrt(n) on a unit shape), not fitted:
+    the block's log-likelihood is Gaussian with dof = n - 1 terms per mode, and a shape misfit
+    that no noise level absorbs shows as chi^2 >> dof."""
+    rng = np.random.default_rng(5)
+    n, sd = 16, 0.03
+    truth = rng.normal(size=(n, 3))
+    prediction = Prediction(np.array([5.0, 9.0, 14.0]), truth, tuple(f"{i}V" for i in range(n)))
+    data = noisy_modes(prediction, 0.001, sd, rng, "known")
+    np.testing.assert_array_equal(data.shape_sd_rel, sd)
+    ev = shape_evidence(data, truth, np.ones(3, bool))
+    assert ev.known
+    np.testing.assert_allclose(ev.scale, sd / np.sqrt(n))
+    r = ev.residuals(truth)
+    np.testing.assert_array_equal(ev.fitted_level(r), ev.scale)  # never re-estimated
+    noise = NoiseModel(np.full(3, 0.001), np.ones(3), False, "data sd", 0.001)
+    space = FitSpace(None, (), noise, ev)
+    r_f = np.zeros(3)
+    expected = log_likelihood(r_f, noise) + np.sum(
+        -0.5 * ev.rss(r) / ev.scale**2 - (n - 1) * (np.log(ev.scale) + 0.5 * np.log(2 * np.pi))
+    )
+    assert space.log_likelihood(np.concatenate([r_f, r])) == pytest.approx(expected, rel=1e-12)
+    # under the truth chi^2 per mode is ~ chi^2(15): all three within its 0.1 %-99.9 % range
+    assert np.all((ev.chi2(r) > 3.5) & (ev.chi2(r) < 38))
+    np.testing.assert_array_equal(space.curvature_weights(np.concatenate([r_f, r]))[3:], 1.0)
+    # a model shape 1 - MAC = 2e-2 off (22x the noise's 9e-4) in mode 2 is flagged
+    off = truth.copy()
+    bias = rng.normal(size=n)
+    bias -= truth[:, 1] * (bias @ truth[:, 1]) / (truth[:, 1] @ truth[:, 1])
+    off[:, 1] += np.sqrt(0.02 / 0.98) * np.linalg.norm(truth[:, 1]) * bias / np.linalg.norm(bias)
+    chi2 = ev.chi2(ev.residuals(off))
+    assert chi2[1] > 200 and chi2[1] > 10 * max(chi2[0], chi2[2])
+    flags = flag_modes(np.zeros(3), noise, 0, shape_chi2=chi2, shape_dof=ev.dof)
+    assert flags.flagged_modes == [2]
+    assert flags.chi2_dof == 3 + 3 * 15 and flags.chi2 == pytest.approx(np.sum(chi2))
+    assert flags.shape_p_value[1] < 1e-10 < flags.shape_p_value[0]
 
 
 def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):

@@ -76,6 +76,7 @@ def test_modal_h5_round_trip(tmp_path):
         shapes,
         ("1V", "2H"),
         mpc=np.array([0.99, 1.0]),
+        shape_sd_rel=np.array([0.03, 0.05]),
         source="x",
         extra={"stable_orders": np.array([7, 9])},
     )
@@ -85,6 +86,20 @@ def test_modal_h5_round_trip(tmp_path):
     assert back.dof_labels == ("1V", "2H")
     assert np.array_equal(back.extra["stable_orders"], [7, 9])
     assert back.mpc[0] == pytest.approx(0.99)
+    np.testing.assert_array_equal(back.shape_sd_rel, [0.03, 0.05])
+    assert back.subset([1]).shape_sd_rel.tolist() == [0.05]
+
+
+def test_shape_sd_needs_shapes_and_must_be_positive():
+    with pytest.raises(BayesUpdateError, match="needs shapes"):
+        ModalData(np.array([10.0]), shape_sd_rel=np.array([0.03]))
+    with pytest.raises(BayesUpdateError, match="shape_sd_rel must be > 0"):
+        ModalData(
+            np.array([10.0]),
+            shapes=np.ones((2, 1)),
+            dof_labels=("a", "b"),
+            shape_sd_rel=np.array([0.0]),
+        )
 
 
 @pytest.mark.parametrize(

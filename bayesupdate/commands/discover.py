@@ -34,7 +34,17 @@ def add_arguments(parser) -> None:
     add_study_arguments(parser)
     parser.add_argument("--kinds", help="comma-separated effect kinds to consider (default all)")
     parser.add_argument("--sigma", type=float, help="fixed relative frequency noise level")
-    parser.add_argument("--threshold", type=float, help="ln Bayes factor to beat (default 3)")
+    parser.add_argument(
+        "--threshold",
+        type=float,
+        help="posterior log odds (ln BF + prior log odds) a candidate must beat (default 3)",
+    )
+    parser.add_argument(
+        "--effect-prior",
+        type=float,
+        help="prior probability that one library effect is present, spread equally over the "
+        "candidates scanned (default 0.5)",
+    )
     parser.add_argument("--max-refits", type=int, help="candidates fitted to convergence")
     parser.add_argument("--plots", metavar="DIR", help="write residuals/localization/ranking PNG")
     parser.add_argument(
@@ -69,7 +79,8 @@ def _settings(study, args):
         "seed": args.seed,
         "baseline_starts": args.starts,
         "sigma": args.sigma,
-        "threshold_ln_bf": args.threshold,
+        "threshold_log_odds": args.threshold,
+        "effect_prior": args.effect_prior,
         "max_refits": args.max_refits,
         "kinds": tuple(k.strip() for k in args.kinds.split(",")) if args.kinds else None,
     }
@@ -134,11 +145,21 @@ def run(args) -> int:
     print(f"verdict: {result.verdict} - {result.reason}")
     print(f"noise: {result.noise.source}, sigma = {100 * result.noise.sigma:.3g} %")
     print(f"flagged modes: {summary['flagged_modes']}")
-    print("candidate                                  ln BF    LOO elpd   Expr      stage")
+    print(
+        f"prior log odds of each of {summary['scanned']} candidates vs the baseline: "
+        f"{summary['prior_log_odds']:.2f}; baseline posterior probability "
+        f"{summary['baseline']['posterior_probability']:.3g}"
+    )
+    print(
+        "candidate                                  ln BF  log odds  P(post)  LOO elpd  Expr  stage"
+    )
     for c in summary["candidates"][:10]:
         loo = "      -" if c["loo"] is None else f"{c['loo']:9.2f}"
         label = f"{c['kind']}@{c['location']}"
-        print(f"  {label:38s} {c['log_bayes_factor']:8.2f} {loo} {c['expr']:9.4g}  {c['stage']}")
+        print(
+            f"  {label:38s} {c['log_bayes_factor']:8.2f} {c['log_posterior_odds']:8.2f} "
+            f"{c['posterior_probability']:8.3g} {loo} {c['expr']:9.4g}  {c['stage']}"
+        )
     print(
         f"gap (Expr, seed eq. 19): before {summary['gap_before']:.4g}, "
         f"after {summary['gap_after']:.4g}"

@@ -22,8 +22,8 @@ over-counted).  Starts that end in distinct optima (Mahalanobis distance > 3 und
 evidences summed (log-sum-exp); the same optimum found twice counts once.
 
 When the test has shapes, the residual vector also holds the shape residuals of
-``shape_evidence`` (per-mode noise levels integrated out the same way, each on its own block), and
-H sums J_b^T J_b / c_b over the blocks.
+``shape_evidence`` (per-mode noise levels integrated out the same way, each on its own block, or
+Gaussian with the data's known level), and H sums J_b^T J_b / c_b over the blocks.
 
 PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
 shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
@@ -125,10 +125,16 @@ class FitSpace:
         """log L of the whole residual vector: frequencies + one integrated block per shape."""
         n_f = self.n_frequency
         value = log_likelihood(r[:n_f], self.noise)
-        if self.shapes is not None:
-            for rss in self.shapes.rss(r[n_f:]):
+        shapes = self.shapes
+        if shapes is not None and shapes.known:  # Gaussian, dof terms per mode (scale fitted)
+            value += float(
+                -0.5 * np.sum(shapes.chi2(r[n_f:]))
+                - shapes.dof * np.sum(np.log(shapes.scale) + 0.5 * _LOG_2PI)
+            )
+        elif shapes is not None:
+            for rss in shapes.rss(r[n_f:]):
                 value += inferred_block_log_likelihood(
-                    float(rss), self.shapes.dof, 0.0, SHAPE_SIGMA_FLOOR, SHAPE_SIGMA_MAX
+                    float(rss), shapes.dof, 0.0, SHAPE_SIGMA_FLOOR, SHAPE_SIGMA_MAX
                 )
         return value
 
@@ -440,12 +446,17 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
     if space.shapes is not None:  # each shape's level drawn like sigma above; added to its mode
         shapes = space.shapes
         dof, k = shapes.dof, shapes.scale.size
-        level_hat = shapes.fitted_level(best.r[n_f:])
-        log_level = rng.normal(np.log(level_hat), np.sqrt(1.0 / (2 * dof)), size=(n, k))
-        log_q = log_q + np.sum(
-            stats.norm.logpdf(log_level, np.log(level_hat), np.sqrt(1.0 / (2 * dof))), axis=1
-        )
-        log_sigma_prior = log_sigma_prior - k * np.log(np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR))
+        if shapes.known:
+            log_level = np.broadcast_to(np.log(shapes.scale), (n, k))
+        else:
+            level_hat = shapes.fitted_level(best.r[n_f:])
+            log_level = rng.normal(np.log(level_hat), np.sqrt(1.0 / (2 * dof)), size=(n, k))
+            log_q = log_q + np.sum(
+                stats.norm.logpdf(log_level, np.log(level_hat), np.sqrt(1.0 / (2 * dof))), axis=1
+            )
+            log_sigma_prior = log_sigma_prior - k * np.log(
+                np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR)
+            )
         rss = shapes.rss(r_all[:, n_f:])  # (n, k)
         level = np.exp(log_level)
         # the scale factor's degree of freedom: dof (not n_dof) Gaussian terms per shape

@@ -13,9 +13,12 @@ s_i = sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), 
 
 z_i = e_i / sqrt(s_i^2 + v_i) with v_i the posterior-predictive variance of the relative
 frequency (when a posterior is given), two-sided p_i = 2 Phi(-|z_i|).  Mode i is flagged when
-p_i < alpha / m (Bonferroni, family-wise level alpha) or, where shapes exist, when its MAC is
-below ``mac_threshold``.  The global misfit test is chi^2 = sum z_i^2 on m - d degrees of freedom
-(known noise only).
+p_i < alpha / T (Bonferroni over the T per-mode tests made, family-wise level alpha: T = m, or
+2m with shape tests) or, where shapes exist, when its MAC is below ``mac_threshold``, or, where
+the data give the shape noise (``ModalData.shape_sd_rel``), when its shape misfit
+c_i = |d_i|^2 / s_i^2 (``shape_evidence``) has P(chi^2(n - 1) > c_i) < alpha / T.  The global
+misfit test is chi^2 = sum z_i^2 (+ sum c_i) on m - d (+ k (n - 1)) degrees of freedom (known
+frequency noise only).
 """
 
 from dataclasses import dataclass
@@ -71,7 +74,8 @@ def noise_model(data, residual_rel: np.ndarray, n_params: int, sigma: float | No
 class ModeFlags:
     """Per mode (test order): z-score, two-sided p-value, MAC (NaN: no shapes), flagged.
 
-    chi2 / chi2_dof / chi2_p : global misfit test (NaN for inferred noise).
+    chi2 / chi2_dof / chi2_p : global misfit test (NaN for inferred noise).  shape_p_value :
+    (m,) p-value of each mode's shape misfit under known shape noise (NaN: not tested).
     """
 
     residual_rel: np.ndarray
@@ -83,6 +87,7 @@ class ModeFlags:
     chi2: float
     chi2_dof: int
     chi2_p: float
+    shape_p_value: np.ndarray | None = None
 
     @property
     def flagged_modes(self) -> list[int]:
@@ -98,8 +103,12 @@ def flag_modes(
     mac: np.ndarray | None = None,
     alpha: float = 0.05,
     mac_threshold: float = 0.8,
+    shape_chi2: np.ndarray | None = None,
+    shape_dof: int = 0,
 ) -> ModeFlags:
-    """Flag modes (module docstring).  residual_rel : (m,) e_i; predictive_rel_var : (m,) v_i."""
+    """Flag modes (module docstring).  residual_rel : (m,) e_i; predictive_rel_var : (m,) v_i;
+    shape_chi2 : (m,) c_i under known shape noise (NaN where a mode has no shape term), each on
+    ``shape_dof`` degrees of freedom."""
     e = np.asarray(residual_rel, dtype=float)
     var = noise.scale**2 + (0.0 if predictive_rel_var is None else predictive_rel_var)
     used = noise.used
@@ -108,11 +117,22 @@ def flag_modes(
     m = int(np.sum(used))
     mac = np.full(e.size, np.nan) if mac is None else np.asarray(mac, dtype=float)
     low_mac = np.nan_to_num(mac, nan=1.0) < mac_threshold
-    flagged = used & ((p < alpha / max(m, 1)) | low_mac)
-    dof = max(m - n_params, 1)
+    shape_p = None
+    shape_sum, shape_terms, n_tests = 0.0, 0, m
+    shape_flag = np.zeros(e.size, dtype=bool)
+    if shape_chi2 is not None and shape_dof > 0:
+        c = np.asarray(shape_chi2, dtype=float)
+        tested = used & np.isfinite(c)
+        shape_p = np.where(tested, stats.chi2.sf(np.nan_to_num(c), shape_dof), np.nan)
+        n_tests += int(np.sum(tested))
+        shape_flag = tested & (np.nan_to_num(shape_p, nan=1.0) < alpha / n_tests)
+        shape_sum, shape_terms = float(np.sum(c[tested])), int(np.sum(tested)) * shape_dof
+    # Bonferroni over every per-mode test made (frequencies, and shapes when tested)
+    flagged = used & ((p < alpha / max(n_tests, 1)) | low_mac | shape_flag)
+    dof = max(m + shape_terms - n_params, 1)
     if noise.inferred:
         chi2 = chi2_p = float("nan")
     else:
-        chi2 = float(np.sum(z[used] ** 2))
+        chi2 = float(np.sum(z[used] ** 2)) + shape_sum
         chi2_p = float(stats.chi2.sf(chi2, dof))
-    return ModeFlags(e, z, p, mac, flagged, alpha, chi2, dof, chi2_p)
+    return ModeFlags(e, z, p, mac, flagged, alpha, chi2, dof, chi2_p, shape_p)

@@ -66,7 +66,8 @@ def plot_localization(result, structure=None):
 
 
 def plot_ranking(result, top: int = 12):
-    """ln Bayes factor vs the baseline of the refitted candidates, with the threshold."""
+    """ln Bayes factor vs the baseline of the refitted candidates, with the threshold
+    (``threshold_log_odds`` minus the prior log odds of one candidate)."""
     fits = result.fits[:top]
     fig, ax = plt.subplots(figsize=(7, 0.35 * max(len(fits), 3) + 1.2))
     values = [result.log_bayes_factor(f) for f in fits]
@@ -74,7 +75,10 @@ def plot_ranking(result, top: int = 12):
     colors = ["C2" if result.named is f else "C0" for f in fits]
     ax.barh(y, values, color=colors)
     ax.set_yticks(y, [f"{f.label}{' (quick)' if f.stage == 'quick' else ''}" for f in fits])
-    ax.axvline(result.settings.threshold_ln_bf, color="r", ls="--", label="threshold")
+    # the threshold is on the posterior log odds; on the Bayes-factor axis it sits higher by
+    # the (negative) prior log odds of a candidate
+    bar = result.settings.threshold_log_odds - result.prior_log_odds
+    ax.axvline(bar, color="r", ls="--", label=f"threshold (ln BF {bar:.1f})")
     ax.axvline(0, color="k", lw=0.5)
     ax.set(xlabel="ln Bayes factor vs baseline (Laplace)", title="candidate ranking")
     ax.legend(fontsize=8)

@@ -12,7 +12,8 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
                     log_evidence, expr, loo_json
 /final              the re-calibrated model (baseline when nothing was named): same datasets,
                     attrs: names, label, expr, effects_json
-/flags              z (m,), p_value (m,), flagged (m,) bool, mac (m,), attrs: chi2, chi2_dof,
+/flags              z (m,), p_value (m,), flagged (m,) bool, mac (m,), [shape_p_value (m,)
+                    with known shape noise], attrs: chi2, chi2_dof,
                     chi2_p, noise_source, noise_sigma
 /localization       candidate (n,) str, delta_chi2 (n,), step_theta (n,); location (k,) str,
                     location_score (k,); part (p,) str, strain_excess (p,), kinetic_excess (p,);
@@ -20,7 +21,8 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
 /final/posterior    (with --posterior-steps) chain (steps, walkers, d), log_prob, attrs: names,
                     burn, summary_json
 /candidates/NNN     theta, residual_rel, frequencies_hz, attrs: label, kind, location, names,
-                    log_evidence, log_bayes_factor, expr, stage, optima, loo_json
+                    log_evidence, log_bayes_factor, log_posterior_odds, expr, stage, optima,
+                    loo_json
 
 ``extended_model_from_result(path)`` rebuilds the final model (base model + effects at their
 fitted values, design variables at their re-fitted values as defaults): a model source.
@@ -113,6 +115,8 @@ def write_discovery(
         f = result.flags
         g = h5.create_group("flags")
         g["z"], g["p_value"], g["flagged"], g["mac"] = f.z, f.p_value, f.flagged, f.mac
+        if f.shape_p_value is not None:
+            g["shape_p_value"] = f.shape_p_value
         g.attrs.update(
             chi2=f.chi2,
             chi2_dof=f.chi2_dof,
@@ -140,6 +144,7 @@ def write_discovery(
                 kind=fit.kind,
                 location=fit.location,
                 log_bayes_factor=result.log_bayes_factor(fit),
+                log_posterior_odds=result.log_posterior_odds(fit),
             )
     return Path(path)
 

@@ -22,6 +22,13 @@ large the identification error of that mode.
 The optimiser sees d_i / s_i with s_i the level fitted at the baseline (held fixed: one
 reweighting of an iteratively reweighted least-squares fit of the integrated likelihood, whose
 gradient (n - 1)/R_i d_i.dd_i it matches at the baseline).
+
+*Known* shape noise: when the data give ``ModalData.shape_sd_rel`` (each shape's component sd as
+a fraction of its RMS amplitude; a unit-norm shape on n DOFs has RMS amplitude 1/sqrt(n)), the
+level is sigma_i = shape_sd_rel_i / sqrt(n), fixed, and the block is Gaussian with that sd, as
+frequencies are with a known sd.  Then a shape misfit that no model removes is not absorbed
+into an inflated noise level: R_i / sigma_i^2 ~ chi^2(n - 1) under a model that fits, and the
+adequacy check (``flagging.flag_modes``) sees it.
 """
 
 from dataclasses import dataclass
@@ -60,12 +67,14 @@ class ShapeEvidence:
 
     modes : (k,) 0-based test modes whose shapes count (the modes with weight > 0).
     test_unit : (n_dof, k) their unit-norm real shapes.  scale : (k,) s_i, the optimiser's fixed
-    per-mode level (module docstring).
+    per-mode level (module docstring).  known : s_i is the data's known noise level (not
+    integrated out).
     """
 
     modes: np.ndarray
     test_unit: np.ndarray
     scale: np.ndarray
+    known: bool = False
 
     @property
     def n_dof(self) -> int:
@@ -92,15 +101,22 @@ class ShapeEvidence:
         return np.sum(blocks**2, axis=-1) * self.scale**2
 
     def fitted_level(self, r: np.ndarray) -> np.ndarray:
-        """(k,) the profile noise level sqrt(R_i / dof), floored."""
+        """(k,) the profile noise level sqrt(R_i / dof), floored; the known level if known."""
+        if self.known:
+            return np.broadcast_to(self.scale, np.shape(r)[:-1] + self.scale.shape)
         return np.maximum(np.sqrt(self.rss(r) / self.dof), SHAPE_SIGMA_FLOOR)
+
+    def chi2(self, r: np.ndarray) -> np.ndarray:
+        """(k,) R_i / s_i^2 (with known noise ~ chi^2(dof) per mode under a fitting model)."""
+        return self.rss(r) / self.scale**2
 
 
 def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     """ShapeEvidence of ``data`` (ModalData with shapes) or None without shapes.
 
     baseline_model_shapes : (n_dof, m) the baseline's paired model shapes on ``data.dof_labels``;
-    used : (m,) bool modes that count.  s_i = the baseline's fitted level of mode i."""
+    used : (m,) bool modes that count.  s_i = the data's known level (``shape_sd_rel``), else
+    the baseline's fitted level of mode i."""
     if data.shapes is None or baseline_model_shapes is None:
         return None
     test = unit_real_shapes(np.asarray(data.shapes))
@@ -108,6 +124,9 @@ def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     modes = np.flatnonzero(np.asarray(used, dtype=bool) & finite)
     if modes.size == 0 or test.shape[0] < 3:
         return None
+    if data.shape_sd_rel is not None:
+        known = np.asarray(data.shape_sd_rel, dtype=float)[modes] / np.sqrt(test.shape[0])
+        return ShapeEvidence(modes, test[:, modes], known, known=True)
     unscaled = ShapeEvidence(modes, test[:, modes], np.ones(modes.size))
     scale = unscaled.fitted_level(unscaled.residuals(baseline_model_shapes))
     return ShapeEvidence(modes, test[:, modes], scale)

@@ -13,8 +13,9 @@ earlier discovery, or a hypothesis)::
     locations = { added_mass = ["12", "14"] }       # default: every admissible location
     sigma = 0.005                                   # fixed relative noise (default: data sd,
                                                     # else inferred)
-    threshold_ln_bf = 3.0
+    threshold_log_odds = 3.0                        # on ln BF + prior log odds
     margin_ln_bf = 2.0
+    effect_prior = 0.5                              # P(one library effect is present)
     max_refits = 5
 """
 
@@ -37,7 +38,14 @@ _INT_KEYS = {
     "loo_top",
     "loo_draws",
 }
-_FLOAT_KEYS = {"sigma", "threshold_ln_bf", "margin_ln_bf", "adequacy_p", "alpha"}
+_FLOAT_KEYS = {
+    "sigma",
+    "threshold_log_odds",
+    "margin_ln_bf",
+    "effect_prior",
+    "adequacy_p",
+    "alpha",
+}
 
 
 def parse_effects_table(table: Mapping, where: str) -> tuple[str, ...]:

@@ -21,13 +21,16 @@
    practice, and are marked ``stage: quick``); the best few also by PSIS-LOO;
 5. the verdict (``decide``):
 
-   * ``explained``: ln BF(best vs baseline) > ``threshold_ln_bf`` (3: "strong" on the
+   * ``explained``: the posterior log odds of the best candidate against the baseline,
+     ln BF + ``prior_log_odds``, exceed ``threshold_log_odds`` (3: "strong" on the
      Kass-Raftery scale), ln BF(best vs runner-up) >= ``margin_ln_bf`` (2: the runner-up is
-     e^2 ~ 7 times less probable), its fitted effect parameters sit off their bounds (by >
+     e^2 ~ 7 times less probable; candidates share one prior, so this is their posterior
+     odds too), its fitted effect parameters sit off their bounds (by >
      ``bound_tolerance`` = 0.5 % of the range: an effect pinned on a bound is absorbing a change
-     the library does not describe), and the extended model fits within the noise (no flagged mode,
-     and for known noise the chi^2 p-value > ``adequacy_p``; for inferred noise its own robust
-     noise level <= ``max_noise_rel``);
+     the library does not describe), and the extended model fits within the noise (no mode
+     misfits at family-wise level ``adequacy_p`` = 1e-3, Bonferroni over its frequency and, with
+     known shape noise, shape tests; for known noise also the global chi^2 p-value >
+     ``adequacy_p``; for inferred noise its own robust noise level <= ``max_noise_rel``);
    * ``no discrepancy``: no candidate beats the baseline by the threshold and the baseline fits
      within the noise (for inferred noise: no flagged mode and an inferred level <=
      ``max_noise_rel`` = 1 %, the scatter of a repeated modal test; a larger "noise" is model
@@ -35,6 +38,16 @@
    * ``unexplained``: misfit remains and no single library effect explains it, or the best
      candidates cannot be told apart (listed in ``ambiguous_with``; identifiability: an added
      mass and a softer joint nearby can move the same frequencies).
+
+Prior odds (the multiplicity correction of Scott & Berger 2010, Ann. Statist. 38, 2587-2619):
+with probability ``effect_prior`` (1/2) one library effect is present, and that probability is
+spread equally over the N candidates scanned (kind x location), so each candidate's prior odds
+against the baseline are p / (1 - p) / N.  On the exhaust (N = 58) a candidate needs
+ln BF > 3 + ln 58 = 7.1 to be named.  Without this the threshold would be a per-candidate one:
+the more places the library looks, the likelier that some candidate fits noise, or a change
+outside the library, well enough by chance; with it, the prior probability of "some effect"
+does not grow with the library, and a user who restricts the library (``kinds``,
+``locations``) to a hypothesis they already hold pays less.
 
 The named effect's model (baseline + effect at its fitted values, design variables re-fitted)
 is the re-calibrated model; ``effects`` holds its spec list for later use as a model source.
@@ -44,6 +57,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.special import logsumexp
 
 from bayesupdate.discovery.candidates import Candidate, axis_for, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
@@ -81,8 +95,9 @@ class DiscoverySettings:
     quick_nfev: int = 4
     max_refits: int = 5
     max_nfev: int = 25
-    threshold_ln_bf: float = 3.0
+    threshold_log_odds: float = 3.0
     margin_ln_bf: float = 2.0
+    effect_prior: float = 0.5
     bound_tolerance: float = 0.005
     adequacy_p: float = 1e-3
     max_noise_rel: float = 0.01
@@ -103,11 +118,22 @@ class DiscoverySettings:
         ):
             if int(getattr(self, name)) < 1:
                 raise BayesUpdateError(f"discovery.{name}: must be >= 1")
-        if not (0 <= self.threshold_ln_bf < np.inf and 0 <= self.margin_ln_bf < np.inf):  # NaN too
-            raise BayesUpdateError(
-                "discovery: thresholds on ln BF (threshold_ln_bf, margin_ln_bf, --threshold) "
-                "must be finite numbers >= 0"
+        if not (0 <= self.threshold_log_odds < np.inf and 0 <= self.margin_ln_bf < np.inf):
+            raise BayesUpdateError(  # NaN fails the chained comparison too
+                "discovery: thresholds on log odds (threshold_log_odds, margin_ln_bf, "
+                "--threshold) must be finite numbers >= 0"
             )
+        if not 0 < self.effect_prior < 1:
+            raise BayesUpdateError(
+                "discovery.effect_prior (--effect-prior): the prior probability that a library "
+                f"effect is present must lie strictly between 0 and 1, got {self.effect_prior}"
+            )
+
+    def prior_log_odds(self, n_candidates: int) -> float:
+        """Prior log odds of one of ``n_candidates`` equally likely candidates against the
+        baseline: ln(p / (1 - p)) - ln N (module docstring, "Prior odds")."""
+        p = self.effect_prior
+        return float(np.log(p / (1 - p)) - np.log(max(int(n_candidates), 1)))
 
 
 @dataclass
@@ -137,6 +163,22 @@ class DiscoveryResult:
         return float(fit.log_evidence - self.baseline.log_evidence)
 
     @property
+    def prior_log_odds(self) -> float:
+        """Prior log odds of each scanned candidate against the baseline."""
+        return self.settings.prior_log_odds(len(self.localization.scores))
+
+    def log_posterior_odds(self, fit: ModelFit) -> float:
+        """ln BF + prior log odds: what ``threshold_log_odds`` is compared with."""
+        return self.log_bayes_factor(fit) + self.prior_log_odds
+
+    def log_posterior_probabilities(self) -> np.ndarray:
+        """(1 + len(fits),) log posterior probabilities of the baseline and of each fitted
+        candidate, normalised over these hypotheses (Laplace evidence x prior).  Candidates the
+        score test left unfitted are omitted, so these are upper bounds for the fitted ones."""
+        log_weight = np.array([0.0, *(self.log_posterior_odds(f) for f in self.fits)])
+        return log_weight - logsumexp(log_weight)
+
+    @property
     def effects(self) -> list[str]:
         """Spec list of the extended model (empty when nothing was named)."""
         if self.named is None:
@@ -150,14 +192,17 @@ class DiscoveryResult:
     def to_json(self) -> dict:
         """The ``discover --json`` object (issue 6 item 7), plus documented extras."""
         scores = {s.label: s.delta_chi2 for s in self.localization.scores}
+        probability = np.exp(self.log_posterior_probabilities())
 
-        def candidate(fit: ModelFit) -> dict:
+        def candidate(k: int, fit: ModelFit) -> dict:
             return {
                 "kind": fit.kind,
                 "location": fit.location,
                 "log_evidence": float(fit.log_evidence),
                 "loo": None if fit.loo is None else fit.loo["elpd"],
                 "log_bayes_factor": self.log_bayes_factor(fit),
+                "log_posterior_odds": self.log_posterior_odds(fit),
+                "posterior_probability": float(probability[k + 1]),
                 "expr": float(fit.expr),
                 "parameters": fit.effect_parameters,
                 "score_delta_chi2": float(scores.get(fit.label, np.nan)),
@@ -176,20 +221,28 @@ class DiscoveryResult:
             "verdict": self.verdict,
             "flagged_modes": self.flags.flagged_modes,
             "named_effect": named,
-            "candidates": [candidate(f) for f in self.fits],
+            "candidates": [candidate(k, f) for k, f in enumerate(self.fits)],
+            "prior_log_odds": self.prior_log_odds,
             "gap_before": float(self.baseline.expr),
             "gap_after": float(self.final.expr),
             "reason": self.reason,
             "ambiguous_with": [f.label for f in self.ambiguous_with],
             "baseline": {
                 "log_evidence": float(self.baseline.log_evidence),
+                "posterior_probability": float(probability[0]),
                 "loo": None if self.baseline.loo is None else self.baseline.loo["elpd"],
                 "parameters": self.baseline.parameters,
             },
             "design_after": self.final.parameters,
             "error_pct_before": [float(v) for v in 100 * self.baseline.residual_rel],
             "error_pct_after": [float(v) for v in 100 * self.final.residual_rel],
-            "noise": {"source": self.noise.source, "sigma_rel": float(self.noise.sigma)},
+            "noise": {
+                "source": self.noise.source,
+                "sigma_rel": float(self.noise.sigma),
+                "shapes": None
+                if self.baseline.space.shapes is None
+                else ("data sd" if self.baseline.space.shapes.known else "inferred per mode"),
+            },
             "effects": self.effects,
             "scanned": len(self.localization.scores),
             "wall_s": float(self.wall_s),
@@ -197,9 +250,15 @@ class DiscoveryResult:
 
 
 def decide(
-    baseline: ModelFit, fits: list, flags: ModeFlags, noise: NoiseModel, s: DiscoverySettings
+    baseline: ModelFit,
+    fits: list,
+    flags: ModeFlags,
+    noise: NoiseModel,
+    s: DiscoverySettings,
+    prior_log_odds: float,
 ) -> tuple[str, str, ModelFit | None, list]:
-    """Verdict, reason, named fit (or None), ambiguous fits (module docstring, step 5)."""
+    """Verdict, reason, named fit (or None), ambiguous fits (module docstring, step 5).
+    ``prior_log_odds``: of each candidate against the baseline (``settings.prior_log_odds``)."""
     baseline_ok = not flags.flagged_modes and (
         noise.sigma <= s.max_noise_rel if noise.inferred else flags.chi2_p > s.adequacy_p
     )
@@ -209,19 +268,23 @@ def decide(
         return "unexplained", "misfit remains and no candidate could be fitted", None, []
     best = fits[0]
     ln_bf = best.log_evidence - baseline.log_evidence
-    if ln_bf <= s.threshold_ln_bf:
+    log_odds = ln_bf + prior_log_odds
+    if log_odds <= s.threshold_log_odds:
+        odds = (
+            f"ln BF {ln_bf:.2f}, posterior log odds {log_odds:.2f} <= {s.threshold_log_odds:g} "
+            f"with prior log odds {prior_log_odds:.2f}"
+        )
         if baseline_ok:
             return (
                 "no discrepancy",
-                f"baseline fits within noise; best candidate {best.label} has ln BF "
-                f"{ln_bf:.2f} <= {s.threshold_ln_bf:g}",
+                f"baseline fits within noise; best candidate {best.label}: {odds}",
                 None,
                 [],
             )
         return (
             "unexplained",
             f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
-            f"beats the baseline (best {best.label}, ln BF {ln_bf:.2f})",
+            f"beats the baseline clearly (best {best.label}: {odds})",
             None,
             [],
         )
@@ -244,12 +307,34 @@ def decide(
             [],
         )
     d = len(best.names)
+    # the named model is judged at family-wise level adequacy_p (1e-3), stricter than the
+    # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
+    # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
+    shape_chi2, shape_dof = known_shape_chi2(best)
     if noise.inferred:  # judged against its own residual scale, which must look like test noise
         own = noise_model(baseline.space.problem.data, best.residual_rel, d)
-        after = flag_modes(best.residual_rel, own, d, mac=best.mac, alpha=s.alpha)
+        after = flag_modes(
+            best.residual_rel,
+            own,
+            d,
+            None,
+            best.mac,
+            s.adequacy_p,
+            shape_chi2=shape_chi2,
+            shape_dof=shape_dof,
+        )
         adequate = not after.flagged_modes and own.sigma <= s.max_noise_rel
     else:
-        after = flag_modes(best.residual_rel, noise, d, mac=best.mac, alpha=s.alpha)
+        after = flag_modes(
+            best.residual_rel,
+            noise,
+            d,
+            None,
+            best.mac,
+            s.adequacy_p,
+            shape_chi2=shape_chi2,
+            shape_dof=shape_dof,
+        )
         adequate = not after.flagged_modes and after.chi2_p > s.adequacy_p
     if not adequate:
         return (
@@ -262,7 +347,7 @@ def decide(
         )
     return (
         "explained",
-        f"{best.label}: ln BF {ln_bf:.2f} vs baseline, "
+        f"{best.label}: ln BF {ln_bf:.2f} vs baseline (posterior log odds {log_odds:.2f}), "
         + (
             f"{best.log_evidence - fits[1].log_evidence:.2f} vs runner-up {fits[1].label}"
             if len(fits) > 1
@@ -271,6 +356,17 @@ def decide(
         best,
         [],
     )
+
+
+def known_shape_chi2(fit: ModelFit) -> tuple[np.ndarray | None, int]:
+    """((m,) per-mode shape chi^2 c_i of ``fit`` (NaN for modes without a shape term), dof) under
+    the data's known shape noise; (None, 0) when the shape noise is inferred or there are none."""
+    shapes = fit.space.shapes
+    if shapes is None or not shapes.known:
+        return None, 0
+    c = np.full(fit.residual_rel.size, np.nan)
+    c[shapes.modes] = shapes.chi2(fit.best.r[fit.space.n_frequency :])
+    return c, shapes.dof
 
 
 def _effect_at_bound(fit: ModelFit, n_design: int, tolerance: float) -> list[str]:
@@ -302,8 +398,9 @@ def _select(scores, settings: DiscoverySettings) -> list:
 
 
 def _candidate_starts(design_theta, score, reference_theta=()) -> list[np.ndarray]:
-    """Refit starts.  Effect values: the score test's suggestion, 3x and 10x its step from null
-    (the linear step underestimates large effects), and the screen grid on both sides of null
+    """Refit starts.  Effect values: the score test's suggestion (plus a quarter of the range
+    when that step is small), 3x and 10x the step from null (the linear step underestimates
+    large effects), and the screen grid on both sides of null
     (``localization.screen_grid``; the linear step can even point the wrong way when the
     baseline sits at a bound).  Each with the design variables at the baseline optimum and
     (if given) at the reference design: a baseline that absorbed a large effect can sit at a
@@ -311,15 +408,18 @@ def _candidate_starts(design_theta, score, reference_theta=()) -> list[np.ndarra
     axis = score.candidate.axes[0]
     null = score.candidate.null[axis.name]
     z0, z1 = float(axis.to_z(null)), float(axis.to_z(score.step_theta))
+    suggested = z1
     lo, hi = axis.z_bounds
     if abs(z1 - z0) < 0.05 * (hi - lo):
-        # the suggested step is tiny (or blocked at a bound): try a quarter of the range inward
+        # the suggested step is small (or blocked at a bound): it stays a start (a small true
+        # effect is where a sharp likelihood, e.g. known shape noise, wants it), and a quarter
+        # of the range inward sets the scale of the far starts
         z1 = z0 + (0.25 if z0 - lo <= hi - z0 else -0.25) * (hi - lo)
     far = [float(np.clip(z0 + f * (z1 - z0), lo, hi)) for f in (3.0, 10.0)]
     designs = [np.asarray(design_theta, dtype=float)]
     for other in reference_theta or ():
         designs.append(np.asarray(other, dtype=float))
-    values = [z1, *far, *screen_grid(axis, z0)]
+    values = [suggested, *([z1] if z1 != suggested else []), *far, *screen_grid(axis, z0)]
     return [np.append(d, axis.from_z(z)) for d in designs for z in values]
 
 
@@ -395,8 +495,16 @@ def discover(
         max_nfev=settings.max_nfev,
     )
     mac = baseline.table.mac if data.shapes is not None else None
+    shape_chi2, shape_dof = known_shape_chi2(base_fit)
     flags = flag_modes(
-        base_fit.residual_rel, noise, len(axes), predictive_rel_var, mac, settings.alpha
+        base_fit.residual_rel,
+        noise,
+        len(axes),
+        predictive_rel_var,
+        mac,
+        settings.alpha,
+        shape_chi2=shape_chi2,
+        shape_dof=shape_dof,
     )
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     t1 = time.perf_counter()
@@ -453,7 +561,9 @@ def discover(
     for k, fit in enumerate([base_fit, *fits[: settings.loo_top]]):
         fit.loo = laplace_loo(fit, settings.loo_draws, seed=settings.seed + k)
     timings["loo_s"] = time.perf_counter() - t3
-    verdict, reason, named, ambiguous = decide(base_fit, fits, flags, noise, settings)
+    verdict, reason, named, ambiguous = decide(
+        base_fit, fits, flags, noise, settings, settings.prior_log_odds(len(where.scores))
+    )
     say(f"verdict: {verdict} ({reason})")
     return DiscoveryResult(
         verdict=verdict,

@@ -2,8 +2,8 @@
 
 Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (m,),
 ``shapes_real`` and ``shapes_imag`` (n_dof, m), ``dof_labels`` (n_dof,) strings, optional
-``mpc``, ``frequency_sd_hz``, ``weights`` (m,), any ``extra`` arrays under ``/modes/extra``;
-attribute ``source``.  Written atomically.
+``mpc``, ``frequency_sd_hz``, ``weights``, ``shape_sd_rel`` (m,), any ``extra`` arrays under
+``/modes/extra``; attribute ``source``.  Written atomically.
 """
 
 import os
@@ -15,7 +15,7 @@ from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
 
-_OPTIONAL = ("damping_ratio", "mpc", "frequency_sd_hz", "weights")
+_OPTIONAL = ("damping_ratio", "mpc", "frequency_sd_hz", "weights", "shape_sd_rel")
 
 
 def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:

@@ -1,0 +1,148 @@
+"""How far apart two explanations of a test are, in units of the test noise (identifiability).
+
+Given a *true* structure's noise-free modes (frequencies f (m,) [Hz] and shapes T (n, m) at the
+test DOFs) and a model (the baseline, or the baseline extended by one library effect), fit the
+model's parameters theta (design variables plus the effect's parameters) to the truth by least
+squares on the whitened residual of the discovery likelihood:
+
+    r_f,i = (f_model,i - f_i) / (f_i sigma_f)                      frequencies, relative sd sigma_f
+    r_s,i = (t_i - a_i p_i) / (sigma_s / sqrt(n))                  shapes (``shape_residuals``)
+
+with sigma_s the shape noise as a fraction of a shape's RMS amplitude (so a unit-norm shape's
+components carry sd sigma_s / sqrt(n) and noise alone gives 1 - MAC ~ sigma_s^2, as
+``modal_data.noisy_modes``).  The minimum D = min_theta |r|^2 / 2 is, for equal noise covariances,
+the Kullback-Leibler divergence from the truth's test distribution to the model's best member:
+the expected log-likelihood ratio, truth against the model's best fit, that one noisy test
+carries.  When D is a nat or two, no test at that noise level can tell the model from the truth,
+however the evidence is computed; when D of the baseline is large and D of a candidate is small,
+every such test prefers the candidate: an out-of-library truth is then *observationally
+equivalent* to that library effect, and naming it is not a failure of the decision rule but a
+limit of the data.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from bayesupdate.discovery.candidates import ParameterAxis, axis_for, make_candidate
+from bayesupdate.discovery.effects import Effect
+from bayesupdate.discovery.localization import candidate_problem
+from bayesupdate.discovery.shape_evidence import shape_residuals, unit_real_shapes
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.problem import build_problem
+from bayesupdate.modal_data import ModalData
+
+
+@dataclass(frozen=True)
+class EquivalenceFit:
+    """Best fit of one model to a noise-free truth (module docstring).
+
+    names / theta : fitted parameters (SI).  frequency_z : (m,) frequency residuals in noise
+    units.  mac_deficit : (m,) 1 - MAC of the fitted model shapes against the truth's.
+    shape_chi2 : sum of the whitened shape residuals squared.
+    """
+
+    label: str
+    names: tuple[str, ...]
+    theta: np.ndarray
+    frequency_z: np.ndarray
+    mac_deficit: np.ndarray
+    shape_chi2: float
+
+    @property
+    def divergence(self) -> float:
+        """D = chi^2_min / 2 [nats]: the expected log-likelihood ratio per test."""
+        return 0.5 * (float(np.sum(self.frequency_z**2)) + self.shape_chi2)
+
+
+def noise_free_modes(prediction, source: str = "noise-free truth") -> ModalData:
+    """ModalData of a ``Prediction``'s frequencies and shapes, listed by frequency, no noise."""
+    f = np.asarray(prediction.frequencies_hz, dtype=float)
+    order = np.argsort(f)
+    return ModalData(
+        f[order],
+        shapes=np.asarray(prediction.shapes, dtype=float)[:, order],
+        dof_labels=tuple(prediction.dof_labels),
+        source=source,
+    )
+
+
+def fit_to_truth(
+    model,
+    truth: ModalData,
+    design_start: dict,
+    effect: Effect | None = None,
+    frequency_noise: float = 0.003,
+    shape_noise: float = 0.03,
+    effect_starts: int = 7,
+) -> EquivalenceFit:
+    """Fit ``model`` (extended by ``effect`` when given: its parameters are fitted too) to the
+    noise-free ``truth`` (ModalData with shapes), design variables started at ``design_start``
+    {name: SI value}, the effect at ``effect_starts`` points spread over its axis (log axes in
+    log) and at its null value.  Returns the best of these least-squares fits (module
+    docstring)."""
+    if truth.shapes is None:
+        raise BayesUpdateError("equivalence: the truth needs mode shapes")
+    if not (frequency_noise > 0 and shape_noise > 0):
+        raise BayesUpdateError("equivalence: frequency_noise and shape_noise must be > 0")
+    problem = build_problem(model, truth, None, pairing="mac")
+    design = np.array([design_start[p.name] for p in problem.parameters], dtype=float)
+    axes: tuple[ParameterAxis, ...] = tuple(axis_for(p) for p in problem.parameters)
+    starts = [design]
+    label = "baseline"
+    if effect is not None:
+        candidate = make_candidate(model, effect)
+        problem = candidate_problem(problem, design, candidate)
+        axes = axes + candidate.axes
+        label = effect.tag
+        grids = [np.linspace(*a.z_bounds, effect_starts + 2)[1:-1] for a in candidate.axes]
+        mesh = np.meshgrid(*grids, indexing="ij")
+        starts = [
+            np.append(design, [a.from_z(z) for a, z in zip(candidate.axes, point, strict=True)])
+            for point in zip(*(m.ravel() for m in mesh), strict=True)
+        ]
+        # the effect at its null value: the baseline's own fit is reachable, so D(candidate)
+        # <= D(baseline) up to the optimiser, as it must be for a nested model
+        starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
+    f = truth.frequencies_hz
+    test_unit = unit_real_shapes(np.asarray(truth.shapes))
+    shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
+    z_low = np.array([a.z_bounds[0] for a in axes])
+    z_span = np.array([a.z_bounds[1] - a.z_bounds[0] for a in axes])
+
+    def theta_of(u):
+        z = z_low + np.clip(u, 0.0, 1.0) * z_span
+        return np.array([float(a.from_z(zi)) for a, zi in zip(axes, z, strict=True)])
+
+    def parts(theta):
+        ev = problem.evaluate(theta)
+        if not ev.ok:
+            return None
+        frequency_z = (ev.frequencies_hz - f) / (f * frequency_noise)
+        d = shape_residuals(test_unit, ev.paired.shapes)
+        return frequency_z, d
+
+    def residual(u):
+        out = parts(theta_of(u))
+        if out is None:  # a failed solve: a large, finite residual keeps the solver away
+            return np.full(f.size * (1 + test_unit.shape[0]), 1e6)
+        frequency_z, d = out
+        return np.concatenate([frequency_z, d.T.ravel() / shape_sd])
+
+    best = None
+    for theta0 in starts:
+        u0 = (np.array([a.to_z(t) for a, t in zip(axes, theta0, strict=True)]) - z_low) / z_span
+        fit = least_squares(residual, np.clip(u0, 0, 1), bounds=(0.0, 1.0), x_scale=0.1)
+        if best is None or fit.cost < best.cost:
+            best = fit
+    theta = theta_of(best.x)
+    frequency_z, d = parts(theta)
+    return EquivalenceFit(
+        label=label,
+        names=tuple(problem.names),
+        theta=theta,
+        frequency_z=frequency_z,
+        mac_deficit=np.sum(d * d, axis=0),
+        shape_chi2=float(np.sum(d * d) / shape_sd**2),
+    )

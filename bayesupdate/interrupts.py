@@ -7,11 +7,16 @@ safe points (between optimiser starts, between sampler steps), so the stop alway
 ``quiet_unraisable`` keeps the extension's "Exception ignored" report off the terminal, and
 ``quiet_excepthook`` the traceback a Cython function prints first (``__Pyx_WriteUnraisable``
 calls ``PyErr_PrintEx``, i.e. ``sys.excepthook``, before the unraisable hook).
+
+Inside ``deferred()`` the handler only records the request: the sampler's bookkeeping between
+blocks and its checkpoint writes must not be cut in half (a stop landing there used to end the
+run with a bare "interrupted" and no resume hint, although the last checkpoint was valid).
 """
 
 import sys
+from contextlib import contextmanager
 
-_state = {"requested": False}
+_state = {"requested": False, "deferred": False}
 
 
 def request() -> None:
@@ -49,7 +54,21 @@ def quiet_excepthook(exc_type, exc_value, traceback) -> None:
     sys.__excepthook__(exc_type, exc_value, traceback)
 
 
+@contextmanager
+def deferred():
+    """While the block runs, ``stop_handler`` records a stop request without raising; the
+    caller checks ``requested()`` after the block."""
+    previous = _state["deferred"]
+    _state["deferred"] = True
+    try:
+        yield
+    finally:
+        _state["deferred"] = previous
+
+
 def stop_handler(signum, frame) -> None:
-    """A signal handler: record the request and interrupt where the signal lands."""
+    """A signal handler: record the request and interrupt where the signal lands (unless inside
+    ``deferred()``)."""
     request()
-    raise KeyboardInterrupt
+    if not _state["deferred"]:
+        raise KeyboardInterrupt

@@ -314,6 +314,53 @@ def test_eigen_solve_failure_in_the_fe_model_is_counted(tmp_path, monkeypatch, c
         assert 0 < int(h5["optimum"].attrs["failed_evaluations"]) < calls["raised"]
 
 
+def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
+    tmp_path, monkeypatch, capsys
+):
+    """A SIGTERM that lands while the first checkpoint is being written (as on a loaded
+    machine): the write completes, the run stops before the next block with the resume hint,
+    exit 130, and --resume completes it."""
+    from bayesupdate import interrupts
+    from bayesupdate.inference import runner
+
+    original = runner.write_result
+    calls = []
+
+    def signalled(path, *args, **kwargs):
+        calls.append(path)
+        if len(calls) == 1:
+            interrupts.stop_handler(signal.SIGTERM, None)  # the handler, mid-write
+        original(path, *args, **kwargs)
+
+    monkeypatch.setattr(runner, "write_result", signalled)
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY.format(steps=200, check=50))
+    out = tmp_path / "run.h5"
+    assert main(["sample", str(study), "--out", str(out), "--no-progress"]) == 130
+    err = capsys.readouterr().err
+    assert "stopped after 50 steps" in err and "--resume" in err, err
+    with h5py.File(out) as h5:
+        assert h5.attrs["status"] == "partial" and h5["posterior/chain"].shape[0] == 50
+    assert not interrupts.requested()
+    monkeypatch.setattr(runner, "write_result", original)
+    assert main(["sample", str(study), "--out", str(out), "--resume", "--no-progress"]) == 0
+    with h5py.File(out) as h5:
+        assert h5.attrs["status"] == "complete" and h5["posterior/chain"].shape[0] == 200
+
+
+def test_deferred_stop_is_recorded_not_raised():
+    from bayesupdate import interrupts
+
+    try:
+        with interrupts.deferred():
+            interrupts.stop_handler(signal.SIGTERM, None)  # no exception inside the block
+            assert interrupts.requested()
+        with pytest.raises(KeyboardInterrupt):
+            interrupts.stop_handler(signal.SIGTERM, None)  # outside it interrupts at once
+    finally:
+        interrupts.clear()
+
+
 def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path, monkeypatch):
     # a SIGTERM whose KeyboardInterrupt a compiled extension swallowed (scipy's Sobol set-up
     # reports "Exception ignored" and goes on): the recorded request stops the run at the next

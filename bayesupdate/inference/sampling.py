@@ -404,6 +404,8 @@ def sample_posterior(
         coords, lps = [], []
         try:
             sampler.reset()
+            if interrupts.requested():  # arrived during the previous block's bookkeeping
+                raise KeyboardInterrupt
             for step in sampler.sample(state, iterations=block, store=True):
                 if stop["requested"] or interrupts.requested():
                     raise KeyboardInterrupt
@@ -417,27 +419,30 @@ def sample_posterior(
                 bar.update(1)
         except KeyboardInterrupt:
             interrupted = True
-        n_new = len(coords)
-        if n_new:
-            block_coords = np.array(coords)
-            # stored in theta, with the log-posterior of theta (the Jacobian taken off)
-            chain_parts.append(to_theta(block_coords))
-            lp_parts.append(np.array(lps) - log_jacobian(block_coords))
-            accepted += sampler.backend.accepted
-            done += n_new
-        if interrupted:
-            break
-        chain_so_far = np.concatenate(chain_parts)
-        tau = _autocorr(chain_so_far)
-        converged = bool(np.all(np.isfinite(tau)) and done >= min_autocorr_times * np.max(tau))
-        if converged and (target_rhat is not None or target_ess is not None):
-            rhat, ess = convergence(chain_so_far, tau)
-            converged = bool(
-                (target_rhat is None or np.all(rhat <= target_rhat))
-                and (target_ess is None or np.all(ess >= target_ess))
-            )
-        if checkpoint is not None:
-            checkpoint(snapshot(finished=converged or done >= steps))
+        # bookkeeping and the checkpoint run to the end; a stop request arriving meanwhile is
+        # recorded by the CLI's handler and acted on at the next block (interrupts.deferred)
+        with interrupts.deferred():
+            n_new = len(coords)
+            if n_new:
+                block_coords = np.array(coords)
+                # stored in theta, with the log-posterior of theta (the Jacobian taken off)
+                chain_parts.append(to_theta(block_coords))
+                lp_parts.append(np.array(lps) - log_jacobian(block_coords))
+                accepted += sampler.backend.accepted
+                done += n_new
+            if interrupted:
+                break
+            chain_so_far = np.concatenate(chain_parts)
+            tau = _autocorr(chain_so_far)
+            converged = bool(np.all(np.isfinite(tau)) and done >= min_autocorr_times * np.max(tau))
+            if converged and (target_rhat is not None or target_ess is not None):
+                rhat, ess = convergence(chain_so_far, tau)
+                converged = bool(
+                    (target_rhat is None or np.all(rhat <= target_rhat))
+                    and (target_ess is None or np.all(ess >= target_ess))
+                )
+            if checkpoint is not None:
+                checkpoint(snapshot(finished=converged or done >= steps))
         if converged:
             break
     bar.close()

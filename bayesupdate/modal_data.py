@@ -64,12 +64,10 @@ class ModalData:
                 raise BayesUpdateError(f"{where}: {name} contains NaN or inf")
             if name in ("frequency_sd_hz", "weights") and np.any(arr < 0):
                 raise BayesUpdateError(f"{where}: {name} must be >= 0")
-            if name == "shape_sd_rel" and (np.any(arr <= 0) or self.shapes is None):
-                raise BayesUpdateError(
-                    f"{where}: shape_sd_rel must be > 0 and needs shapes"
-                    if self.shapes is None
-                    else f"{where}: shape_sd_rel must be > 0"
-                )
+            if name == "shape_sd_rel" and self.shapes is None:
+                raise BayesUpdateError(f"{where}: shape_sd_rel needs shapes")
+            if name == "shape_sd_rel" and np.any(arr <= 0):
+                raise BayesUpdateError(f"{where}: shape_sd_rel must be > 0")
             object.__setattr__(self, name, arr)
         labels = tuple(str(label) for label in self.dof_labels)
         object.__setattr__(self, "dof_labels", labels)

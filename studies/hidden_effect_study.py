@@ -56,9 +56,9 @@ OUT_OF_LIBRARY = [
     "added_mass@18:m=0.6+joint_flexibility@hot_pipe/catalyst:k_rot=2e3",
     "geometry:tail_length=0.30",
     "geometry:jog_dy=0.35",
-    # added after the 2026-11-23 session: the four cases first run outside the suite (the
-    # 0.15 m tail was named as a mass before the multiplicity prior) and six never run before
-    # the prior was chosen (robustness check, not used to choose it)
+    # added on 2026-11-23: the four cases first run outside the suite (the 0.15 m tail was
+    # named as a mass under the earlier rule) and six new ones; of these, the 0.125 m tail was
+    # still named as a mass under the multiplicity prior alone, which led to stated shape noise
     "added_mass@4:m=0.5+stiffness_change@cold_pipe:factor=0.7",
     "bend_flexibility@elbow:factor=3+boundary_spring@20:k=5e3",
     "geometry:tail_length=0.15",

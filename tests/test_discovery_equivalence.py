@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from test_discovery_workflow import TRUE_T, frame_model
 
+from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.effects import Effect, extend_model, parse_effect_spec
 from bayesupdate.discovery.equivalence import fit_to_truth, noise_free_modes
 from bayesupdate.errors import BayesUpdateError
@@ -28,12 +29,13 @@ def test_the_true_effect_is_equivalent_and_the_baseline_is_not(frame):
     )
     baseline = fit_to_truth(frame, truth, start, None, 0.002, 0.03)
     assert baseline.label == "baseline" and baseline.names == ("t_a",)
-    # D is half the whitened chi^2 at the best fit, from its parts
-    np.testing.assert_allclose(
-        baseline.divergence,
-        0.5 * (np.sum(baseline.frequency_z**2) + baseline.shape_chi2),
-        rtol=1e-12,
-    )
+    # the reported residuals are those of the fitted point: an independent solve there gives
+    # the same frequency errors and 1 - MAC against the truth's shapes
+    again = frame.predict({"t_a": baseline.theta[0]}, 8)
+    mac = np.max(mac_matrix(truth.shapes, again.shapes), axis=1)
+    np.testing.assert_allclose(baseline.mac_deficit, 1 - mac, rtol=1e-6, atol=1e-12)
+    z = (np.sort(again.frequencies_hz) - truth.frequencies_hz) / (0.002 * truth.frequencies_hz)
+    np.testing.assert_allclose(baseline.frequency_z, z, rtol=1e-6)
     # a 0.3 kg mass moves frequencies by several % (noise 0.2 %): far from equivalent
     assert baseline.divergence > 1e3
     assert np.max(np.abs(baseline.frequency_z)) > 10

@@ -27,8 +27,10 @@ from scipy.optimize import least_squares
 
 from bayesupdate.discovery.candidates import ParameterAxis, axis_for, make_candidate
 from bayesupdate.discovery.effects import Effect
+from bayesupdate.discovery.evidence import FitSpace
+from bayesupdate.discovery.flagging import NoiseModel
 from bayesupdate.discovery.localization import candidate_problem
-from bayesupdate.discovery.shape_evidence import shape_residuals, unit_real_shapes
+from bayesupdate.discovery.shape_evidence import ShapeEvidence, unit_real_shapes
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.problem import build_problem
 from bayesupdate.modal_data import ModalData
@@ -105,44 +107,34 @@ def fit_to_truth(
         # the effect at its null value: the baseline's own fit is reachable, so D(candidate)
         # <= D(baseline) up to the optimiser, as it must be for a nested model
         starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
-    f = truth.frequencies_hz
+    # the discovery likelihood's own whitened residual: fixed frequency noise, and a shape block
+    # with the known level sigma_s / sqrt(n) (``shape_evidence``)
+    m = truth.n_modes
+    noise = NoiseModel(np.full(m, frequency_noise), np.ones(m), False, "fixed", frequency_noise)
     test_unit = unit_real_shapes(np.asarray(truth.shapes))
     shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
-    z_low = np.array([a.z_bounds[0] for a in axes])
-    z_span = np.array([a.z_bounds[1] - a.z_bounds[0] for a in axes])
-
-    def theta_of(u):
-        z = z_low + np.clip(u, 0.0, 1.0) * z_span
-        return np.array([float(a.from_z(zi)) for a, zi in zip(axes, z, strict=True)])
-
-    def parts(theta):
-        ev = problem.evaluate(theta)
-        if not ev.ok:
-            return None
-        frequency_z = (ev.frequencies_hz - f) / (f * frequency_noise)
-        d = shape_residuals(test_unit, ev.paired.shapes)
-        return frequency_z, d
+    shapes = ShapeEvidence(np.arange(m), test_unit, np.full(m, shape_sd), known=True)
+    space = FitSpace(problem, axes, noise, shapes)
 
     def residual(u):
-        out = parts(theta_of(u))
-        if out is None:  # a failed solve: a large, finite residual keeps the solver away
-            return np.full(f.size * (1 + test_unit.shape[0]), 1e6)
-        frequency_z, d = out
-        return np.concatenate([frequency_z, d.T.ravel() / shape_sd])
+        e, evaluation = space.relative_errors(space.theta_from_z(space.z_from_u(u)))
+        if not evaluation.ok:  # a failed solve: a large, finite residual keeps the solver away
+            return np.full(space.size, 1e6)
+        return space.residual_vector(e, evaluation.paired.shapes)
 
     best = None
     for theta0 in starts:
-        u0 = (np.array([a.to_z(t) for a, t in zip(axes, theta0, strict=True)]) - z_low) / z_span
-        fit = least_squares(residual, np.clip(u0, 0, 1), bounds=(0.0, 1.0), x_scale=0.1)
+        u0 = np.clip(space.u_from_theta(theta0), 0.0, 1.0)
+        fit = least_squares(residual, u0, bounds=(0.0, 1.0), x_scale=0.1)
         if best is None or fit.cost < best.cost:
             best = fit
-    theta = theta_of(best.x)
-    frequency_z, d = parts(theta)
+    theta = space.theta_from_z(space.z_from_u(best.x))
+    r = best.fun
     return EquivalenceFit(
         label=label,
         names=tuple(problem.names),
         theta=theta,
-        frequency_z=frequency_z,
-        mac_deficit=np.sum(d * d, axis=0),
-        shape_chi2=float(np.sum(d * d) / shape_sd**2),
+        frequency_z=r[:m],
+        mac_deficit=shapes.rss(r[m:]),  # |d_i|^2 = 1 - MAC_i
+        shape_chi2=float(np.sum(r[m:] ** 2)),
     )

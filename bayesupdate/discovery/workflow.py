@@ -311,31 +311,23 @@ def decide(
     # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
     # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
     shape_chi2, shape_dof = known_shape_chi2(best)
-    if noise.inferred:  # judged against its own residual scale, which must look like test noise
-        own = noise_model(baseline.space.problem.data, best.residual_rel, d)
-        after = flag_modes(
-            best.residual_rel,
-            own,
-            d,
-            None,
-            best.mac,
-            s.adequacy_p,
-            shape_chi2=shape_chi2,
-            shape_dof=shape_dof,
-        )
-        adequate = not after.flagged_modes and own.sigma <= s.max_noise_rel
-    else:
-        after = flag_modes(
-            best.residual_rel,
-            noise,
-            d,
-            None,
-            best.mac,
-            s.adequacy_p,
-            shape_chi2=shape_chi2,
-            shape_dof=shape_dof,
-        )
-        adequate = not after.flagged_modes and after.chi2_p > s.adequacy_p
+    # inferred noise: judged against its own residual scale, which must look like test noise
+    own = (
+        noise_model(baseline.space.problem.data, best.residual_rel, d) if noise.inferred else noise
+    )
+    after = flag_modes(
+        best.residual_rel,
+        own,
+        d,
+        None,
+        best.mac,
+        s.adequacy_p,
+        shape_chi2=shape_chi2,
+        shape_dof=shape_dof,
+    )
+    adequate = not after.flagged_modes and (
+        own.sigma <= s.max_noise_rel if noise.inferred else after.chi2_p > s.adequacy_p
+    )
     if not adequate:
         return (
             "unexplained",

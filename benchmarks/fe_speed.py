@@ -136,6 +136,7 @@ def versus_opensees(model, label: str, repeats: int) -> dict:
         cpu_ratio_eigen=c_eigen / c_ours,
         variant=label,
         opensees_element=info.element,
+        opensees_solver=opensees_frame.well_posed_solver(info.n_rigid_expected),
         max_rel_diff=float(np.max(np.abs(theirs / ours - 1.0))),
         bayesupdate_ms=1e3 * t_ours,
         opensees_build_eigen_ms=1e3 * t_full,

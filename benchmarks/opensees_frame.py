@@ -63,8 +63,9 @@ def elbow_factor(thickness, bend_radius, outer_diameter):
     """ASME B31.3 flexibility factor k = max(1, 1.65 / h), h = t R / r^2, r = (D - t) / 2; 1 for
     straight elements (R = 0).  (n,) arrays in m."""
     r = 0.5 * (outer_diameter - thickness)
-    h = thickness * np.maximum(bend_radius, 1e-300) / r**2
-    return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
+    h = thickness * bend_radius / r**2
+    bent = np.asarray(bend_radius) > 0  # a solid straight rod has h = 0: no 1.65 / 0
+    return np.where(bent, np.maximum(1.0, 1.65 / np.where(bent, h, 1.0)), 1.0)
 
 
 def _beam_element(structure: Structure) -> str:
@@ -211,11 +212,24 @@ def build_opensees(
     )
 
 
+def well_posed_solver(n_rigid: int) -> str:
+    """OpenSees eigen solver that does not factorise a singular K.
+
+    OpenSees' ARPACK runs in shift-invert mode at shift 0, so on a free body (``n_rigid`` > 0)
+    it factorises the singular stiffness: whether the zero pivot is caught (``aii <
+    minDiagTol``) or turns into garbage eigenvalues depends on round-off, i.e. on the BLAS and
+    the numbering.  Its dense generalized LAPACK solver (QZ) needs no factorisation of K and is
+    exact for free bodies; a supported structure keeps the banded ARPACK solver."""
+    return "-fullGenLapack" if n_rigid else "-genBandArpack"
+
+
 def eigen_frequencies(
-    n_modes: int, n_rigid: int = 6, solver: str = "-genBandArpack"
+    n_modes: int, n_rigid: int = 6, solver: str | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Eigen-solve the current OpenSees domain (built by ``build_opensees``): (elastic
-    frequencies (n_modes,) [Hz], the dropped rigid eigenvalues (n_rigid,) [rad^2/s^2])."""
+    frequencies (n_modes,) [Hz], the dropped rigid eigenvalues (n_rigid,) [rad^2/s^2]).
+    ``solver`` None picks ``well_posed_solver(n_rigid)``."""
+    solver = solver or well_posed_solver(n_rigid)
     ops.wipeAnalysis()  # a second eigen on the same domain needs a fresh analysis
     ops.constraints("Transformation")  # rigid links of the point masses
     ops.numberer("RCM")
@@ -228,10 +242,11 @@ def opensees_frequencies(
     structure: Structure,
     n_modes: int = 12,
     props: ElementProperties | None = None,
-    solver: str = "-genBandArpack",
+    solver: str | None = None,
     polar_torsion: bool = True,
 ) -> np.ndarray:
-    """First ``n_modes`` elastic frequencies [Hz] of ``structure`` computed by OpenSees."""
+    """First ``n_modes`` elastic frequencies [Hz] of ``structure`` computed by OpenSees, with
+    ``well_posed_solver`` unless ``solver`` is given."""
     info = build_opensees(structure, props, polar_torsion)
     f, rigid = eigen_frequencies(n_modes, info.n_rigid_expected, solver)
     if info.n_rigid_expected and np.max(np.abs(rigid)) > 1e-6 * (2 * np.pi * f[0]) ** 2:

@@ -9,6 +9,8 @@ Example (issue 4 item 9)::
     [data]
     source = "paper:ema"            # or a file (.csv, .h5, .uff), or inline:
     # frequencies_hz = [...], weights = [...], sd_hz = [...]
+    mass_kg = 12.29                 # measured mass (test data; overrides the source's own)
+    mass_sd_kg = 0.12               # its sd
     [parameters.t_hot_pipe]         # optional for built-in models (defaults from the model)
     bounds = [0.5e-3, 3.0e-3]
     prior = { kind = "uniform" }    # lognormal {mu, sigma} | normal {mean, sd} | halfnormal {scale}
@@ -17,8 +19,9 @@ Example (issue 4 item 9)::
     method = "auto"                 # auto | order | tracked | mac
     extra_modes = 2
     [objective]
-    mass_kg = 12.29                 # measured mass, for the optional mass term
-    mass_weight = 0.0
+    mass_kg = 12.29                 # target of the mass term (default: the data's measured mass)
+    mass_weight = 10.0              # default: 10 when a measured mass is known, else 0
+    use_measured_mass = true        # false (--no-mass): the data's measured mass is ignored
     mac_weight = 0.0
     [optimizer]
     starts = 16
@@ -28,7 +31,7 @@ Example (issue 4 item 9)::
     polish = true                   # Nelder-Mead polish of every end (optima on pairing kinks)
     [likelihood]
     sigma = 0.05                    # fixed, or sigma_prior = { kind = "halfnormal", scale = 0.1 }
-    mass_sd = 0.01                  # optional relative sd of the mass observation
+    mass_sd = 0.01                  # relative sd of the mass observation (default: the data's)
     pairing = "auto"                # "auto": the pairing above, batched when the model gives
                                     # batch shapes; "order" (batched, in order); "problem"
     [sampler]
@@ -75,9 +78,11 @@ class DataConfig:
     frequencies_hz: tuple | None = None
     weights: tuple | None = None
     sd_hz: tuple | None = None
+    mass_kg: float | None = None
+    mass_sd_kg: float | None = None
 
     def as_source(self):
-        """What ``inference.data.load_modal_data`` takes."""
+        """What ``inference.data.load_modal_data`` takes (the mass is applied by ``prepare``)."""
         if self.frequencies_hz is not None:
             table = {"frequencies_hz": self.frequencies_hz}
             if self.weights is not None:
@@ -97,7 +102,8 @@ class PairingConfig:
 @dataclass(frozen=True)
 class ObjectiveConfig:
     mass_kg: float | None = None
-    mass_weight: float = 0.0
+    mass_weight: float | None = None
+    use_measured_mass: bool = True
     mac_weight: float = 0.0
 
 

@@ -28,6 +28,9 @@ class ModalData:
     shape_sd_rel : (m,) float or None, standard deviation of each shape's components as a
         fraction of that shape's RMS amplitude [-] (known shape noise: 1 - MAC ~ shape_sd_rel^2);
         None when unknown (discovery then infers a level per mode).
+    mass_kg : float or None, the measured total mass of the tested structure [kg]: test data,
+        like the frequencies (seed section 2 weighs the exhaust: 12.29 kg).
+    mass_sd_kg : float or None, its standard deviation [kg] (needs ``mass_kg``).
     source : str, where the data came from (file name, ``paper:ema``, ...).
     """
 
@@ -39,6 +42,8 @@ class ModalData:
     weights: np.ndarray | None = None
     mpc: np.ndarray | None = None
     shape_sd_rel: np.ndarray | None = None
+    mass_kg: float | None = None
+    mass_sd_kg: float | None = None
     source: str = ""
     extra: dict = field(default_factory=dict, compare=False)
 
@@ -69,6 +74,7 @@ class ModalData:
             if name == "shape_sd_rel" and np.any(arr <= 0):
                 raise BayesUpdateError(f"{where}: shape_sd_rel must be > 0")
             object.__setattr__(self, name, arr)
+        self._check_mass(where)
         labels = tuple(str(label) for label in self.dof_labels)
         object.__setattr__(self, "dof_labels", labels)
         if len(set(labels)) != len(labels):
@@ -84,6 +90,28 @@ class ModalData:
             if not np.all(np.isfinite(shapes)):
                 raise BayesUpdateError(f"{where}: shapes contain NaN or inf")
             object.__setattr__(self, "shapes", shapes)
+
+    def _check_mass(self, where: str) -> None:
+        for name in ("mass_kg", "mass_sd_kg"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            try:
+                value = float(value)
+            except (TypeError, ValueError) as exc:
+                raise BayesUpdateError(f"{where}: {name} must be a number, got {value!r}") from exc
+            if not (np.isfinite(value) and value > 0):
+                raise BayesUpdateError(f"{where}: {name} must be a finite number > 0, got {value}")
+            object.__setattr__(self, name, value)
+        if self.mass_sd_kg is not None and self.mass_kg is None:
+            raise BayesUpdateError(f"{where}: mass_sd_kg needs mass_kg")
+
+    @property
+    def mass_sd_rel(self) -> float | None:
+        """Relative sd of the measured mass [-] (None without a measured mass or its sd)."""
+        if self.mass_kg is None or self.mass_sd_kg is None:
+            return None
+        return self.mass_sd_kg / self.mass_kg
 
     @property
     def n_modes(self) -> int:
@@ -105,6 +133,8 @@ class ModalData:
             weights=pick(self.weights),
             mpc=pick(self.mpc),
             shape_sd_rel=pick(self.shape_sd_rel),
+            mass_kg=self.mass_kg,
+            mass_sd_kg=self.mass_sd_kg,
             source=self.source,
         )
 

@@ -57,7 +57,10 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "targets_hz",
         "starts",
         "converged_starts",
+        "measured_mass_kg",
+        "mass_weight",
     }
+    assert result["measured_mass_kg"] is None and result["mass_weight"] == 0.0  # none measured
     assert result["targets_hz"] == [4.30, 10.80]
     assert result["objective"] < 1e-14  # two frequencies, two stiffnesses: an exact fit
     assert result["starts"] == 9 and result["converged_starts"] == 9
@@ -241,3 +244,29 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     assert result["converged"] and result["steps"] in (100, 200, 300, 400, 500)
     assert max(p["r_hat"] for p in result["parameters"].values()) <= 1.5
     assert min(p["ess_bulk"] for p in result["parameters"].values()) >= 20
+
+
+def test_a_posterior_that_misses_its_targets_says_so_everywhere(study, tmp_path, capsys):
+    """Issue 15 item 3: the step budget (400) ends the run before 1e9 tau: the terminal, the JSON
+    and the HDF5 file say "not converged" and why; a converged run says nothing of the kind."""
+    out = tmp_path / "post.h5"
+    assert main(["sample", str(study), "--out", str(out), "--json", "--seed", "3"]) == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out.splitlines()[-1])
+    assert result["converged"] is False
+    reason = result["convergence"]["reason"]
+    assert "400 steps < 1e+09 autocorrelation times" in reason and "step budget" in reason
+    assert "warning: the posterior did not converge: " + reason in captured.err
+    with h5py.File(out) as h5:
+        assert not h5["posterior"].attrs["converged"]
+        assert h5["posterior"].attrs["convergence_reason"] == reason
+    met = tmp_path / "met.toml"
+    met.write_text(
+        study.read_text().replace("min_autocorr_times = 1e9", "min_autocorr_times = 1")
+        + "target_rhat = 1.5\ntarget_ess = 50\n"
+    )
+    assert main(["sample", str(met), "--json", "--seed", "3"]) == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out.splitlines()[-1])
+    assert result["converged"] is True and result["convergence"]["reason"] is None
+    assert result["convergence"]["max_r_hat"] <= 1.5 and "warning" not in captured.err

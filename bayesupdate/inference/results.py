@@ -7,6 +7,7 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
                        config_json (the study as JSON; resume checks it), command
 /versions              attrs: python, bayesupdate, numpy, scipy, emcee, arviz, h5py
 /inputs                frequencies_hz (m,), weights (m,), [sd_hz (m,)], attrs: source,
+                       [measured_mass_kg, measured_mass_sd_kg],
                        parameter_names, bounds (d, 2) dataset, priors_json, pairing_method,
                        fixed_json, model
 /optimum               theta (d,), attrs: parameter_names, objective, expr, mass_kg, swapped,
@@ -16,12 +17,14 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 /optimum/residuals     test_hz, model_hz, error_pct, mac (NaN = no shapes), model_mode (1-based)
 /posterior             chain (steps, walkers, d), log_prob (steps, walkers), autocorr_time (d,),
                        acceptance (walkers,), attrs: names, burn, evaluations, failed_evaluations,
-                       wall_s, converged, interrupted, seed
+                       wall_s, converged (the run met its R-hat / ESS / tau targets),
+                       convergence_reason ("" when converged), interrupted, seed
 /posterior/state       coords (walkers, d), last_log_prob (walkers,), accepted (walkers,),
                        rng_keys (624,) uint32, attrs: rng_pos, rng_has_gauss, rng_cached_gaussian
 /posterior/diagnostics attrs: summary_json (see diagnostics.summarise), sampling_json
                        ({"pairing_mode", "pair_differs_fraction", "rom": {size,
-                       max_rel_error, certified, tol, n_modes, error_at (posterior mean)}})
+                       max_rel_error, certified, tol, n_modes, error_at (posterior mean)},
+                       "convergence": diagnostics.convergence_report})
 /posterior/predictions draw_index (n,), frequencies_hz (n, m), predictive_hz (n, m),
                        attrs: swap_fraction
 """
@@ -126,6 +129,9 @@ def write_result(
             fixed_json=json.dumps(problem.fixed, default=_json_default),
             model=type(problem.model).__name__,
         )
+        for name in ("mass_kg", "mass_sd_kg"):
+            if getattr(data, name) is not None:
+                inputs.attrs[f"measured_{name}"] = float(getattr(data, name))
         opt = h5.create_group("optimum")
         opt["theta"] = calibration.theta
         opt["frequencies_hz"] = calibration.frequencies_hz
@@ -165,6 +171,10 @@ def write_result(
                     failed_evaluations=posterior.failed_evaluations,
                     wall_s=posterior.wall_s,
                     converged=posterior.converged,
+                    convergence_reason=(posterior.diagnostics.get("convergence") or {}).get(
+                        "reason"
+                    )
+                    or "",
                     interrupted=posterior.interrupted,
                     seed=posterior.seed,
                 )

@@ -75,6 +75,9 @@ def run(args) -> int:
         print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)
         raise KeyboardInterrupt
     out = sample_json(posterior, summary, prepared.likelihood, predictions)
+    if not out["converged"]:  # said on every path, never implied by a number in a table
+        reason = (out["convergence"] or {}).get("reason", "")
+        print(f"warning: the posterior did not converge: {reason}", file=sys.stderr)
     if args.json:
         print(json.dumps(out))
     else:

@@ -94,3 +94,47 @@ def posterior_predictive(
         "predictive_hz": predictive,
         "swap_fraction": swap_fraction,
     }
+
+
+def convergence_report(
+    result: PosteriorResult,
+    summary: dict,
+    target_rhat: float | None,
+    target_ess: float | None,
+    min_autocorr_times: float,
+) -> dict:
+    """Whether the run met its own targets, judged on what is reported (``summary``), and why not.
+
+    A run that stops on its step budget is not converged, whatever its last check said; so is one
+    whose final R-hat or bulk ESS (``summarise``) misses the target, or whose chain is shorter
+    than ``min_autocorr_times`` autocorrelation times.  Returns {"converged": bool, "reason":
+    str | None (the failed criteria, with the worst parameter), "max_r_hat", "min_ess_bulk",
+    "target_rhat", "target_ess", "steps"}.
+    """
+    names = list(summary)
+    rhat = np.array([summary[n]["r_hat"] for n in names], dtype=float)
+    ess = np.array([summary[n]["ess_bulk"] for n in names], dtype=float)
+    steps = int(result.chain.shape[0])
+    reasons = []
+    if target_rhat is not None and not np.all(rhat <= target_rhat):
+        worst = int(np.nanargmax(np.where(np.isfinite(rhat), rhat, np.inf)))
+        reasons.append(f"R-hat {rhat[worst]:.3f} > {target_rhat:g} ({names[worst]})")
+    if target_ess and not np.all(ess >= target_ess):
+        worst = int(np.nanargmin(np.where(np.isfinite(ess), ess, -np.inf)))
+        reasons.append(f"bulk ESS {ess[worst]:.0f} < {target_ess:g} ({names[worst]})")
+    tau = np.max(result.autocorr_time) if np.size(result.autocorr_time) else np.nan
+    if not (np.isfinite(tau) and steps >= min_autocorr_times * tau):
+        reasons.append(f"{steps} steps < {min_autocorr_times:g} autocorrelation times ({tau:.0f})")
+    if not result.converged and not reasons:
+        reasons.append("stopped before its convergence check passed")
+    if reasons:
+        reasons.append(f"step budget reached after {steps} steps: raise sampler.steps")
+    return {
+        "converged": not reasons,
+        "reason": "; ".join(reasons) if reasons else None,
+        "max_r_hat": float(np.nanmax(rhat)),
+        "min_ess_bulk": float(np.nanmin(ess)),
+        "target_rhat": target_rhat,
+        "target_ess": target_ess or None,
+        "steps": steps,
+    }

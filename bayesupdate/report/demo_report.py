@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate import paper
-from bayesupdate.report.document import Document, Figure, Section, Table
+from bayesupdate.report.document import Alert, Document, Figure, Section, Table
 from bayesupdate.report.render import write_report
 
 _PLOT_CAPTIONS = {
@@ -133,8 +133,17 @@ def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
     )
     return [
         Section(f"{title}: optimum", (design, freqs)),
-        Section(f"{title}: posterior", (post, *figs)),
+        Section(f"{title}: posterior", (*_convergence_warning(p), post, *figs)),
     ]
+
+
+def _convergence_warning(posterior) -> tuple:
+    """A visible warning when the posterior missed its R-hat / ESS / tau targets."""
+    report = posterior.diagnostics.get("convergence") or {}
+    if posterior.converged:
+        return ()
+    reason = report.get("reason") or "it stopped before its convergence check passed"
+    return (Alert(f"this posterior did not converge: {reason}. Read its numbers with care."),)
 
 
 def _virtual_sections(virtual, identified, out) -> list[Section]:

@@ -24,8 +24,15 @@ class Figure:
 
 
 @dataclass(frozen=True)
+class Alert:
+    """A statement the reader must not miss (e.g. a posterior that missed its targets)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
 class Section:
-    """A titled section: an ordered list of blocks (str paragraphs, Tables, Figures)."""
+    """A titled section: an ordered list of blocks (str paragraphs, Alerts, Tables, Figures)."""
 
     title: str
     blocks: tuple = field(default_factory=tuple)

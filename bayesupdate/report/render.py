@@ -6,7 +6,7 @@ import html
 from pathlib import Path
 
 from bayesupdate.atomic import atomic_path
-from bayesupdate.report.document import Document, Figure, Table, fmt
+from bayesupdate.report.document import Alert, Document, Figure, Table, fmt
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;
@@ -21,6 +21,7 @@ caption{caption-side:top;text-align:left;font-weight:600;padding:.3em 0}
 figure{margin:1.2em 0}figure img{max-width:100%;border:1px solid #e3e7ee}
 figcaption{color:#5a6577;font-size:.9em}
 nav ul{columns:2;list-style:none;padding-left:0}nav a{text-decoration:none}
+.warning{border-left:6px solid #c62828;background:#fdecea;padding:.6em 1em;font-weight:600}
 """
 
 
@@ -60,6 +61,8 @@ def to_html(doc: Document, folder: Path) -> str:
                 parts.append(_table_html(block))
             elif isinstance(block, Figure):
                 parts.append(_figure_html(block, folder))
+            elif isinstance(block, Alert):
+                parts.append(f"<p class='warning'>Warning: {html.escape(block.text)}</p>")
             else:
                 parts.append(f"<p>{html.escape(str(block))}</p>")
     parts.append("</body></html>")
@@ -80,6 +83,8 @@ def to_markdown(doc: Document) -> str:
                 lines.append("")
             elif isinstance(block, Figure):
                 lines += [f"![{block.caption}]({block.path})", "", f"*{block.caption}*", ""]
+            elif isinstance(block, Alert):
+                lines += [f"> **Warning:** {block.text}", ""]
             else:
                 lines += [str(block), ""]
     return "\n".join(lines)

@@ -36,3 +36,23 @@ def test_html_embeds_figures_and_markdown_links_them(tmp_path):
 def test_fmt():
     assert fmt(0.040227) == "0.04023" and fmt(12.29) == "12.29" and fmt(3) == "3"
     assert fmt(1.5e-7) == "1.500e-07" and fmt(None) == "-" and fmt(True) == "yes"
+
+
+def test_an_unconverged_posterior_gets_a_visible_warning(tmp_path):
+    from types import SimpleNamespace
+
+    from bayesupdate.report.demo_report import _convergence_warning
+    from bayesupdate.report.document import Alert
+
+    reason = "R-hat 1.029 > 1.01 (t_cold_pipe); step budget reached after 2500 steps"
+    stuck = SimpleNamespace(converged=False, diagnostics={"convergence": {"reason": reason}})
+    done = SimpleNamespace(converged=True, diagnostics={"convergence": {"reason": None}})
+    assert _convergence_warning(done) == ()
+    (alert,) = _convergence_warning(stuck)
+    assert isinstance(alert, Alert) and reason in alert.text
+    doc = Document("t", "s", (Section("posterior", (alert,)),))
+    html_path, md_path = write_report(doc, tmp_path)
+    assert "<p class='warning'>Warning: this posterior did not converge: R-hat 1.029" in (
+        html_path.read_text()
+    )
+    assert "> **Warning:** this posterior did not converge" in md_path.read_text()

@@ -2,6 +2,8 @@
 
 import json
 
+import numpy as np
+
 from bayesupdate.atomic import check_output_path
 from bayesupdate.errors import BayesUpdateError
 
@@ -45,7 +47,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from bayesupdate.ema.identify import identify
+    from bayesupdate.ema.identify import MAX_SHAPE_SD, identify
     from bayesupdate.ema.modal_h5 import write_modal_h5
     from bayesupdate.ema.uff_io import read_uff58
 
@@ -71,25 +73,49 @@ def run(args) -> int:
         except BayesUpdateError:
             pass  # labels that are not <node><L|H|V> have no geometry to draw
     modes = result.modes
+    one_dof = len(modes.dof_labels) < 2  # the phase scatter of one value says nothing
     summary = {
         "modes": [
             {
                 "frequency_hz": float(modes.frequencies_hz[r]),
                 "damping_ratio": float(modes.damping_ratio[r]),
-                "mpc": float(modes.mpc[r]),
+                "mpc": None if one_dof else float(modes.mpc[r]),
+                "shape_sd_rel": float(modes.shape_sd_rel[r]),
+                "mass_normalised": bool(modes.extra["mass_normalised"][r]),
                 "stable_orders": int(modes.extra["stable_orders"][r]),
             }
             for r in range(modes.n_modes)
         ],
+        "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
         "out": str(out),
     }
+    notes = []
+    if one_dof:
+        notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
+    if not np.all(modes.extra["mass_normalised"]):
+        notes.append(
+            "shapes without a driving point are unscaled (largest component 1), "
+            "not mass-normalised; measure a driving point to scale them"
+        )
+    if np.any(modes.extra["shape_sd_fallback"]):
+        notes.append(f"shape_sd_rel not estimable for some modes: set to {MAX_SHAPE_SD}")
+    if summary["dropped_hz"]:
+        notes.append(
+            "stable poles dropped as not physical (explain little of the FRF, peak near the "
+            "fit residual): " + ", ".join(f"{x:.2f}" for x in summary["dropped_hz"]) + " Hz"
+        )
+    summary["notes"] = notes
     if args.json:
         print(json.dumps(summary))
     else:
         for r, m in enumerate(summary["modes"], 1):
+            mpc_text = "MPC   n/a" if m["mpc"] is None else f"MPC {m['mpc']:.3f}"
             print(
                 f"mode {r:2d}: {m['frequency_hz']:9.3f} Hz  zeta {m['damping_ratio']:.4f}  "
-                f"MPC {m['mpc']:.3f}  stable at {m['stable_orders']} orders"
+                f"{mpc_text}  shape sd {m['shape_sd_rel']:.1e}  "
+                f"stable at {m['stable_orders']} orders"
             )
+        for note in notes:
+            print(f"note: {note}")
         print(f"wrote {out}")
     return 0

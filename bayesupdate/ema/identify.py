@@ -15,10 +15,10 @@ import numpy as np
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.ema.bands import Band, automatic_bands
-from bayesupdate.ema.frf_set import FrfSet
+from bayesupdate.ema.frf_set import KIND_POWER, FrfSet
 from bayesupdate.ema.indicators import frf_correlation
 from bayesupdate.ema.lsce import band_indices, lsce
-from bayesupdate.ema.lsfd import lsfd_residues, mpc, shapes_from_residues
+from bayesupdate.ema.lsfd import LsfdFit, lsfd, mpc, shapes_from_residues
 from bayesupdate.ema.stabilization import (
     SelectedPole,
     StabilizationDiagram,
@@ -66,6 +66,128 @@ def _merge(candidates: list[tuple[SelectedPole, float]]) -> list[SelectedPole]:
     return [p for p, _ in kept]
 
 
+#: a mode is dropped when it explains less than this fraction of the FRF at its resonance ...
+MIN_SIGNIFICANCE = 0.3
+#: ... and its peak is less than this many times the local fit residual (a weak real mode
+#: beside strong ones explains little of the FRF but stands far above the noise)
+MIN_PEAK_TO_RESIDUAL = 10.0
+#: shape_sd_rel is capped here: a shape cannot be less known than its own size
+MAX_SHAPE_SD = 1.0
+
+
+def modal_significance(frfs: FrfSet, poles: np.ndarray, fit: LsfdFit) -> tuple:
+    """Share of the measured FRFs each mode explains at its resonance, and its peak over the
+    local fit residual; each (m,).
+
+    P_kr = |A_kr (j w_dr)^p / Re s_r| is the mode's own peak height in row k (its term of seed
+    eq. 4 at w = w_dr), M_kr the measured level there (RMS over the 3 lines nearest f_dr).
+    share_r = sum_k P_kr^2 / sum_k P_kr M_kr (P/M averaged with weights P M, so rows where the
+    mode is absent do not dilute it); peak_r = ||P_r|| / ||s_r|| with s_kr the local residual
+    sd (:class:`LsfdFit`).  A physical mode makes its own peak (share ~1) or, when weak beside
+    strong ones, still stands far above the residual; a pole fitted to noise or ripple does
+    neither (beam: share 0.06-0.18 and peak 2-8 for the four such poles above 5 kHz).
+    """
+    f = frfs.frequencies_hz
+    m = poles.size
+    wd = poles.imag
+    res = fit.residues[:, :m]
+    peak = np.abs(res * (1j * wd)[None, :] ** KIND_POWER[frfs.kind] / -poles.real[None, :])
+    k = np.clip(np.searchsorted(f, wd / (2 * np.pi)), 1, f.size - 2)
+    near = np.abs(frfs.frf[:, np.stack([k - 1, k, k + 1])])  # (n_frf, 3, m)
+    meas = np.sqrt(np.mean(near**2, axis=1))  # (n_frf, m)
+    tiny = np.finfo(float).tiny
+    share = np.sum(peak**2, axis=0) / np.maximum(np.sum(peak * meas, axis=0), tiny)
+    local = np.linalg.norm(fit.local_sd[:, :m], axis=0)
+    return share, np.linalg.norm(peak, axis=0) / np.maximum(local, tiny)
+
+
+def shape_sd_from_fit(
+    fit: LsfdFit,
+    poles: np.ndarray,
+    row_scale: np.ndarray,
+    shapes: np.ndarray,
+    labels: tuple,
+    sets: list,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Relative shape standard deviation (m,) from the LSFD residue covariance, and a fallback
+    mask (m,) bool.
+
+    In a set with fixed DOF q the shape value of row k is psi_k = 2 j w_d A_kq / psi_q, so
+    var(psi_k) = |2 w_d|^2 var(A_kq) / |psi_q|^2 (:class:`LsfdFit` gives var(A)), psi_q taken
+    from the final shape (all sets combined; else |2 w_d A_qq| + its sd from the driving
+    point; else the scale the set was given).  A set whose fixed DOF barely moves in a mode
+    thus reports the noise amplification its shape part really has.  sd_rel_r =
+    sqrt(mean_k var psi_kr) / rms(psi_r): the component sd as a fraction of the shape's RMS
+    amplitude, so E[1 - MAC] ~ sd_rel^2 for unbiased complex Gaussian errors.  It holds noise
+    and the misfit the fit residual sees near the mode, not the bias of a pole error nor of a
+    shape part no set can scale.  Modes where it is not finite, not > 0 or above
+    ``MAX_SHAPE_SD`` get MAX_SHAPE_SD and are flagged in the mask.
+    """
+    two_wd = 2 * np.abs(poles.imag)
+    inv_q2 = np.abs(row_scale) ** 2  # 1 / |psi_q|^2 as the set was scaled
+    index = {lab: i for i, lab in enumerate(labels)}
+    for st in sets:
+        if st["fixed"] in index:  # psi_q as the final shape has it (all sets combined)
+            q2 = np.abs(shapes[index[st["fixed"]]]) ** 2
+        elif st["driving_row"] is not None:
+            d = st["driving_row"]
+            q2 = two_wd * (np.abs(fit.residues[d]) + np.sqrt(fit.residue_var[d]))
+        else:
+            continue
+        inv_q2[st["rows"]] = np.where(q2 > 0, 1.0 / np.where(q2 > 0, q2, 1.0), inv_q2[st["rows"]])
+    var = two_wd[None, :] ** 2 * fit.residue_var * inv_q2
+    rms = np.sqrt(np.mean(np.abs(shapes) ** 2, axis=0))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        sd = np.sqrt(np.mean(var, axis=0)) / rms
+    bad = ~np.isfinite(sd) | (sd <= 0) | (sd > MAX_SHAPE_SD)
+    return np.where(bad, MAX_SHAPE_SD, sd), bad
+
+
+def _poles_by_band(frfs, bands, order, settings):
+    """Selected poles owned by each band, all diagrams, and stable poles at the data's top."""
+    f = frfs.frequencies_hz
+    tol_frequency, tol_damping, min_mac, min_count = settings
+    candidates, diagrams, edge = [], [], []
+    for band in bands:
+        res = lsce(f, frfs.frf, (f[band.lo], f[band.hi]), max_order=order)
+        diagram = stabilization_diagram(res, tol_frequency, tol_damping, min_mac)
+        diagrams.append(diagram)
+        f_own_lo, f_own_hi = f[band.own_lo], f[band.own_hi]
+        width = f[band.hi] - f[band.lo]
+        for pole in select_poles(diagram, min_count=min_count):
+            # damped frequency decides ownership: it is what sits between the band's lines
+            fd = pole.pole.imag / (2 * np.pi)
+            # a pole hugging an analysed edge is a truncation artefact, not a mode
+            margin = max(2 * frfs.df_hz, 0.01 * width)
+            at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
+            if f_own_lo <= fd <= f_own_hi + 0.5 * frfs.df_hz and not at_edge:
+                centrality = min(fd - f[band.lo], f[band.hi] - fd) / width
+                candidates.append((pole, centrality))
+            elif band is bands[-1] and fd > f[band.hi] - margin:
+                edge.append(pole.pole)
+    return _merge(candidates), diagrams, edge
+
+
+def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):
+    """LSFD over lines fit_lo..fit_hi; drop, one at a time, the least significant mode that is
+    weak by both measures of :func:`modal_significance`, and refit.  Returns (kept poles, fit,
+    (2, m) share and peak-to-residual, dropped poles)."""
+    f, h = frfs.frequencies_hz, frfs.frf
+    f_fit = f[fit_lo : fit_hi + 1]
+    kept, dropped = list(selected), []
+    while True:
+        poles = np.array([p.pole for p in kept])
+        fit = lsfd(
+            f_fit, h[:, fit_lo : fit_hi + 1], np.concatenate([poles, residual_poles]), frfs.kind
+        )
+        share, peak = modal_significance(frfs, poles, fit)
+        weak = (share < MIN_SIGNIFICANCE) & (peak < MIN_PEAK_TO_RESIDUAL)
+        if not np.any(weak) or len(kept) == 1:
+            return kept, fit, np.stack([share, peak]), dropped
+        worst = int(np.flatnonzero(weak)[np.argmin(share[weak])])
+        dropped.append(kept.pop(worst))
+
+
 def identify(
     frfs: FrfSet,
     band_hz: tuple[float, float] | None = None,
@@ -73,11 +195,14 @@ def identify(
     band_lines: int | None = None,
     min_count: int | None = None,
     tol_frequency: float = 0.01,
-    tol_damping: float = 0.05,
+    tol_damping: float = 0.2,
     min_mac: float = 0.98,
 ) -> Identification:
     """Identify the modes of an FRF set without user pole picking.
 
+    tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 % between
+    orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that pass are
+    removed by :func:`modal_significance`.
     band_hz : (lo, hi) [Hz] to analyse one band, or None for automatic consecutive bands over
     the whole axis.  max_order : highest polynomial order (default 60 for a given band, 40 per
     automatic band).  Returns an :class:`Identification`; raises BayesUpdateError for a bad
@@ -94,38 +219,19 @@ def identify(
         order = 40 if max_order is None else int(max_order)
     if order < 2:
         raise BayesUpdateError(f"--max-order {order}: must be at least 2")
-    candidates, diagrams, edge = [], [], []
-    for band in bands:
-        res = lsce(f, h, (f[band.lo], f[band.hi]), max_order=order)
-        diagram = stabilization_diagram(res, tol_frequency, tol_damping, min_mac)
-        diagrams.append(diagram)
-        f_own_lo, f_own_hi = f[band.own_lo], f[band.own_hi]
-        width = f[band.hi] - f[band.lo]
-        for pole in select_poles(diagram, min_count=min_count):
-            # damped frequency decides ownership: it is what sits between the band's lines
-            fd = pole.pole.imag / (2 * np.pi)
-            # a pole hugging an analysed edge is a truncation artefact, not a mode
-            margin = max(2 * frfs.df_hz, 0.01 * width)
-            at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
-            if f_own_lo <= fd <= f_own_hi + 0.5 * frfs.df_hz and not at_edge:
-                centrality = min(fd - f[band.lo], f[band.hi] - fd) / width
-                candidates.append((pole, centrality))
-            elif band is bands[-1] and fd > f[band.hi] - margin:
-                edge.append(pole.pole)
-    selected = _merge(candidates)
+    settings = (tol_frequency, tol_damping, min_mac, min_count)
+    selected, diagrams, edge = _poles_by_band(frfs, bands, order, settings)
     if not selected:
         raise BayesUpdateError(
             f"{frfs.source or 'FRF set'}: no stable mode found; check the band and the data, "
             "or raise --max-order"
         )
-    poles = np.array([p.pole for p in selected])
     # A stable pole hugging the top of the data is a mode just above it: not reported, but kept
     # as an out-of-band pole in the LSFD basis, whose flank the constant upper residual cannot
     # follow (on the FE exhaust a mode at 150.5 Hz otherwise biases mode 11's weak H part: MAC
     # 0.978 -> 0.99+).  Residues of such poles are dropped.
     f_top = max(p.frequency_hz for p in selected)
-    residual_poles = np.array([p for p in edge if p.imag / (2 * np.pi) > f_top * 1.01])
-    fit_poles = np.concatenate([poles, residual_poles[:1]])
+    residual_poles = np.array([p for p in edge if p.imag / (2 * np.pi) > f_top * 1.01])[:1]
     fit_lo, fit_hi = bands[0].lo, bands[-1].hi
     # End the fits at the sum-FRF minimum above the highest selected mode: a resonance just
     # beyond the analysed range is not among the poles, and its rising flank is not the smooth
@@ -133,13 +239,29 @@ def identify(
     above = np.flatnonzero((f > f_top) & (np.arange(f.size) <= fit_hi))
     if above.size > 2:
         fit_hi = int(above[np.argmin(np.sum(np.abs(h[:, above]), axis=0))])
-    f_fit = f[fit_lo : fit_hi + 1]
-    all_residues, lower, upper = lsfd_residues(
-        f_fit, h[:, fit_lo : fit_hi + 1], fit_poles, frfs.kind
+    selected, fit, significance, dropped = _fit_and_prune(
+        frfs, selected, residual_poles, fit_lo, fit_hi
     )
-    residues = all_residues[:, : poles.size]
-    labels, shapes, massnorm = shapes_from_residues(residues, poles, frfs.sets())
-    synth = synthesize_frf(f_fit, fit_poles, all_residues, frfs.kind, lower, upper)
+    poles = np.array([p.pole for p in selected])
+    f_fit = f[fit_lo : fit_hi + 1]
+    residues = fit.residues[:, : poles.size]
+    labels, shapes, massnorm, row_scale = shapes_from_residues(residues, poles, frfs.sets())
+    sd_rel, sd_fallback = shape_sd_from_fit(
+        LsfdFit(
+            residues,
+            fit.lower,
+            fit.upper,
+            fit.residue_var[:, : poles.size],
+            fit.local_sd[:, : poles.size],
+        ),
+        poles,
+        row_scale,
+        shapes,
+        labels,
+        frfs.sets(),
+    )
+    fit_poles = np.concatenate([poles, residual_poles])
+    synth = synthesize_frf(f_fit, fit_poles, fit.residues, frfs.kind, fit.lower, fit.upper)
     meas = h[:, fit_lo : fit_hi + 1]
     frac = frf_correlation(meas, synth)
     freq = np.array([p.frequency_hz for p in selected])
@@ -149,19 +271,23 @@ def identify(
         shapes=shapes,
         dof_labels=labels,
         mpc=mpc(shapes),
+        shape_sd_rel=sd_rel,
         source=frfs.source or "identify",
         extra={
             "stable_orders": np.array([p.stable_orders for p in selected]),
             "cluster_spread_hz": np.array([p.spread_hz for p in selected]),
             "mass_normalised": massnorm,
+            "fit_share": significance[0],
+            "peak_to_residual": significance[1],
+            "shape_sd_fallback": sd_fallback,
         },
     )
     return Identification(
         modes=modes,
         poles=poles,
         residues=residues,
-        lower_residual=lower,
-        upper_residual=upper,
+        lower_residual=fit.lower,
+        upper_residual=fit.upper,
         selected=tuple(selected),
         diagrams=tuple(diagrams),
         bands_hz=tuple((float(f[b.lo]), float(f[b.hi])) for b in bands),
@@ -169,6 +295,7 @@ def identify(
         synthesized=synth,
         frf_correlation=frac,
         mass_normalised=massnorm,
+        extra={"dropped_hz": np.array([p.frequency_hz for p in dropped])},
     )
 
 

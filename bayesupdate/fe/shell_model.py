@@ -1,0 +1,306 @@
+"""A shell mesh as data (``ShellMesh``), its checks, and its parametric assembly.
+
+``shell_mesh(...)`` validates and broadcasts the inputs (errors name the node or element);
+``ShellAssembly`` precomputes frames, element pieces and the sparse pattern once, then builds the
+global K and M for any element thicknesses, either directly or - for thickness *parameters*
+(groups of elements sharing one thickness) - as the exact affine sum
+K(theta) = K_fixed + sum_j sum_p theta_j^p K_jp (``shell.power_matrices``), which costs a few
+vector operations on the CSR data.  Element numbering: quads first, then triangles.
+"""
+
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe import shell
+from bayesupdate.fe.sparse_modal import SparsePattern, element_dofs
+
+#: warp (largest node distance from the mean plane / mean diagonal) above which a quad is reported:
+#: the flat element drops the out-of-plane offsets, an error of the order of the warp itself.
+WARP_LIMIT = 0.01
+
+
+class ShellMeshWarning(UserWarning):
+    """A shell element is usable but distorted (warped quad)."""
+
+
+@dataclass(frozen=True)
+class ShellMesh:
+    """Shell elements as arrays (SI).  nodes (N, 3) [m]; quads (nq, 4), trias (nt, 3) node
+    numbers; per element (nq + nt,), quads first: thickness [m], E [Pa], nu, rho [kg/m^3],
+    offset [m] and offset_ratio [-] (reference plane at offset + offset_ratio t below the
+    mid-surface), nsm [kg/m^2] non-structural mass per area."""
+
+    nodes: np.ndarray
+    quads: np.ndarray
+    trias: np.ndarray
+    thickness: np.ndarray
+    E: np.ndarray
+    nu: np.ndarray
+    rho: np.ndarray
+    offset: np.ndarray
+    offset_ratio: np.ndarray
+    nsm: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.quads) + len(self.trias)
+
+    @property
+    def n_dof(self) -> int:
+        return 6 * len(self.nodes)
+
+    def element_name(self, e: int) -> str:
+        nq = len(self.quads)
+        return f"quad {e}" if e < nq else f"tria {e - nq}"
+
+
+def shell_mesh(
+    nodes,
+    quads=None,
+    trias=None,
+    thickness=1e-3,
+    E=210e9,
+    nu=0.3,
+    rho=7850.0,
+    offset=0.0,
+    offset_ratio=0.0,
+    nsm=0.0,
+    warp_limit: float = WARP_LIMIT,
+) -> ShellMesh:
+    """Validated ``ShellMesh``; scalars broadcast to every element.  Raises BayesUpdateError
+    naming the element or node at fault; warns (``ShellMeshWarning``) for warped quads."""
+    nodes = np.asarray(nodes, dtype=float)
+    q = np.zeros((0, 4), int) if quads is None else np.asarray(quads, dtype=np.int64)
+    t = np.zeros((0, 3), int) if trias is None else np.asarray(trias, dtype=np.int64)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
+        raise BayesUpdateError("shell mesh: nodes must be a finite (N, 3) array of coordinates")
+    if q.ndim != 2 or q.shape[1] != 4 or t.ndim != 2 or t.shape[1] != 3:
+        raise BayesUpdateError("shell mesh: quads must be (nq, 4) and trias (nt, 3) node numbers")
+    n_el = len(q) + len(t)
+    if n_el == 0:
+        raise BayesUpdateError("shell mesh: no elements")
+    props = {}
+    for name, value in dict(
+        thickness=thickness, E=E, nu=nu, rho=rho, offset=offset, offset_ratio=offset_ratio, nsm=nsm
+    ).items():
+        v = np.asarray(value, dtype=float)
+        if v.ndim > 1 or (v.ndim == 1 and v.size != n_el):
+            raise BayesUpdateError(f"shell mesh: {name} must be a scalar or one value per element")
+        props[name] = np.broadcast_to(v, (n_el,)).copy()
+    mesh = ShellMesh(nodes, q, t, **props)
+    check_mesh(mesh, warp_limit)
+    return mesh
+
+
+def _first(mask):
+    return int(np.flatnonzero(mask)[0])
+
+
+def check_mesh(mesh: ShellMesh, warp_limit: float = WARP_LIMIT) -> None:
+    """Connectivity, geometry and property checks (see ``shell_mesh``)."""
+    n = len(mesh.nodes)
+    conn = [mesh.quads, mesh.trias]
+    offset = [0, len(mesh.quads)]
+    for c, off in zip(conn, offset, strict=True):
+        if c.size and (c.min() < 0 or c.max() >= n):
+            e = _first(np.any((c < 0) | (c >= n), axis=1)) + off
+            raise BayesUpdateError(
+                f"shell mesh: {mesh.element_name(e)} uses a node not in 0..{n - 1}"
+            )
+        s = np.sort(c, axis=1)
+        rep = np.any(s[:, 1:] == s[:, :-1], axis=1)
+        if np.any(rep):
+            e = _first(rep) + off
+            raise BayesUpdateError(
+                f"shell mesh: {mesh.element_name(e)} repeats a node ({c[e - off].tolist()})"
+            )
+    used = np.zeros(n, bool)
+    for c in conn:
+        used[c.ravel()] = True
+    if not np.all(used):
+        raise BayesUpdateError(
+            f"shell mesh: node {_first(~used)} is used by no element; remove it or connect it"
+        )
+    _check_properties(mesh)
+    _check_geometry(mesh, warp_limit)
+
+
+def _check_properties(mesh: ShellMesh) -> None:
+    checks = (
+        ("thickness", mesh.thickness, lambda v: v > 0, "> 0"),
+        ("E", mesh.E, lambda v: v > 0, "> 0"),
+        ("nu", mesh.nu, lambda v: (v > -1) & (v < 0.5), "in (-1, 0.5)"),
+        ("rho", mesh.rho, lambda v: v >= 0, ">= 0"),
+        ("nsm", mesh.nsm, lambda v: v >= 0, ">= 0"),
+        ("offset", mesh.offset, lambda v: np.ones(v.shape, bool), "finite"),
+        ("offset_ratio", mesh.offset_ratio, lambda v: np.ones(v.shape, bool), "finite"),
+    )
+    for name, v, ok, rule in checks:
+        bad = ~np.isfinite(v) | ~ok(v)
+        if np.any(bad):
+            e = _first(bad)
+            raise BayesUpdateError(
+                f"shell mesh: {mesh.element_name(e)} has {name} = {v[e]}; it must be {rule}"
+            )
+
+
+def _check_geometry(mesh: ShellMesh, warp_limit: float) -> None:
+    nq = len(mesh.quads)
+    for c, off in ((mesh.quads, 0), (mesh.trias, nq)):
+        if not c.size:
+            continue
+        x = mesh.nodes[c]
+        edges = np.linalg.norm(np.roll(x, -1, axis=1) - x, axis=2)
+        f = shell.quad_frames(x) if c.shape[1] == 4 else shell.tria_frames(x)
+        scale = edges.max(axis=1)
+        tiny = (edges.min(axis=1) <= 1e-8 * scale) | ~(f.area > 1e-10 * scale**2)
+        if np.any(tiny):
+            e = _first(tiny) + off
+            raise BayesUpdateError(
+                f"shell mesh: {mesh.element_name(e)} has zero area or a zero-length edge "
+                f"(nodes {c[e - off].tolist()})"
+            )
+        if c.shape[1] == 4:
+            ops = shell.quad_operators(f.xy)
+            bad = np.any(ops.wdet <= 0, axis=1)
+            if np.any(bad):
+                e = _first(bad)
+                raise BayesUpdateError(
+                    f"shell mesh: quad {e} is not convex or its nodes are not in order around "
+                    f"it (nodes {c[e].tolist()})"
+                )
+            warped = f.warp > warp_limit
+            if np.any(warped):
+                e = _first(warped)
+                warnings.warn(
+                    f"shell mesh: {int(warped.sum())} quad(s) warped beyond {warp_limit:g}, e.g. "
+                    f"quad {e} (warp {f.warp[e]:.3g}); split them into triangles for accuracy",
+                    ShellMeshWarning,
+                    stacklevel=4,
+                )
+
+
+class ShellAssembly:
+    """Geometry-dependent precomputation of a ``ShellMesh``: element frames, the thickness-free
+    element pieces and the sparse pattern.  ``lumped``: lumped (row-sum) mass;
+    ``rotary_inertia=False`` drops the rho t^3 / 12 rotary inertia (for peers without it)."""
+
+    def __init__(self, mesh: ShellMesh, lumped: bool = False, rotary_inertia: bool = True):
+        self.mesh = mesh
+        self.families = []  # (element indices, dofs (n_e, d), frames, pieces)
+        nq = len(mesh.quads)
+        for conn, idx, kind in (
+            (mesh.quads, np.arange(nq), "quad"),
+            (mesh.trias, nq + np.arange(len(mesh.trias)), "tria"),
+        ):
+            if not conn.size:
+                continue
+            x = mesh.nodes[conn]
+            if kind == "quad":
+                f = shell.quad_frames(x)
+                ops = shell.quad_operators(f.xy)
+            else:
+                f = shell.tria_frames(x)
+                ops = shell.tria_operators(f.xy)
+            pieces = shell.local_pieces(ops, mesh.E[idx], mesh.nu[idx], lumped=lumped)
+            if not rotary_inertia:
+                pieces = replace(pieces, mass_r=np.zeros_like(pieces.mass_r))
+            self.families.append((idx, element_dofs(conn), f, pieces))
+        self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
+
+    def element_matrices(self, thickness=None):
+        """Global-axis element matrices at ``thickness`` (n_el,) [m] (default: the mesh's),
+        computed directly: list of (K (n_e, d, d), M (n_e, d, d)) per family."""
+        m = self.mesh
+        t = m.thickness if thickness is None else np.asarray(thickness, dtype=float)
+        out = []
+        for idx, _, f, p in self.families:
+            K, M = shell.direct_matrices(
+                p, t[idx], m.rho[idx], m.nsm[idx], m.offset[idx], m.offset_ratio[idx]
+            )
+            out.append((shell.to_global(K, f.R), shell.to_global(M, f.R)))
+        return out
+
+    def assemble(self, thickness=None, include=None):
+        """Global (K, M) CSR [N/m, kg] at element thicknesses (n_el,) [m], direct path;
+        ``include`` (n_el,) bool keeps only some elements."""
+        mats = self.element_matrices(thickness)
+        if include is not None:
+            keep = [np.asarray(include)[idx][:, None, None] for idx, *_ in self.families]
+            mats = [(k * w, m * w) for (k, m), w in zip(mats, keep, strict=True)]
+        pat = self.pattern
+        return pat.csr(pat.data([k for k, _ in mats])), pat.csr(pat.data([m for _, m in mats]))
+
+    def power_data(self, elements=None):
+        """Per-power CSR data of the elements ``elements`` (bool/int index, default all):
+        (K {p: (nnz,)}, M {p: (nnz,)}) with K = sum_p t^p K_p for a common thickness t."""
+        m = self.mesh
+        sel = np.zeros(m.n_elements, bool)
+        sel[np.arange(m.n_elements) if elements is None else elements] = True
+        Kp, Mp = {}, {}
+        for b, (idx, _, f, p) in enumerate(self.families):
+            keep = sel[idx]
+            if not np.any(keep):
+                continue
+            i = idx[keep]
+            sub = shell.LocalPieces(
+                *(getattr(p, n)[keep] for n in ("membrane", "shear", "drilling", "bending")),
+                p.mass_t[keep],
+                p.mass_r[keep],
+                p.offset,
+            )
+            K, M = shell.power_matrices(sub, m.rho[i], m.nsm[i], m.offset[i], m.offset_ratio[i])
+            pos = self.pattern.positions[b].reshape(len(idx), -1)[keep].ravel()
+            for store, mats in ((Kp, K), (Mp, M)):
+                for power, X in mats.items():
+                    if np.any(X):
+                        Xg = shell.to_global(X, f.R[keep])
+                        d = np.bincount(pos, Xg.ravel(), self.pattern.nnz)
+                        store[power] = store.get(power, 0.0) + d
+        return Kp, Mp
+
+
+class ThicknessParametrisation:
+    """K(theta), M(theta) for thickness parameters theta (n_par,) [m]: element e takes the
+    thickness theta[group[e]] (group[e] = -1 keeps the mesh's thickness).  The per-power data
+    are stored once on each group's own CSR positions, so an evaluation costs
+    O(nnz x powers) vector operations and no element computation."""
+
+    def __init__(self, assembly: ShellAssembly, group):
+        self.assembly = assembly
+        group = np.asarray(group, dtype=np.int64)
+        mesh = assembly.mesh
+        if group.shape != (mesh.n_elements,) or group.max() < 0:
+            raise BayesUpdateError("thickness groups: need one group number (>= -1) per element")
+        self.n_par = int(group.max()) + 1
+        K, M = assembly.assemble(include=group < 0)
+        self.K0, self.M0 = K.data.copy(), M.data.copy()
+        self.terms = []  # (positions, {p: K values}, {p: M values}) per group
+        for j in range(self.n_par):
+            Kp, Mp = assembly.power_data(group == j)
+            pos = np.flatnonzero(np.any([np.abs(v) > 0 for v in (*Kp.values(), *Mp.values())], 0))
+            self.terms.append(
+                (pos, {p: v[pos] for p, v in Kp.items()}, {p: v[pos] for p, v in Mp.items()})
+            )
+
+    def data(self, theta):
+        """(K data, M data) (nnz,) each at thickness parameters theta (n_par,) [m]."""
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (self.n_par,) or not np.all(np.isfinite(theta) & (theta > 0)):
+            raise BayesUpdateError(
+                f"thickness parameters: need {self.n_par} finite values > 0, got {theta}"
+            )
+        K, M = self.K0.copy(), self.M0.copy()
+        for tj, (pos, Kp, Mp) in zip(theta, self.terms, strict=True):
+            K[pos] += sum(tj**p * v for p, v in Kp.items())
+            M[pos] += sum(tj**p * v for p, v in Mp.items())
+        return K, M
+
+    def assemble(self, theta):
+        """Global (K, M) CSR at thickness parameters theta."""
+        K, M = self.data(theta)
+        pat = self.assembly.pattern
+        return pat.csr(K), pat.csr(M)

@@ -28,6 +28,7 @@ import tracemalloc  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
+from timing import time_median  # noqa: E402
 
 from bayesupdate.fe import shell_mesh as sm  # noqa: E402
 from bayesupdate.fe.shell_model import ShellAssembly, ThicknessParametrisation, shell_mesh  # noqa: E402
@@ -59,28 +60,21 @@ def build_box(cells):
     return mesh, face, fixed
 
 
-def median(fn, repeats):
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), out
-
-
 def ours(mesh, face, fixed, repeats):
     settings = ModalSettings(n_modes=N_MODES)
 
     def assemble():
         return ShellAssembly(mesh).assemble()
 
-    t_asm, (K, M) = median(assemble, repeats)
-    t_solve, modes = median(lambda: solve_sparse_modes(K, M, mesh.nodes, settings, fixed), repeats)
+    t_asm, (K, M) = time_median(assemble, repeats)
+    t_solve, modes = time_median(
+        lambda: solve_sparse_modes(K, M, mesh.nodes, settings, fixed), repeats
+    )
     t0 = time.perf_counter()
     par = ThicknessParametrisation(ShellAssembly(mesh), face)
     t_setup = time.perf_counter() - t0
     rng = np.random.default_rng(0)
-    t_par, _ = median(lambda: par.assemble(rng.uniform(1e-3, 3e-3, 6)), max(5, repeats))
+    t_par, _ = time_median(lambda: par.assemble(rng.uniform(1e-3, 3e-3, 6)), max(5, repeats))
     tracemalloc.start()
     K2, M2 = assemble()
     solve_sparse_modes(K2, M2, mesh.nodes, settings, fixed)

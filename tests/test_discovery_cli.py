@@ -1,6 +1,9 @@
 """``bayesupdate discover`` bad input: one-line errors (exit 2) before any computation, and no
 output file left behind."""
 
+import json
+
+import numpy as np
 import pytest
 
 from bayesupdate.cli import main
@@ -60,3 +63,21 @@ def test_existing_output_is_refused(tmp_path, capsys):
     code = main(["discover", "--model", "exhaust", "--data", "paper:ema", "--out", str(out)])
     assert code == 2 and "already exists" in capsys.readouterr().err
     assert out.read_text() == "keep me"
+
+
+def test_simulate_geometry_changes_only_the_true_structure(tmp_path, capsys):
+    """--geometry: one exhaust geometry quantity of the 'true' structure (an out-of-library
+    change for discovery); an unknown name or a non-length is a one-line error."""
+    out = tmp_path / "t.uff"
+    assert main(["simulate", "--out", str(out), "--json", "--noise", "0"]) == 0
+    base = json.loads(capsys.readouterr().out)["true_frequencies_hz"]
+    assert main(["simulate", "--geometry", "tail_length=0.15", "--out", str(out), "--force",
+                 "--json", "--noise", "0"]) == 0  # fmt: skip
+    longer = json.loads(capsys.readouterr().out)
+    assert longer["geometry"] == ["tail_length=0.15"]
+    shift = np.abs(np.array(longer["true_frequencies_hz"]) / np.array(base) - 1)
+    assert 0.005 < shift.max() < 0.05  # a 50 mm longer tail pipe moves a mode by ~0.8 %
+    for bad, words in (("tail_lenth=0.15", "unknown quantities"), ("tail_length=-1", "> 0 m")):
+        assert main(["simulate", "--geometry", bad, "--out", str(out), "--force"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and words in err

@@ -3,16 +3,14 @@ model, the sigma-marginal likelihood = quadrature, PSIS-LOO = exact leave-one-ou
 
 import numpy as np
 import pytest
-from scipy import integrate, stats
+from scipy import stats
 
 from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import (
-    SIGMA_MAX,
     FitSpace,
     ModelFit,
     laplace,
     laplace_loo,
-    log_likelihood,
 )
 from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel, flag_modes, noise_model
 from bayesupdate.inference.priors import prior_from_mapping
@@ -67,21 +65,24 @@ def test_laplace_caps_an_unconstrained_parameter_at_its_prior_volume():
     assert two.log_evidence == pytest.approx(one.log_evidence, abs=1e-6)
 
 
-def test_sigma_marginal_likelihood_matches_quadrature():
+def test_inferred_noise_is_a_fixed_gaussian_at_the_robust_level():
+    """The inferred level is fixed (plug-in): log L is the Gaussian density at that level, so
+    moving every residual from 0.2 to 8 levels costs m (8^2 - 0.2^2) / 2 nats, not the
+    m/2 ln(R ratio) of a level integrated out at every point (module docstring)."""
     rng = np.random.default_rng(3)
-    m = 8
-    r = rng.normal(scale=0.01, size=m)
-    noise = NoiseModel(np.full(m, np.nan), np.ones(m), True, "inferred (robust)", 0.01)
-
-    def integrand(log_sigma):
-        s = np.exp(log_sigma)
-        return np.exp(np.sum(stats.norm.logpdf(r, scale=s)) + 40.0)  # scaled to avoid underflow
-
-    value, _ = integrate.quad(
-        integrand, np.log(SIGMA_FLOOR), np.log(SIGMA_MAX), points=[np.log(0.01)], limit=200
-    )
-    expected = np.log(value) - 40.0 - np.log(np.log(SIGMA_MAX / SIGMA_FLOOR))
-    assert log_likelihood(r, noise) == pytest.approx(expected, abs=1e-6)
+    m = 12
+    f = np.linspace(10.0, 100.0, m)
+    e0 = 2e-5 * rng.choice([-1.0, 1.0], size=m)  # identified null data: 0.002 % errors
+    noise = noise_model(ModalData(f), e0, n_params=5)
+    assert noise.inferred and noise.sigma == SIGMA_FLOOR  # the robust level is floored
+    space = FitSpace(None, (), noise)
+    r0 = space.residuals(e0)
+    expected = np.sum(stats.norm.logpdf(e0, scale=SIGMA_FLOOR))
+    assert space.log_likelihood(r0) == pytest.approx(expected, rel=1e-12)
+    dragged = space.residuals(np.full(m, -8e-4))
+    cost = space.log_likelihood(r0) - space.log_likelihood(dragged)
+    assert cost == pytest.approx(0.5 * m * (64 - 0.04), rel=1e-9)
+    assert cost > 10 * 0.5 * m * np.log(64)
 
 
 def test_laplace_loo_matches_exact_leave_one_out():

@@ -1,18 +1,19 @@
-"""Mode shapes as discovery evidence: the residual is the MAC deficit spread over the sensors, the
-per-mode noise level is integrated out exactly, and the Laplace evidence of a linear model with a
-shape block equals the quadrature of its exact marginal."""
+"""Mode shapes as discovery evidence: the residual is the MAC deficit spread over the sensors, each
+mode's level is fixed before the fit (the stated sd floored at 1 %, raised to the misfit at the
+frequency-only baseline only where that misfit rejects it), and the Laplace evidence of a linear
+model with a shape block equals the quadrature of its exact marginal."""
 
 import numpy as np
 import pytest
-from scipy import integrate, optimize
+from scipy import integrate, optimize, stats
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
 from bayesupdate.discovery.flagging import NoiseModel, flag_modes
 from bayesupdate.discovery.shape_evidence import (
-    SHAPE_SIGMA_FLOOR,
-    SHAPE_SIGMA_MAX,
+    RAISE_P,
+    SHAPE_SD_FLOOR_REL,
     ShapeEvidence,
     shape_evidence,
     shape_residuals,
@@ -45,21 +46,51 @@ def test_unit_real_shapes_undo_a_complex_rotation():
     np.testing.assert_allclose(np.linalg.norm(unit, axis=0), 1.0, atol=1e-12)
 
 
-def test_shape_evidence_uses_the_weighted_modes_and_the_baseline_level():
+def test_without_a_stated_sd_the_level_is_the_floor_or_the_baseline_misfit():
+    """No ``shape_sd_rel``: the 1 % floor is the stated level (source "floor"); a mode whose
+    baseline misfit rejects it is raised to that misfit, so its chi^2 there is exactly dof."""
     rng = np.random.default_rng(2)
     shapes = rng.normal(size=(10, 3))
     data = ModalData(np.array([5.0, 9.0, 14.0]), shapes=shapes, dof_labels=tuple("abcdefghij"))
-    model = shapes + 0.05 * rng.normal(size=shapes.shape)
+    model = shapes + np.array([0.05, 0.0, 1e-4]) * rng.normal(size=shapes.shape)
     used = np.array([True, False, True])
     ev = shape_evidence(data, model, used)
+    assert ev.source == "floor"
     np.testing.assert_array_equal(ev.modes, [0, 2])
+    np.testing.assert_array_equal(ev.raised, [True, False])
     deficit = 1 - np.diag(mac_matrix(shapes, model))[[0, 2]]
-    np.testing.assert_allclose(ev.scale, np.sqrt(deficit / 9), rtol=1e-10)
+    assert deficit[1] < (SHAPE_SD_FLOOR_REL**2) / 10  # mode 3 fits far inside the floor
+    np.testing.assert_allclose(
+        ev.scale, [np.sqrt(deficit[0] / 9), SHAPE_SD_FLOOR_REL / np.sqrt(10)], rtol=1e-10
+    )
     r = ev.residuals(model)
     assert r.shape == (20,)
-    # the scaled residuals of the baseline are unit-level by construction: R_i / s_i^2 = dof
-    np.testing.assert_allclose(ev.rss(r) / ev.scale**2, 9.0, rtol=1e-10)
+    np.testing.assert_allclose(ev.chi2(r)[0], 9.0, rtol=1e-10)
+    assert ev.chi2(r)[1] < 1.0
+    np.testing.assert_allclose(ev.rss(r), deficit, rtol=1e-10, atol=1e-14)  # 1 - MAC round-off
     assert shape_evidence(ModalData(np.array([5.0])), None, np.array([True])) is None
+
+
+def test_a_biased_mode_cannot_drag_the_fit_beyond_dof_over_two_nats():
+    """A mode 1 - MAC = 2e-2 off at the baseline, against a stated 1e-3: raised to its own misfit,
+    so a model that removed the bias entirely would gain dof / 2 nats from it, not the
+    ~R / (2 s^2) ~ 8,000 nats of the stated level; an honest mode keeps its stated level."""
+    rng = np.random.default_rng(6)
+    n = 40
+    truth = rng.normal(size=(n, 2))
+    test = truth.copy()
+    bias = rng.normal(size=n)
+    bias -= truth[:, 0] * (bias @ truth[:, 0]) / (truth[:, 0] @ truth[:, 0])
+    test[:, 0] += np.sqrt(0.02 / 0.98) * np.linalg.norm(truth[:, 0]) * bias / np.linalg.norm(bias)
+    labels = tuple(f"{i}V" for i in range(n))
+    data = ModalData(np.array([5.0, 9.0]), shapes=test, dof_labels=labels, shape_sd_rel=[1e-3] * 2)
+    ev = shape_evidence(data, truth, np.ones(2, bool))
+    np.testing.assert_array_equal(ev.raised, [True, False])
+    gain = np.sum(ev.log_likelihood(ev.residuals(test))) - np.sum(
+        ev.log_likelihood(ev.residuals(truth))
+    )
+    assert gain == pytest.approx((n - 1) / 2, rel=1e-9)
+    np.testing.assert_allclose(ev.scale[1], SHAPE_SD_FLOOR_REL / np.sqrt(n))  # 1e-3 -> floor
 
 
 def test_known_shape_noise_is_a_fixed_gaussian_block():
@@ -73,10 +104,9 @@ def test_known_shape_noise_is_a_fixed_gaussian_block():
     data = noisy_modes(prediction, 0.001, sd, rng, "known")
     np.testing.assert_array_equal(data.shape_sd_rel, sd)
     ev = shape_evidence(data, truth, np.ones(3, bool))
-    assert ev.known
+    assert ev.source == "data sd" and not np.any(ev.raised)  # the truth does not reject it
     np.testing.assert_allclose(ev.scale, sd / np.sqrt(n))
     r = ev.residuals(truth)
-    np.testing.assert_array_equal(ev.fitted_level(r), ev.scale)  # never re-estimated
     noise = NoiseModel(np.full(3, 0.001), np.ones(3), False, "data sd", 0.001)
     space = FitSpace(None, (), noise, ev)
     r_f = np.zeros(3)
@@ -115,37 +145,25 @@ def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):
     return FitSpace(None, (axis,), noise, shapes), rng
 
 
-def test_shape_block_likelihood_matches_quadrature_over_each_level():
-    space, rng = _space_with_shapes()
-    k, n = space.shapes.scale.size, space.shapes.n_dof
-    r_f = rng.normal(size=space.n_frequency)
-    d = 0.03 * rng.normal(size=(k, n))  # unscaled shape residuals of the two modes
-    r = np.concatenate([r_f, (d / space.shapes.scale[:, None]).reshape(-1)])
-    expected = log_likelihood(r_f, space.noise)
-    dof = n - 1
-    for rss in np.sum(d * d, axis=1):
-
-        def integrand(log_s, rss=rss):
-            s = np.exp(log_s)
-            return np.exp(-0.5 * rss / s**2 - dof * (log_s + 0.5 * np.log(2 * np.pi)) - 50.0)
-
-        value, _ = integrate.quad(
-            integrand,
-            np.log(SHAPE_SIGMA_FLOOR),
-            np.log(SHAPE_SIGMA_MAX),
-            points=[0.5 * np.log(rss / dof)],
-            limit=200,
-            epsabs=0.0,
-            epsrel=1e-10,
-        )
-        expected += np.log(value) + 50.0 - np.log(np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR))
-    assert space.log_likelihood(r) == pytest.approx(expected, abs=1e-6)
+def test_raise_threshold_is_the_stated_chi2_quantile():
+    """The level is raised exactly where the baseline misfit's chi^2 at the stated level passes
+    the 1 - RAISE_P quantile of chi^2(n - 1)."""
+    n = 25
+    edge = stats.chi2.isf(RAISE_P, n - 1) * (0.02**2 / n)  # R at the threshold, stated sd 2 %
+    truth = np.eye(n)[:, :2]
+    test = truth.copy()
+    for j, rss in enumerate((0.99 * edge, 1.01 * edge)):
+        test[:, j] = np.sqrt(1 - rss) * truth[:, j] + np.sqrt(rss) * np.eye(n)[:, 5 + j]
+    labels = tuple(f"{i}V" for i in range(n))
+    data = ModalData(np.array([5.0, 9.0]), shapes=test, dof_labels=labels, shape_sd_rel=[0.02] * 2)
+    ev = shape_evidence(data, truth, np.ones(2, bool))
+    np.testing.assert_array_equal(ev.raised, [False, True])
 
 
 def test_laplace_with_a_shape_block_matches_the_exact_marginal_of_a_linear_model():
     """One parameter p, frequency residuals r_f = a p + b (known unit noise), shape residuals
-    d = c p + e (levels integrated).  The exact evidence is a 1-D integral over p of the
-    likelihood (with the closed-form level marginal) times the prior; Laplace uses the
+    d = c p + e (levels fixed).  The exact evidence is a 1-D integral over p of the
+    likelihood times the prior; Laplace uses the
     Gauss-Newton Hessian of both blocks at the optimum.  They agree to the Laplace error, which
     shrinks as the data grow."""
     space, rng = _space_with_shapes(k=2, n_dof=30, level=0.02)
@@ -172,9 +190,8 @@ def test_laplace_with_a_shape_block_matches_the_exact_marginal_of_a_linear_model
     result = laplace(space, np.array([p_star]), residual(p_star), jac)
     assert result.log_evidence == pytest.approx(exact, abs=0.05)
     # and the curvature is the sum over blocks: sum a^2 + sum_i |c_i|^2 / sigma_i^2
-    levels = np.sqrt(shapes.rss(residual(p_star)[n_f:]) / shapes.dof)
     c_blocks = c.reshape(shapes.scale.size, shapes.n_dof)
-    expected = np.sum(a * a) + np.sum(np.sum(c_blocks**2, axis=1) / levels**2) + 1 / 9.0
+    expected = np.sum(a * a) + np.sum(np.sum(c_blocks**2, axis=1) / shapes.scale**2) + 1 / 9.0
     assert result.hessian[0, 0] == pytest.approx(expected, rel=1e-4)
 
 

@@ -22,9 +22,12 @@ by Laplace evidence (Bayes factors vs the baseline) and PSIS-LOO, and a verdict:
 --json prints {"verdict", "flagged_modes", "named_effect": {"kind", "location", "parameters"},
 "candidates": [{"kind", "location", "log_evidence", "loo", ...}], "gap_before", "gap_after",
 ...} (gaps: seed eq. 19 Expr).  Noise: the data's frequency sd when given, else --sigma, else
-inferred from the baseline residuals (robust) and integrated out in the evidence.  When the
-data have mode shapes (an identified test, paired by MAC), each mode's shape residual is evidence
-too, with its own noise level integrated out (bayesupdate.discovery.shape_evidence)."""
+inferred from the frequency-only baseline's residuals (robust), and held fixed.  When the data
+have mode shapes (an identified test, paired by MAC), each mode's shape residual is evidence too,
+at a level fixed the same way: its stated sd (identification estimates one; floored at 1 %),
+raised to its misfit at the baseline where that misfit rejects it, so no single mode can drag the
+design away from what the frequencies say (bayesupdate.discovery.shape_evidence); the JSON's
+"noise" says which modes were raised."""
 
 
 def add_arguments(parser) -> None:

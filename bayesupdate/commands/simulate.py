@@ -16,7 +16,12 @@ Examples:
   bayesupdate simulate --model exhaust --out test.uff
   bayesupdate simulate --model exhaust --set t_cold_pipe=1.3mm \\
       --effect joint_flexibility@cold_pipe/main_muffler:k_rot=2e3 --noise 0.01 --seed 3 \\
-      --out hidden.uff --json"""
+      --out hidden.uff --json
+  bayesupdate simulate --geometry tail_length=0.15 --out longer_tail.uff
+
+--geometry changes one quantity of the exhaust's fitted geometry (metres, names as in
+bayesupdate/data/exhaust_geometry.json) in the 'true' structure only: a change outside the
+discovery library, for testing that discovery does not name what is not there."""
 
 
 def add_arguments(parser):
@@ -34,6 +39,13 @@ def add_arguments(parser):
         default=[],
         metavar="SPEC",
         help="hidden effect KIND@LOCATION[:name=value] (repeatable)",
+    )
+    parser.add_argument(
+        "--geometry",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="exhaust only: a geometry quantity of the 'true' structure in metres (repeatable)",
     )
     parser.add_argument(
         "--noise", type=float, default=0.01, help="relative time-signal noise (default 0.01)"
@@ -89,6 +101,32 @@ def simulate_test(model, params, effects, noise, seed, n_modes=20):
     return frfs, truth
 
 
+def true_geometry(model_name: str, assignments: list[str]) -> dict:
+    """The model options of ``--geometry NAME=VALUE`` (exhaust only): {} without any, else
+    {"geometry": the best-fit geometry with those quantities replaced}."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.models.exhaust import fitted_geometry, full_geometry
+
+    if not assignments:
+        return {}
+    if model_name != "exhaust":
+        raise BayesUpdateError(
+            f"--geometry: only the exhaust model has a geometry, not {model_name!r}"
+        )
+    geometry = fitted_geometry("best")
+    for text in assignments:
+        name, _, value = text.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            raise BayesUpdateError(f"--geometry {text!r}: give NAME=VALUE in metres") from None
+        if not (np.isfinite(number) and number > 0):
+            raise BayesUpdateError(f"--geometry {text!r}: the value must be a length > 0 m")
+        geometry[name.strip()] = number
+    full_geometry(geometry)  # unknown names: one-line error naming them
+    return {"geometry": geometry}
+
+
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.discovery.effects import parse_effect_spec
@@ -104,9 +142,8 @@ def run(args) -> int:
     out = check_output_path(args.out, force=args.force)
     effects = [parse_effect_spec(spec) for spec in args.effect]
     params = parse_assignments(args.set)
-    frfs, truth = simulate_test(
-        get_model(args.model), params, effects, args.noise, args.seed, args.modes
-    )
+    model = get_model(args.model, **true_geometry(args.model, args.geometry))
+    frfs, truth = simulate_test(model, params, effects, args.noise, args.seed, args.modes)
     write_uff58(out, frfs)
     in_band = truth["frequencies_hz"] <= frfs.frequencies_hz[-1]
     summary = {
@@ -114,6 +151,7 @@ def run(args) -> int:
         "n_frf": int(frfs.n_frf),
         "n_lines": int(frfs.frequencies_hz.size),
         "effects": truth["effects"],
+        "geometry": list(args.geometry),
         "true_frequencies_hz": [round(float(f), 6) for f in truth["frequencies_hz"][in_band]],
         "true_damping_ratio": [round(float(z), 6) for z in truth["damping_ratio"][in_band]],
         "mass_kg": float(truth["mass_kg"]),

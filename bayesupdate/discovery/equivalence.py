@@ -108,12 +108,12 @@ def fit_to_truth(
         # <= D(baseline) up to the optimiser, as it must be for a nested model
         starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
     # the discovery likelihood's own whitened residual: fixed frequency noise, and a shape block
-    # with the known level sigma_s / sqrt(n) (``shape_evidence``)
+    # with the stated level sigma_s / sqrt(n) (``shape_evidence``)
     m = truth.n_modes
     noise = NoiseModel(np.full(m, frequency_noise), np.ones(m), False, "fixed", frequency_noise)
     test_unit = unit_real_shapes(np.asarray(truth.shapes))
     shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
-    shapes = ShapeEvidence(np.arange(m), test_unit, np.full(m, shape_sd), known=True)
+    shapes = ShapeEvidence(np.arange(m), test_unit, np.full(m, shape_sd))
     space = FitSpace(problem, axes, noise, shapes)
 
     def residual(u):

@@ -1,29 +1,34 @@
 """Name: refit a model (baseline or baseline + one effect) and compute its evidence.
 
-Likelihood (relative frequency errors e_i, noise s_i from ``flagging.NoiseModel``):
+Likelihood of the relative frequency errors e_i with noise s_i from ``flagging.NoiseModel``
+(the data's sd, a fixed level, or the robust level of the frequency-only baseline's residuals):
 
-* known noise: log L = -1/2 sum r_i^2 - sum log s_i - m/2 log 2 pi, with r_i = e_i / s_i;
-* inferred noise: sigma is integrated out under a log-uniform prior on [a, b] =
-  [``SIGMA_FLOOR``, ``SIGMA_MAX``], with r_i = e_i sqrt(w_i) and R = sum r_i^2:
-  log L = -m/2 log 2 pi + 1/2 sum log w_i - log log(b/a) - log 2 + m/2 log(2/R)
-  + log Gamma(m/2) + log[P(m/2, R/2a^2) - P(m/2, R/2b^2)]  (P: regularised lower incomplete gamma),
-  the exact integral of prod_i N(e_i; 0, sigma^2/w_i) d(log sigma) / log(b/a).
+    log L = -1/2 sum r_i^2 - sum log s_i - m/2 log 2 pi,   r_i = e_i / s_i.
+
+Every level is fixed before any fit: an inferred frequency level is the empirical-Bayes plug-in
+of the frequency-only baseline (Vanik, Beck & Au 2000 estimate the prediction-error variances
+alongside the parameters; here they are estimated once, where only the frequencies chose the
+design), and each shape level is fixed the same way (``shape_evidence``).  A level integrated out
+at every point instead (a log-uniform prior on sigma, as this module once did) makes the frequency
+block scale-invariant: moving all twelve identified frequencies 0.08 % off, 8 times their robust
+level, then cost only m/2 ln 64 = 25 nats, less than a few shape blocks could gain, and the
+baseline of an identified null test was dragged that far (issue 15).
 
 Evidence by the Laplace approximation (MacKay 2003 ch. 27; Kass & Raftery 1995 eq. 4) in the fit
 coordinates z (``candidates.ParameterAxis``):
 
     log Z = log L(z*) + log p(z*) + d/2 log 2 pi - 1/2 log det H + sum_j log T_j,
 
-H = J^T J / c + diag(prior curvature) the Gauss-Newton Hessian of the negative log posterior
-(J: Jacobian of r in z; c = 1 for known noise, c = R/m for inferred noise), and
+H = J^T J + diag(prior curvature) the Gauss-Newton Hessian of the negative log posterior
+(J: Jacobian of r in z), and
 T_j = Phi((z_hi - z*_j)/s_j) - Phi((z_lo - z*_j)/s_j), s_j^2 = (H^-1)_jj, the Gaussian mass
 inside the prior box (so a parameter at its bound, or one the data do not constrain, is not
 over-counted).  Starts that end in distinct optima (Mahalanobis distance > 3 under H) have their
 evidences summed (log-sum-exp); the same optimum found twice counts once.
 
 When the test has shapes, the residual vector also holds the shape residuals of
-``shape_evidence`` (per-mode noise levels integrated out the same way, each on its own block, or
-Gaussian with the data's known level), and H sums J_b^T J_b / c_b over the blocks.
+``shape_evidence`` (Gaussian, each mode with its own level fixed before the fit), and H sums
+J_b^T J_b over the blocks.
 
 PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
 shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
@@ -40,14 +45,10 @@ import numpy as np
 from scipy import optimize, special, stats
 
 from bayesupdate.discovery.candidates import ParameterAxis
-from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel
-from bayesupdate.discovery.shape_evidence import (
-    SHAPE_SIGMA_FLOOR,
-    SHAPE_SIGMA_MAX,
-    ShapeEvidence,
-)
+from bayesupdate.discovery.flagging import NoiseModel
+from bayesupdate.discovery.shape_evidence import ShapeEvidence
 
-#: upper end of the log-uniform prior of an inferred relative noise level
+#: largest relative noise level a sampled sigma may take (``discovery.posterior``)
 SIGMA_MAX = 0.5
 #: residual given where the model fails (large, finite)
 _FAILED = 1e3
@@ -104,10 +105,8 @@ class FitSpace:
         return (evaluation.frequencies_hz - f_test) / f_test, evaluation
 
     def residuals(self, e: np.ndarray) -> np.ndarray:
-        """Normalised frequency residuals r of the used modes (module docstring)."""
+        """Normalised frequency residuals r = e / s of the used modes (module docstring)."""
         used = self.noise.used
-        if self.noise.inferred:
-            return e[used] * self.noise.weights_sqrt[used]
         return e[used] / self.noise.scale[used]
 
     def residual_vector(self, e: np.ndarray, model_shapes: np.ndarray | None) -> np.ndarray:
@@ -122,77 +121,22 @@ class FitSpace:
         return np.concatenate([r, self.shapes.residuals(model_shapes)])
 
     def log_likelihood(self, r: np.ndarray) -> float:
-        """log L of the whole residual vector: frequencies + one integrated block per shape."""
+        """log L of the whole residual vector: frequencies + the Gaussian shape block."""
         n_f = self.n_frequency
         value = log_likelihood(r[:n_f], self.noise)
-        shapes = self.shapes
-        if shapes is not None and shapes.known:  # Gaussian, dof terms per mode (scale fitted)
-            value += float(
-                -0.5 * np.sum(shapes.chi2(r[n_f:]))
-                - shapes.dof * np.sum(np.log(shapes.scale) + 0.5 * _LOG_2PI)
-            )
-        elif shapes is not None:
-            for rss in shapes.rss(r[n_f:]):
-                value += inferred_block_log_likelihood(
-                    float(rss), shapes.dof, 0.0, SHAPE_SIGMA_FLOOR, SHAPE_SIGMA_MAX
-                )
+        if self.shapes is not None:
+            value += float(np.sum(self.shapes.log_likelihood(r[n_f:])))
         return value
 
     def curvature_weights(self, r: np.ndarray) -> np.ndarray:
-        """(size,) w with H = J^T diag(w) J: 1/c per block (``_noise_curvature``); a shape
-        block's r_i = d_i / s_i, so its weight is s_i^2 / sigma_i^2 at the profile level."""
-        n_f = self.n_frequency
-        w = np.full(r.size, 1.0 / _noise_curvature(r[:n_f], self.noise))
-        if self.shapes is not None:
-            level = self.shapes.fitted_level(r[n_f:])
-            w[n_f:] = np.repeat((self.shapes.scale / level) ** 2, self.shapes.n_dof)
-        return w
-
-    def whitening(self) -> np.ndarray:
-        """(size,) factors that put every residual in noise units at the baseline's levels
-        (frequencies: 1 / the robust level for inferred noise; shapes are scaled already),
-        so that score-test chi^2 drops of both blocks add up."""
-        n_f = self.n_frequency
-        level = self.noise.sigma if self.noise.inferred else 1.0
-        return np.concatenate([np.full(n_f, 1.0 / level), np.ones(self.size - n_f)])
+        """(size,) w with H = J^T diag(w) J: 1 everywhere, every residual is in noise units."""
+        return np.ones(r.size)
 
 
 def log_likelihood(r: np.ndarray, noise: NoiseModel) -> float:
-    """log L from the normalised residuals r (module docstring)."""
+    """log L from the normalised frequency residuals r (module docstring)."""
     used = noise.used
-    m = int(np.sum(used))
-    rss = float(np.sum(r * r))
-    if not noise.inferred:
-        return -0.5 * rss - float(np.sum(np.log(noise.scale[used]))) - 0.5 * m * _LOG_2PI
-    log_weights = float(np.sum(np.log(noise.weights_sqrt[used])))
-    return inferred_block_log_likelihood(rss, m, log_weights, SIGMA_FLOOR, SIGMA_MAX)
-
-
-def inferred_block_log_likelihood(
-    rss: float, m: int, log_weight_sum: float, a: float, b: float
-) -> float:
-    """The closed form of the module docstring: m residuals with sum of squares ``rss``, their
-    common level integrated out under a log-uniform prior on [a, b]; log_weight_sum = 1/2 sum
-    log w_i."""
-    rss = max(rss, 1e-3 * m * a * a)  # keeps P(m/2, R/2a^2) representable; sigma << floor anyway
-    k = 0.5 * m
-    mass = special.gammainc(k, rss / (2 * a * a)) - special.gammainc(k, rss / (2 * b * b))
-    return float(
-        -0.5 * m * _LOG_2PI
-        + log_weight_sum
-        - np.log(np.log(b / a))
-        - np.log(2.0)
-        + k * np.log(2.0 / rss)
-        + special.gammaln(k)
-        + np.log(max(mass, 1e-300))
-    )
-
-
-def _noise_curvature(r: np.ndarray, noise: NoiseModel) -> float:
-    """c in H = J^T J / c: 1 for known noise, the fitted sigma^2 (floored) for inferred noise."""
-    if not noise.inferred:
-        return 1.0
-    return max(float(np.sum(r * r)) / r.size, SIGMA_FLOOR**2)
+    return float(-0.5 * np.sum(r * r) - np.sum(np.log(noise.scale[used])) - 0.5 * r.size * _LOG_2PI)
 
 
 @dataclass
@@ -427,44 +371,13 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
     used = noise.used
     log_q = stats.multivariate_normal(best.z, cov, allow_singular=True).logpdf(z)
     log_q = np.atleast_1d(log_q)
-    if noise.inferred:
-        m = r.shape[1]
-        sigma_hat = np.sqrt(_noise_curvature(best.r[:n_f], noise))
-        log_sigma = rng.normal(np.log(sigma_hat), np.sqrt(1.0 / (2 * m)), size=n)
-        sigma = np.exp(log_sigma)[:, None]
-        pointwise = (
-            -0.5 * (r / sigma) ** 2
-            - np.log(sigma)
-            + np.log(noise.weights_sqrt[used])[None, :]
-            - 0.5 * _LOG_2PI
-        )
-        log_q = log_q + stats.norm.logpdf(log_sigma, np.log(sigma_hat), np.sqrt(1.0 / (2 * m)))
-        log_sigma_prior = -np.log(np.log(SIGMA_MAX / SIGMA_FLOOR))
-    else:
-        pointwise = -0.5 * r**2 - np.log(noise.scale[used])[None, :] - 0.5 * _LOG_2PI
-        log_sigma_prior = 0.0
-    if space.shapes is not None:  # each shape's level drawn like sigma above; added to its mode
+    pointwise = -0.5 * r**2 - np.log(noise.scale[used])[None, :] - 0.5 * _LOG_2PI
+    if space.shapes is not None:  # each mode's shape term added to its frequency term
         shapes = space.shapes
-        dof, k = shapes.dof, shapes.scale.size
-        if shapes.known:
-            log_level = np.broadcast_to(np.log(shapes.scale), (n, k))
-        else:
-            level_hat = shapes.fitted_level(best.r[n_f:])
-            log_level = rng.normal(np.log(level_hat), np.sqrt(1.0 / (2 * dof)), size=(n, k))
-            log_q = log_q + np.sum(
-                stats.norm.logpdf(log_level, np.log(level_hat), np.sqrt(1.0 / (2 * dof))), axis=1
-            )
-            log_sigma_prior = log_sigma_prior - k * np.log(
-                np.log(SHAPE_SIGMA_MAX / SHAPE_SIGMA_FLOOR)
-            )
-        rss = shapes.rss(r_all[:, n_f:])  # (n, k)
-        level = np.exp(log_level)
-        # the scale factor's degree of freedom: dof (not n_dof) Gaussian terms per shape
-        shape_terms = -0.5 * rss / level**2 - dof * (log_level + 0.5 * _LOG_2PI)
         column = np.searchsorted(np.flatnonzero(used), shapes.modes)
         pointwise = pointwise.copy()
-        pointwise[:, column] += shape_terms  # shapes.modes are distinct
-    log_p = pointwise.sum(axis=1) + space.log_prior_z(z) + log_sigma_prior
+        pointwise[:, column] += shapes.log_likelihood(r_all[:, n_f:])  # modes are distinct
+    log_p = pointwise.sum(axis=1) + space.log_prior_z(z)
     tree = arviz_base.from_dict(
         {"posterior": {"z": z[None]}, "log_likelihood": {"f": pointwise[None]}},
         dims={"f": ["mode"], "z": ["parameter"]},

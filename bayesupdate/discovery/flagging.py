@@ -8,15 +8,15 @@ s_i = sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), 
 * sigma is *inferred*: for flagging, a robust scale of the baseline residuals
   sigma = 1.4826 MAD(e sqrt(w)) sqrt(m / (m - d)) (median absolute deviation about zero, corrected
   for the d fitted parameters; Huber 1981), floored at ``SIGMA_FLOOR``.  A discrepancy confined to
-  a few modes then stands out instead of inflating the noise level; the evidence step integrates
-  sigma out instead (``evidence.log_likelihood``).
+  a few modes then stands out instead of inflating the noise level; the evidence uses the same
+  level, fixed (``evidence``).
 
 z_i = e_i / sqrt(s_i^2 + v_i) with v_i the posterior-predictive variance of the relative
 frequency (when a posterior is given), two-sided p_i = 2 Phi(-|z_i|).  Mode i is flagged when
 p_i < alpha / T (Bonferroni over the T per-mode tests made, family-wise level alpha: T = m, or
 2m with shape tests) or, where shapes exist, when its MAC is below ``mac_threshold``, or, where
-the data give the shape noise (``ModalData.shape_sd_rel``), when its shape misfit
-c_i = |d_i|^2 / s_i^2 (``shape_evidence``) has P(chi^2(n - 1) > c_i) < alpha / T.  The global
+the test has shapes, when its shape misfit c_i = |d_i|^2 / sigma_i^2 at the shape block's fixed
+level (``shape_evidence``) has P(chi^2(n - 1) > c_i) < alpha / T.  The global
 misfit test is chi^2 = sum z_i^2 (+ sum c_i) on m - d (+ k (n - 1)) degrees of freedom (known
 frequency noise only).
 """
@@ -35,8 +35,9 @@ class NoiseModel:
     """Relative noise per mode.
 
     scale : (m,) s_i used for z-scores (for inferred noise, the robust estimate / sqrt(w_i)).
-    weights_sqrt : (m,) sqrt(w_i) (0 drops a mode).  inferred : sigma is integrated out in the
-    evidence.  source : "data sd" | "fixed" | "inferred (robust)".  sigma : the level quoted.
+    weights_sqrt : (m,) sqrt(w_i) (0 drops a mode). inferred : sigma was estimated from the
+    baseline residuals (then the adequacy check asks that level to look like test noise). source
+    : "data sd" | "fixed" | "inferred (robust)". sigma : the level quoted.
     """
 
     scale: np.ndarray
@@ -75,7 +76,7 @@ class ModeFlags:
     """Per mode (test order): z-score, two-sided p-value, MAC (NaN: no shapes), flagged.
 
     chi2 / chi2_dof / chi2_p : global misfit test (NaN for inferred noise).  shape_p_value :
-    (m,) p-value of each mode's shape misfit under known shape noise (NaN: not tested).
+    (m,) p-value of each mode's shape misfit at its fixed level (NaN: not tested).
     """
 
     residual_rel: np.ndarray
@@ -107,7 +108,7 @@ def flag_modes(
     shape_dof: int = 0,
 ) -> ModeFlags:
     """Flag modes (module docstring).  residual_rel : (m,) e_i; predictive_rel_var : (m,) v_i;
-    shape_chi2 : (m,) c_i under known shape noise (NaN where a mode has no shape term), each on
+    shape_chi2 : (m,) c_i at the shape levels (NaN where a mode has no shape term), each on
     ``shape_dof`` degrees of freedom."""
     e = np.asarray(residual_rel, dtype=float)
     var = noise.scale**2 + (0.0 if predictive_rel_var is None else predictive_rel_var)

@@ -41,8 +41,8 @@ EXACT_NULL_KINDS = ("added_mass", "boundary_spring", "bend_flexibility", "stiffn
 class CandidateScore:
     """Score test of one candidate.
 
-    delta_chi2 : predicted chi^2 drop (in units of the noise; for inferred noise, of the robust
-    level).  step_theta : the effect parameter after the linear step (SI; a refit start).
+    delta_chi2 : predicted chi^2 drop (in units of the noise: the data's, a fixed or the inferred
+    robust level). step_theta : the effect parameter after the linear step (SI; a refit start).
     sensitivity : (m_used,) g_perp.
     """
 
@@ -122,8 +122,8 @@ def _paired_prediction(problem, model, params) -> tuple | None:
 def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, candidate):
     """Score test of a candidate along its first parameter (module docstring, item 1).
 
-    residuals_fn(e, shapes) -> residuals in noise units (``FitSpace.residual_vector`` times
-    ``FitSpace.whitening``) from the relative frequency errors e (m,) and the paired model
+    residuals_fn(e, shapes) -> residuals in noise units (``FitSpace.residual_vector``) from the
+    relative frequency errors e (m,) and the paired model
     shapes (or None).  design_jac : (size, d) J_d of the same residuals.
     One model solve for kinds whose null value reproduces the model exactly (added mass, spring,
     factors), two for a joint (its null only approximates two different bending stiffnesses).

@@ -1,4 +1,5 @@
-"""Mode shapes as evidence: per-mode shape residuals, each with its own integrated noise level.
+"""Mode shapes as evidence: per-mode shape residuals with a per-mode noise level fixed before any
+fit, so that no single mode can drag the design variables away from what the frequencies say.
 
 Test mode i has the real, unit-norm shape t_i (n,) on the test's sensor DOFs (complex identified
 shapes are rotated to their best-fit real line first, ``ema.lsfd.realise``); p_i is the paired model
@@ -8,39 +9,48 @@ and leaves the residual
 
     d_i = t_i - a_i p_i,        |d_i|^2 = 1 - MAC(t_i, p_i)   (exactly, for real shapes),
 
-so this is the MAC deficit spread over the sensors, with a sign and a location, which is what a
-sensitivity (Jacobian) needs.  The components of d_i are modelled as independent N(0, sigma_i^2)
-with one level sigma_i *per mode*: identification quality varies from mode to mode (a mode with
-little motion at the reference sensor is identified worse; on the virtual test 1 - MAC of the
-identified against the true shapes is ~1e-5 for most modes and ~2e-2 for three of twelve).  Each
-sigma_i is integrated out under a log-uniform prior on [``SHAPE_SIGMA_FLOOR``, ``SHAPE_SIGMA_MAX``]
-with the closed form of ``evidence.inferred_block_log_likelihood`` on n - 1 degrees of freedom (the
-scale factor is fitted).  A model that explains a shape discrepancy therefore gains about
-(n - 1)/2 ln(R_before / R_after) for that mode, R = |d_i|^2; one that cannot, gains nothing, however
-large the identification error of that mode.
+the MAC deficit spread over the sensors, with a sign and a location, which is what a sensitivity
+(Jacobian) needs.  The components of d_i are independent N(0, sigma_i^2) (the eigenvector
+prediction-error model of Vanik, Beck & Au 2000, J. Eng. Mech. 126:738, with one variance per
+mode, as Yuen 2010, "Bayesian Methods for Structural Dynamics and Civil Engineering", ch. 6,
+allows), and the block is Gaussian with that level held fixed:
 
-The optimiser sees d_i / s_i with s_i the level fitted at the baseline (held fixed: one
-reweighting of an iteratively reweighted least-squares fit of the integrated likelihood, whose
-gradient (n - 1)/R_i d_i.dd_i it matches at the baseline).
+    sigma_i = s_i,  s_i = max(sd_i, SHAPE_SD_FLOOR_REL) / sqrt(n),  unless R_i / s_i^2 rejects
+    chi^2(n - 1) at level ``RAISE_P`` (1 %); then sigma_i = sqrt(R_i / (n - 1)),
 
-*Known* shape noise: when the data give ``ModalData.shape_sd_rel`` (each shape's component sd as
-a fraction of its RMS amplitude; a unit-norm shape on n DOFs has RMS amplitude 1/sqrt(n)), the
-level is sigma_i = shape_sd_rel_i / sqrt(n), fixed, and the block is Gaussian with that sd, as
-frequencies are with a known sd.  Then a shape misfit that no model removes is not absorbed
-into an inflated noise level: R_i / sigma_i^2 ~ chi^2(n - 1) under a model that fits, and the
-adequacy check (``flagging.flag_modes``) sees it.
+* sd_i is the data's ``shape_sd_rel`` (identification estimates it from the LSFD fit; a virtual
+  test states it), floored at ``SHAPE_SD_FLOOR_REL`` = 1 % of the shape's RMS amplitude: sensor
+  sensitivity and orientation errors of about 1 % (the calibration uncertainty of ordinary
+  accelerometers) and the FE discretisation of a shape leave no test-model difference below it
+  that is physics.  Without it a near-perfect mode (1 - MAC ~ 1e-6 on the virtual test) gets a
+  level so small that a 0.04 % frequency shift of all modes buys a better shape fit of it: that is
+  how the former per-mode integrated level dragged the baseline on identified data (issue 15);
+* R_i = |d_i|^2 at the frequency-only baseline calibration (the eq. 19 optimum, which shapes have
+  not touched): a mode whose misfit there rejects its stated level carries identification bias the
+  stated sd does not cover (on the virtual roving-hammer test, modes whose reference accelerometer
+  barely moves: their V and H sets cannot be scaled to each other; 1 - MAC ~ 6e-3 to 8e-3, tens to
+  hundreds of times the LSFD estimate).  Its level becomes its own misfit (the plug-in estimate of
+  that mode's prediction-error variance at a point the shapes did not choose), so its chi^2 at the
+  baseline is n - 1 and any model, an effect included, gains at most (n - 1) / 2 nats from it,
+  however large the bias.  Modes the stated level covers keep it, and a misfit elsewhere (an
+  effect the frequencies alone cannot see) counts in full against it.
+
+With the level fixed, c_i = R_i / sigma_i^2 ~ chi^2(n - 1) under a model that fits (one degree of
+freedom goes to the fitted scale factor), and the adequacy check (``flagging.flag_modes``) tests it.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from bayesupdate.ema.lsfd import realise
 
-#: smallest per-component noise level of a unit-norm shape (1 - MAC ~ 4e-7 on 40 DOFs)
-SHAPE_SIGMA_FLOOR = 1e-4
-#: largest: a unit-norm shape on n DOFs has components ~ 1/sqrt(n); 0.5 is pure noise for n >= 4
-SHAPE_SIGMA_MAX = 0.5
+#: smallest shape noise as a fraction of a shape's RMS amplitude [-] (module docstring)
+SHAPE_SD_FLOOR_REL = 0.01
+#: a mode's misfit at the frequency-only baseline with P(chi^2(n - 1) > c) below this raises its
+#: level to that misfit (module docstring); 1 %: raising only ever costs evidence, so err towards it
+RAISE_P = 0.01
 
 
 def unit_real_shapes(shapes: np.ndarray) -> np.ndarray:
@@ -66,15 +76,17 @@ class ShapeEvidence:
     """The shape block of a fit's residual vector.
 
     modes : (k,) 0-based test modes whose shapes count (the modes with weight > 0).
-    test_unit : (n_dof, k) their unit-norm real shapes.  scale : (k,) s_i, the optimiser's fixed
-    per-mode level (module docstring).  known : s_i is the data's known noise level (not
-    integrated out).
+    test_unit : (n_dof, k) their unit-norm real shapes.  scale : (k,) sigma_i, each mode's fixed
+    per-component level (module docstring).  raised : (k,) bool, the modes whose level is their
+    misfit at the frequency-only baseline (above their stated level).  source : what the stated
+    level came from ("data sd" or "floor" when the data give none).
     """
 
     modes: np.ndarray
     test_unit: np.ndarray
     scale: np.ndarray
-    known: bool = False
+    raised: np.ndarray | None = None
+    source: str = "data sd"
 
     @property
     def n_dof(self) -> int:
@@ -90,33 +102,32 @@ class ShapeEvidence:
         return int(self.test_unit.size)
 
     def residuals(self, model_shapes: np.ndarray) -> np.ndarray:
-        """(k n_dof,) scaled residuals d_i / s_i, mode after mode.  model_shapes : (n_dof, m_test)
-        paired model shapes of all test modes."""
+        """(k n_dof,) scaled residuals d_i / sigma_i, mode after mode.  model_shapes :
+        (n_dof, m_test) paired model shapes of all test modes."""
         d = shape_residuals(self.test_unit, np.asarray(model_shapes)[:, self.modes])
         return (d / self.scale[None, :]).T.reshape(-1)
 
     def rss(self, r: np.ndarray) -> np.ndarray:
         """(k,) R_i = |d_i|^2 from the scaled residuals r (..., k n_dof) -> (..., k)."""
-        blocks = np.asarray(r).reshape(*np.shape(r)[:-1], self.scale.size, self.n_dof)
-        return np.sum(blocks**2, axis=-1) * self.scale**2
-
-    def fitted_level(self, r: np.ndarray) -> np.ndarray:
-        """(k,) the profile noise level sqrt(R_i / dof), floored; the known level if known."""
-        if self.known:
-            return np.broadcast_to(self.scale, np.shape(r)[:-1] + self.scale.shape)
-        return np.maximum(np.sqrt(self.rss(r) / self.dof), SHAPE_SIGMA_FLOOR)
+        return self.chi2(r) * self.scale**2
 
     def chi2(self, r: np.ndarray) -> np.ndarray:
-        """(k,) R_i / s_i^2 (with known noise ~ chi^2(dof) per mode under a fitting model)."""
-        return self.rss(r) / self.scale**2
+        """(..., k) c_i = R_i / sigma_i^2 (~ chi^2(dof) per mode under a fitting model)."""
+        blocks = np.asarray(r).reshape(*np.shape(r)[:-1], self.scale.size, self.n_dof)
+        return np.sum(blocks**2, axis=-1)
+
+    def log_likelihood(self, r: np.ndarray) -> np.ndarray:
+        """(..., k) per-mode Gaussian log-density of the scaled residuals r (..., k n_dof), on
+        dof terms per mode (the scale factor is fitted)."""
+        return -0.5 * self.chi2(r) - self.dof * (np.log(self.scale) + 0.5 * np.log(2 * np.pi))
 
 
 def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     """ShapeEvidence of ``data`` (ModalData with shapes) or None without shapes.
 
-    baseline_model_shapes : (n_dof, m) the baseline's paired model shapes on ``data.dof_labels``;
-    used : (m,) bool modes that count.  s_i = the data's known level (``shape_sd_rel``), else
-    the baseline's fitted level of mode i."""
+    baseline_model_shapes : (n_dof, m) the paired model shapes on ``data.dof_labels`` at the
+    frequency-only baseline calibration; used : (m,) bool modes that count.  Each mode's level
+    is the larger of its stated level and its misfit there (module docstring)."""
     if data.shapes is None or baseline_model_shapes is None:
         return None
     test = unit_real_shapes(np.asarray(data.shapes))
@@ -124,9 +135,13 @@ def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     modes = np.flatnonzero(np.asarray(used, dtype=bool) & finite)
     if modes.size == 0 or test.shape[0] < 3:
         return None
-    if data.shape_sd_rel is not None:
-        known = np.asarray(data.shape_sd_rel, dtype=float)[modes] / np.sqrt(test.shape[0])
-        return ShapeEvidence(modes, test[:, modes], known, known=True)
-    unscaled = ShapeEvidence(modes, test[:, modes], np.ones(modes.size))
-    scale = unscaled.fitted_level(unscaled.residuals(baseline_model_shapes))
-    return ShapeEvidence(modes, test[:, modes], scale)
+    n = test.shape[0]
+    stated = np.zeros(modes.size) if data.shape_sd_rel is None else data.shape_sd_rel[modes]
+    floor = np.maximum(stated, SHAPE_SD_FLOOR_REL) / np.sqrt(n)
+    d = shape_residuals(test[:, modes], np.asarray(baseline_model_shapes)[:, modes])
+    rss = np.sum(d**2, axis=0)
+    rss = np.where(np.isfinite(rss), rss, 0.0)  # a missing model shape: keep the stated level
+    raised = stats.chi2.sf(rss / floor**2, n - 1) < RAISE_P
+    level = np.where(raised, np.sqrt(rss / (n - 1)), floor)
+    source = "data sd" if data.shape_sd_rel is not None else "floor"
+    return ShapeEvidence(modes, test[:, modes], level, raised, source)

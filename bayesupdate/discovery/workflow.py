@@ -29,7 +29,7 @@
      ``bound_tolerance`` = 0.5 % of the range: an effect pinned on a bound is absorbing a change
      the library does not describe), and the extended model fits within the noise (no mode
      misfits at family-wise level ``adequacy_p`` = 1e-3, Bonferroni over its frequency and, with
-     known shape noise, shape tests; for known noise also the global chi^2 p-value >
+     shapes, shape tests at their fixed levels; for known noise also the global chi^2 p-value >
      ``adequacy_p``; for inferred noise its own robust noise level <= ``max_noise_rel``);
    * ``no discrepancy``: no candidate beats the baseline by the threshold and the baseline fits
      within the noise (for inferred noise: no flagged mode and an inferred level <=
@@ -69,7 +69,7 @@ from bayesupdate.discovery.localization import (
     localize,
     screen_grid,
 )
-from bayesupdate.discovery.shape_evidence import shape_evidence
+from bayesupdate.discovery.shape_evidence import SHAPE_SD_FLOOR_REL, shape_evidence
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
@@ -239,9 +239,7 @@ class DiscoveryResult:
             "noise": {
                 "source": self.noise.source,
                 "sigma_rel": float(self.noise.sigma),
-                "shapes": None
-                if self.baseline.space.shapes is None
-                else ("data sd" if self.baseline.space.shapes.known else "inferred per mode"),
+                "shapes": _shape_noise_json(self.baseline.space.shapes),
             },
             "effects": self.effects,
             "scanned": len(self.localization.scores),
@@ -350,11 +348,26 @@ def decide(
     )
 
 
+def _shape_noise_json(shapes) -> dict | None:
+    """How the shape block's levels were set (``shape_evidence``): the stated source ("data sd",
+    or "floor" when the data give none: a stated fallback), the floor, each used mode's level as
+    a fraction of the RMS amplitude, and the modes raised to their baseline misfit (1-based)."""
+    if shapes is None:
+        return None
+    return {
+        "source": shapes.source,
+        "floor_sd_rel": SHAPE_SD_FLOOR_REL,
+        "sd_rel": [float(v) for v in shapes.scale * np.sqrt(shapes.n_dof)],
+        "modes": [int(i) + 1 for i in shapes.modes],
+        "raised_to_baseline_misfit": [int(i) + 1 for i in shapes.modes[shapes.raised]],
+    }
+
+
 def known_shape_chi2(fit: ModelFit) -> tuple[np.ndarray | None, int]:
-    """((m,) per-mode shape chi^2 c_i of ``fit`` (NaN for modes without a shape term), dof) under
-    the data's known shape noise; (None, 0) when the shape noise is inferred or there are none."""
+    """((m,) per-mode shape chi^2 c_i of ``fit`` (NaN for modes without a shape term), dof) at
+    the shape block's fixed levels; (None, 0) without shapes."""
     shapes = fit.space.shapes
-    if shapes is None or not shapes.known:
+    if shapes is None:
         return None, 0
     c = np.full(fit.residual_rel.size, np.nan)
     c[shapes.modes] = shapes.chi2(fit.best.r[fit.space.n_frequency :])
@@ -501,16 +514,15 @@ def discover(
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     t1 = time.perf_counter()
     candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
-    whiten = base_space.whitening()
 
     def residuals_fn(e, model_shapes):
-        return whiten * base_space.residual_vector(e, model_shapes)
+        return base_space.residual_vector(e, model_shapes)
 
     model_modes = baseline.table.model_mode - 1
     where = localize(
         problem,
         base_fit.theta,
-        whiten[:, None] * base_fit.best.jac_z,
+        base_fit.best.jac_z,
         residuals_fn,
         candidates,
         model_modes,

@@ -1,4 +1,4 @@
-"""``bayesupdate identify``: modal parameters from FRFs in a UFF 58 file, no pole picking."""
+"""``bayesupdate identify``: modal parameters from FRFs in UFF 58 files, no pole picking."""
 
 import json
 
@@ -8,13 +8,16 @@ from bayesupdate.atomic import check_output_path
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "identify"
-HELP = "identify modes (LSCE + stabilization + LSFD) from FRFs in a UFF 58 file"
+HELP = "identify modes (LSCE or pLSCF + stabilization + LSFD) from FRFs in UFF 58 files"
 DESCRIPTION = """Identify natural frequencies, damping ratios and mode shapes from FRFs (UFF 58).
 
-Poles come from global LSCE over all FRFs with orders swept up to --max-order; stable poles are
-clustered across orders and chosen automatically.  Without --band the range is analysed as
-consecutive narrow bands with limits at sum-FRF minima.  Shapes by LSFD, mass-normalised by the
-driving points.  Writes ModalData as HDF5 (--out) and optional plots (--plots DIR).
+Poles come from global LSCE (default) or pLSCF/PolyMAX (--method plscf) over all FRFs with
+orders swept up to --max-order; stable poles are clustered across orders and chosen
+automatically.  Several FRF files are one test (e.g. the runs of a roving accelerometer).
+Without --band the range is analysed as consecutive narrow bands with limits at sum-FRF
+minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
+unscaled and the output says so); each mode's shape_sd_rel estimates its shape error
+(E[1 - MAC] ~ sd^2).  Writes ModalData as HDF5 (--out) and optional plots (--plots DIR).
 
 example: bayesupdate identify test.uff --out modes.h5 --plots plots --json
 """
@@ -31,7 +34,12 @@ def _parse_band(text: str | None):
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("frf_file", metavar="FRF.uff", help="UFF file with dataset-58 FRFs")
+    parser.add_argument(
+        "frf_file",
+        metavar="FRF.uff",
+        nargs="+",
+        help="UFF file(s) with dataset-58 FRFs; several files are one test (e.g. roving runs)",
+    )
     parser.add_argument("--band", metavar="LO:HI", help="analyse one band [Hz] (default: auto)")
     parser.add_argument(
         "--max-order",
@@ -40,6 +48,12 @@ def add_arguments(parser) -> None:
         metavar="N",
         help="highest LSCE polynomial order (default 60 with --band, else 40)",
     )
+    parser.add_argument(
+        "--method",
+        default="lsce",
+        choices=("lsce", "plscf"),
+        help="pole estimator: LSCE (time domain) or pLSCF/PolyMAX (frequency domain)",
+    )
     parser.add_argument("--out", required=True, metavar="modes.h5", help="output HDF5 file")
     parser.add_argument("--plots", metavar="DIR", help="write PNG plots to this folder")
     parser.add_argument("--force", action="store_true", help="overwrite --out if it exists")
@@ -47,6 +61,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from bayesupdate.ema.frf_set import merge_frf_sets
     from bayesupdate.ema.identify import MAX_SHAPE_SD, identify
     from bayesupdate.ema.modal_h5 import write_modal_h5
     from bayesupdate.ema.uff_io import read_uff58
@@ -55,8 +70,8 @@ def run(args) -> int:
     band = _parse_band(args.band)
     if args.max_order is not None and args.max_order < 2:
         raise BayesUpdateError(f"--max-order {args.max_order}: must be at least 2")
-    frfs = read_uff58(args.frf_file)
-    result = identify(frfs, band_hz=band, max_order=args.max_order)
+    frfs, merge_notes = merge_frf_sets([read_uff58(path) for path in args.frf_file])
+    result = identify(frfs, band_hz=band, max_order=args.max_order, method=args.method)
     write_modal_h5(out, result.modes)
     if args.plots:
         from pathlib import Path
@@ -89,7 +104,7 @@ def run(args) -> int:
         "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
         "out": str(out),
     }
-    notes = []
+    notes = list(merge_notes)
     if one_dof:
         notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
     if not np.all(modes.extra["mass_normalised"]):

@@ -114,3 +114,182 @@ def correct_exponential_window(
     s = -z * w + 1j * w * np.sqrt(1 - z**2) + 1.0 / tau_s
     wn = np.abs(s)
     return wn / (2 * np.pi), -s.real / wn
+
+
+#: an impact starts where |force| first exceeds this fraction of the record's peak force
+IMPACT_THRESHOLD = 0.1
+
+
+def detect_impacts(force: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Impacts in a hammer force signal (n_t,): start samples (n_hit,) and double-hit flags.
+
+    A hit starts where |f| rises above ``IMPACT_THRESHOLD`` of the peak after at least 20 ms
+    below it; a hit whose record (up to the next hit) holds a second pulse above the threshold,
+    after the force fell below it, is a double impact (the hammer bounced): its spectrum has
+    notches and its FRF is biased.
+    """
+    above = np.abs(force) > IMPACT_THRESHOLD * np.max(np.abs(force))
+    on = np.flatnonzero(above)
+    if on.size == 0:
+        return np.zeros(0, int), np.zeros(0, bool)
+    quiet = max(int(0.02 * sample_rate_hz), 2)
+    gaps = np.diff(on)
+    pulse_start = np.concatenate([[on[0]], on[1:][gaps > 1]])  # every rise above threshold
+    hit_start = np.concatenate([[on[0]], on[1:][gaps > quiet]])  # rises after a quiet spell
+    # a second rise within the quiet spell (a bounce) or within 4 pulse lengths is a double hit
+    next_hit = np.append(hit_start[1:], force.size)
+    double = np.array(
+        [
+            np.sum((pulse_start > s) & (pulse_start < e)) > 0
+            for s, e in zip(hit_start, next_hit, strict=True)
+        ]
+    )
+    return hit_start, double
+
+
+def impact_segments(
+    force: np.ndarray, response: np.ndarray, sample_rate_hz: float, record_s: float | None
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Cut a hammer test into one record per clean hit: force (n_rec, n_s), response
+    (n_resp, n_rec, n_s), and notes on dropped hits.  Each record starts 5 ms (pretrigger)
+    before its hit and lasts ``record_s`` (default: the shortest spacing between hits, or
+    the time to the end of the signal for one hit)."""
+    starts, double = detect_impacts(force, sample_rate_hz)
+    if starts.size == 0:
+        raise BayesUpdateError("impact test: the force channel holds no hit")
+    pre = int(0.005 * sample_rate_hz)
+    first = np.maximum(starts - pre, 0)
+    if record_s is not None:
+        n_s = int(round(record_s * sample_rate_hz))
+    elif starts.size > 1:
+        n_s = int(np.min(np.diff(first)))
+    else:
+        n_s = force.size - first[0]
+    notes = []
+    if np.any(double):
+        notes.append(
+            f"impact test: {int(double.sum())} of {double.size} hits are double impacts "
+            "(the hammer bounced); left out of the average"
+        )
+    keep = ~double & (first + n_s <= force.size)
+    if not np.any(keep):
+        raise BayesUpdateError(
+            "impact test: no clean hit (every hit is a double impact or too close to the end); "
+            "repeat the hits"
+        )
+    idx = first[keep][:, None] + np.arange(n_s)[None, :]
+    return force[idx], response[:, idx], notes
+
+
+def is_impulsive(force: np.ndarray) -> bool:
+    """A hammer force: above 10 % of its peak for under 2 % of the time (a sweep, random or
+    sine force is above it most of the time)."""
+    return bool(np.mean(np.abs(force) > IMPACT_THRESHOLD * np.max(np.abs(force))) < 0.02)
+
+
+def _impact_frf(force, response, sample_rate_hz, record_s, tau_s):
+    """H1/H2/coherence of a hammer test with force and (if needed) exponential windows."""
+    f_rec, y_rec, notes = impact_segments(force, response, sample_rate_hz, record_s)
+    n_s = f_rec.shape[-1]
+    # force window: twice the time to the last sample above 5 % of each record's peak
+    mag = np.abs(f_rec) / np.max(np.abs(f_rec), axis=1, keepdims=True)
+    pulse_end = max(int(np.max(np.flatnonzero(np.max(mag[:, : n_s // 2], axis=0) > 0.05))), 1)
+    force_window_s = 2 * (pulse_end + 1) / sample_rate_hz
+    if tau_s is None:
+        # no exponential window when the response has died out by the record's end
+        tail = np.sqrt(np.mean(y_rec[..., -max(n_s // 10, 1) :] ** 2))
+        peak = np.sqrt(np.max(np.mean(y_rec[..., : max(n_s // 10, 1)] ** 2, axis=-1)))
+        if tail > 0.01 * peak:
+            tau_s = n_s / sample_rate_hz / np.log(100.0)  # the window ends at 1 %
+            notes.append(
+                f"impact test: the response has not died out in the {n_s / sample_rate_hz:g} s "
+                f"record; exponential window tau = {tau_s:.4g} s applied: every identified "
+                f"decay rate includes 1/tau = {1 / tau_s:.4g} 1/s (zeta_true = zeta - "
+                f"1/(tau 2 pi f))"
+            )
+    win_tau = 1e12 if tau_s is None else tau_s
+    spec = h1_h2_coherence(
+        f_rec[None, :, :], y_rec, sample_rate_hz, segment=n_s, window="impact",
+        force_window_s=force_window_s, tau_s=win_tau,
+    )  # fmt: skip
+    notes.append(f"impact test: {f_rec.shape[0]} hits averaged, {n_s / sample_rate_hz:g} s each")
+    gff = np.mean(np.abs(np.fft.rfft(f_rec, axis=-1)) ** 2, axis=0)
+    return spec, gff, notes
+
+
+def frf_from_signals(
+    force: np.ndarray,
+    response: np.ndarray,
+    sample_rate_hz: float,
+    method: str = "auto",
+    segment: int | None = None,
+    record_s: float | None = None,
+    tau_s: float | None = None,
+    window: str = "hann",
+) -> tuple[tuple, np.ndarray, list[str]]:
+    """FRFs of responses (n_resp, n_rep, n_t) to one force (n_rep, n_t) [SI units], n_rep
+    repetitions of one measurement (1-D force / 2-D response: one repetition).
+
+    method "impact" (hits detected, one record per clean hit, force + exponential windows),
+    "welch" (``window`` segments of ``segment`` samples, default the largest power of two
+    within a quarter of a repetition, 50 % overlap: sweeps, random, burst; ``"rect"`` with a
+    whole-repetition segment for a sweep that fits in its record), or "auto" (impact when the
+    force is impulsive, :func:`is_impulsive`).  Returns ((frequencies_hz, h1, h2, coherence),
+    force autospectrum (n_f,) [relative], notes (one line each)).
+    """
+    force = np.atleast_2d(np.asarray(force, dtype=float))
+    response = np.asarray(response, dtype=float)
+    response = response.reshape(-1, *force.shape)
+    if method == "auto":
+        method = "impact" if is_impulsive(force.reshape(-1)) else "welch"
+    if method == "impact":  # repetitions end to end: each hit makes its own record
+        return _impact_frf(
+            force.reshape(-1), response.reshape(response.shape[0], -1), sample_rate_hz,
+            record_s, tau_s,
+        )  # fmt: skip
+    if method != "welch":
+        raise BayesUpdateError(f"--method {method!r}: use auto, impact or welch")
+    n_t = force.shape[-1]
+    if segment is None:
+        segment = 2 ** int(np.floor(np.log2(max(n_t // 4, 8))))
+    if segment > n_t:
+        raise BayesUpdateError(
+            f"--df: a segment of {segment} samples is longer than the record ({n_t}); "
+            f"the finest line spacing is {sample_rate_hz / n_t:g} Hz"
+        )
+    spec = h1_h2_coherence(force, response, sample_rate_hz, segment, window=window)
+    step = max(1, segment // 2)
+    taper = np.hanning(segment + 1)[:-1] if window == "hann" else np.ones(segment)
+    seg = _segments(force, segment, step) * taper
+    gff = np.mean(np.abs(np.fft.rfft(seg, axis=-1)) ** 2, axis=0)
+    note = (
+        f"Welch: {seg.shape[0]} {window} segments of {segment / sample_rate_hz:g} s "
+        f"({force.shape[0]} repetitions), 50 % overlap"
+    )
+    return spec, gff, [note]
+
+
+def excited_band(frequencies_hz: np.ndarray, gff: np.ndarray, floor: float = 1e-3) -> tuple:
+    """(lo, hi) [Hz]: the contiguous lines around the force autospectrum's peak where its
+    envelope stays at least ``floor`` (-30 dB) of its in-band level (the median over the lines
+    within 10 dB of its peak).  The envelope is the running maximum over +-10 % of each line's
+    frequency: a shaker's force drops out by 20-30 dB at the structure's own resonances (GVT
+    near 7.8 Hz, plate near 350 and 450 Hz), which must not end the band.  Outside, the FRF
+    holds noise (or a DC drift's leakage, which a gap separates from the excited band)."""
+    f = np.asarray(frequencies_hz, dtype=float)
+    g = np.where(f > 0, gff, 0.0)
+    df = f[1] - f[0]
+    half = np.maximum(np.rint(0.1 * f / df).astype(int), 2)
+    idx = np.arange(f.size)
+    lo_i, hi_i = np.maximum(idx - half, 0), np.minimum(idx + half + 1, f.size)
+    # running maximum over variable windows via a sparse table would be faster; n_f is small
+    env = np.array([g[a:b].max() for a, b in zip(lo_i, hi_i, strict=True)])
+    level = np.median(g[g >= 0.1 * np.max(g)])
+    low = env < floor * level
+    top = int(np.argmax(g))
+    below, above = np.flatnonzero(low[:top]), np.flatnonzero(low[top:])
+    lo = below[-1] + 1 if below.size else 1
+    hi = top + above[0] - 1 if above.size else f.size - 1
+    if hi - lo < 3:
+        raise BayesUpdateError("FRF estimation: the force excites fewer than 4 lines")
+    return float(f[lo]), float(f[hi])

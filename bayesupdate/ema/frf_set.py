@@ -142,3 +142,53 @@ class FrfSet:
                 }
             )
         return out
+
+
+def merge_frf_sets(sets: list[FrfSet]) -> tuple[FrfSet, list[str]]:
+    """One FrfSet from several files of one test (e.g. a roving accelerometer measured run by
+    run), and notes.  The FRF kind and line spacing must agree; axes on the same grid but of
+    different extent (each run's excited band) are cut to their common lines, which is noted;
+    coherence is kept only if every set has it."""
+    if len(sets) == 1:
+        return sets[0], []
+    first = sets[0]
+    lo = max(s.frequencies_hz[0] for s in sets)
+    hi = min(s.frequencies_hz[-1] for s in sets)
+    for other in sets[1:]:
+        f1, df = other.frequencies_hz, first.df_hz
+        same_grid = abs(other.df_hz - df) <= 1e-9 * df and (
+            abs(
+                (f1[0] - first.frequencies_hz[0]) / df
+                - round((f1[0] - first.frequencies_hz[0]) / df)
+            )
+            < 1e-6
+        )
+        if not same_grid or hi - lo < 3 * df:
+            raise BayesUpdateError(
+                f"{other.source}: frequency axis {f1[0]:g}..{f1[-1]:g} Hz step {other.df_hz:g} "
+                f"does not share lines with {first.source}'s ({first.frequencies_hz[0]:g}.."
+                f"{first.frequencies_hz[-1]:g} Hz step {df:g}); estimate all FRFs alike"
+            )
+        if other.kind != first.kind:
+            raise BayesUpdateError(
+                f"{other.source}: FRF kind {other.kind} differs from {first.source}'s "
+                f"{first.kind}; convert them to one kind"
+            )
+    tol = 1e-6 * first.df_hz
+    cuts = [(s.frequencies_hz >= lo - tol) & (s.frequencies_hz <= hi + tol) for s in sets]
+    notes = []
+    if any(not np.all(c) for c in cuts):
+        notes.append(f"FRF files cover different ranges: their common {lo:g}..{hi:g} Hz is used")
+    coh = [s.coherence for s in sets]
+    merged = FrfSet(
+        frequencies_hz=first.frequencies_hz[cuts[0]],
+        frf=np.vstack([s.frf[:, c] for s, c in zip(sets, cuts, strict=True)]),
+        response_labels=tuple(lab for s in sets for lab in s.response_labels),
+        reference_labels=tuple(lab for s in sets for lab in s.reference_labels),
+        kind=first.kind,
+        coherence=None
+        if any(c is None for c in coh)
+        else np.vstack([c[:, k] for c, k in zip(coh, cuts, strict=True)]),
+        source="+".join(s.source for s in sets)[:200],
+    )
+    return merged, notes

@@ -18,7 +18,8 @@ from bayesupdate.ema.bands import Band, automatic_bands
 from bayesupdate.ema.frf_set import KIND_POWER, FrfSet
 from bayesupdate.ema.indicators import frf_correlation
 from bayesupdate.ema.lsce import band_indices, lsce
-from bayesupdate.ema.lsfd import LsfdFit, lsfd, mpc, shapes_from_residues
+from bayesupdate.ema.lsfd import LsfdFit, ScaledShapes, lsfd, mpc, shapes_from_residues
+from bayesupdate.ema.plscf import plscf
 from bayesupdate.ema.stabilization import (
     SelectedPole,
     StabilizationDiagram,
@@ -101,55 +102,33 @@ def modal_significance(frfs: FrfSet, poles: np.ndarray, fit: LsfdFit) -> tuple:
     return share, np.linalg.norm(peak, axis=0) / np.maximum(local, tiny)
 
 
-def shape_sd_from_fit(
-    fit: LsfdFit,
-    poles: np.ndarray,
-    row_scale: np.ndarray,
-    shapes: np.ndarray,
-    labels: tuple,
-    sets: list,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Relative shape standard deviation (m,) from the LSFD residue covariance, and a fallback
-    mask (m,) bool.
+def shape_sd_rel(scaled: ScaledShapes) -> tuple[np.ndarray, np.ndarray]:
+    """Relative shape standard deviation (m,) and a fallback mask (m,) bool.
 
-    In a set with fixed DOF q the shape value of row k is psi_k = 2 j w_d A_kq / psi_q, so
-    var(psi_k) = |2 w_d|^2 var(A_kq) / |psi_q|^2 (:class:`LsfdFit` gives var(A)), psi_q taken
-    from the final shape (all sets combined; else |2 w_d A_qq| + its sd from the driving
-    point; else the scale the set was given).  A set whose fixed DOF barely moves in a mode
-    thus reports the noise amplification its shape part really has.  sd_rel_r =
-    sqrt(mean_k var psi_kr) / rms(psi_r): the component sd as a fraction of the shape's RMS
-    amplitude, so E[1 - MAC] ~ sd_rel^2 for unbiased complex Gaussian errors.  It holds noise
-    and the misfit the fit residual sees near the mode, not the bias of a pole error nor of a
-    shape part no set can scale.  Modes where it is not finite, not > 0 or above
-    ``MAX_SHAPE_SD`` get MAX_SHAPE_SD and are flagged in the mask.
+    sd_rel_r^2 = sum_i E|psi_ir - psi_ir_true|^2 / sum_i |psi_ir|^2 with the errors of
+    :func:`~bayesupdate.ema.lsfd.shapes_from_residues` (residue noise, each set's scale
+    relative to the anchor, the parts of sets too weak to be scaled), so E[1 - MAC] ~
+    sd_rel^2.  Modes where it is not finite, not > 0 or above ``MAX_SHAPE_SD`` get
+    MAX_SHAPE_SD and are flagged in the mask.
     """
-    two_wd = 2 * np.abs(poles.imag)
-    inv_q2 = np.abs(row_scale) ** 2  # 1 / |psi_q|^2 as the set was scaled
-    index = {lab: i for i, lab in enumerate(labels)}
-    for st in sets:
-        if st["fixed"] in index:  # psi_q as the final shape has it (all sets combined)
-            q2 = np.abs(shapes[index[st["fixed"]]]) ** 2
-        elif st["driving_row"] is not None:
-            d = st["driving_row"]
-            q2 = two_wd * (np.abs(fit.residues[d]) + np.sqrt(fit.residue_var[d]))
-        else:
-            continue
-        inv_q2[st["rows"]] = np.where(q2 > 0, 1.0 / np.where(q2 > 0, q2, 1.0), inv_q2[st["rows"]])
-    var = two_wd[None, :] ** 2 * fit.residue_var * inv_q2
-    rms = np.sqrt(np.mean(np.abs(shapes) ** 2, axis=0))
+    power = np.sum(np.abs(scaled.shapes) ** 2, axis=0)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        sd = np.sqrt(np.mean(var, axis=0)) / rms
+        sd = np.sqrt(np.sum(scaled.error_var, axis=0) / power)
     bad = ~np.isfinite(sd) | (sd <= 0) | (sd > MAX_SHAPE_SD)
     return np.where(bad, MAX_SHAPE_SD, sd), bad
+
+
+#: pole estimators by name: each returns an LsceResult (poles and pole vectors per order)
+ESTIMATORS = {"lsce": lsce, "plscf": plscf}
 
 
 def _poles_by_band(frfs, bands, order, settings):
     """Selected poles owned by each band, all diagrams, and stable poles at the data's top."""
     f = frfs.frequencies_hz
-    tol_frequency, tol_damping, min_mac, min_count = settings
+    tol_frequency, tol_damping, min_mac, min_count, method = settings
     candidates, diagrams, edge = [], [], []
     for band in bands:
-        res = lsce(f, frfs.frf, (f[band.lo], f[band.hi]), max_order=order)
+        res = ESTIMATORS[method](f, frfs.frf, (f[band.lo], f[band.hi]), max_order=order)
         diagram = stabilization_diagram(res, tol_frequency, tol_damping, min_mac)
         diagrams.append(diagram)
         f_own_lo, f_own_hi = f[band.own_lo], f[band.own_hi]
@@ -197,6 +176,7 @@ def identify(
     tol_frequency: float = 0.01,
     tol_damping: float = 0.2,
     min_mac: float = 0.98,
+    method: str = "lsce",
 ) -> Identification:
     """Identify the modes of an FRF set without user pole picking.
 
@@ -219,7 +199,9 @@ def identify(
         order = 40 if max_order is None else int(max_order)
     if order < 2:
         raise BayesUpdateError(f"--max-order {order}: must be at least 2")
-    settings = (tol_frequency, tol_damping, min_mac, min_count)
+    if method not in ESTIMATORS:
+        raise BayesUpdateError(f"--method {method!r}: use one of {', '.join(ESTIMATORS)}")
+    settings = (tol_frequency, tol_damping, min_mac, min_count, method)
     selected, diagrams, edge = _poles_by_band(frfs, bands, order, settings)
     if not selected:
         raise BayesUpdateError(
@@ -245,21 +227,9 @@ def identify(
     poles = np.array([p.pole for p in selected])
     f_fit = f[fit_lo : fit_hi + 1]
     residues = fit.residues[:, : poles.size]
-    labels, shapes, massnorm, row_scale = shapes_from_residues(residues, poles, frfs.sets())
-    sd_rel, sd_fallback = shape_sd_from_fit(
-        LsfdFit(
-            residues,
-            fit.lower,
-            fit.upper,
-            fit.residue_var[:, : poles.size],
-            fit.local_sd[:, : poles.size],
-        ),
-        poles,
-        row_scale,
-        shapes,
-        labels,
-        frfs.sets(),
-    )
+    scaled = shapes_from_residues(residues, poles, frfs.sets(), fit.residue_var[:, : poles.size])
+    labels, shapes, massnorm = scaled.labels, scaled.shapes, scaled.mass_normalised
+    sd_rel, sd_fallback = shape_sd_rel(scaled)
     fit_poles = np.concatenate([poles, residual_poles])
     synth = synthesize_frf(f_fit, fit_poles, fit.residues, frfs.kind, fit.lower, fit.upper)
     meas = h[:, fit_lo : fit_hi + 1]
@@ -280,6 +250,7 @@ def identify(
             "fit_share": significance[0],
             "peak_to_residual": significance[1],
             "shape_sd_fallback": sd_fallback,
+            "shape_weak_part": scaled.weak_part,
         },
     )
     return Identification(

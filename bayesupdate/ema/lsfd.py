@@ -85,6 +85,7 @@ def lsfd(
     count = np.maximum(near.sum(axis=0), 1)
     s2_local = (near.T.astype(float) @ power) / (2 * count[:, None])  # (m, n_frf)
     diag = np.sum(vt**2 * np.where(ok, inv_sv**2, 1e24)[:, None], axis=0) / scale**2
+    s2_local = s2_local * _correlation_inflation(resid[:n_f] + 1j * resid[n_f:], near)[:, None]
     var_a = s2_local * diag[:m, None]
     var_b = s2_local * diag[m : 2 * m, None]
     residues = (coef[:m] + 1j * coef[m : 2 * m]).T
@@ -94,6 +95,32 @@ def lsfd(
     else:
         lower = upper = np.zeros(h.shape[0])
     return LsfdFit(residues, lower, upper, residue_var, np.sqrt(s2_local.T))
+
+
+def _correlation_inflation(resid: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """Variance inflation (m,) >= 1 of a residue for a fit residual correlated across lines.
+
+    The least-squares covariance s^2 (D^T D)^-1 assumes residuals independent from line to
+    line; model error (leakage, aliasing, modes outside the basis) is smooth in frequency and
+    moves a residue by about the residual itself, not by its mean over many lines.  Near each
+    pole (mask ``near`` (n_f, m)) the residual's autocorrelation rho_k over the lines, pooled
+    over FRFs, gives the variance factor of a mean of correlated samples,
+    g = 1 + 2 sum_k (1 - k/L) rho_k (Bartlett weights over the L lines), clipped to [1, L].
+    resid (n_f, n_frf) complex.
+    """
+    out = np.ones(near.shape[1])
+    for r in range(near.shape[1]):  # a few poles, each an FFT over its own lines
+        seg = resid[near[:, r]]
+        n = seg.shape[0]
+        if n < 3:
+            continue
+        spec = np.fft.fft(seg, 2 * n, axis=0)
+        acf = np.sum(np.fft.ifft(np.abs(spec) ** 2, axis=0).real[:n], axis=1)
+        if acf[0] <= 0:
+            continue
+        k = np.arange(1, n)
+        out[r] = np.clip(1 + 2 * np.sum((1 - k / n) * acf[1:] / acf[0]), 1.0, n)
+    return out
 
 
 def lsfd_residues(
@@ -138,29 +165,117 @@ def realise(shapes: np.ndarray) -> np.ndarray:
     return np.real(x * np.exp(-1j * theta)[None, :])
 
 
+@dataclass(frozen=True)
+class ScaledShapes:
+    """Shapes assembled from the residues of all test sets (:func:`shapes_from_residues`).
+
+    labels (n_dof,) str; shapes (n_dof, m) complex; mass_normalised (m,) bool: the anchor set
+    had a driving point; error_var (n_dof, m): expected |psi_i - psi_i_true|^2 of each value
+    up to the shape's common scale (0 when no residue variances were given); weak_part (m,)
+    bool: some DOFs come only from a set too weak to be scaled against the others.
+    """
+
+    labels: tuple
+    shapes: np.ndarray
+    mass_normalised: np.ndarray
+    error_var: np.ndarray
+    weak_part: np.ndarray
+
+
+def _link_scale(col, col_var, shared_rows, psi_other, var_other):
+    """Complex factor scaling a set's column onto a scaled set through shared DOFs, and its
+    variance: fac = sum conj(a) b / sum |a|^2 (least squares), var(fac) to first order in the
+    errors of a (this set) and b (the scaled set); (None, None) without usable shared DOFs."""
+    a, va = col[shared_rows[0]], col_var[shared_rows[0]]
+    b, vb = psi_other[shared_rows[1]], var_other[shared_rows[1]]
+    den = np.sum(np.abs(a) ** 2)
+    if a.size == 0 or den <= 0:
+        return None, None
+    fac = np.sum(a.conj() * b) / den
+    return fac, float(np.sum(np.abs(a) ** 2 * (vb + abs(fac) ** 2 * va)) / den**2)
+
+
+def _own_scale(dp: complex, dp_var: float) -> tuple[complex, float]:
+    """1 / psi_q from a driving-point value psi_q^2 (sign: driving point positive), and the
+    variance of that factor: var(1/sqrt(x)) = var(x) / (4 |x|^3)."""
+    root = np.sqrt(complex(dp))
+    root = -root if root.real < 0 else root
+    return 1.0 / root, dp_var / (4 * abs(dp) ** 3)
+
+
+def _scale_mode(prod, prod_var, sets, dp, weak, common):
+    """Per-set factors (n_set,) complex, their variances (n_set,), the anchor's having a driving
+    point (bool) and per-set flags 'scaled by an arbitrary factor' (n_set,) for one mode."""
+    order = sorted(range(len(sets)), key=lambda k: -abs(dp[k]))
+    fac, fvar = np.zeros(len(sets), complex), np.zeros(len(sets))
+    arbitrary = np.zeros(len(sets), bool)
+    # the factor (and its variance) a weak or unlinked set would have had: its error
+    alt, alt_var = np.full(len(sets), np.nan + 0j), np.zeros(len(sets))
+    done: list[int] = []
+    massnorm, anchor_relvar = False, 0.0
+    for k in order:
+        rows, has_dp = sets[k]["rows"], sets[k]["driving_row"] is not None and abs(dp[k]) > 0
+        own = _own_scale(dp[k], prod_var[sets[k]["driving_row"]]) if has_dp else (None, None)
+        if not done:  # the anchor: its overall scale does not change any MAC (variance 0)
+            fac[k] = own[0] if has_dp else 1.0 / common
+            massnorm = has_dp
+            anchor_relvar = own[1] / abs(own[0]) ** 2 if has_dp else 0.0
+            done.append(k)
+            continue
+        link = (None, None)
+        for other in done:
+            shared = [lab for lab in sets[k]["roving"] if lab in sets[other]["roving"]]
+            if shared:
+                pos = ([sets[k]["roving"].index(x) for x in shared],
+                       [sets[other]["roving"].index(x) for x in shared])  # fmt: skip
+                psi_o = prod[sets[other]["rows"]] * fac[other]
+                var_o = prod_var[sets[other]["rows"]] * abs(fac[other]) ** 2
+                var_o = var_o + np.abs(psi_o) ** 2 * fvar[other] / max(abs(fac[other]) ** 2, 1e-300)
+                link = _link_scale(prod[rows], prod_var[rows], pos, psi_o, var_o)
+                break
+        if link[0] is not None and not weak[k]:
+            fac[k], fvar[k] = link
+        elif has_dp and not weak[k]:  # independent driving point: both sets' errors count
+            fac[k], fvar[k] = own
+            fvar[k] += abs(own[0]) ** 2 * anchor_relvar
+        else:  # weak or unlinked: a common factor that need not fit this set
+            fac[k], arbitrary[k] = 1.0 / common, True
+            best = link if link[0] is not None else own
+            if best[0] is not None:
+                alt[k], alt_var[k] = best
+        done.append(k)
+    return fac, fvar, massnorm, arbitrary, (alt, alt_var)
+
+
 def shapes_from_residues(
     residues: np.ndarray,
     poles: np.ndarray,
     sets: list[dict],
+    residue_var: np.ndarray | None = None,
     reliable_fraction: float = 0.02,
-) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
-    """Mode shapes (n_dof, m) at the roving DOFs of all sets, scaled consistently.
+) -> ScaledShapes:
+    """Mode shapes (n_dof, m) at the roving DOFs of all sets, scaled consistently, with their
+    errors propagated from the residue variances (n_frf, m) when given (:class:`LsfdFit`).
 
     residues (n_frf, m), poles (m,), sets from :meth:`FrfSet.sets`.  For each mode the set whose
-    driving point sees the mode most strongly is the anchor: it is mass-normalised by its driving
+    driving point sees the mode most strongly is the anchor, mass-normalised by its driving
     point (psi_q = sqrt(2 j w_d A_qq)).  Every other set is scaled onto the already scaled sets
     through their shared DOF labels (complex least squares: magnitude and sign), because a set
     whose own driving point barely moves in this mode would give a noisy sqrt; only a set that
     shares no label with a scaled set uses its own driving point.  A weak set (norm below
     ``reliable_fraction`` of the strongest) only holds noise for this mode: it keeps the common
     scale and only fills DOFs no other set has.  Shared labels are averaged over the sets.
-    Without any driving point a mode is left unscaled (unit largest component) and
-    mass_normalised is False.  Returns (labels, shapes, mass_normalised (m,) bool: the anchor had
-    a driving point, row_scale (n_frf, m) complex: the factor that turned row k's
-    2 j w_d A_kr into its shape value, for propagating residue variances).
+    Without any driving point a mode is left unscaled (unit largest component).
+
+    Errors: value psi_i = fac_k 2 j w_d A_ik has var |fac_k 2 w_d|^2 var(A_ik) (noise) plus
+    |psi_i|^2 var(fac_k) / |fac_k|^2 (the set's scale, relative to the anchor, whose own scale
+    changes no MAC).  The part of a weak or unlinked set is scaled by a factor that need not
+    fit it: its error is the difference to the best other factor (shared DOFs or its own
+    driving point) plus that factor's variance, or its whole size when there is none.
     """
     wd = np.imag(poles)
     prod = residues * (2j * wd)[None, :]  # psi_i psi_q
+    prod_var = np.zeros(prod.shape) if residue_var is None else residue_var * (2 * wd) ** 2
     n_modes = prod.shape[1]
     set_norm = np.array([np.linalg.norm(prod[s["rows"]], axis=0) for s in sets])  # (n_set, m)
     dp = np.array(
@@ -177,46 +292,32 @@ def shapes_from_residues(
     labels = tuple(dict.fromkeys(lab for s in sets for lab in s["roving"]))
     index = {lab: i for i, lab in enumerate(labels)}
     shapes = np.zeros((len(labels), n_modes), complex)
+    error_var = np.zeros((len(labels), n_modes))
     massnorm = np.zeros(n_modes, bool)
-    row_scale = np.zeros(prod.shape, complex)
+    weak_part = np.zeros(n_modes, bool)
     weak = set_norm < reliable_fraction * set_norm.max(axis=0)
-
-    def own_scale(k, r):
-        root = np.sqrt(complex(dp[k, r]))
-        return -root if root.real < 0 else root  # sign convention: driving point positive
-
     for r in range(n_modes):  # a few modes: the per-mode anchor logic reads best as a loop
-        order = sorted(range(len(sets)), key=lambda k: -abs(dp[k, r]))
-        scaled: dict[int, np.ndarray] = {}
+        fac, fvar, massnorm[r], arbitrary, alt = _scale_mode(
+            prod[:, r], prod_var[:, r], sets, dp[:, r], weak[:, r], common[r]
+        )
         total = np.zeros(len(labels), complex)
         count = np.zeros(len(labels))
-        for k in order:
-            col = prod[sets[k]["rows"], r]
-            if not scaled:
-                has_dp = sets[k]["driving_row"] is not None and abs(dp[k, r]) > 0
-                fac = 1.0 / (own_scale(k, r) if has_dp else common[r])
-                massnorm[r] = has_dp
-            else:
-                fac = None
-                for other, psi_other in scaled.items():
-                    shared = [lab for lab in sets[k]["roving"] if lab in sets[other]["roving"]]
-                    if not shared:
-                        continue
-                    a = col[[sets[k]["roving"].index(lab) for lab in shared]]
-                    b = psi_other[[sets[other]["roving"].index(lab) for lab in shared]]
-                    den = np.sum(np.abs(a) ** 2)
-                    if den > 0 and not weak[k, r]:
-                        fac = np.sum(a.conj() * b) / den
-                    break
-                if fac is None:  # no link to a scaled set (or too weak to scale through it)
-                    has_dp = sets[k]["driving_row"] is not None and abs(dp[k, r]) > 0
-                    fac = 1.0 / (own_scale(k, r) if has_dp and not weak[k, r] else common[r])
-            psi = col * fac
-            row_scale[sets[k]["rows"], r] = fac
-            scaled[k] = psi
+        var_sum = np.zeros(len(labels))
+        for k, st in enumerate(sets):
+            col, cvar = prod[st["rows"], r], prod_var[st["rows"], r]
+            psi = col * fac[k]
+            var = cvar * abs(fac[k]) ** 2 + np.abs(psi) ** 2 * fvar[k] / abs(fac[k]) ** 2
+            if arbitrary[k] and np.isfinite(alt[0][k]):
+                a, a_var = alt[0][k], alt[1][k]
+                var = np.abs(col) ** 2 * (abs(a - fac[k]) ** 2 + a_var) + cvar * abs(a) ** 2
+            elif arbitrary[k]:
+                var = var + np.abs(psi) ** 2
             weight = 1e-6 if weak[k, r] else 1.0
-            for j, lab in enumerate(sets[k]["roving"]):
-                total[index[lab]] += weight * psi[j]
-                count[index[lab]] += weight
+            rows = [index[lab] for lab in st["roving"]]
+            np.add.at(total, rows, weight * psi)
+            np.add.at(count, rows, weight)
+            np.add.at(var_sum, rows, weight**2 * var)
         shapes[:, r] = total / np.where(count > 0, count, 1.0)
-    return labels, shapes, massnorm, row_scale
+        error_var[:, r] = var_sum / np.where(count > 0, count, 1.0) ** 2
+        weak_part[r] = bool(np.any(arbitrary & weak[:, r]))
+    return ScaledShapes(labels, shapes, massnorm, error_var, weak_part)

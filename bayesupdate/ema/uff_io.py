@@ -77,33 +77,49 @@ def _read_sets(path: str | os.PathLike) -> list[dict]:
     return list(sets)
 
 
-def write_uff58(path: str | os.PathLike, frfs: FrfSet) -> None:
-    """Write every FRF of ``frfs`` as a dataset 58 (complex, even abscissa) atomically."""
+#: SI unit text of each FRF kind's response, for the ordinate label
+UNIT_OF_KIND = {"receptance": "m", "mobility": "m/s", "accelerance": "m/s^2"}
+
+
+def write_uff58(
+    path: str | os.PathLike, frfs: FrfSet, channel_names: list[str] | None = None
+) -> None:
+    """Write every FRF of ``frfs`` as a dataset 58 (complex, even abscissa) atomically, with
+    its coherence (function type 6) when the set has one.  channel_names (n_frf,) go to the
+    id3 line (e.g. ``"Accel1/Force"``); units are SI, named in the axis labels."""
     import pyuff
 
     if not np.all(np.isfinite(frfs.frf)):  # pyuff would write NaN as 0 without a word
         raise BayesUpdateError(f"{path}: FRFs contain NaN or inf; refusing to write them")
     datasets = []
-    for k in range(frfs.n_frf):
+    functions = [(4, frfs.frf)]
+    if frfs.coherence is not None:
+        functions.append((6, frfs.coherence))
+    for (func, values), k in ((fv, k) for fv in functions for k in range(frfs.n_frf)):
         rn, rd = parse_label(frfs.response_labels[k])
         fn, fd = parse_label(frfs.reference_labels[k])
         datasets.append(
             pyuff.prepare_58(
-                func_type=4,
+                func_type=func,
                 rsp_node=int(rn),
                 rsp_dir=int(rd),
                 ref_node=int(fn),
                 ref_dir=int(fd),
-                ordinate_spec_data_type=ORDINATE_TYPE[frfs.kind],
-                orddenom_spec_data_type=13,
+                ordinate_spec_data_type=ORDINATE_TYPE[frfs.kind] if func == 4 else 0,
+                orddenom_spec_data_type=13 if func == 4 else 0,
                 abscissa_spec_data_type=18,
-                data=np.asarray(frfs.frf[k], dtype=complex),
+                ordinate_axis_units_lab=UNIT_OF_KIND[frfs.kind] if func == 4 else "-",
+                orddenom_axis_units_lab="N" if func == 4 else "-",
+                abscissa_axis_units_lab="Hz",
+                data=np.asarray(values[k], dtype=complex if func == 4 else float),
                 x=np.asarray(frfs.frequencies_hz, dtype=float),
                 abscissa_spacing=1,
                 abscissa_min=float(frfs.frequencies_hz[0]),
                 abscissa_inc=float(frfs.df_hz),
-                id1=f"FRF {frfs.response_labels[k]}/{frfs.reference_labels[k]}",
+                id1=f"{'FRF' if func == 4 else 'COH'} {frfs.response_labels[k]}/"
+                f"{frfs.reference_labels[k]}",
                 id2=(frfs.source or "bayesupdate")[:80],
+                id3=(channel_names[k] if channel_names else "NONE")[:80],
             )
         )
     with atomic_path(path, suffix=".uff") as tmp:
@@ -135,14 +151,31 @@ def read_uff58(path: str | os.PathLike) -> FrfSet:
         resp.append(make_label(s["rsp_node"], s["rsp_dir"]))
         ref.append(make_label(s["ref_node"], s["ref_dir"]))
     kind = KIND_OF_ORDINATE.get(int(frf_sets[0].get("ordinate_spec_data_type", 12)), "accelerance")
+    coherence = _coherence(sets, resp, ref, x0)
     return FrfSet(
         frequencies_hz=x0,
         frf=np.array(rows),
         response_labels=tuple(resp),
         reference_labels=tuple(ref),
         kind=kind,
+        coherence=coherence,
         source=os.path.basename(str(path)),
     )
+
+
+def _coherence(sets: list[dict], resp: list, ref: list, x0: np.ndarray) -> np.ndarray | None:
+    """Coherence rows (function type 6) matching every FRF's labels and axis, else None."""
+    found = {}
+    for s in sets:
+        if int(s.get("func_type", 0)) != 6 or np.asarray(s["x"]).shape != x0.shape:
+            continue
+        try:
+            key = (make_label(s["rsp_node"], s["rsp_dir"]), make_label(s["ref_node"], s["ref_dir"]))
+        except BayesUpdateError:
+            continue
+        found[key] = np.clip(np.real(np.asarray(s["data"], dtype=complex)), 0.0, 1.0)
+    rows = [found.get(pair) for pair in zip(resp, ref, strict=True)]
+    return None if any(r is None for r in rows) else np.array(rows)
 
 
 def write_uff55(path: str | os.PathLike, modes: ModalData) -> None:

@@ -1,0 +1,177 @@
+"""``bayesupdate frf``: FRFs (UFF 58) from force and response time signals."""
+
+import numpy as np
+
+from bayesupdate.atomic import check_output_path
+from bayesupdate.errors import BayesUpdateError
+
+NAME = "frf"
+HELP = "estimate FRFs (H1/H2, coherence) from force and response time signals"
+DESCRIPTION = """Estimate FRFs from one force and its responses; write them as UFF 58.
+
+Input: UFF 58 time records (channels named by DOF label, e.g. 25V, or id line), or .mat /
+.npz / .h5 variables (a 1-D variable, VAR:j for column j of a 2-D one, or a column name listed
+in a string variable such as MATLAB's chanInNameList); several SIGNALS files are repetitions.
+Hammer tests (--method impact, or auto for an impulsive force): hits detected, double impacts
+left out, force window and, when the response has not died out, an exponential window (its
+added damping is stated).  Sweeps, random, burst (--method welch): Hann segments with 50 %
+overlap (--window rect with --df 1/record for a sweep wholly inside each record).  H1 by
+default (--estimator h2 for force noise); coherence is written beside each FRF (UFF 58,
+function type 6).  Units are converted to SI from --force-unit / --response-unit and the
+sensitivities; the lines written are those the force excites (its autospectrum envelope
+within 30 dB of its in-band level) unless --band.
+
+example (one GVT run, volts, 0.4684 V/lbf, 1.028 V/g):
+  bayesupdate frf run_Run1.mat --force-channel Force --response Accel1=1V --response Accel2=2V \\
+      --reference 25V --force-unit lbf --force-sensitivity 0.4684 --response-unit g \\
+      --response-sensitivity 1.028 --out run1.uff
+"""
+
+#: unit -> (factor to SI, FRF kind of a response in it)
+RESPONSE_UNITS = {
+    "m/s2": (1.0, "accelerance"),
+    "g": (9.80665, "accelerance"),
+    "mm/s2": (1e-3, "accelerance"),
+    "m/s": (1.0, "mobility"),
+    "mm/s": (1e-3, "mobility"),
+    "m": (1.0, "receptance"),
+    "mm": (1e-3, "receptance"),
+    "um": (1e-6, "receptance"),
+}
+FORCE_UNITS = {"N": 1.0, "kN": 1e3, "lbf": 4.4482216152605}
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument(
+        "time_file",
+        metavar="SIGNALS",
+        nargs="+",
+        help="UFF 58 time records, .mat/.npz/.h5; several files are repetitions (averaged)",
+    )
+    parser.add_argument("--force-channel", required=True, metavar="CH", help="force channel")
+    parser.add_argument(
+        "--response",
+        action="append",
+        required=True,
+        metavar="CH[=DOF]",
+        help="response channel and its DOF label, e.g. Accel1=1V (repeat per response)",
+    )
+    parser.add_argument("--reference", metavar="DOF", help="DOF label of the force (e.g. 25V)")
+    parser.add_argument("--out", required=True, metavar="FRF.uff", help="output UFF 58 file")
+    parser.add_argument("--method", default="auto", choices=("auto", "impact", "welch"))
+    parser.add_argument("--estimator", default="h1", choices=("h1", "h2"))
+    parser.add_argument(
+        "--window",
+        default="hann",
+        choices=("hann", "rect"),
+        help="Welch window (rect: a sweep wholly inside each record, with --df 1/record)",
+    )
+    parser.add_argument("--fs", type=float, metavar="HZ", help="sample rate if the file has none")
+    parser.add_argument("--time", metavar="VAR", help="time variable giving the sample rate")
+    parser.add_argument("--df", type=float, metavar="HZ", help="Welch line spacing [Hz]")
+    parser.add_argument("--record", type=float, metavar="S", help="impact record length [s]")
+    parser.add_argument("--tau", type=float, metavar="S", help="exponential window time const.")
+    parser.add_argument("--band", metavar="LO:HI", help="lines to write [Hz] (default: excited)")
+    parser.add_argument("--force-unit", default="N", choices=sorted(FORCE_UNITS))
+    parser.add_argument("--response-unit", default="m/s2", choices=sorted(RESPONSE_UNITS))
+    parser.add_argument("--force-sensitivity", type=float, default=1.0, metavar="X",
+                        help="file units per force unit (e.g. 0.4684 V/lbf)")  # fmt: skip
+    parser.add_argument("--response-sensitivity", type=float, default=1.0, metavar="X",
+                        help="file units per response unit (e.g. 1.028 V/g)")  # fmt: skip
+    parser.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+
+
+def _responses(specs: list[str]) -> tuple[list[str], list[str]]:
+    from bayesupdate.ema.uff_io import parse_label
+
+    names, labels = [], []
+    for spec in specs:
+        name, _, label = spec.partition("=")
+        label = label or name
+        try:
+            parse_label(label)
+        except BayesUpdateError:
+            raise BayesUpdateError(
+                f"--response {spec!r}: give CHANNEL=DOF with a DOF label like 1V (node + L/H/V)"
+            ) from None
+        names.append(name)
+        labels.append(label.strip().upper())
+    return names, labels
+
+
+def _check_numbers(args) -> None:
+    for flag, value in (
+        ("--force-sensitivity", args.force_sensitivity),
+        ("--response-sensitivity", args.response_sensitivity),
+        ("--df", args.df),
+        ("--record", args.record),
+        ("--tau", args.tau),
+    ):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise BayesUpdateError(f"{flag} {value}: must be a positive number")
+
+
+def run(args) -> int:
+    from bayesupdate.commands.identify import _parse_band
+    from bayesupdate.ema.frf_estimation import excited_band, frf_from_signals
+    from bayesupdate.ema.time_data import check_channels, read_channels
+    from bayesupdate.ema.uff_io import parse_label
+
+    out = check_output_path(args.out, args.force)
+    _check_numbers(args)
+    names, labels = _responses(args.response)
+    reference = (args.reference or args.force_channel).strip().upper()
+    try:
+        parse_label(reference)
+    except BayesUpdateError:
+        raise BayesUpdateError(
+            f"--reference: force channel {args.force_channel!r} is no DOF label; give "
+            "--reference DOF (e.g. 25V)"
+        ) from None
+    runs, notes = [], []
+    for path in args.time_file:
+        channels = read_channels(path, [args.force_channel, *names], args.time, args.fs)
+        notes += check_channels(channels, path)
+        runs.append(channels)
+    fs = runs[0][0].sample_rate_hz
+    for path, chans in zip(args.time_file[1:], runs[1:], strict=True):
+        first = runs[0][0]
+        if abs(chans[0].sample_rate_hz - fs) > 1e-9 * fs or chans[0].data.size != first.data.size:
+            raise BayesUpdateError(
+                f"{path}: {chans[0].data.size} samples at {chans[0].sample_rate_hz:g} Hz, but "
+                f"{args.time_file[0]} has {first.data.size} at {fs:g} Hz; repetitions must match"
+            )
+    force = np.array([r[0].data for r in runs]) / args.force_sensitivity
+    force = force * FORCE_UNITS[args.force_unit]
+    scale, kind = RESPONSE_UNITS[args.response_unit]
+    resp = np.array([[c.data for c in r[1:]] for r in runs]).transpose(1, 0, 2)
+    resp = resp / args.response_sensitivity * scale
+    segment = None if args.df is None else int(round(fs / args.df))
+    with np.errstate(all="ignore"):  # spectra of silent lines: handled, not worth a warning
+        (f, h1, h2, coh), gff, more = frf_from_signals(
+            force, resp, fs, args.method, segment, args.record, args.tau, args.window
+        )
+    channels = runs[0]
+    notes += more
+    lo, hi = excited_band(f, gff) if args.band is None else _parse_band(args.band)
+    keep = (f >= lo) & (f <= hi) & (f > 0)
+    if keep.sum() < 4:
+        raise BayesUpdateError(f"--band {lo:g}:{hi:g}: holds fewer than 4 FRF lines")
+    h = (h1 if args.estimator == "h1" else h2)[:, keep]
+    _write(out, f[keep], h, coh[:, keep], labels, reference, kind, channels, args)
+    for note in notes:
+        print(f"note: {note}")
+    mean_coh = np.mean(coh[:, keep], axis=1)
+    for lab, ch, c in zip(labels, names, mean_coh, strict=True):
+        print(f"FRF {lab}/{reference} ({ch}/{args.force_channel}): mean coherence {c:.3f}")
+    print(f"{len(labels)} FRFs, {f[keep][0]:g}..{f[keep][-1]:g} Hz, {kind}; wrote {out}")
+    return 0
+
+
+def _write(out, f, h, coh, labels, reference, kind, channels, args) -> None:
+    from bayesupdate.ema.frf_set import FrfSet
+    from bayesupdate.ema.uff_io import write_uff58
+
+    source = f"{args.force_channel}->" + ",".join(c.name for c in channels[1:])
+    frfs = FrfSet(f, h, tuple(labels), (reference,) * len(labels), kind, coh, source[:80])
+    write_uff58(out, frfs, channel_names=[f"{c.name}/{args.force_channel}" for c in channels[1:]])

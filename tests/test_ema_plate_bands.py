@@ -1,0 +1,70 @@
+"""Band invariance on the real plate (../shared/data/plate_sweep, issue 16).
+
+The user path: ``bayesupdate frf`` on the four view-0 repetitions (averaged, rectangular window
+on each whole 2 s record: 0.5 Hz lines; the written lines are those the force excites), then
+``bayesupdate identify`` on each band a user may type.  Each must find the five clear peaks
+(near 126, 214, 264, 348 Hz within 1.5 %; the broad one at 440-460 Hz within 2.5 %) with at
+most 3 other poles in the excited 60-500 Hz.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayesupdate.cli import main
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "plate_sweep"
+PEAKS_HZ = np.array([126.0, 214.0, 264.0, 348.0, 450.0])
+TOLERANCE = np.array([0.015, 0.015, 0.015, 0.015, 0.025])
+
+
+@pytest.fixture(scope="module")
+def plate_uff(tmp_path_factory):
+    files = sorted(DATA.glob("view_0*.hdf5"))
+    if len(files) < 4:
+        pytest.skip(f"shared data not found at {DATA} (clone ../shared beside the repo)")
+    out = tmp_path_factory.mktemp("plate") / "plate.uff"
+    argv = ["frf", *files, "--force-channel", "force", "--response", "acc=1V"]
+    argv += ["--reference", "1V", "--df", "0.5", "--window", "rect", "--out", out]
+    assert main([str(a) for a in argv]) == 0
+    return out
+
+
+def _identify(path, band, capsys):
+    out = path.parent / f"m{band or 'auto'}.h5".replace(":", "_")
+    argv = ["identify", str(path), "--out", str(out), "--json", "--force"]
+    if band:
+        argv += ["--band", band]
+    assert main(argv) == 0
+    return np.array([m["frequency_hz"] for m in json.loads(capsys.readouterr().out)["modes"]])
+
+
+def _score(found):
+    nearest = np.array([found[np.argmin(np.abs(found - p))] for p in PEAKS_HZ])
+    hit = np.abs(nearest / PEAKS_HZ - 1) <= TOLERANCE
+    others = [x for x in found if 60 <= x <= 500 and not np.any(np.isclose(x, nearest[hit]))]
+    return hit, others
+
+
+@pytest.mark.parametrize("band", [None, "60:500", "100:480", "80:470"])
+def test_five_peaks_in_every_band(plate_uff, band, capsys):
+    hit, _ = _score(_identify(plate_uff, band, capsys))
+    assert hit.all()
+
+
+@pytest.mark.parametrize("band", ["60:500", "100:480", "80:470"])
+def test_few_other_poles_in_typed_bands(plate_uff, band, capsys):
+    _, others = _score(_identify(plate_uff, band, capsys))
+    assert len(others) <= 3, others
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 16 open: automatic bands are a quarter of the written lines wide, so on the "
+    "excited 17.5-544 Hz FRF they are narrow and order 40 fits ripple (10+ other poles)",
+)
+def test_few_other_poles_automatic_band(plate_uff, capsys):
+    _, others = _score(_identify(plate_uff, None, capsys))
+    assert len(others) <= 3, others

@@ -10,7 +10,7 @@ from scipy import integrate, optimize, stats
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
-from bayesupdate.discovery.flagging import NoiseModel, flag_modes
+from bayesupdate.discovery.flagging import NoiseModel, ShapeTests, flag_modes
 from bayesupdate.discovery.shape_evidence import (
     RAISE_P,
     SHAPE_SD_FLOOR_REL,
@@ -124,10 +124,18 @@ def test_known_shape_noise_is_a_fixed_gaussian_block():
     off[:, 1] += np.sqrt(0.02 / 0.98) * np.linalg.norm(truth[:, 1]) * bias / np.linalg.norm(bias)
     chi2 = ev.chi2(ev.residuals(off))
     assert chi2[1] > 200 and chi2[1] > 10 * max(chi2[0], chi2[2])
-    flags = flag_modes(np.zeros(3), noise, 0, shape_chi2=chi2, shape_dof=ev.dof)
+    r_off = ev.residuals(off)
+    rejected = ev.stated_rejections(r_off)
+    np.testing.assert_array_equal(rejected, [False, True, False])
+    tests = ShapeTests(stats.chi2.sf(chi2, ev.dof), rejected, 0.3)  # one rejection: plausible
+    flags = flag_modes(np.zeros(3), noise, 0, shapes=tests)
     assert flags.flagged_modes == [2]
-    assert flags.chi2_dof == 3 + 3 * 15 and flags.chi2 == pytest.approx(np.sum(chi2))
+    assert flags.chi2_dof == 3 and flags.chi2 == 0.0  # the global test is the frequencies'
     assert flags.shape_p_value[1] < 1e-10 < flags.shape_p_value[0]
+    # a count beyond the identification failure rate flags every rejecting mode, even at a
+    # per-mode p-value that passes (a raised level)
+    raised = ShapeTests(np.array([0.5, 0.5, 0.5]), np.array([True, True, False]), 1e-4)
+    assert flag_modes(np.zeros(3), noise, 0, shapes=raised).flagged_modes == [1, 2]
 
 
 def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):

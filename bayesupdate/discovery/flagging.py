@@ -1,7 +1,7 @@
 """Find: which modes miss by more than the noise (and the posterior predictive) allow.
 
-Residuals are relative frequency errors e_i = (f_i - f_Ti) / f_Ti.  The noise of mode i is
-s_i = sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), where
+Residuals are relative frequency errors e_i = (f_i - f_Ti) / f_Ti. The noise of mode i is s_i =
+sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), where
 
 * sigma_i = sd_i / f_Ti when the data give frequency standard deviations sd_i, or
 * sigma_i = sigma, a relative level fixed by the user, or
@@ -11,20 +11,24 @@ s_i = sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), 
   a few modes then stands out instead of inflating the noise level; the evidence uses the same
   level, fixed (``evidence``).
 
-z_i = e_i / sqrt(s_i^2 + v_i) with v_i the posterior-predictive variance of the relative
-frequency (when a posterior is given), two-sided p_i = 2 Phi(-|z_i|).  Mode i is flagged when
-p_i < alpha / T (Bonferroni over the T per-mode tests made, family-wise level alpha: T = m, or
-2m with shape tests) or, where shapes exist, when its MAC is below ``mac_threshold``, or, where
-the test has shapes, when its shape misfit c_i = |d_i|^2 / sigma_i^2 at the shape block's fixed
-level (``shape_evidence``) has P(chi^2(n - 1) > c_i) < alpha / T.  The global
-misfit test is chi^2 = sum z_i^2 (+ sum c_i) on m - d (+ k (n - 1)) degrees of freedom (known
-frequency noise only).
-"""
+z_i = e_i / sqrt(s_i^2 + v_i) with v_i the posterior-predictive variance of the relative frequency
+(when a posterior is given), two-sided p_i = 2 Phi(-|z_i|). Mode i is flagged when p_i < alpha / T
+(Bonferroni over the T per-mode tests made, family-wise level alpha: T = m, or 2m with shape tests)
+or, where shapes exist, when its MAC is below ``mac_threshold``, or, where the test has shapes,
+when its shape misfit c_i at its level (``shape_evidence``) has P(chi^2(n - 1) > c_i) < alpha / T,
+or when more modes reject their *stated* shape level (at 1 %) than identification failures explain
+(binomial tail < ``COUNT_LEVEL``): then all of those modes are flagged, since many shapes off at
+once is physics, not identification. The global misfit test is chi^2 = sum z_i^2 on m - d degrees
+of freedom (known frequency noise only)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
+
+#: level of the count test of shapes off their stated accuracy, in finding and adequacy alike: a
+#: model check (discovery's adequacy level), not a search for a discrepancy in one mode
+COUNT_LEVEL = 1e-3
 
 #: smallest relative noise level inferred (0.01 %): below it frequencies are not reproducible
 SIGMA_FLOOR = 1e-4
@@ -72,6 +76,17 @@ def noise_model(data, residual_rel: np.ndarray, n_params: int, sigma: float | No
 
 
 @dataclass(frozen=True)
+class ShapeTests:
+    """Shape tests of one fit, per test mode (m,): ``p_value`` of its chi^2 at its level (NaN: no
+    shape term), ``rejected`` (the misfit rejects the stated level at 1 %), and ``count_p``, the
+    binomial tail probability of that many rejections at the identification failure rate."""
+
+    p_value: np.ndarray
+    rejected: np.ndarray
+    count_p: float
+
+
+@dataclass(frozen=True)
 class ModeFlags:
     """Per mode (test order): z-score, two-sided p-value, MAC (NaN: no shapes), flagged.
 
@@ -104,12 +119,10 @@ def flag_modes(
     mac: np.ndarray | None = None,
     alpha: float = 0.05,
     mac_threshold: float = 0.8,
-    shape_chi2: np.ndarray | None = None,
-    shape_dof: int = 0,
+    shapes: "ShapeTests | None" = None,
 ) -> ModeFlags:
     """Flag modes (module docstring).  residual_rel : (m,) e_i; predictive_rel_var : (m,) v_i;
-    shape_chi2 : (m,) c_i at the shape levels (NaN where a mode has no shape term), each on
-    ``shape_dof`` degrees of freedom."""
+    shapes : the shape tests of the fit (``ShapeTests``), or None."""
     e = np.asarray(residual_rel, dtype=float)
     var = noise.scale**2 + (0.0 if predictive_rel_var is None else predictive_rel_var)
     used = noise.used
@@ -119,21 +132,21 @@ def flag_modes(
     mac = np.full(e.size, np.nan) if mac is None else np.asarray(mac, dtype=float)
     low_mac = np.nan_to_num(mac, nan=1.0) < mac_threshold
     shape_p = None
-    shape_sum, shape_terms, n_tests = 0.0, 0, m
+    n_tests = m
     shape_flag = np.zeros(e.size, dtype=bool)
-    if shape_chi2 is not None and shape_dof > 0:
-        c = np.asarray(shape_chi2, dtype=float)
-        tested = used & np.isfinite(c)
-        shape_p = np.where(tested, stats.chi2.sf(np.nan_to_num(c), shape_dof), np.nan)
+    if shapes is not None:
+        tested = used & np.isfinite(shapes.p_value)
+        shape_p = shapes.p_value
         n_tests += int(np.sum(tested))
         shape_flag = tested & (np.nan_to_num(shape_p, nan=1.0) < alpha / n_tests)
-        shape_sum, shape_terms = float(np.sum(c[tested])), int(np.sum(tested)) * shape_dof
+        if shapes.count_p < COUNT_LEVEL:  # too many shapes off at once: physics, flag them all
+            shape_flag |= tested & shapes.rejected
     # Bonferroni over every per-mode test made (frequencies, and shapes when tested)
     flagged = used & ((p < alpha / max(n_tests, 1)) | low_mac | shape_flag)
-    dof = max(m + shape_terms - n_params, 1)
+    dof = max(m - n_params, 1)
     if noise.inferred:
         chi2 = chi2_p = float("nan")
     else:
-        chi2 = float(np.sum(z[used] ** 2)) + shape_sum
+        chi2 = float(np.sum(z[used] ** 2))
         chi2_p = float(stats.chi2.sf(chi2, dof))
     return ModeFlags(e, z, p, mac, flagged, alpha, chi2, dof, chi2_p, shape_p)

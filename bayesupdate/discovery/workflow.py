@@ -57,24 +57,39 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import stats
 from scipy.special import logsumexp
 
 from bayesupdate.discovery.candidates import Candidate, axis_for, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
-from bayesupdate.discovery.flagging import ModeFlags, NoiseModel, flag_modes, noise_model
+from bayesupdate.discovery.flagging import (
+    ModeFlags,
+    NoiseModel,
+    ShapeTests,
+    flag_modes,
+    noise_model,
+)
 from bayesupdate.discovery.localization import (
     Localization,
     candidate_problem,
     localize,
     screen_grid,
 )
-from bayesupdate.discovery.shape_evidence import SHAPE_SD_FLOOR_REL, shape_evidence
+from bayesupdate.discovery.shape_evidence import (
+    FAILURE_RATE,
+    SHAPE_SD_FLOOR_REL,
+    shape_evidence,
+)
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
 
 VERDICTS = ("explained", "no discrepancy", "unexplained")
+
+
+#: a mode's shape "rejects its stated level" when P(chi^2(n - 1) > c) is below this
+STATED_REJECTION = 0.01
 
 
 @dataclass(frozen=True)
@@ -239,7 +254,7 @@ class DiscoveryResult:
             "noise": {
                 "source": self.noise.source,
                 "sigma_rel": float(self.noise.sigma),
-                "shapes": _shape_noise_json(self.baseline.space.shapes),
+                "shapes": _shape_noise_json(self.baseline),
             },
             "effects": self.effects,
             "scanned": len(self.localization.scores),
@@ -308,7 +323,6 @@ def decide(
     # the named model is judged at family-wise level adequacy_p (1e-3), stricter than the
     # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
     # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
-    shape_chi2, shape_dof = known_shape_chi2(best)
     # inferred noise: judged against its own residual scale, which must look like test noise
     own = (
         noise_model(baseline.space.problem.data, best.residual_rel, d) if noise.inferred else noise
@@ -320,8 +334,7 @@ def decide(
         None,
         best.mac,
         s.adequacy_p,
-        shape_chi2=shape_chi2,
-        shape_dof=shape_dof,
+        shapes=shape_tests(best),
     )
     adequate = not after.flagged_modes and (
         own.sigma <= s.max_noise_rel if noise.inferred else after.chi2_p > s.adequacy_p
@@ -348,30 +361,44 @@ def decide(
     )
 
 
-def _shape_noise_json(shapes) -> dict | None:
+def _shape_noise_json(fit: ModelFit) -> dict | None:
     """How the shape block's levels were set (``shape_evidence``): the stated source ("data sd",
     or "floor" when the data give none: a stated fallback), the floor, each used mode's level as
-    a fraction of the RMS amplitude, and the modes raised to their baseline misfit (1-based)."""
+    a fraction of the RMS amplitude, the modes raised to their baseline misfit and the modes whose
+    misfit rejects their stated level in this fit (1-based)."""
+    shapes = fit.space.shapes
     if shapes is None:
         return None
+    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :], STATED_REJECTION)
     return {
         "source": shapes.source,
         "floor_sd_rel": SHAPE_SD_FLOOR_REL,
         "sd_rel": [float(v) for v in shapes.scale * np.sqrt(shapes.n_dof)],
         "modes": [int(i) + 1 for i in shapes.modes],
         "raised_to_baseline_misfit": [int(i) + 1 for i in shapes.modes[shapes.raised]],
+        "rejecting_stated_level": [int(i) + 1 for i in shapes.modes[rejects]],
     }
 
 
-def known_shape_chi2(fit: ModelFit) -> tuple[np.ndarray | None, int]:
-    """((m,) per-mode shape chi^2 c_i of ``fit`` (NaN for modes without a shape term), dof) at
-    the shape block's fixed levels; (None, 0) without shapes."""
+def shape_tests(fit: ModelFit) -> ShapeTests | None:
+    """The per-mode shape tests of ``fit`` (``flagging.ShapeTests``), None without shapes: each
+    mode's chi^2 at its level, and the count of modes rejecting their stated level against the
+    identification failure rate (``shape_evidence.FAILURE_RATE`` + the 1 % test level); the count
+    test needs a stated sd (with the 1 % floor as a fallback it is not made)."""
     shapes = fit.space.shapes
     if shapes is None:
-        return None, 0
-    c = np.full(fit.residual_rel.size, np.nan)
-    c[shapes.modes] = shapes.chi2(fit.best.r[fit.space.n_frequency :])
-    return c, shapes.dof
+        return None
+    r = fit.best.r[fit.space.n_frequency :]
+    m = fit.residual_rel.size
+    p = np.full(m, np.nan)
+    p[shapes.modes] = stats.chi2.sf(shapes.chi2(r), shapes.dof)
+    rejected = np.zeros(m, dtype=bool)
+    rejected[shapes.modes] = shapes.stated_rejections(r, STATED_REJECTION)
+    rate = FAILURE_RATE + STATED_REJECTION
+    count_p = float(stats.binom.sf(int(rejected.sum()) - 1, shapes.modes.size, rate))
+    if shapes.source != "data sd":  # the floor is a guess, not a stated accuracy: no count test
+        count_p = 1.0
+    return ShapeTests(p, rejected, count_p)
 
 
 def _effect_at_bound(fit: ModelFit, n_design: int, tolerance: float) -> list[str]:
@@ -500,7 +527,6 @@ def discover(
         max_nfev=settings.max_nfev,
     )
     mac = baseline.table.mac if data.shapes is not None else None
-    shape_chi2, shape_dof = known_shape_chi2(base_fit)
     flags = flag_modes(
         base_fit.residual_rel,
         noise,
@@ -508,8 +534,7 @@ def discover(
         predictive_rel_var,
         mac,
         settings.alpha,
-        shape_chi2=shape_chi2,
-        shape_dof=shape_dof,
+        shapes=shape_tests(base_fit),
     )
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     t1 = time.perf_counter()

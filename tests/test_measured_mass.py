@@ -86,3 +86,14 @@ def test_bad_measured_mass_in_a_study_exits_2_with_one_line(tmp_path, capsys):
     assert main(["calibrate", str(study)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "mass_kg must be a finite number > 0" in err
+
+
+def test_modes_file_round_trips_the_measured_mass(tmp_path):
+    from bayesupdate.ema.modal_h5 import read_modal_h5, write_modal_h5
+
+    data = ModalData(np.array([9.0, 11.0]), mass_kg=12.29, mass_sd_kg=0.05, source="weighed")
+    write_modal_h5(tmp_path / "m.h5", data)
+    back = read_modal_h5(tmp_path / "m.h5")
+    assert back.mass_kg == 12.29 and back.mass_sd_kg == 0.05
+    write_modal_h5(tmp_path / "n.h5", ModalData(np.array([9.0])))
+    assert read_modal_h5(tmp_path / "n.h5").mass_kg is None

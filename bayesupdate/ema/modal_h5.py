@@ -3,7 +3,8 @@
 Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (m,),
 ``shapes_real`` and ``shapes_imag`` (n_dof, m), ``dof_labels`` (n_dof,) strings, optional
 ``mpc``, ``frequency_sd_hz``, ``weights``, ``shape_sd_rel`` (m,), any ``extra`` arrays under
-``/modes/extra``; attribute ``source``.  Written atomically.
+``/modes/extra``; attributes ``source`` and, when measured, ``mass_kg`` and ``mass_sd_kg`` (the
+structure's weighed mass, test data like the frequencies).  Written atomically.
 """
 
 import os
@@ -16,6 +17,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
 
 _OPTIONAL = ("damping_ratio", "mpc", "frequency_sd_hz", "weights", "shape_sd_rel")
+_MASS = ("mass_kg", "mass_sd_kg")
 
 
 def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:
@@ -23,6 +25,9 @@ def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:
     with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
         g = fh.create_group("modes")
         g.attrs["source"] = modes.source
+        for name in _MASS:
+            if getattr(modes, name) is not None:
+                g.attrs[name] = float(getattr(modes, name))
         g["frequencies_hz"] = modes.frequencies_hz
         for name in _OPTIONAL:
             value = getattr(modes, name)
@@ -62,6 +67,7 @@ def read_modal_h5(path: str | os.PathLike) -> ModalData:
                 dof_labels=labels,
                 source=str(g.attrs.get("source", "")),
                 extra=extra,
+                **{name: float(g.attrs[name]) for name in _MASS if name in g.attrs},
                 **kwargs,
             )
     except (OSError, KeyError) as exc:

@@ -195,8 +195,8 @@ def identify(
         bands = [Band(lo_i, hi_i, lo_i, hi_i)]
         order = 60 if max_order is None else int(max_order)
     else:
-        bands = automatic_bands(h, 0, f.size - 1, band_lines)
         order = 40 if max_order is None else int(max_order)
+        bands = automatic_bands(h, 0, f.size - 1, band_lines, order)
     if order < 2:
         raise BayesUpdateError(f"--max-order {order}: must be at least 2")
     if method not in ESTIMATORS:

@@ -1,5 +1,7 @@
-"""Finite-element layer: build a 3D frame structure, assemble K(theta), M(theta), solve the
-free-free modes.  Knows nothing of tests or statistics.
+"""Finite-element layer: build a 3D structure (beams, shells, point masses, springs, supports,
+rigid elements), assemble K(theta), M(theta), solve its modes.  Knows nothing of tests or
+statistics.  ``StructureBuilder.add_shells`` / ``add_support`` / ``add_rbe2`` / ``add_rbe3``
+make a structure that ``FEModel`` solves on the sparse path (``fe.general``).
 
 Public names: ``StructureBuilder``, ``Structure``, ``Material``, ``STEEL``, sections
 (``circular_tube``, ``oval_tube``, ``solid_round``), ``FEModel``, ``Binding``, ``FEResult``,

@@ -18,12 +18,20 @@ class ModalEnergies:
     strain_by_part, kinetic_by_part : (n_parts, m) fractions of the mode's total (columns sum to 1).
     strain_by_element : (n_beams, m) fractions carried by each beam element.
     parts : part names (row labels).
+    Structures with shells (``general_energies``): shell_strain, shell_kinetic (n_shell, m)
+    fractions carried by each shell element (quads first); shell_strain_density,
+    shell_kinetic_density (n_shell, m) those fractions per element area [1/m^2] (times the
+    mode's energy lambda / 2 they give J/m^2: the strain-energy density maps of the seed).
     """
 
     strain_by_part: np.ndarray
     kinetic_by_part: np.ndarray
     strain_by_element: np.ndarray
     parts: tuple[str, ...]
+    shell_strain: np.ndarray | None = None
+    shell_kinetic: np.ndarray | None = None
+    shell_strain_density: np.ndarray | None = None
+    shell_kinetic_density: np.ndarray | None = None
 
 
 def _quadratic_forms(mats, dofs, shapes):
@@ -59,4 +67,54 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
         kinetic_by_part=kinetic / total_t,
         strain_by_element=ub / total_u,
         parts=s.parts,
+    )
+
+
+def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEnergies:
+    """Energy shares of a general structure's modes (``fe.general.GeneralAssembler`` ``g``):
+    beams, springs and point masses as ``modal_energies``, plus every shell element (direct
+    element matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs
+    of rigid elements included), so the element energies sum to the mode's lambda / 2."""
+    s = g.structure
+    shapes = modes.shapes
+    m = shapes.shape[1]
+    quad = _quadratic_forms
+    b = g.beams
+    strain = np.zeros((len(s.parts), m))
+    kinetic = np.zeros((len(s.parts), m))
+    ub = 0.5 * quad(element_matrices["beam_K"], b.beam_dofs, shapes)
+    np.add.at(strain, s.beam_part, ub)
+    np.add.at(
+        strain, s.spring_part, 0.5 * quad(element_matrices["spring_K"], b.spring_dofs, shapes)
+    )
+    np.add.at(kinetic, s.beam_part, 0.5 * quad(element_matrices["beam_M"], b.beam_dofs, shapes))
+    np.add.at(kinetic, s.mass_part, 0.5 * quad(element_matrices["mass_M"], b.mass_dofs, shapes))
+    fields = {}
+    if s.shells is not None:
+        n_sh = s.shells.n_elements
+        us, ts, area = np.zeros((n_sh, m)), np.zeros((n_sh, m)), np.zeros(n_sh)
+        for (idx, dofs, K, M), (*_, frames, _p) in zip(
+            g.shell_element_matrices(*shell_props), g.shells.families, strict=True
+        ):
+            us[idx] = 0.5 * quad(K, dofs, shapes)
+            ts[idx] = 0.5 * quad(M, dofs, shapes)
+            area[idx] = frames.area
+        np.add.at(strain, s.shells.part, us)
+        np.add.at(kinetic, s.shells.part, ts)
+        fields = dict(shell_strain=us, shell_kinetic=ts)
+    total_u = np.maximum(strain.sum(axis=0), 1e-300)
+    total_t = np.maximum(kinetic.sum(axis=0), 1e-300)
+    if fields:
+        fields = dict(
+            shell_strain=fields["shell_strain"] / total_u,
+            shell_kinetic=fields["shell_kinetic"] / total_t,
+            shell_strain_density=fields["shell_strain"] / total_u / area[:, None],
+            shell_kinetic_density=fields["shell_kinetic"] / total_t / area[:, None],
+        )
+    return ModalEnergies(
+        strain_by_part=strain / total_u,
+        kinetic_by_part=kinetic / total_t,
+        strain_by_element=ub / total_u,
+        parts=s.parts,
+        **fields,
     )

@@ -16,6 +16,13 @@ mass_factor        factor on the part's point masses            -         M line
 stiffness_factor   factor on the part's springs                 -         K linear
 bend_factor        extra factor dividing EI of a named bend     -         K non-linear
 =================  ==========================================  ========  =====================
+
+On a part with shells, thickness, density, youngs_modulus and modulus_factor act on its shells as
+well (shell K and M are exact sums of powers of the thickness, ``fe.general``).  A structure with
+shells, supports or rigid elements is solved on the sparse path (``fe.general``: constraints
+eliminated exactly, shift-invert Lanczos, rigid-body modes the supports allow removed exactly);
+a beam structure without them keeps the banded Krylov path (``method="sparse"`` forces the
+sparse one).
 """
 
 from collections.abc import Mapping
@@ -26,7 +33,8 @@ import numpy as np
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import Assembler, ElementProperties, rigid_body_basis
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
-from bayesupdate.fe.energy import ModalEnergies, modal_energies
+from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
+from bayesupdate.fe.general import GeneralAssembler
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction
 
@@ -40,6 +48,8 @@ PROPERTIES = (
     "stiffness_factor",
     "bend_factor",
 )
+#: the properties that also act on a part's shells
+SHELL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
 
 
 @dataclass(frozen=True)
@@ -91,12 +101,17 @@ class FEModel:
             raise BayesUpdateError(f"model {name}: parameters {missing} need a default and bounds")
         self._defaults = {k: float(defaults[k]) for k in self.parameter_names}
         self._bounds = {k: (float(bounds[k][0]), float(bounds[k][1])) for k in self.parameter_names}
-        self.assembler = Assembler(structure)
-        a = self.assembler
-        self.banded = BandedShiftInvert(a.n_dof, a.pattern_rows, a.pattern_cols, a.indptr)
+        self._shell_masks = {}
+        self._masks = {p: self._mask(p, b) for p, b in self.bindings.items()}
+        self._general = None
+        if structure.is_general:
+            self._general = GeneralAssembler(structure, self._shell_keys())
+            a = self._assembler = self._general.beams
+        else:
+            a = self._assembler = Assembler(structure)
+            self.banded = BandedShiftInvert(a.n_dof, a.pattern_rows, a.pattern_cols, a.indptr)
         self.rigid_basis = rigid_body_basis(structure.nodes)
         self._base = a.default_properties()
-        self._masks = {p: self._mask(p, b) for p, b in self.bindings.items()}
         dofs, directions = structure.sensor_dofs()
         self._sensor_dofs = dofs
         self._sensor_dir = directions
@@ -121,11 +136,34 @@ class FEModel:
             mask = s.spring_part == part
         else:
             mask = s.beam_part == part
-        if not np.any(mask):
+            if s.shells is not None and binding.property in SHELL_PROPERTIES:
+                self._shell_masks[name] = s.shells.part == part
+        if not np.any(mask) and not np.any(self._shell_masks.get(name, False)):
             raise BayesUpdateError(
                 f"parameter {name}: part {binding.target!r} has nothing with a {binding.property}"
             )
         return mask
+
+    def _shell_keys(self) -> np.ndarray | None:
+        """(n_shell, 3) index of the parameter setting each shell's thickness, modulus and
+        density (-1: none; the last binding wins, as in ``element_properties``)."""
+        if self.structure.shells is None:
+            return None
+        keys = -np.ones((self.structure.shells.n_elements, 3))
+        column = dict(thickness=0, youngs_modulus=1, modulus_factor=1, density=2)
+        for j, (name, mask) in enumerate(self._shell_masks.items()):
+            keys[mask, column[self.bindings[name].property]] = j
+        return keys
+
+    @property
+    def assembler(self) -> Assembler:
+        """The beam ``Assembler`` of a beam structure (the reduced model builds on it)."""
+        if self._general is not None:
+            raise BayesUpdateError(
+                f"model {self.name}: the structure has shells, supports or rigid elements; the "
+                "beam-only assembler and the reduced model do not apply (full solves are used)"
+            )
+        return self._assembler
 
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)
@@ -182,6 +220,23 @@ class FEModel:
                 bend[mask] = value
         return ElementProperties(t, rho, E, bend, ms, ss)
 
+    def shell_properties(self, params: Mapping[str, float] | None = None):
+        """Per-shell (thickness [m], E [Pa], rho [kg/m^3]) arrays (n_shell,) at ``params``."""
+        p = self.full_parameters(params)
+        sh = self.structure.shells
+        t, E, rho = sh.thickness.copy(), sh.E.copy(), sh.rho.copy()
+        for name, mask in self._shell_masks.items():
+            prop, value = self.bindings[name].property, p[name]
+            if prop == "thickness":
+                t[mask] = value
+            elif prop == "density":
+                rho[mask] = value
+            elif prop == "youngs_modulus":
+                E[mask] = value
+            elif prop == "modulus_factor":
+                E[mask] = sh.E[mask] * value
+        return t, E, rho
+
     # -- analysis ----------------------------------------------------------------------------
     def solve(
         self,
@@ -190,9 +245,14 @@ class FEModel:
         energies: bool = False,
         method: str = "krylov",
     ) -> FEResult:
-        """Full modal analysis: first ``n_modes`` elastic modes, mass, CoG, optional energies."""
+        """Full modal analysis: first ``n_modes`` elastic modes, mass, CoG, optional energies.
+
+        method : "krylov" (banded, beam structures), "dense" (LAPACK, checks) or "sparse"
+        (``fe.general``; the only path for shells, supports and rigid elements)."""
         p = self.full_parameters(params)
         props = self.element_properties(p)
+        if self._general is not None or method == "sparse":
+            return self._solve_general(p, props, n_modes, energies, method)
         K, M, elem = self.assembler.assemble(props)
         modes = solve_modes(
             K,
@@ -205,6 +265,19 @@ class FEModel:
         )
         mass, cog = self.assembler.total_mass(props)
         en = modal_energies(self.assembler, elem, modes.shapes) if energies else None
+        return FEResult(
+            p, modes, mass, cog, en, self.sensor_shapes(modes.shapes), self.structure.sensor_labels
+        )
+
+    def _solve_general(self, p, props, n_modes, energies, method) -> FEResult:
+        if self._general is None:  # a beam structure on the sparse path, built on demand
+            self._general = GeneralAssembler(self.structure)
+        g = self._general
+        shell_props = self.shell_properties(p) if self.structure.shells is not None else None
+        K, M, elem = g.assemble(props, shell_props)
+        modes = g.solve(K, M, n_modes, dense=method == "dense")
+        mass, cog = g.total_mass(M)
+        en = general_energies(g, elem, shell_props, modes) if energies else None
         return FEResult(
             p, modes, mass, cog, en, self.sensor_shapes(modes.shapes), self.structure.sensor_labels
         )

@@ -304,3 +304,39 @@ class ThicknessParametrisation:
         K, M = self.data(theta)
         pat = self.assembly.pattern
         return pat.csr(K), pat.csr(M)
+
+
+@dataclass(frozen=True)
+class ShellElements:
+    """The shell elements of a ``Structure`` (global node numbers, quads first): quads (nq, 4),
+    trias (nt, 3), and per element (nq + nt,) part index, thickness [m], E [Pa], nu,
+    rho [kg/m^3], offset [m], offset_ratio [-], nsm [kg/m^2] as in ``ShellMesh``."""
+
+    quads: np.ndarray
+    trias: np.ndarray
+    part: np.ndarray
+    thickness: np.ndarray
+    E: np.ndarray
+    nu: np.ndarray
+    rho: np.ndarray
+    offset: np.ndarray
+    offset_ratio: np.ndarray
+    nsm: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.quads) + len(self.trias)
+
+    def mesh(self, nodes: np.ndarray, **changes) -> ShellMesh:
+        """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
+        used by beams only are allowed here); ``changes`` replace property arrays."""
+        props = {n: getattr(self, n) for n in ("thickness", "E", "nu", "rho", "offset")}
+        props.update(offset_ratio=self.offset_ratio, nsm=self.nsm)
+        props.update(changes)
+        return ShellMesh(nodes, self.quads, self.trias, **props)
+
+    def edges(self) -> np.ndarray:
+        """(n, 2) node pairs along the element edges (for connectivity checks)."""
+        q, t = self.quads, self.trias
+        e = [np.stack([c, np.roll(c, -1, axis=1)], -1).reshape(-1, 2) for c in (q, t) if c.size]
+        return np.concatenate(e) if e else np.zeros((0, 2), int)

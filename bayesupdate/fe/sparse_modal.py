@@ -11,7 +11,9 @@ left to the iteration: the rigid motions that the constraints allow (null space 
 constraint rows of the 6 rigid motions) and that carry no strain energy are the exact rigid
 modes; the Lanczos operator is restricted to their M-orthogonal complement
 (P (K - sigma M)^-1 with P = I - R R^T M), so only elastic modes come out.  A further eigenvalue
-below ``zero_tol`` x the stiffest DOF's K_ii / M_ii is a mechanism and is reported with the DOFs
+below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalised: the value its
+eigenvalue would have without any cancellation between DOFs) is a mechanism and is reported with
+the DOFs
 that move.  Small models use dense LAPACK on the same complement.
 """
 
@@ -98,8 +100,12 @@ def rigid_motions(nodes: np.ndarray) -> np.ndarray:
 class ModalSettings:
     """Settings of ``solve_sparse_modes``.
 
-    n_modes : elastic modes wanted; shift : sigma [rad^2/s^2] (< 0); zero_tol : an eigenvalue
-    below zero_tol x max(K_ii / M_ii) counts as a zero mode (rigid or mechanism); dense_below :
+    n_modes : elastic modes wanted; shift : sigma [rad^2/s^2] (< 0); zero_tol : a mode x
+    (mass-normalised) with eigenvalue below zero_tol x sum_i K_ii x_i^2 counts as a zero mode
+    (rigid or mechanism).  A scale per mode, not max(K_ii / M_ii): the small rotary inertia of a
+    thin shell makes that ratio ~1e12 and flagged the first bending mode of a 30 mm plate as a
+    mechanism; a true zero mode cancels to round-off (~1e-16) and a thin plate's bending mode
+    to ~1e-7 of its diagonal energy.  dense_below :
     free-DOF count under which dense LAPACK is used; tol : ARPACK relative tolerance; seed : start
     vector.
     """
@@ -143,13 +149,18 @@ def dof_names(dofs) -> str:
     return ", ".join(f"node {d // 6} {COMPONENTS[d % 6]}" for d in np.asarray(dofs).ravel())
 
 
-def _rigid_modes(K, M, R, zero):
+def _diagonal_energy(kd, x):
+    """(m,) sum_i K_ii x_i^2 of mass-normalised columns x (n, m)."""
+    return np.einsum("i,im->m", kd, x**2)
+
+
+def _rigid_modes(K, M, R, zero_tol):
     """M-orthonormal zero-energy combinations of the allowed rigid motions R (n, 6)."""
     if R.shape[1] == 0:
         return R, np.zeros(0)
     KR, MR = K @ R, M @ R
     lam, C = sl.eigh(R.T @ KR, R.T @ MR)
-    keep = np.abs(lam) < zero
+    keep = np.abs(lam) < zero_tol * _diagonal_energy(K.diagonal(), R @ C)
     return R @ C[:, keep], lam[keep]
 
 
@@ -177,28 +188,36 @@ def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> S
     free = np.setdiff1d(np.arange(n_dof), fixed)
     Kf = sp.csr_matrix(K)[free][:, free]
     Mf = sp.csr_matrix(M)[free][:, free]
-    kd, md = Kf.diagonal(), Mf.diagonal()
-    zero = settings.zero_tol * np.max(kd[md > 0] / md[md > 0])
     R = _allowed_rigid(nodes, n_dof, fixed)[free]
-    Rm, lam_r = _rigid_modes(Kf, Mf, R, zero)
-    Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
-    n_el = free.size - Rm.shape[1]
-    if settings.n_modes > n_el:
-        raise BayesUpdateError(
-            f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
-        )
-    if free.size < settings.dense_below:
-        lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
-    else:
-        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings)
-    _check_mechanism(lam, phi, zero, free)
-    idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
-    phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
+    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, free)
     shapes = np.zeros((n_dof, phi.shape[1]))
     shapes[free] = phi
     rigid = np.zeros((n_dof, Rm.shape[1]))
     rigid[free] = Rm
     return SparseModes(np.sqrt(np.maximum(lam, 0)) / (2 * np.pi), lam, shapes, rigid, lam_r)
+
+
+def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
+    """Elastic and rigid modes of a reduced pencil (Kf, Mf) (n, n) sparse whose allowed rigid
+    motions are the columns of R (n, r); dof_ids (n,) global DOF number of each coordinate (for
+    mechanism messages).  Returns (lam (m,), phi (n, m), rigid modes (n, r'), their
+    eigenvalues), all mass-normalised; raises BayesUpdateError for a mechanism."""
+    Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol)
+    Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
+    n_el = Kf.shape[0] - Rm.shape[1]
+    if settings.n_modes > n_el:
+        raise BayesUpdateError(
+            f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
+        )
+    if Kf.shape[0] < settings.dense_below:
+        lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
+    else:
+        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings)
+    zero = settings.zero_tol * _diagonal_energy(Kf.diagonal(), phi)
+    _check_mechanism(lam, phi, zero, np.asarray(dof_ids))
+    idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
+    phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
+    return lam, phi, Rm, lam_r
 
 
 def _check_mechanism(lam, phi, zero, free):

@@ -9,12 +9,14 @@ Bends follow ASME B31.3 (Appendix D): flexibility characteristic h = t R / r^2 w
 radius, flexibility factor k = max(1, 1.65 / h); the bend's bending stiffness is divided by k.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.constraints import Constraints
 from bayesupdate.fe.sections import _SHAPE_CODE, Section
+from bayesupdate.fe.shell_model import ShellElements
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,9 @@ class Structure:
     spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part.
     Sensors: sensor_labels, sensor_node, sensor_direction (n_s, 3) unit vectors.
     parts, bends : names.
+    shells : ``ShellElements`` or None; constraints : supports and rigid elements
+    (``constraints.Constraints``) or None.  A structure with either is solved on the sparse path
+    (``fe.general``); without them it is the beam structure of before, solved as before.
     """
 
     nodes: np.ndarray
@@ -94,6 +99,15 @@ class Structure:
     shear: bool = True
     rotary_inertia: bool = True
     metadata: dict = field(default_factory=dict, compare=False)
+    shells: ShellElements | None = None
+    constraints: Constraints | None = None
+
+    @property
+    def is_general(self) -> bool:
+        """True if the structure has shells, supports or rigid elements."""
+        return self.shells is not None or (
+            self.constraints is not None and not self.constraints.is_empty
+        )
 
     @property
     def n_nodes(self) -> int:
@@ -144,6 +158,10 @@ class StructureBuilder:
         self.shear = shear
         self.rotary_inertia = rotary_inertia
         self.metadata: dict = {}
+        self._shell_blocks: list[dict] = []
+        self._supports: list[tuple[int, np.ndarray]] = []
+        self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
+        self._rbe3: list[tuple[int, np.ndarray, list[int], np.ndarray, np.ndarray]] = []
 
     # -- nodes and parts ------------------------------------------------------------------
     def add_node(self, xyz) -> int:
@@ -390,6 +408,58 @@ class StructureBuilder:
         self._springs.append(dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part)))
         return len(self._springs) - 1
 
+    # -- shells, supports and rigid elements (``fe.builder_general``) --------------------------
+    def add_shells(self, points, quads=None, trias=None, *, thickness, material, part, **kw):
+        """Flat shell elements on ``points`` (n, 3) [m]; see ``builder_general.add_shells``.
+        Returns the structure node number of each point (points on existing nodes reuse them)."""
+        from bayesupdate.fe.builder_general import add_shells
+
+        return add_shells(self, points, quads, trias, thickness, material, part, **kw)
+
+    def add_support(self, node, components="123456") -> None:
+        """Single-point constraint: hold ``components`` of ``node`` at zero ('123456' = all,
+        '123' = translations, or names such as ('uz', 'rx'))."""
+        from bayesupdate.fe.constraints import parse_components
+
+        node = self._check_node(node)
+        self._supports.append((node, parse_components(components, f"support at node {node}")))
+
+    def add_rbe2(self, independent, dependents, components="123456") -> int:
+        """Rigid element: ``components`` of every dependent node follow ``independent`` rigidly
+        (exact elimination).  Returns the RBE2 number used in error messages."""
+        from bayesupdate.fe.constraints import parse_components
+
+        i = len(self._rbe2)
+        deps = [self._check_node(d) for d in np.atleast_1d(dependents)]
+        ind = self._check_node(independent)
+        if not deps or ind in deps:
+            raise BayesUpdateError(
+                f"rbe2 {i}: needs dependent nodes other than its independent node {ind}"
+            )
+        self._rbe2.append((ind, deps, parse_components(components, f"rbe2 {i}")))
+        return i
+
+    def add_rbe3(
+        self, reference, nodes, weights=None, components="123456", node_components="123"
+    ) -> int:
+        """Interpolation element: ``components`` of ``reference`` become the weighted
+        least-squares rigid motion of ``nodes`` (their ``node_components``; weights default 1).
+        Adds no stiffness.  Returns the RBE3 number used in error messages."""
+        from bayesupdate.fe.constraints import parse_components
+
+        i = len(self._rbe3)
+        ref = self._check_node(reference)
+        ns = [self._check_node(n) for n in np.atleast_1d(nodes)]
+        w = np.ones(len(ns)) if weights is None else np.asarray(weights, dtype=float).ravel()
+        if not ns or ref in ns or w.shape != (len(ns),) or not np.all(np.isfinite(w) & (w > 0)):
+            raise BayesUpdateError(
+                f"rbe3 {i}: needs nodes other than its reference {ref} and one weight > 0 each"
+            )
+        ref_c = parse_components(components, f"rbe3 {i}")
+        node_c = parse_components(node_components, f"rbe3 {i} node_components")
+        self._rbe3.append((ref, ref_c, ns, w, node_c))
+        return i
+
     def add_sensor(self, label: str, node, direction) -> None:
         """A measurement DOF: translation of ``node`` along ``direction`` ('V', 'H', 'x', ... or a
         vector)."""
@@ -447,6 +517,10 @@ class StructureBuilder:
             rotary_inertia=self.rotary_inertia,
             metadata=dict(self.metadata),
         )
+        if self._shell_blocks or self._supports or self._rbe2 or self._rbe3:
+            from bayesupdate.fe.builder_general import general_parts
+
+            structure = replace(structure, **general_parts(self))
         check_connected(structure)
         return structure
 
@@ -460,9 +534,21 @@ def check_connected(structure: Structure) -> None:
     pairs = [structure.beam_nodes]
     sp = structure.spring_nodes[(structure.spring_nodes >= 0).all(axis=1)]
     pairs.append(sp)
+    if structure.shells is not None:
+        pairs.append(structure.shells.edges())
+    if structure.constraints is not None:
+        pairs.append(structure.constraints.edges())
     edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)
+    used = np.zeros(n, bool)
+    used[edges.ravel()] = True
+    used[structure.mass_node] = True
+    used[structure.spring_nodes[:, 0]] = True
+    if structure.is_general and not np.all(used):
+        raise BayesUpdateError(
+            f"node {int(np.flatnonzero(~used)[0])} is used by no element; remove it or connect it"
+        )
     if n_comp > 1:
         sizes = np.bincount(labels)
         main = np.argmax(sizes)

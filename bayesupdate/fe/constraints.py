@@ -1,0 +1,272 @@
+"""Supports and rigid elements by exact elimination of the dependent DOFs (no penalties).
+
+Every DOF is either *fixed* (a single-point constraint, u = 0), *dependent* (a linear function of
+other DOFs, written by a rigid element) or *independent*.  ``constraint_transform`` returns the
+sparse T (n_dof, n_ind) with u = T u_ind, so the constrained problem is
+(T^T K T) x = lambda (T^T M T) x (Cook et al., *Concepts and Applications of FEA*, 4th ed.,
+sec. 9.2, transformation method).  T is built for all rigid elements at once (no element loop).
+
+Rigid elements (6 DOFs per node: ux uy uz rx ry rz, small rotations):
+
+* ``rbe2``: the chosen components of each dependent node d follow the independent node i
+  rigidly, u_d = u_i + theta_i x (x_d - x_i), theta_d = theta_i (Nastran RBE2).
+* ``rbe3``: the reference node's chosen components are the weighted least-squares rigid motion
+  of a set of nodes: (u_r, theta_r) = argmin sum_k |W_k^1/2 (u_k - G_k (u_r, theta_r))|^2 with
+  G_k = [[I, -skew(x_k - x_r)], [0, I]], so (u_r, theta_r) = A^-1 sum_k G_k^T W_k u_k,
+  A = sum_k G_k^T W_k G_k.  W_k = w_k on the node's chosen translations and w_k L^2 on its chosen
+  rotations, L the mean distance of the nodes from the reference (Nastran RBE3 with its
+  characteristic length).  It reproduces rigid motions exactly and adds no stiffness.
+
+A rigid element may depend on DOFs that another rigid element makes dependent (chains); the
+substitution is repeated until T refers to independent DOFs only, and a loop is an error.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from bayesupdate.errors import BayesUpdateError
+
+COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
+
+
+def parse_components(components, what: str) -> np.ndarray:
+    """(6,) bool mask from Nastran-style digits ("123456", "123", 135) or names ("ux", "rz")."""
+    if isinstance(components, str) and components and set(components) <= set("123456"):
+        idx = [int(c) - 1 for c in components]
+    elif isinstance(components, int | np.integer):
+        idx = [int(c) - 1 for c in str(int(components))]
+    else:
+        names = [components] if isinstance(components, str) else list(components)
+        bad = [c for c in names if c not in COMPONENTS]
+        if bad or not names:
+            raise BayesUpdateError(
+                f"{what}: components must be digits 1-6 (e.g. '123456') or names {COMPONENTS}, "
+                f"got {components!r}"
+            )
+        idx = [COMPONENTS.index(c) for c in names]
+    if not idx or min(idx) < 0 or max(idx) > 5:
+        raise BayesUpdateError(f"{what}: components must be digits 1-6, got {components!r}")
+    mask = np.zeros(6, bool)
+    mask[idx] = True
+    return mask
+
+
+def _empty(shape, dtype=float):
+    return field(default_factory=lambda: np.zeros(shape, dtype=dtype))
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Supports and rigid elements as flat arrays (one row per support, RBE2 leg, RBE3 leg).
+
+    fixed_node (F,), fixed_components (F, 6) bool.
+    RBE2 legs: rbe2_element (L2,), rbe2_independent (L2,) node, rbe2_dependent (L2,) node,
+    rbe2_components (L2, 6) bool (dependent components).
+    RBE3: rbe3_reference (R3,) node, rbe3_ref_components (R3, 6) bool (dependent components);
+    legs rbe3_element (L3,) index into rbe3_reference, rbe3_node (L3,), rbe3_weight (L3,),
+    rbe3_components (L3, 6) bool (the node's components used in the average).
+    """
+
+    fixed_node: np.ndarray = _empty(0, int)
+    fixed_components: np.ndarray = _empty((0, 6), bool)
+    rbe2_element: np.ndarray = _empty(0, int)
+    rbe2_independent: np.ndarray = _empty(0, int)
+    rbe2_dependent: np.ndarray = _empty(0, int)
+    rbe2_components: np.ndarray = _empty((0, 6), bool)
+    rbe3_reference: np.ndarray = _empty(0, int)
+    rbe3_ref_components: np.ndarray = _empty((0, 6), bool)
+    rbe3_element: np.ndarray = _empty(0, int)
+    rbe3_node: np.ndarray = _empty(0, int)
+    rbe3_weight: np.ndarray = _empty(0)
+    rbe3_components: np.ndarray = _empty((0, 6), bool)
+
+    @property
+    def n_rbe2(self) -> int:
+        return int(self.rbe2_element.max()) + 1 if self.rbe2_element.size else 0
+
+    @property
+    def is_empty(self) -> bool:
+        return not (self.fixed_node.size or self.rbe2_element.size or self.rbe3_reference.size)
+
+    def fixed_dofs(self) -> np.ndarray:
+        """Sorted unique global DOF numbers held at zero."""
+        node, comp = np.nonzero(self.fixed_components)
+        return np.unique(6 * self.fixed_node[node] + comp)
+
+    def edges(self) -> np.ndarray:
+        """(n, 2) node pairs that the rigid elements connect (for connectivity checks)."""
+        a = np.stack([self.rbe2_independent, self.rbe2_dependent], axis=1)
+        b = np.stack([self.rbe3_reference[self.rbe3_element], self.rbe3_node], axis=1)
+        return np.concatenate([a, b]).reshape(-1, 2).astype(int)
+
+
+@dataclass(frozen=True)
+class ConstraintTransform:
+    """u = T @ u_ind.  T : (n_dof, n_ind) CSR; independent : (n_ind,) global DOF numbers of the
+    retained DOFs (T is the identity on them); fixed, dependent : global DOF numbers."""
+
+    T: sp.csr_matrix
+    independent: np.ndarray
+    fixed: np.ndarray
+    dependent: np.ndarray
+
+    def reduce(self, A):
+        """T^T A T for a sparse (n_dof, n_dof) matrix, as CSR."""
+        return (self.T.T @ (A @ self.T)).tocsr()
+
+    def expand(self, x: np.ndarray) -> np.ndarray:
+        """Full DOF vectors (n_dof, ...) from independent ones (n_ind, ...)."""
+        return self.T @ x
+
+
+def _skew(v):
+    s = np.zeros(v.shape[:-1] + (3, 3))
+    s[..., 0, 1], s[..., 0, 2] = -v[..., 2], v[..., 1]
+    s[..., 1, 0], s[..., 1, 2] = v[..., 2], -v[..., 0]
+    s[..., 2, 0], s[..., 2, 1] = -v[..., 1], v[..., 0]
+    return s
+
+
+def rigid_link(r: np.ndarray) -> np.ndarray:
+    """(n, 6, 6) G with (u, theta) at x + r = G (u, theta) at x for small rotations."""
+    G = np.zeros(r.shape[:-1] + (6, 6))
+    G[..., :3, :3] = np.eye(3)
+    G[..., 3:, 3:] = np.eye(3)
+    G[..., :3, 3:] = -_skew(r)
+    return G
+
+
+def _rbe2_rows(nodes, c: Constraints):
+    """(rows, cols, vals) of the RBE2 dependencies, then each dependent DOF and its element."""
+    G = rigid_link(nodes[c.rbe2_dependent] - nodes[c.rbe2_independent])  # (L2, 6, 6)
+    leg, comp = np.nonzero(c.rbe2_components)
+    rows = np.repeat(6 * c.rbe2_dependent[leg] + comp, 6)
+    cols = (6 * c.rbe2_independent[leg][:, None] + np.arange(6)).ravel()
+    vals = G[leg, comp].ravel()
+    return (
+        rows,
+        cols,
+        vals,
+        6 * c.rbe2_dependent[leg] + comp,
+        [f"rbe2 {i}" for i in c.rbe2_element[leg]],
+    )
+
+
+def _rbe3_rows(nodes, c: Constraints):
+    """(rows, cols, vals) of the RBE3 reference dependencies (weighted LSQ fit), then each
+    dependent DOF and its element."""
+    n_el = c.rbe3_reference.size
+    e = c.rbe3_element
+    r = nodes[c.rbe3_node] - nodes[c.rbe3_reference[e]]  # (L3, 3)
+    dist = np.linalg.norm(r, axis=1)
+    length = np.bincount(e, dist, n_el) / np.maximum(np.bincount(e, minlength=n_el), 1)
+    scale = np.where(np.arange(6) < 3, 1.0, length[e][:, None] ** 2)
+    W = c.rbe3_weight[:, None] * scale * c.rbe3_components  # (L3, 6) diagonal weights
+    G = rigid_link(r)
+    GtW = G.transpose(0, 2, 1) * W[:, None, :]  # G_k^T W_k
+    A = np.zeros((n_el, 6, 6))
+    np.add.at(A, e, GtW @ G)
+    ref_mask = c.rbe3_ref_components
+    B = _pinv_checked(A, ref_mask)[e] @ GtW  # (L3, 6, 6): (u_r, theta_r) += B_k u_k
+    leg, comp = np.nonzero(ref_mask[e])
+    rows = np.repeat(6 * c.rbe3_reference[e[leg]] + comp, 6)
+    cols = (6 * c.rbe3_node[leg][:, None] + np.arange(6)).ravel()
+    vals = B[leg, comp].ravel()
+    el, comp = np.nonzero(ref_mask)
+    return rows, cols, vals, 6 * c.rbe3_reference[el] + comp, [f"rbe3 {i}" for i in el]
+
+
+def _pinv_checked(A, ref_mask):
+    """Pseudo-inverses (n, 6, 6) of the normal matrices A; the dependent components
+    ``ref_mask`` (n, 6) must be determined (orthogonal to the null space of A), e.g. the rotation
+    about the line through collinear nodes is not, unless their rotations are used."""
+    U, s, Vt = np.linalg.svd(A)
+    null = s < 1e-10 * s[:, :1]
+    reach = np.einsum("nk,nki->ni", null.astype(float), np.abs(Vt))  # null-space weight per comp
+    bad = np.any((reach > 1e-6) & ref_mask, axis=1)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        comp = [COMPONENTS[k] for k in np.flatnonzero((reach[i] > 1e-6) & ref_mask[i])]
+        raise BayesUpdateError(
+            f"rbe3 {i}: its nodes do not determine the reference's {', '.join(comp)} (e.g. "
+            "collinear nodes with translations only); add nodes, use their rotations "
+            "(node_components='123456') or make fewer reference components dependent"
+        )
+    inv_s = np.where(null, 0.0, 1.0 / np.where(null, 1.0, s))
+    return np.einsum("nji,nj,nkj->nik", Vt, inv_s, U)
+
+
+def _dependencies(nodes, c: Constraints):
+    """Sparse G (n_dof, n_dof): dependent rows hold their rigid-element coefficients, every other
+    row is the identity.  Checks that each DOF is dependent in at most one element."""
+    n_dof = 6 * nodes.shape[0]
+    r2 = _rbe2_rows(nodes, c)
+    r3 = _rbe3_rows(nodes, c) if c.rbe3_reference.size else None
+    parts = [r2] + ([r3] if r3 is not None else [])
+    dep = np.concatenate([p[3] for p in parts])
+    owners = [o for p in parts for o in p[4]]
+    uniq, first, counts = np.unique(dep, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        d = int(uniq[np.flatnonzero(counts > 1)[0]])
+        who = [owners[i] for i in np.flatnonzero(dep == d)]
+        raise BayesUpdateError(
+            f"node {d // 6} {COMPONENTS[d % 6]} is a dependent DOF of both {who[0]} and {who[1]}; "
+            "a DOF can be dependent in one rigid element only"
+        )
+    rows = np.concatenate([p[0] for p in parts])
+    cols = np.concatenate([p[1] for p in parts])
+    vals = np.concatenate([p[2] for p in parts])
+    keep = np.abs(vals) > 0
+    eye = np.setdiff1d(np.arange(n_dof), uniq)
+    G = sp.csr_matrix(
+        (
+            np.concatenate([vals[keep], np.ones(eye.size)]),
+            (np.concatenate([rows[keep], eye]), np.concatenate([cols[keep], eye])),
+        ),
+        shape=(n_dof, n_dof),
+    )
+    return G, uniq, dict(zip(uniq.tolist(), (owners[i] for i in first), strict=True))
+
+
+def constraint_transform(nodes: np.ndarray, c: Constraints) -> ConstraintTransform:
+    """The transformation T (u = T u_ind) for nodes (N, 3) [m] and constraints ``c``.
+
+    Raises BayesUpdateError naming the element for a dependent DOF that is also fixed or
+    dependent in another element, and for rigid elements that depend on each other in a loop.
+    """
+    n_dof = 6 * nodes.shape[0]
+    fixed = c.fixed_dofs()
+    if c.rbe2_element.size == 0 and c.rbe3_reference.size == 0:
+        keep = np.setdiff1d(np.arange(n_dof), fixed)
+        T = sp.csr_matrix((np.ones(keep.size), (keep, np.arange(keep.size))), (n_dof, keep.size))
+        return ConstraintTransform(T, keep, fixed, np.zeros(0, int))
+    G, dep, owner = _dependencies(nodes, c)
+    clash = np.intersect1d(dep, fixed)
+    if clash.size:
+        d = int(clash[0])
+        raise BayesUpdateError(
+            f"{owner[d]}: its dependent DOF node {d // 6} {COMPONENTS[d % 6]} is also fixed by a "
+            "support; support the independent node instead"
+        )
+    is_dep = np.zeros(n_dof, bool)
+    is_dep[dep] = True
+    T = G
+    n_elements = c.n_rbe2 + c.rbe3_reference.size
+    for _ in range(n_elements + 1):
+        coo = T.tocoo()
+        if not np.any(is_dep[coo.col[coo.data != 0]]):
+            break
+        T = (T @ G).tocsr()
+    else:
+        coo = T.tocoo()
+        d = int(coo.row[is_dep[coo.col] & (coo.data != 0)][0])
+        raise BayesUpdateError(
+            f"{owner.get(d, 'a rigid element')}: rigid elements depend on each other in a loop "
+            f"(through node {d // 6} {COMPONENTS[d % 6]}); make one of them independent"
+        )
+    keep = np.flatnonzero(~is_dep & ~np.isin(np.arange(n_dof), fixed))
+    T = T.tocsc()[:, keep].tocsr()
+    T.eliminate_zeros()
+    return ConstraintTransform(T, keep, fixed, dep)

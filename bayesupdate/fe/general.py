@@ -1,0 +1,159 @@
+"""Assembly and modal solution of a general ``Structure``: beams, point masses and springs (the
+beam ``Assembler``, unchanged) together with shells, supports and rigid elements.
+
+* One CSR pattern, the union of the beam pattern and the shell pattern; each re-assembly adds the
+  beam data and the shell data into it at precomputed positions.
+* Shells are grouped by the parameters acting on them (and their nominal E, rho and, where the
+  thickness is not a parameter, t).  Within a group K and M are exact sums over powers of the
+  common thickness (``shell.power_matrices``):
+  K = (E / E0) sum_p t^p K_p,  M = M_nsm + rho sum_p t^p M_p  (M_p per unit density),
+  so a new parameter point costs a few vector operations per group and no element computation.
+* Supports and rigid elements: u = T u_ind (``constraints``), K_r = T^T K T, M_r = T^T M T, solved
+  by ``sparse_modal.solve_reduced_modes`` (shift-invert Lanczos with a negative shift, the
+  rigid-body modes the supports allow found exactly, mechanisms reported with their DOFs;
+  dense LAPACK below ``ModalSettings.dense_below`` DOFs).  Modes on springs to ground are
+  elastic modes here (the beam path's suspension-mode removal does not apply).
+"""
+
+import numpy as np
+import scipy.sparse as sp
+
+from bayesupdate.fe import shell
+from bayesupdate.fe.assembly import Assembler, ElementProperties, rigid_body_basis
+from bayesupdate.fe.constraints import Constraints, constraint_transform
+from bayesupdate.fe.eigensolve import ModalSolution
+from bayesupdate.fe.shell_model import ShellAssembly
+from bayesupdate.fe.sparse_modal import ModalSettings, _allowed_rigid, solve_reduced_modes
+from bayesupdate.fe.structure import Structure
+
+
+class GeneralAssembler:
+    """Precomputation for repeated K(theta), M(theta) of a general structure.
+
+    shell_keys : (n_shell, k) numbers that must be equal for shells to share a parameter group
+    (the FE model passes the indices of the parameters bound to each shell); None = one group
+    per distinct nominal (part, t, E, rho).
+    """
+
+    def __init__(self, structure: Structure, shell_keys=None):
+        s = self.structure = structure
+        n = self.n_dof = s.n_dof
+        self.beams = Assembler(s)
+        b = self.beams
+        keys = [b.pattern_rows.astype(np.int64) * n + b.pattern_cols]
+        self.shells = None
+        if s.shells is not None:
+            n_el = s.shells.n_elements
+            unit = s.shells.mesh(s.nodes, rho=np.ones(n_el))  # mass per unit density
+            self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
+            pat = self.shells.pattern
+            keys.append(pat.rows.astype(np.int64) * n + pat.cols)
+        union = np.unique(np.concatenate(keys))
+        self.nnz = union.size
+        self.rows = (union // n).astype(np.int32)
+        self.cols = (union % n).astype(np.int32)
+        self.indptr = np.searchsorted(self.rows, np.arange(n + 1)).astype(np.int32)
+        self._pos_beam = np.searchsorted(union, keys[0])
+        if self.shells is not None:
+            self._pos_shell = np.searchsorted(union, keys[1])
+            self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
+        c = s.constraints if s.constraints is not None else Constraints()
+        self.transform = constraint_transform(s.nodes, c)
+        R = _allowed_rigid(s.nodes, n, self.transform.fixed)
+        self.rigid = R[self.transform.independent]
+        self._rigid_origin = rigid_body_basis(s.nodes, centre=np.zeros(3))
+
+    # -- shells ----------------------------------------------------------------------------------
+    def _groups(self, shell_keys):
+        sh = self.structure.shells
+        shell_keys = np.asarray(shell_keys, dtype=float).reshape(sh.n_elements, -1)
+        # the first key column is the thickness parameter (-1: none): only then does the nominal
+        # thickness matter
+        t_bound = shell_keys[:, 0] >= 0 if shell_keys.shape[1] else np.zeros(sh.n_elements, bool)
+        t0 = np.where(t_bound, 0.0, sh.thickness)
+        key = np.column_stack([shell_keys, sh.part, sh.E, sh.rho, t0])
+        _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        self.group_rep = first
+        self.terms = []  # (union positions, K {p: values}, M_nsm values, M {p: values}) per group
+        for g in range(first.size):
+            Kp, Mp = self.shells.power_data(group.ravel() == g)
+            nz = np.any([np.abs(v) > 0 for v in (*Kp.values(), *Mp.values())], axis=0)
+            pos = np.flatnonzero(nz)
+            m0 = Mp.pop(0)[pos] if 0 in Mp else np.zeros(pos.size)
+            self.terms.append(
+                (
+                    self._pos_shell[pos],
+                    {p: v[pos] for p, v in Kp.items()},
+                    m0,
+                    {p: v[pos] for p, v in Mp.items()},
+                )
+            )
+
+    def shell_data(self, t, E, rho):
+        """(K data, M data) (nnz,) of the shells with per-element thickness t [m], E [Pa], rho
+        [kg/m^3] (n_shell,), uniform within each group (as the FE model's bindings make them)."""
+        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
+        rep = self.group_rep
+        e_factor = E[rep] / self.structure.shells.E[rep]
+        for (pos, Kp, m0, Mp), tg, fe, rg in zip(
+            self.terms, t[rep], e_factor, rho[rep], strict=True
+        ):
+            K[pos] += fe * sum(tg**p * v for p, v in Kp.items())
+            M[pos] += m0 + rg * sum(tg**p * v for p, v in Mp.items())
+        return K, M
+
+    def shell_element_matrices(self, t, E, rho):
+        """Direct global-axis shell element matrices [(dofs (n_e, d), K, M) per family]."""
+        sh = self.structure.shells
+        out = []
+        for idx, dofs, f, p in self.shells.families:
+            K, M = shell.direct_matrices(
+                p, t[idx], rho[idx], sh.nsm[idx], sh.offset[idx], sh.offset_ratio[idx]
+            )
+            K = K * (E[idx] / sh.E[idx])[:, None, None]
+            out.append((idx, dofs, shell.to_global(K, f.R), shell.to_global(M, f.R)))
+        return out
+
+    # -- assembly and solution ------------------------------------------------------------------
+    def csr(self, data: np.ndarray) -> sp.csr_matrix:
+        return sp.csr_matrix((data, self.cols, self.indptr), shape=(self.n_dof, self.n_dof))
+
+    def assemble(self, props: ElementProperties, shell_props=None):
+        """Full (K, M) CSR at beam properties ``props`` and shell (t, E, rho) arrays, plus the
+        beam assembler's element matrices (for energies)."""
+        Kb, Mb, elem = self.beams.assemble(props)
+        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
+        K[self._pos_beam] += Kb.data
+        M[self._pos_beam] += Mb.data
+        if self.shells is not None:
+            sh = self.structure.shells
+            t, E, rho = (sh.thickness, sh.E, sh.rho) if shell_props is None else shell_props
+            Ks, Ms = self.shell_data(t, E, rho)
+            K += Ks
+            M += Ms
+        return self.csr(K), self.csr(M), elem
+
+    def solve(self, K, M, n_modes: int, dense: bool = False) -> ModalSolution:
+        """First ``n_modes`` elastic modes of the constrained structure (full-DOF shapes)."""
+        tr = self.transform
+        settings = ModalSettings(n_modes=n_modes)
+        if dense:
+            settings = ModalSettings(n_modes=n_modes, dense_below=tr.independent.size + 1)
+        lam, phi, Rm, lam_r = solve_reduced_modes(
+            tr.reduce(K), tr.reduce(M), self.rigid, settings, tr.independent
+        )
+        return ModalSolution(
+            frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),
+            eigenvalues=lam,
+            shapes=tr.expand(phi),
+            n_rigid=Rm.shape[1],
+            rigid_frequencies_hz=np.sqrt(np.abs(lam_r)) / (2 * np.pi),
+        )
+
+    def total_mass(self, M) -> tuple[float, np.ndarray]:
+        """Total mass [kg] and centre of gravity (3,) [m] from the full mass matrix: the rigid
+        translations give m I, the coupling with rotations about the origin m skew(c)."""
+        R = self._rigid_origin
+        Mr = R.T @ (M @ R)
+        m = float(np.trace(Mr[:3, :3]) / 3.0)
+        return m, np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]]) / m

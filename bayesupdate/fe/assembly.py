@@ -17,17 +17,9 @@ import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
+from bayesupdate.fe.rotations import skew
 from bayesupdate.fe.sections import section_properties
 from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
-
-
-def _skew(v):
-    """(..., 3) -> (..., 3, 3) with skew(v) @ w = v x w."""
-    s = np.zeros(v.shape[:-1] + (3, 3))
-    s[..., 0, 1], s[..., 0, 2] = -v[..., 2], v[..., 1]
-    s[..., 1, 0], s[..., 1, 2] = v[..., 2], -v[..., 0]
-    s[..., 2, 0], s[..., 2, 1] = -v[..., 1], v[..., 0]
-    return s
 
 
 @dataclass(frozen=True)
@@ -53,7 +45,7 @@ def rigid_body_basis(nodes: np.ndarray, centre=None) -> np.ndarray:
     R = np.zeros((n, 6, 6))
     R[:, :3, :3] = np.eye(3)
     R[:, 3:, 3:] = np.eye(3)
-    R[:, :3, 3:] = -_skew(nodes - c)
+    R[:, :3, 3:] = -skew(nodes - c)
     return R.reshape(6 * n, 6)
 
 
@@ -72,7 +64,7 @@ class Assembler:
         T = np.zeros((len(s.mass_node), 6, 6))
         T[:, :3, :3] = np.eye(3)
         T[:, 3:, 3:] = np.eye(3)
-        T[:, :3, 3:] = -_skew(s.mass_offset)
+        T[:, :3, 3:] = -skew(s.mass_offset)
         self._mass_T = T
         grounded = s.spring_nodes[:, 1] < 0
         b_nodes = np.where(grounded, s.spring_nodes[:, 0], s.spring_nodes[:, 1])

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.rotations import skew
 
 COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
 
@@ -121,20 +122,12 @@ class ConstraintTransform:
         return self.T @ x
 
 
-def _skew(v):
-    s = np.zeros(v.shape[:-1] + (3, 3))
-    s[..., 0, 1], s[..., 0, 2] = -v[..., 2], v[..., 1]
-    s[..., 1, 0], s[..., 1, 2] = v[..., 2], -v[..., 0]
-    s[..., 2, 0], s[..., 2, 1] = -v[..., 1], v[..., 0]
-    return s
-
-
 def rigid_link(r: np.ndarray) -> np.ndarray:
     """(n, 6, 6) G with (u, theta) at x + r = G (u, theta) at x for small rotations."""
     G = np.zeros(r.shape[:-1] + (6, 6))
     G[..., :3, :3] = np.eye(3)
     G[..., 3:, 3:] = np.eye(3)
-    G[..., :3, 3:] = -_skew(r)
+    G[..., :3, 3:] = -skew(r)
     return G
 
 

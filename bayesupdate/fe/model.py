@@ -52,6 +52,24 @@ PROPERTIES = (
 SHELL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
 
 
+#: bound properties shared by beams and shells (``_set_material``)
+MATERIAL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
+
+
+def _set_material(prop, value, mask, arrays, base_modulus) -> None:
+    """Write a thickness / density / modulus binding into (t, rho, E) where ``mask`` (in place);
+    ``modulus_factor`` scales ``base_modulus``.  Other properties are left alone."""
+    t, rho, E = arrays
+    if prop == "thickness":
+        t[mask] = value
+    elif prop == "density":
+        rho[mask] = value
+    elif prop == "youngs_modulus":
+        E[mask] = value
+    elif prop == "modulus_factor":
+        E[mask] = base_modulus[mask] * value
+
+
 @dataclass(frozen=True)
 class Binding:
     """Parameter -> (part or bend name, property); see the module table."""
@@ -202,14 +220,8 @@ class FEModel:
                 raise BayesUpdateError(f"parameter {name} = {value}: {prop} must be finite and > 0")
             if not np.isfinite(value) or value < 0:
                 raise BayesUpdateError(f"parameter {name} = {value}: {prop} must be >= 0")
-            if prop == "thickness":
-                t[mask] = value
-            elif prop == "density":
-                rho[mask] = value
-            elif prop == "youngs_modulus":
-                E[mask] = value
-            elif prop == "modulus_factor":
-                E[mask] = base.beam_E[mask] * value
+            if prop in MATERIAL_PROPERTIES:
+                _set_material(prop, value, mask, (t, rho, E), base.beam_E)
             elif prop == "mass":
                 ms[mask] = value / s.mass_value[mask].sum()
             elif prop == "mass_factor":
@@ -226,15 +238,7 @@ class FEModel:
         sh = self.structure.shells
         t, E, rho = sh.thickness.copy(), sh.E.copy(), sh.rho.copy()
         for name, mask in self._shell_masks.items():
-            prop, value = self.bindings[name].property, p[name]
-            if prop == "thickness":
-                t[mask] = value
-            elif prop == "density":
-                rho[mask] = value
-            elif prop == "youngs_modulus":
-                E[mask] = value
-            elif prop == "modulus_factor":
-                E[mask] = sh.E[mask] * value
+            _set_material(self.bindings[name].property, p[name], mask, (t, rho, E), sh.E)
         return t, E, rho
 
     # -- analysis ----------------------------------------------------------------------------

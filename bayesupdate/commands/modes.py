@@ -7,19 +7,26 @@ import numpy as np
 from bayesupdate.units import parse_assignments
 
 NAME = "modes"
-HELP = "FE normal modes of a built-in model (frequencies, mass, strain-energy shares)"
-DESCRIPTION = """Free-free modal analysis (seed section 3, eqs 1-2) of a built-in model.
+HELP = "FE normal modes of a built-in model or a Nastran deck (frequencies, mass, energies)"
+DESCRIPTION = """Free-free modal analysis (seed section 3, eqs 1-2) of a built-in model, or of a
+Nastran deck (.bdf, .dat, .nas, .blk; needs pip install bayesupdate[nastran]).
 
 Examples:
   bayesupdate modes --model exhaust
   bayesupdate modes --model exhaust --set t_hot_pipe=2.08mm --set rho_catalyst=8.9e-9t/mm3 --json
+  bayesupdate modes --model exhaust.bdf --modes 10 --json
+
+A Nastran deck is solved in its own units (mass_kg is then in the deck's mass unit; the JSON's
+"units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count.
 
 Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
 each mode's frequency and the share of its strain energy in each part (seed section 3.2)."""
 
 
 def add_arguments(parser):
-    parser.add_argument("--model", default="exhaust", help="built-in model name (default exhaust)")
+    parser.add_argument(
+        "--model", default="exhaust", help="built-in model name or Nastran deck (default exhaust)"
+    )
     parser.add_argument(
         "--set",
         action="append",
@@ -27,7 +34,9 @@ def add_arguments(parser):
         metavar="NAME=VALUE",
         help="parameter value, repeatable (e.g. t_hot_pipe=2.08mm)",
     )
-    parser.add_argument("--modes", type=int, default=12, help="number of elastic modes (12)")
+    parser.add_argument(
+        "--modes", type=int, default=None, help="number of elastic modes (12; a deck: its EIGRL)"
+    )
     parser.add_argument(
         "--geometry", default=None, help="exhaust only: 'best' or the index of a runner-up geometry"
     )
@@ -38,24 +47,27 @@ def run(args) -> int:
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.models import get_model
 
-    if args.modes < 1:
+    if args.modes is not None and args.modes < 1:
         raise BayesUpdateError(f"--modes must be >= 1, got {args.modes}")
     params = parse_assignments(args.set)
     options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
     model = get_model(args.model, **options)
     if not hasattr(model, "solve"):
         raise BayesUpdateError(f"model {args.model!r} is not an FE model; 'modes' needs one")
-    result = model.solve(params, n_modes=args.modes, energies=True)
+    deck = model.structure.metadata.get("nastran", {})
+    n_modes = args.modes or deck.get("n_modes") or 12
+    result = model.solve(params, n_modes=n_modes, energies=not args.json)
     if args.json:
-        print(
-            json.dumps(
-                {
-                    "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
-                    "mass_kg": float(result.mass_kg),
-                    "parameters": {k: float(v) for k, v in result.parameters.items()},
-                }
-            )
-        )
+        out = {
+            "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
+            "rigid_modes": int(result.modes.n_rigid),
+            "mass_kg": float(result.mass_kg),
+            "n_dof": int(model.structure.n_dof),
+            "parameters": {k: float(v) for k, v in result.parameters.items()},
+        }
+        if deck:
+            out.update(units=deck["units"], notes=deck["notes"])
+        print(json.dumps(out))
         return 0
     print(format_modes_table(result))
     return 0

@@ -121,6 +121,10 @@ class Assembler:
         sec = section_properties(
             s.beam_shape[e], s.beam_width[e], s.beam_height[e], t, s.beam_nu[e]
         )
+        if s.beam_shear_factor is not None:
+            k = s.beam_shear_factor[e]
+            for axis in ("Asy", "Asz"):
+                sec[axis] = np.where(k > 0, k * sec["A"], sec[axis])
         E = props.beam_E[e]
         G = E / (2.0 * (1.0 + s.beam_nu[e]))
         elbow = np.where(

@@ -65,13 +65,16 @@ U, V, W, RX, RY, RZ = range(6)
 class ElementFrames:
     """Local element frames.  R : (n, 3, 3) rows = local x, y, z (normal) in global axes;
     xy : (n, k, 2) node coordinates in the element plane [m]; warp : (n,) largest node distance
-    from the mean plane divided by the mean diagonal (quads; 0 for triangles); area : (n,) [m^2].
+    from the mean plane divided by the mean diagonal (quads; 0 for triangles); area : (n,) [m^2];
+    height : (n, k) node distances from the element plane along its normal [m] (0 for
+    triangles), used by ``warp_link``.
     """
 
     R: np.ndarray
     xy: np.ndarray
     warp: np.ndarray
     area: np.ndarray
+    height: np.ndarray | None = None
 
 
 def _unit(v):
@@ -94,7 +97,7 @@ def quad_frames(x: np.ndarray) -> ElementFrames:
     rel = np.einsum("nkj,nij->nki", x - c[:, None], R)
     diag = 0.5 * (np.linalg.norm(d1, axis=1) + np.linalg.norm(d2, axis=1))
     warp = np.max(np.abs(rel[:, :, 2]), axis=1) / diag
-    return ElementFrames(R, rel[:, :, :2], warp, area)
+    return ElementFrames(R, rel[:, :, :2], warp, area, rel[:, :, 2])
 
 
 def tria_frames(x: np.ndarray) -> ElementFrames:
@@ -107,7 +110,7 @@ def tria_frames(x: np.ndarray) -> ElementFrames:
     ey = np.cross(ez, ex)
     R = np.stack([ex, ey, ez], axis=1)
     rel = np.einsum("nkj,nij->nki", x - c[:, None], R)
-    return ElementFrames(R, rel[:, :, :2], np.zeros(len(x)), area)
+    return ElementFrames(R, rel[:, :, :2], np.zeros(len(x)), area, np.zeros(x.shape[:2]))
 
 
 def _plane_stress(nu):
@@ -325,6 +328,29 @@ def local_pieces(ops: _Operators, E, nu, lumped: bool = False) -> LocalPieces:
         mass_r=Mr,
         offset=S,
     )
+
+
+def warp_link(p: LocalPieces, height: np.ndarray) -> LocalPieces:
+    """Pieces of a warped quad seen from its real nodes: each node at height h above the flat
+    element's plane is tied rigidly to its projection, u_p = u - h ry, v_p = v + h rx
+    (the rigid-link warping correction of flat quads; MacNeal, *Finite Elements: Their Design
+    and Performance*, 1994, on warped elements), X -> W^T X W.  Without it a rigid rotation of
+    the real nodes strains the flat element (the FEMAP exhaust deck: three rigid 'modes' at
+    5-25 Hz).  W commutes with the offset transform T(e), so ``power_matrices`` stays exact.
+    height (n, k) [m]."""
+    if not np.any(height):
+        return p
+    n, d, _ = p.membrane.shape
+    W = np.broadcast_to(np.eye(d), (n, d, d)).copy()
+    node = np.arange(d // 6)
+    W[:, 6 * node + U, 6 * node + RY] = -height
+    W[:, 6 * node + V, 6 * node + RX] = height
+
+    def link(X):
+        return np.matmul(W.transpose(0, 2, 1), np.matmul(X, W))
+
+    names = ("membrane", "shear", "drilling", "bending", "mass_t", "mass_r")
+    return LocalPieces(*(link(getattr(p, a)) for a in names), p.offset)
 
 
 def _sandwich(S, X):

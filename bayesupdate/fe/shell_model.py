@@ -206,6 +206,7 @@ class ShellAssembly:
                 f = shell.tria_frames(x)
                 ops = shell.tria_operators(f.xy)
             pieces = shell.local_pieces(ops, mesh.E[idx], mesh.nu[idx], lumped=lumped)
+            pieces = shell.warp_link(pieces, f.height)
             if not rotary_inertia:
                 pieces = replace(pieces, mass_r=np.zeros_like(pieces.mass_r))
             self.families.append((idx, element_dofs(conn), f, pieces))

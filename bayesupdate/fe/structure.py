@@ -63,6 +63,8 @@ class Structure:
     spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part.
     Sensors: sensor_labels, sensor_node, sensor_direction (n_s, 3) unit vectors.
     parts, bends : names.
+    beam_shear_factor : None (each section's own shear areas) or (E,) shear area / area imposed
+    on both axes where > 0 (a Nastran PBARL ROD has 0.9, not Cowper's value).
     shells : ``ShellElements`` or None; constraints : supports and rigid elements
     (``constraints.Constraints``) or None.  A structure with either is solved on the sparse path
     (``fe.general``); without them it is the beam structure of before, solved as before.
@@ -101,6 +103,7 @@ class Structure:
     metadata: dict = field(default_factory=dict, compare=False)
     shells: ShellElements | None = None
     constraints: Constraints | None = None
+    beam_shear_factor: np.ndarray | None = None
 
     @property
     def is_general(self) -> bool:

@@ -137,7 +137,10 @@ def load_user_model(
 def resolve_model(source: str, parameters: Mapping | None = None, sensors=(), options=None):
     """A built-in model name (``bayesupdate.models.get_model``) or a ``module:function`` spec."""
     from bayesupdate.models import BUILTIN_MODELS, get_model
+    from bayesupdate.nastran import is_nastran_path
 
+    if is_nastran_path(source):
+        return get_model(str(source), **(options or {}))
     if ":" in str(source):
         return load_user_model(source, parameters or {}, tuple(sensors))
     if source not in BUILTIN_MODELS:

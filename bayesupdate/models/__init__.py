@@ -16,11 +16,16 @@ BUILTIN_MODELS = {
 
 
 def get_model(name: str, **options):
-    """Return the built-in model ``name`` (see ``BUILTIN_MODELS``)."""
+    """Return the built-in model ``name`` (see ``BUILTIN_MODELS``), or the Nastran deck at the
+    path ``name`` (.bdf, .dat, .nas, .blk; ``bayesupdate.nastran``)."""
+    from bayesupdate.nastran import is_nastran_path, load_nastran_model
+
+    if is_nastran_path(name):
+        return load_nastran_model(name, **options)
     if name not in BUILTIN_MODELS:
         raise BayesUpdateError(
             f"unknown model {name!r}; built-in models are {sorted(BUILTIN_MODELS)} "
-            "or give 'package.module:function'"
+            "or give 'package.module:function' or a Nastran deck (.bdf, .dat, .nas, .blk)"
         )
     module_name, factory = BUILTIN_MODELS[name].split(":")
     return getattr(importlib.import_module(module_name), factory)(**options)

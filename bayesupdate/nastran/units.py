@@ -1,0 +1,40 @@
+"""The unit system a Nastran deck is written in.
+
+Nastran has no units: a deck is in any consistent set.  The set is recognised from PARAM WTMASS
+and the Young's moduli (steel or aluminium in Pa, MPa or psi); it is reported, never converted:
+the model works in the deck's own units (mass = WTMASS x the deck's mass and density input).
+"""
+
+import numpy as np
+
+#: (name, E range of steel to aluminium in this system, length, force, mass unit after WTMASS)
+_SYSTEMS = (
+    ("SI (m, N, kg, s)", (5e10, 3e11), "m", "N", "kg"),
+    ("mm, N, t, s", (5e4, 3e5), "mm", "N", "t (1000 kg)"),
+    ("in, lbf, s", (7e6, 4.5e7), "in", "lbf", "lbf s^2/in"),
+)
+
+
+def unit_system(moduli, wtmass: float) -> dict:
+    """A record of the deck's units from its MAT1 moduli (any shape) and WTMASS."""
+    E = np.asarray(moduli, dtype=float).ravel()
+    for name, (lo, hi), length, force, mass in _SYSTEMS:
+        if E.size and np.all((E >= lo) & (E <= hi)):
+            return dict(
+                system=name,
+                length=length,
+                force=force,
+                mass=mass,
+                time="s",
+                wtmass=wtmass,
+                basis="recognised from the MAT1 Young's moduli; values are the deck's own",
+            )
+    return dict(
+        system="the deck's own consistent units (not recognised)",
+        length="deck length",
+        force="deck force",
+        mass="deck mass x WTMASS",
+        time="s",
+        wtmass=wtmass,
+        basis="MAT1 moduli match no common system; values are the deck's own",
+    )

@@ -20,7 +20,6 @@ Run: .venv/bin/python benchmarks/ema_speed.py [--repeats 5] [--threads 1]
 import argparse
 import os
 import sys
-import time
 import warnings
 
 if __name__ == "__main__":
@@ -31,6 +30,7 @@ if __name__ == "__main__":
         os.environ.setdefault(_var, _threads)
 
 import numpy as np  # noqa: E402
+from timing import time_median  # noqa: E402
 
 from bayesupdate.correlation import mac_matrix  # noqa: E402
 from bayesupdate.ema import FrfSet, identify, virtual_impact_test  # noqa: E402
@@ -64,15 +64,6 @@ def accuracy(freq, zeta, fn, zn):
     freq, zeta = np.asarray(freq), np.asarray(zeta)
     idx = [int(np.argmin(np.abs(freq - f))) for f in fn]
     return (np.max(np.abs(freq[idx] - fn) / fn), np.max(np.abs(zeta[idx] - zn) / zn))
-
-
-def time_median(fn, repeats):
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), out
 
 
 def main() -> int:

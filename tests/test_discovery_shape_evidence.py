@@ -12,8 +12,8 @@ from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
 from bayesupdate.discovery.flagging import NoiseModel, ShapeTests, flag_modes
 from bayesupdate.discovery.shape_evidence import (
-    RAISE_P,
     SHAPE_SD_FLOOR_REL,
+    STATED_REJECTION,
     ShapeEvidence,
     shape_evidence,
     shape_residuals,
@@ -155,9 +155,10 @@ def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):
 
 def test_raise_threshold_is_the_stated_chi2_quantile():
     """The level is raised exactly where the baseline misfit's chi^2 at the stated level passes
-    the 1 - RAISE_P quantile of chi^2(n - 1)."""
+    the 1 - STATED_REJECTION quantile of chi^2(n - 1)."""
     n = 25
-    edge = stats.chi2.isf(RAISE_P, n - 1) * (0.02**2 / n)  # R at the threshold, stated sd 2 %
+    # R at the threshold, stated sd 2 %
+    edge = stats.chi2.isf(STATED_REJECTION, n - 1) * (0.02**2 / n)
     truth = np.eye(n)[:, :2]
     test = truth.copy()
     for j, rss in enumerate((0.99 * edge, 1.01 * edge)):

@@ -119,7 +119,7 @@ def flag_modes(
     mac: np.ndarray | None = None,
     alpha: float = 0.05,
     mac_threshold: float = 0.8,
-    shapes: "ShapeTests | None" = None,
+    shapes: ShapeTests | None = None,
 ) -> ModeFlags:
     """Flag modes (module docstring).  residual_rel : (m,) e_i; predictive_rel_var : (m,) v_i;
     shapes : the shape tests of the fit (``ShapeTests``), or None."""

@@ -16,7 +16,7 @@ mode, as Yuen 2010, "Bayesian Methods for Structural Dynamics and Civil Engineer
 allows), and the block is Gaussian with that level held fixed:
 
     sigma_i = s_i,  s_i = max(sd_i, SHAPE_SD_FLOOR_REL) / sqrt(n),  unless R_i / s_i^2 rejects
-    chi^2(n - 1) at level ``RAISE_P`` (1 %); then sigma_i = sqrt(R_i / (n - 1)),
+    chi^2(n - 1) at level ``STATED_REJECTION`` (1 %); then sigma_i = sqrt(R_i / (n - 1)),
 
 * sd_i is the data's ``shape_sd_rel`` (identification estimates it from the LSFD fit; a virtual
   test states it), floored at ``SHAPE_SD_FLOOR_REL`` = 1 % of the shape's RMS amplitude: sensor
@@ -53,9 +53,10 @@ from bayesupdate.ema.lsfd import realise
 
 #: smallest shape noise as a fraction of a shape's RMS amplitude [-] (module docstring)
 SHAPE_SD_FLOOR_REL = 0.01
-#: a mode's misfit at the frequency-only baseline with P(chi^2(n - 1) > c) below this raises its
-#: level to that misfit (module docstring); 1 %: raising only ever costs evidence, so err towards it
-RAISE_P = 0.01
+#: a misfit "rejects its stated level" when P(chi^2(n - 1) > R / s^2) is below this: at the
+#: frequency-only baseline it raises the level to the misfit, at a fit it counts towards the
+#: adequacy check (module docstring); 1 %: raising only ever costs evidence, so err towards it
+STATED_REJECTION = 0.01
 #: the rate at which identification misses a mode shape's stated accuracy (module docstring)
 FAILURE_RATE = 0.1
 
@@ -84,18 +85,23 @@ class ShapeEvidence:
 
     modes : (k,) 0-based test modes whose shapes count (the modes with weight > 0).
     test_unit : (n_dof, k) their unit-norm real shapes.  scale : (k,) sigma_i, each mode's fixed
-    per-component level (module docstring).  raised : (k,) bool, the modes whose level is their
-    misfit at the frequency-only baseline (above their stated level).  source : what the stated
-    level came from ("data sd" or "floor" when the data give none).  stated : (k,) the stated
-    (floored) level before any raise (None: ``scale``).
+    per-component level (module docstring).  stated : (k,) the stated (floored) level before any
+    raise (None: ``scale``).  source : what the stated level came from ("data sd" or "floor" when
+    the data give none).
     """
 
     modes: np.ndarray
     test_unit: np.ndarray
     scale: np.ndarray
-    raised: np.ndarray | None = None
-    source: str = "data sd"
     stated: np.ndarray | None = None
+    source: str = "data sd"
+
+    @property
+    def raised(self) -> np.ndarray:
+        """(k,) bool: the modes whose level was raised to their baseline misfit."""
+        if self.stated is None:
+            return np.zeros(self.scale.size, dtype=bool)
+        return self.scale > self.stated
 
     @property
     def n_dof(self) -> int:
@@ -120,10 +126,10 @@ class ShapeEvidence:
         """(k,) R_i = |d_i|^2 from the scaled residuals r (..., k n_dof) -> (..., k)."""
         return self.chi2(r) * self.scale**2
 
-    def stated_rejections(self, r: np.ndarray, level: float = 0.01) -> np.ndarray:
-        """(..., k) bool: R_i / stated_i^2 rejects chi^2(dof) at ``level``."""
+    def stated_rejections(self, r: np.ndarray) -> np.ndarray:
+        """(..., k) bool: each mode's misfit in the residuals r rejects its stated level."""
         stated = self.scale if self.stated is None else self.stated
-        return stats.chi2.sf(self.rss(r) / stated**2, self.dof) < level
+        return rejects_stated(self.rss(r), stated, self.dof)
 
     def chi2(self, r: np.ndarray) -> np.ndarray:
         """(..., k) c_i = R_i / sigma_i^2 (~ chi^2(dof) per mode under a fitting model)."""
@@ -155,7 +161,12 @@ def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):
     d = shape_residuals(test[:, modes], np.asarray(baseline_model_shapes)[:, modes])
     rss = np.sum(d**2, axis=0)
     rss = np.where(np.isfinite(rss), rss, 0.0)  # a missing model shape: keep the stated level
-    raised = stats.chi2.sf(rss / floor**2, n - 1) < RAISE_P
-    level = np.where(raised, np.sqrt(rss / (n - 1)), floor)
+    level = np.where(rejects_stated(rss, floor, n - 1), np.sqrt(rss / (n - 1)), floor)
     source = "data sd" if data.shape_sd_rel is not None else "floor"
-    return ShapeEvidence(modes, test[:, modes], level, raised, source, floor)
+    return ShapeEvidence(modes, test[:, modes], level, stated=floor, source=source)
+
+
+def rejects_stated(rss: np.ndarray, stated: np.ndarray, dof: int) -> np.ndarray:
+    """(..., k) bool: R / s^2 rejects chi^2(dof) at ``STATED_REJECTION``; rss (..., k) = |d|^2,
+    stated (k,) the per-component level."""
+    return stats.chi2.sf(rss / stated**2, dof) < STATED_REJECTION

@@ -79,6 +79,7 @@ from bayesupdate.discovery.localization import (
 from bayesupdate.discovery.shape_evidence import (
     FAILURE_RATE,
     SHAPE_SD_FLOOR_REL,
+    STATED_REJECTION,
     shape_evidence,
 )
 from bayesupdate.errors import BayesUpdateError
@@ -86,10 +87,6 @@ from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
 
 VERDICTS = ("explained", "no discrepancy", "unexplained")
-
-
-#: a mode's shape "rejects its stated level" when P(chi^2(n - 1) > c) is below this
-STATED_REJECTION = 0.01
 
 
 @dataclass(frozen=True)
@@ -327,7 +324,8 @@ def decide(
     # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
     # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
     # inferred noise: judged against its own residual scale, which must look like test noise
-    best = polish is not None and polish(best) or best
+    if polish is not None:
+        best = polish(best) or best
     own = (
         noise_model(baseline.space.problem.data, best.residual_rel, d) if noise.inferred else noise
     )
@@ -402,7 +400,7 @@ def _shape_noise_json(fit: ModelFit) -> dict | None:
     shapes = fit.space.shapes
     if shapes is None:
         return None
-    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :], STATED_REJECTION)
+    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :])
     return {
         "source": shapes.source,
         "floor_sd_rel": SHAPE_SD_FLOOR_REL,
@@ -426,7 +424,7 @@ def shape_tests(fit: ModelFit) -> ShapeTests | None:
     p = np.full(m, np.nan)
     p[shapes.modes] = stats.chi2.sf(shapes.chi2(r), shapes.dof)
     rejected = np.zeros(m, dtype=bool)
-    rejected[shapes.modes] = shapes.stated_rejections(r, STATED_REJECTION)
+    rejected[shapes.modes] = shapes.stated_rejections(r)
     rate = FAILURE_RATE + STATED_REJECTION
     count_p = float(stats.binom.sf(int(rejected.sum()) - 1, shapes.modes.size, rate))
     if shapes.source != "data sd":  # the floor is a guess, not a stated accuracy: no count test

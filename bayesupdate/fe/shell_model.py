@@ -331,9 +331,8 @@ class ShellElements:
     def mesh(self, nodes: np.ndarray, **changes) -> ShellMesh:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
         used by beams only are allowed here); ``changes`` replace property arrays."""
-        props = {n: getattr(self, n) for n in ("thickness", "E", "nu", "rho", "offset")}
-        props.update(offset_ratio=self.offset_ratio, nsm=self.nsm)
-        props.update(changes)
+        names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm")
+        props = {n: getattr(self, n) for n in names} | changes
         return ShellMesh(nodes, self.quads, self.trias, **props)
 
     def edges(self) -> np.ndarray:

@@ -78,12 +78,6 @@ NULL_VALUES: dict[str, Callable] = {
 }
 
 
-def register_null_value(kind: str, function: Callable) -> None:
-    """For a user's effect kind: ``function(model, location) -> {parameter: value}`` at which the
-    extended model equals the model (else the kind's lower bounds are taken as null)."""
-    NULL_VALUES[kind] = function
-
-
 def null_values(model, effect: Effect) -> dict[str, float]:
     """Null value of each effect parameter, clipped into its bounds."""
     kind = EFFECT_KINDS[effect.kind]

@@ -279,9 +279,3 @@ def extend_model(model: FEModel, effect: Effect) -> FEModel:
     return model.with_structure(
         structure, bindings, defaults, bounds, name=f"{model.name}+{effect.tag}"
     )
-
-
-def effect_priors(effect: Effect) -> dict[str, dict]:
-    """Prior spec per extended parameter name (study-file syntax)."""
-    kind = EFFECT_KINDS[effect.kind]
-    return {f"{effect.tag}:{p.name}": dict(p.prior) for p in kind.parameters}

@@ -86,8 +86,6 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
 
-VERDICTS = ("explained", "no discrepancy", "unexplained")
-
 
 @dataclass(frozen=True)
 class DiscoverySettings:

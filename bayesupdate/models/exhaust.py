@@ -212,11 +212,6 @@ def _solid_bar(diameter):
     return solid_round(diameter)
 
 
-def _ellipse_perimeter(a, b):
-    """Ramanujan's approximation of the perimeter of an ellipse with semi-axes a, b [m]."""
-    return np.pi * (3 * (a + b) - np.sqrt((3 * a + b) * (a + 3 * b)))
-
-
 def _box_inertia(mass, lx, ly, lz):
     """Inertia tensor [kg m^2] of a uniform box of the given mass [kg] and sizes [m]."""
     return mass / 12.0 * np.diag([ly**2 + lz**2, lx**2 + lz**2, lx**2 + ly**2])

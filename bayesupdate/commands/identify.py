@@ -1,8 +1,7 @@
 """``bayesupdate identify``: modal parameters from FRFs in UFF 58 files, no pole picking."""
 
 import json
-
-import numpy as np
+import sys
 
 from bayesupdate.atomic import check_output_path
 from bayesupdate.errors import BayesUpdateError
@@ -17,9 +16,14 @@ automatically.  Several FRF files are one test (e.g. the runs of a roving accele
 Without --band the range is analysed as consecutive narrow bands with limits at sum-FRF
 minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
 unscaled and the output says so); each mode's shape_sd_rel estimates its shape error
-(E[1 - MAC] ~ sd^2).  Writes ModalData as HDF5 (--out) and optional plots (--plots DIR).
+(E[1 - MAC] ~ sd^2).  Writes ModalData as HDF5 (--out), optional plots (--plots DIR) and an
+optional report (--report DIR: report.html, self-contained, and report.md with the data, the
+modes table, the shapes over the response DOFs, the stabilization diagram, the FRF synthesis
+and the AutoMAC).
 
-example: bayesupdate identify test.uff --out modes.h5 --plots plots --json
+examples:
+  bayesupdate identify test.uff --out modes.h5 --plots plots --json
+  bayesupdate identify run1.uff run2.uff run3.uff --band 3:35 --out gvt.h5 --report gvt_report
 """
 
 
@@ -56,45 +60,116 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--out", required=True, metavar="modes.h5", help="output HDF5 file")
     parser.add_argument("--plots", metavar="DIR", help="write PNG plots to this folder")
-    parser.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    parser.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write DIR/report.html (self-contained) and DIR/report.md: data, modes, shapes "
+        "per DOF, stabilization diagram, FRF synthesis, AutoMAC",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="overwrite --out (and the --report files) if they exist",
+    )
     parser.add_argument("--json", action="store_true", help="print the modes as one JSON object")
+
+
+def _write_plots(folder, result, frfs) -> None:
+    from pathlib import Path
+
+    from bayesupdate.ema import plots
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    plots.plot_stabilization(result, frfs, folder / "stabilization.png")
+    plots.plot_frf_fit(result, frfs, folder / "frf_fit.png")
+    plots.plot_mac(result.modes.shapes, result.modes.shapes, folder / "automac.png", "AutoMAC")
+    try:
+        plots.plot_mode_shapes(result.modes, folder / "mode_shapes.png")
+    except BayesUpdateError:
+        pass  # labels that are not <node><L|H|V> have no geometry to draw
+
+
+def _identify(args, inp):
+    """identify() on the merged set; on failure with --report, a report of the data and the
+    failure is written before the error goes to the CLI."""
+    from bayesupdate.ema.identify import identify
+    from bayesupdate.report.identify_report import write_identify_report
+
+    try:
+        return identify(inp.frfs, band_hz=inp.band_hz, max_order=inp.max_order, method=inp.method)
+    except BayesUpdateError as exc:
+        if args.report:
+            html, _ = write_identify_report(args.report, inp, None, failure=str(exc))
+            print(f"report (no modes): {html}", file=sys.stderr)
+        raise
 
 
 def run(args) -> int:
     from bayesupdate.ema.frf_set import merge_frf_sets
-    from bayesupdate.ema.identify import MAX_SHAPE_SD, identify
     from bayesupdate.ema.modal_h5 import write_modal_h5
     from bayesupdate.ema.uff_io import read_uff58
+    from bayesupdate.report.identify_report import (
+        IdentifyInput,
+        check_report_folder,
+        identification_notes,
+        write_identify_report,
+    )
 
     out = check_output_path(args.out, args.force)
     band = _parse_band(args.band)
     if args.max_order is not None and args.max_order < 2:
         raise BayesUpdateError(f"--max-order {args.max_order}: must be at least 2")
-    frfs, merge_notes = merge_frf_sets([read_uff58(path) for path in args.frf_file])
-    result = identify(frfs, band_hz=band, max_order=args.max_order, method=args.method)
+    if args.report:
+        check_report_folder(args.report, args.force)
+    file_sets = tuple(read_uff58(path) for path in args.frf_file)
+    frfs, merge_notes = merge_frf_sets(list(file_sets))
+    inp = IdentifyInput(
+        files=tuple(str(p) for p in args.frf_file),
+        file_sets=file_sets,
+        frfs=frfs,
+        method=args.method,
+        band_hz=band,
+        max_order=args.max_order,
+        merge_notes=tuple(merge_notes),
+        out=str(out),
+    )
+    result = _identify(args, inp)
     write_modal_h5(out, result.modes)
     if args.plots:
-        from pathlib import Path
+        _write_plots(args.plots, result, frfs)
+    report = write_identify_report(args.report, inp, result)[0] if args.report else None
+    summary = _summary(result, out, identification_notes(result, merge_notes), report)
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    for r, m in enumerate(summary["modes"], 1):
+        mpc_text = "MPC   n/a" if m["mpc"] is None else f"MPC {m['mpc']:.3f}"
+        print(
+            f"mode {r:2d}: {m['frequency_hz']:9.3f} Hz  zeta {m['damping_ratio']:.4f}  "
+            f"{mpc_text}  shape sd {m['shape_sd_rel']:.1e}  "
+            f"stable at {m['stable_orders']} orders"
+        )
+    for note in summary["notes"]:
+        print(f"note: {note}")
+    print(f"wrote {out}")
+    if report is not None:
+        print(f"report: {report}")
+    return 0
 
-        from bayesupdate.ema import plots
 
-        folder = Path(args.plots)
-        folder.mkdir(parents=True, exist_ok=True)
-        plots.plot_stabilization(result, frfs, folder / "stabilization.png")
-        plots.plot_frf_fit(result, frfs, folder / "frf_fit.png")
-        plots.plot_mac(result.modes.shapes, result.modes.shapes, folder / "automac.png", "AutoMAC")
-        try:
-            plots.plot_mode_shapes(result.modes, folder / "mode_shapes.png")
-        except BayesUpdateError:
-            pass  # labels that are not <node><L|H|V> have no geometry to draw
+def _summary(result, out, notes, report) -> dict:
+    """The modes, dropped poles, notes and files as printed by --json."""
+    from bayesupdate.report.identify_report import mpc_reasons
+
     modes = result.modes
-    one_dof = len(modes.dof_labels) < 2  # the phase scatter of one value says nothing
+    no_mpc = mpc_reasons(modes)  # e.g. the phase scatter of one value says nothing
     summary = {
         "modes": [
             {
                 "frequency_hz": float(modes.frequencies_hz[r]),
                 "damping_ratio": float(modes.damping_ratio[r]),
-                "mpc": None if one_dof else float(modes.mpc[r]),
+                "mpc": None if no_mpc[r] else float(modes.mpc[r]),
                 "shape_sd_rel": float(modes.shape_sd_rel[r]),
                 "mass_normalised": bool(modes.extra["mass_normalised"][r]),
                 "stable_orders": int(modes.extra["stable_orders"][r]),
@@ -103,34 +178,8 @@ def run(args) -> int:
         ],
         "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
         "out": str(out),
+        "notes": list(notes),
     }
-    notes = list(merge_notes)
-    if one_dof:
-        notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
-    if not np.all(modes.extra["mass_normalised"]):
-        notes.append(
-            "shapes without a driving point are unscaled (largest component 1), "
-            "not mass-normalised; measure a driving point to scale them"
-        )
-    if np.any(modes.extra["shape_sd_fallback"]):
-        notes.append(f"shape_sd_rel not estimable for some modes: set to {MAX_SHAPE_SD}")
-    if summary["dropped_hz"]:
-        notes.append(
-            "stable poles dropped as not physical (explain little of the FRF, peak near the "
-            "fit residual): " + ", ".join(f"{x:.2f}" for x in summary["dropped_hz"]) + " Hz"
-        )
-    summary["notes"] = notes
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        for r, m in enumerate(summary["modes"], 1):
-            mpc_text = "MPC   n/a" if m["mpc"] is None else f"MPC {m['mpc']:.3f}"
-            print(
-                f"mode {r:2d}: {m['frequency_hz']:9.3f} Hz  zeta {m['damping_ratio']:.4f}  "
-                f"{mpc_text}  shape sd {m['shape_sd_rel']:.1e}  "
-                f"stable at {m['stable_orders']} orders"
-            )
-        for note in notes:
-            print(f"note: {note}")
-        print(f"wrote {out}")
-    return 0
+    if report is not None:
+        summary["report"] = str(report)
+    return summary

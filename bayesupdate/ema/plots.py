@@ -1,5 +1,6 @@
 """Identification plots (matplotlib, Agg backend): stabilization diagram with CMIF overlay,
-measured vs synthesized FRFs, MAC matrix, mode shapes on the sensor geometry.
+CMIF alone, measured vs synthesized FRFs, MAC matrix, mode shapes on the sensor geometry or as
+bars over the DOF labels.
 
 Each function writes one PNG file and returns its path; nothing is shown on screen.
 """
@@ -21,8 +22,9 @@ from bayesupdate.ema.uff_io import parse_label  # noqa: E402
 
 
 def plot_stabilization(result: Identification, frfs: FrfSet, path) -> Path:
-    """Stabilization diagram of every band (poles: o new, f/d/v partly stable, + stable) over
-    the CMIF (right axis, log), selected modes as vertical lines."""
+    """Stabilization diagram of every band (poles: o new, x partly stable, + stable) over
+    the CMIF (right axis, log), selected modes as red lines, band starts dotted;
+    drawn over the analysed bands (lines outside them hold no poles)."""
     fig, ax = plt.subplots(figsize=(11, 6))
     for d in result.diagrams:
         partly = ~d.stable & (d.stable_frequency | d.stable_damping | d.stable_vector)
@@ -32,15 +34,68 @@ def plot_stabilization(result: Identification, frfs: FrfSet, path) -> Path:
         ax.plot(d.frequency_hz[d.stable], d.order[d.stable], "+", ms=5, color="tab:green")
     for p in result.selected:
         ax.axvline(p.frequency_hz, color="tab:red", lw=0.6)
+    for band_lo, _ in result.bands_hz[1:]:  # where each automatic band after the first starts
+        ax.axvline(band_lo, color="0.5", lw=0.8, ls=":")
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("model order (o new, x partly stable, + stable)")
-    ax.set_xlim(frfs.frequencies_hz[0], frfs.frequencies_hz[-1])
-    ax2 = ax.twinx()
+    lo = min(b[0] for b in result.bands_hz)
+    hi = max(b[1] for b in result.bands_hz)
+    ax.set_xlim(lo, hi)
+    _plot_cmif(ax.twinx(), frfs, (lo, hi))
+    ax.set_title("stabilization diagram and CMIF")
+    return _save(fig, path)
+
+
+def _plot_cmif(ax, frfs: FrfSet, span_hz) -> None:
+    """Up to 3 CMIF curves on ``ax`` (log), over the lines in span_hz only so that the
+    y-scale follows them."""
+    f = frfs.frequencies_hz
+    sel = (f >= span_hz[0]) & (f <= span_hz[1])
     sv = cmif(frfs)
     for row in sv[: min(3, sv.shape[0])]:
-        ax2.semilogy(frfs.frequencies_hz, np.maximum(row, 1e-300), lw=0.7)
-    ax2.set_ylabel("CMIF singular values")
-    ax.set_title("stabilization diagram and CMIF")
+        # an exact zero (e.g. accelerance at 0 Hz) is left out, not put at 1e-300
+        ax.semilogy(f[sel], np.where(row[sel] > 0, row[sel], np.nan), lw=0.7)
+    ax.set_ylabel("CMIF singular values")
+
+
+def plot_cmif(frfs: FrfSet, path, band_hz=None) -> Path:
+    """CMIF of the FRF set over band_hz (default: all lines); the band, when given, shaded."""
+    f = frfs.frequencies_hz
+    fig, ax = plt.subplots(figsize=(11, 4))
+    _plot_cmif(ax, frfs, (f[0], f[-1]))
+    if band_hz is not None:
+        ax.axvspan(band_hz[0], band_hz[1], color="tab:blue", alpha=0.08, label="band")
+        ax.legend()
+    ax.set_xlim(f[0], f[-1])
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_title("CMIF of the measured FRFs")
+    return _save(fig, path)
+
+
+def plot_shape_bars(labels, shapes: np.ndarray, frequencies_hz, path) -> Path:
+    """Real shapes (n_dof, m) as bars over the DOF labels, one panel per mode; works for any
+    labels (no geometry needed) and for a single DOF."""
+    shapes = np.atleast_2d(np.asarray(shapes, dtype=float))
+    n_dof, m = shapes.shape
+    ncol = min(2, max(m, 1))
+    nrow = max(int(np.ceil(m / ncol)), 1)
+    width = min(max(4.0, 0.35 * n_dof + 1.5), 9.0)
+    fig, axes = plt.subplots(
+        nrow, ncol, figsize=(width * ncol, 2.3 * nrow), squeeze=False, sharey=True
+    )
+    x = np.arange(n_dof)
+    for r in range(m):
+        ax = axes.flat[r]
+        colors = np.where(shapes[:, r] >= 0, "tab:blue", "tab:red")
+        ax.bar(x, shapes[:, r], color=colors, width=0.7)
+        ax.axhline(0, color="0.4", lw=0.6)
+        ax.set_ylim(-1.1, 1.1)
+        ax.set_title(f"mode {r + 1}: {frequencies_hz[r]:.2f} Hz", fontsize=9)
+        if n_dof <= 60:  # beyond that the labels overlap; the table gives them
+            ax.set_xticks(x, [str(lab) for lab in labels], fontsize=7, rotation=90)
+        ax.grid(axis="y", color="0.9", lw=0.5)
+    for ax in list(axes.flat)[m:]:
+        ax.axis("off")
     return _save(fig, path)
 
 

@@ -48,6 +48,8 @@ def digest(value, tmp: str):
         value = value.decode()
     if isinstance(value, str):
         return value.replace(tmp, "<tmp>")
+    if value is None or isinstance(value, bool | int | float):
+        return value
     array = np.asarray(value)
     if array.dtype.kind in "OSU":
         return [digest(v, tmp) for v in array.ravel().tolist()]

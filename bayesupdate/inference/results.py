@@ -114,70 +114,11 @@ def write_result(
             command=command,
         )
         h5.create_group("versions").attrs.update(package_versions())
-        inputs = h5.create_group("inputs")
-        data = problem.data
-        inputs["frequencies_hz"] = data.frequencies_hz
-        inputs["weights"] = problem.weights
-        if data.frequency_sd_hz is not None:
-            inputs["sd_hz"] = data.frequency_sd_hz
-        inputs["bounds"] = np.column_stack([problem.lower, problem.upper])
-        inputs.attrs.update(
-            source=data.source,
-            parameter_names=list(problem.names),
-            priors_json=json.dumps({p.name: p.prior.to_dict() for p in problem.parameters}),
-            pairing_method=problem.pairing.method,
-            fixed_json=json.dumps(problem.fixed, default=_json_default),
-            model=type(problem.model).__name__,
-        )
-        for name in ("mass_kg", "mass_sd_kg"):
-            if getattr(data, name) is not None:
-                inputs.attrs[f"measured_{name}"] = float(getattr(data, name))
-        opt = h5.create_group("optimum")
-        opt["theta"] = calibration.theta
-        opt["frequencies_hz"] = calibration.frequencies_hz
-        opt["start_points"] = calibration.start_points
-        opt["end_points"] = calibration.end_points
-        opt["end_objectives"] = calibration.end_objectives
-        opt["distinct_optima"] = np.asarray(calibration.distinct_optima, dtype=int)
-        opt.attrs.update(
-            parameter_names=list(calibration.names),
-            objective=calibration.objective,
-            expr=calibration.expr,
-            mass_kg=np.nan if calibration.mass_kg is None else calibration.mass_kg,
-            swapped=calibration.swapped,
-            starts=calibration.starts,
-            converged_starts=calibration.converged_starts,
-            failed_evaluations=calibration.failed_evaluations,
-            evaluations=calibration.evaluations,
-            method=calibration.method,
-            wall_s=calibration.wall_s,
-        )
-        table = opt.create_group("residuals")
-        for name in ("test_hz", "model_hz", "error_pct", "mac", "model_mode"):
-            table[name] = getattr(calibration.table, name)
+        _write_inputs(h5.create_group("inputs"), problem)
+        _write_optimum(h5.create_group("optimum"), calibration)
         if kind == "posterior":
             post = h5.create_group("posterior")
-            source = posterior.state if posterior is not None else state
-            post["chain"] = source.chain
-            post["log_prob"] = source.log_prob
-            _write_state(post.create_group("state"), source)
-            if posterior is not None:
-                post["autocorr_time"] = posterior.autocorr_time
-                post["acceptance"] = posterior.acceptance
-                post.attrs.update(
-                    names=list(posterior.names),
-                    burn=posterior.burn,
-                    evaluations=posterior.evaluations,
-                    failed_evaluations=posterior.failed_evaluations,
-                    wall_s=posterior.wall_s,
-                    converged=posterior.converged,
-                    convergence_reason=(posterior.diagnostics.get("convergence") or {}).get(
-                        "reason"
-                    )
-                    or "",
-                    interrupted=posterior.interrupted,
-                    seed=posterior.seed,
-                )
+            _write_posterior(post, posterior, state)
             if diagnostics is not None:
                 group = post.create_group("diagnostics")
                 group.attrs["summary_json"] = json.dumps(diagnostics)
@@ -190,6 +131,79 @@ def write_result(
                     pred[name] = predictions[name]
                 pred.attrs["swap_fraction"] = predictions["swap_fraction"]
     return Path(path)
+
+
+def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:
+    """The data and the problem: test frequencies, weights, sd, bounds, priors, measured mass."""
+    data = problem.data
+    inputs["frequencies_hz"] = data.frequencies_hz
+    inputs["weights"] = problem.weights
+    if data.frequency_sd_hz is not None:
+        inputs["sd_hz"] = data.frequency_sd_hz
+    inputs["bounds"] = np.column_stack([problem.lower, problem.upper])
+    inputs.attrs.update(
+        source=data.source,
+        parameter_names=list(problem.names),
+        priors_json=json.dumps({p.name: p.prior.to_dict() for p in problem.parameters}),
+        pairing_method=problem.pairing.method,
+        fixed_json=json.dumps(problem.fixed, default=_json_default),
+        model=type(problem.model).__name__,
+    )
+    for name in ("mass_kg", "mass_sd_kg"):
+        if getattr(data, name) is not None:
+            inputs.attrs[f"measured_{name}"] = float(getattr(data, name))
+
+
+def _write_optimum(opt: h5py.Group, calibration: CalibrationResult) -> None:
+    """The point optimum, its multi-start record and its residual table."""
+    opt["theta"] = calibration.theta
+    opt["frequencies_hz"] = calibration.frequencies_hz
+    opt["start_points"] = calibration.start_points
+    opt["end_points"] = calibration.end_points
+    opt["end_objectives"] = calibration.end_objectives
+    opt["distinct_optima"] = np.asarray(calibration.distinct_optima, dtype=int)
+    opt.attrs.update(
+        parameter_names=list(calibration.names),
+        objective=calibration.objective,
+        expr=calibration.expr,
+        mass_kg=np.nan if calibration.mass_kg is None else calibration.mass_kg,
+        swapped=calibration.swapped,
+        starts=calibration.starts,
+        converged_starts=calibration.converged_starts,
+        failed_evaluations=calibration.failed_evaluations,
+        evaluations=calibration.evaluations,
+        method=calibration.method,
+        wall_s=calibration.wall_s,
+    )
+    table = opt.create_group("residuals")
+    for name in ("test_hz", "model_hz", "error_pct", "mac", "model_mode"):
+        table[name] = getattr(calibration.table, name)
+
+
+def _write_posterior(
+    post: h5py.Group, posterior: PosteriorResult | None, state: SamplerState | None
+) -> None:
+    """The chain, the sampler state to resume from, and (finished runs) its summary attributes."""
+    source = posterior.state if posterior is not None else state
+    post["chain"] = source.chain
+    post["log_prob"] = source.log_prob
+    _write_state(post.create_group("state"), source)
+    if posterior is None:
+        return
+    post["autocorr_time"] = posterior.autocorr_time
+    post["acceptance"] = posterior.acceptance
+    convergence = posterior.diagnostics.get("convergence") or {}
+    post.attrs.update(
+        names=list(posterior.names),
+        burn=posterior.burn,
+        evaluations=posterior.evaluations,
+        failed_evaluations=posterior.failed_evaluations,
+        wall_s=posterior.wall_s,
+        converged=posterior.converged,
+        convergence_reason=convergence.get("reason") or "",
+        interrupted=posterior.interrupted,
+        seed=posterior.seed,
+    )
 
 
 def _open(path: str | Path) -> h5py.File:

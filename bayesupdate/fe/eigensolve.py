@@ -120,31 +120,12 @@ def solve_modes(
         raise BayesUpdateError(f"asked for {n_modes} modes but the model has only {n} DOFs")
     if method == "krylov" and n <= 3 * (n_want + 8):
         method = "dense"  # a Krylov space would span nearly everything: LAPACK is cheaper
-    share = None
-    if method == "dense":
-        lam, phi = sl.eigh(
-            K.toarray(), M.toarray(), subset_by_index=[0, n_want - 1], check_finite=False
-        )
-    elif method == "krylov":
-        if banded is None:
-            raise ValueError("method='krylov' needs a BandedShiftInvert")
-        lam, phi, share = _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift)
-    else:
-        raise BayesUpdateError(f"unknown eigen-solver method {method!r}; use 'krylov' or 'dense'")
-    if not np.all(np.isfinite(lam)):
-        raise BayesUpdateError("the eigen-solve produced non-finite eigenvalues")
+    lam, phi, share = _lowest_pairs(K, M, n_want, rigid_basis, banded, method, tol, shift)
     rigid = np.zeros(lam.size, bool)
     if remove_rigid:
         if share is None:
             share = _rigid_share(phi, M, rigid_basis)
-        rigid_shaped = share > 0.5
-        zero = np.abs(lam) < 1e-8 * np.abs(lam).max()
-        if ground_stiffness is None:
-            on_springs = np.zeros(lam.size, bool)
-        else:
-            u_ground = np.einsum("im,im->m", phi, ground_stiffness @ phi)
-            on_springs = u_ground > 0.5 * np.maximum(lam, 1e-300)
-        rigid = rigid_shaped & (zero | on_springs)
+        rigid = _rigid_modes(lam, phi, share, ground_stiffness)
     n_rigid = int(rigid.sum())
     if n_rigid > n_rigid_max:
         raise BayesUpdateError(
@@ -168,6 +149,37 @@ def solve_modes(
         n_rigid=n_rigid,
         rigid_frequencies_hz=f_rigid,
     )
+
+
+def _lowest_pairs(K, M, n_want, rigid_basis, banded, method, tol, shift):
+    """(lam (n_want,), phi (n, n_want), rigid share or None) by dense LAPACK or block Krylov."""
+    if method == "dense":
+        lam, phi = sl.eigh(
+            K.toarray(), M.toarray(), subset_by_index=[0, n_want - 1], check_finite=False
+        )
+        share = None
+    elif method == "krylov":
+        if banded is None:
+            raise ValueError("method='krylov' needs a BandedShiftInvert")
+        lam, phi, share = _block_krylov(K, M, n_want, rigid_basis, banded, tol, shift)
+    else:
+        raise BayesUpdateError(f"unknown eigen-solver method {method!r}; use 'krylov' or 'dense'")
+    if not np.all(np.isfinite(lam)):
+        raise BayesUpdateError("the eigen-solve produced non-finite eigenvalues")
+    return lam, phi, share
+
+
+def _rigid_modes(lam, phi, share, ground_stiffness) -> np.ndarray:
+    """(m,) bool: rigid-body modes, i.e. rigid-shaped (share > 0.5) with zero eigenvalue or, on
+    springs to ground, with most of their strain energy in those springs."""
+    rigid_shaped = share > 0.5
+    zero = np.abs(lam) < 1e-8 * np.abs(lam).max()
+    if ground_stiffness is None:
+        on_springs = np.zeros(lam.size, bool)
+    else:
+        u_ground = np.einsum("im,im->m", phi, ground_stiffness @ phi)
+        on_springs = u_ground > 0.5 * np.maximum(lam, 1e-300)
+    return rigid_shaped & (zero | on_springs)
 
 
 def _rayleigh_ritz(Kr, Mr, n_want):

@@ -252,13 +252,25 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
     the manifold to the tail (for mode classification), ``metadata["path_s"]`` their arc length.
     """
     g = geometry
-    el = g["element_length"]
-    pipe = circular_tube(g["pipe_od"], g["pipe_wall"])
-    tail = circular_tube(g["pipe_od"], g["tail_wall"])
     b = StructureBuilder()
-    x_axis = (1.0, 0.0, 0.0)
-    kw = dict(element_length=el, max_bend_angle_deg=30.0, elbow_flexibility=elbow_flexibility)
+    kw = dict(
+        element_length=g["element_length"],
+        max_bend_angle_deg=30.0,
+        elbow_flexibility=elbow_flexibility,
+    )
+    hot, path = _upstream(b, g, kw)
+    mid = _downstream(b, g, kw, path)
+    m_int = _close_mass_budget(b, g, hot[0], mid)
+    s_path = _place_sensors(b, path)
+    b.metadata.update(path_nodes=np.array(path), path_s=s_path, mm_internal_mass_kg=float(m_int))
+    return b.build()
 
+
+def _upstream(b: StructureBuilder, g: dict, kw: dict) -> tuple[list[int], list[int]]:
+    """Hot pipe with its front hanger, catalyst, first cold pipe, intermediate muffler; returns
+    the hot pipe's nodes and the gas path so far."""
+    pipe = circular_tube(g["pipe_od"], g["pipe_wall"])
+    x_axis = (1.0, 0.0, 0.0)
     # hot pipe: down-pipe from the manifold flange, then horizontal to the catalyst
     z1 = -g["hot_drop"]
     x1 = g["hot_drop_run"] + g["hot_length"]
@@ -294,9 +306,17 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
     im_sec = oval_tube(g["im_width"], g["im_height"], g["im_wall"])
     im = _component(b, m0, g["im_length"], im_sec, "intermediate_muffler", 2, material=_SHELL_10K)
     path += im[1:]
+    return hot, path
 
+
+def _downstream(b: StructureBuilder, g: dict, kw: dict, path: list[int]) -> int:
+    """Cold pipe with the large elbow, main muffler with its rear hanger bar, tail pipe, from the
+    end of ``path`` (extended in place); returns the main muffler's middle node."""
+    pipe = circular_tube(g["pipe_od"], g["pipe_wall"])
+    tail = circular_tube(g["pipe_od"], g["tail_wall"])
+    x_axis = (1.0, 0.0, 0.0)
     # cold pipe with the large elbow: straight, S-jog (elbow + second bend), straight
-    p1 = _joint(b, im[-1], x_axis, g, "intermediate_muffler/cold_pipe")
+    p1 = _joint(b, path[-1], x_axis, g, "intermediate_muffler/cold_pipe")
     a = b.node_xyz(p1)
     bpt = a + (g["cold2_length"], 0, 0)
     cpt = bpt + (g["jog_dx"], g["jog_dy"], g["jog_dz"])
@@ -322,8 +342,20 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
     mm = _component(b, q0, g["mm_length"], mm_sec, "main_muffler", 3, material=mm_sheet)
     path += mm[1:]
     mid = mm[len(mm) // 2]
-    # the bar is welded along the shell: from the muffler axis to the shell side it moves with the
-    # shell (a massless stiff link of the main muffler part), beyond it it is a free solid bar
+    _rear_hanger_bar(b, g, mid)
+
+    t0 = _joint(b, mm[-1], x_axis, g, "main_muffler/tail_pipe")
+    xt = b.node_xyz(t0)
+    tl = b.add_pipe_run(
+        [xt, xt + (g["tail_length"], 0, 0)], tail, STEEL, "tail_pipe", start_node=t0, **kw
+    )
+    path += tl[1:]
+    return mid
+
+
+def _rear_hanger_bar(b: StructureBuilder, g: dict, mid: int) -> None:
+    """The bar is welded along the shell: from the muffler axis to the shell side it moves with
+    the shell (a massless stiff link of the main muffler part), beyond it it is a free solid bar."""
     xm = b.node_xyz(mid)
     bar = _solid_bar(g["rear_bar_diameter"])
     link = circular_tube(0.5 * g["mm_height"], 1.0e-3)
@@ -333,17 +365,12 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
         b.add_beam(mid, weld, link, _MASSLESS_STEEL, "main_muffler", up=(0, 0, 1))
         b.add_beam(weld, tip, bar, STEEL, "rear_hanger_bar", up=(0, 0, 1))
 
-    t0 = _joint(b, mm[-1], x_axis, g, "main_muffler/tail_pipe")
-    xt = b.node_xyz(t0)
-    tl = b.add_pipe_run(
-        [xt, xt + (g["tail_length"], 0, 0)], tail, STEEL, "tail_pipe", start_node=t0, **kw
-    )
-    path += tl[1:]
 
-    # non-design masses: flange at the manifold; main muffler internals (baffles, perforated
-    # tubes, end caps) close the measured 12.29 kg at the initial design
+def _close_mass_budget(b: StructureBuilder, g: dict, flange_node: int, mid: int) -> float:
+    """Non-design masses: the flange at the manifold; the main muffler internals (baffles,
+    perforated tubes, end caps) close the measured 12.29 kg at the initial design [kg]."""
     b.add_point_mass(
-        hot[0],
+        flange_node,
         g["flange_mass"],
         "hot_pipe",
         inertia=_box_inertia(g["flange_mass"], 0.006, 0.12, 0.08),
@@ -361,8 +388,12 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
             max(m_int, 0.0), 0.8 * g["mm_length"], 0.7 * g["mm_width"], 0.7 * g["mm_height"]
         ),
     )
+    return m_int
 
-    # 20 sensors spread uniformly along the gas path (seed Fig. 9), numbered from the manifold
+
+def _place_sensors(b: StructureBuilder, path: list[int]) -> np.ndarray:
+    """20 sensors spread uniformly along the gas path (seed Fig. 9), numbered from the manifold;
+    returns the path's arc length at its nodes [m]."""
     nodes = np.array([b.node_xyz(n) for n in path])
     s_path = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(nodes, axis=0), axis=1))])
     targets = (np.arange(N_SENSORS) + 0.5) / N_SENSORS * s_path[-1]
@@ -373,8 +404,7 @@ def build_exhaust_structure(geometry: dict, elbow_flexibility: bool = True):
         used.add(pick)
         b.add_sensor(f"{k}V", path[pick], "V")
         b.add_sensor(f"{k}H", path[pick], "H")
-    b.metadata.update(path_nodes=np.array(path), path_s=s_path, mm_internal_mass_kg=float(m_int))
-    return b.build()
+    return s_path
 
 
 def envelope(structure) -> dict:

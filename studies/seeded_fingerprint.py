@@ -48,6 +48,8 @@ def digest(value, tmp: str):
         value = value.decode()
     if isinstance(value, str):
         return value.replace(tmp, "<tmp>")
+    if isinstance(value, np.generic):
+        value = value.item()
     if value is None or isinstance(value, bool | int | float):
         return value
     array = np.asarray(value)
@@ -73,20 +75,25 @@ def from_json(prefix: str, obj, out: dict, tmp: str) -> None:
         out[prefix] = digest(obj, tmp)
 
 
+def from_attrs(prefix: str, attrs, out: dict, tmp: str) -> None:
+    """HDF5 attributes; JSON text (``*_json``) compared field by field, wall times left out."""
+    for key, value in attrs.items():
+        if key.endswith("_json"):
+            from_json(f"{prefix}@{key}", json.loads(value), out, tmp)
+        elif key not in VOLATILE:
+            out[f"{prefix}@{key}"] = digest(value, tmp)
+
+
 def from_h5(path: Path, out: dict, tmp: str) -> None:
     def visit(name, node):
         if any(part in VOLATILE for part in name.split("/")):
             return
         if isinstance(node, h5py.Dataset):
             out[f"{path.name}:{name}"] = digest(node[()], tmp)
-        for key, value in node.attrs.items():
-            if key not in VOLATILE:
-                out[f"{path.name}:{name}@{key}"] = digest(value, tmp)
+        from_attrs(f"{path.name}:{name}", node.attrs, out, tmp)
 
     with h5py.File(path, "r") as h5:
-        for key, value in h5.attrs.items():
-            if key not in VOLATILE:
-                out[f"{path.name}:@{key}"] = digest(value, tmp)
+        from_attrs(f"{path.name}:", h5.attrs, out, tmp)
         h5.visititems(visit)
 
 
@@ -113,9 +120,17 @@ def fingerprint() -> dict:
     return out
 
 
+def _text(fingerprint: dict, key: str) -> str:
+    return json.dumps(fingerprint.get(key, "<missing>"))
+
+
 def compare(now: dict, before: dict) -> int:
     keys = sorted(set(now) | set(before))
-    differ = [k for k in keys if now.get(k, "<missing>") != before.get(k, "<missing>")]
+    # through JSON text, so that NaN equals NaN
+    same = [
+        json.dumps(now.get(k, "<missing>")) == json.dumps(before.get(k, "<missing>")) for k in keys
+    ]
+    differ = [k for k, equal in zip(keys, same, strict=True) if not equal]
     for key in differ:
         was, now_value = before.get(key, "<missing>"), now.get(key, "<missing>")
         print(f"DIFFERS {key}: before {was!r} now {now_value!r}")

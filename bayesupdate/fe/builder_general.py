@@ -1,16 +1,19 @@
-"""Builder steps for shells, supports and rigid elements (the ``StructureBuilder`` methods
-``add_shells``, ``add_support``, ``add_rbe2``, ``add_rbe3`` delegate here), and their arrays for
-the frozen ``Structure`` (``general_parts``).
+"""Builder steps for shells, supports, rigid elements, general beams, rods and node frames (the
+``StructureBuilder`` methods ``add_shells``, ``add_support``, ``add_rbe2``, ``add_rbe3``,
+``add_beams``, ``add_rods`` and ``set_frame`` delegate here), and their arrays for the frozen
+``Structure`` (``general_parts``).
 
 Shell points that lie within ``merge_tol`` of an existing node reuse that node, so shell faces
 built separately, or a shell and the beams on its edge, share DOFs (6 per node everywhere).
 """
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.constraints import Constraints
+from bayesupdate.fe.constraints import Constraints, parse_components
 from bayesupdate.fe.shell_model import WARP_LIMIT, ShellElements, shell_mesh
 
 
@@ -98,7 +101,8 @@ def _shell_elements(builder) -> ShellElements | None:
 
 def _constraints(builder) -> Constraints | None:
     sup, r2, r3 = builder._supports, builder._rbe2, builder._rbe3  # noqa: SLF001
-    if not (sup or r2 or r3):
+    frames = builder._frames  # noqa: SLF001
+    if not (sup or r2 or r3 or frames):
         return None
     legs2 = [(e, ind, d, c) for e, (ind, deps, c) in enumerate(r2) for d in deps]
     legs3 = [
@@ -119,9 +123,243 @@ def _constraints(builder) -> Constraints | None:
         rbe3_node=np.array([leg[1] for leg in legs3], dtype=int),
         rbe3_weight=np.array([leg[2] for leg in legs3], dtype=float),
         rbe3_components=np.array([leg[3] for leg in legs3], dtype=bool).reshape(-1, 6),
+        frame_node=np.array(list(frames), dtype=int),
+        frame_axes=np.array(list(frames.values()), dtype=float).reshape(-1, 3, 3),
     )
 
 
 def general_parts(builder) -> dict:
-    """``shells`` and ``constraints`` fields of the ``Structure`` being built."""
-    return dict(shells=_shell_elements(builder), constraints=_constraints(builder))
+    """``shells``, ``constraints``, ``general_beams`` and ``rods`` fields of the ``Structure``
+    being built."""
+    from bayesupdate.fe.general_beam import GeneralBeams
+    from bayesupdate.fe.rod import Rods
+
+    return dict(
+        shells=_shell_elements(builder),
+        constraints=_constraints(builder),
+        general_beams=_concat(builder._general_beams, GeneralBeams),  # noqa: SLF001
+        rods=_concat(builder._rods, Rods),  # noqa: SLF001
+    )
+
+
+# -- general beams, rods and node frames --------------------------------------------------------
+def _pairs(builder, node_pairs, what: str) -> np.ndarray:
+    """(n, 2) node pairs, checked: existing nodes, two different nodes per element."""
+    pairs = np.asarray(node_pairs)
+    if pairs.ndim == 1 and pairs.size == 2:
+        pairs = pairs.reshape(1, 2)
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or len(pairs) == 0:
+        raise BayesUpdateError(f"{what}: node_pairs must be (n, 2) node numbers, n >= 1")
+    if not np.issubdtype(pairs.dtype, np.integer):
+        raise BayesUpdateError(f"{what}: node_pairs must be integer node numbers")
+    n_nodes = len(builder._nodes)  # noqa: SLF001
+    bad = np.flatnonzero((pairs < 0).any(axis=1) | (pairs >= n_nodes).any(axis=1))
+    if bad.size:
+        k = int(bad[0])
+        raise BayesUpdateError(
+            f"{what}: element {k} uses node {pairs[k].tolist()} but nodes are 0..{n_nodes - 1}"
+        )
+    same = np.flatnonzero(pairs[:, 0] == pairs[:, 1])
+    if same.size:
+        k = int(same[0])
+        raise BayesUpdateError(f"{what}: element {k} repeats node {int(pairs[k, 0])}")
+    return pairs.astype(int)
+
+
+def _per_element(value, n: int, shape: tuple, what: str, name: str) -> np.ndarray:
+    """``value`` broadcast to (n, *shape) floats, or a one-line error naming the field."""
+    a = np.asarray(value, dtype=float)
+    try:
+        a = np.broadcast_to(a, (n, *shape)) if a.shape != (n, *shape) else a
+    except ValueError:
+        raise BayesUpdateError(
+            f"{what}: {name} must have shape {shape} or ({n}, {', '.join(map(str, shape))})"
+        ) from None
+    if not np.all(np.isfinite(a)):
+        raise BayesUpdateError(f"{what}: {name} must be finite")
+    return np.array(a, dtype=float)
+
+
+def _pin_masks(pins, n: int, what: str) -> np.ndarray:
+    """(n, 2, 6) bool from None, one (pa, pb) pair or n pairs of component digits ('' = none)."""
+    out = np.zeros((n, 2, 6), bool)
+    if pins is None:
+        return out
+    rows = [pins] * n if len(pins) == 2 and not isinstance(pins[0], list | tuple) else list(pins)
+    if len(rows) != n or any(len(r) != 2 for r in rows):
+        raise BayesUpdateError(f"{what}: pins must be (pa, pb) or one (pa, pb) per element")
+    for k, pair in enumerate(rows):
+        for end, comps in enumerate(pair):
+            if comps not in (None, "", 0):
+                out[k, end] = parse_components(comps, f"{what}: element {k} pins")
+    return out
+
+
+def _default_up(axis: np.ndarray) -> np.ndarray:
+    """Global z as local z reference, global y for near-vertical elements (as ``add_beam``)."""
+    L = np.linalg.norm(axis, axis=1)
+    vertical = np.abs(axis[:, 2]) >= 0.99 * L
+    return np.where(vertical[:, None], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0])
+
+
+def add_beams(
+    builder,
+    node_pairs,
+    section,
+    material,
+    part,
+    up=None,
+    offsets=None,
+    pins=None,
+    mass="consistent",
+    nsm=0.0,
+    shear_modulus=None,
+    torsion_inertia=None,
+):
+    """General beams (``fe.general_beam``) on existing node pairs; returns their indices.
+
+    section : ``standard_sections.BeamSection``; material : ``Material`` (G = E / 2(1 + nu)
+    unless ``shear_modulus`` [Pa]); up : local z reference (3,) or (n, 3), default global z
+    (global y for vertical elements); offsets : (2, 3) or (n, 2, 3) [m] from each node to its
+    element end (global axes); pins : (pa, pb) or n pairs of released element-axis components
+    ('456', 'rz', ...); mass : 'consistent', 'lumped' or 'none'; nsm [kg/m]; torsion_inertia
+    [kg m] per length (default rho (iy + iz)).
+    """
+    from bayesupdate.fe import general_beam as gb
+    from bayesupdate.fe.standard_sections import BeamSection
+
+    what = f"add_beams (part {part!r})"
+    if not isinstance(section, BeamSection):
+        raise BayesUpdateError(f"{what}: section must be a BeamSection (fe.standard_sections)")
+    if mass not in gb.MASS_KINDS:
+        raise BayesUpdateError(f"{what}: mass must be one of {gb.MASS_KINDS}, got {mass!r}")
+    pairs = _pairs(builder, node_pairs, what)
+    n = len(pairs)
+    xyz = np.array(builder._nodes, dtype=float)  # noqa: SLF001
+    off = _per_element(0.0 if offsets is None else offsets, n, (2, 3), what, "offsets")
+    axis = xyz[pairs[:, 1]] + off[:, 1] - xyz[pairs[:, 0]] - off[:, 0]
+    E = material.youngs_modulus
+    G = E / (2 * (1 + material.poisson)) if shear_modulus is None else float(shear_modulus)
+    if torsion_inertia is None:
+        torsion_inertia = material.density * (section.iy + section.iz)
+    per = dict(
+        nsm=_per_element(nsm, n, (), what, "nsm"),
+        torsion_inertia=_per_element(torsion_inertia, n, (), what, "torsion_inertia"),
+        up=_default_up(axis) if up is None else _per_element(up, n, (3,), what, "up"),
+    )
+    if not (np.isfinite(G) and G > 0) or min(per["nsm"].min(), per["torsion_inertia"].min()) < 0:
+        raise BayesUpdateError(f"{what}: needs shear modulus > 0, nsm >= 0, torsion_inertia >= 0")
+    values = dict(E=E, G=G, rho=material.density, area=section.area, iy=section.iy,
+                  iz=section.iz, iyz=section.iyz, torsion=section.torsion,
+                  shear_y=section.shear_y, shear_z=section.shear_z)  # fmt: skip
+    beams = gb.GeneralBeams(
+        nodes=pairs,
+        part=np.zeros(n, int),
+        offset=off,
+        pins=_pin_masks(pins, n, what),
+        mass=np.full(n, gb.MASS_KINDS.index(mass)),
+        **{k: np.full(n, float(v)) for k, v in values.items()},
+        **per,
+    )
+    _check_beams(xyz, beams, what)
+    beams = replace(beams, part=np.full(n, builder._part(part)))  # noqa: SLF001
+    start = sum(b.n_elements for b in builder._general_beams)  # noqa: SLF001
+    builder._general_beams.append(beams)  # noqa: SLF001
+    return start + np.arange(n)
+
+
+def _check_beams(xyz, b, what: str) -> None:
+    """Zero length (after offsets), an orientation along the axis, pins that free the element."""
+    from bayesupdate.fe import general_beam as gb
+
+    xa = xyz[b.nodes[:, 0]] + b.offset[:, 0]
+    d = xyz[b.nodes[:, 1]] + b.offset[:, 1] - xa
+    L = np.linalg.norm(d, axis=1)
+    size = max(1.0, float(np.abs(xyz).max()))
+    short = np.flatnonzero(L <= 1e-12 * size)
+    if short.size:
+        raise BayesUpdateError(f"{what}: element {int(short[0])} has zero length")
+    cross = np.linalg.norm(np.cross(b.up, d), axis=1)
+    along = np.flatnonzero(cross <= 1e-6 * L * np.linalg.norm(b.up, axis=1))
+    if along.size:
+        raise BayesUpdateError(
+            f"{what}: element {int(along[0])}: the orientation vector is parallel to the axis"
+        )
+    released = b.pins.reshape(-1, 12)
+    pinned = np.flatnonzero(released.any(axis=1))
+    if pinned.size:
+        K, _ = gb.element_local(L[pinned], b, pinned, True, True)
+        bad = gb.pin_mechanisms(K, released[pinned])
+        if np.any(bad):
+            raise BayesUpdateError(
+                f"{what}: element {int(pinned[np.flatnonzero(bad)[0]])}: its pin flags let it "
+                "move without strain (e.g. the axial or twist DOF released at both ends)"
+            )
+
+
+def add_rods(
+    builder,
+    node_pairs,
+    area,
+    material,
+    part,
+    torsion=0.0,
+    nsm=0.0,
+    mass="consistent",
+    shear_modulus=None,
+):
+    """Rods (``fe.rod``): area [m^2] and torsion constant [m^4] (scalars or one per element),
+    nsm [kg/m], mass 'consistent' or 'lumped'.  Returns their indices."""
+    from bayesupdate.fe.rod import Rods
+
+    what = f"add_rods (part {part!r})"
+    if mass not in ("consistent", "lumped", "none"):
+        raise BayesUpdateError(f"{what}: mass must be 'consistent', 'lumped' or 'none'")
+    pairs = _pairs(builder, node_pairs, what)
+    n = len(pairs)
+    a = _per_element(area, n, (), what, "area")
+    j = _per_element(torsion, n, (), what, "torsion")
+    m = _per_element(nsm, n, (), what, "nsm")
+    bad = np.flatnonzero((a <= 0) | (j < 0) | (m < 0))
+    if bad.size:
+        raise BayesUpdateError(
+            f"{what}: element {int(bad[0])} needs area > 0, torsion >= 0 and nsm >= 0"
+        )
+    xyz = np.array(builder._nodes, dtype=float)  # noqa: SLF001
+    L = np.linalg.norm(xyz[pairs[:, 1]] - xyz[pairs[:, 0]], axis=1)
+    short = np.flatnonzero(L <= 1e-12 * max(1.0, float(np.abs(xyz).max())))
+    if short.size:
+        raise BayesUpdateError(f"{what}: element {int(short[0])} has zero length")
+    E = material.youngs_modulus
+    G = E / (2 * (1 + material.poisson)) if shear_modulus is None else float(shear_modulus)
+    keep = float(mass != "none")
+    full = {k: np.full(n, v) for k, v in (("E", E), ("G", G), ("rho", keep * material.density))}
+    part_id = np.full(n, builder._part(part))  # noqa: SLF001
+    lumped = np.full(n, mass == "lumped")
+    rods = Rods(pairs, part_id, area=a, torsion=j, nsm=keep * m, lumped=lumped, **full)
+    start = sum(r.n_elements for r in builder._rods)  # noqa: SLF001
+    builder._rods.append(rods)  # noqa: SLF001
+    return start + np.arange(n)
+
+
+def set_frame(builder, nodes, frame) -> None:
+    """Give ``nodes`` the DOF axes of ``frame`` (``fe.frames.CoordinateFrame``) at their
+    positions: their supports and rigid-element components act in those axes."""
+    from bayesupdate.fe.frames import CoordinateFrame
+
+    if not isinstance(frame, CoordinateFrame):
+        raise BayesUpdateError("set_frame: frame must be a fe.frames.CoordinateFrame")
+    ids = [builder._check_node(n) for n in np.atleast_1d(nodes)]  # noqa: SLF001
+    axes = frame.axes_at(np.array([builder._nodes[i] for i in ids], dtype=float))  # noqa: SLF001
+    for i, A in zip(ids, axes, strict=True):
+        if i in builder._frames:  # noqa: SLF001
+            raise BayesUpdateError(f"set_frame: node {i} already has a coordinate frame")
+        builder._frames[i] = A  # noqa: SLF001
+
+
+def _concat(blocks, cls):
+    if not blocks:
+        return None
+    return cls(
+        **{k: np.concatenate([getattr(b, k) for b in blocks]) for k in cls.__dataclass_fields__}
+    )

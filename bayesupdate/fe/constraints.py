@@ -19,6 +19,13 @@ Rigid elements (6 DOFs per node: ux uy uz rx ry rz, small rotations):
 
 A rigid element may depend on DOFs that another rigid element makes dependent (chains); the
 substitution is repeated until T refers to independent DOFs only, and a loop is an error.
+
+Node-local frames (``fe.frames``, Nastran's GRID CD): a node with a frame has its six DOFs in
+that frame's axes A (3, 3) (rows, global) at the node: u_node = L w_node, L = diag(A^T, A^T)
+(orthogonal).  Supports and the components of rigid elements are then read in w: an RBE2 leg
+is w_d = L_d^T G L_i w_i, an RBE3 fits the reference's global motion q to the nodes' w_k
+through L_k^T G_k and gives w_r = L_r^T q.  The transformation is T = Lambda T_w with Lambda the
+block diagonal of the L's (exact, no penalties); without frames Lambda = I and T is unchanged.
 """
 
 from dataclasses import dataclass, field
@@ -68,6 +75,9 @@ class Constraints:
     RBE3: rbe3_reference (R3,) node, rbe3_ref_components (R3, 6) bool (dependent components);
     legs rbe3_element (L3,) index into rbe3_reference, rbe3_node (L3,), rbe3_weight (L3,),
     rbe3_components (L3, 6) bool (the node's components used in the average).
+    Node frames: frame_node (Fn,) distinct nodes, frame_axes (Fn, 3, 3) rows = the node's local
+    DOF axes in global coordinates; components of supports and rigid elements on these nodes
+    are in those axes.
     """
 
     fixed_node: np.ndarray = _empty(0, int)
@@ -82,6 +92,8 @@ class Constraints:
     rbe3_node: np.ndarray = _empty(0, int)
     rbe3_weight: np.ndarray = _empty(0)
     rbe3_components: np.ndarray = _empty((0, 6), bool)
+    frame_node: np.ndarray = _empty(0, int)
+    frame_axes: np.ndarray = _empty((0, 3, 3))
 
     @property
     def n_rbe2(self) -> int:
@@ -89,7 +101,12 @@ class Constraints:
 
     @property
     def is_empty(self) -> bool:
-        return not (self.fixed_node.size or self.rbe2_element.size or self.rbe3_reference.size)
+        return not (
+            self.fixed_node.size
+            or self.rbe2_element.size
+            or self.rbe3_reference.size
+            or self.frame_node.size
+        )
 
     def fixed_dofs(self) -> np.ndarray:
         """Sorted unique global DOF numbers held at zero."""
@@ -105,13 +122,16 @@ class Constraints:
 
 @dataclass(frozen=True)
 class ConstraintTransform:
-    """u = T @ u_ind.  T : (n_dof, n_ind) CSR; independent : (n_ind,) global DOF numbers of the
-    retained DOFs (T is the identity on them); fixed, dependent : global DOF numbers."""
+    """u = T @ u_ind.  T : (n_dof, n_ind) CSR; independent : (n_ind,) DOF numbers (6 node + i,
+    in the node's own frame where it has one) of the retained DOFs; fixed, dependent : DOF
+    numbers likewise.  rotation : Lambda (n_dof, n_dof) CSR with u = Lambda w (None: no node
+    frames, then T is the identity on the independent DOFs)."""
 
     T: sp.csr_matrix
     independent: np.ndarray
     fixed: np.ndarray
     dependent: np.ndarray
+    rotation: sp.csr_matrix | None = None
 
     def reduce(self, A):
         """T^T A T for a sparse (n_dof, n_dof) matrix, as CSR."""
@@ -131,9 +151,12 @@ def rigid_link(r: np.ndarray) -> np.ndarray:
     return G
 
 
-def _rbe2_rows(nodes, c: Constraints):
-    """(rows, cols, vals) of the RBE2 dependencies, then each dependent DOF and its element."""
+def _rbe2_rows(nodes, c: Constraints, L=None):
+    """(rows, cols, vals) of the RBE2 dependencies, then each dependent DOF and its element.
+    L : None or (N, 6, 6) node rotations (u = L w): the coefficients act between frames."""
     G = rigid_link(nodes[c.rbe2_dependent] - nodes[c.rbe2_independent])  # (L2, 6, 6)
+    if L is not None:
+        G = L[c.rbe2_dependent].transpose(0, 2, 1) @ G @ L[c.rbe2_independent]
     leg, comp = np.nonzero(c.rbe2_components)
     rows = np.repeat(6 * c.rbe2_dependent[leg] + comp, 6)
     cols = (6 * c.rbe2_independent[leg][:, None] + np.arange(6)).ravel()
@@ -147,9 +170,9 @@ def _rbe2_rows(nodes, c: Constraints):
     )
 
 
-def _rbe3_rows(nodes, c: Constraints):
+def _rbe3_rows(nodes, c: Constraints, L=None):
     """(rows, cols, vals) of the RBE3 reference dependencies (weighted LSQ fit), then each
-    dependent DOF and its element."""
+    dependent DOF and its element.  L : None or (N, 6, 6) node rotations (module docstring)."""
     n_el = c.rbe3_reference.size
     e = c.rbe3_element
     r = nodes[c.rbe3_node] - nodes[c.rbe3_reference[e]]  # (L3, 3)
@@ -158,11 +181,14 @@ def _rbe3_rows(nodes, c: Constraints):
     scale = np.where(np.arange(6) < 3, 1.0, length[e][:, None] ** 2)
     W = c.rbe3_weight[:, None] * scale * c.rbe3_components  # (L3, 6) diagonal weights
     G = rigid_link(r)
+    if L is not None:
+        G = L[c.rbe3_node].transpose(0, 2, 1) @ G  # the fit works on the nodes' own components
     GtW = G.transpose(0, 2, 1) * W[:, None, :]  # G_k^T W_k
     A = np.zeros((n_el, 6, 6))
     np.add.at(A, e, GtW @ G)
     ref_mask = c.rbe3_ref_components
-    B = _pinv_checked(A, ref_mask)[e] @ GtW  # (L3, 6, 6): (u_r, theta_r) += B_k u_k
+    Lr = None if L is None else L[c.rbe3_reference]
+    B = _pinv_checked(A, ref_mask, Lr)[e] @ GtW  # (L3, 6, 6): (u_r, theta_r) += B_k u_k
     leg, comp = np.nonzero(ref_mask[e])
     rows = np.repeat(6 * c.rbe3_reference[e[leg]] + comp, 6)
     cols = (6 * c.rbe3_node[leg][:, None] + np.arange(6)).ravel()
@@ -171,13 +197,15 @@ def _rbe3_rows(nodes, c: Constraints):
     return rows, cols, vals, 6 * c.rbe3_reference[el] + comp, [f"rbe3 {i}" for i in el]
 
 
-def _pinv_checked(A, ref_mask):
+def _pinv_checked(A, ref_mask, Lr=None):
     """Pseudo-inverses (n, 6, 6) of the normal matrices A; the dependent components
     ``ref_mask`` (n, 6) must be determined (orthogonal to the null space of A), e.g. the rotation
-    about the line through collinear nodes is not, unless their rotations are used."""
+    about the line through collinear nodes is not, unless their rotations are used.  With the
+    reference frames Lr (n, 6, 6) the result maps to the reference's own components."""
     U, s, Vt = np.linalg.svd(A)
     null = s < 1e-10 * s[:, :1]
-    reach = np.einsum("nk,nki->ni", null.astype(float), np.abs(Vt))  # null-space weight per comp
+    Vl = Vt if Lr is None else Vt @ Lr  # null directions in the reference's own components
+    reach = np.einsum("nk,nki->ni", null.astype(float), np.abs(Vl))  # null-space weight per comp
     bad = np.any((reach > 1e-6) & ref_mask, axis=1)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
@@ -188,15 +216,16 @@ def _pinv_checked(A, ref_mask):
             "(node_components='123456') or make fewer reference components dependent"
         )
     inv_s = np.where(null, 0.0, 1.0 / np.where(null, 1.0, s))
-    return np.einsum("nji,nj,nkj->nik", Vt, inv_s, U)
+    P = np.einsum("nji,nj,nkj->nik", Vt, inv_s, U)
+    return P if Lr is None else Lr.transpose(0, 2, 1) @ P
 
 
-def _dependencies(nodes, c: Constraints):
+def _dependencies(nodes, c: Constraints, L=None):
     """Sparse G (n_dof, n_dof): dependent rows hold their rigid-element coefficients, every other
     row is the identity.  Checks that each DOF is dependent in at most one element."""
     n_dof = 6 * nodes.shape[0]
-    r2 = _rbe2_rows(nodes, c)
-    r3 = _rbe3_rows(nodes, c) if c.rbe3_reference.size else None
+    r2 = _rbe2_rows(nodes, c, L)
+    r3 = _rbe3_rows(nodes, c, L) if c.rbe3_reference.size else None
     parts = [r2] + ([r3] if r3 is not None else [])
     dep = np.concatenate([p[3] for p in parts])
     owners = [o for p in parts for o in p[4]]
@@ -231,11 +260,12 @@ def constraint_transform(nodes: np.ndarray, c: Constraints) -> ConstraintTransfo
     """
     n_dof = 6 * nodes.shape[0]
     fixed = c.fixed_dofs()
+    L, Lam = node_rotations(nodes.shape[0], c)
     if c.rbe2_element.size == 0 and c.rbe3_reference.size == 0:
         keep = np.setdiff1d(np.arange(n_dof), fixed)
         T = sp.csr_matrix((np.ones(keep.size), (keep, np.arange(keep.size))), (n_dof, keep.size))
-        return ConstraintTransform(T, keep, fixed, np.zeros(0, int))
-    G, dep, owner = _dependencies(nodes, c)
+        return _with_frames(ConstraintTransform(T, keep, fixed, np.zeros(0, int)), Lam)
+    G, dep, owner = _dependencies(nodes, c, L)
     clash = np.intersect1d(dep, fixed)
     if clash.size:
         d = int(clash[0])
@@ -262,4 +292,32 @@ def constraint_transform(nodes: np.ndarray, c: Constraints) -> ConstraintTransfo
     keep = np.flatnonzero(~is_dep & ~np.isin(np.arange(n_dof), fixed))
     T = T.tocsc()[:, keep].tocsr()
     T.eliminate_zeros()
-    return ConstraintTransform(T, keep, fixed, dep)
+    return _with_frames(ConstraintTransform(T, keep, fixed, dep), Lam)
+
+
+def node_rotations(n_nodes: int, c: Constraints):
+    """(L (N, 6, 6), Lambda (6N, 6N) CSR) with u = L w per node, or (None, None) without
+    node frames.  L = diag(A^T, A^T) for a node with axes A (rows), the identity otherwise."""
+    if c.frame_node.size == 0:
+        return None, None
+    if np.unique(c.frame_node).size != c.frame_node.size:
+        raise BayesUpdateError("a node has two coordinate frames; give each node one frame")
+    A = np.broadcast_to(np.eye(3), (n_nodes, 3, 3)).copy()
+    A[c.frame_node] = c.frame_axes
+    L = np.zeros((n_nodes, 6, 6))
+    L[:, :3, :3] = A.transpose(0, 2, 1)
+    L[:, 3:, 3:] = L[:, :3, :3]
+    rows = np.repeat(6 * np.arange(n_nodes)[:, None] + np.arange(6), 6, axis=1).ravel()
+    cols = np.tile(6 * np.arange(n_nodes)[:, None] + np.arange(6), (1, 6)).ravel()
+    Lam = sp.csr_matrix((L.ravel(), (rows, cols)), shape=(6 * n_nodes,) * 2)
+    Lam.eliminate_zeros()
+    return L, Lam
+
+
+def _with_frames(tr: ConstraintTransform, Lam) -> ConstraintTransform:
+    """The transform in global DOFs: T = Lambda T_w (unchanged without frames)."""
+    if Lam is None:
+        return tr
+    T = (Lam @ tr.T).tocsr()
+    T.eliminate_zeros()
+    return ConstraintTransform(T, tr.independent, tr.fixed, tr.dependent, Lam)

@@ -72,7 +72,8 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
 
 def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEnergies:
     """Energy shares of a general structure's modes (``fe.general.GeneralAssembler`` ``g``):
-    beams, springs and point masses as ``modal_energies``, plus every shell element (direct
+    beams, springs and point masses as ``modal_energies``, general beams and rods (their element
+    matrices in ``g.lines``), plus every shell element (direct
     element matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs
     of rigid elements included), so the element energies sum to the mode's lambda / 2."""
     s = g.structure
@@ -89,6 +90,10 @@ def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEner
     )
     np.add.at(kinetic, s.beam_part, 0.5 * quad(element_matrices["beam_M"], b.beam_dofs, shapes))
     np.add.at(kinetic, s.mass_part, 0.5 * quad(element_matrices["mass_M"], b.mass_dofs, shapes))
+    line_parts = [x.part for x in (s.general_beams, s.rods) if x is not None]
+    for (dofs, K, M), part in zip(g.lines, line_parts, strict=True):
+        np.add.at(strain, part, 0.5 * quad(K, dofs, shapes))
+        np.add.at(kinetic, part, 0.5 * quad(M, dofs, shapes))
     fields = {}
     if s.shells is not None:
         n_sh = s.shells.n_elements

@@ -8,7 +8,10 @@ beam ``Assembler``, unchanged) together with shells, supports and rigid elements
   common thickness (``shell.power_matrices``):
   K = (E / E0) sum_p t^p K_p,  M = M_nsm + rho sum_p t^p M_p  (M_p per unit density),
   so a new parameter point costs a few vector operations per group and no element computation.
-* Supports and rigid elements: u = T u_ind (``constraints``), K_r = T^T K T, M_r = T^T M T, solved
+* General beams and rods (``general_beam``, ``rod``) carry no parameters: their K and M are
+  assembled once into the pattern and added to every re-assembly.
+* Supports, rigid elements and node frames: u = T u_ind (``constraints``; T includes the
+  frames' rotation), K_r = T^T K T, M_r = T^T M T, solved
   by ``sparse_modal.solve_reduced_modes`` (shift-invert Lanczos with a negative shift, the
   rigid-body modes the supports allow found exactly, mechanisms reported with their DOFs;
   dense LAPACK below ``ModalSettings.dense_below`` DOFs).  Modes on springs to ground are
@@ -22,8 +25,15 @@ from bayesupdate.fe import shell
 from bayesupdate.fe.assembly import Assembler, ElementProperties, rigid_body_basis
 from bayesupdate.fe.constraints import Constraints, constraint_transform
 from bayesupdate.fe.eigensolve import ModalSolution
+from bayesupdate.fe.general_beam import general_beam_matrices
+from bayesupdate.fe.rod import rod_matrices
 from bayesupdate.fe.shell_model import ShellAssembly
-from bayesupdate.fe.sparse_modal import ModalSettings, _allowed_rigid, solve_reduced_modes
+from bayesupdate.fe.sparse_modal import (
+    ModalSettings,
+    _allowed_rigid,
+    rigid_motions,
+    solve_reduced_modes,
+)
 from bayesupdate.fe.structure import Structure
 
 
@@ -48,7 +58,9 @@ class GeneralAssembler:
             self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
             pat = self.shells.pattern
             keys.append(pat.rows.astype(np.int64) * n + pat.cols)
-        union = np.unique(np.concatenate(keys))
+        self.lines = line_matrices(s)
+        line_keys = [_block_keys(dofs, n) for dofs, _, _ in self.lines]
+        union = np.unique(np.concatenate(keys + line_keys))
         self.nnz = union.size
         self.rows = (union // n).astype(np.int32)
         self.cols = (union % n).astype(np.int32)
@@ -57,10 +69,14 @@ class GeneralAssembler:
         if self.shells is not None:
             self._pos_shell = np.searchsorted(union, keys[1])
             self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
+        self._line_K, self._line_M = np.zeros(self.nnz), np.zeros(self.nnz)
+        for (_, K, M), key in zip(self.lines, line_keys, strict=True):
+            pos = np.searchsorted(union, key)
+            self._line_K += np.bincount(pos, K.ravel(), self.nnz)
+            self._line_M += np.bincount(pos, M.ravel(), self.nnz)
         c = s.constraints if s.constraints is not None else Constraints()
         self.transform = constraint_transform(s.nodes, c)
-        R = _allowed_rigid(s.nodes, n, self.transform.fixed)
-        self.rigid = R[self.transform.independent]
+        self.rigid = allowed_rigid(s.nodes, self.transform)
         self._rigid_origin = rigid_body_basis(s.nodes, centre=np.zeros(3))
 
     # -- shells ----------------------------------------------------------------------------------
@@ -122,7 +138,7 @@ class GeneralAssembler:
         """Full (K, M) CSR at beam properties ``props`` and shell (t, E, rho) arrays, plus the
         beam assembler's element matrices (for energies)."""
         Kb, Mb, elem = self.beams.assemble(props)
-        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
+        K, M = self._line_K.copy(), self._line_M.copy()
         K[self._pos_beam] += Kb.data
         M[self._pos_beam] += Mb.data
         if self.shells is not None:
@@ -157,3 +173,36 @@ class GeneralAssembler:
         Mr = R.T @ (M @ R)
         m = float(np.trace(Mr[:3, :3]) / 3.0)
         return m, np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]]) / m
+
+
+def line_matrices(structure: Structure) -> list:
+    """[(dofs (n, 12), K (n, 12, 12), M (n, 12, 12))] of the general beams and the rods."""
+    out = []
+    b, r = structure.general_beams, structure.rods
+    if b is not None:
+        K, M = general_beam_matrices(structure.nodes, b, structure.shear, structure.rotary_inertia)
+        out.append((b.dofs(), K, M))
+    if r is not None:
+        out.append((r.dofs(), *rod_matrices(structure.nodes, r)))
+    return out
+
+
+def _block_keys(dofs: np.ndarray, n: int) -> np.ndarray:
+    """row * n + col of every entry of element matrices with DOF maps (n_e, d), row-major."""
+    d = dofs.shape[1]
+    rows = np.repeat(dofs, d, axis=1).ravel().astype(np.int64)
+    return rows * n + np.tile(dofs, (1, d)).ravel()
+
+
+def allowed_rigid(nodes: np.ndarray, tr) -> np.ndarray:
+    """(n_ind, r) rigid motions that the supports allow, in the independent DOFs of ``tr``
+    (with node frames the fixed DOFs are in the nodes' own axes: w = Lambda^T u)."""
+    n = 6 * nodes.shape[0]
+    if tr.rotation is None:
+        return _allowed_rigid(nodes, n, tr.fixed)[tr.independent]
+    R = tr.rotation.T @ rigid_motions(nodes)
+    if tr.fixed.size:
+        s, v = np.linalg.svd(R[tr.fixed], full_matrices=True)[1:]
+        rank = int(np.sum(s > 1e-9 * max(1.0, np.abs(R).max())))
+        R = R @ v[rank:].T
+    return R[tr.independent]

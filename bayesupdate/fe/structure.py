@@ -10,6 +10,7 @@ radius, flexibility factor k = max(1, 1.65 / h); the bend's bending stiffness is
 """
 
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,10 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.constraints import Constraints
 from bayesupdate.fe.sections import _SHAPE_CODE, Section
 from bayesupdate.fe.shell_model import ShellElements
+
+if TYPE_CHECKING:
+    from bayesupdate.fe.general_beam import GeneralBeams
+    from bayesupdate.fe.rod import Rods
 
 
 @dataclass(frozen=True)
@@ -68,6 +73,8 @@ class Structure:
     shells : ``ShellElements`` or None; constraints : supports and rigid elements
     (``constraints.Constraints``) or None.  A structure with either is solved on the sparse path
     (``fe.general``); without them it is the beam structure of before, solved as before.
+    general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
+    None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
     """
 
     nodes: np.ndarray
@@ -104,12 +111,18 @@ class Structure:
     shells: ShellElements | None = None
     constraints: Constraints | None = None
     beam_shear_factor: np.ndarray | None = None
+    general_beams: "GeneralBeams | None" = None
+    rods: "Rods | None" = None
 
     @property
     def is_general(self) -> bool:
-        """True if the structure has shells, supports or rigid elements."""
-        return self.shells is not None or (
-            self.constraints is not None and not self.constraints.is_empty
+        """True if the structure has shells, supports, rigid elements, node frames, general
+        beams or rods."""
+        return (
+            self.shells is not None
+            or (self.constraints is not None and not self.constraints.is_empty)
+            or self.general_beams is not None
+            or self.rods is not None
         )
 
     @property
@@ -165,6 +178,9 @@ class StructureBuilder:
         self._supports: list[tuple[int, np.ndarray]] = []
         self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
         self._rbe3: list[tuple[int, np.ndarray, list[int], np.ndarray, np.ndarray]] = []
+        self._general_beams: list = []
+        self._rods: list = []
+        self._frames: dict[int, np.ndarray] = {}
 
     # -- nodes and parts ------------------------------------------------------------------
     def add_node(self, xyz) -> int:
@@ -463,6 +479,29 @@ class StructureBuilder:
         self._rbe3.append((ref, ref_c, ns, w, node_c))
         return i
 
+    # -- general beams, rods and node frames (``fe.builder_general``) ---------------------------
+    def add_beams(self, node_pairs, section, material, part, **kw) -> np.ndarray:
+        """General beams on node pairs (n, 2): any ``standard_sections.BeamSection``, optional
+        ``up``, ``offsets``, ``pins``, ``mass``, ``nsm`` (``builder_general.add_beams``).
+        Returns their element indices."""
+        from bayesupdate.fe.builder_general import add_beams
+
+        return add_beams(self, node_pairs, section, material, part, **kw)
+
+    def add_rods(self, node_pairs, area, material, part, **kw) -> np.ndarray:
+        """Axial rods (truss members) on node pairs (n, 2), area [m^2]; optional ``torsion``,
+        ``nsm``, ``mass`` (``builder_general.add_rods``).  Returns their element indices."""
+        from bayesupdate.fe.builder_general import add_rods
+
+        return add_rods(self, node_pairs, area, material, part, **kw)
+
+    def set_frame(self, nodes, frame) -> None:
+        """DOF axes of ``nodes`` from a ``frames.CoordinateFrame`` (rectangular, cylindrical,
+        spherical): supports and rigid-element components on them act in those axes."""
+        from bayesupdate.fe.builder_general import set_frame
+
+        set_frame(self, nodes, frame)
+
     def add_sensor(self, label: str, node, direction) -> None:
         """A measurement DOF: translation of ``node`` along ``direction`` ('V', 'H', 'x', ... or a
         vector)."""
@@ -520,7 +559,8 @@ class StructureBuilder:
             rotary_inertia=self.rotary_inertia,
             metadata=dict(self.metadata),
         )
-        if self._shell_blocks or self._supports or self._rbe2 or self._rbe3:
+        general = (self._general_beams, self._rods, self._frames)
+        if self._shell_blocks or self._supports or self._rbe2 or self._rbe3 or any(general):
             from bayesupdate.fe.builder_general import general_parts
 
             structure = replace(structure, **general_parts(self))
@@ -541,6 +581,9 @@ def check_connected(structure: Structure) -> None:
         pairs.append(structure.shells.edges())
     if structure.constraints is not None:
         pairs.append(structure.constraints.edges())
+    for lines in (structure.general_beams, structure.rods):
+        if lines is not None:
+            pairs.append(lines.nodes)
     edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)

@@ -31,4 +31,5 @@ def _has_mass(structure) -> bool:
     shells = s.shells is not None and bool(
         (s.shells.rho > 1e-200).any() or (s.shells.nsm > 0).any()
     )
-    return bool(shells or (s.beam_rho > 1e-200).any() or (s.mass_value > 0).any())
+    lines = any(x is not None and x.has_mass() for x in (s.general_beams, s.rods))
+    return bool(shells or lines or (s.beam_rho > 1e-200).any() or (s.mass_value > 0).any())

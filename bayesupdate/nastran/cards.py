@@ -3,19 +3,26 @@
 Each ``add_*`` takes the reading context (``Context``) and adds one card family.  Beams, rods,
 masses and springs are few in a shell deck (hundreds), so they are added card by card; the shells
 (thousands) are converted as arrays in ``reader``.  Conventions (MSC Nastran Quick Reference
-Guide): components are digits 1-6 in the grid's CD frame; a CBAR/CBEAM orientation vector v lies
-in the element's x-y plane; CONM2 inertia is [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32,
-I33]]; PARAM COUPMASS < 1 (the default) gives line elements lumped translational mass, half at
-each end (the beam then carries stiffness only).
+Guide): components are digits 1-6 in the grid's CD frame (a grid whose CD frame turns a partial
+component set gets that frame in the structure, ``fe.frames``); a CBAR/CBEAM orientation vector
+v lies in the element's x-y plane, its section has I1 about z (plane 1, x-y) and I2 about y, and
+its offsets WA, WB run from the grids to the element's ends; CONM2 inertia is [[I11, -I21, -I31],
+[-I21, I22, -I32], [-I31, -I32, I33]]; PARAM COUPMASS < 1 (the default) gives line elements
+lumped translational mass, half at each end (the element then carries stiffness only);
+COUPMASS 1 their consistent mass.  CBAR/CBEAM are ``fe.general_beam`` elements, CROD/CONROD
+``fe.rod`` elements.
 """
 
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe import standard_sections as ss
 from bayesupdate.fe.constraints import parse_components
-from bayesupdate.fe.sections import circular_tube, solid_round
+from bayesupdate.fe.frames import CoordinateFrame
+from bayesupdate.fe.standard_sections import general_section
 from bayesupdate.fe.structure import Material
 from bayesupdate.nastran.deck import card_location
 from bayesupdate.nastran.frames import Grids, axes_at
@@ -34,7 +41,7 @@ class Context:
     lumped: bool
     builder: object
     notes: list = field(default_factory=list)
-    beam_shear: list = field(default_factory=list)
+    framed: set = field(default_factory=set)
 
     def nodes_of(self, ids, what):
         return self.node[self.grids.index(ids, what)]
@@ -66,31 +73,110 @@ def density(ctx: Context, mid: int) -> float:
     return float(ctx.model.materials[int(mid)].rho or 0.0) * ctx.wtmass
 
 
-def _lumped_mass(ctx: Context, nodes, mass_per_length, length, part, inertia=None):
-    """Half the line mass (and of the ``inertia`` (3, 3) tensor) at each end node."""
+def _lumped_mass(ctx: Context, nodes, mass_per_length, length, part, inertia=None, offsets=None):
+    """Half the line mass (and of the ``inertia`` (3, 3) tensor) at each end (node + offset)."""
     if mass_per_length > 0:
         J = None if inertia is None else 0.5 * inertia
-        for n in nodes:
-            ctx.builder.add_point_mass(n, 0.5 * mass_per_length * length, part, J)
+        off = np.zeros((2, 3)) if offsets is None else offsets
+        for n, w in zip(nodes, off, strict=True):
+            ctx.builder.add_point_mass(n, 0.5 * mass_per_length * length, part, J, w)
 
 
-def _section(ctx: Context, prop, eid, card):
-    """(beam ``Section``, extra mass per length, shear area factor or 0 for the section's own)
-    of a PBARL/PBEAML ROD or TUBE.  MSC's ROD uses the shear factor 0.9 (with it the beam_modes
-    deck matches MSC to 2e-4 %; Cowper's 0.886 is 0.3 % low on the 4th bending pair)."""
-    if prop.type in ("PBAR", "PBEAM"):
-        ctx.fail(card, eid, f"{prop.type} {prop.pid} gives a general section (A, I1, I2, J); the "
-                 "beam element takes PBARL/PBEAML ROD or TUBE sections only")  # fmt: skip
+#: PBAR K1/K2 at or above this (pyNastran's stand-in for a blank field) mean rigid in shear
+_RIGID_SHEAR = 1e8
+#: PBARL/PBEAML shapes read (Nastran DIM order; ``standard_sections`` for the formulas)
+L_SECTIONS = ("ROD", "TUBE", "TUBE2", "BAR", "BOX", "I")
+
+
+def shear_modulus(ctx: Context, mid: int) -> float:
+    """MAT1 G (pyNastran fills a blank G with E / 2(1 + nu), as Nastran does)."""
+    mat = ctx.model.materials[int(mid)]
+    g = mat.g if mat.g else mat.e / (2 * (1 + (mat.nu or 0.0)))
+    return float(g)
+
+
+def _general_section(ctx: Context, prop, eid, card):
+    """(``BeamSection``, nsm) of a PBAR or a single-station PBEAM (I1 -> iz, I2 -> iy)."""
+    if prop.type == "PBAR":
+        a, i1, i2, i12, j, nsm = (
+            float(v or 0.0) for v in (prop.A, prop.i1, prop.i2, prop.i12, prop.j, prop.nsm)
+        )
+        # K1, K2 blank (or ignored because I12 != 0) mean rigid in shear (MSC QRG, PBAR)
+        k = [
+            0.0 if (v is None or v >= _RIGID_SHEAR or i12) else float(v) for v in (prop.k1, prop.k2)
+        ]
+    else:
+        values = [
+            np.atleast_1d(np.asarray(v, float))
+            for v in (prop.A, prop.i1, prop.i2, prop.i12, prop.j, prop.nsm)
+        ]
+        if any(np.ptp(v) > 0 for v in values):
+            ctx.fail(card, eid, f"PBEAM {prop.pid} is tapered; only constant sections")
+        extras = dict(
+            S1=prop.s1,
+            S2=prop.s2,
+            NSIA=prop.nsia,
+            NSIB=prop.nsib,
+            CWA=prop.cwa,
+            CWB=prop.cwb,
+            M1A=prop.m1a,
+            M2A=prop.m2a,
+            M1B=prop.m1b,
+            M2B=prop.m2b,
+            N1A=prop.n1a,
+            N2A=prop.n2a,
+            N1B=prop.n1b,
+            N2B=prop.n2b,
+        )
+        used = [k for k, v in extras.items() if v]
+        if used:
+            ctx.fail(
+                card,
+                eid,
+                f"PBEAM {prop.pid}: {', '.join(used)} not supported (shear "
+                "relief, warping, mass and neutral-axis offsets)",
+            )
+        a, i1, i2, i12, j, nsm = (float(v[0]) for v in values)
+        # PBEAM K1, K2 default 1.0; 0.0 means rigid in shear (MSC QRG, PBEAM)
+        k = [float(v or 0.0) for v in (prop.k1, prop.k2)]
+    try:
+        sec = general_section(a, i2, i1, j, i12, k[0], k[1], name=f"{prop.type} {prop.pid}")
+    except BayesUpdateError as exc:
+        ctx.fail(card, eid, str(exc))
+    return sec, nsm
+
+
+def _library_section(ctx: Context, prop, eid, card, nu):
+    """(``BeamSection``, nsm) of a PBARL/PBEAML of a shape in ``L_SECTIONS``.  Nastran's
+    figures have y_elem vertical: the shapes are built with their height along z and turned.
+    MSC's ROD uses the shear factor 0.9 (with it the beam_modes deck matches MSC to 2e-4 %;
+    Cowper's 0.886 is 0.3 % low on the 4th bending pair); the others use Cowper's (a note)."""
     dims = np.atleast_2d(np.asarray(prop.dim, dtype=float))
     nsm = float(np.max(np.atleast_1d(prop.nsm))) if prop.nsm is not None else 0.0
     if np.ptp(dims, axis=0).max() > 0:
         ctx.fail(card, eid, f"{prop.type} {prop.pid} is tapered; only constant sections")
-    d = dims[0]
-    if prop.Type == "ROD":
-        return solid_round(2 * d[0]), nsm, 0.9
-    if prop.Type == "TUBE":
-        return circular_tube(2 * d[0], d[0] - d[1]), nsm, 0.0
-    ctx.fail(card, eid, f"{prop.type} {prop.pid} type {prop.Type}: only ROD and TUBE sections")
+    d, kind = dims[0], prop.Type
+    if kind not in L_SECTIONS:
+        ctx.fail(card, eid, f"{prop.type} {prop.pid} type {kind}: only {', '.join(L_SECTIONS)}")
+    if kind == "I" and (d[1] != d[2] or d[4] != d[5]):
+        ctx.fail(card, eid, f"{prop.type} {prop.pid}: an I with unequal flanges is not supported")
+    try:
+        if kind == "ROD":
+            return replace(ss.rod_section(2 * d[0], nu), shear_y=0.9, shear_z=0.9), nsm
+        if kind in ("TUBE", "TUBE2"):
+            wall = d[0] - d[1] if kind == "TUBE" else d[1]
+            return ss.tube_section(2 * d[0], wall, nu), nsm
+        ctx.notes.append(
+            f"{prop.type} {prop.pid} {kind}: shear factors of Cowper (1966); "
+            "Nastran's own may differ"
+        )
+        if kind == "BAR":
+            return ss.bar_section(d[0], d[1], nu).swap_yz(), nsm
+        if kind == "BOX":
+            return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz(), nsm
+        return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz(), nsm
+    except BayesUpdateError as exc:
+        ctx.fail(card, eid, f"{prop.type} {prop.pid}: {exc}")
 
 
 def _orientation(ctx: Context, elem, ga_row):
@@ -103,41 +189,84 @@ def _orientation(ctx: Context, elem, ga_row):
     return v if offt[0] == "B" else g.frame[ga_row].T @ v
 
 
+def _offsets(ctx: Context, e, rows) -> np.ndarray:
+    """(2, 3) end offsets WA, WB in basic axes: OFFT 'G' = the end grid's CD frame, 'B' =
+    basic (MSC QRG, CBAR/CBEAM); 'O' (element axes) and CBEAM's BIT are not supported."""
+    w = np.stack([np.asarray(e.wa, float), np.asarray(e.wb, float)])
+    offt = getattr(e, "offt", "GGG")
+    if getattr(e, "bit", None) is not None or not isinstance(offt, str):
+        ctx.fail(e.type, e.eid, "BIT / a numeric OFFT is not supported (OFFT GGG, BGG, ... only)")
+    if not np.any(w):
+        return w
+    for end in (0, 1):
+        if offt[1 + end] == "G":
+            w[end] = ctx.grids.frame[rows[end]].T @ w[end]
+        elif offt[1 + end] != "B":
+            ctx.fail(e.type, e.eid, f"OFFT {offt}: offsets in element axes ('O') are not supported")
+    return w
+
+
+def _builder_message(exc) -> str:
+    """A builder error without its 'add_beams (part ...): element k' prefix (the card is named
+    instead)."""
+    return re.sub(r"^element \d+:? ", "", str(exc).split(": ", 1)[-1])
+
+
+def _pins(e):
+    return tuple("" if not p else str(int(p)) for p in (e.pa, e.pb))
+
+
 def add_beams(ctx: Context) -> None:
-    """CBAR and CBEAM with PBARL/PBEAML ROD or TUBE sections (no offsets, no pin flags).
-    Lumped mass (COUPMASS < 1): rho A L / 2 at each end, and for CBEAM also half the torsional
-    inertia rho J L about the axis (MSC lumps none for CBAR; the beam_modes torsion mode shows
-    it, 3554.909 Hz with against MSC's 3554.923)."""
+    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM (one station), PBARL or PBEAML
+    (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
+    (COUPMASS < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each,
+    and for CBEAM also half the torsional inertia rho (I1 + I2) L about the axis (MSC lumps none
+    for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with against MSC's 3554.923)."""
     for eid, e in sorted(ctx.model.elements.items()):
         if e.type not in ("CBAR", "CBEAM"):
             continue
-        if np.any(np.asarray(e.wa, float)) or np.any(np.asarray(e.wb, float)) or e.pa or e.pb:
-            ctx.fail(e.type, eid, "offsets (WA, WB) and pin flags (PA, PB) are not supported")
+        if e.type == "CBEAM" and (e.sa or e.sb):
+            ctx.fail(e.type, eid, "warping scalar points SA, SB are not supported")
         rows = ctx.grids.index(e.node_ids, f"{e.type} {eid}")
         prop = ctx.model.properties[e.pid]
-        section, nsm, shear = _section(ctx, prop, eid, e.type)
         mat = material(ctx, prop.mid, e.type, eid)
-        x = ctx.grids.xyz[rows]
+        if prop.type in ("PBAR", "PBEAM"):
+            section, nsm = _general_section(ctx, prop, eid, e.type)
+        else:
+            section, nsm = _library_section(ctx, prop, eid, e.type, mat.poisson)
+        off = _offsets(ctx, e, rows)
+        x = ctx.grids.xyz[rows] + off
         length = np.linalg.norm(x[1] - x[0])
-        axis = (x[1] - x[0]) / length
+        axis = (x[1] - x[0]) / max(length, 1e-300)
         up = np.cross(axis, _orientation(ctx, e, rows[0]))  # local z = x cross v
         a, b = ctx.node[rows]
         part = f"{prop.type} {prop.pid}"
-        ctx.builder.add_beam(a, b, section, mat, part, up=up)
-        ctx.beam_shear.append(shear)
-        sec = section.properties(mat.poisson)
-        line_nsm = nsm * ctx.wtmass
-        if not ctx.lumped:
-            _lumped_mass(ctx, (a, b), line_nsm, length, part)
-            continue
-        torsion = None
-        if e.type == "CBEAM":
-            torsion = mat.density * (sec["Iy"] + sec["Iz"]) * length * np.outer(axis, axis)
-        _lumped_mass(ctx, (a, b), mat.density * sec["A"] + line_nsm, length, part, torsion)
+        try:
+            ctx.builder.add_beams(
+                [[a, b]],
+                section,
+                mat,
+                part,
+                up=up,
+                offsets=off,
+                pins=_pins(e),
+                mass="none" if ctx.lumped else "consistent",
+                nsm=nsm * ctx.wtmass,
+                shear_modulus=shear_modulus(ctx, prop.mid),
+            )
+        except BayesUpdateError as exc:
+            ctx.fail(e.type, eid, _builder_message(exc))
+        if ctx.lumped:
+            line = mat.density * section.area + nsm * ctx.wtmass
+            twist = None
+            if e.type == "CBEAM":
+                twist = mat.density * (section.iy + section.iz) * length * np.outer(axis, axis)
+            _lumped_mass(ctx, (a, b), line, length, part, twist, off)
 
 
 def add_rods(ctx: Context) -> None:
-    """CROD/CONROD as axial + torsion springs along the element axis, mass lumped at the ends."""
+    """CROD (with PROD) and CONROD as rods (``fe.rod``): axial EA / L and torsion GJ / L (G from
+    MAT1), consistent mass (COUPMASS 1) or mass lumped at the ends."""
     for eid, e in sorted(ctx.model.elements.items()):
         if e.type not in ("CROD", "CONROD"):
             continue
@@ -146,22 +275,24 @@ def add_rods(ctx: Context) -> None:
         rows = ctx.grids.index(e.node_ids, f"{e.type} {eid}")
         x = ctx.grids.xyz[rows]
         length = np.linalg.norm(x[1] - x[0])
-        frame = _frame_from_axis((x[1] - x[0]) / length)
-        G = mat.youngs_modulus / (2 * (1 + mat.poisson))
-        k = np.array([mat.youngs_modulus * p.A, 0, 0, G * (p.j or 0.0), 0, 0]) / length
         a, b = ctx.node[rows]
         part = f"{e.type} {eid}" if e.type == "CONROD" else f"PROD {p.pid}"
-        ctx.builder.add_spring(a, b, k, part, frame=frame)
-        _lumped_mass(ctx, (a, b), density(ctx, p.mid) * p.A + (p.nsm or 0.0) * ctx.wtmass,
-                     length, part)  # fmt: skip
-
-
-def _frame_from_axis(axis):
-    """(3, 3) rows: axis and two unit vectors normal to it."""
-    helper = np.eye(3)[np.argmin(np.abs(axis))]
-    y = np.cross(axis, helper)
-    y /= np.linalg.norm(y)
-    return np.stack([axis, y, np.cross(axis, y)])
+        nsm = (p.nsm or 0.0) * ctx.wtmass
+        try:
+            ctx.builder.add_rods(
+                [[a, b]],
+                p.A,
+                mat,
+                part,
+                torsion=p.j or 0.0,
+                nsm=nsm,
+                mass="none" if ctx.lumped else "consistent",
+                shear_modulus=shear_modulus(ctx, p.mid),
+            )
+        except BayesUpdateError as exc:
+            ctx.fail(e.type, eid, _builder_message(exc))
+        if ctx.lumped:
+            _lumped_mass(ctx, (a, b), density(ctx, p.mid) * p.A + nsm, length, part)
 
 
 def add_masses(ctx: Context) -> None:
@@ -262,12 +393,17 @@ def _add_cbush(ctx: Context, e, eid):
 
 
 def components(ctx: Context, text, rows, card, eid):
-    """Component digits (sorted str) of ``text`` at grids ``rows``; a partial set (not all of
-    123 or 456) needs basic CD frames, as the structure's DOFs are in basic axes."""
+    """Component digits (sorted str) of ``text`` at grids ``rows``.  A partial set (not all of
+    123 or of 456) on a grid with a rotated CD frame gives that grid its frame
+    (``StructureBuilder.set_frame``): the components then act in the CD axes, exactly."""
     mask = parse_components(str(text), f"{card} {eid}")
-    if not _invariant(mask) and not np.all(ctx.grids.is_basic(np.atleast_1d(rows))):
-        ctx.fail(card, eid, f"components {text} on a grid with a rotated CD frame are not "
-                 "supported (use 123, 456 or 123456)")  # fmt: skip
+    if not _invariant(mask):
+        for row in np.atleast_1d(rows):
+            if not ctx.grids.is_basic([row])[0] and row not in ctx.framed:
+                xyz = ctx.grids.xyz[row]
+                frame = CoordinateFrame.from_axes("rectangular", xyz, ctx.grids.frame[row])
+                ctx.builder.set_frame(int(ctx.node[row]), frame)
+                ctx.framed.add(int(row))
     return "".join(str(i + 1) for i in np.flatnonzero(mask))
 
 

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.fe import frames
+
 
 @dataclass(frozen=True)
 class Grids:
@@ -42,33 +44,10 @@ class Grids:
 def axes_at(coord, xyz: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rows = the axes of pyNastran coordinate system ``coord`` at basic points
     xyz (n, 3): constant for CORD2R, (e_r, e_theta, e_z) for CORD2C, (e_r, e_theta, e_phi)
-    for CORD2S (theta from the local z axis, phi about it)."""
+    for CORD2S (theta from the local z axis, phi about it) (``fe.frames``)."""
+    kind = {"R": "rectangular", "C": "cylindrical", "S": "spherical"}[coord.Type]
     beta = np.asarray(coord.beta(), dtype=float)  # rows: local i, j, k in basic
-    n = len(xyz)
-    if coord.Type == "R":
-        return np.broadcast_to(beta, (n, 3, 3)).copy()
-    local = (xyz - np.asarray(coord.origin, dtype=float)) @ beta.T
-    phi = np.arctan2(local[:, 1], local[:, 0])
-    c, s = np.cos(phi), np.sin(phi)
-    zero, one = np.zeros(n), np.ones(n)
-    if coord.Type == "C":
-        rows = np.stack(
-            [np.stack([c, s, zero], 1), np.stack([-s, c, zero], 1), np.stack([zero, zero, one], 1)],
-            axis=1,
-        )
-    else:
-        rho = np.linalg.norm(local[:, :2], axis=1)
-        th = np.arctan2(rho, local[:, 2])
-        ct, st = np.cos(th), np.sin(th)
-        rows = np.stack(
-            [
-                np.stack([st * c, st * s, ct], 1),
-                np.stack([ct * c, ct * s, -st], 1),
-                np.stack([-s, c, zero], 1),
-            ],
-            axis=1,
-        )
-    return rows @ beta
+    return frames.axes_at(kind, np.asarray(coord.origin, dtype=float), beta, xyz)
 
 
 def read_grids(model) -> Grids:

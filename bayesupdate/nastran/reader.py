@@ -24,8 +24,6 @@ from bayesupdate.nastran.frames import read_grids
 from bayesupdate.nastran.units import unit_system
 
 SHELL_TYPES = ("CQUAD4", "CTRIA3")
-#: density of a line element whose mass is lumped at its nodes
-NO_DENSITY = 1e-300
 
 
 def _param(model, name, default):
@@ -200,10 +198,13 @@ def _autospc(ctx, structure):
     nodes have all six; springs and rods are checked on their assembled diagonal."""
     from bayesupdate.fe.assembly import Assembler
     from bayesupdate.fe.constraints import Constraints, constraint_transform
+    from bayesupdate.fe.general import line_matrices
 
     a = Assembler(structure)
     K, _, _ = a.assemble(a.default_properties())
     diag = np.abs(K.diagonal())
+    for dofs, Ke, _ in line_matrices(structure):
+        np.add.at(diag, dofs.ravel(), np.abs(np.diagonal(Ke, axis1=1, axis2=2)).ravel())
     if structure.shells is not None:
         sh = structure.shells
         for conn in (sh.quads, sh.trias):
@@ -253,12 +254,6 @@ def _finish(ctx, eids, pids, props):
     structure = ctx.builder.build()
     if props is not None:
         structure = _patch_shells(structure, pids, props)
-    if ctx.beam_shear:
-        structure = replace(structure, beam_shear_factor=np.array(ctx.beam_shear, float))
-    if ctx.lumped and len(structure.beam_rho):
-        # line mass is lumped at the ends (cards.add_beams): the beam keeps its stiffness only
-        # (a negligible density: the beam assembly requires one > 0)
-        structure = replace(structure, beam_rho=np.full_like(structure.beam_rho, NO_DENSITY))
     return structure
 
 

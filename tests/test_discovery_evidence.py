@@ -12,7 +12,8 @@ from bayesupdate.discovery.evidence import (
     laplace,
     laplace_loo,
 )
-from bayesupdate.discovery.flagging import SIGMA_FLOOR, NoiseModel, flag_modes, noise_model
+from bayesupdate.discovery.flagging import flag_modes
+from bayesupdate.inference.likelihood_blocks import SIGMA_FLOOR, NoiseModel, noise_model
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData
 
@@ -75,12 +76,12 @@ def test_inferred_noise_is_a_fixed_gaussian_at_the_robust_level():
     e0 = 2e-5 * rng.choice([-1.0, 1.0], size=m)  # identified null data: 0.002 % errors
     noise = noise_model(ModalData(f), e0, n_params=5)
     assert noise.inferred and noise.sigma == SIGMA_FLOOR  # the robust level is floored
-    space = FitSpace(None, (), noise)
-    r0 = space.residuals(e0)
+    likelihood = FitSpace(None, (), noise).likelihood
+    r0 = noise.residuals(e0)
     expected = np.sum(stats.norm.logpdf(e0, scale=SIGMA_FLOOR))
-    assert space.log_likelihood(r0) == pytest.approx(expected, rel=1e-12)
-    dragged = space.residuals(np.full(m, -8e-4))
-    cost = space.log_likelihood(r0) - space.log_likelihood(dragged)
+    assert likelihood.log_likelihood(r0) == pytest.approx(expected, rel=1e-12)
+    dragged = noise.residuals(np.full(m, -8e-4))
+    cost = likelihood.log_likelihood(r0) - likelihood.log_likelihood(dragged)
     assert cost == pytest.approx(0.5 * m * (64 - 0.04), rel=1e-9)
     assert cost > 10 * 0.5 * m * np.log(64)
 

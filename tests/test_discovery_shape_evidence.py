@@ -9,16 +9,16 @@ from scipy import integrate, optimize, stats
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.candidates import ParameterAxis
-from bayesupdate.discovery.evidence import FitSpace, laplace, log_likelihood
-from bayesupdate.discovery.flagging import NoiseModel, ShapeTests, flag_modes
+from bayesupdate.discovery.evidence import FitSpace, laplace
+from bayesupdate.discovery.flagging import ShapeTests, flag_modes
 from bayesupdate.discovery.shape_evidence import (
     SHAPE_SD_FLOOR_REL,
     STATED_REJECTION,
     ShapeEvidence,
     shape_evidence,
-    shape_residuals,
     unit_real_shapes,
 )
+from bayesupdate.inference.likelihood_blocks import NoiseModel, shape_residuals
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData, noisy_modes
 from bayesupdate.model_protocol import Prediction
@@ -108,15 +108,15 @@ def test_known_shape_noise_is_a_fixed_gaussian_block():
     np.testing.assert_allclose(ev.scale, sd / np.sqrt(n))
     r = ev.residuals(truth)
     noise = NoiseModel(np.full(3, 0.001), np.ones(3), False, "data sd", 0.001)
-    space = FitSpace(None, (), noise, ev)
+    likelihood = FitSpace(None, (), noise, ev).likelihood
     r_f = np.zeros(3)
-    expected = log_likelihood(r_f, noise) + np.sum(
+    expected = np.sum(stats.norm.logpdf(0.001 * r_f, scale=0.001)) + np.sum(
         -0.5 * ev.rss(r) / ev.scale**2 - (n - 1) * (np.log(ev.scale) + 0.5 * np.log(2 * np.pi))
     )
-    assert space.log_likelihood(np.concatenate([r_f, r])) == pytest.approx(expected, rel=1e-12)
+    assert likelihood.log_likelihood(np.concatenate([r_f, r])) == pytest.approx(expected, rel=1e-12)
     # under the truth chi^2 per mode is ~ chi^2(15): all three within its 0.1 %-99.9 % range
     assert np.all((ev.chi2(r) > 3.5) & (ev.chi2(r) < 38))
-    np.testing.assert_array_equal(space.curvature_weights(np.concatenate([r_f, r]))[3:], 1.0)
+    np.testing.assert_array_equal(likelihood.curvature_weights(np.concatenate([r_f, r]))[3:], 1.0)
     # a model shape 1 - MAC = 2e-2 off (22x the noise's 9e-4) in mode 2 is flagged
     off = truth.copy()
     bias = rng.normal(size=n)
@@ -187,7 +187,8 @@ def test_laplace_with_a_shape_block_matches_the_exact_marginal_of_a_linear_model
         return np.concatenate([a * p + b, (c * p + e) / scale])
 
     def log_post(p):
-        return space.log_likelihood(residual(p)) + float(space.log_prior_z(np.array([[p]]))[0])
+        log_like = space.likelihood.log_likelihood(residual(p))
+        return log_like + float(space.log_prior_z(np.array([[p]]))[0])
 
     grid = np.linspace(-20, 20, 4001)
     values = np.array([log_post(p) for p in grid])

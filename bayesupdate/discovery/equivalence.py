@@ -28,10 +28,10 @@ from scipy.optimize import least_squares
 from bayesupdate.discovery.candidates import ParameterAxis, axis_for, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace
-from bayesupdate.discovery.flagging import NoiseModel
 from bayesupdate.discovery.localization import candidate_problem
-from bayesupdate.discovery.shape_evidence import ShapeEvidence, unit_real_shapes
+from bayesupdate.discovery.shape_evidence import unit_real_shapes
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.likelihood_blocks import NoiseModel, ShapeBlock
 from bayesupdate.inference.problem import build_problem
 from bayesupdate.modal_data import ModalData
 
@@ -113,7 +113,7 @@ def fit_to_truth(
     noise = NoiseModel(np.full(m, frequency_noise), np.ones(m), False, "fixed", frequency_noise)
     test_unit = unit_real_shapes(np.asarray(truth.shapes))
     shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
-    shapes = ShapeEvidence(np.arange(m), test_unit, np.full(m, shape_sd))
+    shapes = ShapeBlock(np.arange(m), test_unit, np.full(m, shape_sd))
     space = FitSpace(problem, axes, noise, shapes)
 
     def residual(u):

@@ -1,7 +1,9 @@
 """Name: refit a model (baseline or baseline + one effect) and compute its evidence.
 
-Likelihood of the relative frequency errors e_i with noise s_i from ``flagging.NoiseModel``
-(the data's sd, a fixed level, or the robust level of the frequency-only baseline's residuals):
+The likelihood is ``inference.likelihood_blocks.FixedNoiseLikelihood``: the relative frequency
+errors e_i with noise s_i from ``likelihood_blocks.NoiseModel`` (the data's sd, a fixed level, or
+the robust level of the frequency-only baseline's residuals), and the shape block when the test
+has shapes:
 
     log L = -1/2 sum r_i^2 - sum log s_i - m/2 log 2 pi,   r_i = e_i / s_i.
 
@@ -26,9 +28,9 @@ inside the prior box (so a parameter at its bound, or one the data do not constr
 over-counted).  Starts that end in distinct optima (Mahalanobis distance > 3 under H) have their
 evidences summed (log-sum-exp); the same optimum found twice counts once.
 
-When the test has shapes, the residual vector also holds the shape residuals of
-``shape_evidence`` (Gaussian, each mode with its own level fixed before the fit), and H sums
-J_b^T J_b over the blocks.
+When the test has shapes, the residual vector also holds the shape residuals
+(``likelihood_blocks.ShapeBlock``, each mode with its own level fixed before the fit by
+``shape_evidence``), and H sums J_b^T J_b over the blocks.
 
 PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
 shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
@@ -45,35 +47,41 @@ import numpy as np
 from scipy import optimize, special, stats
 
 from bayesupdate.discovery.candidates import ParameterAxis
-from bayesupdate.discovery.flagging import NoiseModel
-from bayesupdate.discovery.shape_evidence import ShapeEvidence
+from bayesupdate.inference.likelihood_blocks import (
+    LOG_2PI,
+    FixedNoiseLikelihood,
+    NoiseModel,
+    ShapeBlock,
+    relative_errors,
+)
 
-#: largest relative noise level a sampled sigma may take (``discovery.posterior``)
-SIGMA_MAX = 0.5
 #: residual given where the model fails (large, finite)
 _FAILED = 1e3
-_LOG_2PI = float(np.log(2 * np.pi))
 
 
 @dataclass(frozen=True)
 class FitSpace:
     """What a fit needs: the calibration problem of the (extended) model, the axes of its
-    parameters (problem order) and the noise model."""
+    parameters (problem order), the frequency noise and the shape block (``likelihood``)."""
 
     problem: object
     axes: tuple[ParameterAxis, ...]
     noise: NoiseModel
-    shapes: ShapeEvidence | None = None
+    shapes: ShapeBlock | None = None
+
+    @property
+    def likelihood(self) -> FixedNoiseLikelihood:
+        return FixedNoiseLikelihood(self.noise, self.shapes)
 
     @property
     def n_frequency(self) -> int:
         """Residuals of the frequency block (the used modes)."""
-        return int(np.sum(self.noise.used))
+        return self.likelihood.n_frequency
 
     @property
     def size(self) -> int:
         """Length of the residual vector: frequencies, then shapes mode after mode."""
-        return self.n_frequency + (0 if self.shapes is None else self.shapes.size)
+        return self.likelihood.size
 
     @property
     def z_low(self) -> np.ndarray:
@@ -101,42 +109,13 @@ class FitSpace:
     def relative_errors(self, theta) -> tuple[np.ndarray, object]:
         """e (m,) at theta and the problem's Evaluation (e NaN where the model failed)."""
         evaluation = self.problem.evaluate(np.asarray(theta, dtype=float))
-        f_test = self.problem.data.frequencies_hz
-        return (evaluation.frequencies_hz - f_test) / f_test, evaluation
-
-    def residuals(self, e: np.ndarray) -> np.ndarray:
-        """Normalised frequency residuals r = e / s of the used modes (module docstring)."""
-        used = self.noise.used
-        return e[used] / self.noise.scale[used]
+        return relative_errors(
+            evaluation.frequencies_hz, self.problem.data.frequencies_hz
+        ), evaluation
 
     def residual_vector(self, e: np.ndarray, model_shapes: np.ndarray | None) -> np.ndarray:
-        """(size,) the whole residual vector: ``residuals(e)``, then the scaled shape residuals.
-
-        model_shapes : (n_dof, m) paired model shapes on the test DOFs (NaN where missing)."""
-        r = self.residuals(e)
-        if self.shapes is None:
-            return r
-        if model_shapes is None:
-            return np.concatenate([r, np.full(self.shapes.size, np.nan)])
-        return np.concatenate([r, self.shapes.residuals(model_shapes)])
-
-    def log_likelihood(self, r: np.ndarray) -> float:
-        """log L of the whole residual vector: frequencies + the Gaussian shape block."""
-        n_f = self.n_frequency
-        value = log_likelihood(r[:n_f], self.noise)
-        if self.shapes is not None:
-            value += float(np.sum(self.shapes.log_likelihood(r[n_f:])))
-        return value
-
-    def curvature_weights(self, r: np.ndarray) -> np.ndarray:
-        """(size,) w with H = J^T diag(w) J: 1 everywhere, every residual is in noise units."""
-        return np.ones(r.size)
-
-
-def log_likelihood(r: np.ndarray, noise: NoiseModel) -> float:
-    """log L from the normalised frequency residuals r (module docstring)."""
-    used = noise.used
-    return float(-0.5 * np.sum(r * r) - np.sum(np.log(noise.scale[used])) - 0.5 * r.size * _LOG_2PI)
+        """(size,) residuals in noise units (``FixedNoiseLikelihood.residual_vector``)."""
+        return self.likelihood.residual_vector(e, model_shapes)
 
 
 @dataclass
@@ -156,7 +135,8 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
     """Laplace log-evidence around one optimum (module docstring)."""
     d = z.size
     span = space.z_high - space.z_low
-    log_like = space.log_likelihood(r)
+    likelihood = space.likelihood
+    log_like = likelihood.log_likelihood(r)
     log_prior = float(space.log_prior_z(z[None])[0])
     h = 1e-4 * span
     curv = np.zeros(d)
@@ -168,7 +148,7 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
         step = 0.5 * (zp[j] - zm[j])
         if np.all(np.isfinite(lp)) and step > 0:
             curv[j] = max(-(lp[0] - 2 * lp[1] + lp[2]) / step**2, 0.0)
-    hessian = jac_z.T @ (space.curvature_weights(r)[:, None] * jac_z) + np.diag(curv)
+    hessian = jac_z.T @ (likelihood.curvature_weights(r)[:, None] * jac_z) + np.diag(curv)
     # a direction the data do not see: a tiny curvature (1e-8 per prior width^2) keeps H
     # invertible; the box truncation below then caps its contribution at the prior volume
     hessian = hessian + np.diag(1e-8 / span**2)
@@ -177,7 +157,7 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     inside = stats.norm.cdf((space.z_high - z) / sd) - stats.norm.cdf((space.z_low - z) / sd)
     log_trunc = float(np.sum(np.log(np.maximum(inside, 1e-300))))
-    log_z = log_like + log_prior + 0.5 * d * _LOG_2PI - 0.5 * logdet + log_trunc
+    log_z = log_like + log_prior + 0.5 * d * LOG_2PI - 0.5 * logdet + log_trunc
     return Optimum(z, r, jac_z, log_like, log_prior, float(log_z), hessian)
 
 
@@ -365,18 +345,9 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
     z = z[:draws]
     n = z.shape[0]
     r_all = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, size) linearised residuals
-    n_f = space.n_frequency
-    r = r_all[:, :n_f]
-    noise = space.noise
-    used = noise.used
     log_q = stats.multivariate_normal(best.z, cov, allow_singular=True).logpdf(z)
     log_q = np.atleast_1d(log_q)
-    pointwise = -0.5 * r**2 - np.log(noise.scale[used])[None, :] - 0.5 * _LOG_2PI
-    if space.shapes is not None:  # each mode's shape term added to its frequency term
-        shapes = space.shapes
-        column = np.searchsorted(np.flatnonzero(used), shapes.modes)
-        pointwise = pointwise.copy()
-        pointwise[:, column] += shapes.log_likelihood(r_all[:, n_f:])  # modes are distinct
+    pointwise = space.likelihood.pointwise_by_mode(r_all)
     log_p = pointwise.sum(axis=1) + space.log_prior_z(z)
     tree = arviz_base.from_dict(
         {"posterior": {"z": z[None]}, "log_likelihood": {"f": pointwise[None]}},

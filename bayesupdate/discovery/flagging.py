@@ -5,11 +5,10 @@ sigma_i / sqrt(w_i) with w_i the eq. 19 weights (w_i = 0 drops the mode), where
 
 * sigma_i = sd_i / f_Ti when the data give frequency standard deviations sd_i, or
 * sigma_i = sigma, a relative level fixed by the user, or
-* sigma is *inferred*: for flagging, a robust scale of the baseline residuals
-  sigma = 1.4826 MAD(e sqrt(w)) sqrt(m / (m - d)) (median absolute deviation about zero, corrected
-  for the d fitted parameters; Huber 1981), floored at ``SIGMA_FLOOR``.  A discrepancy confined to
-  a few modes then stands out instead of inflating the noise level; the evidence uses the same
-  level, fixed (``evidence``).
+* sigma is *inferred*: a robust scale of the baseline residuals, floored (the plug-in level of
+  ``inference.likelihood_blocks.noise_model``).  A discrepancy confined to a few modes then stands
+  out instead of inflating the noise level; the evidence uses the same level, fixed
+  (``evidence``).
 
 z_i = e_i / sqrt(s_i^2 + v_i) with v_i the posterior-predictive variance of the relative frequency
 (when a posterior is given), two-sided p_i = 2 Phi(-|z_i|). Mode i is flagged when p_i < alpha / T
@@ -26,53 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from bayesupdate.inference.likelihood_blocks import NoiseModel
+
 #: level of the count test of shapes off their stated accuracy, in finding and adequacy alike: a
 #: model check (discovery's adequacy level), not a search for a discrepancy in one mode
 COUNT_LEVEL = 1e-3
-
-#: smallest relative noise level inferred (0.01 %): below it frequencies are not reproducible
-SIGMA_FLOOR = 1e-4
-
-
-@dataclass(frozen=True)
-class NoiseModel:
-    """Relative noise per mode.
-
-    scale : (m,) s_i used for z-scores (for inferred noise, the robust estimate / sqrt(w_i)).
-    weights_sqrt : (m,) sqrt(w_i) (0 drops a mode). inferred : sigma was estimated from the
-    baseline residuals (then the adequacy check asks that level to look like test noise). source
-    : "data sd" | "fixed" | "inferred (robust)". sigma : the level quoted.
-    """
-
-    scale: np.ndarray
-    weights_sqrt: np.ndarray
-    inferred: bool
-    source: str
-    sigma: float
-
-    @property
-    def used(self) -> np.ndarray:
-        return self.weights_sqrt > 0
-
-
-def noise_model(data, residual_rel: np.ndarray, n_params: int, sigma: float | None = None):
-    """NoiseModel from the data (sd), a fixed ``sigma`` or the baseline residuals (module doc)."""
-    w = np.ones(data.n_modes) if data.weights is None else np.asarray(data.weights, float)
-    sw = np.sqrt(np.maximum(w, 0.0))
-    inv = np.where(sw > 0, 1.0 / np.where(sw > 0, sw, 1.0), np.inf)
-    if sigma is not None:
-        return NoiseModel(sigma * inv, sw, False, "fixed", float(sigma))
-    sd = data.frequency_sd_hz
-    if sd is not None and np.all(sd[sw > 0] > 0):
-        rel = sd / data.frequencies_hz
-        return NoiseModel(rel * inv, sw, False, "data sd", float(np.median(rel[sw > 0])))
-    used = sw > 0
-    m = int(np.sum(used))
-    e = np.abs(residual_rel[used] * sw[used])
-    dof_factor = np.sqrt(m / max(m - n_params, 1))
-    robust = 1.4826 * float(np.median(e)) * dof_factor
-    level = max(robust, SIGMA_FLOOR)
-    return NoiseModel(level * inv, sw, True, "inferred (robust)", level)
 
 
 @dataclass(frozen=True)

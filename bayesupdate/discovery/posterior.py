@@ -1,20 +1,24 @@
 """Optional posterior of the re-calibrated model (issue 6 item 5): emcee over the design
 variables and the named effect's parameters, walkers started from the Laplace Gaussian.
 
-The likelihood is the calibration layer's (``inference.LikelihoodSpec``) with the noise model
-discovery used: the data's frequency sd (sigma ~ 0, the sd added in quadrature), a fixed sigma,
-or an inferred sigma with a half-normal prior (scale 5 %).  It is a likelihood of the frequencies
-only: test shapes (``shape_evidence``) shape the evidence and the optimum, not this posterior.
+The likelihood is the calibration layer's (``inference.LogPosterior``: the frequency block of
+``inference.likelihood_blocks`` with ``SampledNoise``) with the noise model discovery used: the
+data's frequency sd (sigma ~ 0, the sd added in quadrature), a fixed sigma, or an inferred sigma
+with a half-normal prior (scale 5 %) integrated out by the sampler.  It is a likelihood of the
+frequencies only: test shapes (``shape_evidence``) shape the evidence and the optimum, not this
+posterior.
 Costs ``walkers x steps`` model solves (e.g. 16 x 500 = 8,000 solves, minutes on the exhaust),
 hence off by default.
 """
 
 import numpy as np
 
-from bayesupdate.discovery.evidence import SIGMA_MAX
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.sampling import sample_posterior
+
+#: largest relative noise level a sampled sigma may take
+SIGMA_MAX = 0.5
 
 
 def likelihood_for(noise, pairing_method: str) -> LikelihoodSpec:

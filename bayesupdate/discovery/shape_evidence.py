@@ -1,19 +1,13 @@
-"""Mode shapes as evidence: per-mode shape residuals with a per-mode noise level fixed before any
-fit, so that no single mode can drag the design variables away from what the frequencies say.
+"""Mode shapes as evidence: how discovery sets the level of each mode in the shape block
+(``inference.likelihood_blocks.ShapeBlock``) before any fit, so that no single mode can drag the
+design variables away from what the frequencies say, and how it counts modes off their stated
+level.
 
 Test mode i has the real, unit-norm shape t_i (n,) on the test's sensor DOFs (complex identified
-shapes are rotated to their best-fit real line first, ``ema.lsfd.realise``); p_i is the paired model
-shape on the same DOFs.  The modal scale factor a_i = p_i.t_i / p_i.p_i (Allemang 2003, "The modal
-assurance criterion - twenty years of use and abuse", eq. 3) fits the model shape to the test shape
-and leaves the residual
-
-    d_i = t_i - a_i p_i,        |d_i|^2 = 1 - MAC(t_i, p_i)   (exactly, for real shapes),
-
-the MAC deficit spread over the sensors, with a sign and a location, which is what a sensitivity
-(Jacobian) needs.  The components of d_i are independent N(0, sigma_i^2) (the eigenvector
-prediction-error model of Vanik, Beck & Au 2000, J. Eng. Mech. 126:738, with one variance per
-mode, as Yuen 2010, "Bayesian Methods for Structural Dynamics and Civil Engineering", ch. 6,
-allows), and the block is Gaussian with that level held fixed:
+shapes are rotated to their best-fit real line first, ``ema.lsfd.realise``; ``unit_real_shapes``).
+The block's residual is d_i = t_i - a_i p_i, |d_i|^2 = 1 - MAC(t_i, p_i), with independent
+N(0, sigma_i^2) components (``ShapeBlock``, after Vanik, Beck & Au 2000 and Yuen 2010 ch. 6), and
+its level is held fixed:
 
     sigma_i = s_i,  s_i = max(sd_i, SHAPE_SD_FLOOR_REL) / sqrt(n),  unless R_i / s_i^2 rejects
     chi^2(n - 1) at level ``STATED_REJECTION`` (1 %); then sigma_i = sqrt(R_i / (n - 1)),
@@ -50,6 +44,7 @@ import numpy as np
 from scipy import stats
 
 from bayesupdate.ema.lsfd import realise
+from bayesupdate.inference.likelihood_blocks import ShapeBlock, shape_residuals
 
 #: smallest shape noise as a fraction of a shape's RMS amplitude [-] (module docstring)
 SHAPE_SD_FLOOR_REL = 0.01
@@ -68,31 +63,15 @@ def unit_real_shapes(shapes: np.ndarray) -> np.ndarray:
     return real / np.where(norm > 0, norm, 1.0)[None, :]
 
 
-def shape_residuals(test_unit: np.ndarray, model_shapes: np.ndarray) -> np.ndarray:
-    """d (n_dof, m) = t - a p with the modal scale factor a (module docstring).
-
-    test_unit : (n_dof, m) unit-norm real test shapes; model_shapes : (n_dof, m) paired model
-    shapes on the same DOFs (any scaling).  A zero model shape leaves d = t (MAC 0)."""
-    p = np.asarray(model_shapes, dtype=float)
-    pp = np.sum(p * p, axis=0)
-    a = np.sum(p * test_unit, axis=0) / np.where(pp > 0, pp, 1.0)
-    return test_unit - p * a[None, :]
-
-
 @dataclass(frozen=True)
-class ShapeEvidence:
-    """The shape block of a fit's residual vector.
+class ShapeEvidence(ShapeBlock):
+    """The shape block of a discovery fit with the record of how its levels were set.
 
-    modes : (k,) 0-based test modes whose shapes count (the modes with weight > 0).
-    test_unit : (n_dof, k) their unit-norm real shapes.  scale : (k,) sigma_i, each mode's fixed
-    per-component level (module docstring).  stated : (k,) the stated (floored) level before any
-    raise (None: ``scale``).  source : what the stated level came from ("data sd" or "floor" when
-    the data give none).
+    modes, test_unit, scale : as ``ShapeBlock`` (scale: each mode's fixed level, module
+    docstring).  stated : (k,) the stated (floored) level before any raise (None: ``scale``).
+    source : what the stated level came from ("data sd" or "floor" when the data give none).
     """
 
-    modes: np.ndarray
-    test_unit: np.ndarray
-    scale: np.ndarray
     stated: np.ndarray | None = None
     source: str = "data sd"
 
@@ -103,43 +82,10 @@ class ShapeEvidence:
             return np.zeros(self.scale.size, dtype=bool)
         return self.scale > self.stated
 
-    @property
-    def n_dof(self) -> int:
-        return int(self.test_unit.shape[0])
-
-    @property
-    def dof(self) -> int:
-        """Degrees of freedom per mode: n_dof less the fitted scale factor."""
-        return self.n_dof - 1
-
-    @property
-    def size(self) -> int:
-        return int(self.test_unit.size)
-
-    def residuals(self, model_shapes: np.ndarray) -> np.ndarray:
-        """(k n_dof,) scaled residuals d_i / sigma_i, mode after mode.  model_shapes :
-        (n_dof, m_test) paired model shapes of all test modes."""
-        d = shape_residuals(self.test_unit, np.asarray(model_shapes)[:, self.modes])
-        return (d / self.scale[None, :]).T.reshape(-1)
-
-    def rss(self, r: np.ndarray) -> np.ndarray:
-        """(k,) R_i = |d_i|^2 from the scaled residuals r (..., k n_dof) -> (..., k)."""
-        return self.chi2(r) * self.scale**2
-
     def stated_rejections(self, r: np.ndarray) -> np.ndarray:
         """(..., k) bool: each mode's misfit in the residuals r rejects its stated level."""
         stated = self.scale if self.stated is None else self.stated
         return rejects_stated(self.rss(r), stated, self.dof)
-
-    def chi2(self, r: np.ndarray) -> np.ndarray:
-        """(..., k) c_i = R_i / sigma_i^2 (~ chi^2(dof) per mode under a fitting model)."""
-        blocks = np.asarray(r).reshape(*np.shape(r)[:-1], self.scale.size, self.n_dof)
-        return np.sum(blocks**2, axis=-1)
-
-    def log_likelihood(self, r: np.ndarray) -> np.ndarray:
-        """(..., k) per-mode Gaussian log-density of the scaled residuals r (..., k n_dof), on
-        dof terms per mode (the scale factor is fitted)."""
-        return -0.5 * self.chi2(r) - self.dof * (np.log(self.scale) + 0.5 * np.log(2 * np.pi))
 
 
 def shape_evidence(data, baseline_model_shapes: np.ndarray, used: np.ndarray):

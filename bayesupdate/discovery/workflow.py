@@ -63,13 +63,7 @@ from scipy.special import logsumexp
 from bayesupdate.discovery.candidates import Candidate, axis_for, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
-from bayesupdate.discovery.flagging import (
-    ModeFlags,
-    NoiseModel,
-    ShapeTests,
-    flag_modes,
-    noise_model,
-)
+from bayesupdate.discovery.flagging import ModeFlags, ShapeTests, flag_modes
 from bayesupdate.discovery.localization import (
     Localization,
     candidate_problem,
@@ -83,6 +77,7 @@ from bayesupdate.discovery.shape_evidence import (
     shape_evidence,
 )
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import calibrate
 from bayesupdate.inference.problem import build_problem
 
@@ -536,8 +531,7 @@ def discover(
             problem, starts=settings.baseline_starts, seed=settings.seed, max_nfev=100
         )
     timings["baseline_calibration_s"] = time.perf_counter() - t0
-    f_test = data.frequencies_hz
-    e0 = (baseline.frequencies_hz - f_test) / f_test
+    e0 = relative_errors(baseline.frequencies_hz, data.frequencies_hz)
     noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
     axes = tuple(axis_for(p) for p in problem.parameters)
     shapes = None

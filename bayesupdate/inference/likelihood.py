@@ -1,14 +1,16 @@
-"""Gaussian likelihood on the relative frequency errors and the vectorised log-posterior.
+"""The calibration posterior: the frequency block (and optionally the mass block) of
+``likelihood_blocks`` with a sampled or fixed level sigma, times the parameter priors, vectorised
+over walkers.
 
 For paired frequencies f_i(theta) and test values f_Ti (issue 4 item 5):
 
     e_i = (f_i - f_Ti) / f_Ti,   e_i ~ N(0, s_i^2),   s_i^2 = sigma^2 / w_i + (sd_i / f_Ti)^2,
 
 with w_i the eq. 19 weights (w_i = 0 drops mode i) and sd_i the test's own frequency standard
-deviation if the data give one (added in quadrature; zero otherwise).  So -2 log L is
-sum_i e_i^2 / s_i^2 + const: with equal s_i it is seed eq. 19 divided by sigma^2.  sigma is fixed
-or sampled as one more parameter (named ``sigma``) with its own prior (e.g. halfnormal).
-Optional mass term: (m - m_T)/m_T ~ N(0, mass_sd_rel^2).
+deviation if the data give one (added in quadrature; zero otherwise): ``SampledNoise``.  So
+-2 log L is sum_i e_i^2 / s_i^2 + const: with equal s_i it is seed eq. 19 divided by sigma^2.
+sigma is fixed or sampled as one more parameter (named ``sigma``) with its own prior (e.g.
+halfnormal).  Optional mass term: (m - m_T)/m_T ~ N(0, mass_sd_rel^2) (``mass_log_likelihood``).
 
 ``LogPosterior`` maps walkers (n_walkers, d) to (n_walkers,) log-posterior values.  Three ways
 to get the paired frequencies (``mode``):
@@ -32,12 +34,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.likelihood_blocks import (
+    SampledNoise,
+    mass_log_likelihood,
+    relative_errors,
+)
 from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
 
-_LOG_2PI = float(np.log(2.0 * np.pi))
 PAIRING_CHOICES = ("auto", "tracked", "problem", "order")
 
 
@@ -90,10 +96,9 @@ class LogPosterior:
         w = problem.weights
         self.mask = w > 0
         self.f_test = f_test[self.mask]
-        self.inv_w = 1.0 / w[self.mask]
         sd = problem.data.frequency_sd_hz
-        self.sd_rel2 = (
-            np.zeros(self.f_test.size) if sd is None else (sd[self.mask] / self.f_test) ** 2
+        self.noise = SampledNoise.of(
+            self.f_test, w[self.mask], None if sd is None else sd[self.mask]
         )
         self.mode = likelihood_mode(problem, spec)
         self.batched = self.mode != "points"
@@ -194,16 +199,12 @@ class LogPosterior:
 
     def log_likelihood(self, freqs: np.ndarray, sigma: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """freqs (n, n_test) [Hz], sigma (n,), mass (n,) -> (n,) log-likelihood (NaN -> -inf)."""
-        e = (freqs[:, self.mask] - self.f_test) / self.f_test
-        var = sigma[:, None] ** 2 * self.inv_w + self.sd_rel2
-        ll = -0.5 * np.sum(e * e / var + np.log(var) + _LOG_2PI, axis=1)
+        ll = self.noise.log_likelihood(relative_errors(freqs[:, self.mask], self.f_test), sigma)
         if self.spec.mass_sd_rel is not None:
             target = self.problem.objective.mass_target_kg
             if target is None:
                 raise BayesUpdateError("likelihood.mass_sd needs objective.mass_kg")
-            em = (mass - target) / target
-            s2 = self.spec.mass_sd_rel**2
-            ll = ll - 0.5 * (em * em / s2 + np.log(s2) + _LOG_2PI)
+            ll = ll + mass_log_likelihood(mass, target, self.spec.mass_sd_rel)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
     def log_prior(self, theta: np.ndarray) -> np.ndarray:

@@ -6,12 +6,14 @@ accelerometers per run (1.028 V/g), runs 1-5 holding accelerometers 1-10 (odd: l
 even: trailing edge).  The authors' peak picks (explog.txt): 7.797, 19.06, 23.82, 31.78 Hz, and
 shallow peaks in 8.8-9.8, 15.4-16.4 (multiple) and 30.2-31.2 Hz.
 
-Path a user takes: ``bayesupdate frf`` per run (Welch, H1, lines the force excites), then one
-``bayesupdate identify`` on the 5 files as one roving test, with the band the authors give
-for the input (GVT_Info.m FreqWin_Hz = [3 35]) and with the automatic bands, for both
-estimators (LSCE, pLSCF).  Prints the modes, the nearest mode to each peak pick, the shapes
-over the 10 accelerometers (real part after rotation to the best real line, largest = 1) and
-writes the stabilization diagram of the chosen run to OUT (default /tmp/gvt_study).
+Path a user takes, default settings: ``bayesupdate frf`` per run (the force is found to be a
+sine sweep: one whole-record spectrum, 1/60 Hz lines, written up to the sweep's top, 35.2 Hz,
+as the lines above hold the shaker's harmonics), then one ``bayesupdate identify`` on the 5
+files as one roving test, with the band the authors give for the input (GVT_Info.m
+FreqWin_Hz = [3 35]) and with the automatic band, for both estimators (LSCE, pLSCF).  Prints
+the modes, the nearest mode to each peak pick, the shapes over the 10 accelerometers (real part
+after rotation to the best real line, largest = 1) and writes the stabilization diagram of the
+chosen run to OUT (default /tmp/gvt_study).
 
 Run: .venv/bin/python studies/gvt_maewing1.py [OUT]
 """

@@ -1,8 +1,6 @@
-"""``bayesupdate frf``: time signals to FRFs, checked on a simulated hammer test (known modes),
-on the real mAEWing1 ground vibration test (shaker sweep, the authors' peak picks) and on bad
-input (one line, exit 2, or a stated warning; never a traceback or RuntimeWarning)."""
-
-from pathlib import Path
+"""``bayesupdate frf``: time signals to FRFs, checked on a simulated hammer test and a simulated
+shaker sine sweep with harmonics (known modes), and on bad input (one line, exit 2, or a stated
+warning; never a traceback or RuntimeWarning).  The real mAEWing1 sweep: tests/test_ema_gvt.py."""
 
 import numpy as np
 import pytest
@@ -10,12 +8,6 @@ import pytest
 from bayesupdate.cli import main
 from bayesupdate.ema.uff_io import read_uff58
 from bayesupdate.ema.virtual_test import exhaust_like_model, virtual_impact_test
-
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-GVT = DATA / "gvt_maewing1" / "data"
-#: explog.txt peak picks (7.797, 19.06, 23.82, 31.78 Hz) and shallow peaks (8.8-9.8, 15.4-16.4,
-#: 30.2-31.2 Hz ranges, centres given here)
-GVT_PEAKS_HZ = np.array([7.797, 9.3, 15.9, 19.06, 23.82, 30.7, 31.78])
 
 
 def run_cli(argv, capsys):
@@ -168,38 +160,74 @@ def test_uff_time_records_with_disagreeing_rates(tmp_path, capsys):
     assert code == 2 and "sample rates differ" in err and len(err.strip().splitlines()) == 1
 
 
-@pytest.fixture(scope="module")
-def gvt_frfs(tmp_path_factory):
-    if not (GVT / "run_Run1.mat").is_file():
-        pytest.skip(f"shared data not found at {GVT} (clone ../shared beside the repo)")
-    folder = tmp_path_factory.mktemp("gvt")
-    paths = []
-    for k in range(1, 6):
-        out = folder / f"run{k}.uff"
-        argv = [
-            "frf", GVT / f"run_Run{k}.mat", "--force-channel", "Force",
-            "--response", f"Accel1={2 * k - 1}V", "--response", f"Accel2={2 * k}V",
-            "--reference", "25V", "--force-unit", "lbf", "--force-sensitivity", "0.4684",
-            "--response-unit", "g", "--response-sensitivity", "1.028", "--out", out,
-        ]  # fmt: skip
-        assert main([str(a) for a in argv]) == 0
-        paths.append(out)
-    return folder, paths
+def _sweep_test(folder):
+    """A shaker sweep 2 -> 40 Hz in 60 s (then 4 s of rest) at 512 Hz whose force carries 10 % and
+    5 % of 2nd and 3rd harmonic (up to 120 Hz), on 3 modes (8, 17, 31 Hz; 0.3, 0.5, 1 %
+    damping), two accelerances computed exactly (FFT with 4x zero padding), 0.1 % noise."""
+    from bayesupdate.ema.synthesis import synthesize_frf
+
+    fs, n = 512.0, 32768
+    t = np.arange(n) / fs
+    phase = 2 * np.pi * (2.0 * t + 0.5 * 38.0 / 60.0 * t**2)
+    force = np.sin(phase) + 0.1 * np.sin(2 * phase) + 0.05 * np.sin(3 * phase)
+    force[t >= 60.0] = 0.0
+    fn, zeta = np.array([8.0, 17.0, 31.0]), np.array([0.003, 0.005, 0.01])
+    wd = 2 * np.pi * fn * np.sqrt(1 - zeta**2)
+    poles = -zeta * 2 * np.pi * fn + 1j * wd
+    residues = np.array([[1.0, 0.6, -0.8], [0.5, -1.0, 0.7]]) / (2j * wd)
+    f_pad = np.fft.rfftfreq(4 * n, 1 / fs)
+    h_pad = synthesize_frf(f_pad, poles, residues, "accelerance")
+    acc = np.fft.irfft(h_pad * np.fft.rfft(force, 4 * n), 4 * n, axis=-1)[:, :n]
+    noise = np.random.default_rng(0).standard_normal(acc.shape)
+    acc += 1e-3 * acc.std(axis=1, keepdims=True) * noise
+    np.savez(folder / "sweep.npz", force=force, a1=acc[0], a2=acc[1], time=t)
+    return fn, zeta
 
 
-def test_gvt_five_runs_identified_as_one_roving_test(gvt_frfs, capsys):
-    folder, paths = gvt_frfs
-    # the band the authors give for the input (GVT_Info.m FreqWin_Hz = [3 35])
-    argv = ["identify", *paths, "--band", "3:35", "--out", folder / "m.h5", "--json"]
-    code, text, err = run_cli(argv, capsys)
-    assert code == 0, err
+def test_sine_sweep_with_harmonics_whole_record(tmp_path, capsys):
     import json
 
-    summary = json.loads(text)
-    found = np.array([m["frequency_hz"] for m in summary["modes"]])
-    nearest = np.array([found[np.argmin(np.abs(found - p))] for p in GVT_PEAKS_HZ])
-    # peak picks within 0.5 %; the shallow peaks are ranges of +-0.5 Hz in the log
-    assert np.all(np.abs(nearest[[0, 3, 4, 6]] / GVT_PEAKS_HZ[[0, 3, 4, 6]] - 1) < 0.005)
-    assert np.all(np.abs(nearest[[1, 2, 5]] - GVT_PEAKS_HZ[[1, 2, 5]]) < 0.5)
-    assert len(found) <= len(GVT_PEAKS_HZ) + 1
-    assert any("unscaled" in n for n in summary["notes"])
+    fn, zeta = _sweep_test(tmp_path)
+    argv = ["frf", tmp_path / "sweep.npz", "--force-channel", "force", "--response", "a1=1V"]
+    argv += ["--response", "a2=2V", "--reference", "1V"]
+    code, text, err = run_cli([*argv, "--out", tmp_path / "f.uff"], capsys)
+    assert code == 0 and err == "", err
+    assert "sine sweep up to" in text and "no coherence" in text
+    frfs = read_uff58(tmp_path / "f.uff")
+    # the fundamental ends at 40 Hz; its harmonics (to 120 Hz) are not written
+    assert 39.5 < frfs.frequencies_hz[-1] < 42.0 and frfs.coherence is None
+    modes = []
+    for method in ("sweep", "welch"):
+        out = tmp_path / f"{method}.uff"
+        assert run_cli([*argv, "--method", method, "--out", out], capsys)[0] == 0
+        identify = ["identify", out, "--out", tmp_path / "m.h5", "--json", "--force"]
+        code, text, err = run_cli(identify, capsys)
+        assert code == 0, err
+        modes.append(json.loads(text)["modes"])
+    found = np.array([m["frequency_hz"] for m in modes[0]])
+    damping = np.array([m["damping_ratio"] for m in modes[0]])
+    assert found.size == 3 and np.max(np.abs(found / fn - 1)) < 1e-3
+    assert np.max(np.abs(damping / zeta - 1)) < 0.05
+    # Welch segments of the same sweep (the former default) cut each ring-down from the force
+    # that caused it: the 0.3 % mode comes out more than twice as damped
+    welch = min(modes[1], key=lambda m: abs(m["frequency_hz"] - fn[0]))
+    assert welch["damping_ratio"] > 2 * zeta[0]
+
+
+def test_sweep_top_ignores_harmonics_at_force_dropouts():
+    """While the structure absorbs the fundamental at a resonance (force drop-out), the
+    shaker's 2nd harmonic dominates the force for a few seconds: the sweep's top stays the
+    fundamental's (35 Hz, within one 1 Hz short-spectrum line), not the harmonic's 2 x 20 Hz;
+    white noise is no sweep."""
+    from bayesupdate.ema.excitation import sine_sweep_top
+
+    fs = 2000.0
+    t = np.arange(int(60 * fs)) / fs
+    phase = 2 * np.pi * (1.0 * t + 0.5 * 34.0 / 60.0 * t**2)  # 1 -> 35 Hz
+    fundamental = np.ones_like(t)
+    for start in (11.0, 30.0):  # passing about 7.5 and 18 Hz: the force drops 30 dB
+        fundamental[(t > start) & (t < start + 3.0)] = 0.03
+    force = fundamental * np.sin(phase) + 0.1 * np.sin(2 * phase) + 0.03 * np.sin(3 * phase)
+    assert 35.0 <= sine_sweep_top(force, fs) <= 36.5
+    noise = np.random.default_rng(1).standard_normal((2, t.size))
+    assert sine_sweep_top(noise, fs) is None

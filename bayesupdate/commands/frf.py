@@ -14,12 +14,16 @@ Input: UFF 58 time records (channels named by DOF label, e.g. 25V, or id line), 
 in a string variable such as MATLAB's chanInNameList); several SIGNALS files are repetitions.
 Hammer tests (--method impact, or auto for an impulsive force): hits detected, double impacts
 left out, force window and, when the response has not died out, an exponential window (its
-added damping is stated).  Sweeps, random, burst (--method welch): Hann segments with 50 %
-overlap (--window rect with --df 1/record for a sweep wholly inside each record).  H1 by
-default (--estimator h2 for force noise); coherence is written beside each FRF (UFF 58,
-function type 6).  Units are converted to SI from --force-unit / --response-unit and the
+added damping is stated).  Sine sweeps (--method sweep, or auto when every short spectrum of
+the force holds one line): one whole-record spectrum per repetition (a sweep is a transient
+inside its record; Welch segments cut the ringing of lightly damped modes from its cause).
+Random, burst, periodic chirp (--method welch, or auto otherwise, or with --df): Hann segments
+with 50 % overlap.  H1 by default (--estimator h2 for force noise); coherence (over the
+segments, hits or repetitions; none from a single spectrum) is written beside each FRF (UFF
+58, function type 6).  Units are converted to SI from --force-unit / --response-unit and the
 sensitivities; the lines written are those the force excites (its autospectrum envelope
-within 30 dB of its in-band level) unless --band.
+within 30 dB of its in-band level; for a sweep, not above its fundamental: the lines above
+hold the shaker's harmonics) unless --band.
 
 example (one GVT run, volts, 0.4684 V/lbf, 1.028 V/g):
   bayesupdate frf run_Run1.mat --force-channel Force --response Accel1=1V --response Accel2=2V \\
@@ -58,7 +62,7 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--reference", metavar="DOF", help="DOF label of the force (e.g. 25V)")
     parser.add_argument("--out", required=True, metavar="FRF.uff", help="output UFF 58 file")
-    parser.add_argument("--method", default="auto", choices=("auto", "impact", "welch"))
+    parser.add_argument("--method", default="auto", choices=("auto", "impact", "sweep", "welch"))
     parser.add_argument("--estimator", default="h1", choices=("h1", "h2"))
     parser.add_argument(
         "--window",
@@ -112,9 +116,7 @@ def _check_numbers(args) -> None:
 
 
 def run(args) -> int:
-    from bayesupdate.commands.identify import _parse_band
-    from bayesupdate.ema.frf_estimation import excited_band, frf_from_signals
-    from bayesupdate.ema.time_data import check_channels, read_channels
+    from bayesupdate.ema.frf_estimation import frf_from_signals
     from bayesupdate.ema.uff_io import parse_label
 
     out = check_output_path(args.out, args.force)
@@ -128,19 +130,7 @@ def run(args) -> int:
             f"--reference: force channel {args.force_channel!r} is no DOF label; give "
             "--reference DOF (e.g. 25V)"
         ) from None
-    runs, notes = [], []
-    for path in args.time_file:
-        channels = read_channels(path, [args.force_channel, *names], args.time, args.fs)
-        notes += check_channels(channels, path)
-        runs.append(channels)
-    fs = runs[0][0].sample_rate_hz
-    for path, chans in zip(args.time_file[1:], runs[1:], strict=True):
-        first = runs[0][0]
-        if abs(chans[0].sample_rate_hz - fs) > 1e-9 * fs or chans[0].data.size != first.data.size:
-            raise BayesUpdateError(
-                f"{path}: {chans[0].data.size} samples at {chans[0].sample_rate_hz:g} Hz, but "
-                f"{args.time_file[0]} has {first.data.size} at {fs:g} Hz; repetitions must match"
-            )
+    runs, notes, fs = _read_runs(args, names)
     force = np.array([r[0].data for r in runs]) / args.force_sensitivity
     force = force * FORCE_UNITS[args.force_unit]
     scale, kind = RESPONSE_UNITS[args.response_unit]
@@ -148,24 +138,61 @@ def run(args) -> int:
     resp = resp / args.response_sensitivity * scale
     segment = None if args.df is None else int(round(fs / args.df))
     with np.errstate(all="ignore"):  # spectra of silent lines: handled, not worth a warning
-        (f, h1, h2, coh), gff, more = frf_from_signals(
+        est = frf_from_signals(
             force, resp, fs, args.method, segment, args.record, args.tau, args.window
         )
-    channels = runs[0]
-    notes += more
-    lo, hi = excited_band(f, gff) if args.band is None else _parse_band(args.band)
+    f, coh = est.frequencies_hz, est.coherence
+    lo, hi = _lines_to_write(args, est)
     keep = (f >= lo) & (f <= hi) & (f > 0)
     if keep.sum() < 4:
         raise BayesUpdateError(f"--band {lo:g}:{hi:g}: holds fewer than 4 FRF lines")
-    h = (h1 if args.estimator == "h1" else h2)[:, keep]
-    _write(out, f[keep], h, coh[:, keep], labels, reference, kind, channels, args)
+    h = (est.h1 if args.estimator == "h1" else est.h2)[:, keep]
+    coh = None if coh is None else coh[:, keep]
+    _write(out, f[keep], h, coh, labels, reference, kind, runs[0], args)
+    notes += est.notes
+    if est.sweep_top_hz is not None and args.band is None and f[-1] > est.sweep_top_hz:
+        notes.append(
+            f"lines above the sweep's top ({est.sweep_top_hz:.3g} Hz) hold its harmonics "
+            "(shaker distortion), not excitation: not written"
+        )
     for note in notes:
         print(f"note: {note}")
-    mean_coh = np.mean(coh[:, keep], axis=1)
-    for lab, ch, c in zip(labels, names, mean_coh, strict=True):
-        print(f"FRF {lab}/{reference} ({ch}/{args.force_channel}): mean coherence {c:.3f}")
+    for i, (lab, ch) in enumerate(zip(labels, names, strict=True)):
+        level = "n/a" if coh is None else f"{np.mean(coh[i]):.3f}"
+        print(f"FRF {lab}/{reference} ({ch}/{args.force_channel}): mean coherence {level}")
     print(f"{len(labels)} FRFs, {f[keep][0]:g}..{f[keep][-1]:g} Hz, {kind}; wrote {out}")
     return 0
+
+
+def _read_runs(args, names: list[str]) -> tuple[list, list[str], float]:
+    """Force and response channels of each SIGNALS file (repetitions: same rate and length),
+    notes on them, and the sample rate [Hz]."""
+    from bayesupdate.ema.time_data import check_channels, read_channels
+
+    runs, notes = [], []
+    for path in args.time_file:
+        channels = read_channels(path, [args.force_channel, *names], args.time, args.fs)
+        notes += check_channels(channels, path)
+        runs.append(channels)
+    first = runs[0][0]
+    fs = first.sample_rate_hz
+    for path, chans in zip(args.time_file[1:], runs[1:], strict=True):
+        if abs(chans[0].sample_rate_hz - fs) > 1e-9 * fs or chans[0].data.size != first.data.size:
+            raise BayesUpdateError(
+                f"{path}: {chans[0].data.size} samples at {chans[0].sample_rate_hz:g} Hz, but "
+                f"{args.time_file[0]} has {first.data.size} at {fs:g} Hz; repetitions must match"
+            )
+    return runs, notes, fs
+
+
+def _lines_to_write(args, est) -> tuple[float, float]:
+    """(lo, hi) [Hz]: --band, or the lines the force excites (below a sweep's top)."""
+    from bayesupdate.commands.identify import _parse_band
+    from bayesupdate.ema.excitation import excited_band
+
+    if args.band is not None:
+        return _parse_band(args.band)
+    return excited_band(est.frequencies_hz, est.force_autospectrum, sweep_top_hz=est.sweep_top_hz)
 
 
 def _write(out, f, h, coh, labels, reference, kind, channels, args) -> None:

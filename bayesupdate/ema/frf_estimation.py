@@ -6,16 +6,19 @@ G_ff = <|F|^2>, G_yy = <|Y|^2>, G_fy = <conj(F) Y> averaged over all segments of
 repetitions.  H1 = G_fy / G_ff (noise on the response averages out), H2 = G_yy / conj(G_fy)
 (noise on the force averages out), coherence = |G_fy|^2 / (G_ff G_yy).
 
-Windows: ``"hann"`` for random and sweep data, ``"rect"`` for periodic or fully captured
-transients, ``"impact"`` for hammer tests: a force window (1 up to ``force_window_s``, then a
-short cosine taper to 0) on the force channel and an exponential window exp(-t / tau) on both
-channels.  The exponential window adds 1/tau to every pole's decay rate: a measured pole
-s' = s - 1/tau, so the identified damping must be corrected with
+Windows: ``"hann"`` for random data, ``"rect"`` for sine sweeps (one whole-record spectrum),
+periodic signals or fully captured transients, ``"impact"`` for hammer tests: a force window
+(1 up to ``force_window_s``, then a short cosine taper to 0) on the force channel and an
+exponential window exp(-t / tau) on both channels.  The exponential window adds 1/tau to every
+pole's decay rate: a measured pole s' = s - 1/tau, so the identified damping must be corrected with
 :func:`correct_exponential_window` (sigma = sigma' - 1/tau, damped frequency unchanged).
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from bayesupdate.ema.excitation import sine_sweep_top
 from bayesupdate.errors import BayesUpdateError
 
 
@@ -217,6 +220,27 @@ def _impact_frf(force, response, sample_rate_hz, record_s, tau_s):
     return spec, gff, notes
 
 
+@dataclass(frozen=True)
+class FrfEstimate:
+    """FRFs of n_resp responses to one force, as :func:`frf_from_signals` returns them.
+
+    frequencies_hz (n_f,); h1, h2 (n_resp, n_f) complex [response unit / N]; coherence
+    (n_resp, n_f), or None when a single spectrum was averaged (it would be 1 everywhere);
+    force_autospectrum (n_f,) [relative]; method: "impact", "sweep" or "welch"; sweep_top_hz:
+    the top of a sine sweep's fundamental (:func:`~bayesupdate.ema.excitation.sine_sweep_top`)
+    or None; notes: one line each, for the user.
+    """
+
+    frequencies_hz: np.ndarray
+    h1: np.ndarray
+    h2: np.ndarray
+    coherence: np.ndarray | None
+    force_autospectrum: np.ndarray
+    method: str
+    sweep_top_hz: float | None
+    notes: tuple
+
+
 def frf_from_signals(
     force: np.ndarray,
     response: np.ndarray,
@@ -226,70 +250,70 @@ def frf_from_signals(
     record_s: float | None = None,
     tau_s: float | None = None,
     window: str = "hann",
-) -> tuple[tuple, np.ndarray, list[str]]:
+) -> FrfEstimate:
     """FRFs of responses (n_resp, n_rep, n_t) to one force (n_rep, n_t) [SI units], n_rep
     repetitions of one measurement (1-D force / 2-D response: one repetition).
 
     method "impact" (hits detected, one record per clean hit, force + exponential windows),
+    "sweep" (one rectangular-window spectrum per repetition: a sine sweep is a transient
+    wholly inside its record, so the whole-record ratio is exact for a linear structure,
+    while Welch segments cut the ringing of lightly damped modes from the force that caused
+    it: on the mAEWing1 GVT the 7.8 and 23.8 Hz resonances, 0.2 and 0.1 % damped, showed as
+    small dips in a Welch H1),
     "welch" (``window`` segments of ``segment`` samples, default the largest power of two
-    within a quarter of a repetition, 50 % overlap: sweeps, random, burst; ``"rect"`` with a
-    whole-repetition segment for a sweep that fits in its record), or "auto" (impact when the
-    force is impulsive, :func:`is_impulsive`).  Returns ((frequencies_hz, h1, h2, coherence),
-    force autospectrum (n_f,) [relative], notes (one line each)).
+    within a quarter of a repetition, 50 % overlap: random, burst, periodic chirps), or
+    "auto": impact when the force is impulsive (:func:`is_impulsive`), sweep when it is a
+    sine sweep (:func:`~bayesupdate.ema.excitation.sine_sweep_top`), else welch.  A given
+    ``segment`` with "auto" means welch.
     """
     force = np.atleast_2d(np.asarray(force, dtype=float))
     response = np.asarray(response, dtype=float)
     response = response.reshape(-1, *force.shape)
+    if method == "auto" and is_impulsive(force.reshape(-1)):
+        method = "impact"
+    sweep = None if method == "impact" else sine_sweep_top(force, sample_rate_hz)
     if method == "auto":
-        method = "impact" if is_impulsive(force.reshape(-1)) else "welch"
+        method = "sweep" if sweep is not None and segment is None else "welch"
     if method == "impact":  # repetitions end to end: each hit makes its own record
-        return _impact_frf(
+        spec, gff, notes = _impact_frf(
             force.reshape(-1), response.reshape(response.shape[0], -1), sample_rate_hz,
             record_s, tau_s,
         )  # fmt: skip
-    if method != "welch":
-        raise BayesUpdateError(f"--method {method!r}: use auto, impact or welch")
+        return FrfEstimate(*spec, gff, method, None, tuple(notes))
+    if method not in ("sweep", "welch"):
+        raise BayesUpdateError(f"--method {method!r}: use auto, impact, sweep or welch")
+    return _averaged_frf(force, response, sample_rate_hz, method, segment, window, sweep)
+
+
+def _averaged_frf(force, response, sample_rate_hz, method, segment, window, sweep):
+    """:class:`FrfEstimate` of a sweep (one rectangular spectrum per repetition) or of Welch
+    segments; force (n_rep, n_t), response (n_resp, n_rep, n_t)."""
     n_t = force.shape[-1]
-    if segment is None:
+    if method == "sweep":
+        segment, window = n_t, "rect"
+    elif segment is None:
         segment = 2 ** int(np.floor(np.log2(max(n_t // 4, 8))))
     if segment > n_t:
         raise BayesUpdateError(
             f"--df: a segment of {segment} samples is longer than the record ({n_t}); "
             f"the finest line spacing is {sample_rate_hz / n_t:g} Hz"
         )
-    spec = h1_h2_coherence(force, response, sample_rate_hz, segment, window=window)
-    step = max(1, segment // 2)
+    f, h1, h2, coh = h1_h2_coherence(force, response, sample_rate_hz, segment, window=window)
     taper = np.hanning(segment + 1)[:-1] if window == "hann" else np.ones(segment)
-    seg = _segments(force, segment, step) * taper
+    seg = _segments(force, segment, max(1, segment // 2)) * taper
     gff = np.mean(np.abs(np.fft.rfft(seg, axis=-1)) ** 2, axis=0)
-    note = (
-        f"Welch: {seg.shape[0]} {window} segments of {segment / sample_rate_hz:g} s "
-        f"({force.shape[0]} repetitions), 50 % overlap"
-    )
-    return spec, gff, [note]
+    notes = [_spectra_note(method, seg.shape[0], segment / sample_rate_hz, window, sweep)]
+    if seg.shape[0] == 1:
+        coh = None
+        notes.append("one spectrum averaged: no coherence (repeat the test to get one)")
+    return FrfEstimate(f, h1, h2, coh, gff, method, sweep, tuple(notes))
 
 
-def excited_band(frequencies_hz: np.ndarray, gff: np.ndarray, floor: float = 1e-3) -> tuple:
-    """(lo, hi) [Hz]: the contiguous lines around the force autospectrum's peak where its
-    envelope stays at least ``floor`` (-30 dB) of its in-band level (the median over the lines
-    within 10 dB of its peak).  The envelope is the running maximum over +-10 % of each line's
-    frequency: a shaker's force drops out by 20-30 dB at the structure's own resonances (GVT
-    near 7.8 Hz, plate near 350 and 450 Hz), which must not end the band.  Outside, the FRF
-    holds noise (or a DC drift's leakage, which a gap separates from the excited band)."""
-    f = np.asarray(frequencies_hz, dtype=float)
-    g = np.where(f > 0, gff, 0.0)
-    df = f[1] - f[0]
-    half = np.maximum(np.rint(0.1 * f / df).astype(int), 2)
-    idx = np.arange(f.size)
-    lo_i, hi_i = np.maximum(idx - half, 0), np.minimum(idx + half + 1, f.size)
-    # running maximum over variable windows via a sparse table would be faster; n_f is small
-    env = np.array([g[a:b].max() for a, b in zip(lo_i, hi_i, strict=True)])
-    level = np.median(g[g >= 0.1 * np.max(g)])
-    low = env < floor * level
-    top = int(np.argmax(g))
-    below, above = np.flatnonzero(low[:top]), np.flatnonzero(low[top:])
-    lo = below[-1] + 1 if below.size else 1
-    hi = top + above[0] - 1 if above.size else f.size - 1
-    if hi - lo < 3:
-        raise BayesUpdateError("FRF estimation: the force excites fewer than 4 lines")
-    return float(f[lo]), float(f[hi])
+def _spectra_note(method: str, n_seg: int, seg_s: float, window: str, sweep) -> str:
+    if method == "sweep":
+        what = "no sine sweep found" if sweep is None else f"sine sweep up to {sweep:.3g} Hz"
+        return (
+            f"{what}: one whole-record spectrum per repetition ({n_seg} averaged, "
+            f"rectangular window, {seg_s:g} s)"
+        )
+    return f"Welch: {n_seg} {window} segments of {seg_s:g} s, 50 % overlap"

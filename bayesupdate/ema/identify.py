@@ -1,7 +1,7 @@
 """End-to-end modal identification: FRFs -> LSCE per band -> stabilization -> automatic poles ->
 LSFD shapes -> :class:`~bayesupdate.modal_data.ModalData` plus diagnostics.
 
-Without a band, the range is split automatically into consecutive narrow bands
+The range (the whole axis, or the band given) is split into consecutive narrow bands
 (:mod:`bayesupdate.ema.bands`); the modes of all bands are merged, a duplicate pair (frequency
 within 1 %, pole-vector MAC >= 0.9) keeping the estimate farther from its band's edges.  Poles are
 estimated globally over all FRFs of all test sets; the residues of all FRFs are then fitted at
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bayesupdate.correlation import mac_matrix
-from bayesupdate.ema.bands import Band, automatic_bands
+from bayesupdate.ema.bands import automatic_bands
 from bayesupdate.ema.frf_set import KIND_POWER, FrfSet
 from bayesupdate.ema.indicators import frf_correlation
 from bayesupdate.ema.lsce import band_indices, lsce
@@ -72,6 +72,10 @@ MIN_SIGNIFICANCE = 0.3
 #: ... and its peak is less than this many times the local fit residual (a weak real mode
 #: beside strong ones explains little of the FRF but stands far above the noise)
 MIN_PEAK_TO_RESIDUAL = 10.0
+#: ... or, whatever its share, when its peak does not rise above the local fit residual: the
+#: share of a pole at an antiresonance is large, as the measured level there is tiny (beam,
+#: pLSCF: a pole at 3666 Hz, |H| 1/50 of the median, share 1.3, peak 0.3 x the residual)
+MIN_PEAK_ABOVE_RESIDUAL = 1.0
 #: shape_sd_rel is capped here: a shape cannot be less known than its own size
 MAX_SHAPE_SD = 1.0
 
@@ -122,24 +126,45 @@ def shape_sd_rel(scaled: ScaledShapes) -> tuple[np.ndarray, np.ndarray]:
 ESTIMATORS = {"lsce": lsce, "plscf": plscf}
 
 
+def _edge_margin(f: np.ndarray, band, df_hz: float) -> float:
+    """Width [Hz] at each end of a band where a pole is a truncation artefact, not a mode."""
+    return max(2 * df_hz, 0.01 * (f[band.hi] - f[band.lo]))
+
+
+def _owned_range(f: np.ndarray, bands: list, i: int, df_hz: float) -> tuple[float, float]:
+    """(lo, hi) [Hz] of the poles band i keeps: its own range (:class:`Band`) with the edge
+    zone at its start handed to the band before, where it is interior, and the next band's
+    edge zone taken over.  Else a mode just above a boundary, where a weak mode's own
+    antiresonance can make the deepest sum-FRF minimum, is at the edge of the band that owns
+    it and outside the range of the band that sees it whole (mAEWing1 GVT, 23.81 Hz, with a
+    boundary at 23.77 Hz for --band 5:35)."""
+    band = bands[i]
+    lo = f[band.own_lo] + (_edge_margin(f, band, df_hz) if i > 0 else 0.0)
+    hi = f[band.own_hi] + 0.5 * df_hz
+    if i + 1 < len(bands):
+        hi += _edge_margin(f, bands[i + 1], df_hz)
+    return lo, hi
+
+
 def _poles_by_band(frfs, bands, order, settings):
     """Selected poles owned by each band, all diagrams, and stable poles at the data's top."""
     f = frfs.frequencies_hz
     tol_frequency, tol_damping, min_mac, min_count, method = settings
     candidates, diagrams, edge = [], [], []
-    for band in bands:
+    for i, band in enumerate(bands):
         res = ESTIMATORS[method](f, frfs.frf, (f[band.lo], f[band.hi]), max_order=order)
-        diagram = stabilization_diagram(res, tol_frequency, tol_damping, min_mac)
+        diagram = stabilization_diagram(
+            res, tol_frequency, tol_damping, min_mac, resolution_hz=frfs.df_hz
+        )
         diagrams.append(diagram)
-        f_own_lo, f_own_hi = f[band.own_lo], f[band.own_hi]
+        f_own_lo, f_own_hi = _owned_range(f, bands, i, frfs.df_hz)
         width = f[band.hi] - f[band.lo]
-        for pole in select_poles(diagram, min_count=min_count):
+        margin = _edge_margin(f, band, frfs.df_hz)
+        for pole in select_poles(diagram, min_count=min_count, resolution_hz=frfs.df_hz):
             # damped frequency decides ownership: it is what sits between the band's lines
             fd = pole.pole.imag / (2 * np.pi)
-            # a pole hugging an analysed edge is a truncation artefact, not a mode
-            margin = max(2 * frfs.df_hz, 0.01 * width)
             at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
-            if f_own_lo <= fd <= f_own_hi + 0.5 * frfs.df_hz and not at_edge:
+            if f_own_lo <= fd <= f_own_hi and not at_edge:
                 centrality = min(fd - f[band.lo], f[band.hi] - fd) / width
                 candidates.append((pole, centrality))
             elif band is bands[-1] and fd > f[band.hi] - margin:
@@ -149,8 +174,9 @@ def _poles_by_band(frfs, bands, order, settings):
 
 def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):
     """LSFD over lines fit_lo..fit_hi; drop, one at a time, the least significant mode that is
-    weak by both measures of :func:`modal_significance`, and refit.  Returns (kept poles, fit,
-    (2, m) share and peak-to-residual, dropped poles)."""
+    weak by the measures of :func:`modal_significance` (both low, or a peak below the local
+    residual), and refit.  Returns (kept poles, fit, (2, m) share and peak-to-residual,
+    dropped poles)."""
     f, h = frfs.frequencies_hz, frfs.frf
     f_fit = f[fit_lo : fit_hi + 1]
     kept, dropped = list(selected), []
@@ -161,6 +187,7 @@ def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):
         )
         share, peak = modal_significance(frfs, poles, fit)
         weak = (share < MIN_SIGNIFICANCE) & (peak < MIN_PEAK_TO_RESIDUAL)
+        weak |= peak < MIN_PEAK_ABOVE_RESIDUAL
         if not np.any(weak) or len(kept) == 1:
             return kept, fit, np.stack([share, peak]), dropped
         worst = int(np.flatnonzero(weak)[np.argmin(share[weak])])
@@ -183,20 +210,21 @@ def identify(
     tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 % between
     orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that pass are
     removed by :func:`modal_significance`.
-    band_hz : (lo, hi) [Hz] to analyse one band, or None for automatic consecutive bands over
-    the whole axis.  max_order : highest polynomial order (default 60 for a given band, 40 per
-    automatic band).  Returns an :class:`Identification`; raises BayesUpdateError for a bad
-    band, too few lines for the order, or when no stable mode is found.
+    band_hz : (lo, hi) [Hz] to analyse, or None for the whole axis; either range is split
+    into consecutive narrow bands (:func:`~bayesupdate.ema.bands.automatic_bands`), so a
+    mode's estimate does not depend on the range typed around it (one band of order 60 over
+    the mAEWing1 GVT's 3-35 Hz, 1920 lines, left its weak 31.7 Hz mode drifting with the
+    order, 31.48-31.68 Hz, and pLSCF lost it).  band_lines : lines per band minus one
+    (default :func:`~bayesupdate.ema.bands.automatic_bands`; at least the range's lines for
+    one band).  max_order : highest polynomial order per band (default 40).  Returns an
+    :class:`Identification`; raises BayesUpdateError for a bad band, too few lines for the
+    order, or when no stable mode is found.
     """
     f = frfs.frequencies_hz
     h = frfs.frf
-    if band_hz is not None:
-        lo_i, hi_i = band_indices(f, band_hz)
-        bands = [Band(lo_i, hi_i, lo_i, hi_i)]
-        order = 60 if max_order is None else int(max_order)
-    else:
-        order = 40 if max_order is None else int(max_order)
-        bands = automatic_bands(h, 0, f.size - 1, band_lines, order)
+    order = 40 if max_order is None else int(max_order)
+    lo_i, hi_i = (0, f.size - 1) if band_hz is None else band_indices(f, band_hz)
+    bands = automatic_bands(h, lo_i, hi_i, band_lines, order)
     if order < 2:
         raise BayesUpdateError(f"--max-order {order}: must be at least 2")
     if method not in ESTIMATORS:

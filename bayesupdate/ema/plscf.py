@@ -17,8 +17,10 @@ per FRF, for the stabilization MAC) is the residue B_o(z_r) / A'(z_r).
 Band handling as in :mod:`bayesupdate.ema.lsce`: the band's lines are a base-band spectrum
 (w - w_lo), dt = 1 / (2 (f_hi - f_lo)), poles shifted back by j w_lo.  Orders are nested: the
 basis of order n is the first n + 1 columns of the highest order's, so R, S_o and T are formed
-once and each order uses their leading blocks.  Each FRF row is weighted by 1 / its RMS over
-the band, so weak FRFs count as much as strong ones (the PolyMAX weighting W_o).
+once (Toeplitz blocks, from one FFT per FRF) and each order uses their leading blocks, reduced
+through the leading block of one Cholesky factor of R (:func:`_nested_reduction`).  Each FRF
+row is weighted by 1 / its RMS over the band, so weak FRFs count as much as strong ones (the
+PolyMAX weighting W_o).
 """
 
 import numpy as np
@@ -28,14 +30,57 @@ from bayesupdate.ema.lsce import LsceResult, band_indices
 from bayesupdate.errors import BayesUpdateError
 
 
-def _normal_blocks(w: np.ndarray, h: np.ndarray, dt: float, n_basis: int):
-    """R (n, n), S (n_o, n, n), T (n, n) of the reduced normal equations (module docstring)."""
-    x = np.exp(1j * w[:, None] * dt * np.arange(n_basis)[None, :])  # (N, n)
-    r = (x.conj().T @ x).real
-    xh = h[:, :, None] * x[None, :, :]  # (n_o, N, n): diag(H_o) X
-    s = -np.matmul(x.conj().T[None, :, :], xh).real
-    t = (x.conj().T @ (np.sum(np.abs(h) ** 2, axis=0)[:, None] * x)).real
+def _normal_blocks(h: np.ndarray, n_basis: int):
+    """R (n, n), S (n_o, n, n), T (n, n) of the reduced normal equations (module docstring) for
+    the band's N uniform lines h (n_o, N).
+
+    On the base-band grid z_k = exp(j w_k dt) = exp(j 2 pi k / M), M = 2 (N - 1), every block is
+    Toeplitz: (X^H diag(g) X)_rs = sum_k g_k z_k^(s - r), a DFT of g at lag s - r.  One FFT per
+    FRF gives all lags, O(n_o M log M), instead of the products over lines, O(n_o N n^2)
+    (40 FRFs x 4096 lines, order 60: 0.57 s -> a few ms).
+    """
+    m = 2 * (h.shape[1] - 1)
+    lag = (np.arange(n_basis)[None, :] - np.arange(n_basis)[:, None]) % m  # s - r
+    moments = np.fft.ifft(h, n=m, axis=-1) * m  # (n_o, M): sum_k h_k z_k^d, d = 0..M-1
+    r = (np.fft.ifft(np.ones(h.shape[1]), n=m) * m)[lag].real
+    s = -moments[:, lag].real
+    t = (np.fft.ifft(np.sum(np.abs(h) ** 2, axis=0), n=m) * m)[lag].real
     return r, s, t
+
+
+def _nested_reduction(r: np.ndarray, s: np.ndarray):
+    """Cholesky factor L (n, n) of R, Q = L^-1 S_o stacked as (n, n_o, n) (row, FRF, column),
+    and the cumulative Gram blocks G (n, n, n) with G[k - 1, :k, :k] = sum_o S_o^T R^-1 S_o of
+    the order with k coefficients.
+
+    L of a leading block of R is the leading block of L, and the first k rows of L^-1 S_o
+    involve only those, so Q_o[:k, :k] = L_k^-1 S_o[:k, :k] and S^T R^-1 S = Q^T Q for every
+    order from one factorisation: G[k - 1] = sum_(i < k) sum_o Q_o[i]^T Q_o[i].
+    """
+    n = r.shape[0]
+    chol = scipy.linalg.cholesky(r, lower=True)
+    s_wide = np.ascontiguousarray(np.moveaxis(s, 0, 1)).reshape(n, -1)  # (n, n_o n)
+    q = scipy.linalg.solve_triangular(chol, s_wide, lower=True).reshape(n, -1, n)
+    gram = np.cumsum(np.einsum("ioj,iok->ijk", q, q), axis=0)
+    return chol, q, gram
+
+
+def _poles_and_vectors(alpha, beta, dt, w_lo, w_hi):
+    """Poles (m,) [rad/s] inside w_lo..w_hi, sorted, and their vectors B_o(z_r) / A'(z_r)
+    (n_o, m) of the denominator alpha (n,) and numerators beta (n_o, n) of one order."""
+    n = alpha.size
+    z = np.roots(alpha[::-1])
+    z = z[np.isfinite(z) & (np.abs(z) > 0)]
+    s_base = np.log(z.astype(complex)) / dt
+    keep = (s_base.imag > 0) & (s_base.real < 0)
+    poles = s_base[keep] + 1j * w_lo
+    inside = (poles.imag >= w_lo) & (poles.imag <= w_hi)
+    zk = z[keep][inside]
+    order_idx = np.argsort(poles[inside].imag)
+    powers = zk[None, :] ** np.arange(n)[:, None]  # (n, m)
+    d_alpha = (alpha[1:] * np.arange(1, n)) @ (zk[None, :] ** np.arange(n - 1)[:, None])
+    vectors = (beta @ powers) / np.where(d_alpha != 0, d_alpha, 1.0)[None, :]
+    return poles[inside][order_idx], vectors[:, order_idx]
 
 
 def plscf(
@@ -65,38 +110,22 @@ def plscf(
         )
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=1, keepdims=True))
     h = h / np.where(rms > 0, rms, 1.0)
-    w = 2 * np.pi * (f[lo_i : hi_i + 1] - f[lo_i])
     dt = 1.0 / (2 * (f[hi_i] - f[lo_i]))
-    r_full, s_full, t_full = _normal_blocks(w, h, dt, max_order + 1)
+    r_full, s_full, t_full = _normal_blocks(h, max_order + 1)
     w_lo, w_hi = 2 * np.pi * f[lo_i], 2 * np.pi * f[hi_i]
     orders = np.arange(min_order, max_order + 1, 2)
+    chol, q, gram = _nested_reduction(r_full, s_full)
     poles_out, vectors_out = [], []
     for p in orders:
         n = int(p) + 1
-        r, s, t = r_full[:n, :n], s_full[:, :n, :n], t_full[:n, :n]
-        # R^-1 S_o for all o at once: S_o side by side as (n, n_o n)
-        s_wide = np.ascontiguousarray(np.moveaxis(s, 0, 1)).reshape(n, -1)
-        r_inv_s = scipy.linalg.cho_solve(scipy.linalg.cho_factor(r), s_wide)
-        # sum_o S_o^T R^-1 S_o as one product of the S_o stacked over o
-        m = t - s.reshape(-1, n).T @ np.ascontiguousarray(
-            np.moveaxis(r_inv_s.reshape(n, -1, n), 1, 0)
-        ).reshape(-1, n)
-        r_inv_s = np.moveaxis(r_inv_s.reshape(n, -1, n), 1, 0)  # (n_o, n, n)
+        m = t_full[:n, :n] - gram[n - 1, :n, :n]
         alpha = np.append(np.linalg.lstsq(m[:-1, :-1], -m[:-1, -1], rcond=None)[0], 1.0)
-        beta = -r_inv_s @ alpha  # (n_o, n): numerator coefficients
-        z = np.roots(alpha[::-1])
-        z = z[np.isfinite(z) & (np.abs(z) > 0)]
-        s_base = np.log(z.astype(complex)) / dt
-        keep = (s_base.imag > 0) & (s_base.real < 0)
-        poles = s_base[keep] + 1j * w_lo
-        inside = (poles.imag >= w_lo) & (poles.imag <= w_hi)
-        zk = z[keep][inside]
-        order_idx = np.argsort(poles[inside].imag)
-        powers = zk[None, :] ** np.arange(n)[:, None]  # (n, m)
-        d_alpha = (alpha[1:] * np.arange(1, n)) @ (zk[None, :] ** np.arange(n - 1)[:, None])
-        vectors = (beta @ powers) / np.where(d_alpha != 0, d_alpha, 1.0)[None, :]
-        poles_out.append(poles[inside][order_idx])
-        vectors_out.append(vectors[:, order_idx] * rms)
+        # numerator coefficients beta_o = -R^-1 S_o alpha = -L^-T (Q_o alpha), (n_o, n)
+        q_alpha = np.einsum("ioj,j->io", q[:n, :, :n], alpha)
+        beta = -scipy.linalg.solve_triangular(chol[:n, :n], q_alpha, lower=True, trans="T").T
+        poles, vectors = _poles_and_vectors(alpha, beta, dt, w_lo, w_hi)
+        poles_out.append(poles)
+        vectors_out.append(vectors * rms)
     return LsceResult(
         orders=orders,
         poles=tuple(poles_out),

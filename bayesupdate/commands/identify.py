@@ -13,8 +13,8 @@ DESCRIPTION = """Identify natural frequencies, damping ratios and mode shapes fr
 Poles come from global LSCE (default) or pLSCF/PolyMAX (--method plscf) over all FRFs with
 orders swept up to --max-order; stable poles are clustered across orders and chosen
 automatically.  Several FRF files are one test (e.g. the runs of a roving accelerometer).
-Without --band the range is analysed as consecutive narrow bands with limits at sum-FRF
-minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
+The range (all lines, or --band) is analysed as consecutive narrow bands with limits at
+sum-FRF minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
 unscaled and the output says so); each mode's shape_sd_rel estimates its shape error
 (E[1 - MAC] ~ sd^2).  Writes ModalData as HDF5 (--out), optional plots (--plots DIR) and an
 optional report (--report DIR: report.html, self-contained, and report.md with the data, the
@@ -44,13 +44,17 @@ def add_arguments(parser) -> None:
         nargs="+",
         help="UFF file(s) with dataset-58 FRFs; several files are one test (e.g. roving runs)",
     )
-    parser.add_argument("--band", metavar="LO:HI", help="analyse one band [Hz] (default: auto)")
+    parser.add_argument(
+        "--band",
+        metavar="LO:HI",
+        help="range to analyse [Hz], split into narrow bands like the whole axis (default: all)",
+    )
     parser.add_argument(
         "--max-order",
         type=int,
         default=None,
         metavar="N",
-        help="highest LSCE polynomial order (default 60 with --band, else 40)",
+        help="highest polynomial order per band (default 40)",
     )
     parser.add_argument(
         "--method",

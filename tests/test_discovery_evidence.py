@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import (
     FitSpace,
     ModelFit,
@@ -14,6 +13,7 @@ from bayesupdate.discovery.evidence import (
 )
 from bayesupdate.discovery.flagging import flag_modes
 from bayesupdate.inference.likelihood_blocks import SIGMA_FLOOR, NoiseModel, noise_model
+from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData
 
@@ -26,11 +26,11 @@ def _linear_case(seed=0, m=10, d=2):
     jac = rng.normal(size=(m, d))
     y = jac @ rng.normal(scale=TAU, size=d) + rng.normal(size=m)
     axes = tuple(
-        ParameterAxis(
+        ParameterSpec(
             f"p{j}",
             (-40 * TAU, 40 * TAU),
             prior_from_mapping({"kind": "normal", "mean": 0.0, "sd": TAU}, (-40 * TAU, 40 * TAU)),
-            False,
+            axis="linear",
         )
         for j in range(d)
     )

@@ -8,7 +8,6 @@ import pytest
 from scipy import integrate, optimize, stats
 
 from bayesupdate.correlation import mac_matrix
-from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.discovery.evidence import FitSpace, laplace
 from bayesupdate.discovery.flagging import ShapeTests, flag_modes
 from bayesupdate.discovery.shape_evidence import (
@@ -19,6 +18,7 @@ from bayesupdate.discovery.shape_evidence import (
     unit_real_shapes,
 )
 from bayesupdate.inference.likelihood_blocks import NoiseModel, shape_residuals
+from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData, noisy_modes
 from bayesupdate.model_protocol import Prediction
@@ -144,11 +144,11 @@ def _space_with_shapes(k=2, n_dof=8, level=0.02, seed=3):
     noise = NoiseModel(np.full(m_f, 0.01), np.ones(m_f), False, "fixed", 0.01)
     test = unit_real_shapes(rng.normal(size=(n_dof, k)))
     shapes = ShapeEvidence(np.arange(k), test, np.full(k, level))
-    axis = ParameterAxis(
+    axis = ParameterSpec(
         "p",
         (-50.0, 50.0),
         prior_from_mapping({"kind": "normal", "mean": 0.0, "sd": 3.0}, (-50.0, 50.0)),
-        False,
+        axis="linear",
     )
     return FitSpace(None, (axis,), noise, shapes), rng
 

@@ -1,10 +1,11 @@
 """Candidate effects and the coordinates they are fitted in.
 
 A *candidate* is one effect kind at one location (``effects.Effect``).  Each is fitted together
-with the design variables, so every parameter (design variable or effect parameter) is described
-by a ``ParameterAxis``: bounds, prior, and whether it is fitted in log coordinates (when its
-bounds span >= 2 decades, e.g. a joint stiffness in [1e2, 1e6] N m/rad).  The optimiser works in
-unit-box coordinates u in [0, 1]; the Laplace approximation in z = theta or z = log(theta).
+with the design variables, so every parameter (design variable or effect parameter) is an
+``inference.parameter_space.ParameterSpec``: bounds, prior, and whether it is fitted in log
+coordinates (when its bounds span >= 2 decades, e.g. a joint stiffness in [1e2, 1e6] N m/rad).
+The refits work in unit-box coordinates u in [0, 1]; the Laplace approximation in z = theta or
+z = log(theta) (``ParameterSpace``).
 
 The *null value* of an effect parameter is the value at which the extended model equals the
 model without the effect (zero added mass, zero spring, factor 1, the joint's modelled
@@ -18,46 +19,8 @@ import numpy as np
 
 from bayesupdate.discovery.effects import EFFECT_KINDS, Effect, effect_locations, extend_model
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.priors import Prior, prior_from_mapping
-from bayesupdate.inference.problem import ParameterSpec
-
-#: bounds ratio from which a positive parameter is fitted in log coordinates
-LOG_AXIS_RATIO = 100.0
-
-
-@dataclass(frozen=True)
-class ParameterAxis:
-    """One fitted parameter: SI bounds, prior (truncated to the bounds), log or linear axis."""
-
-    name: str
-    bounds: tuple[float, float]
-    prior: Prior
-    log: bool
-
-    @property
-    def z_bounds(self) -> tuple[float, float]:
-        low, high = self.bounds
-        return (np.log(low), np.log(high)) if self.log else (low, high)
-
-    def to_z(self, theta):
-        return np.log(theta) if self.log else np.asarray(theta, dtype=float)
-
-    def from_z(self, z):
-        return np.exp(z) if self.log else np.asarray(z, dtype=float)
-
-    def log_prior_z(self, z):
-        """Log density of the prior in z coordinates, including |d theta / d z| (any shape)."""
-        z = np.asarray(z, dtype=float)
-        value = self.prior.logpdf(self.from_z(z))
-        return value + z if self.log else value
-
-
-def axis_for(spec: ParameterSpec) -> ParameterAxis:
-    """The axis of a calibrated parameter (log when positive and spanning >= 2 decades)."""
-    low, high = spec.bounds
-    return ParameterAxis(
-        spec.name, spec.bounds, spec.prior, low > 0 and high / low >= LOG_AXIS_RATIO
-    )
+from bayesupdate.inference.parameter_space import ParameterSpec
+from bayesupdate.inference.priors import prior_from_mapping
 
 
 # -- null values ------------------------------------------------------------------------------
@@ -93,12 +56,12 @@ def null_values(model, effect: Effect) -> dict[str, float]:
 # -- candidates -------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Candidate:
-    """One effect at one location, with its extended model and the axes of its parameters."""
+    """One effect at one location, with its extended model and its parameters (each starting at
+    its null value, on its natural axis)."""
 
     effect: Effect
     model: object
-    axes: tuple[ParameterAxis, ...]
-    null: dict  # full parameter name -> null value (SI)
+    axes: tuple[ParameterSpec, ...]
 
     @property
     def label(self) -> str:
@@ -108,20 +71,23 @@ class Candidate:
     def names(self) -> tuple[str, ...]:
         return tuple(a.name for a in self.axes)
 
+    @property
+    def null(self) -> dict[str, float]:
+        """Full parameter name -> null value (SI)."""
+        return {a.name: a.start for a in self.axes}
+
 
 def make_candidate(model, effect: Effect) -> Candidate:
     """Extend ``model`` by ``effect`` and describe the effect's parameters."""
     extended = extend_model(model, effect)
     kind = EFFECT_KINDS[effect.kind]
     nulls = null_values(model, effect)
-    axes, null = [], {}
+    axes = []
     for p in kind.parameters:
         full = f"{effect.tag}:{p.name}"
         prior = prior_from_mapping(p.prior, p.bounds, full)
-        low, high = p.bounds
-        axes.append(ParameterAxis(full, p.bounds, prior, low > 0 and high / low >= LOG_AXIS_RATIO))
-        null[full] = nulls[p.name]
-    return Candidate(effect, extended, tuple(axes), null)
+        axes.append(ParameterSpec(full, p.bounds, prior, nulls[p.name]))
+    return Candidate(effect, extended, tuple(axes))
 
 
 def enumerate_effects(

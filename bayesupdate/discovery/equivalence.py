@@ -25,13 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from bayesupdate.discovery.candidates import ParameterAxis, axis_for, make_candidate
+from bayesupdate.discovery.candidates import make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace
 from bayesupdate.discovery.localization import candidate_problem
 from bayesupdate.discovery.shape_evidence import unit_real_shapes
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import NoiseModel, ShapeBlock
+from bayesupdate.inference.parameter_space import EvaluationCount
 from bayesupdate.inference.problem import build_problem
 from bayesupdate.modal_data import ModalData
 
@@ -90,13 +91,11 @@ def fit_to_truth(
         raise BayesUpdateError("equivalence: frequency_noise and shape_noise must be > 0")
     problem = build_problem(model, truth, None, pairing="mac")
     design = np.array([design_start[p.name] for p in problem.parameters], dtype=float)
-    axes: tuple[ParameterAxis, ...] = tuple(axis_for(p) for p in problem.parameters)
     starts = [design]
     label = "baseline"
     if effect is not None:
         candidate = make_candidate(model, effect)
         problem = candidate_problem(problem, design, candidate)
-        axes = axes + candidate.axes
         label = effect.tag
         grids = [np.linspace(*a.z_bounds, effect_starts + 2)[1:-1] for a in candidate.axes]
         mesh = np.meshgrid(*grids, indexing="ij")
@@ -114,21 +113,16 @@ def fit_to_truth(
     test_unit = unit_real_shapes(np.asarray(truth.shapes))
     shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
     shapes = ShapeBlock(np.arange(m), test_unit, np.full(m, shape_sd))
-    space = FitSpace(problem, axes, noise, shapes)
-
-    def residual(u):
-        e, evaluation = space.relative_errors(space.theta_from_z(space.z_from_u(u)))
-        if not evaluation.ok:  # a failed solve: a large, finite residual keeps the solver away
-            return np.full(space.size, 1e6)
-        return space.residual_vector(e, evaluation.paired.shapes)
-
+    space = FitSpace(problem, problem.parameters, noise, shapes)
+    # a failed solve: a 1000 % error in noise units (parameter_space.FAILED_RELATIVE_ERROR)
+    residual = space.unit_box_residuals(EvaluationCount())
     best = None
     for theta0 in starts:
         u0 = np.clip(space.u_from_theta(theta0), 0.0, 1.0)
         fit = least_squares(residual, u0, bounds=(0.0, 1.0), x_scale=0.1)
         if best is None or fit.cost < best.cost:
             best = fit
-    theta = space.theta_from_z(space.z_from_u(best.x))
+    theta = space.parameter_space.theta_from_u(best.x)
     r = best.fun
     return EquivalenceFit(
         label=label,

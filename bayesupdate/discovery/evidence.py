@@ -17,7 +17,7 @@ level, then cost only m/2 ln 64 = 25 nats, less than a few shape blocks could ga
 baseline of an identified null test was dragged that far (issue 15).
 
 Evidence by the Laplace approximation (MacKay 2003 ch. 27; Kass & Raftery 1995 eq. 4) in the fit
-coordinates z (``candidates.ParameterAxis``):
+coordinates z (the axis coordinates of ``inference.parameter_space``):
 
     log Z = log L(z*) + log p(z*) + d/2 log 2 pi - 1/2 log det H + sum_j log T_j,
 
@@ -42,11 +42,11 @@ with log p - log q.
 import time
 import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy import optimize, special, stats
 
-from bayesupdate.discovery.candidates import ParameterAxis
 from bayesupdate.inference.likelihood_blocks import (
     LOG_2PI,
     FixedNoiseLikelihood,
@@ -54,18 +54,21 @@ from bayesupdate.inference.likelihood_blocks import (
     ShapeBlock,
     relative_errors,
 )
-
-#: residual given where the model fails (large, finite)
-_FAILED = 1e3
+from bayesupdate.inference.parameter_space import (
+    EvaluationCount,
+    ParameterSpace,
+    ParameterSpec,
+    unit_box_residuals,
+)
 
 
 @dataclass(frozen=True)
 class FitSpace:
-    """What a fit needs: the calibration problem of the (extended) model, the axes of its
-    parameters (problem order), the frequency noise and the shape block (``likelihood``)."""
+    """What a fit needs: the calibration problem of the (extended) model, its parameters
+    (problem order, each on its axis), the frequency noise and the shape block (``likelihood``)."""
 
     problem: object
-    axes: tuple[ParameterAxis, ...]
+    axes: tuple[ParameterSpec, ...]
     noise: NoiseModel
     shapes: ShapeBlock | None = None
 
@@ -83,28 +86,53 @@ class FitSpace:
         """Length of the residual vector: frequencies, then shapes mode after mode."""
         return self.likelihood.size
 
+    @cached_property
+    def parameter_space(self) -> ParameterSpace:
+        """The coordinates theta, z (axis) and u (unit box) of the fit (``parameter_space``)."""
+        return ParameterSpace(self.axes)
+
     @property
     def z_low(self) -> np.ndarray:
-        return np.array([a.z_bounds[0] for a in self.axes])
+        return self.parameter_space.z_low
 
     @property
     def z_high(self) -> np.ndarray:
-        return np.array([a.z_bounds[1] for a in self.axes])
+        return self.parameter_space.z_high
 
     def z_from_u(self, u):
-        return self.z_low + np.clip(u, 0.0, 1.0) * (self.z_high - self.z_low)
+        return self.parameter_space.z_from_u(u)
 
     def u_from_theta(self, theta) -> np.ndarray:
-        z = np.array([a.to_z(t) for a, t in zip(self.axes, theta, strict=True)], dtype=float)
-        return (z - self.z_low) / (self.z_high - self.z_low)
+        return self.parameter_space.u_from_theta(theta)
 
     def theta_from_z(self, z) -> np.ndarray:
-        return np.array([a.from_z(v) for a, v in zip(self.axes, z, strict=True)], dtype=float)
+        return self.parameter_space.theta_from_z(z)
 
     def log_prior_z(self, z: np.ndarray) -> np.ndarray:
         """z (n, d) -> (n,) joint log prior density in z coordinates."""
-        z = np.atleast_2d(z)
-        return sum(a.log_prior_z(z[:, j]) for j, a in enumerate(self.axes))
+        return self.parameter_space.log_prior_z(z)
+
+    @property
+    def residual_units(self) -> np.ndarray:
+        """(size,) the noise sd each component of ``residual_vector`` is measured in: the
+        frequency levels, then each mode's shape level once per DOF."""
+        units = self.noise.scale[self.noise.used]
+        if self.shapes is None:
+            return units
+        return np.concatenate([units, np.repeat(self.shapes.scale, self.shapes.n_dof)])
+
+    def unit_box_residuals(self, count: EvaluationCount):
+        """r(u) (size,): ``residual_vector`` at theta(u) for a least-squares fit in the unit box,
+        with the failure convention of ``parameter_space.unit_box_residuals``."""
+
+        def residuals_at(theta):
+            e, evaluation = self.relative_errors(theta)
+            if not evaluation.ok:
+                return None
+            shapes = None if evaluation.paired is None else evaluation.paired.shapes
+            return self.residual_vector(e, shapes)
+
+        return unit_box_residuals(self.parameter_space, residuals_at, self.residual_units, count)
 
     def relative_errors(self, theta) -> tuple[np.ndarray, object]:
         """e (m,) at theta and the problem's Evaluation (e NaN where the model failed)."""
@@ -232,26 +260,15 @@ def fit_model(
     best_start_only: bool = False,
 ) -> ModelFit:
     """Bounded least squares (TRF, unit-box coordinates, forward-difference Jacobians with step
-    1e-4, recomputed at each end point) from each start, then the Laplace evidence of the
-    distinct optima (module doc).
+    1e-4, recomputed at each end point; a failed model as ``FitSpace.unit_box_residuals``) from
+    each start, then the Laplace evidence of the distinct optima (module doc).
 
     best_start_only : evaluate every start once and fit from the one with the smallest chi^2
     only (the cheap quick tier)."""
     t0 = time.perf_counter()
-    n_eval = [0]
+    count = EvaluationCount()
     span = space.z_high - space.z_low
-    m_used = space.size
-
-    def fun(u):
-        n_eval[0] += 1
-        e, evaluation = space.relative_errors(space.theta_from_z(space.z_from_u(u)))
-        r = None
-        if evaluation.ok:
-            shapes = None if evaluation.paired is None else evaluation.paired.shapes
-            r = space.residual_vector(e, shapes)
-        if r is None or not np.all(np.isfinite(r)):
-            return np.full(m_used, _FAILED)
-        return r
+    fun = space.unit_box_residuals(count)
 
     u_starts = [np.clip(space.u_from_theta(t), 0.0, 1.0) for t in starts_theta]
     if best_start_only and len(u_starts) > 1:
@@ -292,7 +309,7 @@ def fit_model(
     best = distinct[0]
     theta = space.theta_from_z(best.z)
     e, evaluation = space.relative_errors(theta)
-    n_eval[0] += 1
+    count.evaluations += 1
     return ModelFit(
         label=label,
         kind=kind,
@@ -304,7 +321,7 @@ def fit_model(
         expr=float(space.problem.expr(evaluation.frequencies_hz)),
         optima=distinct,
         log_evidence=log_z,
-        evaluations=n_eval[0],
+        evaluations=count.evaluations,
         wall_s=time.perf_counter() - t0,
         space=space,
         stage=stage,

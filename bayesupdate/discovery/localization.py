@@ -21,13 +21,14 @@ Three views, each a ranked list:
    the paired modes (Lieven & Ewins 1988).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from bayesupdate.correlation import comac
-from bayesupdate.discovery.candidates import Candidate, ParameterAxis
-from bayesupdate.inference.problem import ParameterSpec, build_problem
+from bayesupdate.discovery.candidates import Candidate
+from bayesupdate.inference.parameter_space import ParameterSpec
+from bayesupdate.inference.problem import build_problem
 
 #: probe step as a fraction of the effect parameter's z range
 PROBE_FRACTION = 0.02
@@ -75,11 +76,12 @@ class Localization:
 def candidate_problem(baseline_problem, design_theta, candidate: Candidate):
     """The calibration problem of ``candidate``: design variables (bounds, priors as in the
     baseline; start at the baseline optimum) plus the effect parameters (start at null)."""
-    specs = tuple(
-        ParameterSpec(p.name, p.bounds, p.prior, float(t))
-        for p, t in zip(baseline_problem.parameters, design_theta, strict=True)
-    ) + tuple(
-        ParameterSpec(a.name, a.bounds, a.prior, candidate.null[a.name]) for a in candidate.axes
+    specs = (
+        tuple(
+            replace(p, start=float(t))
+            for p, t in zip(baseline_problem.parameters, design_theta, strict=True)
+        )
+        + candidate.axes
     )
     return build_problem(
         candidate.model,
@@ -91,7 +93,7 @@ def candidate_problem(baseline_problem, design_theta, candidate: Candidate):
     )
 
 
-def _probe(axis: ParameterAxis, null: float) -> tuple[float, float]:
+def _probe(axis: ParameterSpec, null: float) -> tuple[float, float]:
     """(z_null, dz): a step into the admissible range."""
     z_lo, z_hi = axis.z_bounds
     z0 = float(axis.to_z(null))
@@ -181,7 +183,7 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
     return CandidateScore(candidate, max(drop, 0.0), step_theta, g_perp)
 
 
-def screen_grid(axis: ParameterAxis, z0: float) -> list[float]:
+def screen_grid(axis: ParameterSpec, z0: float) -> list[float]:
     """Magnitudes of the grid screen: ``SCREEN_FRACTIONS`` (5 % ... 100 %) of the way from the
     null value to each bound that is not the null itself (7 points one-sided, 14 two-sided).
     Dense enough that a mid-range effect (a joint at 1e3 N m/rad, 3/4 of the log range from

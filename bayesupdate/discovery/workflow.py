@@ -60,7 +60,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import logsumexp
 
-from bayesupdate.discovery.candidates import Candidate, axis_for, enumerate_effects, make_candidate
+from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
 from bayesupdate.discovery.flagging import ModeFlags, ShapeTests, flag_modes
@@ -533,7 +533,7 @@ def discover(
     timings["baseline_calibration_s"] = time.perf_counter() - t0
     e0 = relative_errors(baseline.frequencies_hz, data.frequencies_hz)
     noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
-    axes = tuple(axis_for(p) for p in problem.parameters)
+    axes = problem.parameters
     shapes = None
     if problem.pairing.method == "mac":  # the test's shapes are evidence too (shape_evidence)
         at_baseline = problem.evaluate(baseline.theta)

@@ -3,10 +3,10 @@
 The fit objective is seed eq. 19, Expr = sum_i w_i ((f_si - f_Ti) / f_Ti)^2, plus the optional mass
 and MAC terms of ``ObjectiveSpec``; it is minimised as a sum of squared residuals with
 ``scipy.optimize.least_squares`` (trust-region reflective, bounded) in normalised coordinates
-u = (theta - low) / (high - low) in [0, 1]^d, so thicknesses (1e-3 m) and densities (1e4 kg/m^3)
-are equally scaled.  Starts come from a scrambled Sobol design (seeded).  The seed reports that
-different starts reach the same optimum; ``converged_starts`` counts starts whose objective is
-within 1 % of the best.
+u = (theta - low) / (high - low) in [0, 1]^d (``parameter_space``'s unit box, every axis linear),
+so thicknesses (1e-3 m) and densities (1e4 kg/m^3) are equally scaled.  Starts come from a
+scrambled Sobol design (seeded).  The seed reports that different starts reach the same optimum;
+``converged_starts`` counts starts whose objective is within 1 % of the best.
 
 With shape-tracked pairing the objective has kinks: where two modes veer (the exhaust's modes 6
 and 7) the tracked assignment flips, and the optima lie on that flip.  A gradient method stops
@@ -31,10 +31,12 @@ from scipy import optimize, stats
 from bayesupdate import interrupts
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.pairing import ResidualTable
+from bayesupdate.inference.parameter_space import (
+    EvaluationCount,
+    ParameterSpace,
+    unit_box_residuals,
+)
 from bayesupdate.inference.problem import CalibrationProblem
-
-#: residual given to the optimiser where the model failed: large, finite, constant
-_FAILED_RESIDUAL = 10.0
 
 
 @dataclass(frozen=True)
@@ -101,28 +103,22 @@ def space_filling_starts(n_starts: int, n_dim: int, seed: int, design: str = "so
     raise BayesUpdateError(f"optimizer.design: {design!r}; use 'sobol' or 'lhs'")
 
 
-class _Counter:
-    """Counts model evaluations and failures of one fit (mutable; local to ``calibrate``)."""
-
-    def __init__(self):
-        self.evaluations = 0
-        self.failed = 0
+def unit_box(problem: CalibrationProblem) -> ParameterSpace:
+    """The optimiser's coordinates: u linear in theta on every axis (module docstring)."""
+    return ParameterSpace(problem.parameters).linear()
 
 
-def _residual_function(problem: CalibrationProblem, counter: _Counter):
-    low, span = problem.lower, problem.upper - problem.lower
+def _residual_function(problem: CalibrationProblem, count: EvaluationCount):
+    """r(u): the weighted residuals of ``problem`` over its unit box (eq. 19 plus extra terms).
+    They are relative errors (unit 1): a failed model gets a 1000 % error in each
+    (``parameter_space.FAILED_RELATIVE_ERROR``), counted in ``count``."""
     n_res = problem.residual_vector(problem.evaluate(problem.start)).size
 
-    def residuals(u: np.ndarray) -> np.ndarray:
-        counter.evaluations += 1
-        evaluation = problem.evaluate(low + np.clip(u, 0.0, 1.0) * span)
-        r = problem.residual_vector(evaluation) if evaluation.ok else None
-        if r is None or not np.all(np.isfinite(r)):
-            counter.failed += 1
-            return np.full(n_res, _FAILED_RESIDUAL)
-        return r
+    def residuals_at(theta: np.ndarray) -> np.ndarray | None:
+        evaluation = problem.evaluate(theta)
+        return problem.residual_vector(evaluation) if evaluation.ok else None
 
-    return residuals
+    return unit_box_residuals(unit_box(problem), residuals_at, np.ones(n_res), count)
 
 
 def _nelder_mead_polish(residuals, u0: np.ndarray, value0: float, max_evaluations: int):
@@ -173,12 +169,12 @@ def calibrate(
     t0 = time.perf_counter()
     polish = max_nfev is None if polish is None else bool(polish)
     d = len(problem.parameters)
-    low, span = problem.lower, problem.upper - problem.lower
-    counter = _Counter()
+    box = unit_box(problem)
+    counter = EvaluationCount()
     residuals = _residual_function(problem, counter)
     u_starts = space_filling_starts(starts, d, seed, design)
     if include_start:
-        u_starts = np.vstack([(problem.start - low) / span, u_starts])
+        u_starts = np.vstack([box.u_from_theta(problem.start), u_starts])
     if method == "global":
         de = optimize.differential_evolution(
             lambda u: float(np.sum(residuals(u) ** 2)),
@@ -230,7 +226,7 @@ def calibrate(
     # re-evaluate the best end point; a failure there (a one-off eigen-solve failure) falls back
     # to the next best end point instead of ending the run
     for best in map(int, order):
-        theta = low + ends[best] * span
+        theta = box.theta_from_u(ends[best])
         evaluation = problem.evaluate(theta)
         counter.evaluations += 1
         if evaluation.ok:
@@ -258,8 +254,8 @@ def calibrate(
         table=problem.table(evaluation),
         starts=int(u_starts.shape[0]),
         converged_starts=converged,
-        start_points=low + u_starts * span,
-        end_points=low + ends * span,
+        start_points=box.theta_from_u(u_starts),
+        end_points=box.theta_from_u(ends),
         end_objectives=objectives,
         distinct_optima=tuple(distinct),
         failed_evaluations=counter.failed,

@@ -21,20 +21,11 @@ from bayesupdate.inference.pairing import (
     residual_table,
     shapes_at,
 )
-from bayesupdate.inference.priors import Prior, prior_from_mapping
+from bayesupdate.inference.parameter_space import ParameterSpec
+from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData
 from bayesupdate.model_protocol import ParametricModel, Prediction
 from bayesupdate.paper import objective_expr
-
-
-@dataclass(frozen=True)
-class ParameterSpec:
-    """One calibrated parameter: SI bounds, prior (truncated to the bounds), start value."""
-
-    name: str
-    bounds: tuple[float, float]
-    prior: Prior
-    start: float
 
 
 @dataclass(frozen=True)

@@ -54,8 +54,7 @@ from bayesupdate.fe import (
     oval_tube,
     solid_round,
 )
-
-MEASURED_MASS_KG = 12.29  # seed section 2 and Table 3
+from bayesupdate.paper import MEASURED_MASS_KG
 
 PARTS = (
     "hot_pipe",
@@ -67,6 +66,8 @@ PARTS = (
     "front_hanger",
     "rear_hanger_bar",
 )
+#: joint spring parts (flow order), the connections a shell model resolves and a beam model
+#: lumps into springs: their stiffness is the model-form uncertainty of the connections
 JOINTS = (
     "hot_pipe/catalyst",
     "catalyst/cold_pipe",
@@ -413,16 +414,6 @@ def envelope(structure) -> dict:
     return {"length": float(span[0]), "width": float(span[1]), "height": float(span[2])}
 
 
-#: joint spring parts (flow order), the connections a shell model resolves and a beam model
-#: lumps into springs: their stiffness is the model-form uncertainty of the connections
-JOINT_PARTS = (
-    "hot_pipe/catalyst",
-    "catalyst/cold_pipe",
-    "cold_pipe/intermediate_muffler",
-    "intermediate_muffler/cold_pipe",
-    "cold_pipe/main_muffler",
-    "main_muffler/tail_pipe",
-)
 #: bounds of the joint stiffness factors (nuisance parameters; factor 1 = the fitted geometry)
 JOINT_FACTOR_BOUNDS = (0.1, 10.0)
 
@@ -442,7 +433,7 @@ def build_exhaust_model(
     geometry : "best" (the stored best fit), an index (0 = best, 1.. = runner-up fits) or a dict
     of fitted quantities (see ``GEOMETRY_QUANTITIES``).  elbow_flexibility : apply the ASME B31.3
     flexibility factor to the bends.  joint_nuisance : also bind each joint spring part "A/B"
-    (``JOINT_PARTS``) to a parameter ``k_A__B`` (property stiffness_factor, default 1, bounds
+    (``JOINTS``) to a parameter ``k_A__B`` (property stiffness_factor, default 1, bounds
     ``JOINT_FACTOR_BOUNDS``), so the connection stiffnesses can be sampled as nuisance
     parameters; off (default) the model is unchanged.
     """
@@ -450,11 +441,12 @@ def build_exhaust_model(
     structure = build_exhaust_structure(full_geometry(fitted), elbow_flexibility)
     if structure.metadata["mm_internal_mass_kg"] < 0:
         raise BayesUpdateError(
-            "exhaust geometry: the shells alone weigh more than 12.29 kg; reduce the sizes"
+            f"exhaust geometry: the shells alone weigh more than {MEASURED_MASS_KG} kg; "
+            "reduce the sizes"
         )
     bindings, defaults, bounds = dict(DESIGN_BINDINGS), dict(DESIGN_DEFAULTS), dict(DESIGN_BOUNDS)
     if joint_nuisance:
-        for part in JOINT_PARTS:
+        for part in JOINTS:
             name = joint_parameter(part)
             bindings[name] = Binding(part, "stiffness_factor")
             defaults[name] = 1.0

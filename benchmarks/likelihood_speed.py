@@ -16,7 +16,7 @@ and the largest relative frequency error against full solves on fresh uniform po
 The reduced rows are timed three ways in the same run: the batched solve (``fe.batched_eigen``)
 split over 2 threads (or ``BAYESUPDATE_SOLVER_THREADS`` if more), the same on one thread (the
 default), and the independent per-point LAPACK dsygvd path
-(``fe.reduced.sygvd_elastic_eigenvalues``).
+(``sygvd_elastic_eigenvalues`` in tests/reference_eigen.py, the tests' reference).
 """
 
 import os
@@ -25,14 +25,19 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from bayesupdate.fe.batched_eigen import THREADS_VARIABLE, solver_threads  # noqa: E402
-from bayesupdate.fe.reduced import reduced_model_for, sygvd_elastic_eigenvalues  # noqa: E402
+from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.paper import TABLE2_EMA_HZ, TABLE3_OPTIMUM_SI  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from reference_eigen import sygvd_elastic_eigenvalues  # noqa: E402
 
 BATCH = 32
 SIGMA = 0.05

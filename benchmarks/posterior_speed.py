@@ -29,6 +29,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
+from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -61,7 +62,8 @@ def run(args, reduced: bool) -> dict:
     calibration = calibrate(problem, starts=args.starts, seed=0, max_nfev=args.max_nfev)
     info = {}
     if rom is not None:
-        info["error_at_optimum"] = rom.certify_at(calibration.theta[None, :], problem.names)
+        rom, info["error_at_optimum"] = rom.certify_at(calibration.theta[None, :], problem.names)
+        problem = replace(problem, model=rom)
     t_opt = time.perf_counter() - t0
     spec = likelihood()
     log_post = LogPosterior(problem, spec)
@@ -85,7 +87,7 @@ def run(args, reduced: bool) -> dict:
     cpu = time.process_time() - c0
     flat = post.chain[post.burn :].reshape(-1, post.chain.shape[-1])
     if rom is not None:
-        info["error_at_mean"] = rom.certify_at(flat[:, :-1].mean(axis=0)[None, :], problem.names)
+        info["error_at_mean"] = rom.certify_at(flat[:, :-1].mean(axis=0)[None, :], problem.names)[1]
     return dict(
         label="reduced" if reduced else "full",
         wall_s=wall,

@@ -76,7 +76,7 @@ def run_case(label, geometry, joints, args, out: Path) -> dict:
     rom_info = None
     if rom is not None:
         mean = posterior.samples()[:, : len(problem.names)].mean(axis=0)
-        rom_info = certify_rom(rom, mean[None, :], problem.names, f"{label} posterior mean")
+        rom_info = certify_rom(rom, mean[None, :], problem.names, f"{label} posterior mean")[1]
     predictions = posterior_predictive(log_post, posterior, seed=args.seed)
     path = write_result(
         out / f"posterior_{label.replace(' ', '_').replace('+', '_')}.h5",

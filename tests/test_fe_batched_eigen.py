@@ -1,17 +1,17 @@
 """Threaded batched eigen-solve of reduced free-free pencils (bayesupdate.fe.batched_eigen),
 checked against dense LAPACK on the pencils with the rigid coordinates kept, and against the
-independent dsygvd path of fe.reduced."""
+independent dsygvd path of tests/reference_eigen.py."""
 
 import numpy as np
 import pytest
 import scipy.linalg as sl
+from reference_eigen import sygvd_elastic_eigenvalues
 
 from bayesupdate.fe.batched_eigen import (
     THREADS_VARIABLE,
     batched_elastic_eigenvalues,
     solver_threads,
 )
-from bayesupdate.fe.reduced import sygvd_elastic_eigenvalues
 
 N_RIGID, N_ELASTIC, N_MODES, BATCH = 6, 30, 10, 24
 

@@ -12,11 +12,12 @@ import scipy.linalg as sl
 from bayesupdate.fe import STEEL, Binding, FEModel, StructureBuilder, circular_tube, oval_tube
 from bayesupdate.fe.reduced import (
     ReducedFEModel,
-    _b31_kinks,
+    ReducedSettings,
     barycentric_weights,
     chebyshev_nodes,
     reduced_model_for,
 )
+from bayesupdate.fe.reduced.affine import b31_kinks
 from bayesupdate.fe.structure import _bend_flexibility_factor
 from bayesupdate.parallel import PoolEvaluator
 
@@ -71,9 +72,13 @@ def fe():
     return frame_model()
 
 
+def settings(**changes) -> ReducedSettings:
+    return ReducedSettings(**{"n_modes": N_MODES, "tol": 1e-4, "seed": 0, **changes})
+
+
 @pytest.fixture(scope="module")
 def rom(fe):
-    return ReducedFEModel(fe, n_modes=N_MODES, tol=1e-4, seed=0).build()
+    return ReducedFEModel(fe, settings=settings()).build()
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +93,7 @@ def fresh(fe, rom):
 def test_certified_error_holds_on_fresh_points(rom, fresh):
     theta, f_full = fresh
     f_rom = rom.predict_frequencies_batch(theta, rom.parameter_names, N_MODES)
-    assert rom.certified and 6 < rom.size <= rom.max_size
+    assert rom.certified and 6 < rom.size <= rom.settings.max_size
     assert rom.max_rel_error <= 1e-4
     assert np.max(np.abs(f_rom / f_full - 1)) <= 1e-4
     assert "certified" in str(rom) and f"size {rom.size}" in str(rom)
@@ -150,7 +155,7 @@ def test_subset_of_names_and_outside_box(fe, rom):
 
 def test_fallback_when_size_limit_too_small(fe):
     with pytest.warns(RuntimeWarning, match="falling back to full solves"):
-        small = ReducedFEModel(fe, n_modes=N_MODES, tol=1e-6, max_size=14, max_rounds=2).build()
+        small = ReducedFEModel(fe, settings=settings(tol=1e-6, max_size=14, max_rounds=2)).build()
     assert not small.certified and small.max_rel_error > 1e-6
     theta = np.array([[1.2e-3, 1.1, 8000.0, 1.0, 1.0]])
     with warnings.catch_warnings():
@@ -160,7 +165,9 @@ def test_fallback_when_size_limit_too_small(fe):
 
 
 def test_seeded_build_is_deterministic(fe, rom, fresh):
-    again = ReducedFEModel(fe, n_modes=N_MODES, tol=1e-4, seed=0).build()
+    unbuilt = ReducedFEModel(fe, settings=settings())
+    again = unbuilt.build()
+    assert unbuilt.size == 0 and not unbuilt.certified  # build returns a new model
     assert again.size == rom.size and again.max_rel_error == rom.max_rel_error
     theta = fresh[0]
     np.testing.assert_array_equal(
@@ -170,8 +177,12 @@ def test_seeded_build_is_deterministic(fe, rom, fresh):
 
 def test_certify_at_a_point_and_localized_model(fe, rom):
     centre = 0.5 * (rom.low + rom.high)
-    err = rom.certify_at(centre[None, :])
-    assert 0 <= err <= 1e-4 and rom.max_rel_error <= 1e-4
+    n_before = rom.certificate.n_points
+    checked, err = rom.certify_at(centre[None, :])
+    assert 0 <= err <= 1e-4 and checked.max_rel_error <= 1e-4
+    # certify_at returns a new model with the point recorded; the model itself is unchanged
+    assert checked.certificate.n_points == n_before + 1 and rom.certificate.n_points == n_before
+    assert checked.max_rel_error == max(rom.max_rel_error, err)
     rng = np.random.default_rng(3)
     pilot = centre + 0.05 * (rom.high - rom.low) * rng.standard_normal((50, 5))
     local = rom.localized(pilot)
@@ -199,13 +210,48 @@ def test_barycentric_chebyshev_interpolation_is_exact_for_polynomials():
 def test_b31_kink_is_where_the_flexibility_factor_leaves_one(fe):
     s = fe.structure
     elements = np.flatnonzero(s.beam_elbow & (s.beam_bend_radius > 0))
-    kinks = _b31_kinks(s, elements, 1e-4, 0.02)
+    kinks = b31_kinks(s, elements, 1e-4, 0.02)
     assert kinks, "the elbows of the frame have a B31.3 kink below t = 20 mm"
     for t in kinks:
         D = s.beam_width[elements[0]]
         R = s.beam_bend_radius[elements]
         k = _bend_flexibility_factor(np.full(R.size, t), R, np.full(R.size, D))
         assert np.any(np.isclose(k, 1.0, rtol=1e-9))
+
+
+def test_affine_terms_reproduce_the_linear_parameters(fe):
+    # FEModel.affine_terms: a linear parameter's element matrices assembled from ``unit``, times
+    # value x scale, are the element matrices at that value
+    terms = fe.affine_terms()
+    a = fe.assembler
+    values = {"rho_shell": 12000.0, "m_shell": 1.7, "k_joint": 0.6}
+    props = fe.element_properties(values)
+    kinds = {t.name: t.enters for t in terms.parameters}
+    assert kinds == dict(t_pipe="nonlinear", f_elbow="nonlinear", rho_shell="M", m_shell="M",
+                         k_joint="K")  # fmt: skip
+    for t in terms.parameters:
+        if t.family == "beam" and t.enters == "M":
+            exact, unit = (
+                a.beam_matrices(props, t.elements)[1],
+                a.beam_matrices(terms.unit, t.elements)[1],
+            )
+        elif t.family == "mass":
+            exact, unit = (
+                a.mass_matrices(props)[t.elements],
+                a.mass_matrices(terms.unit)[t.elements],
+            )
+        elif t.family == "spring":
+            exact, unit = (
+                a.spring_matrices(props)[t.elements],
+                a.spring_matrices(terms.unit)[t.elements],
+            )
+        else:
+            continue
+        assert t.elements.size > 0
+        value = values[t.name] * t.scale
+        np.testing.assert_allclose(
+            value * unit, exact, rtol=1e-13, atol=1e-13 * np.abs(exact).max()
+        )
 
 
 def test_pool_evaluator_matches_serial(fe):

@@ -22,8 +22,8 @@ more CPU time: the two vCPUs behave like SMT siblings.  On a machine with free p
 set it to their number.
 """
 
+import functools
 import os
-import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -32,10 +32,6 @@ from scipy.linalg.lapack import dtrtri as _dtrtri
 THREADS_VARIABLE = "BAYESUPDATE_SOLVER_THREADS"
 # a thread hand-off costs tens of microseconds: chunks smaller than this run in the caller
 MIN_CHUNK = 4
-
-_pool: ThreadPoolExecutor | None = None
-_pool_size = 0
-_lock = threading.Lock()
 
 
 def solver_threads() -> int:
@@ -47,15 +43,11 @@ def solver_threads() -> int:
         return 1
 
 
+@functools.cache
 def _executor(n: int) -> ThreadPoolExecutor:
-    global _pool, _pool_size
-    with _lock:
-        if _pool is None or _pool_size < n:
-            if _pool is not None:
-                _pool.shutdown(wait=False)
-            _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="bayesupdate-eig")
-            _pool_size = n
-        return _pool
+    """The pool of ``n`` threads, made once per process and thread count: a thread start costs
+    more than a small batch's solve, so the threads are kept between calls."""
+    return ThreadPoolExecutor(max_workers=n, thread_name_prefix="bayesupdate-eig")
 
 
 def _triangular_inverse(L: np.ndarray) -> np.ndarray:

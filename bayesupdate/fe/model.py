@@ -26,7 +26,8 @@ sparse one).
 """
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -55,6 +56,23 @@ SHELL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
 #: bound properties shared by beams and shells (``_set_material``)
 MATERIAL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
 
+#: how each property enters K and M (the module table): (element family it acts on,
+#: ``ElementProperties`` array it sets, "K" / "M" when that matrix is exactly linear in the value,
+#: "nonlinear" when the element matrices must be re-computed: A, I are polynomials in the wall
+#: thickness, the Timoshenko shear parameter is rational and the B31.3 elbow factor has a kink)
+PROPERTY_TERMS = MappingProxyType(
+    {
+        "thickness": ("beam", "beam_thickness", "nonlinear"),
+        "density": ("beam", "beam_rho", "M"),
+        "youngs_modulus": ("beam", "beam_E", "K"),
+        "modulus_factor": ("beam", "beam_E", "K"),
+        "mass": ("mass", "mass_scale", "M"),
+        "mass_factor": ("mass", "mass_scale", "M"),
+        "stiffness_factor": ("spring", "spring_scale", "K"),
+        "bend_factor": ("beam", "beam_bend_factor", "nonlinear"),
+    }
+)
+
 
 def _set_material(prop, value, mask, arrays, base_modulus) -> None:
     """Write a thickness / density / modulus binding into (t, rho, E) where ``mask`` (in place);
@@ -76,6 +94,51 @@ class Binding:
 
     target: str
     property: str
+
+
+@dataclass(frozen=True)
+class ParameterTerm:
+    """Where one parameter acts and how it enters K and M (``FEModel.affine_terms``).
+
+    name, property : the parameter and its bound property (module table).
+    family : "beam", "mass" or "spring": the element family ``elements`` indexes.
+    elements : (n,) int, the beams / point masses / springs it acts on (structure order).
+    field : the ``ElementProperties`` array its value sets.
+    enters : "K" or "M" when that matrix is exactly linear in the value: the parameter's term is
+        value x ``scale`` x the element matrices assembled from ``AffineTerms.unit``;
+        "nonlinear" (thickness, bend_factor) when the element matrices must be re-computed.
+    scale : factor on the value in a linear term: 1 / (nominal total of the part's point masses)
+        [1/kg] for "mass" (the value is the part's total mass), else 1.
+    """
+
+    name: str
+    property: str
+    family: str
+    elements: np.ndarray
+    field: str
+    enters: str
+    scale: float
+
+
+@dataclass(frozen=True)
+class AffineTerms:
+    """K(theta), M(theta) of the beams, point masses and springs split by parameter.
+
+    parameters : one ``ParameterTerm`` per parameter, in ``parameter_names`` order.
+    defaults : element properties at the default parameters (SI): elements that no parameter
+        acts on keep these values for every theta.
+    unit : ``defaults`` with every linearly entering parameter at its unit value where it acts
+        (density 1 kg/m^3, Young's modulus 1 Pa, modulus factor 1 i.e. the nominal E) and all
+        point-mass and spring scales 1, the non-linear ones (thickness, bend factor) at their
+        defaults.  A linear parameter's element matrices assembled from ``unit`` times
+        value x ``scale`` are its exact contribution to K or M.
+    Shells are not covered (their thickness terms are ``fe.general``'s): the reduced model,
+    which builds on this, applies to beam structures only (``FEModel.assembler``).
+    """
+
+    parameters: tuple[ParameterTerm, ...]
+    defaults: ElementProperties
+    unit: ElementProperties
 
 
 @dataclass(frozen=True)
@@ -185,6 +248,38 @@ class FEModel:
 
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)
+
+    def affine_terms(self) -> AffineTerms:
+        """The parameter-separable form of K(theta), M(theta) (``AffineTerms``): for each
+        parameter the elements it acts on and whether it enters K or M linearly."""
+        s = self.structure
+        terms = []
+        for name, binding in self.bindings.items():
+            family, field, enters = PROPERTY_TERMS[binding.property]
+            mask = self._masks[name]
+            scale = 1.0 / s.mass_value[mask].sum() if binding.property == "mass" else 1.0
+            terms.append(
+                ParameterTerm(
+                    name, binding.property, family, np.flatnonzero(mask), field, enters, scale
+                )
+            )
+        defaults = self.element_properties(self._defaults)
+        t, rho = defaults.beam_thickness.copy(), defaults.beam_rho.copy()
+        E = defaults.beam_E.copy()
+        for term in terms:
+            if term.enters != "nonlinear" and term.property in MATERIAL_PROPERTIES:
+                _set_material(
+                    term.property, 1.0, self._masks[term.name], (t, rho, E), self._base.beam_E
+                )
+        unit = ElementProperties(
+            t,
+            rho,
+            E,
+            defaults.beam_bend_factor.copy(),
+            np.ones_like(defaults.mass_scale),
+            np.ones_like(defaults.spring_scale),
+        )
+        return AffineTerms(tuple(terms), defaults, unit)
 
     def default_bounds(self) -> dict[str, tuple[float, float]]:
         return dict(self._bounds)
@@ -323,8 +418,3 @@ class FEModel:
         d = dict(self._defaults, **(defaults or {}))
         bo = dict(self._bounds, **(bounds or {}))
         return FEModel(structure, b, d, bo, name=name or self.name)
-
-
-def structure_with(structure: Structure, **changes) -> Structure:
-    """A copy of ``structure`` with some arrays replaced (frozen dataclass ``replace``)."""
-    return replace(structure, **changes)

@@ -200,7 +200,8 @@ def run_sampling(
             polish=False,
         )
     if rom is not None:
-        certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")
+        rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
+        problem = replace(problem, model=rom)
         if not rom.certified:
             problem, rom = prepared.problem, None
     log_post = LogPosterior(problem, prepared.likelihood)
@@ -250,7 +251,7 @@ def run_sampling(
     }
     if rom is not None:
         mean = posterior.samples()[:, : len(problem.names)].mean(axis=0)
-        extra["rom"] = certify_rom(rom, mean[None, :], problem.names, "the posterior mean")
+        extra["rom"] = certify_rom(rom, mean[None, :], problem.names, "the posterior mean")[1]
     if screen is not None:
         extra["screen"] = {
             "size": int(screen.problem.model.size),
@@ -304,7 +305,7 @@ def sampling_problem(
     if not isinstance(rom, ReducedFEModel) or not rom.certified:
         return problem, None
     if calibration is not None:
-        certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")
+        rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
         if not rom.certified:
             return problem, None
     return replace(problem, model=rom), rom
@@ -329,10 +330,10 @@ def screening_posterior(
     return LogPosterior(screen_problem, likelihood)
 
 
-def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> dict:
+def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> tuple:
     """Full solve(s) at theta (k, len(names)); warn (suggesting --full) when the reduced model
-    misses its tolerance there.  Returns the ROM's ``summary()`` plus ``error_at`` there."""
-    err = rom.certify_at(theta, names)
+    misses its tolerance there.  Returns (the checked ROM, its ``summary()`` plus ``error_at``)."""
+    rom, err = rom.certify_at(theta, names)
     if not rom.certified or not err <= rom.tol:
         warnings.warn(
             f"reduced model not certified at {where} (relative frequency error {err:.2e}, tol "
@@ -340,7 +341,7 @@ def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> d
             RuntimeWarning,
             stacklevel=2,
         )
-    return {**rom.summary(), "error_at": float(err)}
+    return rom, {**rom.summary(), "error_at": float(err)}
 
 
 def _jsonable(obj):

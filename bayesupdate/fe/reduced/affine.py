@@ -1,0 +1,379 @@
+"""Parameter-separable (affine) decomposition of K(theta), M(theta) for the reduced model.
+
+Every beam, point mass and spring is grouped by the parameters bound to it
+(``FEModel.affine_terms``).  Density, Young's modulus (and its factor), point-mass and spring
+factors enter M or K exactly linearly: such a group contributes ``value * X_unit`` (X_unit
+assembled with the value 1).  Wall thickness and bend factor do not (A, I are polynomials in t,
+the Timoshenko shear parameter is rational, the ASME B31.3 elbow factor max(1, 1.65/h) has a
+kink): their group matrices are interpolated in log(value) by barycentric Lagrange interpolation
+on Chebyshev points of the second kind (``reduced.interpolation``), piecewise between the kinks of
+the B31.3 factor and tensor-product when two such parameters act on the same beams.  The degree
+is raised until the element matrices are reproduced to ``interp_tol`` (relative, checked between
+the nodes), so the interpolation is exact to far below the frequency tolerance.
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.assembly import ElementProperties
+from bayesupdate.fe.model import AffineTerms, FEModel
+from bayesupdate.fe.reduced.interpolation import (
+    barycentric_weights_columns,
+    piecewise_nodes,
+    tensor_weights,
+)
+
+#: 1-D interpolation degrees tried in turn for each non-linear parameter
+DEGREES = (4, 6, 8, 12, 16, 24, 32)
+#: seed of the test points between the interpolation nodes (fixed: the build is deterministic)
+TEST_SEED = 7
+N_TEST = 12
+
+
+@dataclass(frozen=True)
+class InterpolatedGroup:
+    """Beams with the same bound parameters.  ``nonaffine``: parameter indices interpolated in
+    log(value) (breakpoints ``pieces`` in log, one ``degrees`` entry each); ``k_scale`` /
+    ``m_scale``: parameter index whose value multiplies K / M (or -1)."""
+
+    elements: np.ndarray
+    nonaffine: tuple[int, ...]
+    pieces: tuple[np.ndarray, ...]
+    degrees: tuple[int, ...]
+    k_scale: int
+    m_scale: int
+
+    @property
+    def n_nodes(self) -> int:
+        """Interpolation nodes (tensor grid size; 1 without non-linear parameters)."""
+        sizes = [(p.size - 1) * (d + 1) for p, d in zip(self.pieces, self.degrees, strict=True)]
+        return int(np.prod(sizes))
+
+
+@dataclass(frozen=True, eq=False)
+class AffineDecomposition:
+    """theta -> K(theta), M(theta) as sums coefficient(theta) x fixed element-matrix stacks.
+
+    ``k_stacks`` / ``m_stacks``: per term, the parts (dofs (n_e, d), mats (n_e, d, d)) summed into
+    it; ``coefficients(theta)`` -> (B, n_terms) with the term order of the stacks.  Term 0 is the
+    constant part (coefficient 1).  A term's coefficient is F[:, a] * F[:, b] * c over the
+    features F = [1, theta, interpolation weights of every group], (a, b, c) = ``k_gather`` /
+    ``m_gather``; ``one_d`` batches the groups interpolated in one parameter by (degree, piece
+    count): (group indices, parameter indices, stacked log breakpoints (G, P + 1), degree).
+    """
+
+    names: tuple[str, ...]
+    groups: tuple[InterpolatedGroup, ...]
+    k_stacks: tuple
+    m_stacks: tuple
+    k_gather: tuple[np.ndarray, np.ndarray, np.ndarray]
+    m_gather: tuple[np.ndarray, np.ndarray, np.ndarray]
+    one_d: tuple
+
+    def coefficients(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(B, n_k_terms), (B, n_m_terms) coefficients at theta (B, n_params) (all names, SI)."""
+        weights: list = [None] * len(self.groups)
+        for groups, params, pieces, degree in self.one_d:
+            w = barycentric_weights_columns(np.log(theta[:, params]), pieces, degree)
+            for c, g in enumerate(groups):
+                weights[g] = w[:, c]
+        for g, group in enumerate(self.groups):
+            if weights[g] is None:
+                cols = theta[:, list(group.nonaffine)]
+                weights[g] = tensor_weights(cols, group.pieces, group.degrees)
+        F = np.concatenate([np.ones((theta.shape[0], 1)), theta, *weights], axis=1)
+        return tuple(F[:, a] * F[:, b] * c for a, b, c in (self.k_gather, self.m_gather))
+
+    @staticmethod
+    def project(V: np.ndarray, stacks) -> np.ndarray:
+        """(n_terms, r, r) projections V^T X_term V of the term stacks, V (n_dof, r)."""
+        r = V.shape[1]
+        out = np.zeros((len(stacks), r, r))
+        for t, parts in enumerate(stacks):
+            for dofs, mats in parts:
+                if mats.shape[0]:
+                    Vd = V[dofs]
+                    out[t] += np.einsum("eir,eij,ejs->rs", Vd, mats, Vd, optimize=True)
+        return 0.5 * (out + out.transpose(0, 2, 1))
+
+
+def decompose(
+    fe: FEModel, bounds: Mapping[str, tuple[float, float]], interp_tol: float
+) -> AffineDecomposition:
+    """The decomposition of ``fe`` (a free beam structure) over the box ``bounds`` (name ->
+    (low, high), SI).  Raises ``BayesUpdateError`` when two parameters set the same property of
+    an element or an interpolation does not reach ``interp_tol``."""
+    names = fe.parameter_names
+    low = np.array([bounds[n][0] for n in names])
+    high = np.array([bounds[n][1] for n in names])
+    terms = fe.affine_terms()
+    keys = _beam_keys(terms, len(fe.structure.beam_part))
+    k_stacks, m_stacks, k_entries, m_entries = _fixed_terms(fe, terms, keys)
+    groups = []
+    offset = 1 + len(names)  # features before the first group's weights: [1, theta]
+    for key in sorted({k for k in keys if k}):
+        elements = np.array([i for i, k in enumerate(keys) if k == key], dtype=int)
+        group, Kn, Mn = _interpolated_group(fe, terms, elements, key, (low, high), interp_tol)
+        dofs = fe.assembler.beam_dofs[elements]
+        k_col = 1 + group.k_scale if group.k_scale >= 0 else 0
+        m_col = 1 + group.m_scale if group.m_scale >= 0 else 0
+        for n in range(Kn.shape[0]):
+            k_stacks.append([(dofs, Kn[n])])
+            k_entries.append((offset + n, k_col, 1.0))
+            m_stacks.append([(dofs, Mn[n])])
+            m_entries.append((offset + n, m_col, 1.0))
+        groups.append(group)
+        offset += group.n_nodes
+    return AffineDecomposition(
+        names,
+        tuple(groups),
+        tuple(k_stacks),
+        tuple(m_stacks),
+        _gather(k_entries),
+        _gather(m_entries),
+        _one_d_batches(groups),
+    )
+
+
+def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
+    """Per beam, the indices of the parameters acting on it (ascending); raises when two of them
+    set the same property, or two scale the same point mass or spring."""
+    keys: list[list[int]] = [[] for _ in range(n_beams)]
+    for j, term in enumerate(terms.parameters):
+        if term.family == "beam":
+            for e in term.elements:
+                keys[e].append(j)
+    for key in keys:
+        fields = [terms.parameters[j].field for j in key]
+        if len(set(fields)) != len(fields):
+            raise BayesUpdateError(
+                "reduced model: two parameters set the same property of one beam; "
+                "use the full model (--full)"
+            )
+    for family in ("mass", "spring"):
+        idx = np.concatenate(
+            [t.elements for t in terms.parameters if t.family == family] + [np.zeros(0, int)]
+        )
+        if np.unique(idx).size != idx.size:
+            raise BayesUpdateError(
+                "reduced model: two parameters scale the same point mass or spring; "
+                "use the full model (--full)"
+            )
+    return [tuple(k) for k in keys]
+
+
+def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
+    """The constant term (beams without parameters at the defaults, unbound masses and springs)
+    and one linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
+    m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``."""
+    s, a = fe.structure, fe.assembler
+    props0, unit = terms.defaults, terms.unit
+    point = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "mass"]
+    spring = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "spring"]
+    free_beams = np.array([i for i, k in enumerate(keys) if not k], dtype=int)
+    bound_masses = np.concatenate([t.elements for _, t in point] + [np.zeros(0, int)])
+    bound_springs = np.concatenate([t.elements for _, t in spring] + [np.zeros(0, int)])
+    free_masses = np.setdiff1d(np.arange(len(s.mass_node)), bound_masses)
+    free_springs = np.setdiff1d(np.arange(len(s.spring_part)), bound_springs)
+    mM, sK = a.mass_matrices(props0), a.spring_matrices(props0)
+    mM_unit, sK_unit = a.mass_matrices(unit), a.spring_matrices(unit)
+    bK0, bM0 = (
+        a.beam_matrices(props0, elements=free_beams)
+        if free_beams.size
+        else (np.zeros((0, 12, 12)),) * 2
+    )
+    k_stacks = [[(a.beam_dofs[free_beams], bK0), (a.spring_dofs[free_springs], sK[free_springs])]]
+    m_stacks = [[(a.beam_dofs[free_beams], bM0), (a.mass_dofs[free_masses], mM[free_masses])]]
+    k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
+    for j, t in point:
+        m_stacks.append([(a.mass_dofs[t.elements], mM_unit[t.elements])])
+        m_entries.append((1 + j, 0, t.scale))
+    for j, t in spring:
+        k_stacks.append([(a.spring_dofs[t.elements], sK_unit[t.elements])])
+        k_entries.append((1 + j, 0, t.scale))
+    return k_stacks, m_stacks, k_entries, m_entries
+
+
+def _gather(entries) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    a, b, c = zip(*entries, strict=True)
+    return np.array(a), np.array(b), np.array(c)
+
+
+def _one_d_batches(groups) -> tuple:
+    """Groups interpolated in one parameter, batched by (degree, piece count) (see
+    ``AffineDecomposition``)."""
+    batches: dict[tuple[int, int], list[int]] = {}
+    for g, group in enumerate(groups):
+        if len(group.nonaffine) == 1:
+            batches.setdefault((group.degrees[0], group.pieces[0].size), []).append(g)
+    return tuple(
+        (
+            gs,
+            [groups[g].nonaffine[0] for g in gs],
+            np.array([groups[g].pieces[0] for g in gs]),
+            degree,
+        )
+        for (degree, _), gs in batches.items()
+    )
+
+
+# -- interpolated beam groups ---------------------------------------------------------------------
+def b31_kinks(structure, elements: np.ndarray, low: float, high: float) -> list[float]:
+    """Thicknesses in (low, high) where the B31.3 factor max(1, 1.65/h), h = t R / r^2,
+    r = (D - t)/2, switches branch: 1.65 t^2 - (3.3 D + 4 R) t + 1.65 D^2 = 0."""
+    s = structure
+    e = elements[s.beam_elbow[elements] & (s.beam_bend_radius[elements] > 0)]
+    kinks = []
+    for D, R in {(float(s.beam_width[i]), float(s.beam_bend_radius[i])) for i in e}:
+        for t in np.roots([1.65, -(3.3 * D + 4 * R), 1.65 * D**2]).real:
+            if low < t < high:
+                kinks.append(float(t))
+    return sorted(set(kinks))
+
+
+@dataclass(frozen=True)
+class _GroupMatrices:
+    """Element matrices of one group's beams at values of its non-linear parameters: the
+    ``AffineTerms.unit`` properties with each non-linear parameter's ``field`` set to its value
+    on the group's beams."""
+
+    fe: FEModel
+    unit: ElementProperties
+    elements: np.ndarray
+    fields: tuple[str, ...]
+
+    def __call__(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """points (n, len(fields)) -> K, M (n, n_e, 12, 12)."""
+        Ks, Ms = [], []
+        for row in points:
+            K, M = self.fe.assembler.beam_matrices(self._props(row), elements=self.elements)
+            Ks.append(K)
+            Ms.append(M)
+        return np.array(Ks), np.array(Ms)
+
+    def _props(self, row) -> ElementProperties:
+        u = self.unit
+        arrays = {
+            "beam_thickness": u.beam_thickness.copy(),
+            "beam_rho": u.beam_rho.copy(),
+            "beam_E": u.beam_E.copy(),
+            "beam_bend_factor": u.beam_bend_factor.copy(),
+        }
+        for field, value in zip(self.fields, row, strict=True):
+            arrays[field][self.elements] = value
+        return ElementProperties(**arrays, mass_scale=u.mass_scale, spring_scale=u.spring_scale)
+
+    def interp_error(
+        self, log_pieces, degrees, nodes, test, test_cols
+    ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Largest relative entry error of the interpolant on ``nodes`` (n, len(fields)) at
+        ``test`` (k, len(fields)); the weights are taken at ``test_cols`` (k, len(degrees)), the
+        interpolated columns of ``test``.  Returns (error, node K, node M)."""
+        Kn, Mn = self(nodes)
+        Kt, Mt = self(test)
+        w = tensor_weights(test_cols, log_pieces, degrees)
+        err = max(
+            _rel_err(np.einsum("bn,neij->beij", w, Kn), Kt),
+            _rel_err(np.einsum("bn,neij->beij", w, Mn), Mt),
+        )
+        return err, Kn, Mn
+
+
+def _interpolated_group(fe, terms: AffineTerms, elements, key, box, interp_tol: float):
+    """The group of ``elements`` (beams acting with the parameters ``key``) and its node matrices
+    K, M (n_nodes, n_e, 12, 12).  ``box``: (low, high) of all parameters."""
+    params = terms.parameters
+    nonaffine = tuple(j for j in key if params[j].enters == "nonlinear")
+    k_scale = next((j for j in key if params[j].enters == "K"), -1)
+    m_scale = next((j for j in key if params[j].enters == "M"), -1)
+    fields = tuple(params[j].field for j in nonaffine)
+    matrices = _GroupMatrices(fe, terms.unit, elements, fields)
+    if not nonaffine:
+        Kn, Mn = matrices(np.zeros((1, 0)))
+        return InterpolatedGroup(elements, (), (), (), k_scale, m_scale), Kn, Mn
+    low, high = box
+    pieces = []
+    for j in nonaffine:
+        if low[j] <= 0:
+            raise BayesUpdateError(
+                f"reduced model: the lower bound of {params[j].name} must be > 0, got {low[j]}"
+            )
+        thickness = params[j].property == "thickness"
+        kinks = b31_kinks(fe.structure, elements, low[j], high[j]) if thickness else []
+        pieces.append(np.array([low[j], *kinks, high[j]]))
+    # interpolate in log(parameter): thickness enters through rational functions with poles at
+    # t = 0 (B31.3 factor ~ 1/t), which map to -infinity in log t, so the degree stays low
+    log_pieces = tuple(np.log(p) for p in pieces)
+    rng = np.random.default_rng(TEST_SEED)
+    search = _DegreeSearch(matrices, nonaffine, log_pieces, low, high, interp_tol, params)
+    degrees = [search.axis_degree(i, rng) for i in range(len(nonaffine))]
+    degrees, Kn, Mn = search.tensor(degrees, rng)
+    group = InterpolatedGroup(elements, nonaffine, log_pieces, degrees, k_scale, m_scale)
+    return group, Kn, Mn
+
+
+@dataclass(frozen=True)
+class _DegreeSearch:
+    """The interpolation degrees of one group: each parameter alone (the others mid-range), then
+    the tensor product, raised until the element matrices are reproduced to ``tol``."""
+
+    matrices: _GroupMatrices
+    nonaffine: tuple[int, ...]
+    log_pieces: tuple[np.ndarray, ...]
+    low: np.ndarray
+    high: np.ndarray
+    tol: float
+    params: tuple
+
+    def _test_values(self, j: int, rng) -> np.ndarray:
+        return np.exp(rng.uniform(np.log(self.low[j]), np.log(self.high[j]), N_TEST))
+
+    def axis_degree(self, i: int, rng) -> int:
+        """Smallest of ``DEGREES`` reaching the tolerance in parameter ``nonaffine[i]``."""
+        j = self.nonaffine[i]
+        others = [float(np.sqrt(self.low[q] * self.high[q])) for q in self.nonaffine]
+        test = np.tile(others, (N_TEST, 1))
+        test[:, i] = self._test_values(j, rng)
+        for degree in DEGREES:
+            n_nodes = (len(self.log_pieces[i]) - 1) * (degree + 1)
+            nodes = np.tile(others, n_nodes).reshape(-1, len(others))
+            nodes[:, i] = np.exp(piecewise_nodes(self.log_pieces[i], degree))
+            pieces = (self.log_pieces[i],)
+            err = self.matrices.interp_error(pieces, (degree,), nodes, test, test[:, i : i + 1])
+            err = err[0]
+            if err < self.tol:
+                return degree
+        raise BayesUpdateError(
+            f"reduced model: interpolation in {self.params[j].name} does not reach "
+            f"{self.tol:g} at degree {DEGREES[-1]}; use the full model (--full)"
+        )
+
+    def tensor(self, degrees: list[int], rng) -> tuple[tuple[int, ...], np.ndarray, np.ndarray]:
+        """Tensor-product degrees from the 1-D ones (raised by 4 up to 3 times): (degrees,
+        node K, node M)."""
+        test = np.column_stack([self._test_values(j, rng) for j in self.nonaffine])
+        for _ in range(4):  # the tensor product may need a little more than each 1-D degree
+            axes = [
+                np.exp(piecewise_nodes(p, d)) for p, d in zip(self.log_pieces, degrees, strict=True)
+            ]
+            grid = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
+            err, Kn, Mn = self.matrices.interp_error(
+                self.log_pieces, tuple(degrees), grid, test, test
+            )
+            if err < self.tol:
+                return tuple(degrees), Kn, Mn
+            degrees = [d + 4 for d in degrees]
+        names = [self.params[j].name for j in self.nonaffine]
+        raise BayesUpdateError(
+            f"reduced model: tensor interpolation in {names} has error {err:.1e} > "
+            f"{self.tol:g}; use the full model (--full)"
+        )
+
+
+def _rel_err(approx: np.ndarray, exact: np.ndarray) -> float:
+    """Largest entry error of each element matrix relative to its largest entry."""
+    scale = np.abs(exact).max(axis=(-2, -1))
+    return float(np.max(np.abs(approx - exact).max(axis=(-2, -1)) / np.maximum(scale, 1e-300)))

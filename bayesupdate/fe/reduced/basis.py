@@ -1,0 +1,171 @@
+"""The reduced basis: snapshots, POD in the energy norm, projection of the affine terms.
+
+Elastic mode shapes at parameter points (snapshots), rigid-body part removed, are compressed by
+POD in the energy (K) norm of the box centre with each snapshot scaled to unit strain energy: the
+discarded POD energy then estimates the relative eigenvalue error of Rayleigh-Ritz (Quarteroni,
+Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, ch. 6).  The six rigid-body motions are
+kept exactly as the first basis vectors.
+
+Online: reduced K and M for all points by one matrix product each over the projected affine
+terms, the rigid-body coordinates eliminated exactly (K R = 0 for a free body, so the elastic
+pencil is K_ww x = lambda (M_ww - M_wr M_rr^-1 M_rw) x), then stacked Cholesky + ``eigvalsh``
+for all points, the batch split over threads (``fe.batched_eigen``).
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
+from bayesupdate.fe.model import FEModel
+from bayesupdate.fe.reduced.affine import AffineDecomposition
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedBasis:
+    """A basis V and the affine terms projected on it.
+
+    V : (n_dof, r) basis: the first ``n_rigid`` columns the rigid-body motions, the rest elastic,
+    all orthonormal in the mass matrix at the box centre.  V_sensor : (n_sensors, r) its sensor
+    read-out (shapes at the sensors of a reduced solution y are V_sensor @ y).  K_terms /
+    M_terms : (C (n_terms, k), B (k, r_e^2) or (k, r^2)) with the projected terms ~= C @ B
+    (``compress_terms``), K on the elastic block only (K R = 0).  decomposition : the affine
+    terms the coefficients come from.
+    """
+
+    decomposition: AffineDecomposition
+    V: np.ndarray
+    V_sensor: np.ndarray
+    n_rigid: int
+    K_terms: tuple[np.ndarray, np.ndarray]
+    M_terms: tuple[np.ndarray, np.ndarray]
+
+    @property
+    def size(self) -> int:
+        """Basis vectors (rigid included)."""
+        return self.V.shape[1]
+
+    def matrices(self, theta_full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reduced pencils at theta_full (B, n_params) (all parameters, SI): the elastic block of
+        K (B, r_e, r_e) and the whole M (B, r, r), the first ``n_rigid`` coordinates being the
+        rigid-body motions.  Two matrix products over the projected affine terms."""
+        cK, cM = self.decomposition.coefficients(theta_full)
+        r, nr = self.size, self.n_rigid
+        K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r - nr, r - nr)
+        M = ((cM @ self.M_terms[0]) @ self.M_terms[1]).reshape(-1, r, r)
+        return K, M
+
+    def eigen(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
+        """(B, n_modes) elastic eigenvalues [rad^2/s^2] at theta_full (B, n_params) and, with
+        ``vectors``, the (B, r, n_modes) reduced eigenvectors (``batched_elastic_eigenvalues``)."""
+        K, M = self.matrices(theta_full)
+        return batched_elastic_eigenvalues(K, M, self.n_rigid, n_modes, vectors=vectors)
+
+    def restricted(self, Q: np.ndarray) -> "ReducedBasis":
+        """The basis restricted to the elastic subspace Q (r_e, m) of this one (rigid kept): a
+        second Rayleigh-Ritz level, without re-projecting the element matrices."""
+        nr, re = self.n_rigid, self.size - self.n_rigid
+        m = Q.shape[1]
+        Qf = np.zeros((self.size, nr + m))
+        Qf[:nr, :nr] = np.eye(nr)
+        Qf[nr:, nr:] = Q
+        BK = self.K_terms[1].reshape(-1, re, re)
+        BM = self.M_terms[1].reshape(-1, self.size, self.size)
+        return ReducedBasis(
+            self.decomposition,
+            self.V @ Qf,
+            self.V_sensor @ Qf,
+            nr,
+            (self.K_terms[0], (Q.T @ BK @ Q).reshape(BK.shape[0], -1)),
+            (self.M_terms[0], (Qf.T @ BM @ Qf).reshape(BM.shape[0], -1)),
+        )
+
+
+def full_solves(fe: FEModel, names: tuple[str, ...], theta: np.ndarray, n_modes: int):
+    """Full solves at theta (B, len(names)) (SI): (B, n_modes) frequencies [Hz] (NaN rows on
+    failure) and the (n_dof, k) mode shapes of the points that solved, side by side."""
+    freqs = np.full((theta.shape[0], n_modes), np.nan)
+    shapes = []
+    for i, row in enumerate(theta):
+        try:
+            sol = fe.solve(dict(zip(names, map(float, row), strict=True)), n_modes).modes
+        except (BayesUpdateError, np.linalg.LinAlgError):
+            # a snapshot whose eigen-solve fails is left out (its row stays NaN); the
+            # certification then runs on the points that solved
+            continue
+        freqs[i] = sol.frequencies_hz
+        shapes.append(sol.shapes)
+    return freqs, np.concatenate(shapes, axis=1)
+
+
+def pod_basis(
+    fe: FEModel,
+    decomposition: AffineDecomposition,
+    centre: Mapping[str, float],
+    snaps: np.ndarray,
+    pod_tol: float,
+    n_modes: int,
+) -> ReducedBasis:
+    """POD of the rigid-free snapshots (n_dof, k) in the K-norm at ``centre`` (unit strain energy
+    each), then the affine terms projected on [rigid motions, POD vectors].  Keeps the smallest
+    rank whose discarded energy per snapshot (on average) is <= pod_tol: that is about the
+    relative eigenvalue error, twice the relative frequency error; at least ``n_modes``."""
+    K0, M0, _ = fe.assembler.assemble(fe.element_properties(centre))
+    R = fe.rigid_basis
+    MR = M0 @ R
+    Rr = R @ np.linalg.inv(np.linalg.cholesky(R.T @ MR)).T  # M0-orthonormal rigid motions
+    Y = snaps - Rr @ (Rr.T @ (M0 @ snaps))
+    W = _energy_pod(Y, K0, pod_tol, n_modes)
+    # M0-orthonormal elastic basis (well-conditioned reduced M)
+    W = W - Rr @ (Rr.T @ (M0 @ W))
+    g = W.T @ (M0 @ W)
+    s, Q = np.linalg.eigh(0.5 * (g + g.T))
+    W = W @ (Q / np.sqrt(s))
+    return projected_basis(fe, decomposition, np.concatenate([Rr, W], axis=1), Rr.shape[1])
+
+
+def _energy_pod(Y: np.ndarray, K0, pod_tol: float, n_modes: int) -> np.ndarray:
+    """(n_dof, rank) leading POD vectors of the snapshots Y (n_dof, k) in the K0 energy norm."""
+    energy = np.einsum("ik,ik->k", Y, K0 @ Y)
+    Y = Y / np.sqrt(energy)
+    G = Y.T @ (K0 @ Y)
+    w, U = np.linalg.eigh(0.5 * (G + G.T))
+    w, U = w[::-1], U[:, ::-1]
+    tail = np.concatenate([np.cumsum(w[::-1])[::-1][1:], [0.0]])
+    numerical = int(np.sum(w > 1e-10 * w[0]))
+    rank = int(np.argmax(tail <= pod_tol * Y.shape[1])) + 1
+    rank = min(max(rank, n_modes), numerical)
+    return Y @ U[:, :rank]
+
+
+def projected_basis(
+    fe: FEModel, decomposition: AffineDecomposition, V: np.ndarray, n_rigid: int
+) -> ReducedBasis:
+    """The ``ReducedBasis`` of V (n_dof, r), its first ``n_rigid`` columns rigid motions."""
+    # sensor read-out is linear in the shape: sensor shapes of a reduced solution y are
+    # V_sensor @ y, so a batch of shapes costs (n_sensors x r x n_modes) per point
+    nr = n_rigid
+    Kt = decomposition.project(V, decomposition.k_stacks)[:, nr:, nr:]
+    Mt = decomposition.project(V, decomposition.m_stacks)
+    return ReducedBasis(
+        decomposition,
+        V,
+        fe.sensor_shapes(V),
+        nr,
+        compress_terms(Kt.reshape(Kt.shape[0], -1)),
+        compress_terms(Mt.reshape(Mt.shape[0], -1)),
+    )
+
+
+def compress_terms(terms: np.ndarray, rel: float = 1e-14) -> tuple[np.ndarray, np.ndarray]:
+    """(n_terms, r*r) projected terms -> (C (n_terms, k), B (k, r*r)) with terms ~= C @ B.
+
+    The interpolation nodes of one part give nearly dependent matrices (smooth in the
+    parameter), so k is about 40 % of n_terms; dropping singular values below ``rel`` times the
+    largest changes reduced entries by < 1e-14 ||K_r||, far below the certified tolerance (and
+    the certification is run on the compressed terms)."""
+    U, sv, Vt = np.linalg.svd(terms, full_matrices=False)
+    k = max(1, int(np.sum(sv > rel * sv[0])))
+    return U[:, :k] * sv[:k], Vt[:k]

@@ -1,0 +1,190 @@
+"""Certification of a reduced basis against full solves, and its enrichment.
+
+Reduced frequencies are Rayleigh-Ritz values, hence upper bounds of the full ones
+(Courant-Fischer); the relative error is one-sided, so a reduced value *below* a full one can only
+come from the interpolation of the affine terms, and is treated as such (an error asking for a
+finer interpolation).  Fresh seeded validation points are solved in full; while the largest
+relative frequency error exceeds ``tol`` the validation shapes join the snapshots, the POD
+threshold is lowered and a new validation set is drawn.  If ``max_size`` is reached first, the
+model warns and falls back to full solves.  Extra points (e.g. an optimum) are checked the same
+way (``certify_points``); a miss there enriches the basis with their shapes.
+"""
+
+import warnings
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.stats import qmc
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.reduced.affine import decompose
+from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis
+
+if TYPE_CHECKING:
+    from bayesupdate.fe.reduced.model import ReducedFEModel
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """What the certification found: largest relative frequency error over ``n_points`` full solves
+    (validation set plus checked points), the smallest signed error (>= ~0 by Rayleigh-Ritz)."""
+
+    max_rel_error: float
+    min_signed_error: float
+    n_points: int
+
+
+@dataclass(frozen=True)
+class BuildRound:
+    """One round of the build: basis size, error on its validation set, POD threshold."""
+
+    round: int
+    size: int
+    max_rel_error: float
+    pod_tol: float
+
+
+@dataclass(frozen=True, eq=False)
+class Certification:
+    """A basis and what its certification found (a ``ReducedFEModel`` holds one).
+
+    basis : None before the build.  certified : False -> every prediction is a full solve.
+    max_rel_error : certified relative frequency error.  history : the build's rounds.
+    checked : (theta (k, n_params), full frequencies (k, n_modes) [Hz]) of every point set the
+    basis was certified on, re-verified when the basis is enriched.
+    """
+
+    basis: ReducedBasis | None
+    certificate: Certificate
+    certified: bool
+    max_rel_error: float
+    history: tuple[BuildRound, ...] = ()
+    checked: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
+
+
+#: a model not built yet
+UNBUILT = Certification(None, Certificate(np.inf, 0.0, 0), False, np.inf)
+
+
+def compare(basis: ReducedBasis, theta: np.ndarray, f_full: np.ndarray, n_modes: int):
+    """``Certificate`` of the basis at theta (k, n_params) against full frequencies f_full
+    (k, n_modes) [Hz]; rows with a failed full solve (NaN) are left out."""
+    ok = np.all(np.isfinite(f_full), axis=1)
+    lam = basis.eigen(theta[ok], n_modes)
+    f_rom = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+    signed = f_rom / f_full[ok] - 1.0
+    return Certificate(float(np.max(np.abs(signed))), float(np.min(signed)), int(ok.sum()))
+
+
+def build(model: "ReducedFEModel") -> Certification:
+    """Decompose, snapshot, compress, certify, enrich (module docstring) over ``model``'s box
+    with its settings; warns and returns an uncertified result when ``max_size`` is reached."""
+    fe, st, names = model.fe, model.settings, model.parameter_names
+    centre = model.mapping(model.centre())
+    _check_free_free(fe, centre)
+    decomposition = decompose(fe, model.bounds, st.interp_tol)
+    dim = len(names)
+    snap_theta = model.scale(qmc.Sobol(dim, scramble=True, seed=st.seed).random(st.n_snapshots))
+    snaps = full_solves(fe, names, snap_theta, st.n_modes + st.extra_modes)[1]
+    pod_tol = 0.5 * st.tol
+    history = []
+    certificate = UNBUILT.certificate
+    for rnd in range(st.max_rounds):
+        basis = pod_basis(fe, decomposition, centre, snaps, pod_tol, st.n_modes)
+        if basis.size > st.max_size:
+            break
+        sobol = qmc.Sobol(dim, scramble=True, seed=st.seed + 1000 + rnd)
+        theta_v = model.scale(sobol.random(st.n_validation))
+        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes)
+        certificate = compare(basis, theta_v, f_full, st.n_modes)
+        history.append(BuildRound(rnd, basis.size, certificate.max_rel_error, pod_tol))
+        _check_upper_bound(certificate, st.tol)
+        if certificate.max_rel_error <= st.tol:
+            checked = ((theta_v, f_full),)
+            err = certificate.max_rel_error
+            return Certification(basis, certificate, True, err, tuple(history), checked)
+        snaps = np.concatenate([snaps, shapes_v], axis=1)
+        pod_tol *= 0.25
+    err = certificate.max_rel_error
+    failed = Certification(basis, certificate, False, err, tuple(history))
+    _warn_failed(model, failed, stacklevel=4)  # the caller of ReducedFEModel.build
+    return failed
+
+
+def _check_free_free(fe, centre) -> None:
+    K0 = fe.assembler.assemble(fe.element_properties(centre))[0]
+    R = fe.rigid_basis
+    if np.abs(K0 @ R).max() > 1e-8 * np.abs(K0.data).max():
+        raise BayesUpdateError(
+            "reduced model: the structure is not free-free (rigid motions strain it, e.g. "
+            "springs to ground); use the full model (--full)"
+        )
+
+
+def _check_upper_bound(certificate: Certificate, tol: float) -> None:
+    if certificate.min_signed_error < -0.1 * tol:
+        raise BayesUpdateError(
+            f"reduced model: reduced frequencies fall {-certificate.min_signed_error:.1e} below "
+            "full ones (Rayleigh-Ritz forbids it): the parameter interpolation is too "
+            "coarse; lower interp_tol or use the full model (--full)"
+        )
+
+
+def _warn_failed(model: "ReducedFEModel", failed: Certification, stacklevel: int) -> None:
+    st = model.settings
+    warnings.warn(
+        f"reduced model of {model.fe.name}: tolerance {st.tol:g} not reached within size "
+        f"{st.max_size} (best {failed.max_rel_error:.2e} at size {failed.basis.size}); "
+        "falling back to full solves",
+        RuntimeWarning,
+        stacklevel=stacklevel,
+    )
+
+
+def certify_points(
+    model: "ReducedFEModel", theta: np.ndarray, enrich: bool = True
+) -> tuple[Certification, float]:
+    """``model``'s certification checked at theta (k, n_params) inside its box (all parameters,
+    SI): (new certification, largest relative frequency error at the points).  A miss (error >
+    tol) with ``enrich``: their shapes join the basis and every checked point is re-verified; if
+    the tolerance still fails or the size limit is hit, the result is uncertified (a warning)."""
+    c, st = model.certification, model.settings
+    f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes)[0]
+    cert = compare(c.basis, theta, f_full, st.n_modes)
+    if cert.max_rel_error > st.tol and enrich:
+        return _enriched(model, theta, f_full)
+    max_err = max(c.max_rel_error, cert.max_rel_error)
+    return _with_checked(c, c.basis, max_err, cert, (theta, f_full)), cert.max_rel_error
+
+
+def _enriched(model: "ReducedFEModel", theta: np.ndarray, f_full: np.ndarray):
+    c, st, fe = model.certification, model.settings, model.fe
+    extra = full_solves(fe, model.parameter_names, theta, st.n_modes + st.extra_modes)[1]
+    snaps = np.concatenate([c.basis.V[:, c.basis.n_rigid :], extra], axis=1)
+    centre = model.mapping(model.centre())
+    basis = pod_basis(fe, c.basis.decomposition, centre, snaps, 0.0, st.n_modes)
+    errors = [compare(basis, t, f, st.n_modes) for t, f in [*c.checked, (theta, f_full)]]
+    cert = errors[-1]
+    worst = max(e.max_rel_error for e in errors)
+    if worst > st.tol or basis.size > st.max_size:
+        # the reported error stays the last certificate's (as before the enrichment)
+        failed = replace(c, basis=basis, certified=False, max_rel_error=c.certificate.max_rel_error)
+        _warn_failed(model, failed, stacklevel=5)  # the caller of ReducedFEModel.certify_at
+        return failed, cert.max_rel_error
+    return _with_checked(c, basis, worst, cert, (theta, f_full)), cert.max_rel_error
+
+
+def _with_checked(c: Certification, basis, max_err: float, cert: Certificate, point_set):
+    certificate = Certificate(
+        max_err,
+        min(c.certificate.min_signed_error, cert.min_signed_error),
+        c.certificate.n_points + cert.n_points,
+    )
+    return replace(
+        c,
+        basis=basis,
+        certificate=certificate,
+        max_rel_error=max_err,
+        checked=(*c.checked, point_set),
+    )

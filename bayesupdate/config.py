@@ -49,9 +49,20 @@ Example (issue 4 item 9)::
     screen = true                   # delayed acceptance: proposals screened on a coarser basis
     transform = "logit"             # walk in unconstrained coordinates ("none": in theta)
 
+    [effects]                       # effects the model is extended by before anything else
+    add = ["joint_flexibility@cold_pipe/main_muffler:k_rot=2e3"]   # (an earlier discovery's)
+    [discovery]                     # discovery.workflow.DiscoverySettings
+    kinds = ["added_mass", "joint_flexibility"]     # default: the whole library
+    locations = { added_mass = ["12", "14"] }       # default: every admissible location
+    sigma = 0.005                   # fixed relative noise (default: data sd, else inferred)
+    threshold_log_odds = 3.0        # on ln BF + prior log odds
+    margin_ln_bf = 2.0
+    effect_prior = 0.5              # P(one library effect is present)
+    max_refits = 5
+
 Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
-``file: table.key``.  Other layers add their own tables (e.g. ``[effects]``, ``[discovery]``) with
-``register_table(name, parser)``; the parsed value lands in ``StudyConfig.extensions[name]``.
+``file: table.key``.  The parsed ``[effects]`` (a tuple of spec strings) and ``[discovery]`` (a
+``DiscoverySettings``) land in ``StudyConfig.extensions``.
 """
 
 import dataclasses
@@ -62,6 +73,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bayesupdate.discovery.effects import parse_effect_spec
+from bayesupdate.discovery.workflow import DiscoverySettings
 from bayesupdate.errors import BayesUpdateError
 
 
@@ -144,7 +157,8 @@ class SamplerConfig:
 @dataclass(frozen=True)
 class StudyConfig:
     """A whole study.  ``parameters``: {name: {bounds, prior, start}} (checked against the model
-    when the problem is built).  ``extensions``: tables registered by other layers."""
+    when the problem is built).  ``extensions``: the discovery tables present in the file,
+    ``{"effects": tuple of specs, "discovery": DiscoverySettings}``."""
 
     model: ModelConfig = field(default_factory=ModelConfig)
     data: DataConfig = field(default_factory=DataConfig)
@@ -174,14 +188,6 @@ _SECTIONS = {
     "sampler": SamplerConfig,
 }
 _PARAMETER_KEYS = {"bounds": list, "prior": dict, "start": float}
-_TABLE_PARSERS: dict[str, Callable[[Mapping, str], Any]] = {}
-
-
-def register_table(name: str, parser: Callable[[Mapping, str], Any]) -> None:
-    """Accept a top-level table ``[name]``; ``parser(table, where)`` returns its parsed value."""
-    if name in _SECTIONS or name == "parameters":
-        raise ValueError(f"study table {name!r} is built in")
-    _TABLE_PARSERS[name] = parser
 
 
 def _check_type(value, annotation, where: str):
@@ -269,6 +275,78 @@ def _parse_parameters(table, where: str) -> dict:
     return out
 
 
+_DISCOVERY_INT_KEYS = {
+    "baseline_starts",
+    "seed",
+    "quick_refits",
+    "per_kind",
+    "quick_nfev",
+    "max_refits",
+    "max_nfev",
+    "loo_top",
+    "loo_draws",
+}
+_DISCOVERY_FLOAT_KEYS = {
+    "sigma",
+    "threshold_log_odds",
+    "margin_ln_bf",
+    "effect_prior",
+    "adequacy_p",
+    "alpha",
+}
+
+
+def _parse_effects_table(table: Mapping, where: str) -> tuple[str, ...]:
+    """``[effects] add = [...]`` -> validated spec strings."""
+    unknown = sorted(set(table) - {"add"})
+    if unknown:
+        raise BayesUpdateError(f"{where}.{unknown[0]}: unknown key; valid keys are ['add']")
+    specs = table.get("add", [])
+    if not isinstance(specs, list) or not all(isinstance(s, str) for s in specs):
+        raise BayesUpdateError(f"{where}.add: must be a list of effect specs (strings)")
+    for spec in specs:
+        parse_effect_spec(spec)  # raises a clear error for an unknown kind or a bad value
+    return tuple(specs)
+
+
+def _parse_discovery_table(table: Mapping, where: str) -> DiscoverySettings:
+    """``[discovery]`` -> DiscoverySettings (strict keys and types)."""
+    valid = {f.name for f in dataclasses.fields(DiscoverySettings)}
+    values = {}
+    for key, value in table.items():
+        here = f"{where}.{key}"
+        if key not in valid:
+            raise BayesUpdateError(f"{here}: unknown key; valid keys are {sorted(valid)}")
+        if key in _DISCOVERY_INT_KEYS:
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise BayesUpdateError(f"{here}: must be an integer, got {value!r}")
+        elif key in _DISCOVERY_FLOAT_KEYS:
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise BayesUpdateError(f"{here}: must be a number, got {value!r}")
+            value = float(value)
+        elif key == "kinds":
+            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+                raise BayesUpdateError(f"{here}: must be a list of effect kinds")
+            value = tuple(value)
+        elif key == "locations":
+            ok = isinstance(value, dict) and all(
+                isinstance(v, list) and all(isinstance(x, str | int) for x in v)
+                for v in value.values()
+            )
+            if not ok:
+                raise BayesUpdateError(f"{here}: must be a table kind = [locations]")
+            value = {k: [str(x) for x in v] for k, v in value.items()}
+        values[key] = value
+    return DiscoverySettings(**values)
+
+
+#: the discovery tables: the study file knows discovery's settings record directly
+_EXTENSION_TABLES: dict[str, Callable[[Mapping, str], Any]] = {
+    "effects": _parse_effects_table,
+    "discovery": _parse_discovery_table,
+}
+
+
 def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
     """StudyConfig from a parsed TOML document; ``where`` prefixes error messages (file name)."""
     kwargs: dict[str, Any] = {}
@@ -278,10 +356,10 @@ def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
             kwargs[key] = _parse_section(_SECTIONS[key], table, f"{where}: {key}")
         elif key == "parameters":
             kwargs[key] = _parse_parameters(table, f"{where}: parameters")
-        elif key in _TABLE_PARSERS:
-            extensions[key] = _TABLE_PARSERS[key](table, f"{where}: {key}")
+        elif key in _EXTENSION_TABLES:
+            extensions[key] = _EXTENSION_TABLES[key](table, f"{where}: {key}")
         else:
-            valid = sorted([*_SECTIONS, "parameters", *_TABLE_PARSERS])
+            valid = sorted([*_SECTIONS, "parameters", *_EXTENSION_TABLES])
             raise BayesUpdateError(f"{where}: unknown table [{key}]; valid tables are {valid}")
     likelihood = document.get("likelihood", {})
     if "sigma_prior" in likelihood and "sigma" not in likelihood:

@@ -1,5 +1,6 @@
 """The seed paper's numbers as data (Lupea 2013, "Updating of an exhaust system model by using test
-data from EMA"), with their table numbers, and its objective (seed eq. 19).
+data from EMA"), with their table numbers: tables only (eq. 19 itself, the objective, is
+``inference.problem.objective_expr``).
 
 Units: frequencies in Hz; the paper's mm and t/mm^3 are kept in the ``*_paper`` fields and
 converted to SI (m, kg/m^3) in the others.
@@ -64,20 +65,3 @@ OPTIMUM_MASS_KG = 12.12
 #: Objective values reported in seed section 5 / Table 4.
 EXPR_INITIAL_REPORTED = 0.3325
 EXPR_FINAL_REPORTED = 0.04
-
-
-def objective_expr(f_sim_hz, f_test_hz, weights=None) -> np.ndarray:
-    """Seed eq. 19: Expr = sum_i w_i ((f_si - f_Ti) / f_Ti)^2.
-
-    f_sim_hz : (..., n) simulated frequencies [Hz] (leading axes broadcast, e.g. walkers).
-    f_test_hz : (n,) target frequencies [Hz].  weights : (n,) or None for unit weights.
-    Returns Expr with the leading shape of ``f_sim_hz``.
-    """
-    f_sim = np.asarray(f_sim_hz, dtype=float)
-    f_test = np.asarray(f_test_hz, dtype=float)
-    if f_sim.shape[-1] != f_test.shape[-1]:
-        raise ValueError(
-            f"objective_expr: {f_sim.shape[-1]} simulated vs {f_test.shape[-1]} test frequencies"
-        )
-    w = np.ones_like(f_test) if weights is None else np.asarray(weights, dtype=float)
-    return np.sum(w * ((f_sim - f_test) / f_test) ** 2, axis=-1)

@@ -8,8 +8,8 @@ Run:
   .venv/bin/python benchmarks/posterior_speed.py --full --steps 1000 --starts 1 --save full.npz
   .venv/bin/python benchmarks/posterior_speed.py --compare rom.npz full.npz   # no sampling
 
-Pipeline (the CLI's, ``runner.run_sampling``): the exhaust model, tracked pairing at the
-reference design -> [reduced: ``runner.sampling_problem``: certified reduced basis over the
+Pipeline (the CLI's, ``pipelines.sample.run_sampling``): the exhaust model, tracked pairing at the
+reference design -> [reduced: ``surrogates.sampling_problem``: certified reduced basis over the
 prior box, 14 modes] -> multi-start optimum (``--starts``, ``--max-nfev`` per start) -> [reduced:
 ``certify_at`` the optimum] -> emcee with DE moves, ``--walkers`` walkers started around the
 optimum, in logit coordinates (``--transform``), checked every ``--check-every`` steps and run
@@ -39,9 +39,9 @@ from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noq
 from bayesupdate.inference.optimize import calibrate  # noqa: E402
 from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
 from bayesupdate.inference.problem import build_problem  # noqa: E402
-from bayesupdate.inference.runner import sampling_problem, screening_posterior  # noqa: E402
 from bayesupdate.inference.sampling import sample_posterior  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
+from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior  # noqa: E402
 
 
 def likelihood() -> LikelihoodSpec:
@@ -54,8 +54,9 @@ def run(args, reduced: bool) -> dict:
     t0, c0 = time.perf_counter(), time.process_time()
     fe = get_model("exhaust")
     data = paper_ema()
-    # the CLI's pipeline (runner.run_sampling): tracked pairing at the reference design, the
-    # certified reduced model over the parameter box (14 modes = 12 test + 2 extra), optimum
+    # the CLI's pipeline (pipelines.sample.run_sampling): tracked pairing at the reference
+    # design, the certified reduced model over the parameter box (14 modes = 12 test + 2 extra),
+    # optimum
     problem = build_problem(fe, data)
     problem, rom = sampling_problem(problem, reduced=reduced)
     t_model = time.perf_counter() - t0

@@ -12,7 +12,7 @@ wider S-jog, a shorter main muffler, a wider elbow, a longer cold pipe).  Test d
   each shape's RMS amplitude, so 1 - MAC(noisy, true) ~ 9e-4 (the virtual roving-hammer test
   identifies most shapes to 1 - MAC ~ 1e-5 - 1e-4, ``--path identify``); discovery infers the
   shape noise of each mode itself.  ``--shape-noise 0`` drops the shapes (frequencies only);
-* ``--path identify``: the virtual roving-hammer test (``commands.simulate.simulate_test``), then
+* ``--path identify``: the virtual roving-hammer test (``pipelines.simulate.simulate_test``), then
   ``ema.identify`` (modes with shapes, paired by MAC), frequency sd = ``--noise``;
 * ``--path cli``: what a user runs, as subprocesses with the default settings:
   ``bayesupdate simulate --model exhaust [--effect SPEC ...] [--geometry NAME=VALUE]
@@ -183,15 +183,15 @@ def case_data(case: str, path: str, noise: float, seed: int, shape_noise: float 
     if path == "fast":
         data = noisy_modes(truth, noise, shape_noise, rng, f"virtual:{case}")
         return data, shift, base
-    from bayesupdate.commands.simulate import simulate_test
     from bayesupdate.discovery.effects import parse_effect_spec
     from bayesupdate.ema.identify import identify
+    from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
 
     if case.startswith("geometry:"):
         raise SystemExit("--path identify supports effect and null cases only")
-    effects = [parse_effect_spec(s) for s in specs]
-    frfs, _ = simulate_test(base, dict(TABLE3_OPTIMUM_SI), effects, 0.01, seed)
-    modes = identify(frfs).modes
+    effects = tuple(parse_effect_spec(s) for s in specs)
+    truth = VirtualTestSettings(dict(TABLE3_OPTIMUM_SI), effects, noise=0.01, seed=seed)
+    modes = identify(simulate_test(base, truth).frfs).modes
     keep = np.argsort(modes.frequencies_hz)[:N_MODES]
     modes = modes.subset(keep)
     data = ModalData(

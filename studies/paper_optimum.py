@@ -26,6 +26,7 @@ from bayesupdate.inference import (  # noqa: E402
     build_problem,
     calibrate,
     load_modal_data,
+    objective_expr,
     pareto_front_mass,
     write_result,
 )
@@ -38,7 +39,6 @@ from bayesupdate.paper import (  # noqa: E402
     TABLE3_INITIAL_SI,
     TABLE3_OPTIMUM_SI,
     TABLE4_FINAL_HZ,
-    objective_expr,
 )
 
 

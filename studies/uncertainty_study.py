@@ -11,10 +11,10 @@ Cases: ``best`` (the stored best geometry, five design variables + sigma), ``bes
 same with the six joint spring factors k_A__B sampled as nuisance parameters, lognormal prior
 mu = 0, sigma = ``--joint-sigma`` of the log, truncated to [0.1, 10]: the connection stiffness a
 shell model resolves and this beam model lumps), and ``geometry N`` (runner-up geometries, five
-design variables).  Each case: certified reduced model over the prior box (``runner.
-sampling_problem``), multi-start optimum on it, emcee (DE moves) from the optimum, checked in
-full at the optimum and the posterior mean.  Priors uniform on the bounds; sigma inferred
-(half-normal, scale 0.1); shape-tracked pairing in the likelihood.
+design variables).  Each case: certified reduced model over the prior box
+(``pipelines.surrogates.sampling_problem``), multi-start optimum on it, emcee (DE moves) from the
+optimum, checked in full at the optimum and the posterior mean.  Priors uniform on the bounds;
+sigma inferred (half-normal, scale 0.1); shape-tracked pairing in the likelihood.
 
 Prints the design variables' marginal posterior (mean, sd, 90 % HDI) per case side by side,
 the thickness-density correlations of the best case and the least-determined combinations, and
@@ -42,9 +42,9 @@ from bayesupdate.inference import (
 )
 from bayesupdate.inference.coverage import interval_coverage
 from bayesupdate.inference.plots import save_all
-from bayesupdate.inference.runner import certify_rom, sampling_problem
 from bayesupdate.models import get_model
 from bayesupdate.paper import DESIGN_VARIABLES, TABLE3_OPTIMUM_SI
+from bayesupdate.pipelines.surrogates import certify_rom, sampling_problem
 
 
 def run_case(label, geometry, joints, args, out: Path) -> dict:

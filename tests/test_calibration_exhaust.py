@@ -18,7 +18,6 @@ from bayesupdate.inference import (  # noqa: E402
     load_modal_data,
 )
 from bayesupdate.inference.pairing import pair_batch  # noqa: E402
-from bayesupdate.inference.runner import sampling_problem  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.models.exhaust import JOINTS, joint_parameter  # noqa: E402
 from bayesupdate.paper import (  # noqa: E402
@@ -27,6 +26,7 @@ from bayesupdate.paper import (  # noqa: E402
     TABLE3_INITIAL_SI,
     TABLE3_OPTIMUM_SI,
 )
+from bayesupdate.pipelines.surrogates import sampling_problem  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -172,7 +172,7 @@ def test_joint_nuisance_option():
 
 
 def test_screening_posteriors_for_reduced_and_full_sampling(rom):
-    from bayesupdate.inference.runner import screening_posterior
+    from bayesupdate.pipelines.surrogates import screening_posterior
 
     problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
     reduced_problem, _ = sampling_problem(problem)

@@ -4,9 +4,10 @@ import textwrap
 
 import pytest
 
-from bayesupdate.config import load_study, parse_study, register_table, with_overrides
+from bayesupdate.config import load_study, parse_study, with_overrides
+from bayesupdate.discovery.workflow import DiscoverySettings
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.runner import prepare
+from bayesupdate.pipelines.study import prepare
 
 FULL = """
 [model]
@@ -123,10 +124,36 @@ def test_invalid_toml_and_missing_file(tmp_path):
         load_study(tmp_path / "nope.toml")
 
 
-def test_other_layers_can_register_tables():
-    register_table("effects_test", lambda table, where: dict(table))
-    study = parse_study({"effects_test": {"kind": "added_mass"}})
-    assert study.extensions == {"effects_test": {"kind": "added_mass"}}
+def test_discovery_tables_are_part_of_the_schema():
+    # [effects] and [discovery] parse without importing anything else first (no registration)
+    study = parse_study(
+        {"effects": {"add": ["added_mass@14:m=0.2"]}, "discovery": {"max_refits": 2, "sigma": 1}}
+    )
+    assert study.extensions == {
+        "effects": ("added_mass@14:m=0.2",),
+        "discovery": DiscoverySettings(max_refits=2, sigma=1.0),
+    }
+    assert isinstance(study.extensions["discovery"].sigma, float)
+    with pytest.raises(BayesUpdateError, match=r"valid tables are \[.*'discovery', 'effects'"):
+        parse_study({"effect": {}}, "s.toml")
+    with pytest.raises(BayesUpdateError, match=r"s.toml: discovery.max_refits: must be an integer"):
+        parse_study({"discovery": {"max_refits": 2.5}}, "s.toml")
+
+
+def test_prepare_extends_the_model_by_the_study_effects_then_the_extra_ones():
+    base = prepare(parse_study({"model": {"source": "exhaust"}}))
+    study = parse_study(
+        {"model": {"source": "exhaust"}, "effects": {"add": ["added_mass@14:m=0.2"]}}
+    )
+    one = prepare(study)
+    two = prepare(study, effects=("added_mass@8:m=0.3",))
+    masses = [p.problem.model.predict({}, 12).mass_kg for p in (base, one, two)]
+    assert masses[1] - masses[0] == pytest.approx(0.2, rel=1e-9)
+    assert masses[2] - masses[0] == pytest.approx(0.5, rel=1e-9)
+    # a bad spec is named before the model is even looked up
+    unknown_model = parse_study({"model": {"source": "no_such_model"}})
+    with pytest.raises(BayesUpdateError, match="bogus"):
+        prepare(unknown_model, effects=("bogus@1",))
 
 
 def test_overrides():

@@ -13,18 +13,18 @@ and correlation terms, median 16 and range 0.28-406.
 import numpy as np
 import pytest
 
-from bayesupdate.commands.simulate import simulate_test
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.ema.identify import identify
 from bayesupdate.models import get_model
+from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
 
 
 def _case(seed):
-    frfs, truth = simulate_test(get_model("exhaust"), {}, [], noise=0.01, seed=seed)
-    modes = identify(frfs).modes
-    labels = list(truth["dof_labels"])
-    true = truth["shapes"][[labels.index(lab) for lab in modes.dof_labels]]
-    idx = [int(np.argmin(np.abs(truth["frequencies_hz"] - f))) for f in modes.frequencies_hz]
+    truth = simulate_test(get_model("exhaust"), VirtualTestSettings(noise=0.01, seed=seed))
+    modes = identify(truth.frfs).modes
+    labels = list(truth.dof_labels)
+    true = truth.shapes[[labels.index(lab) for lab in modes.dof_labels]]
+    idx = [int(np.argmin(np.abs(truth.frequencies_hz - f))) for f in modes.frequencies_hz]
     one_minus_mac = 1 - np.diag(mac_matrix(modes.shapes, true[:, idx]))
     return modes, one_minus_mac
 

@@ -174,13 +174,13 @@ def test_crash_while_writing_a_checkpoint_keeps_the_previous_checkpoint(tmp_path
         original(path, *args, **kwargs)
         snapshots.append(Path(path).read_bytes())
 
-    monkeypatch.setattr("bayesupdate.inference.runner.write_result", flaky)
+    monkeypatch.setattr("bayesupdate.pipelines.sample.write_result", flaky)
     assert main(["sample", str(study), "--out", str(out), "--no-progress"]) == 1
     assert out.read_bytes() == snapshots[-1]
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial" and h5["posterior/chain"].shape[0] == 100
     assert _files(tmp_path) == ["run.h5", "study.toml"]
-    monkeypatch.setattr("bayesupdate.inference.runner.write_result", original)
+    monkeypatch.setattr("bayesupdate.pipelines.sample.write_result", original)
     assert main(["sample", str(study), "--out", str(out), "--resume", "--no-progress"]) == 0
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "complete" and h5["posterior/chain"].shape[0] == 200
@@ -321,7 +321,7 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     machine): the write completes, the run stops before the next block with the resume hint,
     exit 130, and --resume completes it."""
     from bayesupdate import interrupts
-    from bayesupdate.inference import runner
+    from bayesupdate.pipelines import sample as runner
 
     original = runner.write_result
     calls = []
@@ -365,7 +365,7 @@ def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path,
     # a SIGTERM whose KeyboardInterrupt a compiled extension swallowed (scipy's Sobol set-up
     # reports "Exception ignored" and goes on): the recorded request stops the run at the next
     # optimiser start, exit 130, and nothing is written
-    import bayesupdate.inference.runner as runner
+    import bayesupdate.pipelines.sample as runner
     from bayesupdate import interrupts
 
     original = runner.sampling_problem

@@ -5,6 +5,7 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference import LikelihoodSpec, LogPosterior, ObjectiveSpec, build_problem
+from bayesupdate.inference.problem import objective_expr
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
 from bayesupdate.paper import (
@@ -12,7 +13,6 @@ from bayesupdate.paper import (
     TABLE2_EMA_HZ,
     TABLE4_EMA_HZ,
     TABLE4_FINAL_HZ,
-    objective_expr,
 )
 
 

@@ -12,9 +12,9 @@ from bayesupdate.config import parse_study
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import PAPER_MASS_SD_REL, load_modal_data
 from bayesupdate.inference.results import read_result
-from bayesupdate.inference.runner import DEFAULT_MASS_WEIGHT, prepare
 from bayesupdate.modal_data import ModalData
 from bayesupdate.paper import MEASURED_MASS_KG
+from bayesupdate.pipelines.study import DEFAULT_MASS_WEIGHT, prepare
 
 SHEAR_STUDY = """
 [model]

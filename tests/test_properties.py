@@ -227,7 +227,7 @@ def test_random_study_documents_parse_or_raise_one_error(document):
 @given(document=documents)
 def test_random_studies_are_validated_before_any_work(document):
     # a parsed study goes through the whole validation of calibrate/sample with a fast model
-    from bayesupdate.inference.runner import prepare
+    from bayesupdate.pipelines.study import prepare
 
     document = dict(document)
     document["model"] = {"source": "shear_building"}

@@ -57,7 +57,6 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
 
 def study_from_args(args):
     """StudyConfig from a study file and/or --model/--data flags (flags win)."""
-    import bayesupdate.discovery.study  # noqa: F401  (registers the [effects] table)
     from bayesupdate.config import StudyConfig, load_study, with_overrides
 
     if args.study is None and args.model is None:
@@ -86,21 +85,6 @@ def study_from_args(args):
     return study
 
 
-def model_extension(args, study):
-    """The effects of ``[effects] add`` and ``--effect``, as the ``extend`` of ``prepare``
-    (None when there are none)."""
-    from bayesupdate.discovery.effects import parse_effect_spec
-
-    specs = tuple(study.extensions.get("effects", ())) + tuple(args.effect)
-    for spec in specs:
-        parse_effect_spec(spec)  # a bad spec is a user error before any work
-    if not specs:
-        return None
-    from bayesupdate.discovery.results_io import extend_with_specs
-
-    return lambda model: extend_with_specs(model, specs)
-
-
 def add_full_argument(parser) -> None:
     parser.add_argument(
         "--full",
@@ -122,12 +106,13 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.inference.results import write_result
-    from bayesupdate.inference.runner import prepare, run_calibration
+    from bayesupdate.pipelines.calibrate import run_calibration
+    from bayesupdate.pipelines.study import prepare
 
     study = study_from_args(args)
     if args.out:
         check_output_path(args.out, args.force)
-    prepared = prepare(study, extend=model_extension(args, study))
+    prepared = prepare(study, effects=tuple(args.effect))
     result = run_calibration(prepared)
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)

@@ -1,7 +1,10 @@
 """``bayesupdate demo``: the main job - the seed's whole story with a report."""
 
 import sys
+import time
 from pathlib import Path
+
+from bayesupdate.errors import BayesUpdateError
 
 NAME = "demo"
 HELP = "run the seed's whole story (model, test, calibration, uncertainty, discovery) + report"
@@ -24,16 +27,47 @@ def add_arguments(parser):
 
 
 def run(args) -> int:
-    from bayesupdate.demo import DemoSettings, check_out_folder, run_demo
+    from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo
+    from bayesupdate.report.demo_report import summary_rows, write_demo_report
 
     out = check_out_folder(Path(args.out), args.force)
-    record = run_demo(
-        DemoSettings(out=out, quick=args.quick, seed=args.seed),
-        say=lambda line: print(line, file=sys.stderr, flush=True),
-    )
-    width = max(len(k) for k, _ in record.rows)
+    settings = DemoSettings(out=out, quick=args.quick, seed=args.seed, progress=sys.stderr.isatty())
+    steps = (*demo_steps(settings), "report")
+    t0 = time.perf_counter()
+    counter = iter(range(1, len(steps) + 1))
+
+    def step(name):
+        say(f"[{next(counter)}/{len(steps)}] {name}  ({time.perf_counter() - t0:.0f} s)")
+
+    results = run_demo(settings, step)
+    step("report")
+    files = write_demo_report(results)
+    rows = summary_rows(results, time.perf_counter() - t0)
+    width = max(len(k) for k, _ in rows)
     print("\nsummary")
-    for key, value in record.rows:
+    for key, value in rows:
         print(f"  {key:<{width}}  {value}")
-    print(f"\nreport: {record.files[0]}\n        {record.files[1]}")
+    print(f"\nreport: {files[0]}\n        {files[1]}")
     return 0
+
+
+def say(line: str) -> None:
+    """Progress goes to stderr: stdout carries the summary only."""
+    print(line, file=sys.stderr, flush=True)
+
+
+def check_out_folder(out: Path, force: bool) -> Path:
+    """The demo writes into ``out``; refuse a non-empty folder unless ``force``."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise BayesUpdateError(f"--out {out}: is a file; give a folder")
+    if out.exists() and any(out.iterdir()) and not force:
+        raise BayesUpdateError(f"--out {out}: folder is not empty; use --force to overwrite")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".write_test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError:
+        raise BayesUpdateError(f"--out {out}: cannot write there; choose another folder") from None
+    return out

@@ -59,7 +59,6 @@ def add_arguments(parser) -> None:
 
 
 def _study(args):
-    import bayesupdate.discovery.study  # noqa: F401  (registers [effects] and [discovery])
     from bayesupdate.config import StudyConfig, load_study, with_overrides
 
     if args.study is None and args.model is None:
@@ -92,59 +91,40 @@ def _settings(study, args):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.discovery.effects import parse_effect_spec
-    from bayesupdate.discovery.results_io import extend_with_specs, write_discovery
-    from bayesupdate.discovery.workflow import discover
-    from bayesupdate.inference.data import load_modal_data
-    from bayesupdate.inference.user_model import resolve_model
+    from bayesupdate.discovery.results_io import write_discovery
+    from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
+    from bayesupdate.pipelines.study import study_effects
 
     study = _study(args)
     if args.out:
         check_output_path(args.out, args.force)
     if args.posterior_steps < 0:
         raise BayesUpdateError(f"--posterior-steps must be >= 0, got {args.posterior_steps}")
-    specs = list(study.extensions.get("effects") or ()) + list(args.effect)
-    for spec in specs:
-        parse_effect_spec(spec)
-    settings = _settings(study, args)
-    model = resolve_model(
-        study.model.source, study.parameters, study.model.sensors, study.model.options
-    )
-    if not hasattr(model, "structure"):
-        raise BayesUpdateError(
-            f"model {study.model.source!r}: discovery extends an FE model's structure; "
-            "use a built-in FE model such as 'exhaust'"
-        )
-    model = extend_with_specs(model, specs)
-    data = load_modal_data(study.data.as_source())
+    specs = study_effects(study, tuple(args.effect))
+    request = DiscoveryRequest(_settings(study, args), specs, args.posterior_steps)
     progress = None if args.json else (lambda message: print(message, file=sys.stderr))
-    result = discover(
-        model,
-        data,
-        settings,
-        parameters=study.parameters or None,
-        pairing=study.pairing.method,
-        progress=progress,
-    )
-    posterior = None
-    if args.posterior_steps > 0:
-        from bayesupdate.discovery.posterior import sample_final
-        from bayesupdate.inference.diagnostics import summarise
-
-        chain, _ = sample_final(result, steps=args.posterior_steps, seed=settings.seed + 1)
-        posterior = (chain, summarise(chain))
+    found = discover_study(study, request, progress)
+    result, posterior = found.result, found.posterior
     if args.out:
-        write_discovery(args.out, result, specs, study.to_dict(), command=NAME, posterior=posterior)
+        write_discovery(
+            args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior
+        )
     if args.plots:
         from bayesupdate.discovery.plots import save_plots
 
-        save_plots(result, args.plots, getattr(model, "structure", None))
+        save_plots(result, args.plots, getattr(found.model, "structure", None))
     summary = result.to_json()
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:
         print(json.dumps(summary))
         return 0
+    _print_summary(result, summary, list(specs))
+    return 0
+
+
+def _print_summary(result, summary: dict, specs: list) -> None:
+    """The terminal report of a discovery run (without --json)."""
     print(f"verdict: {result.verdict} - {result.reason}")
     print(f"noise: {result.noise.source}, sigma = {100 * result.noise.sigma:.3g} %")
     print(f"flagged modes: {summary['flagged_modes']}")
@@ -169,4 +149,3 @@ def run(args) -> int:
     )
     if result.effects:
         print("extended model: " + " ".join(f"--effect {s}" for s in specs + result.effects))
-    return 0

@@ -4,11 +4,12 @@ import json
 import signal
 import sys
 
+import numpy as np
+
 from bayesupdate import interrupts
 from bayesupdate.commands.calibrate import (
     add_full_argument,
     add_study_arguments,
-    model_extension,
     study_from_args,
 )
 from bayesupdate.errors import BayesUpdateError
@@ -45,14 +46,38 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.inference.runner import prepare, run_sampling, sample_json
+    from bayesupdate.pipelines.study import prepare
 
     study = study_from_args(args)
     if args.resume and not args.out:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
     if args.out:
         check_output_path(args.out, force=args.force or args.resume)
-    prepared = prepare(study, extend=model_extension(args, study))
+    prepared = prepare(study, effects=tuple(args.effect))
+    run = _sample_with_stop_handlers(prepared, args)
+    posterior = run.posterior
+    if posterior.interrupted:
+        where = f"; partial result in {args.out}, continue with --resume" if args.out else ""
+        print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)
+        raise KeyboardInterrupt
+    out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
+    if not out["converged"]:  # said on every path, never implied by a number in a table
+        reason = (out["convergence"] or {}).get("reason", "")
+        print(f"warning: the posterior did not converge: {reason}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        _print_summary(out, run.summary, study.sampler)
+    return 0
+
+
+def _sample_with_stop_handlers(prepared, args):
+    """``pipelines.sample.run_sampling`` with SIGTERM/SIGINT turned into a checkpointed stop."""
+    from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
+
+    options = SamplingOptions(
+        out=args.out, resume=args.resume, progress=not (args.json or args.no_progress)
+    )
     interrupts.clear()
     previous_hook, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
     previous_excepthook, sys.excepthook = sys.excepthook, interrupts.quiet_excepthook
@@ -61,50 +86,40 @@ def run(args) -> int:
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
     previous_int = signal.signal(signal.SIGINT, interrupts.stop_handler)
     try:
-        _, posterior, summary, predictions = run_sampling(
-            prepared, args.out, resume=args.resume, progress=not (args.json or args.no_progress)
-        )
+        return run_sampling(prepared, options)
     finally:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
         sys.unraisablehook = previous_hook
         sys.excepthook = previous_excepthook
         interrupts.clear()
-    if posterior.interrupted:
-        where = f"; partial result in {args.out}, continue with --resume" if args.out else ""
-        print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)
-        raise KeyboardInterrupt
-    out = sample_json(posterior, summary, prepared.likelihood, predictions)
-    if not out["converged"]:  # said on every path, never implied by a number in a table
-        reason = (out["convergence"] or {}).get("reason", "")
-        print(f"warning: the posterior did not converge: {reason}", file=sys.stderr)
-    if args.json:
-        print(json.dumps(out))
-    else:
+
+
+def _print_summary(out: dict, summary: dict, sampler) -> None:
+    """The terminal table of a sampling run (without --json)."""
+    print(
+        f"{out['steps']} steps x {out['walkers']} walkers, {out['evaluations']} evaluations "
+        f"({out['failed_evaluations']} failed), {out['wall_s']:.1f} s, "
+        f"converged ({_criteria(sampler)}): {out['converged']}"
+    )
+    rom = out["rom"]
+    print(
+        "full FE solves"
+        if rom is None
+        else f"reduced basis: size {rom['size']}, max relative frequency error "
+        f"{rom['max_rel_error']:.1e}"
+    )
+    if out["pair_differs_fraction"] is not None:
         print(
-            f"{out['steps']} steps x {out['walkers']} walkers, {out['evaluations']} evaluations "
-            f"({out['failed_evaluations']} failed), {out['wall_s']:.1f} s, "
-            f"converged ({_criteria(study.sampler)}): {out['converged']}"
+            f"pairing by shape: {out['pair_differs_fraction']:.0%} of evaluations pair "
+            "differently from the mode order"
         )
-        rom = out["rom"]
+    print("name                      mean         sd     hdi_low    hdi_high  r_hat  ess_bulk")
+    for name, row in summary.items():
         print(
-            "full FE solves"
-            if rom is None
-            else f"reduced basis: size {rom['size']}, max relative frequency error "
-            f"{rom['max_rel_error']:.1e}"
+            f"{name:20s} {row['mean']:10.5g} {row['sd']:10.4g} {row['hdi_low']:10.5g} "
+            f"{row['hdi_high']:10.5g} {row['r_hat']:6.3f} {row['ess_bulk']:8.0f}"
         )
-        if out["pair_differs_fraction"] is not None:
-            print(
-                f"pairing by shape: {out['pair_differs_fraction']:.0%} of evaluations pair "
-                "differently from the mode order"
-            )
-        print("name                      mean         sd     hdi_low    hdi_high  r_hat  ess_bulk")
-        for name, row in summary.items():
-            print(
-                f"{name:20s} {row['mean']:10.5g} {row['sd']:10.4g} {row['hdi_low']:10.5g} "
-                f"{row['hdi_high']:10.5g} {row['r_hat']:6.3f} {row['ess_bulk']:8.0f}"
-            )
-    return 0
 
 
 def _criteria(sampler) -> str:
@@ -115,3 +130,59 @@ def _criteria(sampler) -> str:
     if sampler.target_ess:
         parts.append(f"ESS >= {sampler.target_ess:g}")
     return ", ".join(parts)
+
+
+def sample_json(posterior, summary: dict, likelihood, predictions: dict | None = None) -> dict:
+    """The ``sample --json`` object (issue 4 item 10) of a ``PosteriorResult``, its summary, the
+    ``LikelihoodSpec`` and the posterior predictive, plus failed_evaluations, steps, walkers,
+    converged, convergence ({"converged", "reason" (null when converged), "max_r_hat",
+    "min_ess_bulk", "target_rhat", "target_ess", "steps"}), swap_fraction (share of checked
+    draws whose modes are swapped against their order; None if the model gives no shapes), "rom"
+    ({"size", "max_rel_error", "error_at"} of the reduced basis used, null with --full),
+    "screen" ({"size", "max_rel_error" against the reduced basis, "evaluations"} of the delayed-
+    acceptance surrogate, null without), "pairing" (likelihood mode) and "pair_differs_fraction"
+    (share of likelihood evaluations paired differently from the order pairing; null unless the
+    likelihood paired by shape)."""
+    keys = ("mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk")
+    params = {
+        name: {k: summary[name][k] for k in keys} for name in posterior.names if name != "sigma"
+    }
+    if likelihood.infer_sigma:
+        sigma = {k: summary["sigma"][k] for k in keys}
+    else:
+        sigma = {"fixed": float(likelihood.sigma)}
+    return {
+        "parameters": params,
+        "sigma": sigma,
+        "evaluations": int(posterior.evaluations),
+        "failed_evaluations": int(posterior.failed_evaluations),
+        "wall_s": float(posterior.wall_s),
+        "autocorr_time": [float(t) for t in posterior.autocorr_time],
+        "steps": int(posterior.chain.shape[0]),
+        "walkers": int(posterior.chain.shape[1]),
+        "converged": bool(posterior.converged),
+        "convergence": posterior.diagnostics.get("convergence"),
+        "rom": _rom_json(posterior.diagnostics.get("rom")),
+        "screen": posterior.diagnostics.get("screen"),
+        "pairing": posterior.diagnostics.get("pairing_mode"),
+        "pair_differs_fraction": _finite_or_none(
+            posterior.diagnostics.get("pair_differs_fraction")
+        ),
+        "swap_fraction": None
+        if not predictions or not np.isfinite(predictions["swap_fraction"])
+        else float(predictions["swap_fraction"]),
+    }
+
+
+def _rom_json(rom: dict | None) -> dict | None:
+    if not rom:
+        return None
+    return {
+        "size": int(rom["size"]),
+        "max_rel_error": float(rom["max_rel_error"]),
+        "error_at_posterior_mean": _finite_or_none(rom.get("error_at")),
+    }
+
+
+def _finite_or_none(value) -> float | None:
+    return None if value is None or not np.isfinite(value) else float(value)

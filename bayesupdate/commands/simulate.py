@@ -62,45 +62,6 @@ def add_arguments(parser):
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def simulate_test(model, params, effects, noise, seed, n_modes=20):
-    """The virtual test of ``model`` with ``effects`` at ``params``: (FrfSet, truth dict)."""
-    from bayesupdate.discovery.effects import extend_model
-    from bayesupdate.ema.virtual_test import (
-        best_reference_points,
-        seed_layout,
-        virtual_impact_test,
-    )
-
-    for effect in effects:
-        model = extend_model(model, effect)
-    result = model.solve(params, n_modes=n_modes)
-    rng = np.random.default_rng(seed)
-    damping = rng.uniform(0.005, 0.03, size=n_modes)
-    # like a test engineer, place the accelerometers where the (nominal) modes in band are seen
-    in_band = result.frequencies_hz <= 150.0
-    ref_v, ref_h = best_reference_points(result.sensor_shapes[:, in_band], result.sensor_labels)
-    frfs = virtual_impact_test(
-        result.frequencies_hz,
-        damping,
-        result.sensor_shapes,
-        result.sensor_labels,
-        layout=seed_layout(20, ref_v, ref_h),
-        noise=noise,
-        seed=rng,
-    )
-    truth = {
-        "frequencies_hz": result.frequencies_hz,
-        "damping_ratio": damping,
-        "mass_kg": result.mass_kg,
-        "parameters": result.parameters,
-        "effects": [e.spec() for e in effects],
-        "shapes": result.sensor_shapes,
-        "dof_labels": result.sensor_labels,
-        "reference_points": (ref_v, ref_h),
-    }
-    return frfs, truth
-
-
 def true_geometry(model_name: str, assignments: list[str]) -> dict:
     """The model options of ``--geometry NAME=VALUE`` (exhaust only): {} without any, else
     {"geometry": the best-fit geometry with those quantities replaced}."""
@@ -133,6 +94,7 @@ def run(args) -> int:
     from bayesupdate.ema.uff_io import write_uff58
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.models import get_model
+    from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
     from bayesupdate.units import parse_assignments
 
     if not (0.0 <= args.noise < 1.0):
@@ -140,22 +102,24 @@ def run(args) -> int:
     if args.modes < 1:
         raise BayesUpdateError(f"--modes must be >= 1, got {args.modes}")
     out = check_output_path(args.out, force=args.force)
-    effects = [parse_effect_spec(spec) for spec in args.effect]
+    effects = tuple(parse_effect_spec(spec) for spec in args.effect)
     params = parse_assignments(args.set)
     model = get_model(args.model, **true_geometry(args.model, args.geometry))
-    frfs, truth = simulate_test(model, params, effects, args.noise, args.seed, args.modes)
+    settings = VirtualTestSettings(params, effects, args.noise, args.seed, args.modes)
+    test = simulate_test(model, settings)
+    frfs = test.frfs
     write_uff58(out, frfs)
-    in_band = truth["frequencies_hz"] <= frfs.frequencies_hz[-1]
+    in_band = test.frequencies_hz <= frfs.frequencies_hz[-1]
     summary = {
         "out": str(out),
         "n_frf": int(frfs.n_frf),
         "n_lines": int(frfs.frequencies_hz.size),
-        "effects": truth["effects"],
+        "effects": list(test.effects),
         "geometry": list(args.geometry),
-        "true_frequencies_hz": [round(float(f), 6) for f in truth["frequencies_hz"][in_band]],
-        "true_damping_ratio": [round(float(z), 6) for z in truth["damping_ratio"][in_band]],
-        "mass_kg": float(truth["mass_kg"]),
-        "reference_points": {"V": truth["reference_points"][0], "H": truth["reference_points"][1]},
+        "true_frequencies_hz": [round(float(f), 6) for f in test.frequencies_hz[in_band]],
+        "true_damping_ratio": [round(float(z), 6) for z in test.damping_ratio[in_band]],
+        "mass_kg": float(test.mass_kg),
+        "reference_points": {"V": test.reference_points[0], "H": test.reference_points[1]},
     }
     if args.json:
         print(json.dumps(summary))

@@ -24,8 +24,7 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
                     log_evidence, log_bayes_factor, log_posterior_odds, expr, stage, optima,
                     loo_json
 
-``extended_model_from_result(path)`` rebuilds the final model (base model + effects at their
-fitted values, design variables at their re-fitted values as defaults): a model source.
+``pipelines.model_source.extended_model_from_result(path)`` rebuilds the final model from it.
 """
 
 import json
@@ -92,61 +91,74 @@ def write_discovery(
             config_json=json.dumps(config or {}, default=str),
         )
         h5.create_group("versions").attrs.update(package_versions())
-        g = h5.create_group("inputs")
-        g["frequencies_hz"] = data.frequencies_hz
-        if data.weights is not None:
-            g["weights"] = data.weights
-        if data.frequency_sd_hz is not None:
-            g["sd_hz"] = data.frequency_sd_hz
-        g.attrs["source"] = data.source
+        _write_inputs(h5.create_group("inputs"), data)
         _write_fit(h5.create_group("baseline"), result.baseline)
         final = h5.create_group("final")
         _write_fit(final, result.final)
         final.attrs["effects_json"] = json.dumps(effects)
         if posterior is not None:
-            chain, summary_post = posterior
-            g = final.create_group("posterior")
-            g["chain"], g["log_prob"] = chain.chain, chain.log_prob
-            g.attrs.update(
-                names=json.dumps(list(chain.names)),
-                burn=int(chain.burn),
-                summary_json=json.dumps(summary_post, default=float),
-            )
-        f = result.flags
-        g = h5.create_group("flags")
-        g["z"], g["p_value"], g["flagged"], g["mac"] = f.z, f.p_value, f.flagged, f.mac
-        if f.shape_p_value is not None:
-            g["shape_p_value"] = f.shape_p_value
-        g.attrs.update(
-            chi2=f.chi2,
-            chi2_dof=f.chi2_dof,
-            chi2_p=f.chi2_p,
-            noise_source=result.noise.source,
-            noise_sigma=result.noise.sigma,
-        )
-        loc = result.localization
-        g = h5.create_group("localization")
-        g["candidate"] = _strings(s.label for s in loc.scores)
-        g["delta_chi2"] = np.array([s.delta_chi2 for s in loc.scores], float)
-        g["step_theta"] = np.array([s.step_theta for s in loc.scores], float)
-        g["location"] = _strings(item[0] for item in loc.locations)
-        g["location_score"] = np.array([item[1] for item in loc.locations], float)
-        g["part"] = _strings(item[0] for item in loc.part_energy)
-        g["strain_excess"] = np.array([item[1] for item in loc.part_energy], float)
-        g["kinetic_excess"] = np.array([item[2] for item in loc.part_energy], float)
-        g["comac_label"] = _strings(loc.comac)
-        g["comac"] = np.array(list(loc.comac.values()), float)
-        cands = h5.create_group("candidates")
-        for i, fit in enumerate(result.fits):
-            c = cands.create_group(f"{i:03d}")
-            _write_fit(c, fit)
-            c.attrs.update(
-                kind=fit.kind,
-                location=fit.location,
-                log_bayes_factor=result.log_bayes_factor(fit),
-                log_posterior_odds=result.log_posterior_odds(fit),
-            )
+            _write_posterior(final.create_group("posterior"), *posterior)
+        _write_flags(h5.create_group("flags"), result)
+        _write_localization(h5.create_group("localization"), result.localization)
+        _write_candidates(h5.create_group("candidates"), result)
     return Path(path)
+
+
+def _write_inputs(g, data) -> None:
+    g["frequencies_hz"] = data.frequencies_hz
+    if data.weights is not None:
+        g["weights"] = data.weights
+    if data.frequency_sd_hz is not None:
+        g["sd_hz"] = data.frequency_sd_hz
+    g.attrs["source"] = data.source
+
+
+def _write_posterior(g, chain, summary: dict) -> None:
+    g["chain"], g["log_prob"] = chain.chain, chain.log_prob
+    g.attrs.update(
+        names=json.dumps(list(chain.names)),
+        burn=int(chain.burn),
+        summary_json=json.dumps(summary, default=float),
+    )
+
+
+def _write_flags(g, result) -> None:
+    f = result.flags
+    g["z"], g["p_value"], g["flagged"], g["mac"] = f.z, f.p_value, f.flagged, f.mac
+    if f.shape_p_value is not None:
+        g["shape_p_value"] = f.shape_p_value
+    g.attrs.update(
+        chi2=f.chi2,
+        chi2_dof=f.chi2_dof,
+        chi2_p=f.chi2_p,
+        noise_source=result.noise.source,
+        noise_sigma=result.noise.sigma,
+    )
+
+
+def _write_localization(g, loc) -> None:
+    g["candidate"] = _strings(s.label for s in loc.scores)
+    g["delta_chi2"] = np.array([s.delta_chi2 for s in loc.scores], float)
+    g["step_theta"] = np.array([s.step_theta for s in loc.scores], float)
+    g["location"] = _strings(item[0] for item in loc.locations)
+    g["location_score"] = np.array([item[1] for item in loc.locations], float)
+    g["part"] = _strings(item[0] for item in loc.part_energy)
+    g["strain_excess"] = np.array([item[1] for item in loc.part_energy], float)
+    g["kinetic_excess"] = np.array([item[2] for item in loc.part_energy], float)
+    g["comac_label"] = _strings(loc.comac)
+    g["comac"] = np.array(list(loc.comac.values()), float)
+
+
+def _write_candidates(cands, result) -> None:
+    for i, fit in enumerate(result.fits):
+        c = cands.create_group(f"{i:03d}")
+        _write_fit(c, fit)
+        c.attrs.update(
+            kind=fit.kind,
+            location=fit.location,
+            log_bayes_factor=result.log_bayes_factor(fit),
+            log_posterior_odds=result.log_posterior_odds(fit),
+        )
 
 
 def read_discovery_summary(path) -> dict:
@@ -178,16 +190,3 @@ def extend_with_specs(model, specs) -> object:
     for spec in specs:
         model = extend_model(model, parse_effect_spec(spec))
     return model
-
-
-def extended_model_from_result(path):
-    """(model, parameters): the final model of a discovery result as a model source.
-
-    The base model is rebuilt by name (built-in models), extended by the stored effect specs
-    (their fitted values become the effect parameters' defaults); ``parameters`` holds the
-    re-fitted design variables and effect parameters (SI)."""
-    from bayesupdate.models import get_model
-
-    summary = read_discovery_summary(path)
-    model = extend_with_specs(get_model(summary["model"]), summary["effects"])
-    return model, summary["final_parameters"]

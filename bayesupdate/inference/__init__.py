@@ -23,6 +23,7 @@ from bayesupdate.inference.problem import (
     ParameterSpec,
     build_parameter_specs,
     build_problem,
+    objective_expr,
 )
 from bayesupdate.inference.results import (
     export_netcdf,
@@ -37,7 +38,7 @@ from bayesupdate.inference.sampling import (
     default_moves,
     sample_posterior,
 )
-from bayesupdate.inference.user_model import FunctionModel, load_user_model, resolve_model
+from bayesupdate.inference.user_model import FunctionModel, load_user_model
 
 __all__ = [
     "CalibrationProblem",
@@ -59,6 +60,7 @@ __all__ = [
     "export_netcdf",
     "load_modal_data",
     "load_user_model",
+    "objective_expr",
     "pair_modes",
     "pareto_front_mass",
     "posterior_predictive",
@@ -66,7 +68,6 @@ __all__ = [
     "read_result",
     "read_sampler_state",
     "register_loader",
-    "resolve_model",
     "sample_posterior",
     "summarise",
     "to_datatree",

@@ -11,7 +11,7 @@
   registered with ``register_loader`` (the EMA layer registers ``.h5`` / ``.uff``).
 
 A measured mass is test data: calibration and the likelihood use it by default
-(``inference.runner.prepare``).
+(``pipelines.study.prepare``).
 """
 
 import csv

@@ -25,7 +25,6 @@ from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData
 from bayesupdate.model_protocol import ParametricModel, Prediction
-from bayesupdate.paper import objective_expr
 
 
 @dataclass(frozen=True)
@@ -311,3 +310,20 @@ def build_problem(
         fixed=fixed,
         reference=reference,
     )
+
+
+def objective_expr(f_sim_hz, f_test_hz, weights=None) -> np.ndarray:
+    """Seed eq. 19: Expr = sum_i w_i ((f_si - f_Ti) / f_Ti)^2.
+
+    f_sim_hz : (..., n) simulated frequencies [Hz] (leading axes broadcast, e.g. walkers).
+    f_test_hz : (n,) target frequencies [Hz].  weights : (n,) or None for unit weights.
+    Returns Expr with the leading shape of ``f_sim_hz``.
+    """
+    f_sim = np.asarray(f_sim_hz, dtype=float)
+    f_test = np.asarray(f_test_hz, dtype=float)
+    if f_sim.shape[-1] != f_test.shape[-1]:
+        raise ValueError(
+            f"objective_expr: {f_sim.shape[-1]} simulated vs {f_test.shape[-1]} test frequencies"
+        )
+    w = np.ones_like(f_test) if weights is None else np.asarray(weights, dtype=float)
+    return np.sum(w * ((f_sim - f_test) / f_test) ** 2, axis=-1)

@@ -132,27 +132,3 @@ def load_user_model(
         dof_labels=tuple(sensors),
         label=spec,
     )
-
-
-def resolve_model(source: str, parameters: Mapping | None = None, sensors=(), options=None):
-    """A built-in model name (``bayesupdate.models.get_model``) or a ``module:function`` spec."""
-    from bayesupdate.models import BUILTIN_MODELS, get_model
-    from bayesupdate.nastran import is_nastran_path
-
-    if is_nastran_path(source):
-        return get_model(str(source), **(options or {}))
-    if ":" in str(source):
-        return load_user_model(source, parameters or {}, tuple(sensors))
-    if source not in BUILTIN_MODELS:
-        raise BayesUpdateError(
-            f"model.source {source!r}: unknown; built-in models are {sorted(BUILTIN_MODELS)} "
-            "or give 'package.module:function'"
-        )
-    try:
-        return get_model(source, **(options or {}))
-    except ImportError as exc:
-        raise BayesUpdateError(
-            f"model {source!r}: not available in this installation ({exc})"
-        ) from exc
-    except TypeError as exc:
-        raise BayesUpdateError(f"model.options: not accepted by {source!r} ({exc})") from exc

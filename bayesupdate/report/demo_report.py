@@ -1,10 +1,20 @@
-"""The demo's report: the seed's story as tables and figures (content only; ``render`` writes)."""
+"""The demo's figures, report and terminal summary, made from the records of
+``pipelines.demo.run_demo`` (the side effects of the demo: PNG files, report.html/report.md)."""
 
 from pathlib import Path
 
 import numpy as np
 
 from bayesupdate import paper
+from bayesupdate.pipelines.demo import (
+    IDENTIFIED_BELOW_HZ,
+    CalibrationPart,
+    DemoResults,
+    DiscoveryPart,
+    FePart,
+    IdentifiedPart,
+)
+from bayesupdate.pipelines.simulate import VirtualTest
 from bayesupdate.report.document import Alert, Document, Figure, Section, Table
 from bayesupdate.report.render import write_report
 
@@ -25,11 +35,11 @@ def _figures(pairs, out) -> tuple:
     return tuple(Figure(_rel(p, out), caption) for p, caption in pairs)
 
 
-def _fe_section(fe, out) -> Section:
-    r = fe["result"]
+def _fe_section(fe: FePart, figures, out) -> Section:
+    r = fe.result
     rows = []
     for i, (f_paper, f_model) in enumerate(zip(paper.TABLE1_FEA_HZ, r.frequencies_hz, strict=True)):
-        ch = fe["character"][i]
+        ch = fe.character[i]
         rows.append(
             (i + 1, f_paper, f_model, 100 * (f_model / f_paper - 1), ch["plane"], ch["nodes"])
         )
@@ -47,7 +57,7 @@ def _fe_section(fe, out) -> Section:
         tuple(rows),
         caption="FE normal modes vs seed Table 1",
     )
-    return Section("The FE model and seed Table 1", (text, table, *_figures(fe["figures"], out)))
+    return Section("The FE model and seed Table 1", (text, table, *_figures(figures, out)))
 
 
 def _swap_note(table) -> str:
@@ -60,11 +70,36 @@ def _swap_note(table) -> str:
     )
 
 
-def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
-    c = part["calibration"]
-    names = c.names
+def _calibration_sections(
+    tag, title, part: CalibrationPart, plots, out, truth=None
+) -> list[Section]:
+    """The optimum (design and residual tables) and the posterior (table and figures) of a case;
+    ``tag`` "seed" adds the seed's Table 4 and Expr, ``truth`` a column of true values."""
+    c, p = part.run.calibration, part.run.posterior
+    post_rows = tuple(
+        (n, s["mean"], s["sd"], s["hdi_low"], s["hdi_high"], s["r_hat"], s["ess_bulk"])
+        for n, s in part.run.summary.items()
+    )
+    post = Table(
+        ("parameter", "mean", "sd", "HDI 90 % low", "HDI 90 % high", "R-hat", "bulk ESS"),
+        post_rows,
+        caption=f"Posterior: {p.chain.shape[1]} walkers x {p.chain.shape[0]} steps, "
+        f"{p.evaluations} model evaluations, {p.wall_s:.0f} s",
+    )
+    figs = tuple(
+        Figure(_rel(path, out), _PLOT_CAPTIONS.get(Path(path).stem, Path(path).stem))
+        for path in plots
+    )
+    return [
+        Section(f"{title}: optimum", (_design_table(c, truth), _residual_table(c, tag))),
+        Section(f"{title}: posterior", (*_convergence_warning(p), post, *figs)),
+    ]
+
+
+def _design_table(c, truth=None) -> Table:
+    """The optimum's design values beside seed Table 3 (and the truth when known)."""
     rows = []
-    for i, name in enumerate(names):
+    for i, name in enumerate(c.names):
         init = paper.TABLE3_INITIAL_SI.get(name)
         opt_paper = paper.TABLE3_OPTIMUM_SI.get(name)
         ours = float(c.theta[i])
@@ -84,12 +119,16 @@ def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
     ]
     if truth is not None:
         headers.append("true value")
-    design = Table(
+    return Table(
         tuple(headers),
         tuple(rows),
         caption="Point optimum (bounded least squares, "
         f"{c.starts} starts, {c.converged_starts} reach the best)",
     )
+
+
+def _residual_table(c, tag) -> Table:
+    """Test vs model frequencies at the optimum (with seed Table 4 for the seed case)."""
     t = c.table
     freq_rows = []
     for i in range(t.test_hz.size):
@@ -107,7 +146,7 @@ def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
     fheaders = ["mode", "test [Hz]", "model [Hz]", "error [%]", "MAC", "model mode"]
     if tag == "seed":
         fheaders.insert(2, "seed Table 4 [Hz]")
-    freqs = Table(
+    return Table(
         tuple(fheaders),
         tuple(freq_rows),
         caption=f"Residuals at the optimum: Expr (seed eq. 19) = {c.expr:.4f}"
@@ -115,26 +154,6 @@ def _calibration_sections(tag, title, part, out, truth=None) -> list[Section]:
         + (f", mass {c.mass_kg:.3f} kg" if c.mass_kg is not None else "")
         + (_swap_note(c.table) if c.swapped else "; no mode swap"),
     )
-    summary = part["summary"]
-    post_rows = tuple(
-        (n, s["mean"], s["sd"], s["hdi_low"], s["hdi_high"], s["r_hat"], s["ess_bulk"])
-        for n, s in summary.items()
-    )
-    p = part["posterior"]
-    post = Table(
-        ("parameter", "mean", "sd", "HDI 90 % low", "HDI 90 % high", "R-hat", "bulk ESS"),
-        post_rows,
-        caption=f"Posterior: {p.chain.shape[1]} walkers x {p.chain.shape[0]} steps, "
-        f"{p.evaluations} model evaluations, {p.wall_s:.0f} s",
-    )
-    figs = tuple(
-        Figure(_rel(path, out), _PLOT_CAPTIONS.get(Path(path).stem, Path(path).stem))
-        for path in part["plots"]
-    )
-    return [
-        Section(f"{title}: optimum", (design, freqs)),
-        Section(f"{title}: posterior", (*_convergence_warning(p), post, *figs)),
-    ]
 
 
 def _convergence_warning(posterior) -> tuple:
@@ -146,12 +165,13 @@ def _convergence_warning(posterior) -> tuple:
     return (Alert(f"this posterior did not converge: {reason}. Read its numbers with care."),)
 
 
-def _virtual_sections(virtual, identified, out) -> list[Section]:
-    truth = virtual["truth"]
-    modes = identified["modes"]
-    f_true = truth["frequencies_hz"]
-    z_true = truth["damping_ratio"]
-    in_band = f_true < 140.0
+def _virtual_sections(
+    truth: VirtualTest, identified: IdentifiedPart, figures, out
+) -> list[Section]:
+    modes = identified.modes
+    f_true = truth.frequencies_hz
+    z_true = truth.damping_ratio
+    in_band = f_true < IDENTIFIED_BELOW_HZ
     rows = []
     for i, (f, z) in enumerate(zip(f_true[in_band], z_true[in_band], strict=True)):
         j = int(np.argmin(np.abs(modes.frequencies_hz - f)))
@@ -167,9 +187,9 @@ def _virtual_sections(virtual, identified, out) -> list[Section]:
             )
         )
     text = (
-        f"A 'true' exhaust with known design values and a hidden {', '.join(truth['effects'])}"
+        f"A 'true' exhaust with known design values and a hidden {', '.join(truth.effects)}"
         f" is tested as in the seed: roving hammer over 20 points, accelerometers at points "
-        f"{truth['reference_points'][0]} (V) and {truth['reference_points'][1]} (H), 40 FRFs "
+        f"{truth.reference_points[0]} (V) and {truth.reference_points[1]} (H), 40 FRFs "
         "with 1 % noise on the time signals, 0-150 Hz. LSCE with automatic bands, "
         "stabilization and pole clustering, then LSFD, identify the modes with no pole picked "
         "by hand."
@@ -187,36 +207,184 @@ def _virtual_sections(virtual, identified, out) -> list[Section]:
         tuple(rows),
         caption="Virtual test: identified vs true modes below 140 Hz",
     )
-    return [
-        Section(
-            "Virtual test: from FRFs to modes", (text, table, *_figures(identified["figures"], out))
+    return [Section("Virtual test: from FRFs to modes", (text, table, *_figures(figures, out)))]
+
+
+def discovery_headline(part: DiscoveryPart) -> str:
+    """One paragraph: verdict, named effect, flagged modes, gap before -> after, scan size."""
+    summary = part.run.result.to_json()
+    named = summary["named_effect"]
+    name = "none" if named is None else f"{named['kind']}@{named['location']}"
+    return (
+        f"verdict: {summary['verdict']} (named effect: {name}); flagged modes "
+        f"{summary['flagged_modes']}; gap (Expr, seed eq. 19) {summary['gap_before']:.4f}"
+        f" -> {summary['gap_after']:.4f}; {summary['scanned']} candidate placements "
+        f"scanned in {summary['wall_s']:.0f} s. {summary['reason']}"
+    )
+
+
+def _discovery_table(part: DiscoveryPart) -> Table:
+    """The ten best candidates by evidence."""
+    rows = tuple(
+        (
+            c["kind"],
+            c["location"],
+            c["log_evidence"],
+            c["log_bayes_factor"],
+            c["posterior_probability"],
+            c["loo"],
+            c["expr"],
         )
+        for c in part.run.result.to_json()["candidates"][:10]
+    )
+    return Table(
+        (
+            "kind",
+            "location",
+            "log evidence",
+            "ln BF vs baseline",
+            "posterior probability",
+            "LOO elpd",
+            "Expr after refit",
+        ),
+        rows,
+        caption="Candidate ranking (best evidence first)",
+    )
+
+
+_DISCOVERY_CAPTIONS = {
+    "residuals": "Per-mode residuals before and after adding the named effect.",
+    "localization": "Localisation map: where on the structure the misfit points.",
+    "ranking": "Candidate ranking by evidence.",
+}
+
+
+def _discovery_section(title, part: DiscoveryPart, plots, out) -> Section:
+    blocks = [discovery_headline(part), _discovery_table(part)]
+    blocks += [
+        Figure(_rel(p, out), _DISCOVERY_CAPTIONS.get(Path(p).stem, Path(p).stem)) for p in plots
     ]
-
-
-def _discovery_section(title, part, out) -> Section:
-    blocks = [part["headline"]]
-    if part.get("table") is not None:
-        blocks.append(part["table"])
-    blocks += [Figure(_rel(p, out), cap) for p, cap in part.get("figures", [])]
     return Section(title, tuple(blocks))
 
 
-def build_demo_report(settings, results, out) -> tuple[Path, Path]:
-    sections = [_fe_section(results["fe"], out)]
-    sections += _calibration_sections("seed", "Seed case (Table 2)", results["seed"], out)
-    if "seed_discovery" in results:
-        sections.append(
-            _discovery_section("Seed case: what is missing", results["seed_discovery"], out)
-        )
-    sections += _virtual_sections(results["virtual_test"], results["identified"], out)
-    truth = dict(results["virtual_test"]["truth"]["parameters"])
+def _fe_figures(fe: FePart, folder: Path) -> list:
+    from bayesupdate.report import fe_figures
+
+    structure, result = fe.model.structure, fe.result
+    return [
+        (
+            fe_figures.plot_layout(structure, folder / "fe_layout.png"),
+            "The exhaust FE model (plan and elevation) with the 20 sensor points.",
+        ),
+        (
+            fe_figures.plot_fe_mode_shapes(structure, result, folder / "fe_modes.png"),
+            "First six FE mode shapes at the initial design.",
+        ),
+        (
+            fe_figures.plot_strain_energy(result, folder / "fe_strain_energy.png"),
+            "Modal strain energy per part (seed section 3.2).",
+        ),
+    ]
+
+
+def _calibration_figures(part: CalibrationPart, folder: Path) -> list:
+    from bayesupdate.inference import plots as inference_plots
+    from bayesupdate.inference.results import read_result
+
+    folder.mkdir(exist_ok=True)
+    return inference_plots.save_all(read_result(part.path), folder)
+
+
+def _identification_figures(truth: VirtualTest, identified: IdentifiedPart, folder: Path) -> list:
+    from bayesupdate.ema import plots as ema_plots
+
+    ident, frfs, modes = identified.identification, identified.frfs, identified.modes
+    labels = list(truth.dof_labels)
+    rows = [labels.index(lab) for lab in modes.dof_labels]
+    in_band = truth.frequencies_hz < IDENTIFIED_BELOW_HZ
+    folder.mkdir(exist_ok=True)
+    return [
+        (
+            ema_plots.plot_stabilization(ident, frfs, folder / "stabilization.png"),
+            "Stabilization diagram (LSCE orders) over the CMIF, selected poles marked.",
+        ),
+        (
+            ema_plots.plot_frf_fit(ident, frfs, folder / "frf_fit.png"),
+            "Measured vs synthesized FRFs (LSFD) at a few DOFs.",
+        ),
+        (
+            ema_plots.plot_mac(
+                modes.shapes,
+                truth.shapes[rows][:, in_band],
+                folder / "mac.png",
+                title="MAC: identified vs true shapes",
+            ),
+            "MAC between identified and true (FE) mode shapes.",
+        ),
+        (
+            ema_plots.plot_mode_shapes(modes, folder / "mode_shapes.png"),
+            "Identified mode shapes at the 20 sensor points (V and H).",
+        ),
+    ]
+
+
+def _discovery_figures(part: DiscoveryPart | None, folder: Path) -> list:
+    from bayesupdate.discovery.plots import save_plots
+
+    if part is None:
+        return []
+    # both discovery runs write into figures/ itself (the last run's plots are kept)
+    return save_plots(part.run.result, folder, part.run.model.structure)
+
+
+def demo_figures(results: DemoResults) -> dict:
+    """Write every figure into ``out/figures``; {part name: its figures}."""
+    figures = results.settings.out / "figures"
+    figures.mkdir(parents=True, exist_ok=True)
+    return {
+        "fe": _fe_figures(results.fe, figures),
+        "seed": _calibration_figures(results.seed, figures / "seed"),
+        "seed_discovery": _discovery_figures(results.seed_discovery, figures),
+        "identified": _identification_figures(
+            results.virtual_test, results.identified, figures / "ema"
+        ),
+        "virtual": _calibration_figures(results.virtual, figures / "virtual"),
+        "virtual_discovery": _discovery_figures(results.virtual_discovery, figures),
+    }
+
+
+def write_demo_report(results: DemoResults) -> tuple[Path, Path]:
+    """Figures, then report.html and report.md in ``results.settings.out``; returns the two."""
+    figures = demo_figures(results)
+    settings, out = results.settings, results.settings.out
+    sections = [_fe_section(results.fe, figures["fe"], out)]
     sections += _calibration_sections(
-        "virtual", "Virtual test", results["virtual"], out, truth=truth
+        "seed", "Seed case (Table 2)", results.seed, figures["seed"], out
     )
-    if "virtual_discovery" in results:
+    if results.seed_discovery is not None:
         sections.append(
-            _discovery_section("Virtual test: the hidden effect", results["virtual_discovery"], out)
+            _discovery_section(
+                "Seed case: what is missing",
+                results.seed_discovery,
+                figures["seed_discovery"],
+                out,
+            )
+        )
+    sections += _virtual_sections(
+        results.virtual_test, results.identified, figures["identified"], out
+    )
+    truth = dict(results.virtual_test.parameters)
+    sections += _calibration_sections(
+        "virtual", "Virtual test", results.virtual, figures["virtual"], out, truth=truth
+    )
+    if results.virtual_discovery is not None:
+        sections.append(
+            _discovery_section(
+                "Virtual test: the hidden effect",
+                results.virtual_discovery,
+                figures["virtual_discovery"],
+                out,
+            )
         )
     files = (
         "Files: seed_case.h5, virtual_test.uff, virtual_modes.h5, virtual_case.h5 (HDF5 "
@@ -230,3 +398,57 @@ def build_demo_report(settings, results, out) -> tuple[Path, Path]:
         tuple(sections),
     )
     return write_report(doc, out)
+
+
+def summary_rows(results: DemoResults, wall_s: float) -> list[tuple[str, str]]:
+    """(step, key numbers) rows of the terminal summary; ``wall_s``: the whole run."""
+    rows = []
+    fe = results.fe.result
+    rel = fe.frequencies_hz / paper.TABLE1_FEA_HZ - 1
+    rows.append(
+        (
+            "FE vs seed Table 1",
+            f"RMS {100 * np.sqrt(np.mean(rel**2)):.2f} %, max "
+            f"{100 * np.abs(rel).max():.2f} %, mass {fe.mass_kg:.2f} kg",
+        )
+    )
+    for part, label in ((results.seed, "seed case"), (results.virtual, "virtual test")):
+        rows += _calibration_rows(part, label)
+    ident = results.identified.modes
+    truth = results.virtual_test.frequencies_hz
+    truth = truth[truth < IDENTIFIED_BELOW_HZ]
+    if ident.n_modes == truth.size:
+        err = np.abs(ident.frequencies_hz / truth - 1).max() * 100
+        rows.append(
+            ("virtual test: identify", f"{ident.n_modes} modes, max freq error {err:.3f} %")
+        )
+    else:
+        rows.append(("virtual test: identify", f"{ident.n_modes} modes found of {truth.size}"))
+    for label, part in (
+        ("seed discovery", results.seed_discovery),
+        ("virtual discovery", results.virtual_discovery),
+    ):
+        if part is not None:
+            rows.append((label, discovery_headline(part)))
+    rows.append(("whole run", f"{wall_s:.0f} s"))
+    return rows
+
+
+def _calibration_rows(part: CalibrationPart, label: str) -> list[tuple[str, str]]:
+    c, p, summary = part.run.calibration, part.run.posterior, part.run.summary
+    rhat = max(v["r_hat"] for v in summary.values())
+    ess = min(v["ess_bulk"] for v in summary.values())
+    report = p.diagnostics.get("convergence") or {}
+    state = "converged" if p.converged else f"NOT CONVERGED: {report.get('reason')}"
+    return [
+        (
+            f"{label}: optimum",
+            f"Expr {c.expr:.4f}, mass {c.mass_kg:.2f} kg, "
+            f"{c.converged_starts}/{c.starts} starts agree, swap: {c.swapped}",
+        ),
+        (
+            f"{label}: posterior",
+            f"{p.chain.shape[0]} steps x {p.chain.shape[1]} "
+            f"walkers, max R-hat {rhat:.3f}, min ESS {ess:.0f}, {p.wall_s:.0f} s; {state}",
+        ),
+    ]

@@ -1,0 +1,72 @@
+"""The discover pipeline: a study (model + test data) -> what physics the model is missing.
+
+The study's FE model, extended by the effects already known (``[effects]``, ``--effect``), runs
+``discovery.workflow.discover`` against the study's data; optionally the final model's
+posterior is sampled too (``discovery.posterior.sample_final``).
+"""
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from bayesupdate.config import StudyConfig
+from bayesupdate.discovery.results_io import extend_with_specs
+from bayesupdate.discovery.workflow import DiscoveryResult, DiscoverySettings, discover
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.data import load_modal_data
+from bayesupdate.pipelines.model_source import study_model
+
+
+@dataclass(frozen=True)
+class DiscoveryRequest:
+    """settings : the discovery knobs.  effects : checked effect specs the model is extended by
+    first (``pipelines.study.study_effects``).  posterior_steps : > 0 also samples the final
+    model's posterior for that many steps (seed ``settings.seed + 1``; 0: not sampled)."""
+
+    settings: DiscoverySettings = field(default_factory=DiscoverySettings)
+    effects: tuple[str, ...] = ()
+    posterior_steps: int = 0
+
+
+@dataclass(frozen=True)
+class DiscoveryRun:
+    """model : the (extended) FE model discovery ran on.  effects : the specs it was extended
+    by.  result : what discovery found.  posterior : (PosteriorResult, summary dict) of the final
+    model, or None."""
+
+    model: object
+    effects: tuple[str, ...]
+    result: DiscoveryResult
+    posterior: tuple | None = None
+
+
+def discover_study(
+    study: StudyConfig,
+    request: DiscoveryRequest = DiscoveryRequest(),
+    progress: Callable[[str], None] | None = None,
+) -> DiscoveryRun:
+    """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
+    model = study_model(study)
+    if not hasattr(model, "structure"):
+        raise BayesUpdateError(
+            f"model {study.model.source!r}: discovery extends an FE model's structure; "
+            "use a built-in FE model such as 'exhaust'"
+        )
+    model = extend_with_specs(model, request.effects)
+    data = load_modal_data(study.data.as_source())
+    result = discover(
+        model,
+        data,
+        request.settings,
+        parameters=study.parameters or None,
+        pairing=study.pairing.method,
+        progress=progress,
+    )
+    posterior = None
+    if request.posterior_steps > 0:
+        from bayesupdate.discovery.posterior import sample_final
+        from bayesupdate.inference.diagnostics import summarise
+
+        seed = request.settings.seed + 1
+        chain, _ = sample_final(result, steps=request.posterior_steps, seed=seed)
+        posterior = (chain, summarise(chain))
+    return DiscoveryRun(model, tuple(request.effects), result, posterior)

@@ -1,0 +1,87 @@
+"""The surrogate a pipeline calibrates and samples on: a built-in FE model gets a certified
+reduced basis (``fe.reduced``) over the parameters' bounds, checked in full where it matters (the
+optimum, the posterior mean), and a coarser basis inside it screens sampler proposals (delayed
+acceptance).  Other models are used as they are.
+
+Choosing the surrogate is orchestration: it needs the FE layer, which inference does not import
+(inference sees any model only through ``model_protocol``).
+"""
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
+from bayesupdate.inference.optimize import CalibrationResult
+from bayesupdate.inference.problem import CalibrationProblem
+
+
+def sampling_problem(
+    problem: CalibrationProblem,
+    calibration: CalibrationResult | None = None,
+    reduced: bool = True,
+    tol: float = 1e-4,
+    seed: int = 0,
+) -> tuple[CalibrationProblem, object | None]:
+    """The problem the sampler uses: a built-in FE model gets a certified reduced basis
+    (``fe.reduced.reduced_model_for``) over the calibrated parameters' bounds, with the model
+    modes the pairing needs (test modes + extra modes), certified again at the optimum.
+    Fixed parameters keep a narrow box (+-0.1 %) around their value.  Returns (problem, rom);
+    rom is None with ``reduced=False``, for other models, or when no certified basis exists
+    (then a RuntimeWarning says full solves are used)."""
+    from bayesupdate.fe.model import FEModel
+    from bayesupdate.fe.reduced import ReducedFEModel, reduced_model_for
+
+    model = problem.model
+    if not reduced or not isinstance(model, FEModel):
+        return problem, None
+    bounds = {p.name: p.bounds for p in problem.parameters}
+    for name, value in problem.fixed.items():
+        if name in model.parameter_names and value > 0:
+            bounds[name] = (value * (1 - 1e-3), value * (1 + 1e-3))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rom = reduced_model_for(model, bounds, tol=tol, seed=seed, n_modes=problem.pairing.n_model)
+    for w in caught:
+        warnings.warn(str(w.message), RuntimeWarning, stacklevel=2)
+    if not isinstance(rom, ReducedFEModel) or not rom.certified:
+        return problem, None
+    if calibration is not None:
+        rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
+        if not rom.certified:
+            return problem, None
+    return replace(problem, model=rom), rom
+
+
+def screening_posterior(
+    problem: CalibrationProblem, rom, likelihood: LikelihoodSpec, tol: float = 1e-4
+) -> LogPosterior | None:
+    """The surrogate posterior for delayed-acceptance sampling (``inference.delayed_acceptance``).
+
+    With a reduced model (``rom``): the same problem on a coarser basis inside it
+    (``ReducedFEModel.coarsened``).  On full solves of a built-in FE model (``--full``): the
+    certified reduced model itself, so the exact full-model posterior is sampled with full
+    solves only for the proposals the reduced model lets through.  None for other models."""
+    if rom is not None:
+        return LogPosterior(replace(problem, model=rom.coarsened()), likelihood)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no reduced model: plain sampling, nothing to warn about
+        screen_problem, screen_rom = sampling_problem(problem, None, True, tol)
+    if screen_rom is None:
+        return None
+    return LogPosterior(screen_problem, likelihood)
+
+
+def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> tuple:
+    """Full solve(s) at theta (k, len(names)); warn (suggesting --full) when the reduced model
+    misses its tolerance there.  Returns (the checked ROM, its ``summary()`` plus ``error_at``)."""
+    rom, err = rom.certify_at(theta, names)
+    if not rom.certified or not err <= rom.tol:
+        warnings.warn(
+            f"reduced model not certified at {where} (relative frequency error {err:.2e}, tol "
+            f"{rom.tol:g}); the posterior may carry reduced-basis error: rerun with --full",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return rom, {**rom.summary(), "error_at": float(err)}

@@ -66,7 +66,7 @@ def deferred():
         _state["deferred"] = previous
 
 
-def stop_handler(signum, frame) -> None:
+def stop_handler(_signum, _frame) -> None:
     """A signal handler: record the request and interrupt where the signal lands (unless inside
     ``deferred()``)."""
     request()

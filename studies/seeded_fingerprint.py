@@ -127,10 +127,7 @@ def _text(fingerprint: dict, key: str) -> str:
 def compare(now: dict, before: dict) -> int:
     keys = sorted(set(now) | set(before))
     # through JSON text, so that NaN equals NaN
-    same = [
-        json.dumps(now.get(k, "<missing>")) == json.dumps(before.get(k, "<missing>")) for k in keys
-    ]
-    differ = [k for k, equal in zip(keys, same, strict=True) if not equal]
+    differ = [k for k in keys if _text(now, k) != _text(before, k)]
     for key in differ:
         was, now_value = before.get(key, "<missing>"), now.get(key, "<missing>")
         print(f"DIFFERS {key}: before {was!r} now {now_value!r}")

@@ -107,15 +107,6 @@ class FrfSet:
         f = self.frequencies_hz
         return float((f[-1] - f[0]) / (f.size - 1))
 
-    def as_receptance(self) -> np.ndarray:
-        """FRFs converted to receptance (n_frf, n_f); lines at 0 Hz are set to 0."""
-        p = KIND_POWER[self.kind]
-        jw = 2j * np.pi * self.frequencies_hz
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out = self.frf / jw**p
-        out[:, self.frequencies_hz == 0] = 0.0
-        return out
-
     def sets(self) -> list[dict]:
         """Group FRFs into test sets by their common (fixed) DOF.
 

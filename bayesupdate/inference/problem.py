@@ -206,20 +206,6 @@ class CalibrationProblem:
             self.pairing.method,
         )
 
-    def check_theta(self, theta: np.ndarray, where: str = "parameters") -> np.ndarray:
-        """Raise BayesUpdateError if theta has the wrong length or lies outside the bounds."""
-        theta = np.asarray(theta, dtype=float).reshape(-1)
-        if theta.size != len(self.parameters):
-            raise BayesUpdateError(f"{where}: {theta.size} values for {len(self.parameters)} names")
-        bad = [
-            f"{p.name}={v:g} not in [{p.bounds[0]:g}, {p.bounds[1]:g}]"
-            for p, v in zip(self.parameters, theta, strict=True)
-            if not p.bounds[0] <= v <= p.bounds[1]
-        ]
-        if bad:
-            raise BayesUpdateError(f"{where}: outside bounds: {'; '.join(bad)}")
-        return theta
-
 
 def build_problem(
     model: ParametricModel,

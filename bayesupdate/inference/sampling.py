@@ -79,10 +79,6 @@ class SamplerState:
     wall_s: float
     finished: bool = False
 
-    @property
-    def steps_done(self) -> int:
-        return int(self.chain.shape[0])
-
 
 @dataclass(frozen=True)
 class PosteriorResult:

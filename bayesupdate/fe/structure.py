@@ -297,76 +297,22 @@ class StructureBuilder:
             raise BayesUpdateError(
                 f"pipe run {part!r}: need one bend radius/name per interior vertex ({k_int})"
             )
-        outer_radius = 0.5 * section.width
-        # centre-line as a list of (kind, geometry): straight from a to b, or arc
-        path = []
-        cursor = pts[0]
-        for i in range(1, len(pts) - 1):
-            d1 = pts[i] - pts[i - 1]
-            d2 = pts[i + 1] - pts[i]
-            d1 /= np.linalg.norm(d1)
-            d2 /= np.linalg.norm(d2)
-            angle = np.arccos(np.clip(d1 @ d2, -1.0, 1.0))
-            R = radii[i - 1]
-            if R > 0 and R <= outer_radius:
-                raise BayesUpdateError(
-                    f"pipe run {part!r}: bend radius {R} m at vertex {i} is not larger than the "
-                    f"pipe's outer radius {outer_radius} m"
-                )
-            if R <= 0 or angle < 1e-9:
-                path.append(("line", cursor, pts[i]))
-                cursor = pts[i]
-                continue
-            tangent = R * np.tan(angle / 2)
-            a = pts[i] - tangent * d1
-            b = pts[i] + tangent * d2
-            if (
-                tangent > np.linalg.norm(pts[i] - cursor) + 1e-12
-                or tangent > np.linalg.norm(pts[i + 1] - pts[i]) + 1e-12
-            ):
-                raise BayesUpdateError(
-                    f"pipe run {part!r}: bend radius {R} m at vertex {i} does not fit between "
-                    "the neighbouring straight segments"
-                )
-            normal = d2 - (d1 @ d2) * d1
-            normal /= np.linalg.norm(normal)
-            centre = a + R * normal
-            if np.linalg.norm(a - cursor) > 1e-12:
-                path.append(("line", cursor, a))
-            path.append(("arc", centre, -normal, d1, R, angle, names[i - 1]))
-            cursor = b
-        path.append(("line", cursor, pts[-1]))
-
+        path = _centre_line(pts, radii, names, 0.5 * section.width, part)
         if start_node is None:
             ids = [self.add_node(pts[0])]
         else:
             if np.linalg.norm(self.node_xyz(start_node) - pts[0]) > 1e-9:
                 raise BayesUpdateError(f"pipe run {part!r}: start_node is not at the first point")
             ids = [self._check_node(start_node)]
+        beam = dict(up=up, elbow_flexibility=elbow_flexibility)
         for seg_index, seg in enumerate(path):
+            default_name = f"{part}_bend{len(self._bends)}"
+            new_pts, bend_info = _segment_points(
+                seg, element_length, max_bend_angle_deg, default_name
+            )
             last_segment = seg_index == len(path) - 1
-            if seg[0] == "line":
-                _, a, b = seg
-                length = np.linalg.norm(b - a)
-                if length < 1e-12:
-                    continue
-                n_el = max(1, int(np.ceil(length / element_length - 1e-9)))
-                new_pts = [a + (b - a) * j / n_el for j in range(1, n_el + 1)]
-                bend_info = [(None, 0.0)] * n_el
-            else:
-                _, centre, u, v, R, angle, name = seg
-                n_el = max(
-                    2,
-                    int(np.ceil(np.degrees(angle) / max_bend_angle_deg - 1e-9)),
-                    int(np.ceil(R * angle / element_length - 1e-9)),
-                )
-                phis = angle * np.arange(1, n_el + 1) / n_el
-                new_pts = [centre + R * (np.cos(p) * u + np.sin(p) * v) for p in phis]
-                bend_name = name if name is not None else f"{part}_bend{len(self._bends)}"
-                bend_info = [(bend_name, R)] * n_el
             for j, p in enumerate(new_pts):
-                is_end = last_segment and j == len(new_pts) - 1
-                if is_end and end_node is not None:
+                if last_segment and j == len(new_pts) - 1 and end_node is not None:
                     if np.linalg.norm(self.node_xyz(end_node) - p) > 1e-9:
                         raise BayesUpdateError(
                             f"pipe run {part!r}: end_node is not at the last point"
@@ -376,15 +322,7 @@ class StructureBuilder:
                     nid = self.add_node(p)
                 bname, R = bend_info[j]
                 self.add_beam(
-                    ids[-1],
-                    nid,
-                    section,
-                    material,
-                    part,
-                    up=up,
-                    bend=bname,
-                    bend_radius=R,
-                    elbow_flexibility=elbow_flexibility,
+                    ids[-1], nid, section, material, part, bend=bname, bend_radius=R, **beam
                 )
                 ids.append(nid)
         return ids
@@ -604,3 +542,68 @@ def check_connected(structure: Structure) -> None:
             f"{' ...' if lonely.size > 10 else ''} are not connected to the main piece "
             "(add a beam or spring)"
         )
+
+
+def _centre_line(pts: np.ndarray, radii: np.ndarray, names: list, outer_radius: float, part: str):
+    """A pipe run's centre-line as segments: ("line", a, b) straight from a to b [m], or
+    ("arc", centre, u, v, R, angle, name) a circular bend of radius R [m] through ``angle`` [rad]
+    starting at centre + R u, turning towards v; sharp corners where the radius is 0."""
+    path = []
+    cursor = pts[0]
+    for i in range(1, len(pts) - 1):
+        d1 = pts[i] - pts[i - 1]
+        d2 = pts[i + 1] - pts[i]
+        d1 /= np.linalg.norm(d1)
+        d2 /= np.linalg.norm(d2)
+        angle = np.arccos(np.clip(d1 @ d2, -1.0, 1.0))
+        R = radii[i - 1]
+        if R > 0 and R <= outer_radius:
+            raise BayesUpdateError(
+                f"pipe run {part!r}: bend radius {R} m at vertex {i} is not larger than the "
+                f"pipe's outer radius {outer_radius} m"
+            )
+        if R <= 0 or angle < 1e-9:
+            path.append(("line", cursor, pts[i]))
+            cursor = pts[i]
+            continue
+        tangent = R * np.tan(angle / 2)
+        a = pts[i] - tangent * d1
+        b = pts[i] + tangent * d2
+        if (
+            tangent > np.linalg.norm(pts[i] - cursor) + 1e-12
+            or tangent > np.linalg.norm(pts[i + 1] - pts[i]) + 1e-12
+        ):
+            raise BayesUpdateError(
+                f"pipe run {part!r}: bend radius {R} m at vertex {i} does not fit between "
+                "the neighbouring straight segments"
+            )
+        normal = d2 - (d1 @ d2) * d1
+        normal /= np.linalg.norm(normal)
+        centre = a + R * normal
+        if np.linalg.norm(a - cursor) > 1e-12:
+            path.append(("line", cursor, a))
+        path.append(("arc", centre, -normal, d1, R, angle, names[i - 1]))
+        cursor = b
+    path.append(("line", cursor, pts[-1]))
+    return path
+
+
+def _segment_points(seg, element_length: float, max_bend_angle_deg: float, default_name: str):
+    """Element end points of one centre-line segment (``_centre_line``) and (bend name, radius)
+    per element: at most ``element_length`` [m] long, arcs also at most ``max_bend_angle_deg``."""
+    if seg[0] == "line":
+        _, a, b = seg
+        length = np.linalg.norm(b - a)
+        if length < 1e-12:
+            return [], []
+        n_el = max(1, int(np.ceil(length / element_length - 1e-9)))
+        return [a + (b - a) * j / n_el for j in range(1, n_el + 1)], [(None, 0.0)] * n_el
+    _, centre, u, v, R, angle, name = seg
+    n_el = max(
+        2,
+        int(np.ceil(np.degrees(angle) / max_bend_angle_deg - 1e-9)),
+        int(np.ceil(R * angle / element_length - 1e-9)),
+    )
+    phis = angle * np.arange(1, n_el + 1) / n_el
+    new_pts = [centre + R * (np.cos(p) * u + np.sin(p) * v) for p in phis]
+    return new_pts, [(name if name is not None else default_name, R)] * n_el

@@ -1,6 +1,7 @@
-"""Speed of one modal solve, Krylov vs dense LAPACK, and a side-by-side run with OpenSeesPy.
+"""Speed of the FE layer beside OpenSeesPy: the exhaust beams (a-c) and a shell model (d).
 
-Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--json]
+Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--shell-repeats 3] [--json]
+      [--no-shells | --shells-only] [--no-opensees]
 
 (a) median time of one full modal solve (``FEModel.solve``: assembly, first 12 elastic modes,
     mass, sensor shapes) of the exhaust model at its initial design (or, if
@@ -15,7 +16,13 @@ Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--json]
     like-for-like variants: Timoshenko + rotary inertia without elbow factor, and Euler-Bernoulli
     without rotary inertia with the elbow factor.
 
-All timings are medians over repeats in this one process (the machine is noisy).
+(d) shells (``shell_speed.py``, the issue's speed benchmark): a closed box of 28,860 DOFs, first
+    20 modes, built and solved through ``StructureBuilder`` / ``FEModel`` with six thickness
+    parameters: build, set-up, re-assembly at new thicknesses (share of the solve), eigen-solve
+    (CHOLMOD and SuperLU), memory; OpenSeesPy ShellMITC4 and pyfe3d on the same mesh.
+
+All timings are medians over repeats in this one process (the machine is noisy); ratios come from
+the same run.
 """
 
 import os
@@ -154,11 +161,16 @@ def main(argv=None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--threads-default", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--no-opensees", action="store_true", help="skip the OpenSees part (c)")
+    parser.add_argument("--shell-repeats", type=int, default=3, help="repeats of the shell part")
+    parser.add_argument("--no-shells", action="store_true", help="skip the shell part (d)")
+    parser.add_argument("--shells-only", action="store_true", help="run only the shell part (d)")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     if args.threads_default:  # child process: only (a)
         print(json.dumps(solve_time(args.repeats)))
         return 0
+    if args.shells_only:
+        return report_shells(args)
     repeats = max(50, args.repeats)
 
     out = {"repeats": repeats, "blas_threads": 1, "load_average_before": os.getloadavg()}
@@ -190,7 +202,23 @@ def main(argv=None) -> int:
         print(json.dumps(out, indent=1))
     else:
         print_table(out)
+    return 0 if args.no_shells else report_shells(args)
+
+
+def report_shells(args) -> int:
+    """(d): the shell benchmark (``shell_speed``), as a table or one JSON object."""
+    import shell_speed
+
+    out = shell_speed.run(max(1, args.shell_repeats), peers=not args.no_opensees)
+    if args.json:
+        print(json.dumps(out, indent=1, default=_jsonable))
+    else:
+        shell_speed.print_shells(out)
     return 0
+
+
+def _jsonable(x):
+    return x.tolist() if isinstance(x, np.ndarray) else str(x)
 
 
 def print_table(out: dict) -> None:

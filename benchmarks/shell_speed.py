@@ -1,107 +1,142 @@
-"""Speed and memory of the shell FE path on a >= 25,000-DOF model, beside OpenSeesPy and pyfe3d.
+"""Shell part of ``benchmarks/fe_speed.py``: a >= 25,000-DOF shell model, first 20 modes, on the
+path a user takes (``StructureBuilder.add_shells`` -> ``FEModel`` with thickness parameters),
+beside OpenSeesPy and pyfe3d on the same mesh.
 
-Run:  .venv/bin/python benchmarks/shell_speed.py [--repeats 3] [--cells 44 26 18]
+Run:  .venv/bin/python benchmarks/fe_speed.py --shells-only [--shell-repeats 3]
+      (``benchmarks/fe_speed.py`` runs it after the beam part; this file holds no second copy)
 
 Model: a closed steel box 1.0 x 0.6 x 0.4 m of MITC4 quads (2 mm walls, one thickness parameter
-per face), clamped along the four edges of its bottom face; first 20 elastic modes.  Times
-(medians over repeats, BLAS on one thread):
-  (a) ours: assembly (geometry precomputation + element matrices + CSR), solve (shift-invert
-      Lanczos, sparse LU), parametric re-assembly K(theta), M(theta) for new face thicknesses, and
-      its one-off set-up; memory: peak RSS of the process and tracemalloc peak of one assembly +
-      solve (numpy buffers; SuperLU's own allocations are not traced);
-  (b) OpenSeesPy on the same mesh and supports: model build + ShellMITC4 elements, and
-      ``eigen`` (its default ARPACK; the structure is supported, so shift 0 is regular);
-      frequencies compared with ours (consistent mass, no rotary inertia = ShellMITC4's model);
-  (c) pyfe3d (if installed): its Quad4 matrices assembled by its per-element Cython calls, solved
-      with our solver; frequencies compared.
+per face, six in all), clamped along the four edges of its bottom face.  Medians over repeats,
+BLAS on one thread:
+  (a) ours: structure build (``add_shells`` per face, ``build``); model set-up (``FEModel``:
+      element geometry, the six faces' thickness-power data, the sparse pattern and the
+      constraint elimination, once per geometry); re-assembly of K(theta), M(theta) at new face
+      thicknesses (what every ``FEModel.solve`` costs before its eigen-solve); the eigen-solve
+      (shift-invert Lanczos on the supported model) with CHOLMOD where scikit-sparse is installed
+      and with SuperLU; memory: tracemalloc peak of set-up + re-assembly + solve (numpy buffers;
+      the factorisations' own allocations are not traced) and the process's peak RSS before the
+      peers run;
+  (b) OpenSeesPy on the same nodes, quads and supports: model build (nodes, ShellMITC4 elements;
+      its element matrices are formed inside ``eigen``) and ``eigen`` (its default ARPACK; the
+      model is supported, so shift 0 is regular); frequencies compared with ours built without
+      rotary inertia (ShellMITC4's mass model);
+  (c) pyfe3d (if installed): its Quad4 matrices assembled by one Cython call per element,
+      solved with our solver; frequencies compared with ours.
 """
 
-import os
+import resource
+import time
+import tracemalloc
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_name] = "1"
+import numpy as np
+import scipy.sparse as sp
+from timing import time_median
 
-import argparse  # noqa: E402
-import resource  # noqa: E402
-import time  # noqa: E402
-import tracemalloc  # noqa: E402
-
-import numpy as np  # noqa: E402
-import scipy.sparse as sp  # noqa: E402
-from timing import time_median  # noqa: E402
-
-from bayesupdate.fe import shell_mesh as sm  # noqa: E402
-from bayesupdate.fe.shell_model import ShellAssembly, ThicknessParametrisation, shell_mesh  # noqa: E402
-from bayesupdate.fe.sparse_modal import ModalSettings, solve_sparse_modes  # noqa: E402
+from bayesupdate.fe import Binding, FEModel, Material, StructureBuilder
+from bayesupdate.fe import shell_mesh as sm
+from bayesupdate.fe.sparse_modal import ModalSettings, cholmod_available, solve_sparse_modes
 
 N_MODES = 20
-STEEL = dict(E=210e9, nu=0.3, rho=7850.0)
+SIZE = (1.0, 0.6, 0.4)
+CELLS = (44, 26, 18)
+T0 = 2e-3
+STEEL = Material(210e9, 0.3, 7850.0, "steel")
 
 
-def build_box(cells):
-    """Box mesh, per-element face number (0..5) and the clamped DOFs (bottom-face edges)."""
-    nodes, quads = sm.box(1.0, 0.6, 0.4, *cells)
+def box_faces(cells):
+    """(nodes (N, 3), quads (nq, 4), face (nq,) 0..5 (x = 0, x = lx, y = 0, ...), clamped node
+    numbers (the bottom face's four edges))."""
+    nodes, quads = sm.box(*SIZE, *cells)
     centre = nodes[quads].mean(axis=1)
-    ext = np.array([1.0, 0.6, 0.4])
     face = np.full(len(quads), -1)
     for axis in range(3):
         face[np.abs(centre[:, axis]) < 1e-9] = 2 * axis
-        face[np.abs(centre[:, axis] - ext[axis]) < 1e-9] = 2 * axis + 1
-    mesh = shell_mesh(nodes, quads, thickness=0.002, **STEEL)
+        face[np.abs(centre[:, axis] - SIZE[axis]) < 1e-9] = 2 * axis + 1
     x, y, z = nodes.T
-    edge = (
-        (np.abs(x) < 1e-9)
-        | (np.abs(x - 1.0) < 1e-9)
-        | (np.abs(y) < 1e-9)
-        | (np.abs(y - 0.6) < 1e-9)
+    edge = np.isclose(x, 0) | np.isclose(x, SIZE[0]) | np.isclose(y, 0) | np.isclose(y, SIZE[1])
+    return nodes, quads, face, np.flatnonzero(np.isclose(z, 0) & edge)
+
+
+def build_structure(cells, rotary_inertia=True):
+    """The box through the public builder: one part per face, the bottom edges clamped."""
+    nodes, quads, face, clamped = box_faces(cells)
+    b = StructureBuilder(rotary_inertia=rotary_inertia)
+    ids = np.full(len(nodes), -1)
+    for f in range(6):
+        q = quads[face == f]
+        used, local = np.unique(q, return_inverse=True)
+        ids[used] = b.add_shells(
+            nodes[used], local.reshape(q.shape), thickness=T0, material=STEEL, part=f"face{f}"
+        )
+    for n in ids[clamped]:
+        b.add_support(int(n))
+    return b.build()
+
+
+def make_model(structure) -> FEModel:
+    names = {f"t{f}": Binding(f"face{f}", "thickness") for f in range(6)}
+    return FEModel(
+        structure, names, {k: T0 for k in names}, {k: (0.5e-3, 4e-3) for k in names}, name="box"
     )
-    bottom = np.flatnonzero((z < 1e-9) & edge)
-    fixed = (6 * bottom[:, None] + np.arange(6)).ravel()
-    return mesh, face, fixed
 
 
-def ours(mesh, face, fixed, repeats):
-    settings = ModalSettings(n_modes=N_MODES)
-
-    def assemble():
-        return ShellAssembly(mesh).assemble()
-
-    t_asm, (K, M) = time_median(assemble, repeats)
-    t_solve, modes = time_median(
-        lambda: solve_sparse_modes(K, M, mesh.nodes, settings, fixed), repeats
-    )
-    t0 = time.perf_counter()
-    par = ThicknessParametrisation(ShellAssembly(mesh), face)
-    t_setup = time.perf_counter() - t0
+def ours(cells, repeats: int) -> dict:
+    """Times [s], memory [bytes] and frequencies of our path (module docstring, (a))."""
+    t_build, structure = time_median(lambda: build_structure(cells), repeats)
+    t_setup, model = time_median(lambda: make_model(structure), repeats)
+    g = model._general  # noqa: SLF001 - the model's own assembler: re-assembly timed alone
+    props = model.element_properties()
     rng = np.random.default_rng(0)
-    t_par, _ = time_median(lambda: par.assemble(rng.uniform(1e-3, 3e-3, 6)), max(5, repeats))
+
+    def reassemble():
+        p = {k: rng.uniform(1e-3, 3e-3) for k in model.parameter_names}
+        return g.assemble(props, model.shell_properties(p))
+
+    t_asm, _ = time_median(reassemble, max(10, repeats))
+    K, M, _ = g.assemble(props, model.shell_properties())
+    solves = {}
+    kinds = ("cholmod", "superlu") if cholmod_available() else ("superlu",)
+    for kind in kinds:
+        settings = ModalSettings(factorization=kind)
+        solves[kind] = time_median(lambda s=settings: g.solve(K, M, N_MODES, settings=s), repeats)
+    t_full, result = time_median(lambda: model.solve(n_modes=N_MODES), repeats)
     tracemalloc.start()
-    K2, M2 = assemble()
-    solve_sparse_modes(K2, M2, mesh.nodes, settings, fixed)
+    m2 = make_model(structure)
+    m2.solve(n_modes=N_MODES)
     traced = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
+    f = {k: v[1].frequencies_hz for k, v in solves.items()}
     return dict(
-        assembly=t_asm, solve=t_solve, param_setup=t_setup, param=t_par, traced=traced,
-        modes=modes, K=K, M=M,
+        n_dof=structure.n_dof, n_free=g.transform.independent.size,
+        n_quads=len(structure.shells.quads),
+        build=t_build, setup=t_setup, reassembly=t_asm, solve={k: v[0] for k, v in solves.items()},
+        model_solve=t_full, traced=traced, rss=_peak_rss(), frequencies=result.frequencies_hz,
+        factorization_agreement=float(np.max(np.abs(f["superlu"] / f[kinds[0]] - 1))),
+        n_rigid=result.modes.n_rigid,
     )  # fmt: skip
 
 
-def opensees(mesh, fixed, repeats):
-    """(build time, eigen time, frequencies) with ShellMITC4 / ElasticMembranePlateSection."""
+def _peak_rss() -> float:
+    """Peak resident set size of this process so far [bytes] (Linux reports KiB)."""
+    return 1024.0 * resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def opensees(cells, repeats: int) -> dict:
+    """(b): build and eigen times [s] and frequencies of OpenSeesPy's ShellMITC4 model."""
     import openseespy.opensees as ops
 
-    flags = np.zeros((len(mesh.nodes), 6), int)
-    flags.reshape(-1)[fixed] = 1
+    nodes, quads, _, clamped = box_faces(cells)
 
     def build():
         ops.wipe()
         ops.model("basic", "-ndm", 3, "-ndf", 6)
-        for i, x in enumerate(mesh.nodes):
+        for i, x in enumerate(nodes):
             ops.node(i + 1, *map(float, x))
-        for i in np.flatnonzero(flags.any(axis=1)):
-            ops.fix(int(i) + 1, *map(int, flags[i]))
-        ops.section("ElasticMembranePlateSection", 1, STEEL["E"], STEEL["nu"], 0.002, STEEL["rho"])
-        for e, q in enumerate(mesh.quads):
+        for i in clamped:
+            ops.fix(int(i) + 1, 1, 1, 1, 1, 1, 1)
+        ops.section("ElasticMembranePlateSection", 1, STEEL.youngs_modulus, STEEL.poisson, T0,
+                    STEEL.density)  # fmt: skip
+        for e, q in enumerate(quads):
             ops.element("ShellMITC4", e + 1, *map(int, q + 1), 1)
 
     t_build, t_eig, lam = [], [], None
@@ -113,23 +148,31 @@ def opensees(mesh, fixed, repeats):
         t_eig.append(time.perf_counter() - t1)
         t_build.append(t1 - t0)
     ops.wipe()
-    return float(np.median(t_build)), float(np.median(t_eig)), np.sqrt(lam) / (2 * np.pi)
+    plain = make_model(build_structure(cells, rotary_inertia=False)).solve(n_modes=N_MODES)
+    f_ops = np.sqrt(lam) / (2 * np.pi)
+    return dict(
+        build=float(np.median(t_build)), eigen=float(np.median(t_eig)), frequencies=f_ops,
+        max_rel_diff=float(np.max(np.abs(plain.frequencies_hz / f_ops - 1))),
+    )  # fmt: skip
 
 
-def pyfe3d_matrices(mesh):
-    """Global K, M from pyfe3d's Quad4 (consistent mass), one Cython call per element."""
+def pyfe3d(cells, frequencies) -> dict:
+    """(c): pyfe3d Quad4 (consistent mass) assembly time [s], frequencies vs ours."""
     from pyfe3d import DOF, INT, Quad4, Quad4Data, Quad4Probe
     from pyfe3d.shellprop_utils import isotropic_plate
 
+    nodes, quads, _, clamped = box_faces(cells)
+    t0 = time.perf_counter()
     data, probe = Quad4Data(), Quad4Probe()
-    ne, n = len(mesh.quads), DOF * len(mesh.nodes)
+    ne, n = len(quads), DOF * len(nodes)
     Kr = np.zeros(data.KC0_SPARSE_SIZE * ne, dtype=INT)
     Kc, Kv = np.zeros_like(Kr), np.zeros(len(Kr))
     Mr = np.zeros(data.M_SPARSE_SIZE * ne, dtype=INT)
     Mc, Mv = np.zeros_like(Mr), np.zeros(len(Mr))
-    x = np.ascontiguousarray(mesh.nodes).ravel()
-    prop = isotropic_plate(thickness=0.002, E=STEEL["E"], nu=STEEL["nu"], rho=STEEL["rho"])
-    for i, q in enumerate(mesh.quads):
+    x = np.ascontiguousarray(nodes).ravel()
+    prop = isotropic_plate(thickness=T0, E=STEEL.youngs_modulus, nu=STEEL.poisson,
+                           rho=STEEL.density)  # fmt: skip
+    for i, q in enumerate(quads):
         el = Quad4(probe)
         el.n1, el.n2, el.n3, el.n4 = map(int, q)
         el.c1, el.c2, el.c3, el.c4 = (DOF * int(k) for k in q)
@@ -139,51 +182,66 @@ def pyfe3d_matrices(mesh):
         el.update_KC0(Kr, Kc, Kv, prop)
         el.update_M(Mr, Mc, Mv, prop, mtype=0)
     K = sp.coo_matrix((Kv, (Kr, Kc)), shape=(n, n)).tocsr()
-    return K, sp.coo_matrix((Mv, (Mr, Mc)), shape=(n, n)).tocsr()
+    M = sp.coo_matrix((Mv, (Mr, Mc)), shape=(n, n)).tocsr()
+    t_asm = time.perf_counter() - t0
+    fixed = (6 * clamped[:, None] + np.arange(6)).ravel()
+    fp = solve_sparse_modes(K, M, nodes, ModalSettings(n_modes=N_MODES), fixed).frequencies_hz
+    return dict(assembly=t_asm, max_rel_diff=float(np.max(np.abs(fp / frequencies - 1))))
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--cells", type=int, nargs=3, default=[44, 26, 18])
-    args = ap.parse_args()
-    mesh, face, fixed = build_box(tuple(args.cells))
-    print(f"box {args.cells}: {len(mesh.nodes)} nodes, {len(mesh.quads)} quads, "
-          f"{mesh.n_dof} DOFs ({mesh.n_dof - fixed.size} free), {N_MODES} modes")  # fmt: skip
-    r = ours(mesh, face, fixed, args.repeats)
-    f = r["modes"].frequencies_hz
-    print(f"ours: assembly {r['assembly']:.3f} s, solve {r['solve']:.3f} s, "
-          f"total {r['assembly'] + r['solve']:.3f} s")  # fmt: skip
-    print(f"ours: parametric re-assembly {1e3 * r['param']:.1f} ms = "
-          f"{100 * r['param'] / r['solve']:.1f} % of the solve (one-off set-up "
-          f"{r['param_setup']:.2f} s)")  # fmt: skip
-    print(f"ours: tracemalloc peak {r['traced'] / 2**20:.0f} MiB")
-    print("ours: f [Hz] =", np.array2string(f, precision=3, max_line_width=100))
-    try:
-        t_build, t_eig, f_ops = opensees(mesh, fixed, args.repeats)
-        Kn, Mn = ShellAssembly(mesh, rotary_inertia=False).assemble()
-        f_nr = solve_sparse_modes(Kn, Mn, mesh.nodes, ModalSettings(n_modes=N_MODES), fixed)
-        dev = np.max(np.abs(f_nr.frequencies_hz / f_ops - 1))
-        print(f"OpenSees ShellMITC4: build {t_build:.3f} s, eigen {t_eig:.3f} s, total "
-              f"{t_build + t_eig:.3f} s; speed-up ours vs OpenSees: total "
-              f"{(t_build + t_eig) / (r['assembly'] + r['solve']):.1f}x, solve "
-              f"{t_eig / r['solve']:.1f}x; max |f_ours(no rotary) / f_ops - 1| = "
-              f"{dev:.2e}")  # fmt: skip
-    except ImportError:
-        print("OpenSees: not installed")
-    try:
-        t0 = time.perf_counter()
-        Kp, Mp = pyfe3d_matrices(mesh)
-        t_py = time.perf_counter() - t0
-        fp = solve_sparse_modes(Kp, Mp, mesh.nodes, ModalSettings(n_modes=N_MODES), fixed)
-        dev = np.max(np.abs(fp.frequencies_hz / f - 1))
-        print(f"pyfe3d Quad4: assembly {t_py:.3f} s (ours {r['assembly']:.3f} s); "
-              f"max |f_pyfe3d / f_ours - 1| = {dev:.2e}")  # fmt: skip
-    except ImportError:
-        print("pyfe3d: not installed")
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"peak RSS of this process (all of the above): {peak:.0f} MiB")
+def run(repeats: int = 3, cells=CELLS, peers: bool = True) -> dict:
+    """All of the above as one dict (times [s], memory [bytes], frequencies [Hz])."""
+    out = dict(cells=list(cells), repeats=repeats, peers=peers, ours=ours(cells, repeats))
+    out["opensees"] = out["pyfe3d"] = None
+    if peers:
+        try:
+            out["opensees"] = opensees(cells, repeats)
+        except ImportError:
+            pass
+        try:
+            out["pyfe3d"] = pyfe3d(cells, out["ours"]["frequencies"])
+        except ImportError:
+            pass
+    out["rss_end"] = _peak_rss()
+    return out
 
 
-if __name__ == "__main__":
-    main()
+def print_shells(out: dict) -> None:
+    o = out["ours"]
+    fast = next(iter(o["solve"].values()))  # what factorization "auto" takes: CHOLMOD if installed
+    ours_total = o["build"] + o["setup"] + o["reassembly"] + fast
+    print(f"(d) shells: closed box {out['cells']} cells, {o['n_quads']} MITC4 quads, "
+          f"{o['n_dof']} DOFs ({o['n_free']} free), first {N_MODES} modes, 6 thickness "
+          f"parameters; medians of {out['repeats']}")  # fmt: skip
+    print(f"    structure build (add_shells, build)     {o['build']:8.3f} s")
+    print(f"    model set-up (FEModel, once)             {o['setup']:8.3f} s")
+    print(f"    re-assembly at new thicknesses           {1e3 * o['reassembly']:8.1f} ms  "
+          f"= {100 * o['reassembly'] / fast:.1f} % of the solve (target <= 10 %)")  # fmt: skip
+    for kind, t in o["solve"].items():
+        print(f"    eigen-solve, {kind:8s}                   {t:8.3f} s")
+    if len(o["solve"]) == 1:
+        print("    (CHOLMOD: scikit-sparse not installed, pip install 'bayesupdate[fast]')")
+    else:
+        print(f"    max |f_superlu / f_cholmod - 1|          {o['factorization_agreement']:8.1e}")
+    print(f"    FEModel.solve (re-assembly + solve)      {o['model_solve']:8.3f} s")
+    print(f"    total build + set-up + assembly + solve  {ours_total:8.3f} s")
+    print(f"    memory: tracemalloc peak {o['traced'] / 2**20:.0f} MiB (set-up + solve), peak RSS "
+          f"{o['rss'] / 2**20:.0f} MiB before the peers, {out['rss_end'] / 2**20:.0f} MiB "
+          "after")  # fmt: skip
+    print("    f [Hz] =", np.array2string(o["frequencies"], precision=3, max_line_width=96))
+    p = out["opensees"]
+    skipped = "not installed" if out["peers"] else "skipped (--no-opensees)"
+    if p is None:
+        print(f"    OpenSeesPy: {skipped}")
+    else:
+        print(f"    OpenSees ShellMITC4 build                {p['build']:8.3f} s")
+        print(f"    OpenSees eigen (ARPACK)                  {p['eigen']:8.3f} s")
+        print(f"    speed-up: total x{(p['build'] + p['eigen']) / ours_total:.1f}, eigen-solve "
+              f"x{p['eigen'] / fast:.1f} (target >= 3x); max |f_ours(no rotary inertia) / "
+              f"f_opensees - 1| = {p['max_rel_diff']:.1e}")  # fmt: skip
+    q = out["pyfe3d"]
+    if q is None:
+        print(f"    pyfe3d: {skipped}")
+    else:
+        print(f"    pyfe3d Quad4 assembly (per element)      {q['assembly']:8.3f} s; max "
+              f"|f_pyfe3d / f_ours - 1| = {q['max_rel_diff']:.1e}")  # fmt: skip

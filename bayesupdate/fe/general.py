@@ -14,9 +14,14 @@ beam ``Assembler``, unchanged) together with shells, supports and rigid elements
   frames' rotation), K_r = T^T K T, M_r = T^T M T, solved
   by ``sparse_modal.solve_reduced_modes`` (shift-invert Lanczos with a negative shift, the
   rigid-body modes the supports allow found exactly, mechanisms reported with their DOFs;
-  dense LAPACK below ``ModalSettings.dense_below`` DOFs).  Modes on springs to ground are
-  elastic modes here (the beam path's suspension-mode removal does not apply).
+  dense LAPACK below ``ModalSettings.dense_below`` DOFs).
+* Springs to ground: rigid-shaped modes with most of their strain energy in those springs are
+  suspension modes, reported with the rigid ones (``n_rigid``, ``rigid_frequencies_hz``) and not
+  among the elastic modes, as on the beam path (``fe.eigensolve``).  ``solve`` takes the ground
+  springs' stiffness of the K it is given from the ``assemble`` call that made that K.
 """
+
+from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,6 +38,7 @@ from bayesupdate.fe.sparse_modal import (
     _allowed_rigid,
     rigid_motions,
     solve_reduced_modes,
+    sorted_unique,
 )
 from bayesupdate.fe.structure import Structure
 
@@ -60,7 +66,7 @@ class GeneralAssembler:
             keys.append(pat.rows.astype(np.int64) * n + pat.cols)
         self.lines = line_matrices(s)
         line_keys = [_block_keys(dofs, n) for dofs, _, _ in self.lines]
-        union = np.unique(np.concatenate(keys + line_keys))
+        union = sorted_unique(np.concatenate(keys + line_keys))
         self.nnz = union.size
         self.rows = (union // n).astype(np.int32)
         self.cols = (union % n).astype(np.int32)
@@ -78,6 +84,7 @@ class GeneralAssembler:
         self.transform = constraint_transform(s.nodes, c)
         self.rigid = allowed_rigid(s.nodes, self.transform)
         self._rigid_origin = rigid_body_basis(s.nodes, centre=np.zeros(3))
+        self._ground = (None, None)  # (the last assembled K, its ground-spring stiffness)
 
     # -- shells ----------------------------------------------------------------------------------
     def _groups(self, shell_keys):
@@ -147,16 +154,31 @@ class GeneralAssembler:
             Ks, Ms = self.shell_data(t, E, rho)
             K += Ks
             M += Ms
-        return self.csr(K), self.csr(M), elem
+        K = self.csr(K)
+        self._ground = (K, self.beams.ground_stiffness(elem))
+        return K, self.csr(M), elem
 
-    def solve(self, K, M, n_modes: int, dense: bool = False) -> ModalSolution:
-        """First ``n_modes`` elastic modes of the constrained structure (full-DOF shapes)."""
+    def solve(
+        self, K, M, n_modes: int, dense: bool = False, ground=None, settings=None
+    ) -> ModalSolution:
+        """First ``n_modes`` elastic modes of the constrained structure (full-DOF shapes).
+
+        ground : (n_dof, n_dof) stiffness of the springs to ground in K; default: the one
+        ``assemble`` computed with this very K (None for another K: no suspension modes then).
+        settings : ``ModalSettings`` (its n_modes is replaced by ``n_modes``)."""
         tr = self.transform
-        settings = ModalSettings(n_modes=n_modes)
+        settings = replace(settings or ModalSettings(), n_modes=n_modes)
         if dense:
-            settings = ModalSettings(n_modes=n_modes, dense_below=tr.independent.size + 1)
+            settings = replace(settings, dense_below=tr.independent.size + 1)
+        if ground is None and self._ground[0] is K:
+            ground = self._ground[1]
         lam, phi, Rm, lam_r = solve_reduced_modes(
-            tr.reduce(K), tr.reduce(M), self.rigid, settings, tr.independent
+            tr.reduce(K),
+            tr.reduce(M),
+            self.rigid,
+            settings,
+            tr.independent,
+            None if ground is None else tr.reduce(ground),
         )
         return ModalSolution(
             frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),

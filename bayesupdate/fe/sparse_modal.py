@@ -15,9 +15,20 @@ below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalised
 eigenvalue would have without any cancellation between DOFs) is a mechanism and is reported with
 the DOFs
 that move.  Small models use dense LAPACK on the same complement.
+
+Springs to ground (``ground``: their stiffness alone): the allowed rigid motions then carry
+energy and come out of the iteration as low modes.  As on the beam path (``fe.eigensolve``) a mode
+is a *suspension* mode, reported with the rigid ones and not among the elastic modes, when it is
+rigid-shaped (more than half of its M-norm in the span of the allowed rigid motions) and most of
+its strain energy (> lambda / 2) is in the ground springs.  A model with fewer elastic modes than
+asked besides them (a rigid body on springs, e.g. a point mass) keeps them as its modes.
+
+Factorisation of K - sigma M: CHOLMOD (supernodal Cholesky, Chen et al., ACM TOMS 35 (2008) 22,
+through scikit-sparse, the optional extra ``bayesupdate[fast]``) where it is installed, else
+SuperLU (``ModalSettings.factorization``).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sl
@@ -27,6 +38,14 @@ import scipy.sparse.linalg as spla
 from bayesupdate.errors import BayesUpdateError
 
 COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
+FACTORIZATIONS = ("auto", "cholmod", "superlu")
+
+
+def sorted_unique(keys: np.ndarray) -> np.ndarray:
+    """Sorted distinct values of an integer array (as ``np.unique``, whose hash path is ~30x
+    slower than a sort on the millions of (row, col) keys of a shell pattern)."""
+    k = np.sort(keys)
+    return k[np.concatenate([[True], k[1:] != k[:-1]])] if k.size else k
 
 
 def element_dofs(connectivity: np.ndarray, dof_per_node: int = 6) -> np.ndarray:
@@ -48,7 +67,8 @@ class SparsePattern:
         rows.append(np.arange(n_dof))
         cols.append(np.arange(n_dof))
         key = np.concatenate(rows).astype(np.int64) * n_dof + np.concatenate(cols)
-        uniq, inverse = np.unique(key, return_inverse=True)
+        uniq = sorted_unique(key)
+        inverse = np.searchsorted(uniq, key)
         self.n_dof = n_dof
         self.nnz = uniq.size
         self.rows = (uniq // n_dof).astype(np.int32)
@@ -107,7 +127,8 @@ class ModalSettings:
     mechanism; a true zero mode cancels to round-off (~1e-16) and a thin plate's bending mode
     to ~1e-7 of its diagonal energy.  dense_below :
     free-DOF count under which dense LAPACK is used; tol : ARPACK relative tolerance; seed : start
-    vector.
+    vector; factorization : "auto" (CHOLMOD if scikit-sparse is installed, else SuperLU),
+    "cholmod" (an error without scikit-sparse) or "superlu".
     """
 
     n_modes: int = 20
@@ -116,12 +137,18 @@ class ModalSettings:
     dense_below: int = 1200
     tol: float = 1e-12
     seed: int = 0
+    factorization: str = "auto"
 
     def __post_init__(self):
         if not (self.shift < 0 and np.isfinite(self.shift)):
             raise BayesUpdateError(f"modal settings: shift must be < 0, got {self.shift}")
         if self.n_modes < 1:
             raise BayesUpdateError(f"modal settings: n_modes must be >= 1, got {self.n_modes}")
+        if self.factorization not in FACTORIZATIONS:
+            raise BayesUpdateError(
+                f"modal settings: factorization must be one of {FACTORIZATIONS}, "
+                f"got {self.factorization!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -130,7 +157,8 @@ class SparseModes:
 
     frequencies_hz, eigenvalues (m,) [Hz, rad^2/s^2]; shapes (n_dof, m) mass-normalised, zero on
     constrained DOFs; rigid_shapes (n_dof, r) mass-normalised rigid-body modes allowed by the
-    constraints; rigid_eigenvalues (r,) their Rayleigh quotients (round-off, ~0).
+    constraints, then any suspension modes on springs to ground; rigid_eigenvalues (r,) their
+    eigenvalues (round-off ~0 for the exact rigid modes).
     """
 
     frequencies_hz: np.ndarray
@@ -176,20 +204,24 @@ def _allowed_rigid(nodes, n_dof, fixed):
     return R @ v[rank:].T
 
 
-def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> SparseModes:
+def solve_sparse_modes(
+    K, M, nodes, settings: ModalSettings, fixed_dofs=(), ground=None
+) -> SparseModes:
     """First ``settings.n_modes`` elastic modes of K u = lambda M u, constraints eliminated.
 
     K, M : (n_dof, n_dof) sparse, 6 DOFs per node; nodes : (N, 3) [m] (for the rigid motions);
-    fixed_dofs : global DOF numbers held at zero.  Raises BayesUpdateError for a mechanism
-    (naming the moving DOFs) or a singular K - sigma M.
+    fixed_dofs : global DOF numbers held at zero; ground : (n_dof, n_dof) sparse stiffness of
+    the springs to ground alone (part of K), for telling suspension modes apart.  Raises
+    BayesUpdateError for a mechanism (naming the moving DOFs) or a singular K - sigma M.
     """
     n_dof = K.shape[0]
     fixed = np.unique(np.asarray(fixed_dofs, dtype=np.int64))
     free = np.setdiff1d(np.arange(n_dof), fixed)
     Kf = sp.csr_matrix(K)[free][:, free]
     Mf = sp.csr_matrix(M)[free][:, free]
+    Gf = None if ground is None else sp.csr_matrix(ground)[free][:, free]
     R = _allowed_rigid(nodes, n_dof, fixed)[free]
-    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, free)
+    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, free, Gf)
     shapes = np.zeros((n_dof, phi.shape[1]))
     shapes[free] = phi
     rigid = np.zeros((n_dof, Rm.shape[1]))
@@ -197,11 +229,13 @@ def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> S
     return SparseModes(np.sqrt(np.maximum(lam, 0)) / (2 * np.pi), lam, shapes, rigid, lam_r)
 
 
-def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
+def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, ground=None):
     """Elastic and rigid modes of a reduced pencil (Kf, Mf) (n, n) sparse whose allowed rigid
     motions are the columns of R (n, r); dof_ids (n,) global DOF number of each coordinate (for
-    mechanism messages).  Returns (lam (m,), phi (n, m), rigid modes (n, r'), their
-    eigenvalues), all mass-normalised; raises BayesUpdateError for a mechanism."""
+    mechanism messages); ground (n, n) sparse or None: stiffness of the springs to ground alone.
+    Returns (lam (m,), phi (n, m), rigid modes (n, r') - the exact rigid modes, then any
+    suspension modes - and their eigenvalues), all mass-normalised; raises BayesUpdateError for a
+    mechanism."""
     Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol)
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
     n_el = Kf.shape[0] - Rm.shape[1]
@@ -209,15 +243,34 @@ def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
         raise BayesUpdateError(
             f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
         )
+    # room for the suspension modes: at most the allowed rigid motions that are not exact zeros
+    n_extra = R.shape[1] - Rm.shape[1] if ground is not None and ground.nnz else 0
+    n_want = min(settings.n_modes + n_extra, n_el)
     if Kf.shape[0] < settings.dense_below:
-        lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
+        lam, phi = _dense_modes(Kf, Mf, Rm, n_want, settings.shift)
     else:
-        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings)
+        lam, phi = _lanczos_modes(Kf, Mf, Rm, replace(settings, n_modes=n_want))
     zero = settings.zero_tol * _diagonal_energy(Kf.diagonal(), phi)
     _check_mechanism(lam, phi, zero, np.asarray(dof_ids))
     idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
     phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
-    return lam, phi, Rm, lam_r
+    susp = _suspension(lam, phi, Mf, R, ground) if n_extra else np.zeros(lam.size, bool)
+    if np.sum(~susp) < settings.n_modes:  # a rigid body on springs: those are its modes
+        susp[:] = False
+    elastic = np.flatnonzero(~susp)[: settings.n_modes]
+    Rm = np.hstack([Rm, phi[:, susp]])
+    lam_r = np.concatenate([lam_r, lam[susp]])
+    return lam[elastic], phi[:, elastic], Rm, lam_r
+
+
+def _suspension(lam, phi, M, R, ground) -> np.ndarray:
+    """(m,) bool: rigid-shaped modes (share of the M-norm in span(R) > 0.5) whose strain energy
+    is mostly (> lambda / 2) in the springs to ground (``fe.eigensolve._rigid_modes``)."""
+    MR = M @ R
+    c = MR.T @ phi
+    share = np.einsum("im,im->m", c, np.linalg.pinv(R.T @ MR, hermitian=True) @ c)
+    u_ground = np.einsum("im,im->m", phi, ground @ phi)
+    return (share > 0.5) & (u_ground > 0.5 * np.maximum(lam, 1e-300))
 
 
 def _check_mechanism(lam, phi, zero, free):
@@ -253,9 +306,45 @@ def _dense_modes(Kf, Mf, Rm, n_modes, sigma):
     return sigma + 1.0 / mu, phi
 
 
-def _factor(A):
-    """Sparse LU of the symmetric positive definite K - sigma M (SuperLU with a symmetric
-    minimum-degree ordering and diagonal pivots)."""
+def cholmod_available() -> bool:
+    """True if scikit-sparse's CHOLMOD can be imported (the optional extra ``fast``)."""
+    try:
+        import sksparse.cholmod  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _singular(detail: str) -> BayesUpdateError:
+    return BayesUpdateError(
+        f"K - sigma M is singular ({detail}): some DOFs have neither stiffness nor mass; "
+        "support them or give them mass"
+    )
+
+
+def factorize(A, kind: str = "auto"):
+    """solve(b) -> (K - sigma M)^-1 b for the symmetric positive definite A (n, n) sparse.
+
+    kind "auto": CHOLMOD (supernodal Cholesky, AMD ordering) if scikit-sparse is installed,
+    else SuperLU with a symmetric minimum-degree ordering and diagonal pivots; "cholmod" or
+    "superlu" force one (a BayesUpdateError if CHOLMOD is asked for but not installed).
+    """
+    if kind not in FACTORIZATIONS:
+        raise BayesUpdateError(f"factorization must be one of {FACTORIZATIONS}, got {kind!r}")
+    if kind != "superlu":
+        try:
+            from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
+        except ImportError:
+            if kind == "cholmod":
+                raise BayesUpdateError(
+                    "factorization 'cholmod' needs scikit-sparse: pip install "
+                    "'bayesupdate[fast]' (it builds against libsuitesparse-dev), or use 'auto'"
+                ) from None
+        else:
+            try:
+                return cholesky(sp.csc_matrix(A), ordering_method="amd")
+            except CholmodNotPositiveDefiniteError as exc:
+                raise _singular("CHOLMOD: not positive definite") from exc
     try:
         lu = spla.splu(
             sp.csc_matrix(A),
@@ -264,25 +353,22 @@ def _factor(A):
             options={"SymmetricMode": True},
         )
     except RuntimeError as exc:
-        raise BayesUpdateError(
-            f"K - sigma M is singular ({exc}): some DOFs have neither stiffness nor mass; "
-            "support them or give them mass"
-        ) from exc
-    return lu
+        raise _singular(str(exc)) from exc
+    return lu.solve
 
 
 def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings):
     """Shift-invert Lanczos on the complement of the rigid modes Rm (M-orthonormal)."""
     n = Kf.shape[0]
     sigma = settings.shift
-    lu = _factor((Kf - sigma * Mf).tocsc())
+    solve = factorize((Kf - sigma * Mf).tocsc(), settings.factorization)
     MR = Mf @ Rm
 
     def project(x):
         return x - Rm @ (MR.T @ x)
 
     def op(b):
-        return project(lu.solve(np.asarray(b, dtype=float).ravel()))
+        return project(solve(np.asarray(b, dtype=float).ravel()))
 
     OPinv = spla.LinearOperator((n, n), matvec=op, dtype=float)
     v0 = project(np.random.default_rng(settings.seed).standard_normal(n))

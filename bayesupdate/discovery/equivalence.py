@@ -71,6 +71,55 @@ def noise_free_modes(prediction, source: str = "noise-free truth") -> ModalData:
     )
 
 
+def _truth_starts(
+    model, problem, design: np.ndarray, effect: Effect | None, effect_starts: int
+) -> tuple[object, str, list[np.ndarray]]:
+    """The problem to fit (extended by ``effect`` when given), its label and its starts (each
+    (d,), SI): the design (d_design,) alone for the baseline; with an effect, the design with the
+    effect on an ``effect_starts``-per-axis grid inside its z range, then at its null value."""
+    if effect is None:
+        return problem, "baseline", [design]
+    candidate = make_candidate(model, effect)
+    problem = candidate_problem(problem, design, candidate)
+    grids = [np.linspace(*a.z_bounds, effect_starts + 2)[1:-1] for a in candidate.axes]
+    mesh = np.meshgrid(*grids, indexing="ij")
+    starts = [
+        np.append(design, [a.from_z(z) for a, z in zip(candidate.axes, point, strict=True)])
+        for point in zip(*(m.ravel() for m in mesh), strict=True)
+    ]
+    # the effect at its null value: the baseline's own fit is reachable, so D(candidate)
+    # <= D(baseline) up to the optimiser, as it must be for a nested model
+    starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
+    return problem, effect.tag, starts
+
+
+def _truth_likelihood(
+    truth: ModalData, frequency_noise: float, shape_noise: float
+) -> tuple[NoiseModel, ShapeBlock]:
+    """The discovery likelihood's own whitening for the m modes of ``truth``: fixed relative
+    frequency sd ``frequency_noise`` [-], and a shape block with the stated level
+    ``shape_noise`` / sqrt(n) per component of a unit-norm shape (``shape_evidence``)."""
+    m = truth.n_modes
+    noise = NoiseModel(np.full(m, frequency_noise), np.ones(m), False, "fixed", frequency_noise)
+    test_unit = unit_real_shapes(np.asarray(truth.shapes))
+    shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
+    return noise, ShapeBlock(np.arange(m), test_unit, np.full(m, shape_sd))
+
+
+def _best_least_squares(space: FitSpace, starts: list[np.ndarray]):
+    """The ``scipy.optimize.least_squares`` result (in the unit box) with the smallest cost
+    over the starts (each (d,), SI); the first start wins ties."""
+    # a failed solve: a 1000 % error in noise units (parameter_space.FAILED_RELATIVE_ERROR)
+    residual = space.unit_box_residuals(EvaluationCount())
+    best = None
+    for theta0 in starts:
+        u0 = np.clip(space.u_from_theta(theta0), 0.0, 1.0)
+        fit = least_squares(residual, u0, bounds=(0.0, 1.0), x_scale=0.1)
+        if best is None or fit.cost < best.cost:
+            best = fit
+    return best
+
+
 def fit_to_truth(
     model,
     truth: ModalData,
@@ -91,39 +140,13 @@ def fit_to_truth(
         raise BayesUpdateError("equivalence: frequency_noise and shape_noise must be > 0")
     problem = build_problem(model, truth, None, pairing="mac")
     design = np.array([design_start[p.name] for p in problem.parameters], dtype=float)
-    starts = [design]
-    label = "baseline"
-    if effect is not None:
-        candidate = make_candidate(model, effect)
-        problem = candidate_problem(problem, design, candidate)
-        label = effect.tag
-        grids = [np.linspace(*a.z_bounds, effect_starts + 2)[1:-1] for a in candidate.axes]
-        mesh = np.meshgrid(*grids, indexing="ij")
-        starts = [
-            np.append(design, [a.from_z(z) for a, z in zip(candidate.axes, point, strict=True)])
-            for point in zip(*(m.ravel() for m in mesh), strict=True)
-        ]
-        # the effect at its null value: the baseline's own fit is reachable, so D(candidate)
-        # <= D(baseline) up to the optimiser, as it must be for a nested model
-        starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
-    # the discovery likelihood's own whitened residual: fixed frequency noise, and a shape block
-    # with the stated level sigma_s / sqrt(n) (``shape_evidence``)
-    m = truth.n_modes
-    noise = NoiseModel(np.full(m, frequency_noise), np.ones(m), False, "fixed", frequency_noise)
-    test_unit = unit_real_shapes(np.asarray(truth.shapes))
-    shape_sd = shape_noise / np.sqrt(test_unit.shape[0])
-    shapes = ShapeBlock(np.arange(m), test_unit, np.full(m, shape_sd))
+    problem, label, starts = _truth_starts(model, problem, design, effect, effect_starts)
+    noise, shapes = _truth_likelihood(truth, frequency_noise, shape_noise)
     space = FitSpace(problem, problem.parameters, noise, shapes)
-    # a failed solve: a 1000 % error in noise units (parameter_space.FAILED_RELATIVE_ERROR)
-    residual = space.unit_box_residuals(EvaluationCount())
-    best = None
-    for theta0 in starts:
-        u0 = np.clip(space.u_from_theta(theta0), 0.0, 1.0)
-        fit = least_squares(residual, u0, bounds=(0.0, 1.0), x_scale=0.1)
-        if best is None or fit.cost < best.cost:
-            best = fit
+    best = _best_least_squares(space, starts)
     theta = space.parameter_space.theta_from_u(best.x)
     r = best.fun
+    m = truth.n_modes
     return EquivalenceFit(
         label=label,
         names=tuple(problem.names),

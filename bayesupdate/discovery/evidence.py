@@ -249,6 +249,55 @@ def _forward_jacobian(fun, u: np.ndarray, r0: np.ndarray, step: float = 1e-4) ->
     return jac
 
 
+def _pick_starts(
+    fun, space: FitSpace, starts_theta: list[np.ndarray], best_start_only: bool
+) -> list[np.ndarray]:
+    """Starts (each (d,), SI) -> unit-box starts (each (d,) in [0, 1]); with
+    ``best_start_only`` only the one with the smallest chi^2 (one model solve per start)."""
+    u_starts = [np.clip(space.u_from_theta(t), 0.0, 1.0) for t in starts_theta]
+    if best_start_only and len(u_starts) > 1:
+        u_starts = [min(u_starts, key=lambda u: float(np.sum(fun(u) ** 2)))]
+    return u_starts
+
+
+def _optimum_from(fun, space: FitSpace, u0: np.ndarray, span: np.ndarray, max_nfev: int) -> Optimum:
+    """Bounded TRF least squares of r(u) from the unit-box start u0 (d,), then the Laplace
+    evidence at its end point (``laplace``).  span : (d,) z range of each axis."""
+    fit = optimize.least_squares(
+        fun,
+        u0,
+        bounds=(np.zeros(u0.size), np.ones(u0.size)),
+        method="trf",
+        diff_step=1e-4,
+        xtol=1e-7,
+        ftol=1e-7,
+        gtol=1e-8,
+        max_nfev=max_nfev,
+    )
+    u = np.clip(fit.x, 0.0, 1.0)
+    r = np.asarray(fit.fun)
+    # our own Jacobian: TRF's ``fit.jac`` is rescaled near the bounds (zero at a bound)
+    jac_z = _forward_jacobian(fun, u, r) / span
+    return laplace(space, space.z_from_u(u), r, jac_z)
+
+
+def _distinct_optima(ends: list[Optimum], span: np.ndarray) -> list[Optimum]:
+    """The distinct optima among ``ends``, highest evidence first: an end point within
+    Mahalanobis distance 3 (under its Hessian) of a kept one, or within 2 % of every axis's z
+    range (span (d,)), is the same optimum found again and is dropped."""
+    distinct: list[Optimum] = []
+    for o in sorted(ends, key=lambda o: -o.log_evidence):
+        same = False
+        for kept in distinct:
+            dz = o.z - kept.z
+            if float(dz @ kept.hessian @ dz) < 9.0 or np.max(np.abs(dz / span)) < 0.02:
+                same = True
+                break
+        if not same:
+            distinct.append(o)
+    return distinct
+
+
 def fit_model(
     space: FitSpace,
     starts_theta: list[np.ndarray],
@@ -269,45 +318,14 @@ def fit_model(
     count = EvaluationCount()
     span = space.z_high - space.z_low
     fun = space.unit_box_residuals(count)
-
-    u_starts = [np.clip(space.u_from_theta(t), 0.0, 1.0) for t in starts_theta]
-    if best_start_only and len(u_starts) > 1:
-        u_starts = [min(u_starts, key=lambda u: float(np.sum(fun(u) ** 2)))]
-    ends = []
-    for u0 in u_starts:
-        fit = optimize.least_squares(
-            fun,
-            u0,
-            bounds=(np.zeros(u0.size), np.ones(u0.size)),
-            method="trf",
-            diff_step=1e-4,
-            xtol=1e-7,
-            ftol=1e-7,
-            gtol=1e-8,
-            max_nfev=max_nfev,
-        )
-        u = np.clip(fit.x, 0.0, 1.0)
-        r = np.asarray(fit.fun)
-        # our own Jacobian: TRF's ``fit.jac`` is rescaled near the bounds (zero at a bound)
-        jac_z = _forward_jacobian(fun, u, r) / span
-        ends.append(laplace(space, space.z_from_u(u), r, jac_z))
-    ends.sort(key=lambda o: -o.log_evidence)
-    distinct: list[Optimum] = []
-    for o in ends:
-        same = False
-        for kept in distinct:
-            dz = o.z - kept.z
-            if float(dz @ kept.hessian @ dz) < 9.0 or np.max(np.abs(dz / span)) < 0.02:
-                same = True
-                break
-        if not same:
-            distinct.append(o)
+    u_starts = _pick_starts(fun, space, starts_theta, best_start_only)
+    ends = [_optimum_from(fun, space, u0, span, max_nfev) for u0 in u_starts]
+    distinct = _distinct_optima(ends, span)
     log_z = float(special.logsumexp([o.log_evidence for o in distinct]))
     # report the best-fitting optimum (the calibrated point; also the centre of the LOO draws);
     # the evidence is the sum over all distinct optima either way
     distinct.sort(key=lambda o: float(np.sum(o.r**2)))
-    best = distinct[0]
-    theta = space.theta_from_z(best.z)
+    theta = space.theta_from_z(distinct[0].z)
     e, evaluation = space.relative_errors(theta)
     count.evaluations += 1
     return ModelFit(

@@ -54,6 +54,7 @@ is the re-calibrated model; ``effects`` holds its spec list for later use as a m
 """
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -252,6 +253,99 @@ class DiscoveryResult:
         }
 
 
+def _within_noise(flags: ModeFlags, sigma: float, inferred: bool, s: DiscoverySettings) -> bool:
+    """A model fits within the noise: no flagged mode, and (inferred noise) its robust relative
+    level ``sigma`` [-] <= ``max_noise_rel`` or (known noise) the global chi^2 p >
+    ``adequacy_p``."""
+    return not flags.flagged_modes and (
+        sigma <= s.max_noise_rel if inferred else flags.chi2_p > s.adequacy_p
+    )
+
+
+def _below_threshold(
+    best: ModelFit,
+    ln_bf: float,
+    log_odds: float,
+    prior_log_odds: float,
+    baseline_ok: bool,
+    flags: ModeFlags,
+    s: DiscoverySettings,
+) -> tuple[str, str, None, list]:
+    """Verdict when the best candidate's posterior log odds do not exceed the threshold:
+    "no discrepancy" if the baseline fits within noise, else "unexplained"."""
+    odds = (
+        f"ln BF {ln_bf:.2f}, posterior log odds {log_odds:.2f} <= {s.threshold_log_odds:g} "
+        f"with prior log odds {prior_log_odds:.2f}"
+    )
+    if baseline_ok:
+        return (
+            "no discrepancy",
+            f"baseline fits within noise; best candidate {best.label}: {odds}",
+            None,
+            [],
+        )
+    return (
+        "unexplained",
+        f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
+        f"beats the baseline clearly (best {best.label}: {odds})",
+        None,
+        [],
+    )
+
+
+def _not_confident(
+    fits: list, ln_bf: float, n_design: int, s: DiscoverySettings
+) -> tuple[str, str, None, list] | None:
+    """The "unexplained" verdict of a winner ``fits[0]`` that beats the baseline but cannot be
+    named: runners-up within ``margin_ln_bf`` (returned as ambiguous), or an effect parameter
+    within ``bound_tolerance`` of its bound; None when neither holds."""
+    best = fits[0]
+    close = [f for f in fits[1:] if best.log_evidence - f.log_evidence < s.margin_ln_bf]
+    if close:
+        return (
+            "unexplained",
+            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) but the data cannot tell it "
+            f"from {[f.label for f in close]} (ln BF difference < {s.margin_ln_bf:g})",
+            None,
+            close,
+        )
+    at_bound = _effect_at_bound(best, n_design, s.bound_tolerance)
+    if at_bound:
+        return (
+            "unexplained",
+            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) only with {at_bound} on its "
+            "bound: the library effect is stretched to absorb a change it does not describe",
+            None,
+            [],
+        )
+    return None
+
+
+def _adequacy(
+    best: ModelFit, baseline: ModelFit, noise: NoiseModel, s: DiscoverySettings
+) -> tuple[ModeFlags, bool]:
+    """The winner's mode flags at family-wise level ``adequacy_p`` and whether it fits within
+    the noise (for inferred noise judged at its own robust residual level)."""
+    d = len(best.names)
+    # the named model is judged at family-wise level adequacy_p (1e-3), stricter than the
+    # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
+    # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
+    # inferred noise: judged against its own residual scale, which must look like test noise
+    own = (
+        noise_model(baseline.space.problem.data, best.residual_rel, d) if noise.inferred else noise
+    )
+    after = flag_modes(
+        best.residual_rel,
+        own,
+        d,
+        None,
+        best.mac,
+        s.adequacy_p,
+        shapes=shape_tests(best),
+    )
+    return after, _within_noise(after, own.sigma, noise.inferred, s)
+
+
 def decide(
     baseline: ModelFit,
     fits: list,
@@ -265,9 +359,7 @@ def decide(
     ``prior_log_odds``: of each candidate against the baseline (``settings.prior_log_odds``).
     ``polish(fit) -> ModelFit | None``: the winner re-fitted at its own noise level before it is
     judged (``polish_at_own_level``); its Bayes factors stay those of the comparison."""
-    baseline_ok = not flags.flagged_modes and (
-        noise.sigma <= s.max_noise_rel if noise.inferred else flags.chi2_p > s.adequacy_p
-    )
+    baseline_ok = _within_noise(flags, noise.sigma, noise.inferred, s)
     if not fits:
         if baseline_ok:
             return "no discrepancy", "no candidate fitted; the baseline fits within noise", None, []
@@ -276,64 +368,13 @@ def decide(
     ln_bf = best.log_evidence - baseline.log_evidence
     log_odds = ln_bf + prior_log_odds
     if log_odds <= s.threshold_log_odds:
-        odds = (
-            f"ln BF {ln_bf:.2f}, posterior log odds {log_odds:.2f} <= {s.threshold_log_odds:g} "
-            f"with prior log odds {prior_log_odds:.2f}"
-        )
-        if baseline_ok:
-            return (
-                "no discrepancy",
-                f"baseline fits within noise; best candidate {best.label}: {odds}",
-                None,
-                [],
-            )
-        return (
-            "unexplained",
-            f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
-            f"beats the baseline clearly (best {best.label}: {odds})",
-            None,
-            [],
-        )
-    close = [f for f in fits[1:] if best.log_evidence - f.log_evidence < s.margin_ln_bf]
-    if close:
-        return (
-            "unexplained",
-            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) but the data cannot tell it "
-            f"from {[f.label for f in close]} (ln BF difference < {s.margin_ln_bf:g})",
-            None,
-            close,
-        )
-    at_bound = _effect_at_bound(best, len(baseline.names), s.bound_tolerance)
-    if at_bound:
-        return (
-            "unexplained",
-            f"{best.label} beats the baseline (ln BF {ln_bf:.2f}) only with {at_bound} on its "
-            "bound: the library effect is stretched to absorb a change it does not describe",
-            None,
-            [],
-        )
-    d = len(best.names)
-    # the named model is judged at family-wise level adequacy_p (1e-3), stricter than the
-    # finding step's alpha: at alpha = 0.05 about 1 true model in 20 is rejected by chance, while
-    # a change outside the library misfits far beyond either level (study: chi^2 p < 1e-100)
-    # inferred noise: judged against its own residual scale, which must look like test noise
+        return _below_threshold(best, ln_bf, log_odds, prior_log_odds, baseline_ok, flags, s)
+    rejected = _not_confident(fits, ln_bf, len(baseline.names), s)
+    if rejected is not None:
+        return rejected
     if polish is not None:
         best = polish(best) or best
-    own = (
-        noise_model(baseline.space.problem.data, best.residual_rel, d) if noise.inferred else noise
-    )
-    after = flag_modes(
-        best.residual_rel,
-        own,
-        d,
-        None,
-        best.mac,
-        s.adequacy_p,
-        shapes=shape_tests(best),
-    )
-    adequate = not after.flagged_modes and (
-        own.sigma <= s.max_noise_rel if noise.inferred else after.chi2_p > s.adequacy_p
-    )
+    after, adequate = _adequacy(best, baseline, noise, s)
     if not adequate:
         return (
             "unexplained",
@@ -343,17 +384,13 @@ def decide(
             None,
             [],
         )
-    return (
-        "explained",
-        f"{best.label}: ln BF {ln_bf:.2f} vs baseline (posterior log odds {log_odds:.2f}), "
-        + (
-            f"{best.log_evidence - fits[1].log_evidence:.2f} vs runner-up {fits[1].label}"
-            if len(fits) > 1
-            else "no runner-up"
-        ),
-        best,
-        [],
+    runner_up = (
+        f"{best.log_evidence - fits[1].log_evidence:.2f} vs runner-up {fits[1].label}"
+        if len(fits) > 1
+        else "no runner-up"
     )
+    reason = f"{best.label}: ln BF {ln_bf:.2f} vs baseline (posterior log odds {log_odds:.2f}), "
+    return "explained", reason + runner_up, best, []
 
 
 def polish_at_own_level(
@@ -492,6 +529,173 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
         )
 
 
+def _prepare(
+    model, data, settings: DiscoverySettings, parameters, baseline, pairing: str, say
+) -> tuple[object, list, object]:
+    """The calibration problem (``pairing`` "auto" resolved as ``discover`` says), the library's
+    effects and the baseline ``CalibrationResult`` (calibrated here from ``baseline_starts``
+    starts, seeded by ``seed``, when none is given)."""
+    if pairing == "auto":
+        pairing = "mac" if data.shapes is not None else "order"
+    problem = build_problem(model, data, parameters, pairing=pairing)
+    check_enough_modes(problem)
+    effects = enumerate_effects(model, settings.kinds, settings.locations)
+    if baseline is None:
+        say(f"baseline calibration ({settings.baseline_starts} starts)")
+        baseline = calibrate(
+            problem, starts=settings.baseline_starts, seed=settings.seed, max_nfev=100
+        )
+    return problem, effects, baseline
+
+
+def _box_centre(problem) -> np.ndarray:
+    """(d,) centre of the design variables' bounds box [SI]: a start for every full fit."""
+    return 0.5 * (problem.lower + problem.upper)
+
+
+def _baseline_fit(problem, baseline, settings: DiscoverySettings) -> ModelFit:
+    """The baseline refitted for its evidence: the noise model from the calibration's relative
+    errors (m,), the shape block (MAC pairing only) and the same design starts as the
+    candidates' full tier (its optimum and the box centre), so that both sides of every Bayes
+    factor sum over the same basins.  Its ``space`` carries the noise and shapes."""
+    data = problem.data
+    e0 = relative_errors(baseline.frequencies_hz, data.frequencies_hz)
+    noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
+    shapes = None
+    if problem.pairing.method == "mac":  # the test's shapes are evidence too (shape_evidence)
+        at_baseline = problem.evaluate(baseline.theta)
+        if at_baseline.ok:
+            shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
+    base_space = FitSpace(problem, problem.parameters, noise, shapes)
+    starts = [baseline.theta, _box_centre(problem)]
+    return fit_model(base_space, starts, "baseline", max_nfev=settings.max_nfev)
+
+
+def _flag_baseline(
+    base_fit: ModelFit, baseline, predictive_rel_var, settings: DiscoverySettings
+) -> ModeFlags:
+    """Mode flags of the baseline fit at level ``alpha`` (z-scores widened by the (m,)
+    ``predictive_rel_var`` when given, MAC of the calibration when the test has shapes)."""
+    mac = baseline.table.mac if base_fit.space.problem.data.shapes is not None else None
+    return flag_modes(
+        base_fit.residual_rel,
+        base_fit.space.noise,
+        len(base_fit.space.axes),
+        predictive_rel_var,
+        mac,
+        settings.alpha,
+        shapes=shape_tests(base_fit),
+    )
+
+
+def _localize(model, effects: list, base_fit: ModelFit, baseline, flags: ModeFlags):
+    """``localization.localize`` of every library effect around the baseline fit (score tests
+    in the noise units of the baseline's likelihood)."""
+    candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
+    base_space = base_fit.space
+
+    def residuals_fn(e, model_shapes):
+        return base_space.residual_vector(e, model_shapes)
+
+    model_modes = baseline.table.model_mode - 1
+    return localize(
+        base_space.problem,
+        base_fit.theta,
+        base_fit.best.jac_z,
+        residuals_fn,
+        candidates,
+        model_modes,
+        flags.flagged,
+    )
+
+
+def _quick_refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings) -> list:
+    """Quick tier (module docstring, step 4): (fit, score) of the ``_select``-ed candidates,
+    each ``quick_nfev`` iterations from its best ``_candidate_starts`` start, best evidence
+    first."""
+    problem, axes = base_fit.space.problem, base_fit.space.axes
+    noise, shapes = base_fit.space.noise, base_fit.space.shapes
+    centre = _box_centre(problem)
+    quick = []
+    for score in _select(scores, settings):
+        problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
+        space = FitSpace(problem_c, axes + score.candidate.axes, noise, shapes)
+        effect = score.candidate.effect
+        fit = fit_model(
+            space,
+            _candidate_starts(base_fit.theta, score, (problem.start, centre)),
+            score.label,
+            effect.kind,
+            effect.location,
+            max_nfev=settings.quick_nfev,
+            stage="quick",
+            best_start_only=True,
+        )
+        quick.append((fit, score))
+    quick.sort(key=lambda item: -item[0].log_evidence)
+    return quick
+
+
+def _full_refits(quick: list, base_fit: ModelFit, settings: DiscoverySettings, say) -> list:
+    """Full tier: the ``max_refits`` best quick (fit, score) pairs re-fitted to convergence;
+    the rest keep their quick fit.  All fits, best evidence first."""
+    centre = _box_centre(base_fit.space.problem)
+    n_design = len(base_fit.space.axes)
+    fits = [f for f, _ in quick[settings.max_refits :]]
+    for fit, score in quick[: settings.max_refits]:
+        say(f"full refit {score.label}")
+        # the quick end point, plus the box centre with the quick fit's effect value: the
+        # design variables of a far-off baseline can hold the fit in another basin
+        starts = [fit.theta, np.append(centre, fit.theta[n_design:])]
+        full = fit_model(
+            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.max_nfev
+        )
+        full.evaluations += fit.evaluations
+        fits.append(full)
+    fits.sort(key=lambda f: -f.log_evidence)
+    return fits
+
+
+def _refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings, say) -> list:
+    """Both refit tiers (module docstring, step 4): every fitted candidate, best evidence
+    first."""
+    quick = _quick_refits(scores, base_fit, settings)
+    say("quick refits: " + ", ".join(f"{f.label} {f.log_evidence:.1f}" for f, _ in quick))
+    return _full_refits(quick, base_fit, settings, say)
+
+
+def _add_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> None:
+    """PSIS-LOO (``laplace_loo``, ``loo_draws`` draws) of the baseline and the ``loo_top`` best
+    fits, stored on each fit; the k-th of them is seeded ``seed + k``."""
+    for k, fit in enumerate([base_fit, *fits[: settings.loo_top]]):
+        fit.loo = laplace_loo(fit, settings.loo_draws, seed=settings.seed + k)
+
+
+@contextmanager
+def _stopwatch(timings: dict, key: str):
+    """Store the wall time [s] of the ``with`` block as ``timings[key]``."""
+    t = time.perf_counter()
+    yield
+    timings[key] = time.perf_counter() - t
+
+
+def _verdict(
+    base_fit: ModelFit, fits: list, flags: ModeFlags, n_scanned: int, settings: DiscoverySettings
+) -> tuple[str, str, ModelFit | None, list]:
+    """``decide`` with the prior odds of ``n_scanned`` candidates, the winner polished at its
+    own noise level (``polish_at_own_level``)."""
+    noise = base_fit.space.noise
+    return decide(
+        base_fit,
+        fits,
+        flags,
+        noise,
+        settings,
+        settings.prior_log_odds(n_scanned),
+        polish=lambda fit: polish_at_own_level(fit, noise, settings.max_nfev),
+    )
+
+
 def discover(
     model,
     data,
@@ -519,115 +723,24 @@ def discover(
     settings = settings or DiscoverySettings()
     say = progress or (lambda message: None)
     t0 = time.perf_counter()
-    timings = {}
-    if pairing == "auto":
-        pairing = "mac" if data.shapes is not None else "order"
-    problem = build_problem(model, data, parameters, pairing=pairing)
-    check_enough_modes(problem)
-    effects = enumerate_effects(model, settings.kinds, settings.locations)
-    if baseline is None:
-        say(f"baseline calibration ({settings.baseline_starts} starts)")
-        baseline = calibrate(
-            problem, starts=settings.baseline_starts, seed=settings.seed, max_nfev=100
-        )
-    timings["baseline_calibration_s"] = time.perf_counter() - t0
-    e0 = relative_errors(baseline.frequencies_hz, data.frequencies_hz)
-    noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
-    axes = problem.parameters
-    shapes = None
-    if problem.pairing.method == "mac":  # the test's shapes are evidence too (shape_evidence)
-        at_baseline = problem.evaluate(baseline.theta)
-        if at_baseline.ok:
-            shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
-    # the baseline gets the same design starts as the candidates' full tier (its optimum and the
-    # box centre), so that both sides of every Bayes factor sum over the same basins
-    centre = 0.5 * (problem.lower + problem.upper)
-    base_space = FitSpace(problem, axes, noise, shapes)
-    base_fit = fit_model(
-        base_space,
-        [baseline.theta, centre],
-        "baseline",
-        max_nfev=settings.max_nfev,
-    )
-    mac = baseline.table.mac if data.shapes is not None else None
-    flags = flag_modes(
-        base_fit.residual_rel,
-        noise,
-        len(axes),
-        predictive_rel_var,
-        mac,
-        settings.alpha,
-        shapes=shape_tests(base_fit),
-    )
+    problem, effects, baseline = _prepare(model, data, settings, parameters, baseline, pairing, say)
+    timings = {"baseline_calibration_s": time.perf_counter() - t0}
+    base_fit = _baseline_fit(problem, baseline, settings)
+    flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
-    t1 = time.perf_counter()
-    candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
-
-    def residuals_fn(e, model_shapes):
-        return base_space.residual_vector(e, model_shapes)
-
-    model_modes = baseline.table.model_mode - 1
-    where = localize(
-        problem,
-        base_fit.theta,
-        base_fit.best.jac_z,
-        residuals_fn,
-        candidates,
-        model_modes,
-        flags.flagged,
-    )
-    timings["localization_s"] = time.perf_counter() - t1
-    t2 = time.perf_counter()
-    quick = []
-    for score in _select(where.scores, settings):
-        problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
-        space = FitSpace(problem_c, axes + score.candidate.axes, noise, shapes)
-        effect = score.candidate.effect
-        fit = fit_model(
-            space,
-            _candidate_starts(base_fit.theta, score, (problem.start, centre)),
-            score.label,
-            effect.kind,
-            effect.location,
-            max_nfev=settings.quick_nfev,
-            stage="quick",
-            best_start_only=True,
-        )
-        quick.append((fit, score))
-    quick.sort(key=lambda item: -item[0].log_evidence)
-    say("quick refits: " + ", ".join(f"{f.label} {f.log_evidence:.1f}" for f, _ in quick))
-    fits = [f for f, _ in quick[settings.max_refits :]]
-    for fit, score in quick[: settings.max_refits]:
-        say(f"full refit {score.label}")
-        # the quick end point, plus the box centre with the quick fit's effect value: the
-        # design variables of a far-off baseline can hold the fit in another basin
-        starts = [fit.theta, np.append(centre, fit.theta[len(axes) :])]
-        full = fit_model(
-            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.max_nfev
-        )
-        full.evaluations += fit.evaluations
-        fits.append(full)
-    fits.sort(key=lambda f: -f.log_evidence)
-    timings["refits_s"] = time.perf_counter() - t2
-    t3 = time.perf_counter()
-    for k, fit in enumerate([base_fit, *fits[: settings.loo_top]]):
-        fit.loo = laplace_loo(fit, settings.loo_draws, seed=settings.seed + k)
-    timings["loo_s"] = time.perf_counter() - t3
-    verdict, reason, named, ambiguous = decide(
-        base_fit,
-        fits,
-        flags,
-        noise,
-        settings,
-        settings.prior_log_odds(len(where.scores)),
-        polish=lambda fit: polish_at_own_level(fit, noise, settings.max_nfev),
-    )
+    with _stopwatch(timings, "localization_s"):
+        where = _localize(model, effects, base_fit, baseline, flags)
+    with _stopwatch(timings, "refits_s"):
+        fits = _refits(where.scores, base_fit, settings, say)
+    with _stopwatch(timings, "loo_s"):
+        _add_loo(base_fit, fits, settings)
+    verdict, reason, named, ambiguous = _verdict(base_fit, fits, flags, len(where.scores), settings)
     say(f"verdict: {verdict} ({reason})")
     return DiscoveryResult(
         verdict=verdict,
         reason=reason,
         baseline=base_fit,
-        noise=noise,
+        noise=base_fit.space.noise,
         flags=flags,
         localization=where,
         fits=fits,

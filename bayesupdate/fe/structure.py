@@ -20,6 +20,7 @@ from bayesupdate.fe.sections import _SHAPE_CODE, Section
 from bayesupdate.fe.shell_model import ShellElements
 
 if TYPE_CHECKING:
+    from bayesupdate.fe.dampers import Dampers
     from bayesupdate.fe.general_beam import GeneralBeams
     from bayesupdate.fe.rod import Rods
 
@@ -75,6 +76,7 @@ class Structure:
     (``fe.general``); without them it is the beam structure of before, solved as before.
     general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
+    dampers : ``dampers.Dampers`` or None: viscous dampers as data (normal modes ignore them).
     """
 
     nodes: np.ndarray
@@ -113,6 +115,7 @@ class Structure:
     beam_shear_factor: np.ndarray | None = None
     general_beams: "GeneralBeams | None" = None
     rods: "Rods | None" = None
+    dampers: "Dampers | None" = None
 
     @property
     def is_general(self) -> bool:
@@ -181,6 +184,7 @@ class StructureBuilder:
         self._general_beams: list = []
         self._rods: list = []
         self._frames: dict[int, np.ndarray] = {}
+        self._dampers: list[dict] = []
 
     # -- nodes and parts ------------------------------------------------------------------
     def add_node(self, xyz) -> int:
@@ -365,6 +369,23 @@ class StructureBuilder:
         self._springs.append(dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part)))
         return len(self._springs) - 1
 
+    def add_damper(self, node_a, node_b, damping, part: str, frame=None) -> int:
+        """6-component viscous damper between ``node_a`` and ``node_b`` (None = ground), kept as
+        data (``fe.dampers``: normal modes ignore it; ``damping_matrix`` gives C).
+
+        damping : 6 values (cx, cy, cz [N s/m], crx, cry, crz [N m s/rad]) along the rows of
+        ``frame`` (3x3, default global axes)."""
+        node_a = self._check_node(node_a)
+        node_b = -1 if node_b is None else self._check_node(node_b)
+        c = np.asarray(damping, dtype=float).reshape(-1)
+        if c.shape != (6,) or np.any(~np.isfinite(c)) or np.any(c < 0):
+            raise BayesUpdateError(f"damper in part {part!r}: damping must be 6 values >= 0")
+        R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+            raise BayesUpdateError(f"damper in part {part!r}: frame must be a 3x3 rotation")
+        self._dampers.append(dict(nodes=(node_a, node_b), c=c, frame=R, part=self._part(part)))
+        return len(self._dampers) - 1
+
     # -- shells, supports and rigid elements (``fe.builder_general``) --------------------------
     def add_shells(self, points, quads=None, trias=None, *, thickness, material, part, **kw):
         """Flat shell elements on ``points`` (n, 3) [m]; see ``builder_general.add_shells``.
@@ -497,6 +518,8 @@ class StructureBuilder:
             rotary_inertia=self.rotary_inertia,
             metadata=dict(self.metadata),
         )
+        if self._dampers:
+            structure = replace(structure, dampers=_dampers(self._dampers))
         general = (self._general_beams, self._rods, self._frames)
         if self._shell_blocks or self._supports or self._rbe2 or self._rbe3 or any(general):
             from bayesupdate.fe.builder_general import general_parts
@@ -504,6 +527,17 @@ class StructureBuilder:
             structure = replace(structure, **general_parts(self))
         check_connected(structure)
         return structure
+
+
+def _dampers(records: list[dict]) -> "Dampers":
+    from bayesupdate.fe.dampers import Dampers
+
+    return Dampers(
+        nodes=np.array([d["nodes"] for d in records], dtype=int),
+        damping=np.array([d["c"] for d in records]),
+        frame=np.array([d["frame"] for d in records]),
+        part=np.array([d["part"] for d in records], dtype=int),
+    )
 
 
 def check_connected(structure: Structure) -> None:

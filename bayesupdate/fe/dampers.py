@@ -1,0 +1,55 @@
+"""Viscous dampers as data: six-component dashpots between two nodes or to ground.
+
+A normal-modes analysis ignores them (K and M only); they are kept on the ``Structure`` so that a
+user can form the viscous damping matrix C for FRF synthesis or complex modes,
+
+    f = C v,   C_e = T^T [[c, -c], [-c, c]] T,   c = diag(c_x, c_y, c_z, c_rx, c_ry, c_rz),
+
+with c in N s/m (translations) and N m s/rad (rotations) along the rows of the damper's frame R
+(3x3, rows = its axes in global coordinates), T = blockdiag(R, R) per node (the same element form
+as a zero-length spring, ``fe.assembly.spring_matrices``); a grounded damper keeps only the
+[[c]] block on its first node.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass(frozen=True)
+class Dampers:
+    """n dampers: nodes (n, 2) (second -1 = ground), damping (n, 6) [N s/m, N m s/rad] along the
+    rows of frame (n, 3, 3), part (n,) part indices."""
+
+    nodes: np.ndarray
+    damping: np.ndarray
+    frame: np.ndarray
+    part: np.ndarray
+
+    def element_matrices(self) -> np.ndarray:
+        """(n, 12, 12) damper matrices on [node_a DOFs, node_b DOFs] in global axes."""
+        T = np.zeros((len(self.part), 6, 6))
+        T[:, :3, :3] = self.frame
+        T[:, 3:, 3:] = self.frame
+        cg = np.einsum("dji,dj,djl->dil", T, self.damping, T)
+        out = np.zeros((len(self.part), 12, 12))
+        out[:, :6, :6] = cg
+        free = self.nodes[:, 1] >= 0
+        out[free, 6:, 6:] = cg[free]
+        out[free, :6, 6:] = -cg[free]
+        out[free, 6:, :6] = -cg[free]
+        return out
+
+
+def damping_matrix(dampers: Dampers | None, n_nodes: int) -> sp.csr_matrix:
+    """C (6 n_nodes, 6 n_nodes) CSR [N s/m, N m s/rad] of all dampers (zero without any)."""
+    n = 6 * n_nodes
+    if dampers is None:
+        return sp.csr_matrix((n, n))
+    nodes = np.where(dampers.nodes >= 0, dampers.nodes, dampers.nodes[:, :1])
+    dofs = (6 * nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
+    C_e = dampers.element_matrices()
+    rows = np.repeat(dofs, 12, axis=1).ravel()
+    cols = np.tile(dofs, (1, 12)).ravel()
+    return sp.coo_matrix((C_e.ravel(), (rows, cols)), shape=(n, n)).tocsr()

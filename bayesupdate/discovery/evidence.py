@@ -189,7 +189,7 @@ def laplace(space: FitSpace, z: np.ndarray, r: np.ndarray, jac_z: np.ndarray) ->
     return Optimum(z, r, jac_z, log_like, log_prior, float(log_z), hessian)
 
 
-@dataclass
+@dataclass(frozen=True)
 class ModelFit:
     """A fitted model (baseline or one candidate) with its evidence.
 

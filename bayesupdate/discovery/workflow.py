@@ -417,8 +417,8 @@ def polish_at_own_level(
             max_nfev=max_nfev, stage=fit.stage,
         )  # fmt: skip
     if polished is not None:
-        polished.log_evidence = fit.log_evidence  # the comparison's evidence, not this level's
-        polished.loo = fit.loo
+        # the comparison's evidence and LOO, not this level's
+        polished = replace(polished, log_evidence=fit.log_evidence, loo=fit.loo)
     return polished
 
 
@@ -650,8 +650,7 @@ def _full_refits(quick: list, base_fit: ModelFit, settings: DiscoverySettings, s
         full = fit_model(
             fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.max_nfev
         )
-        full.evaluations += fit.evaluations
-        fits.append(full)
+        fits.append(replace(full, evaluations=full.evaluations + fit.evaluations))
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
 
@@ -664,11 +663,15 @@ def _refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings, say) 
     return _full_refits(quick, base_fit, settings, say)
 
 
-def _add_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> None:
-    """PSIS-LOO (``laplace_loo``, ``loo_draws`` draws) of the baseline and the ``loo_top`` best
-    fits, stored on each fit; the k-th of them is seeded ``seed + k``."""
-    for k, fit in enumerate([base_fit, *fits[: settings.loo_top]]):
-        fit.loo = laplace_loo(fit, settings.loo_draws, seed=settings.seed + k)
+def _with_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> tuple[ModelFit, list]:
+    """The baseline and the fits, the baseline and the ``loo_top`` best with their PSIS-LOO
+    (``laplace_loo``, ``loo_draws`` draws; the k-th of them seeded ``seed + k``)."""
+    top = [base_fit, *fits[: settings.loo_top]]
+    done = [
+        replace(fit, loo=laplace_loo(fit, settings.loo_draws, seed=settings.seed + k))
+        for k, fit in enumerate(top)
+    ]
+    return done[0], done[1:] + list(fits[settings.loo_top :])
 
 
 @contextmanager
@@ -733,7 +736,7 @@ def discover(
     with _stopwatch(timings, "refits_s"):
         fits = _refits(where.scores, base_fit, settings, say)
     with _stopwatch(timings, "loo_s"):
-        _add_loo(base_fit, fits, settings)
+        base_fit, fits = _with_loo(base_fit, fits, settings)
     verdict, reason, named, ambiguous = _verdict(base_fit, fits, flags, len(where.scores), settings)
     say(f"verdict: {verdict} ({reason})")
     return DiscoveryResult(

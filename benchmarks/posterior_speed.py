@@ -36,10 +36,10 @@ import numpy as np  # noqa: E402
 from bayesupdate.inference.data import paper_ema  # noqa: E402
 from bayesupdate.inference.diagnostics import summarise  # noqa: E402
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noqa: E402
-from bayesupdate.inference.optimize import calibrate  # noqa: E402
+from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
 from bayesupdate.inference.problem import build_problem  # noqa: E402
-from bayesupdate.inference.sampling import sample_posterior  # noqa: E402
+from bayesupdate.inference.sampling import SamplerSettings, sample_posterior  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior  # noqa: E402
 
@@ -60,7 +60,8 @@ def run(args, reduced: bool) -> dict:
     problem = build_problem(fe, data)
     problem, rom = sampling_problem(problem, reduced=reduced)
     t_model = time.perf_counter() - t0
-    calibration = calibrate(problem, starts=args.starts, seed=0, max_nfev=args.max_nfev)
+    fit = CalibrationSettings(starts=args.starts, seed=0, max_nfev=args.max_nfev)
+    calibration = calibrate(problem, fit)
     info = {}
     if rom is not None:
         rom, info["error_at_optimum"] = rom.certify_at(calibration.theta[None, :], problem.names)
@@ -70,9 +71,7 @@ def run(args, reduced: bool) -> dict:
     log_post = LogPosterior(problem, spec)
     screen = None if args.no_screen else screening_posterior(problem, rom, spec)
     t_screen = time.perf_counter() - t0
-    post = sample_posterior(
-        log_post,
-        calibration,
+    settings = SamplerSettings(
         walkers=args.walkers,
         steps=args.steps,
         seed=args.seed,
@@ -81,8 +80,8 @@ def run(args, reduced: bool) -> dict:
         transform=args.transform,
         target_rhat=1.01,
         target_ess=1000,
-        screen=screen,
     )
+    post = sample_posterior(log_post, calibration, settings, screen=screen)
     summary = summarise(post)
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0

@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import numpy as np  # noqa: E402
 from hidden_effect_study import N_MODES, truth_model  # noqa: E402
 
-from bayesupdate.inference.optimize import calibrate  # noqa: E402
+from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.problem import ObjectiveSpec, build_problem  # noqa: E402
 from bayesupdate.modal_data import ModalData  # noqa: E402
 from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
@@ -48,7 +48,7 @@ def recalibrated(base, f_true, mass_true, with_mass: bool) -> tuple[float, float
     data = ModalData(f_true, frequency_sd_hz=NOISE * f_true)
     objective = ObjectiveSpec(mass_true, mass_weight=(NOISE / MASS_SD) ** 2) if with_mass else None
     problem = build_problem(base, data, None, pairing="order", objective=objective)
-    fit = calibrate(problem, starts=4, seed=0, max_nfev=100, polish=False)
+    fit = calibrate(problem, CalibrationSettings(starts=4, seed=0, max_nfev=100, polish=False))
     freq = float(np.max(np.abs(fit.frequencies_hz - f_true) / f_true)) / NOISE
     return freq, (fit.mass_kg - mass_true) / mass_true / MASS_SD
 

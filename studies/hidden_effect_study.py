@@ -221,7 +221,7 @@ def shift_after_recalibration(base, data, case: str, path: str) -> float:
     design variables cannot absorb is what any frequency-based discovery can see: an effect
     moving a frequency by > 2x noise but absorbed below it here is unidentifiable from
     frequencies alone."""
-    from bayesupdate.inference.optimize import calibrate
+    from bayesupdate.inference.optimize import CalibrationSettings, calibrate
     from bayesupdate.inference.problem import build_problem
     from bayesupdate.modal_data import ModalData
 
@@ -229,7 +229,7 @@ def shift_after_recalibration(base, data, case: str, path: str) -> float:
     f_true = np.sort(true_model.solve(TABLE3_OPTIMUM_SI, N_MODES).frequencies_hz)
     clean = ModalData(f_true, frequency_sd_hz=0.003 * f_true, source=f"noise-free:{case}")
     problem = build_problem(base, clean, None, pairing="order")
-    fit = calibrate(problem, starts=4, seed=0, max_nfev=100)
+    fit = calibrate(problem, CalibrationSettings(starts=4, seed=0, max_nfev=100))
     return float(np.max(np.abs(fit.frequencies_hz - f_true) / f_true))
 
 

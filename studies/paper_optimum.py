@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 
 from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
 from bayesupdate.inference import (  # noqa: E402
+    CalibrationSettings,
     ObjectiveSpec,
     build_problem,
     calibrate,
@@ -52,10 +53,11 @@ def calibrate_exhaust(geometry, starts: int, seed: int, mass_weight: float, full
     objective = ObjectiveSpec(mass_target_kg=MEASURED_MASS_KG, mass_weight=mass_weight)
     problem = build_problem(fe, data, None, pairing="tracked", objective=objective)
     if full:
-        return problem, None, calibrate(problem, starts=starts, seed=seed)
+        return problem, None, calibrate(problem, CalibrationSettings(starts=starts, seed=seed))
     rom = reduced_model_for(fe, tol=1e-4, seed=0, n_modes=14)
     search = build_problem(rom, data, None, pairing="tracked", objective=objective)
-    return problem, search, calibrate(search, starts=starts, seed=seed, refine=problem)
+    settings = CalibrationSettings(starts=starts, seed=seed)
+    return problem, search, calibrate(search, settings, refine=problem)
 
 
 def table3(result) -> list[dict]:

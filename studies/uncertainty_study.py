@@ -28,8 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate.inference import (
+    CalibrationSettings,
     LikelihoodSpec,
     LogPosterior,
+    SamplerSettings,
     build_problem,
     calibrate,
     load_modal_data,
@@ -56,15 +58,13 @@ def run_case(label, geometry, joints, args, out: Path) -> dict:
                 table[name] = {"prior": {"kind": "lognormal", "mu": 0.0, "sigma": args.joint_sigma}}
     problem = build_problem(model, load_modal_data("paper:ema"), table, pairing="tracked")
     problem, rom = sampling_problem(problem)
-    optimum = calibrate(problem, starts=args.starts, seed=0, max_nfev=400)
+    optimum = calibrate(problem, CalibrationSettings(starts=args.starts, seed=0, max_nfev=400))
     spec = LikelihoodSpec(
         sigma=None,
         sigma_prior=prior_from_mapping({"kind": "halfnormal", "scale": 0.1}, (0.0, 1.0), "sigma"),
     )
     log_post = LogPosterior(problem, spec)
-    posterior = sample_posterior(
-        log_post,
-        optimum,
+    settings = SamplerSettings(
         walkers=max(args.walkers, 2 * log_post.ndim + 2),
         steps=args.steps,
         seed=args.seed,
@@ -72,6 +72,7 @@ def run_case(label, geometry, joints, args, out: Path) -> dict:
         check_every=1000,
         transform="logit",
     )
+    posterior = sample_posterior(log_post, optimum, settings)
     summary = summarise(posterior)
     rom_info = None
     if rom is not None:

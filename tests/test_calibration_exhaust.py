@@ -10,6 +10,7 @@ import pytest  # noqa: E402
 
 from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
 from bayesupdate.inference import (  # noqa: E402
+    CalibrationSettings,
     LikelihoodSpec,
     LogPosterior,
     ObjectiveSpec,
@@ -43,7 +44,7 @@ def mass_kept(rom):
     objective = ObjectiveSpec(MEASURED_MASS_KG, mass_weight=10.0)
     search = build_problem(rom, data, objective=objective)
     problem = build_problem(get_model("exhaust"), data, objective=objective)
-    return problem, calibrate(search, starts=8, seed=0, refine=problem)
+    return problem, calibrate(search, CalibrationSettings(starts=8, seed=0), refine=problem)
 
 
 def test_pair_batch_equals_hungarian_per_point():

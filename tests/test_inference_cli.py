@@ -155,7 +155,7 @@ def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monke
 
 def test_modal_data_from_ema_h5_with_shapes_pairs_by_mac(tmp_path):
     modal_h5 = pytest.importorskip("bayesupdate.ema.modal_h5")
-    from bayesupdate.inference import ObjectiveSpec, build_problem, calibrate
+    from bayesupdate.inference import CalibrationSettings, ObjectiveSpec, build_problem, calibrate
     from bayesupdate.modal_data import ModalData
     from bayesupdate.models import get_model
 
@@ -169,7 +169,7 @@ def test_modal_data_from_ema_h5_with_shapes_pairs_by_mac(tmp_path):
     data = load_modal_data(path)
     problem = build_problem(model, data, objective=ObjectiveSpec(mac_weight=1.0))
     assert problem.pairing.method == "mac"
-    result = calibrate(problem, starts=8, seed=0)
+    result = calibrate(problem, CalibrationSettings(starts=8, seed=0))
     # with MAC terms the shapes break the two-fold symmetry of frequencies alone
     np.testing.assert_allclose(result.theta, [1.2, 0.8], rtol=1e-5)
     assert len(result.distinct_optima) == 1

@@ -4,7 +4,7 @@ exact posterior, not the surrogate, and spends exact evaluations only on screene
 import numpy as np
 import pytest
 
-from bayesupdate.inference.sampling import sample_posterior
+from bayesupdate.inference.sampling import SamplerSettings, sample_posterior
 
 MEAN = np.array([1.0, -2.0])
 COV = np.array([[1.0, 0.6], [0.6, 2.0]])
@@ -30,10 +30,10 @@ class Gaussian:
 def _run(target, screen, seed=3):
     rng = np.random.default_rng(seed)
     start = MEAN + 0.1 * rng.standard_normal((16, 2))
-    return sample_posterior(
-        target, initial=start, walkers=16, steps=3000, seed=seed, min_autocorr_times=1e9,
-        check_every=1000, screen=screen,
-    )  # fmt: skip
+    settings = SamplerSettings(
+        walkers=16, steps=3000, seed=seed, min_autocorr_times=1e9, check_every=1000
+    )
+    return sample_posterior(target, settings=settings, initial=start, screen=screen)
 
 
 def test_delayed_acceptance_targets_the_exact_posterior():
@@ -93,14 +93,24 @@ def test_interrupted_screened_run_resumes_to_the_identical_chain():
 
     rng = np.random.default_rng(3)
     start = MEAN + 0.1 * rng.standard_normal((16, 2))
-    options = dict(walkers=16, steps=600, seed=4, min_autocorr_times=1e9, check_every=100)
+    settings = SamplerSettings(
+        walkers=16, steps=600, seed=4, min_autocorr_times=1e9, check_every=100
+    )
     surrogate = Gaussian(MEAN + 0.3, COV)
-    whole = sample_posterior(Gaussian(MEAN, COV), initial=start, screen=surrogate, **options)
+    whole = sample_posterior(
+        Gaussian(MEAN, COV), settings=settings, initial=start, screen=surrogate
+    )
     broken = sample_posterior(
-        InterruptAt(MEAN, COV, at=700), initial=start, screen=Gaussian(MEAN + 0.3, COV), **options
+        InterruptAt(MEAN, COV, at=700),
+        settings=settings,
+        initial=start,
+        screen=Gaussian(MEAN + 0.3, COV),
     )
     assert broken.interrupted and 0 < broken.chain.shape[0] < 600
     resumed = sample_posterior(
-        Gaussian(MEAN, COV), screen=Gaussian(MEAN + 0.3, COV), resume=broken.state, **options
+        Gaussian(MEAN, COV),
+        settings=settings,
+        screen=Gaussian(MEAN + 0.3, COV),
+        resume=broken.state,
     )
     assert np.array_equal(resumed.chain, whole.chain)

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference import FunctionModel, build_problem, calibrate, pair_modes
+from bayesupdate.inference import (
+    CalibrationSettings,
+    FunctionModel,
+    build_problem,
+    calibrate,
+    pair_modes,
+)
 from bayesupdate.modal_data import ModalData
 
 SHAPES = np.eye(3)
@@ -44,16 +50,15 @@ def test_tracked_pairing_detects_the_swap():
 def test_calibration_with_a_swap_reports_it():
     # test modes listed in the reference order: the second one (shape e2) sits at 32 Hz
     data = ModalData(frequencies_hz=[10.0, 32.0, 30.0])
-    tracked = calibrate(build_problem(MODEL, data, extra_modes=0), starts=4, seed=0)
+    fit = CalibrationSettings(starts=4, seed=0)
+    tracked = calibrate(build_problem(MODEL, data, extra_modes=0), fit)
     assert tracked.parameters["p"] == pytest.approx(1.6, rel=1e-6)
     assert tracked.expr < 1e-12
     assert tracked.swapped
     assert tracked.table.model_mode.tolist() == [1, 3, 2]
     assert "swapped" in tracked.table.format()
     # by order, the same data cannot be fitted: the swap costs a residual
-    ordered = calibrate(
-        build_problem(MODEL, data, pairing="order", extra_modes=0), starts=4, seed=0
-    )
+    ordered = calibrate(build_problem(MODEL, data, pairing="order", extra_modes=0), fit)
     assert ordered.expr > 1e-4
     assert not ordered.swapped
 

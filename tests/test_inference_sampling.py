@@ -5,9 +5,11 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference import (
+    CalibrationSettings,
     FunctionModel,
     LikelihoodSpec,
     LogPosterior,
+    SamplerSettings,
     build_problem,
     calibrate,
     load_user_model,
@@ -27,7 +29,7 @@ DATA = ModalData(frequencies_hz=shear_building_frequencies(np.array([1.1, 0.9]))
 def setup():
     # theta_2 fixed: two frequencies, one parameter and sigma, so the residual is not zero
     problem = build_problem(get_model("shear_building"), DATA, {"theta_1": {}}, pairing="order")
-    return problem, calibrate(problem, starts=8, seed=0)
+    return problem, calibrate(problem, CalibrationSettings(starts=8, seed=0))
 
 
 def _run(problem, optimum, **kwargs):
@@ -39,7 +41,7 @@ def _run(problem, optimum, **kwargs):
     )
     options = dict(walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9)
     options.update(kwargs)
-    return sample_posterior(LogPosterior(problem, spec), optimum, **options)
+    return sample_posterior(LogPosterior(problem, spec), optimum, SamplerSettings(**options))
 
 
 def test_seeded_runs_are_identical_and_seeds_differ(setup):
@@ -75,31 +77,17 @@ def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path):
             {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
         ),
     )
-    broken = sample_posterior(
-        _InterruptAt(problem, spec, at=333),
-        optimum,
-        walkers=16,
-        steps=300,
-        seed=5,
-        check_every=100,
-        min_autocorr_times=1e9,
+    settings = SamplerSettings(
+        walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9
     )
+    broken = sample_posterior(_InterruptAt(problem, spec, at=333), optimum, settings)
     assert broken.interrupted and 0 < broken.chain.shape[0] < 300
     np.testing.assert_array_equal(broken.chain, full.chain[: broken.chain.shape[0]])
     # through the result file, as `sample --resume` does
     path = tmp_path / "partial.h5"
     write_result(path, problem, optimum, {"x": 1}, state=broken.state)
     state = read_sampler_state(path)
-    resumed = sample_posterior(
-        LogPosterior(problem, spec),
-        optimum,
-        walkers=16,
-        steps=300,
-        seed=5,
-        check_every=100,
-        min_autocorr_times=1e9,
-        resume=state,
-    )
+    resumed = sample_posterior(LogPosterior(problem, spec), optimum, settings, resume=state)
     assert np.array_equal(resumed.chain, full.chain)
     assert np.array_equal(resumed.log_prob, full.log_prob)
 
@@ -128,12 +116,11 @@ def test_custom_model_failures_count_as_minus_infinity():
     lp = log_post(np.array([[1.0], [1.8], [0.6]]))
     assert np.isfinite(lp[0]) and lp[1] == -np.inf and lp[2] == -np.inf
     assert log_post.failed == 2 and log_post.evaluations == 3
-    optimum = calibrate(problem, starts=8, seed=0)
+    optimum = calibrate(problem, CalibrationSettings(starts=8, seed=0))
     assert optimum.parameters["a"] == pytest.approx(1.0, rel=1e-6)
     assert optimum.failed_evaluations > 0
-    result = sample_posterior(
-        log_post, optimum, walkers=8, steps=400, seed=1, min_autocorr_times=1e9
-    )
+    settings = SamplerSettings(walkers=8, steps=400, seed=1, min_autocorr_times=1e9)
+    result = sample_posterior(log_post, optimum, settings)
     assert np.all(np.isfinite(result.log_prob))
 
 
@@ -145,7 +132,8 @@ def test_user_model_import(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     model = load_user_model("my_beam:model", {"k": {"bounds": [0.5, 2.0], "start": 1.0}})
     problem = build_problem(model, ModalData(frequencies_hz=[6.0, 10.8]))
-    assert calibrate(problem, starts=4, seed=0).parameters["k"] == pytest.approx(1.2, rel=1e-6)
+    fit = calibrate(problem, CalibrationSettings(starts=4, seed=0))
+    assert fit.parameters["k"] == pytest.approx(1.2, rel=1e-6)
     with pytest.raises(BayesUpdateError, match="does not import"):
         load_user_model("no_such_package.sub:model", {"k": {"bounds": [0.5, 2.0]}})
     with pytest.raises(BayesUpdateError, match="has no function"):

@@ -11,8 +11,10 @@ import pytest
 from scipy.linalg import eigh
 
 from bayesupdate.inference import (
+    CalibrationSettings,
     LikelihoodSpec,
     LogPosterior,
+    SamplerSettings,
     build_problem,
     calibrate,
     sample_posterior,
@@ -65,7 +67,7 @@ def test_second_solution_reproduces_the_data():
 
 
 def test_multistart_finds_both_exact_optima(problem):
-    result = calibrate(problem, starts=16, seed=0)
+    result = calibrate(problem, CalibrationSettings(starts=16, seed=0))
     assert result.expr < 1e-14
     optima = result.end_points[list(result.distinct_optima)]
     assert len(optima) == 2
@@ -91,16 +93,11 @@ def test_bimodal_posterior_matches_quadrature(problem):
     log_post = LogPosterior(problem, LikelihoodSpec(sigma=SIGMA))
     mean_q, sd_q, mass_q = _quadrature(log_post)
     assert 0.3 < mass_q < 0.7  # really two modes of comparable weight
-    optimum = calibrate(problem, starts=16, seed=0)
-    result = sample_posterior(
-        log_post,
-        optimum,
-        walkers=48,
-        steps=2500,
-        seed=3,
-        check_every=500,
-        min_autocorr_times=150,
+    optimum = calibrate(problem, CalibrationSettings(starts=16, seed=0))
+    settings = SamplerSettings(
+        walkers=48, steps=2500, seed=3, check_every=500, min_autocorr_times=150
     )
+    result = sample_posterior(log_post, optimum, settings)
     draws = result.samples()
     np.testing.assert_allclose(draws.mean(axis=0), mean_q, rtol=0.03)
     np.testing.assert_allclose(draws.std(axis=0), sd_q, rtol=0.03)

@@ -15,7 +15,7 @@ import numpy as np
 
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
 from bayesupdate.inference.priors import prior_from_mapping
-from bayesupdate.inference.sampling import sample_posterior
+from bayesupdate.inference.sampling import SamplerSettings, sample_posterior
 
 #: largest relative noise level a sampled sigma may take
 SIGMA_MAX = 0.5
@@ -51,12 +51,8 @@ def sample_final(result, steps: int = 500, walkers: int | None = None, seed: int
         rss = float(np.sum(fit.best.r[: space.n_frequency] ** 2))  # the frequency block
         sigma = np.sqrt(max(rss / m, 1e-8)) * np.exp(rng.normal(0, np.sqrt(0.5 / m), walkers))
         theta = np.column_stack([theta, sigma])
-    posterior = sample_posterior(
-        log_post,
-        walkers=walkers,
-        steps=steps,
-        seed=seed,
-        check_every=max(steps // 4, 1),
-        initial=theta,
+    settings = SamplerSettings(
+        walkers=walkers, steps=steps, seed=seed, check_every=max(steps // 4, 1)
     )
+    posterior = sample_posterior(log_post, settings=settings, initial=theta)
     return posterior, log_post

@@ -79,7 +79,7 @@ from bayesupdate.discovery.shape_evidence import (
 )
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
-from bayesupdate.inference.optimize import calibrate
+from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
 
 
@@ -543,7 +543,8 @@ def _prepare(
     if baseline is None:
         say(f"baseline calibration ({settings.baseline_starts} starts)")
         baseline = calibrate(
-            problem, starts=settings.baseline_starts, seed=settings.seed, max_nfev=100
+            problem,
+            CalibrationSettings(starts=settings.baseline_starts, seed=settings.seed, max_nfev=100),
         )
     return problem, effects, baseline
 

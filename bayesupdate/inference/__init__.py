@@ -2,19 +2,27 @@
 
 Typical use (a thin script)::
 
-    from bayesupdate.inference import (build_problem, calibrate, LikelihoodSpec, LogPosterior,
-                                       sample_posterior, summarise, load_modal_data)
+    from bayesupdate.inference import (build_problem, calibrate, CalibrationSettings,
+                                       LikelihoodSpec, LogPosterior,
+                                       SamplerSettings, sample_posterior, summarise,
+                                       load_modal_data)
     problem = build_problem(model, load_modal_data("paper:ema"))
-    optimum = calibrate(problem, starts=16, seed=0)
+    optimum = calibrate(problem, CalibrationSettings(starts=16, seed=0))
     log_post = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
-    posterior = sample_posterior(log_post, optimum, walkers=32, steps=5000, seed=1)
+    settings = SamplerSettings(walkers=32, steps=5000, seed=1)
+    posterior = sample_posterior(log_post, optimum, settings)
     table = summarise(posterior)
 """
 
 from bayesupdate.inference.data import load_modal_data, register_loader
 from bayesupdate.inference.diagnostics import posterior_predictive, summarise
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
-from bayesupdate.inference.optimize import CalibrationResult, calibrate, pareto_front_mass
+from bayesupdate.inference.optimize import (
+    CalibrationResult,
+    CalibrationSettings,
+    calibrate,
+    pareto_front_mass,
+)
 from bayesupdate.inference.pairing import ModePairing, ResidualTable, pair_modes
 from bayesupdate.inference.priors import Prior, prior_from_mapping
 from bayesupdate.inference.problem import (
@@ -34,6 +42,7 @@ from bayesupdate.inference.results import (
 )
 from bayesupdate.inference.sampling import (
     PosteriorResult,
+    SamplerSettings,
     SamplerState,
     default_moves,
     sample_posterior,
@@ -43,6 +52,7 @@ from bayesupdate.inference.user_model import FunctionModel, load_user_model
 __all__ = [
     "CalibrationProblem",
     "CalibrationResult",
+    "CalibrationSettings",
     "FunctionModel",
     "LikelihoodSpec",
     "LogPosterior",
@@ -52,6 +62,7 @@ __all__ = [
     "PosteriorResult",
     "Prior",
     "ResidualTable",
+    "SamplerSettings",
     "SamplerState",
     "build_parameter_specs",
     "build_problem",

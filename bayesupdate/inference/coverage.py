@@ -13,9 +13,9 @@ import numpy as np
 
 from bayesupdate.inference.diagnostics import summarise
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
-from bayesupdate.inference.optimize import calibrate
+from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
-from bayesupdate.inference.sampling import sample_posterior
+from bayesupdate.inference.sampling import SamplerSettings, sample_posterior
 from bayesupdate.modal_data import ModalData
 
 
@@ -63,11 +63,11 @@ def interval_coverage(
             pairing=pairing,
             fixed={k: v for k, v in truth.items() if k not in problem.names},
         )
-        optimum = calibrate(problem, starts=starts, seed=seed + r, max_nfev=max_nfev)
+        fit = CalibrationSettings(starts=starts, seed=seed + r, max_nfev=max_nfev)
+        optimum = calibrate(problem, fit)
         log_post = LogPosterior(problem, LikelihoodSpec(sigma=noise_rel))
-        posterior = sample_posterior(
-            log_post, optimum, walkers=walkers, steps=steps, seed=seed + r, transform=transform
-        )
+        settings = SamplerSettings(walkers=walkers, steps=steps, seed=seed + r, transform=transform)
+        posterior = sample_posterior(log_post, optimum, settings)
         summary = summarise(posterior, hdi_prob=prob)
         for name in problem.names:
             low, high = summary[name]["hdi_low"], summary[name]["hdi_high"]

@@ -89,6 +89,52 @@ class CalibrationResult:
         }
 
 
+@dataclass(frozen=True)
+class CalibrationSettings:
+    """How ``calibrate`` searches, validated once when made.
+
+    starts : number of space-filling starts (plus the reference start if ``include_start``).
+    seed : seeds the design (and differential evolution).  design : "sobol" or "lhs".
+    method : "least_squares" (multi-start TRF) or "global" (``differential_evolution`` seeded,
+    polished by least squares; its starts are then the DE population's best plus the design).
+    objective_window : end points with objective <= best * (1 + window) (and apart from each
+    other by > 2 % of the bounds box) are ``distinct_optima``; walkers start around each.
+    max_nfev : evaluation budget of each least-squares start (None: scipy's default).
+    polish : Nelder-Mead polish of every end point (module docstring); None = on unless a budget
+    ``max_nfev`` is given (a budgeted fit is a quick one).  Its budget is 400 d evaluations.
+    """
+
+    starts: int = 16
+    seed: int = 0
+    method: str = "least_squares"
+    design: str = "sobol"
+    include_start: bool = True
+    objective_window: float = 0.5
+    max_nfev: int | None = None
+    polish: bool | None = None
+
+    def __post_init__(self) -> None:
+        if self.method not in ("least_squares", "global"):
+            raise BayesUpdateError(
+                f"optimizer.method: {self.method!r}; use 'least_squares' or 'global'"
+            )
+        if self.starts < 1:
+            raise BayesUpdateError(f"optimizer.starts: must be >= 1, got {self.starts}")
+        if self.design not in ("sobol", "lhs"):
+            raise BayesUpdateError(f"optimizer.design: {self.design!r}; use 'sobol' or 'lhs'")
+        if not self.objective_window >= 0:
+            raise BayesUpdateError(
+                f"optimizer.objective_window: must be >= 0, got {self.objective_window}"
+            )
+        if self.max_nfev is not None and self.max_nfev < 1:
+            raise BayesUpdateError(f"optimizer.max_nfev: must be >= 1, got {self.max_nfev}")
+
+    @property
+    def polish_ends(self) -> bool:
+        """Whether every end point is polished (``polish``, or by default when unbudgeted)."""
+        return self.max_nfev is None if self.polish is None else bool(self.polish)
+
+
 def space_filling_starts(n_starts: int, n_dim: int, seed: int, design: str = "sobol") -> np.ndarray:
     """Seeded space-filling points in [0, 1]^d, (n_starts, n_dim) (scrambled Sobol or LHS)."""
     if n_starts < 1:
@@ -136,46 +182,17 @@ def _nelder_mead_polish(residuals, u0: np.ndarray, value0: float, max_evaluation
     return u0, value0
 
 
-def calibrate(
-    problem: CalibrationProblem,
-    starts: int = 16,
-    seed: int = 0,
-    method: str = "least_squares",
-    design: str = "sobol",
-    include_start: bool = True,
-    objective_window: float = 0.5,
-    max_nfev: int | None = None,
-    polish: bool | None = None,
-    refine: CalibrationProblem | None = None,
-) -> CalibrationResult:
-    """Point optimum of the fit objective over the parameter bounds.
-
-    starts : number of space-filling starts (plus the reference start if ``include_start``).
-    method : "least_squares" (multi-start TRF) or "global" (``differential_evolution`` seeded,
-    polished by least squares; its starts are then the DE population's best plus the design).
-    objective_window : end points with objective <= best * (1 + window) (and apart from each
-    other by > 2 % of the bounds box) are ``distinct_optima``; walkers start around each.
-    max_nfev : evaluation budget of each least-squares start (None: scipy's default).
-    polish : Nelder-Mead polish of every end point (module docstring); None = on unless a budget
-    ``max_nfev`` is given (a budgeted fit is a quick one).  Its budget is 400 d evaluations.
-    refine : the exact problem when ``problem`` is a surrogate of it (same parameters, bounds,
-    data and pairing): each end point within 5 % of the best is polished on it (Nelder-Mead,
-    60 d evaluations), every end is re-evaluated on it, and the result (objectives, table) is that
-    of ``refine``; ``evaluations`` counts both models' evaluations.
-    Returns CalibrationResult.  Model failures are counted in ``failed_evaluations``.
-    """
-    if method not in ("least_squares", "global"):
-        raise BayesUpdateError(f"optimizer.method: {method!r}; use 'least_squares' or 'global'")
-    t0 = time.perf_counter()
-    polish = max_nfev is None if polish is None else bool(polish)
-    d = len(problem.parameters)
-    box = unit_box(problem)
-    counter = EvaluationCount()
-    residuals = _residual_function(problem, counter)
-    u_starts = space_filling_starts(starts, d, seed, design)
-    if include_start:
+def _start_points(
+    problem: CalibrationProblem, box: ParameterSpace, residuals, settings: CalibrationSettings
+) -> np.ndarray:
+    """Starts in the unit box ``box``, (n, d): the reference start (``include_start``), the
+    seeded space-filling design and, for ``method="global"``, differential evolution's best
+    first (it evaluates ``residuals``)."""
+    d, seed = len(problem.parameters), settings.seed
+    u_starts = space_filling_starts(settings.starts, d, seed, settings.design)
+    if settings.include_start:
         u_starts = np.vstack([box.u_from_theta(problem.start), u_starts])
-    if method == "global":
+    if settings.method == "global":
         de = optimize.differential_evolution(
             lambda u: float(np.sum(residuals(u) ** 2)),
             bounds=[(0.0, 1.0)] * d,
@@ -184,6 +201,15 @@ def calibrate(
             tol=1e-10,
         )
         u_starts = np.vstack([de.x, u_starts])
+    return u_starts
+
+
+def _local_fits(
+    residuals, u_starts: np.ndarray, max_nfev: int | None, polish: bool
+) -> tuple[list, list]:
+    """Bounded trust-region least squares from each start (n, d), each end Nelder-Mead polished
+    (400 d evaluations) when ``polish``: (end points u (d,) each, objectives each)."""
+    d = u_starts.shape[1]
     ends, objectives = [], []
     for u0 in u_starts:
         interrupts.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
@@ -203,47 +229,101 @@ def calibrate(
             end, value = _nelder_mead_polish(residuals, end, value, max_evaluations=400 * d)
         ends.append(end)
         objectives.append(value)
-    if refine is not None:
-        if refine.names != problem.names or not (
-            np.array_equal(refine.lower, problem.lower)
-            and np.array_equal(refine.upper, problem.upper)
-        ):
-            raise ValueError("calibrate: refine must have the parameters and bounds of problem")
-        # one count over both models: a failure of either is reported
-        problem = refine
-        residuals = _residual_function(problem, counter)
-        # ends more than 5 % above the best on the surrogate lie in other basins: re-evaluated
-        # exactly, not polished (the surrogate's error is ~1e-4 in frequency)
-        near_best = np.asarray(objectives) <= 1.05 * min(objectives)
-        for k, end in enumerate(ends):
-            value = float(np.sum(residuals(end) ** 2))
-            if near_best[k]:
-                end, value = _nelder_mead_polish(residuals, end, value, max_evaluations=60 * d)
-            ends[k], objectives[k] = end, value
-    ends = np.array(ends)
-    objectives = np.array(objectives)
-    order = np.argsort(objectives, kind="stable")
-    # re-evaluate the best end point; a failure there (a one-off eigen-solve failure) falls back
-    # to the next best end point instead of ending the run
+    return ends, objectives
+
+
+def _refined(
+    refine: CalibrationProblem,
+    problem: CalibrationProblem,
+    counter: EvaluationCount,
+    ends: list,
+    objectives: list,
+) -> None:
+    """Re-evaluate every end point (u, (d,)) of a surrogate ``problem`` on the exact ``refine``
+    and polish those within 5 % of the best there (60 d evaluations); ``ends`` and
+    ``objectives`` are updated in place, ``counter`` counts both models."""
+    if refine.names != problem.names or not (
+        np.array_equal(refine.lower, problem.lower) and np.array_equal(refine.upper, problem.upper)
+    ):
+        raise ValueError("calibrate: refine must have the parameters and bounds of problem")
+    d = len(problem.parameters)
+    # one count over both models: a failure of either is reported
+    residuals = _residual_function(refine, counter)
+    # ends more than 5 % above the best on the surrogate lie in other basins: re-evaluated
+    # exactly, not polished (the surrogate's error is ~1e-4 in frequency)
+    near_best = np.asarray(objectives) <= 1.05 * min(objectives)
+    for k, end in enumerate(ends):
+        value = float(np.sum(residuals(end) ** 2))
+        if near_best[k]:
+            end, value = _nelder_mead_polish(residuals, end, value, max_evaluations=60 * d)
+        ends[k], objectives[k] = end, value
+
+
+def _best_evaluation(
+    problem: CalibrationProblem,
+    box: ParameterSpace,
+    ends: np.ndarray,
+    order: np.ndarray,
+    counter: EvaluationCount,
+):
+    """(index, theta (d,), Evaluation) of the best end point (u in ``box``, (n, d)) whose model
+    evaluates; a failure there (a one-off eigen-solve failure) falls back to the next best in
+    ``order`` (indices of ``ends``, best first)."""
     for best in map(int, order):
         theta = box.theta_from_u(ends[best])
         evaluation = problem.evaluate(theta)
         counter.evaluations += 1
         if evaluation.ok:
-            break
+            return best, theta, evaluation
         counter.failed += 1
-    else:
-        raise BayesUpdateError(f"calibration: the model failed at every start ({evaluation.error})")
-    best_obj = objectives[best]
-    tol = 0.01 * max(best_obj, 1e-12)
-    converged = int(np.sum(objectives <= best_obj + tol))
+    raise BayesUpdateError(f"calibration: the model failed at every start ({evaluation.error})")
+
+
+def _distinct_optima(
+    ends: np.ndarray, objectives: np.ndarray, order: np.ndarray, best_obj: float, window: float
+) -> tuple[int, ...]:
+    """Indices (best first) of end points u (n, d) with objective <= best * (1 + window), each
+    more than 2 % of the unit box from every earlier one."""
     distinct: list[int] = []
-    window = best_obj + objective_window * max(best_obj, 1e-12) + 1e-12
+    limit = best_obj + window * max(best_obj, 1e-12) + 1e-12
     for i in order:
-        if objectives[i] > window:
+        if objectives[i] > limit:
             break
         if all(np.max(np.abs(ends[i] - ends[j])) > 0.02 for j in distinct):
             distinct.append(int(i))
+    return tuple(distinct)
+
+
+def calibrate(
+    problem: CalibrationProblem,
+    settings: CalibrationSettings = CalibrationSettings(),
+    refine: CalibrationProblem | None = None,
+) -> CalibrationResult:
+    """Point optimum of the fit objective over the parameter bounds (module docstring).
+
+    settings : CalibrationSettings (starts, seed, method, design, window, budget, polish).
+    refine : the exact problem when ``problem`` is a surrogate of it (same parameters, bounds,
+    data and pairing): each end point within 5 % of the best is polished on it (Nelder-Mead,
+    60 d evaluations), every end is re-evaluated on it, and the result (objectives, table) is that
+    of ``refine``; ``evaluations`` counts both models' evaluations.
+    Returns CalibrationResult.  Model failures are counted in ``failed_evaluations``.
+    """
+    t0 = time.perf_counter()
+    box = unit_box(problem)
+    counter = EvaluationCount()
+    residuals = _residual_function(problem, counter)
+    u_starts = _start_points(problem, box, residuals, settings)
+    ends, objectives = _local_fits(residuals, u_starts, settings.max_nfev, settings.polish_ends)
+    if refine is not None:
+        _refined(refine, problem, counter, ends, objectives)
+        problem = refine
+    ends = np.array(ends)
+    objectives = np.array(objectives)
+    order = np.argsort(objectives, kind="stable")
+    best, theta, evaluation = _best_evaluation(problem, box, ends, order, counter)
+    best_obj = objectives[best]
+    tol = 0.01 * max(best_obj, 1e-12)
+    window = settings.objective_window
     return CalibrationResult(
         names=problem.names,
         theta=theta,
@@ -253,14 +333,14 @@ def calibrate(
         frequencies_hz=evaluation.frequencies_hz,
         table=problem.table(evaluation),
         starts=int(u_starts.shape[0]),
-        converged_starts=converged,
+        converged_starts=int(np.sum(objectives <= best_obj + tol)),
         start_points=box.theta_from_u(u_starts),
         end_points=box.theta_from_u(ends),
         end_objectives=objectives,
-        distinct_optima=tuple(distinct),
+        distinct_optima=_distinct_optima(ends, objectives, order, best_obj, window),
         failed_evaluations=counter.failed,
         evaluations=counter.evaluations,
-        method=method,
+        method=settings.method,
         wall_s=time.perf_counter() - t0,
     )
 
@@ -275,8 +355,8 @@ def pareto_front_mass(
 ) -> list[dict]:
     """Front of eq. 19 against the mass error, by sweeping the weight of the mass term.
 
-    starts, seed, polish: as ``calibrate`` (polish=False: ~10x cheaper, each point may stay on
-    a pairing kink a few % above its polished value).
+    starts, seed, polish: as ``CalibrationSettings`` (polish=False: ~10x cheaper, each point may
+    stay on a pairing kink a few % above its polished value).
 
     For each weight W the fit minimises Expr + W ((m - m_T)/m_T)^2.  Returns one dict per weight:
     {"mass_weight", "expr", "mass_kg", "mass_error_pct", "parameters", "swapped"}.
@@ -286,13 +366,14 @@ def pareto_front_mass(
     from bayesupdate.inference.problem import ObjectiveSpec
 
     weights = np.geomspace(1e-3, 1e3, 13) if mass_weights is None else np.asarray(mass_weights)
+    settings = CalibrationSettings(starts=starts, seed=seed, polish=polish)
     front = []
     for w in weights:
         spec = replace(
             problem.objective, mass_target_kg=float(mass_target_kg), mass_weight=float(w)
         )
         sub = replace(problem, objective=spec if w > 0 else ObjectiveSpec())
-        result = calibrate(sub, starts=starts, seed=seed, polish=polish)
+        result = calibrate(sub, settings)
         mass = result.mass_kg
         front.append(
             {

@@ -207,6 +207,98 @@ class CalibrationProblem:
         )
 
 
+def _checked_objective(
+    objective: ObjectiveSpec | None, extra_modes: int, data: ModalData
+) -> ObjectiveSpec:
+    """The objective (default: eq. 19 alone) after checking its weights, ``extra_modes`` and
+    the data's weights."""
+    objective = objective or ObjectiveSpec()
+    if objective.mass_weight < 0 or objective.mac_weight < 0:
+        raise BayesUpdateError("objective: mass_weight and mac_weight must be >= 0")
+    if objective.mass_weight > 0 and not (objective.mass_target_kg or 0) > 0:
+        raise BayesUpdateError("objective.mass_kg: give the measured mass (> 0) for the mass term")
+    if int(extra_modes) < 0:
+        raise BayesUpdateError(f"pairing.extra_modes: must be >= 0, got {extra_modes}")
+    if data.weights is not None and np.all(data.weights == 0):
+        raise BayesUpdateError(f"data {data.source!r}: all weights are zero")
+    return objective
+
+
+def _reference_parameters(
+    model: ParametricModel,
+    parameters: tuple[ParameterSpec, ...],
+    fixed: Mapping[str, float] | None,
+) -> dict[str, float]:
+    """All model parameters at the reference design: the model's defaults, overridden by the
+    ``fixed`` values (checked: model parameters that are not calibrated), then the starts."""
+    reference_params = dict(model.default_parameters())
+    calibrated = {p.name for p in parameters}
+    for name, value in (fixed or {}).items():
+        if name not in model.parameter_names or name in calibrated:
+            raise BayesUpdateError(
+                f"fixed parameter {name!r}: not a model parameter, or also calibrated"
+            )
+        reference_params[name] = float(value)
+    reference_params.update({p.name: p.start for p in parameters})
+    return reference_params
+
+
+def _reference_prediction(
+    model: ParametricModel, reference_params: dict[str, float], n_test: int, extra_modes: int
+) -> tuple[Prediction, int]:
+    """(prediction, n_model): the model at the reference design with ``extra_modes`` modes
+    beyond the test's ``n_test`` if it can, else exactly ``n_test``."""
+    reference = None
+    n_model = n_test
+    for n_try in (n_test + max(int(extra_modes), 0), n_test):
+        try:
+            reference = model.predict(reference_params, n_modes=n_try)
+        except BayesUpdateError as exc:
+            if n_try == n_test:
+                raise BayesUpdateError(
+                    f"model: cannot compute the {n_test} modes of the test data ({exc})"
+                ) from exc
+            continue
+        n_model = n_try
+        break
+    freqs = np.asarray(reference.frequencies_hz)
+    if freqs.size < n_test:
+        raise BayesUpdateError(
+            f"model: computed {freqs.size} modes but the test data have {n_test}; "
+            "request fewer modes or give a model with more"
+        )
+    return reference, n_model
+
+
+def _mode_pairing(
+    pairing: str, data: ModalData, reference: Prediction, n_model: int
+) -> ModePairing:
+    """The pairing set up at the reference prediction ("auto" resolved: "mac" if the test has
+    shapes, else "tracked" if the model gives shapes, else "order")."""
+    n_test = data.n_modes
+    method = pairing
+    if method == "auto":
+        method = (
+            "mac"
+            if data.shapes is not None
+            else ("tracked" if reference.shapes is not None else "order")
+        )
+    labels: tuple[str, ...] = ()
+    ref_shapes = test_shapes = None
+    if method == "mac":
+        if data.shapes is None:
+            raise BayesUpdateError("pairing 'mac' needs test shapes; use 'tracked' or 'order'")
+        labels = data.dof_labels
+        test_shapes = data.shapes
+        shapes_at(reference, labels, f"data {data.source!r}")
+    elif reference.shapes is not None:
+        labels = tuple(reference.dof_labels)
+        ref_shapes = np.asarray(reference.shapes)[:, :n_test]
+    elif method == "tracked":
+        raise BayesUpdateError("pairing 'tracked' needs model shapes; use 'order'")
+    return ModePairing(method, n_test, n_model, labels, ref_shapes, test_shapes)
+
+
 def build_problem(
     model: ParametricModel,
     data: ModalData,
@@ -228,70 +320,15 @@ def build_problem(
         raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
     if not isinstance(parameters, tuple):
         parameters = build_parameter_specs(model, parameters)
-    objective = objective or ObjectiveSpec()
-    if objective.mass_weight < 0 or objective.mac_weight < 0:
-        raise BayesUpdateError("objective: mass_weight and mac_weight must be >= 0")
-    if objective.mass_weight > 0 and not (objective.mass_target_kg or 0) > 0:
-        raise BayesUpdateError("objective.mass_kg: give the measured mass (> 0) for the mass term")
-    if int(extra_modes) < 0:
-        raise BayesUpdateError(f"pairing.extra_modes: must be >= 0, got {extra_modes}")
-    if data.weights is not None and np.all(data.weights == 0):
-        raise BayesUpdateError(f"data {data.source!r}: all weights are zero")
-    n_test = data.n_modes
-    reference_params = dict(model.default_parameters())
-    calibrated = {p.name for p in parameters}
-    for name, value in (fixed or {}).items():
-        if name not in model.parameter_names or name in calibrated:
-            raise BayesUpdateError(
-                f"fixed parameter {name!r}: not a model parameter, or also calibrated"
-            )
-        reference_params[name] = float(value)
-    reference_params.update({p.name: p.start for p in parameters})
-    reference = None
-    n_model = n_test
-    for n_try in (n_test + max(int(extra_modes), 0), n_test):
-        try:
-            reference = model.predict(reference_params, n_modes=n_try)
-        except BayesUpdateError as exc:
-            if n_try == n_test:
-                raise BayesUpdateError(
-                    f"model: cannot compute the {n_test} modes of the test data ({exc})"
-                ) from exc
-            continue
-        n_model = n_try
-        break
-    freqs = np.asarray(reference.frequencies_hz)
-    if freqs.size < n_test:
-        raise BayesUpdateError(
-            f"model: computed {freqs.size} modes but the test data have {n_test}; "
-            "request fewer modes or give a model with more"
-        )
-    method = pairing
-    if method == "auto":
-        method = (
-            "mac"
-            if data.shapes is not None
-            else ("tracked" if reference.shapes is not None else "order")
-        )
-    labels: tuple[str, ...] = ()
-    ref_shapes = test_shapes = None
-    if method == "mac":
-        if data.shapes is None:
-            raise BayesUpdateError("pairing 'mac' needs test shapes; use 'tracked' or 'order'")
-        labels = data.dof_labels
-        test_shapes = data.shapes
-        shapes_at(reference, labels, f"data {data.source!r}")
-    elif reference.shapes is not None:
-        labels = tuple(reference.dof_labels)
-        ref_shapes = np.asarray(reference.shapes)[:, :n_test]
-    elif method == "tracked":
-        raise BayesUpdateError("pairing 'tracked' needs model shapes; use 'order'")
+    objective = _checked_objective(objective, extra_modes, data)
+    reference_params = _reference_parameters(model, parameters, fixed)
+    reference, n_model = _reference_prediction(model, reference_params, data.n_modes, extra_modes)
     fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}
     return CalibrationProblem(
         model=model,
         data=data,
         parameters=parameters,
-        pairing=ModePairing(method, n_test, n_model, labels, ref_shapes, test_shapes),
+        pairing=_mode_pairing(pairing, data, reference, n_model),
         objective=objective,
         fixed=fixed,
         reference=reference,

@@ -213,82 +213,85 @@ def convergence(chain: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndar
     return rhat, np.minimum(ess, np.nan_to_num(ess_tau, nan=0.0))
 
 
-def sample_posterior(
-    log_posterior: LogPosterior,
-    calibration: CalibrationResult | None = None,
-    walkers: int = 32,
-    steps: int = 5000,
-    seed: int = 1,
-    min_autocorr_times: float = 50.0,
-    check_every: int = 500,
-    progress: bool = False,
-    checkpoint: Callable[[SamplerState], None] | None = None,
-    resume: SamplerState | None = None,
-    moves: list | None = None,
-    initial: np.ndarray | None = None,
-    transform: str = "none",
-    target_rhat: float | None = None,
-    target_ess: float | None = None,
-    screen: LogPosterior | None = None,
-) -> PosteriorResult:
-    """Run emcee until steps >= min_autocorr_times * max(tau) and the convergence targets hold
-    (``target_rhat``, ``target_ess``; None: not checked), or ``steps`` steps.
+@dataclass(frozen=True)
+class SamplerSettings:
+    """How a sampling run goes (module docstring), validated once when made.
 
-    log_posterior : vectorised, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
-    (walkers start around its distinct optima) unless ``initial`` (n_walkers, d) is given.
-    checkpoint : called with a SamplerState after every block (write it to disk there).
-    resume : a SamplerState from an interrupted run with the same settings.
-    Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
-    ``interrupted=True`` and its ``state`` resumes it.
+    walkers : ensemble size (>= 4 and >= 2 d; the latter checked by ``sample_posterior``).
+    steps : step budget per walker.  seed : seeds the start (walker balls) and emcee's MT19937.
+    min_autocorr_times : stop once steps >= this * max(tau) [tau in steps].
+    check_every : block length [steps] between tau estimates and checkpoints.
     transform : "none" (walk in theta) or "logit" (walk in the unconstrained coordinates y of
-    ``sampler_space``; the chain and log_prob are returned in theta all the same).  A resume
-    must use the same.
-    screen : a cheap surrogate of ``log_posterior`` (same parameters, e.g. on a coarser reduced
-    basis): delayed acceptance (``inference.delayed_acceptance``) - proposals are screened with
-    it and only the survivors get an exact evaluation; the chain still targets
-    ``log_posterior`` exactly.  ``evaluations`` counts exact evaluations,
-    ``screen_evaluations`` the surrogate's.
+    ``sampler_space``; the chain and log_prob are returned in theta all the same); a resume must
+    use the same.  target_rhat, target_ess : convergence targets (None: not checked).
+    progress : show a progress bar.
     """
-    if transform not in ("none", "logit"):
-        raise BayesUpdateError(f"sampler.transform: {transform!r}; use 'none' or 'logit'")
-    if walkers < 2 * log_posterior.ndim or walkers < 4:
-        raise BayesUpdateError(
-            f"sampler.walkers: {walkers} is too few for {log_posterior.ndim} parameters; "
-            f"use at least {max(2 * log_posterior.ndim, 4)}"
-        )
-    if steps < 1 or check_every < 1:
-        raise BayesUpdateError("sampler.steps and sampler.check_every must be >= 1")
-    if target_rhat is not None and not target_rhat >= 1.0:
-        raise BayesUpdateError(f"sampler.target_rhat: must be >= 1, got {target_rhat}")
-    if target_ess is not None and not target_ess > 0:
-        raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {target_ess}")
-    d = log_posterior.ndim
-    stop = {"requested": False}
 
-    space = sampler_space(log_posterior) if transform == "logit" else None
+    walkers: int = 32
+    steps: int = 5000
+    seed: int = 1
+    min_autocorr_times: float = 50.0
+    check_every: int = 500
+    transform: str = "none"
+    target_rhat: float | None = None
+    target_ess: float | None = None
+    progress: bool = False
 
-    def to_theta(x: np.ndarray) -> np.ndarray:
-        return x if space is None else space.theta_from_y(x)
+    def __post_init__(self) -> None:
+        if self.transform not in ("none", "logit"):
+            raise BayesUpdateError(f"sampler.transform: {self.transform!r}; use 'none' or 'logit'")
+        if self.walkers < 4:
+            raise BayesUpdateError(f"sampler.walkers: {self.walkers} is too few; use at least 4")
+        if self.steps < 1 or self.check_every < 1:
+            raise BayesUpdateError("sampler.steps and sampler.check_every must be >= 1")
+        if self.target_rhat is not None and not self.target_rhat >= 1.0:
+            raise BayesUpdateError(f"sampler.target_rhat: must be >= 1, got {self.target_rhat}")
+        if self.target_ess is not None and not self.target_ess > 0:
+            raise BayesUpdateError(f"sampler.target_ess: must be > 0, got {self.target_ess}")
 
-    def log_jacobian(x: np.ndarray) -> np.ndarray:
-        return np.zeros(np.shape(x)[:-1]) if space is None else space.log_jacobian_y(x)
+    def check_walkers(self, ndim: int) -> None:
+        """Raise unless there are at least 2 walkers per sampled parameter (ndim of them)."""
+        if self.walkers < 2 * ndim:
+            raise BayesUpdateError(
+                f"sampler.walkers: {self.walkers} is too few for {ndim} parameters; "
+                f"use at least {max(2 * ndim, 4)}"
+            )
 
-    def guard(density: LogPosterior) -> Callable[[np.ndarray], np.ndarray]:
-        def guarded(x: np.ndarray) -> np.ndarray:
-            # Ctrl-C inside the model: finish the step without evaluating (it is discarded
-            # below); raising through emcee would print every walker's parameters and a traceback
-            if not stop["requested"]:
-                try:
-                    if space is None:
-                        return density(x)
-                    return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
-                except KeyboardInterrupt:
-                    stop["requested"] = True
-            return np.full(np.shape(x)[0], -np.inf)
 
-        return guarded
+def _to_theta(space: ParameterSpace | None, x: np.ndarray) -> np.ndarray:
+    """Sampler coordinates (..., d) -> theta (..., d) (identity without a transform)."""
+    return x if space is None else space.theta_from_y(x)
 
-    guarded = guard(log_posterior)
+
+def _log_jacobian(space: ParameterSpace | None, x: np.ndarray) -> np.ndarray:
+    """log |d theta / d y| at sampler coordinates (..., d) -> (...) (0 without a transform)."""
+    return np.zeros(np.shape(x)[:-1]) if space is None else space.log_jacobian_y(x)
+
+
+def _guard(
+    density: LogPosterior, space: ParameterSpace | None, stop: dict
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The log-density emcee sees, (n_walkers, d) sampler coordinates -> (n_walkers,): in y
+    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf."""
+
+    def guarded(x: np.ndarray) -> np.ndarray:
+        # Ctrl-C inside the model: finish the step without evaluating (it is discarded
+        # below); raising through emcee would print every walker's parameters and a traceback
+        if not stop["requested"]:
+            try:
+                if space is None:
+                    return density(x)
+                return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
+            except KeyboardInterrupt:
+                stop["requested"] = True
+        return np.full(np.shape(x)[0], -np.inf)
+
+    return guarded
+
+
+def _ensemble(walkers: int, d: int, guarded, moves: list | None, screen, guard):
+    """(emcee sampler, ScreenedLogDensity or None): the moves, wrapped for delayed acceptance
+    (``inference.delayed_acceptance``) when a ``screen`` posterior is given."""
     moves = moves or default_moves()
     screened = None
     if screen is not None:
@@ -297,114 +300,201 @@ def sample_posterior(
         screened = ScreenedLogDensity(guard(screen), guarded)
         moves = delayed_acceptance_moves(moves, screened)
     sampler = emcee.EnsembleSampler(walkers, d, guarded, moves=moves, vectorize=True)
-    if resume is not None:
-        if resume.coords.shape != (walkers, d):
-            raise BayesUpdateError(
-                f"resume: checkpoint has {resume.coords.shape} walkers x parameters, "
-                f"settings give {(walkers, d)}; resume with the same study"
-            )
-        chain_parts, lp_parts = [resume.chain], [resume.log_prob]
-        accepted = resume.accepted.copy()
-        state = emcee.State(
-            resume.coords.copy(),
-            log_prob=resume.last_log_prob.copy(),
-            random_state=resume.random_state,
-        )
-        # the checkpoint's counts are those of the chain so far: set, not add (a LogPosterior
-        # reused from the interrupted run has counted them already)
-        log_posterior.evaluations = resume.evaluations
-        log_posterior.failed = resume.failed
-        wall_before = resume.wall_s
-    else:
-        rng = np.random.default_rng(seed)
-        if initial is None:
-            if calibration is None:
-                raise BayesUpdateError("sampler: give a calibration result or initial walkers")
-            initial = initial_walkers(log_posterior, calibration, walkers, rng)
-        mt = np.random.RandomState(np.random.MT19937(np.random.SeedSequence([seed, 7])))
-        initial = np.asarray(initial, dtype=float)
-        if space is not None:
-            # walkers clipped onto a bound would coincide in y: spread them a little
-            initial = space.y_from_theta(initial) + 0.01 * rng.standard_normal(initial.shape)
-        state = emcee.State(initial, random_state=mt.get_state())
-        chain_parts, lp_parts = [np.empty((0, walkers, d))], [np.empty((0, walkers))]
-        accepted = np.zeros(walkers)
-        wall_before = 0.0
-    if state.log_prob is None:
-        # what emcee would compute first; done here so a checkpoint always has it (no RNG use)
-        state.log_prob = guarded(state.coords)
-    if not np.all(np.isfinite(state.log_prob)):
-        raise BayesUpdateError("sampler: some initial walkers have zero posterior density")
-    t0 = time.perf_counter()
-    done = sum(part.shape[0] for part in chain_parts)
-    interrupted = converged = False
-    tau = np.full(d, np.inf)
+    return sampler, screened
 
-    def snapshot(finished: bool) -> SamplerState:
+
+@dataclass
+class _Run:
+    """The run so far, grown block by block (the sampling loop's accumulator, hence mutable).
+
+    state : emcee.State after the last step (sampler coordinates).  chain_parts : blocks
+    (n_i, n_walkers, d) in theta; lp_parts : (n_i, n_walkers) log-posterior of theta.
+    accepted : (n_walkers,) accepted proposals.  wall_before [s] : earlier runs' wall time;
+    t0 : ``time.perf_counter()`` when this run's sampling began.
+    """
+
+    state: emcee.State
+    chain_parts: list
+    lp_parts: list
+    accepted: np.ndarray
+    wall_before: float
+    t0: float = 0.0
+
+    @property
+    def done(self) -> int:
+        """Steps in the chain so far."""
+        return sum(part.shape[0] for part in self.chain_parts)
+
+    def snapshot(self, log_posterior: LogPosterior, finished: bool) -> SamplerState:
+        """The SamplerState of the run so far (copies)."""
         return SamplerState(
-            chain=np.concatenate(chain_parts),
-            log_prob=np.concatenate(lp_parts),
-            coords=state.coords.copy(),
-            last_log_prob=np.asarray(state.log_prob).copy(),
-            random_state=state.random_state,
-            accepted=accepted.copy(),
+            chain=np.concatenate(self.chain_parts),
+            log_prob=np.concatenate(self.lp_parts),
+            coords=self.state.coords.copy(),
+            last_log_prob=np.asarray(self.state.log_prob).copy(),
+            random_state=self.state.random_state,
+            accepted=self.accepted.copy(),
             evaluations=log_posterior.evaluations,
             failed=log_posterior.failed,
-            wall_s=wall_before + time.perf_counter() - t0,
+            wall_s=self.wall_before + time.perf_counter() - self.t0,
             finished=finished,
         )
 
+
+def _resumed_run(resume: SamplerState, log_posterior: LogPosterior, walkers: int) -> _Run:
+    """The run continued from a checkpoint (same walkers and parameters)."""
+    d = log_posterior.ndim
+    if resume.coords.shape != (walkers, d):
+        raise BayesUpdateError(
+            f"resume: checkpoint has {resume.coords.shape} walkers x parameters, "
+            f"settings give {(walkers, d)}; resume with the same study"
+        )
+    state = emcee.State(
+        resume.coords.copy(),
+        log_prob=resume.last_log_prob.copy(),
+        random_state=resume.random_state,
+    )
+    # the checkpoint's counts are those of the chain so far: set, not add (a LogPosterior
+    # reused from the interrupted run has counted them already)
+    log_posterior.evaluations = resume.evaluations
+    log_posterior.failed = resume.failed
+    return _Run(state, [resume.chain], [resume.log_prob], resume.accepted.copy(), resume.wall_s)
+
+
+def _fresh_run(
+    log_posterior: LogPosterior,
+    calibration: CalibrationResult | None,
+    initial: np.ndarray | None,
+    settings: SamplerSettings,
+    space: ParameterSpace | None,
+) -> _Run:
+    """A new run: walkers (``initial``, or balls around the calibration's optima) and emcee's
+    MT19937 state, both from ``settings.seed``."""
+    walkers, d, seed = settings.walkers, log_posterior.ndim, settings.seed
+    rng = np.random.default_rng(seed)
+    if initial is None:
+        if calibration is None:
+            raise BayesUpdateError("sampler: give a calibration result or initial walkers")
+        initial = initial_walkers(log_posterior, calibration, walkers, rng)
+    mt = np.random.RandomState(np.random.MT19937(np.random.SeedSequence([seed, 7])))
+    initial = np.asarray(initial, dtype=float)
+    if space is not None:
+        # walkers clipped onto a bound would coincide in y: spread them a little
+        initial = space.y_from_theta(initial) + 0.01 * rng.standard_normal(initial.shape)
+    state = emcee.State(initial, random_state=mt.get_state())
+    chain_parts, lp_parts = [np.empty((0, walkers, d))], [np.empty((0, walkers))]
+    return _Run(state, chain_parts, lp_parts, np.zeros(walkers), 0.0)
+
+
+def _start(run: _Run, guarded) -> None:
+    """Fill in the initial log-density, check it and start the clock."""
+    if run.state.log_prob is None:
+        # what emcee would compute first; done here so a checkpoint always has it (no RNG use)
+        run.state.log_prob = guarded(run.state.coords)
+    if not np.all(np.isfinite(run.state.log_prob)):
+        raise BayesUpdateError("sampler: some initial walkers have zero posterior density")
+    run.t0 = time.perf_counter()
+
+
+def _run_block(sampler, run: _Run, block: int, stop: dict, bar) -> tuple[list, list, bool]:
+    """``block`` emcee steps from ``run.state``: (coords (n_walkers, d) per completed step,
+    log-densities (n_walkers,) per step, interrupted).  ``run.state`` follows each step."""
+    coords, lps = [], []
+    try:
+        sampler.reset()
+        if interrupts.requested():  # arrived during the previous block's bookkeeping
+            raise KeyboardInterrupt
+        for step in sampler.sample(run.state, iterations=block, store=True):
+            if stop["requested"] or interrupts.requested():
+                raise KeyboardInterrupt
+            # emcee updates its state object in place during the next step, so a Ctrl-C
+            # there would leave it half-updated: keep copies of each completed step
+            coords.append(step.coords.copy())
+            lps.append(np.asarray(step.log_prob).copy())
+            run.state = emcee.State(
+                coords[-1].copy(), log_prob=lps[-1].copy(), random_state=step.random_state
+            )
+            bar.update(1)
+    except KeyboardInterrupt:
+        return coords, lps, True
+    return coords, lps, False
+
+
+def _append(run: _Run, sampler, coords: list, lps: list, space: ParameterSpace | None) -> None:
+    """Add a block's steps to the run, stored in theta with the log-posterior of theta (the
+    Jacobian taken off), and its acceptances."""
+    if coords:
+        block_coords = np.array(coords)
+        run.chain_parts.append(_to_theta(space, block_coords))
+        run.lp_parts.append(np.array(lps) - _log_jacobian(space, block_coords))
+        run.accepted += sampler.backend.accepted
+
+
+def _stop_rule(chain: np.ndarray, done: int, settings: SamplerSettings):
+    """(tau (d,) [steps], converged): steps >= min_autocorr_times * max(tau) and the
+    convergence targets of ``settings`` hold for the chain (n_steps, n_walkers, d)."""
+    tau = _autocorr(chain)
+    converged = bool(np.all(np.isfinite(tau)) and done >= settings.min_autocorr_times * np.max(tau))
+    target_rhat, target_ess = settings.target_rhat, settings.target_ess
+    if converged and (target_rhat is not None or target_ess is not None):
+        rhat, ess = convergence(chain, tau)
+        converged = bool(
+            (target_rhat is None or np.all(rhat <= target_rhat))
+            and (target_ess is None or np.all(ess >= target_ess))
+        )
+    return tau, converged
+
+
+def _sample_blocks(
+    sampler,
+    run: _Run,
+    log_posterior: LogPosterior,
+    settings: SamplerSettings,
+    stop: dict,
+    checkpoint: Callable[[SamplerState], None] | None,
+    space: ParameterSpace | None,
+) -> tuple[bool, bool, np.ndarray]:
+    """Blocks of ``check_every`` steps (boundaries at its multiples from the first step) until
+    the stop rule, the budget or a stop request: (interrupted, converged, tau (d,) [steps]).
+    ``checkpoint`` gets a SamplerState after every complete block."""
     from tqdm.auto import tqdm
 
-    bar = tqdm(total=steps, initial=done, disable=not progress, desc="sampling", unit="step")
-    while done < steps:
+    steps, check_every = settings.steps, settings.check_every
+    bar = tqdm(
+        total=steps, initial=run.done, disable=not settings.progress, desc="sampling", unit="step"
+    )
+    interrupted = converged = False
+    tau = np.full(log_posterior.ndim, np.inf)
+    while run.done < steps:
+        done = run.done
         block = min(check_every - done % check_every, steps - done)
-        coords, lps = [], []
-        try:
-            sampler.reset()
-            if interrupts.requested():  # arrived during the previous block's bookkeeping
-                raise KeyboardInterrupt
-            for step in sampler.sample(state, iterations=block, store=True):
-                if stop["requested"] or interrupts.requested():
-                    raise KeyboardInterrupt
-                # emcee updates its state object in place during the next step, so a Ctrl-C
-                # there would leave it half-updated: keep copies of each completed step
-                coords.append(step.coords.copy())
-                lps.append(np.asarray(step.log_prob).copy())
-                state = emcee.State(
-                    coords[-1].copy(), log_prob=lps[-1].copy(), random_state=step.random_state
-                )
-                bar.update(1)
-        except KeyboardInterrupt:
-            interrupted = True
+        coords, lps, interrupted = _run_block(sampler, run, block, stop, bar)
         # bookkeeping and the checkpoint run to the end; a stop request arriving meanwhile is
         # recorded by the CLI's handler and acted on at the next block (interrupts.deferred)
         with interrupts.deferred():
-            n_new = len(coords)
-            if n_new:
-                block_coords = np.array(coords)
-                # stored in theta, with the log-posterior of theta (the Jacobian taken off)
-                chain_parts.append(to_theta(block_coords))
-                lp_parts.append(np.array(lps) - log_jacobian(block_coords))
-                accepted += sampler.backend.accepted
-                done += n_new
+            _append(run, sampler, coords, lps, space)
             if interrupted:
                 break
-            chain_so_far = np.concatenate(chain_parts)
-            tau = _autocorr(chain_so_far)
-            converged = bool(np.all(np.isfinite(tau)) and done >= min_autocorr_times * np.max(tau))
-            if converged and (target_rhat is not None or target_ess is not None):
-                rhat, ess = convergence(chain_so_far, tau)
-                converged = bool(
-                    (target_rhat is None or np.all(rhat <= target_rhat))
-                    and (target_ess is None or np.all(ess >= target_ess))
-                )
+            tau, converged = _stop_rule(np.concatenate(run.chain_parts), run.done, settings)
             if checkpoint is not None:
-                checkpoint(snapshot(finished=converged or done >= steps))
+                checkpoint(run.snapshot(log_posterior, finished=converged or run.done >= steps))
         if converged:
             break
     bar.close()
-    final = snapshot(finished=not interrupted)
+    return interrupted, converged, tau
+
+
+def _posterior_result(
+    run: _Run,
+    log_posterior: LogPosterior,
+    outcome: tuple[bool, bool, np.ndarray],
+    seed: int,
+    screened: ScreenedLogDensity | None,
+) -> PosteriorResult:
+    """The PosteriorResult of a finished or interrupted run; ``outcome`` is
+    ``_sample_blocks``'s (interrupted, converged, tau)."""
+    interrupted, converged, tau = outcome
+    final = run.snapshot(log_posterior, finished=not interrupted)
     chain = final.chain
     if chain.shape[0] >= 20:
         tau = _autocorr(chain)
@@ -425,3 +515,51 @@ def sample_posterior(
         seed=seed,
         screen_evaluations=0 if screened is None else screened.screen_evaluations,
     )
+
+
+def sample_posterior(
+    log_posterior: LogPosterior,
+    calibration: CalibrationResult | None = None,
+    settings: SamplerSettings = SamplerSettings(),
+    *,
+    initial: np.ndarray | None = None,
+    resume: SamplerState | None = None,
+    checkpoint: Callable[[SamplerState], None] | None = None,
+    screen: LogPosterior | None = None,
+    moves: list | None = None,
+) -> PosteriorResult:
+    """Run emcee until steps >= min_autocorr_times * max(tau) and the convergence targets hold
+    (``settings.target_rhat``, ``settings.target_ess``; None: not checked), or ``settings.steps``
+    steps.
+
+    log_posterior : vectorised, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
+    (walkers start around its distinct optima) unless ``initial`` (n_walkers, d) is given.
+    settings : SamplerSettings (walkers, steps, seed, stop rule, transform, progress bar).
+    checkpoint : called with a SamplerState after every block (write it to disk there).
+    resume : a SamplerState from an interrupted run with the same settings.
+    Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
+    ``interrupted=True`` and its ``state`` resumes it.
+    screen : a cheap surrogate of ``log_posterior`` (same parameters, e.g. on a coarser reduced
+    basis): delayed acceptance (``inference.delayed_acceptance``) - proposals are screened with
+    it and only the survivors get an exact evaluation; the chain still targets
+    ``log_posterior`` exactly.  ``evaluations`` counts exact evaluations,
+    ``screen_evaluations`` the surrogate's.  moves : emcee moves (default ``default_moves()``).
+    """
+    settings.check_walkers(log_posterior.ndim)
+    stop = {"requested": False}
+    space = sampler_space(log_posterior) if settings.transform == "logit" else None
+
+    def guard(density: LogPosterior) -> Callable[[np.ndarray], np.ndarray]:
+        return _guard(density, space, stop)
+
+    guarded = guard(log_posterior)
+    sampler, screened = _ensemble(
+        settings.walkers, log_posterior.ndim, guarded, moves, screen, guard
+    )
+    if resume is not None:
+        run = _resumed_run(resume, log_posterior, settings.walkers)
+    else:
+        run = _fresh_run(log_posterior, calibration, initial, settings, space)
+    _start(run, guarded)
+    outcome = _sample_blocks(sampler, run, log_posterior, settings, stop, checkpoint, space)
+    return _posterior_result(run, log_posterior, outcome, settings.seed, screened)

@@ -1,6 +1,6 @@
 """The calibrate pipeline: a prepared study -> its multi-start point optimum (seed eq. 19)."""
 
-from bayesupdate.inference.optimize import CalibrationResult, calibrate
+from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import sampling_problem
 
@@ -12,12 +12,7 @@ def run_calibration(prepared: PreparedStudy) -> CalibrationResult:
     opt = prepared.study.optimizer
     cfg = prepared.study.sampler
     search, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
-    return calibrate(
-        search,
-        starts=opt.starts,
-        seed=opt.seed,
-        method=opt.method,
-        design=opt.design,
-        polish=opt.polish,
-        refine=None if rom is None else prepared.problem,
+    settings = CalibrationSettings(
+        starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=opt.polish
     )
+    return calibrate(search, settings, refine=None if rom is None else prepared.problem)

@@ -16,9 +16,14 @@ from bayesupdate.inference.diagnostics import (
     summarise,
 )
 from bayesupdate.inference.likelihood import LogPosterior
-from bayesupdate.inference.optimize import CalibrationResult, calibrate
+from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
 from bayesupdate.inference.results import read_config, read_sampler_state, write_result
-from bayesupdate.inference.sampling import PosteriorResult, SamplerState, sample_posterior
+from bayesupdate.inference.sampling import (
+    PosteriorResult,
+    SamplerSettings,
+    SamplerState,
+    sample_posterior,
+)
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
     certify_rom,
@@ -74,14 +79,10 @@ def run_sampling(
         opt = study.optimizer
         # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the
         # cost of the trust-region starts and moves the point along a kink by < 3 % in Expr)
-        calibration = calibrate(
-            problem,
-            starts=opt.starts,
-            seed=opt.seed,
-            method=opt.method,
-            design=opt.design,
-            polish=False,
+        settings = CalibrationSettings(
+            starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False
         )
+        calibration = calibrate(problem, settings)
     if rom is not None:
         rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
         problem = replace(problem, model=rom)
@@ -137,9 +138,7 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
         if not sampler_state.finished:
             write(state=sampler_state)
 
-    return sample_posterior(
-        log_post,
-        calibration,
+    settings = SamplerSettings(
         walkers=cfg.walkers,
         steps=cfg.steps,
         seed=cfg.seed,
@@ -148,10 +147,10 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
         transform=cfg.transform,
         target_rhat=cfg.target_rhat,
         target_ess=cfg.target_ess or None,
-        screen=screen,
         progress=options.progress,
-        checkpoint=checkpoint,
-        resume=state,
+    )
+    return sample_posterior(
+        log_post, calibration, settings, screen=screen, checkpoint=checkpoint, resume=state
     )
 
 

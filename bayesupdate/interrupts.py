@@ -16,59 +16,59 @@ run with a bare "interrupted" and no resume hint, although the last checkpoint w
 import sys
 from contextlib import contextmanager
 
-_state = {"requested": False, "deferred": False}
 
+class StopRequest:
+    """One run's stop request: the command installs ``handler`` for SIGTERM/SIGINT and passes
+    the object down (``calibrate``, ``sample_posterior``); long loops ``check()`` it at safe
+    points.  Nothing is global: a run nobody can signal gets a fresh one."""
 
-def request() -> None:
-    """Record a stop request (called from a signal handler)."""
-    _state["requested"] = True
+    def __init__(self):
+        self._requested = False
+        self._deferred = False
 
+    def request(self) -> None:
+        """Record a stop request (called from the signal handler)."""
+        self._requested = True
 
-def clear() -> None:
-    _state["requested"] = False
+    def clear(self) -> None:
+        self._requested = False
 
+    def requested(self) -> bool:
+        return self._requested
 
-def requested() -> bool:
-    return _state["requested"]
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a stop was requested."""
+        if self._requested:
+            raise KeyboardInterrupt
 
+    @contextmanager
+    def deferred(self):
+        """While the block runs, ``handler`` records a stop request without raising; the caller
+        checks ``requested()`` after the block."""
+        previous, self._deferred = self._deferred, True
+        try:
+            yield
+        finally:
+            self._deferred = previous
 
-def check() -> None:
-    """Raise ``KeyboardInterrupt`` if a stop was requested."""
-    if _state["requested"]:
-        raise KeyboardInterrupt
+    def handler(self, _signum, _frame) -> None:
+        """A signal handler: record the request and interrupt where the signal lands (unless
+        inside ``deferred()``)."""
+        self.request()
+        if not self._deferred:
+            raise KeyboardInterrupt
 
+    def quiet_unraisable(self, unraisable) -> None:
+        """``sys.unraisablehook`` that drops the "Exception ignored" report of a swallowed stop
+        request (the request itself is recorded and acted on); anything else goes to the
+        default."""
+        if isinstance(unraisable.exc_value, KeyboardInterrupt) and self.requested():
+            return
+        sys.__unraisablehook__(unraisable)
 
-def quiet_unraisable(unraisable) -> None:
-    """``sys.unraisablehook`` that drops the "Exception ignored" report of a swallowed stop
-    request (the request itself is recorded and acted on); anything else goes to the default."""
-    if isinstance(unraisable.exc_value, KeyboardInterrupt) and requested():
-        return
-    sys.__unraisablehook__(unraisable)
-
-
-def quiet_excepthook(exc_type, exc_value, traceback) -> None:
-    """``sys.excepthook`` that drops the traceback of a swallowed stop request; anything else
-    goes to the default."""
-    if issubclass(exc_type, KeyboardInterrupt) and requested():
-        return
-    sys.__excepthook__(exc_type, exc_value, traceback)
-
-
-@contextmanager
-def deferred():
-    """While the block runs, ``stop_handler`` records a stop request without raising; the
-    caller checks ``requested()`` after the block."""
-    previous = _state["deferred"]
-    _state["deferred"] = True
-    try:
-        yield
-    finally:
-        _state["deferred"] = previous
-
-
-def stop_handler(_signum, _frame) -> None:
-    """A signal handler: record the request and interrupt where the signal lands (unless inside
-    ``deferred()``)."""
-    request()
-    if not _state["deferred"]:
-        raise KeyboardInterrupt
+    def quiet_excepthook(self, exc_type, exc_value, traceback) -> None:
+        """``sys.excepthook`` that drops the traceback of a swallowed stop request; anything
+        else goes to the default."""
+        if issubclass(exc_type, KeyboardInterrupt) and self.requested():
+            return
+        sys.__excepthook__(exc_type, exc_value, traceback)

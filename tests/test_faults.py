@@ -7,6 +7,7 @@ real console script, writer crashes for every command that writes, and failing m
 """
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -320,7 +321,6 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     """A SIGTERM that lands while the first checkpoint is being written (as on a loaded
     machine): the write completes, the run stops before the next block with the resume hint,
     exit 130, and --resume completes it."""
-    from bayesupdate import interrupts
     from bayesupdate.pipelines import sample as runner
 
     original = runner.write_result
@@ -329,7 +329,8 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     def signalled(path, *args, **kwargs):
         calls.append(path)
         if len(calls) == 1:
-            interrupts.stop_handler(signal.SIGTERM, None)  # the handler, mid-write
+            os.kill(os.getpid(), signal.SIGTERM)  # lands mid-write, in the command's handler
+            time.sleep(0.05)
         original(path, *args, **kwargs)
 
     monkeypatch.setattr(runner, "write_result", signalled)
@@ -341,7 +342,6 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     assert "stopped after 50 steps" in err and "--resume" in err, err
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial" and h5["posterior/chain"].shape[0] == 50
-    assert not interrupts.requested()
     monkeypatch.setattr(runner, "write_result", original)
     assert main(["sample", str(study), "--out", str(out), "--resume", "--no-progress"]) == 0
     with h5py.File(out) as h5:
@@ -349,16 +349,15 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
 
 
 def test_deferred_stop_is_recorded_not_raised():
-    from bayesupdate import interrupts
+    from bayesupdate.interrupts import StopRequest
 
-    try:
-        with interrupts.deferred():
-            interrupts.stop_handler(signal.SIGTERM, None)  # no exception inside the block
-            assert interrupts.requested()
-        with pytest.raises(KeyboardInterrupt):
-            interrupts.stop_handler(signal.SIGTERM, None)  # outside it interrupts at once
-    finally:
-        interrupts.clear()
+    stop = StopRequest()
+    with stop.deferred():
+        stop.handler(signal.SIGTERM, None)  # no exception inside the block
+        assert stop.requested()
+    with pytest.raises(KeyboardInterrupt):
+        stop.handler(signal.SIGTERM, None)  # outside it interrupts at once
+    assert not StopRequest().requested()  # each run has its own request: nothing global
 
 
 def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path, monkeypatch):
@@ -366,12 +365,15 @@ def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path,
     # reports "Exception ignored" and goes on): the recorded request stops the run at the next
     # optimiser start, exit 130, and nothing is written
     import bayesupdate.pipelines.sample as runner
-    from bayesupdate import interrupts
 
     original = runner.sampling_problem
 
     def swallowed(*args, **kwargs):
-        interrupts.request()  # what the handler did before the exception was lost
+        try:  # the command's handler records the request, its KeyboardInterrupt is lost
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+        except KeyboardInterrupt:
+            pass
         return original(*args, **kwargs)
 
     monkeypatch.setattr(runner, "sampling_problem", swallowed)
@@ -380,14 +382,15 @@ def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path,
     out = tmp_path / "run.h5"
     assert main(["sample", str(study), "--out", str(out), "--no-progress"]) == 130
     assert _files(tmp_path) == ["study.toml"]
-    assert not interrupts.requested()  # cleared for the next command in this process
+    # the next command in this process starts with its own, clear request
+    assert signal.getsignal(signal.SIGTERM) is not None
 
 
 def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
     import gc
     import sys
 
-    from bayesupdate import interrupts
+    from bayesupdate.interrupts import StopRequest
 
     class RaisesOnDelete:  # an exception Python can only report as "Exception ignored"
         def __init__(self, exc):
@@ -396,8 +399,9 @@ def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
         def __del__(self):
             raise self.exc
 
-    previous, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
-    interrupts.request()
+    stop = StopRequest()
+    previous, sys.unraisablehook = sys.unraisablehook, stop.quiet_unraisable
+    stop.request()
     try:
         RaisesOnDelete(KeyboardInterrupt())
         gc.collect()
@@ -407,25 +411,23 @@ def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
         assert "real problem" in capsys.readouterr().err
     finally:
         sys.unraisablehook = previous
-        interrupts.clear()
 
 
 def test_swallowed_stop_traceback_printed_by_an_extension_is_silenced(capsys):
     """Cython prints a swallowed exception with sys.excepthook (PyErr_PrintEx) before the
     unraisable hook: a recorded stop request's traceback is dropped, anything else is shown."""
-    from bayesupdate import interrupts
+    from bayesupdate.interrupts import StopRequest
+
+    stop = StopRequest()
 
     def report(exc):
         try:
             raise exc
         except BaseException as caught:
-            interrupts.quiet_excepthook(type(caught), caught, caught.__traceback__)
+            stop.quiet_excepthook(type(caught), caught, caught.__traceback__)
         return capsys.readouterr().err
 
     assert "KeyboardInterrupt" in report(KeyboardInterrupt())  # no stop request: a real one
-    interrupts.request()
-    try:
-        assert report(KeyboardInterrupt()) == ""
-        assert "real problem" in report(ValueError("real problem"))
-    finally:
-        interrupts.clear()
+    stop.request()
+    assert report(KeyboardInterrupt()) == ""
+    assert "real problem" in report(ValueError("real problem"))

@@ -6,13 +6,13 @@ import sys
 
 import numpy as np
 
-from bayesupdate import interrupts
 from bayesupdate.commands.calibrate import (
     add_full_argument,
     add_study_arguments,
     study_from_args,
 )
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.interrupts import StopRequest
 
 NAME = "sample"
 HELP = "posterior of the parameters with emcee (DE moves), diagnostics, predictive bands"
@@ -75,16 +75,19 @@ def _sample_with_stop_handlers(prepared, args):
     """``pipelines.sample.run_sampling`` with SIGTERM/SIGINT turned into a checkpointed stop."""
     from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
 
+    stop = StopRequest()
     options = SamplingOptions(
-        out=args.out, resume=args.resume, progress=not (args.json or args.no_progress)
+        out=args.out,
+        resume=args.resume,
+        progress=not (args.json or args.no_progress),
+        stop=stop,
     )
-    interrupts.clear()
-    previous_hook, sys.unraisablehook = sys.unraisablehook, interrupts.quiet_unraisable
-    previous_excepthook, sys.excepthook = sys.excepthook, interrupts.quiet_excepthook
-    previous = signal.signal(signal.SIGTERM, interrupts.stop_handler)
+    previous_hook, sys.unraisablehook = sys.unraisablehook, stop.quiet_unraisable
+    previous_excepthook, sys.excepthook = sys.excepthook, stop.quiet_excepthook
+    previous = signal.signal(signal.SIGTERM, stop.handler)
     # a process started in the background by a non-interactive shell inherits SIGINT ignored,
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
-    previous_int = signal.signal(signal.SIGINT, interrupts.stop_handler)
+    previous_int = signal.signal(signal.SIGINT, stop.handler)
     try:
         return run_sampling(prepared, options)
     finally:
@@ -92,7 +95,6 @@ def _sample_with_stop_handlers(prepared, args):
         signal.signal(signal.SIGINT, previous_int)
         sys.unraisablehook = previous_hook
         sys.excepthook = previous_excepthook
-        interrupts.clear()
 
 
 def _print_summary(out: dict, summary: dict, sampler) -> None:

@@ -28,7 +28,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from bayesupdate import interrupts
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.pairing import ResidualTable
 from bayesupdate.inference.parameter_space import (
@@ -37,6 +36,7 @@ from bayesupdate.inference.parameter_space import (
     unit_box_residuals,
 )
 from bayesupdate.inference.problem import CalibrationProblem
+from bayesupdate.interrupts import StopRequest
 
 
 @dataclass(frozen=True)
@@ -205,14 +205,14 @@ def _start_points(
 
 
 def _local_fits(
-    residuals, u_starts: np.ndarray, max_nfev: int | None, polish: bool
+    residuals, u_starts: np.ndarray, max_nfev: int | None, polish: bool, stop: StopRequest
 ) -> tuple[list, list]:
     """Bounded trust-region least squares from each start (n, d), each end Nelder-Mead polished
     (400 d evaluations) when ``polish``: (end points u (d,) each, objectives each)."""
     d = u_starts.shape[1]
     ends, objectives = [], []
     for u0 in u_starts:
-        interrupts.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
+        stop.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
         fit = optimize.least_squares(
             residuals,
             np.clip(u0, 0.0, 1.0),
@@ -298,6 +298,7 @@ def calibrate(
     problem: CalibrationProblem,
     settings: CalibrationSettings = CalibrationSettings(),
     refine: CalibrationProblem | None = None,
+    stop: StopRequest | None = None,
 ) -> CalibrationResult:
     """Point optimum of the fit objective over the parameter bounds (module docstring).
 
@@ -306,6 +307,7 @@ def calibrate(
     data and pairing): each end point within 5 % of the best is polished on it (Nelder-Mead,
     60 d evaluations), every end is re-evaluated on it, and the result (objectives, table) is that
     of ``refine``; ``evaluations`` counts both models' evaluations.
+    stop : the run's ``interrupts.StopRequest``, checked before each start (None: none).
     Returns CalibrationResult.  Model failures are counted in ``failed_evaluations``.
     """
     t0 = time.perf_counter()
@@ -313,7 +315,9 @@ def calibrate(
     counter = EvaluationCount()
     residuals = _residual_function(problem, counter)
     u_starts = _start_points(problem, box, residuals, settings)
-    ends, objectives = _local_fits(residuals, u_starts, settings.max_nfev, settings.polish_ends)
+    ends, objectives = _local_fits(
+        residuals, u_starts, settings.max_nfev, settings.polish_ends, stop or StopRequest()
+    )
     if refine is not None:
         _refined(refine, problem, counter, ends, objectives)
         problem = refine

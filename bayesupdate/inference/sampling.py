@@ -27,12 +27,12 @@ from dataclasses import dataclass, field
 import emcee
 import numpy as np
 
-from bayesupdate import interrupts
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.parameter_space import ParameterSpace, ParameterSpec
+from bayesupdate.interrupts import StopRequest
 
 
 def default_moves() -> list:
@@ -396,16 +396,18 @@ def _start(run: _Run, guarded) -> None:
     run.t0 = time.perf_counter()
 
 
-def _run_block(sampler, run: _Run, block: int, stop: dict, bar) -> tuple[list, list, bool]:
+def _run_block(
+    sampler, run: _Run, block: int, stop: dict, request: StopRequest, bar
+) -> tuple[list, list, bool]:
     """``block`` emcee steps from ``run.state``: (coords (n_walkers, d) per completed step,
     log-densities (n_walkers,) per step, interrupted).  ``run.state`` follows each step."""
     coords, lps = [], []
     try:
         sampler.reset()
-        if interrupts.requested():  # arrived during the previous block's bookkeeping
+        if request.requested():  # arrived during the previous block's bookkeeping
             raise KeyboardInterrupt
         for step in sampler.sample(run.state, iterations=block, store=True):
-            if stop["requested"] or interrupts.requested():
+            if stop["requested"] or request.requested():
                 raise KeyboardInterrupt
             # emcee updates its state object in place during the next step, so a Ctrl-C
             # there would leave it half-updated: keep copies of each completed step
@@ -453,6 +455,7 @@ def _sample_blocks(
     stop: dict,
     checkpoint: Callable[[SamplerState], None] | None,
     space: ParameterSpace | None,
+    request: StopRequest,
 ) -> tuple[bool, bool, np.ndarray]:
     """Blocks of ``check_every`` steps (boundaries at its multiples from the first step) until
     the stop rule, the budget or a stop request: (interrupted, converged, tau (d,) [steps]).
@@ -468,10 +471,10 @@ def _sample_blocks(
     while run.done < steps:
         done = run.done
         block = min(check_every - done % check_every, steps - done)
-        coords, lps, interrupted = _run_block(sampler, run, block, stop, bar)
+        coords, lps, interrupted = _run_block(sampler, run, block, stop, request, bar)
         # bookkeeping and the checkpoint run to the end; a stop request arriving meanwhile is
-        # recorded by the CLI's handler and acted on at the next block (interrupts.deferred)
-        with interrupts.deferred():
+        # recorded by the CLI's handler and acted on at the next block (StopRequest.deferred)
+        with request.deferred():
             _append(run, sampler, coords, lps, space)
             if interrupted:
                 break
@@ -527,6 +530,7 @@ def sample_posterior(
     checkpoint: Callable[[SamplerState], None] | None = None,
     screen: LogPosterior | None = None,
     moves: list | None = None,
+    stop_request: StopRequest | None = None,
 ) -> PosteriorResult:
     """Run emcee until steps >= min_autocorr_times * max(tau) and the convergence targets hold
     (``settings.target_rhat``, ``settings.target_ess``; None: not checked), or ``settings.steps``
@@ -544,6 +548,8 @@ def sample_posterior(
     it and only the survivors get an exact evaluation; the chain still targets
     ``log_posterior`` exactly.  ``evaluations`` counts exact evaluations,
     ``screen_evaluations`` the surrogate's.  moves : emcee moves (default ``default_moves()``).
+    stop_request : the run's ``interrupts.StopRequest`` (a signal handler sets it; checked between
+    steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
     """
     settings.check_walkers(log_posterior.ndim)
     stop = {"requested": False}
@@ -561,5 +567,8 @@ def sample_posterior(
     else:
         run = _fresh_run(log_posterior, calibration, initial, settings, space)
     _start(run, guarded)
-    outcome = _sample_blocks(sampler, run, log_posterior, settings, stop, checkpoint, space)
+    request = stop_request or StopRequest()
+    outcome = _sample_blocks(
+        sampler, run, log_posterior, settings, stop, checkpoint, space, request
+    )
     return _posterior_result(run, log_posterior, outcome, settings.seed, screened)

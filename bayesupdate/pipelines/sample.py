@@ -24,6 +24,7 @@ from bayesupdate.inference.sampling import (
     SamplerState,
     sample_posterior,
 )
+from bayesupdate.interrupts import StopRequest
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
     certify_rom,
@@ -39,11 +40,14 @@ class SamplingOptions:
     out : result file (HDF5), checkpointed while sampling; None: nothing is written.
     resume : continue the partial result in ``out`` (written by the same study).
     progress : show a progress bar.
+    stop : the run's ``interrupts.StopRequest`` (the command's signal handler sets it); None:
+    the run cannot be stopped but by an exception.
     """
 
     out: str | Path | None = None
     resume: bool = False
     progress: bool = False
+    stop: StopRequest | None = None
 
 
 @dataclass(frozen=True)
@@ -82,7 +86,7 @@ def run_sampling(
         settings = CalibrationSettings(
             starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False
         )
-        calibration = calibrate(problem, settings)
+        calibration = calibrate(problem, settings, stop=options.stop)
     if rom is not None:
         rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
         problem = replace(problem, model=rom)
@@ -150,7 +154,13 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
         progress=options.progress,
     )
     return sample_posterior(
-        log_post, calibration, settings, screen=screen, checkpoint=checkpoint, resume=state
+        log_post,
+        calibration,
+        settings,
+        screen=screen,
+        checkpoint=checkpoint,
+        resume=state,
+        stop_request=options.stop,
     )
 
 

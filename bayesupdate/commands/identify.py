@@ -97,11 +97,12 @@ def _write_plots(folder, result, frfs) -> None:
 def _identify(args, inp):
     """identify() on the merged set; on failure with --report, a report of the data and the
     failure is written before the error goes to the CLI."""
-    from bayesupdate.ema.identify import identify
+    from bayesupdate.ema.identify import IdentifySettings, identify
     from bayesupdate.report.identify_report import write_identify_report
 
     try:
-        return identify(inp.frfs, band_hz=inp.band_hz, max_order=inp.max_order, method=inp.method)
+        settings = IdentifySettings(max_order=inp.max_order, method=inp.method)
+        return identify(inp.frfs, band_hz=inp.band_hz, settings=settings)
     except BayesUpdateError as exc:
         if args.report:
             html, _ = write_identify_report(args.report, inp, None, failure=str(exc))

@@ -9,7 +9,7 @@ once by LSFD over the analysed range, and the shapes of the sets are scaled by t
 points and aligned on shared DOFs (:func:`~bayesupdate.ema.lsfd.shapes_from_residues`).
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -146,21 +146,59 @@ def _owned_range(f: np.ndarray, bands: list, i: int, df_hz: float) -> tuple[floa
     return lo, hi
 
 
-def _poles_by_band(frfs, bands, order, settings):
-    """Selected poles owned by each band, all diagrams, and stable poles at the data's top."""
+@dataclass(frozen=True)
+class IdentifySettings:
+    """Knobs of :func:`identify`, validated once here.
+
+    max_order : highest polynomial order per band (None: 40; at least 2).  band_lines : lines
+    per band minus one (None: :func:`~bayesupdate.ema.bands.automatic_bands`; at least the
+    range's lines for one band).  min_count : stable orders a pole needs (None: the
+    selection's default, :func:`~bayesupdate.ema.stabilization.select_poles`).
+    tol_frequency, tol_damping [-], min_mac : stabilization tolerances between orders.
+    tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 %
+    between orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that
+    pass are removed by :func:`modal_significance`.  method : a key of ``ESTIMATORS``.
+    """
+
+    max_order: int | None = None
+    band_lines: int | None = None
+    min_count: int | None = None
+    tol_frequency: float = 0.01
+    tol_damping: float = 0.2
+    min_mac: float = 0.98
+    method: str = "lsce"
+
+    def __post_init__(self):
+        order = 40 if self.max_order is None else int(self.max_order)
+        if order < 2:
+            raise BayesUpdateError(f"--max-order {order}: must be at least 2")
+        if self.method not in ESTIMATORS:
+            raise BayesUpdateError(f"--method {self.method!r}: use one of {', '.join(ESTIMATORS)}")
+        object.__setattr__(self, "max_order", order)
+
+
+def _poles_by_band(frfs, bands, settings: IdentifySettings):
+    """Selected poles owned by each band, all diagrams, and stable poles at the data's top;
+    BayesUpdateError when no band has a stable mode."""
     f = frfs.frequencies_hz
-    tol_frequency, tol_damping, min_mac, min_count, method = settings
     candidates, diagrams, edge = [], [], []
     for i, band in enumerate(bands):
-        res = ESTIMATORS[method](f, frfs.frf, (f[band.lo], f[band.hi]), max_order=order)
+        res = ESTIMATORS[settings.method](
+            f, frfs.frf, (f[band.lo], f[band.hi]), max_order=settings.max_order
+        )
         diagram = stabilization_diagram(
-            res, tol_frequency, tol_damping, min_mac, resolution_hz=frfs.df_hz
+            res,
+            settings.tol_frequency,
+            settings.tol_damping,
+            settings.min_mac,
+            resolution_hz=frfs.df_hz,
         )
         diagrams.append(diagram)
         f_own_lo, f_own_hi = _owned_range(f, bands, i, frfs.df_hz)
         width = f[band.hi] - f[band.lo]
         margin = _edge_margin(f, band, frfs.df_hz)
-        for pole in select_poles(diagram, min_count=min_count, resolution_hz=frfs.df_hz):
+        selected = select_poles(diagram, min_count=settings.min_count, resolution_hz=frfs.df_hz)
+        for pole in selected:
             # damped frequency decides ownership: it is what sits between the band's lines
             fd = pole.pole.imag / (2 * np.pi)
             at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
@@ -169,6 +207,11 @@ def _poles_by_band(frfs, bands, order, settings):
                 candidates.append((pole, centrality))
             elif band is bands[-1] and fd > f[band.hi] - margin:
                 edge.append(pole.pole)
+    if not candidates:
+        raise BayesUpdateError(
+            f"{frfs.source or 'FRF set'}: no stable mode found; check the band and the data, "
+            "or raise --max-order"
+        )
     return _merge(candidates), diagrams, edge
 
 
@@ -194,108 +237,114 @@ def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):
         dropped.append(kept.pop(worst))
 
 
-def identify(
-    frfs: FrfSet,
-    band_hz: tuple[float, float] | None = None,
-    max_order: int | None = None,
-    band_lines: int | None = None,
-    min_count: int | None = None,
-    tol_frequency: float = 0.01,
-    tol_damping: float = 0.2,
-    min_mac: float = 0.98,
-    method: str = "lsce",
-) -> Identification:
-    """Identify the modes of an FRF set without user pole picking.
+def _residual_poles(selected: list, edge: list) -> np.ndarray:
+    """Out-of-band poles (0 or 1,) [rad/s] for the LSFD basis: the first stable pole hugging
+    the top of the data more than 1 % above the highest selected mode.
 
-    tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 % between
-    orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that pass are
-    removed by :func:`modal_significance`.
-    band_hz : (lo, hi) [Hz] to analyse, or None for the whole axis; either range is split
-    into consecutive narrow bands (:func:`~bayesupdate.ema.bands.automatic_bands`), so a
-    mode's estimate does not depend on the range typed around it (one band of order 60 over
-    the mAEWing1 GVT's 3-35 Hz, 1920 lines, left its weak 31.7 Hz mode drifting with the
-    order, 31.48-31.68 Hz, and pLSCF lost it).  band_lines : lines per band minus one
-    (default :func:`~bayesupdate.ema.bands.automatic_bands`; at least the range's lines for
-    one band).  max_order : highest polynomial order per band (default 40).  Returns an
-    :class:`Identification`; raises BayesUpdateError for a bad band, too few lines for the
-    order, or when no stable mode is found.
+    Such a pole is a mode just above the data: not reported, but kept in the basis, whose
+    flank the constant upper residual cannot follow (on the FE exhaust a mode at 150.5 Hz
+    otherwise biases mode 11's weak H part: MAC 0.978 -> 0.99+).  Its residues are dropped.
     """
-    f = frfs.frequencies_hz
-    h = frfs.frf
-    order = 40 if max_order is None else int(max_order)
-    lo_i, hi_i = (0, f.size - 1) if band_hz is None else band_indices(f, band_hz)
-    bands = automatic_bands(h, lo_i, hi_i, band_lines, order)
-    if order < 2:
-        raise BayesUpdateError(f"--max-order {order}: must be at least 2")
-    if method not in ESTIMATORS:
-        raise BayesUpdateError(f"--method {method!r}: use one of {', '.join(ESTIMATORS)}")
-    settings = (tol_frequency, tol_damping, min_mac, min_count, method)
-    selected, diagrams, edge = _poles_by_band(frfs, bands, order, settings)
-    if not selected:
-        raise BayesUpdateError(
-            f"{frfs.source or 'FRF set'}: no stable mode found; check the band and the data, "
-            "or raise --max-order"
-        )
-    # A stable pole hugging the top of the data is a mode just above it: not reported, but kept
-    # as an out-of-band pole in the LSFD basis, whose flank the constant upper residual cannot
-    # follow (on the FE exhaust a mode at 150.5 Hz otherwise biases mode 11's weak H part: MAC
-    # 0.978 -> 0.99+).  Residues of such poles are dropped.
     f_top = max(p.frequency_hz for p in selected)
-    residual_poles = np.array([p for p in edge if p.imag / (2 * np.pi) > f_top * 1.01])[:1]
-    fit_lo, fit_hi = bands[0].lo, bands[-1].hi
-    # End the fits at the sum-FRF minimum above the highest selected mode: a resonance just
-    # beyond the analysed range is not among the poles, and its rising flank is not the smooth
-    # upper residual the fit assumes (seed sec. 4.1: band limits at local minima).
+    return np.array([p for p in edge if p.imag / (2 * np.pi) > f_top * 1.01])[:1]
+
+
+def _fit_end(frfs: FrfSet, f_top: float, fit_hi: int) -> int:
+    """Last line index of the LSFD fit: the sum-FRF minimum between the highest selected mode
+    f_top [Hz] and line fit_hi (fit_hi itself with under 3 lines there).  A resonance just
+    beyond the analysed range is not among the poles, and its rising flank is not the smooth
+    upper residual the fit assumes (seed sec. 4.1: band limits at local minima)."""
+    f = frfs.frequencies_hz
     above = np.flatnonzero((f > f_top) & (np.arange(f.size) <= fit_hi))
     if above.size > 2:
-        fit_hi = int(above[np.argmin(np.sum(np.abs(h[:, above]), axis=0))])
-    selected, fit, significance, dropped = _fit_and_prune(
-        frfs, selected, residual_poles, fit_lo, fit_hi
-    )
+        fit_hi = int(above[np.argmin(np.sum(np.abs(frfs.frf[:, above]), axis=0))])
+    return fit_hi
+
+
+def _modal_data(frfs: FrfSet, selected: list, fit: LsfdFit, significance) -> ModalData:
+    """The identified modes: the selected poles (m) with the LSFD residues of ``fit`` scaled
+    to shapes over all test sets, their errors and the diagnostics in ``extra``;
+    significance (2, m): share and peak-to-residual (:func:`modal_significance`)."""
     poles = np.array([p.pole for p in selected])
-    f_fit = f[fit_lo : fit_hi + 1]
     residues = fit.residues[:, : poles.size]
     scaled = shapes_from_residues(residues, poles, frfs.sets(), fit.residue_var[:, : poles.size])
-    labels, shapes, massnorm = scaled.labels, scaled.shapes, scaled.mass_normalised
     sd_rel, sd_fallback = shape_sd_rel(scaled)
-    fit_poles = np.concatenate([poles, residual_poles])
-    synth = synthesize_frf(f_fit, fit_poles, fit.residues, frfs.kind, fit.lower, fit.upper)
-    meas = h[:, fit_lo : fit_hi + 1]
-    frac = frf_correlation(meas, synth)
-    freq = np.array([p.frequency_hz for p in selected])
-    modes = ModalData(
-        frequencies_hz=freq,
+    return ModalData(
+        frequencies_hz=np.array([p.frequency_hz for p in selected]),
         damping_ratio=np.array([p.damping_ratio for p in selected]),
-        shapes=shapes,
-        dof_labels=labels,
-        mpc=mpc(shapes),
+        shapes=scaled.shapes,
+        dof_labels=scaled.labels,
+        mpc=mpc(scaled.shapes),
         shape_sd_rel=sd_rel,
         source=frfs.source or "identify",
         extra={
             "stable_orders": np.array([p.stable_orders for p in selected]),
             "cluster_spread_hz": np.array([p.spread_hz for p in selected]),
-            "mass_normalised": massnorm,
+            "mass_normalised": scaled.mass_normalised,
             "fit_share": significance[0],
             "peak_to_residual": significance[1],
             "shape_sd_fallback": sd_fallback,
             "shape_weak_part": scaled.weak_part,
         },
     )
+
+
+def _synthesis(frfs: FrfSet, fit: LsfdFit, fit_poles: np.ndarray, lines: slice) -> tuple:
+    """FRFs (n_frf, n_fit) synthesized from ``fit`` with its poles fit_poles [rad/s] on the fit
+    lines ``lines``, and their correlation (FRAC, (n_frf,)) with the measured FRFs there."""
+    f_fit = frfs.frequencies_hz[lines]
+    synth = synthesize_frf(f_fit, fit_poles, fit.residues, frfs.kind, fit.lower, fit.upper)
+    return synth, frf_correlation(frfs.frf[:, lines], synth)
+
+
+def identify(
+    frfs: FrfSet,
+    band_hz: tuple[float, float] | None = None,
+    settings: IdentifySettings | None = None,
+    **options,
+) -> Identification:
+    """Identify the modes of an FRF set without user pole picking.
+
+    band_hz : (lo, hi) [Hz] to analyse, or None for the whole axis; either range is split
+    into consecutive narrow bands (:func:`~bayesupdate.ema.bands.automatic_bands`), so a
+    mode's estimate does not depend on the range typed around it (one band of order 60 over
+    the mAEWing1 GVT's 3-35 Hz, 1920 lines, left its weak 31.7 Hz mode drifting with the
+    order, 31.48-31.68 Hz, and pLSCF lost it).  settings : :class:`IdentifySettings`
+    (default: its defaults); options : fields of it to set or override, for calls without
+    a record (``identify(frfs, max_order=60)``).  Returns an :class:`Identification`;
+    raises BayesUpdateError for bad settings, a bad band, too few lines for the order, or
+    when no stable mode is found.
+    """
+    settings = IdentifySettings(**options) if settings is None else replace(settings, **options)
+    f = frfs.frequencies_hz
+    lo_i, hi_i = (0, f.size - 1) if band_hz is None else band_indices(f, band_hz)
+    bands = automatic_bands(frfs.frf, lo_i, hi_i, settings.band_lines, settings.max_order)
+    selected, diagrams, edge = _poles_by_band(frfs, bands, settings)
+    residual_poles = _residual_poles(selected, edge)
+    fit_lo = bands[0].lo
+    fit_hi = _fit_end(frfs, max(p.frequency_hz for p in selected), bands[-1].hi)
+    selected, fit, significance, dropped = _fit_and_prune(
+        frfs, selected, residual_poles, fit_lo, fit_hi
+    )
+    poles = np.array([p.pole for p in selected])
+    lines = slice(fit_lo, fit_hi + 1)
+    synth, frac = _synthesis(frfs, fit, np.concatenate([poles, residual_poles]), lines)
+    modes = _modal_data(frfs, selected, fit, significance)
     return Identification(
         modes=modes,
         poles=poles,
-        residues=residues,
+        residues=fit.residues[:, : poles.size],
         lower_residual=fit.lower,
         upper_residual=fit.upper,
         selected=tuple(selected),
         diagrams=tuple(diagrams),
         bands_hz=tuple((float(f[b.lo]), float(f[b.hi])) for b in bands),
-        fit_range_hz=(float(f_fit[0]), float(f_fit[-1])),
+        fit_range_hz=(float(f[fit_lo]), float(f[fit_hi])),
         synthesized=synth,
         frf_correlation=frac,
-        mass_normalised=massnorm,
+        mass_normalised=modes.extra["mass_normalised"],
         extra={"dropped_hz": np.array([p.frequency_hz for p in dropped])},
     )
 
 
-__all__ = ["Identification", "identify", "StabilizationDiagram"]
+__all__ = ["Identification", "IdentifySettings", "identify", "StabilizationDiagram"]

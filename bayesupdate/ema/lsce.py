@@ -128,9 +128,37 @@ def lsce(
     f = np.asarray(frequencies_hz, dtype=float)
     h = np.atleast_2d(np.asarray(frf))
     lo_i, hi_i = band_indices(f, band_hz)
-    n_lines = hi_i - lo_i + 1
     max_order = int(max_order) + int(max_order) % 2
     min_order = max(2, int(min_order) + int(min_order) % 2)
+    irf, dt, n_use, n_rows = _band_system(f, h, (lo_i, hi_i), max_order, first_sample, n_samples)
+    r = hankel_r_factor(irf, max_order + 1, first_sample, n_rows)
+    w_lo, w_hi = 2 * np.pi * f[lo_i], 2 * np.pi * f[hi_i]
+    orders = np.arange(min_order, max_order + 1, 2)
+    poles_out, vectors_out = [], []
+    n_vec = min(n_use, 2 * max_order + 64)
+    t_index = np.arange(first_sample, first_sample + n_vec)
+    for p in orders:
+        z, pick, poles = _order_poles(r, int(p), dt, (w_lo, w_hi))
+        poles_out.append(poles)
+        if with_vectors:
+            vectors_out.append(_pole_vectors(z, irf, t_index)[pick].T)
+        else:
+            vectors_out.append(np.zeros((h.shape[0], pick.size), complex))
+    return LsceResult(
+        orders=orders,
+        poles=tuple(poles_out),
+        vectors=tuple(vectors_out),
+        band_hz=(float(f[lo_i]), float(f[hi_i])),
+        dt=float(dt),
+    )
+
+
+def _band_system(f, h, band, max_order, first_sample, n_samples):
+    """The band's IRFs (n_frf, M) and step dt [s], the IRF samples used and the Hankel rows
+    per FRF; BayesUpdateError when the band holds too few lines for ``max_order``.
+    f (n_f,) [Hz], h (n_frf, n_f), band (lo, hi) line indices (inclusive)."""
+    lo_i, hi_i = band
+    n_lines = hi_i - lo_i + 1
     df = (f[-1] - f[0]) / (f.size - 1)
     irf, dt = band_irf(h[:, lo_i : hi_i + 1], df)
     n_irf = irf.shape[1]
@@ -142,44 +170,40 @@ def lsce(
             f"band {f[lo_i]:g}-{f[hi_i]:g} Hz: {n_lines} lines are too few for model order "
             f"{max_order}; widen the band or lower --max-order"
         )
-    r = hankel_r_factor(irf, max_order + 1, first_sample, n_rows)
-    w_lo, w_hi = 2 * np.pi * f[lo_i], 2 * np.pi * f[hi_i]
-    orders = np.arange(min_order, max_order + 1, 2)
-    poles_out, vectors_out = [], []
-    n_vec = min(n_use, 2 * max_order + 64)
-    t_index = np.arange(first_sample, first_sample + n_vec)
-    for p in orders:
-        beta = prony_coefficients(r, int(p))
-        z = np.roots(np.concatenate(([1.0], beta[::-1])))
-        z = z[np.isfinite(z) & (np.abs(z) > 0)]
-        s_base = np.log(z.astype(complex)) / dt
-        keep = (s_base.imag > 0) & (s_base.real < 0)
-        s = s_base[keep] + 1j * w_lo  # shift back by the band's lower limit (module docstring)
-        inside = (s.imag >= w_lo) & (s.imag <= w_hi)
-        order_idx = np.argsort(s[inside].imag)
-        poles_out.append(s[inside][order_idx])
-        if with_vectors:
-            # IRF residues (seed eq. 18) of the decaying roots by least squares over the first
-            # samples; growing roots would overflow z^k and carry no physical residue
-            decaying = np.abs(z) < 1
-            vander = z[decaying][None, :] ** t_index[:, None]
-            # normal equations of the small Vandermonde system (p x p): the vectors only feed
-            # the MAC stability check, and this avoids a LAPACK least-squares call per order
-            normal = vander.conj().T @ vander
-            normal += 1e-12 * np.trace(normal).real * np.eye(normal.shape[0])
-            coef = np.linalg.solve(normal, vander.conj().T @ irf[:, t_index].T)
-            full = np.zeros((z.size, h.shape[0]), complex)
-            full[decaying] = coef
-            vectors_out.append(full[keep][inside][order_idx].T)
-        else:
-            vectors_out.append(np.zeros((h.shape[0], int(inside.sum())), complex))
-    return LsceResult(
-        orders=orders,
-        poles=tuple(poles_out),
-        vectors=tuple(vectors_out),
-        band_hz=(float(f[lo_i]), float(f[hi_i])),
-        dt=float(dt),
-    )
+    return irf, dt, n_use, n_rows
+
+
+def _order_poles(r_factor, order, dt, w_band):
+    """Prony roots z (n_z,) of one order (seed eqs 10, 15), the indices (m,) into z of its
+    physical poles, and those poles (m,) [rad/s]: decaying, Im > 0, shifted back by the band's
+    lower limit (module docstring), inside w_band = (w_lo, w_hi) [rad/s], by frequency."""
+    w_lo, w_hi = w_band
+    beta = prony_coefficients(r_factor, order)
+    z = np.roots(np.concatenate(([1.0], beta[::-1])))
+    z = z[np.isfinite(z) & (np.abs(z) > 0)]
+    s_base = np.log(z.astype(complex)) / dt
+    keep = (s_base.imag > 0) & (s_base.real < 0)
+    s = s_base[keep] + 1j * w_lo
+    inside = (s.imag >= w_lo) & (s.imag <= w_hi)
+    order_idx = np.argsort(s[inside].imag)
+    pick = np.flatnonzero(keep)[inside][order_idx]
+    return z, pick, s[inside][order_idx]
+
+
+def _pole_vectors(z, irf, t_index):
+    """IRF residues (n_z, n_frf) of the roots z (n_z,) (seed eq. 18) by least squares over the
+    IRF samples t_index of irf (n_frf, M); zero for growing roots, which would overflow z^k
+    and carry no physical residue."""
+    decaying = np.abs(z) < 1
+    vander = z[decaying][None, :] ** t_index[:, None]
+    # normal equations of the small Vandermonde system (p x p): the vectors only feed the MAC
+    # stability check, and this avoids a LAPACK least-squares call per order
+    normal = vander.conj().T @ vander
+    normal += 1e-12 * np.trace(normal).real * np.eye(normal.shape[0])
+    coef = np.linalg.solve(normal, vander.conj().T @ irf[:, t_index].T)
+    full = np.zeros((z.size, irf.shape[0]), complex)
+    full[decaying] = coef
+    return full
 
 
 def band_indices(frequencies_hz: np.ndarray, band_hz: tuple[float, float] | None) -> tuple:

@@ -247,6 +247,65 @@ def _scale_mode(prod, prod_var, sets, dp, weak, common):
     return fac, fvar, massnorm, arbitrary, (alt, alt_var)
 
 
+def _residue_products(residues, poles, residue_var, sets):
+    """Per mode, from residues (n_frf, m) and poles (m,) [rad/s]: the products psi_i psi_q =
+    2 j w_d A_iq (n_frf, m), their variances (n_frf, m) (zero without ``residue_var``), the
+    driving-point products (n_set, m) (zero for a set without one) and the common scale (m,)
+    of a set that is not scaled by its own data."""
+    wd = np.imag(poles)
+    prod = residues * (2j * wd)[None, :]  # psi_i psi_q
+    prod_var = np.zeros(prod.shape) if residue_var is None else residue_var * (2 * wd) ** 2
+    n_modes = prod.shape[1]
+    dp = np.array(
+        [
+            prod[s["driving_row"]] if s["driving_row"] is not None else np.zeros(n_modes)
+            for s in sets
+        ]
+    )
+    # without any driving point a mode cannot be mass-normalised: its shape is left unscaled,
+    # at unit largest component (dividing by a vanishing driving point would overflow)
+    peak = np.max(np.abs(prod), axis=0)
+    dp_max = np.max(np.abs(dp), axis=0)
+    common = np.where(dp_max > 0, np.sqrt(dp_max), np.where(peak > 0, peak, 1.0))
+    return prod, prod_var, dp, common
+
+
+def _value_var(col, cvar, fac, fvar, arbitrary, alt):
+    """Error variance (n_rows,) of a set's values psi = fac col of one mode (col, cvar
+    (n_rows,): products and their variances; fac, fvar: the set's factor and its variance;
+    alt: the (factor, variance) the set would have had if ``arbitrary``; docstring of
+    :func:`shapes_from_residues`)."""
+    psi = col * fac
+    var = cvar * abs(fac) ** 2 + np.abs(psi) ** 2 * fvar / abs(fac) ** 2
+    if arbitrary and np.isfinite(alt[0]):
+        a, a_var = alt
+        var = np.abs(col) ** 2 * (abs(a - fac) ** 2 + a_var) + cvar * abs(a) ** 2
+    elif arbitrary:
+        var = var + np.abs(psi) ** 2
+    return var
+
+
+def _assemble_mode(prod_r, prod_var_r, sets, index, scaling, weak_r):
+    """One mode's shape (n_dof,) complex and error variance (n_dof,) at the labels of
+    ``index``: the sets' scaled values averaged where sets share a label, a weak set
+    (weak_r (n_set,) bool) weighted 1e-6 so it only fills DOFs no other set has.
+    prod_r, prod_var_r (n_frf,); scaling: (fac, fvar, arbitrary, alt) of :func:`_scale_mode`."""
+    fac, fvar, arbitrary, alt = scaling
+    total = np.zeros(len(index), complex)
+    count = np.zeros(len(index))
+    var_sum = np.zeros(len(index))
+    for k, st in enumerate(sets):
+        col, cvar = prod_r[st["rows"]], prod_var_r[st["rows"]]
+        psi = col * fac[k]
+        var = _value_var(col, cvar, fac[k], fvar[k], arbitrary[k], (alt[0][k], alt[1][k]))
+        weight = 1e-6 if weak_r[k] else 1.0
+        rows = [index[lab] for lab in st["roving"]]
+        np.add.at(total, rows, weight * psi)
+        np.add.at(count, rows, weight)
+        np.add.at(var_sum, rows, weight**2 * var)
+    return total / np.where(count > 0, count, 1.0), var_sum / np.where(count > 0, count, 1.0) ** 2
+
+
 def shapes_from_residues(
     residues: np.ndarray,
     poles: np.ndarray,
@@ -273,22 +332,9 @@ def shapes_from_residues(
     fit it: its error is the difference to the best other factor (shared DOFs or its own
     driving point) plus that factor's variance, or its whole size when there is none.
     """
-    wd = np.imag(poles)
-    prod = residues * (2j * wd)[None, :]  # psi_i psi_q
-    prod_var = np.zeros(prod.shape) if residue_var is None else residue_var * (2 * wd) ** 2
+    prod, prod_var, dp, common = _residue_products(residues, poles, residue_var, sets)
     n_modes = prod.shape[1]
     set_norm = np.array([np.linalg.norm(prod[s["rows"]], axis=0) for s in sets])  # (n_set, m)
-    dp = np.array(
-        [
-            prod[s["driving_row"]] if s["driving_row"] is not None else np.zeros(n_modes)
-            for s in sets
-        ]
-    )
-    # without any driving point a mode cannot be mass-normalised: its shape is left unscaled,
-    # at unit largest component (dividing by a vanishing driving point would overflow)
-    peak = np.max(np.abs(prod), axis=0)
-    dp_max = np.max(np.abs(dp), axis=0)
-    common = np.where(dp_max > 0, np.sqrt(dp_max), np.where(peak > 0, peak, 1.0))
     labels = tuple(dict.fromkeys(lab for s in sets for lab in s["roving"]))
     index = {lab: i for i, lab in enumerate(labels)}
     shapes = np.zeros((len(labels), n_modes), complex)
@@ -300,24 +346,8 @@ def shapes_from_residues(
         fac, fvar, massnorm[r], arbitrary, alt = _scale_mode(
             prod[:, r], prod_var[:, r], sets, dp[:, r], weak[:, r], common[r]
         )
-        total = np.zeros(len(labels), complex)
-        count = np.zeros(len(labels))
-        var_sum = np.zeros(len(labels))
-        for k, st in enumerate(sets):
-            col, cvar = prod[st["rows"], r], prod_var[st["rows"], r]
-            psi = col * fac[k]
-            var = cvar * abs(fac[k]) ** 2 + np.abs(psi) ** 2 * fvar[k] / abs(fac[k]) ** 2
-            if arbitrary[k] and np.isfinite(alt[0][k]):
-                a, a_var = alt[0][k], alt[1][k]
-                var = np.abs(col) ** 2 * (abs(a - fac[k]) ** 2 + a_var) + cvar * abs(a) ** 2
-            elif arbitrary[k]:
-                var = var + np.abs(psi) ** 2
-            weight = 1e-6 if weak[k, r] else 1.0
-            rows = [index[lab] for lab in st["roving"]]
-            np.add.at(total, rows, weight * psi)
-            np.add.at(count, rows, weight)
-            np.add.at(var_sum, rows, weight**2 * var)
-        shapes[:, r] = total / np.where(count > 0, count, 1.0)
-        error_var[:, r] = var_sum / np.where(count > 0, count, 1.0) ** 2
+        shapes[:, r], error_var[:, r] = _assemble_mode(
+            prod[:, r], prod_var[:, r], sets, index, (fac, fvar, arbitrary, alt), weak[:, r]
+        )
         weak_part[r] = bool(np.any(arbitrary & weak[:, r]))
     return ScaledShapes(labels, shapes, massnorm, error_var, weak_part)

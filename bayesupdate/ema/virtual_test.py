@@ -16,6 +16,8 @@ FRFs are then estimated with H1 averaged over ``n_averages`` hits (rectangular w
 periodic record has no leakage), so noise is the only error source.
 """
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
 from bayesupdate.ema.frf_estimation import h1_h2_coherence
@@ -75,28 +77,43 @@ def half_sine_pulse(t: np.ndarray, duration_s: float, peak_n: float = 100.0) -> 
     return np.where(on, peak_n * np.sin(np.pi * t / duration_s), 0.0)
 
 
-def virtual_impact_test(
-    natural_hz: np.ndarray,
-    damping_ratio: np.ndarray,
-    shapes: np.ndarray,
-    dof_labels: tuple[str, ...],
-    layout: list[tuple[str, str]] | None = None,
-    f_max_hz: float = 150.0,
-    sample_rate_hz: float = 1024.0,
-    duration_s: float = 16.0,
-    pulse_s: float = 0.004,
-    noise: float = 0.01,
-    n_averages: int = 5,
-    seed: int | np.random.Generator | None = 0,
-    return_signals: bool = False,
-):
-    """Simulate the test; returns an accelerance :class:`FrfSet` on 0..f_max_hz.
+@dataclass(frozen=True)
+class ImpactTestSettings:
+    """Knobs of :func:`virtual_impact_test`, validated once here.
 
-    natural_hz (m,) [Hz], damping_ratio (m,), shapes (n_dof, m) real mass-normalised
-    [1/sqrt(kg)] at ``dof_labels``; layout: (response, reference) label pairs (default
-    :func:`seed_layout`).  noise: relative time-signal noise (module docstring).  With
-    ``return_signals`` also returns (t (n_t,), force (n_frf, n_avg, n_t), accel (same)).
+    f_max_hz : top of the returned FRFs [Hz], below half the sample rate.  sample_rate_hz [Hz],
+    duration_s : record length T [s].  pulse_s : hammer pulse length [s], spanning at least 4
+    samples and exciting up to 1.2 f_max_hz (the half-sine spectrum's first zero is at
+    1.5 / pulse_s).  noise : relative time-signal noise (module docstring).  n_averages : hits
+    averaged per FRF.
     """
+
+    f_max_hz: float = 150.0
+    sample_rate_hz: float = 1024.0
+    duration_s: float = 16.0
+    pulse_s: float = 0.004
+    noise: float = 0.01
+    n_averages: int = 5
+
+    def __post_init__(self):
+        if self.f_max_hz >= self.sample_rate_hz / 2:
+            raise BayesUpdateError("virtual test: f_max_hz must be below half the sample rate")
+        if self.pulse_s * self.sample_rate_hz < 4:
+            raise BayesUpdateError(
+                f"virtual test: hammer pulse of {self.pulse_s:g} s spans under 4 samples at "
+                f"{self.sample_rate_hz:g} Hz; lengthen the pulse or raise the sample rate"
+            )
+        if 1.5 / self.pulse_s < 1.2 * self.f_max_hz:
+            raise BayesUpdateError(
+                f"virtual test: a {self.pulse_s:g} s pulse does not excite up to "
+                f"{self.f_max_hz:g} Hz; shorten the pulse"
+            )
+
+
+def _checked_modes(natural_hz, damping_ratio, shapes, dof_labels, layout):
+    """The modes as float arrays (m,), (m,), (n_dof, m), the labels (n_dof,) and the layout
+    (default :func:`seed_layout`); BayesUpdateError for mismatched sizes or layout DOFs
+    without shape values."""
     natural_hz = np.asarray(natural_hz, dtype=float)
     damping_ratio = np.asarray(damping_ratio, dtype=float)
     shapes = np.asarray(shapes, dtype=float)
@@ -110,37 +127,60 @@ def virtual_impact_test(
     missing = sorted({lab for pair in layout for lab in pair} - set(labels))
     if missing:
         raise BayesUpdateError(f"virtual test: layout DOFs {missing} have no shape values")
-    if f_max_hz >= sample_rate_hz / 2:
-        raise BayesUpdateError("virtual test: f_max_hz must be below half the sample rate")
-    if pulse_s * sample_rate_hz < 4:
-        raise BayesUpdateError(
-            f"virtual test: hammer pulse of {pulse_s:g} s spans under 4 samples at "
-            f"{sample_rate_hz:g} Hz; lengthen the pulse or raise the sample rate"
-        )
-    if 1.5 / pulse_s < 1.2 * f_max_hz:  # first zero of the half-sine spectrum at 1.5/pulse
-        raise BayesUpdateError(
-            f"virtual test: a {pulse_s:g} s pulse does not excite up to {f_max_hz:g} Hz; "
-            "shorten the pulse"
-        )
+    return natural_hz, damping_ratio, shapes, labels, layout
+
+
+def _noisy_signals(h_true, settings: ImpactTestSettings, n_t: int, rng):
+    """Time t (n_t,) [s] and the noisy hammer forces [N] and accelerations [m/s^2], each
+    (n_frf, n_averages, n_t), of the periodic record for accelerances h_true (n_frf, n_t//2+1)
+    on the rfft lines; noise is drawn for the forces first, then the accelerations."""
+    t = np.arange(n_t) / settings.sample_rate_hz
+    force = half_sine_pulse(t, settings.pulse_s)
+    accel = np.fft.irfft(h_true * np.fft.rfft(force)[None, :], n=n_t, axis=1)  # (n_frf, n_t)
+    shape = (h_true.shape[0], settings.n_averages, n_t)
+    force_rms = np.sqrt(np.mean(force**2))
+    accel_rms = np.sqrt(np.mean(accel**2, axis=1))[:, None, None]
+    force_n = force[None, None, :] + settings.noise * force_rms * rng.standard_normal(shape)
+    accel_n = accel[:, None, :] + settings.noise * accel_rms * rng.standard_normal(shape)
+    return t, force_n, accel_n
+
+
+def virtual_impact_test(
+    natural_hz: np.ndarray,
+    damping_ratio: np.ndarray,
+    shapes: np.ndarray,
+    dof_labels: tuple[str, ...],
+    layout: list[tuple[str, str]] | None = None,
+    settings: ImpactTestSettings | None = None,
+    seed: int | np.random.Generator | None = 0,
+    return_signals: bool = False,
+    **options,
+):
+    """Simulate the test; returns an accelerance :class:`FrfSet` on 0..f_max_hz.
+
+    natural_hz (m,) [Hz], damping_ratio (m,), shapes (n_dof, m) real mass-normalised
+    [1/sqrt(kg)] at ``dof_labels``; layout: (response, reference) label pairs (default
+    :func:`seed_layout`).  settings : :class:`ImpactTestSettings` (default: its defaults);
+    options : fields of it to set or override, for calls without a record
+    (``noise=0.0``).  With ``return_signals`` also returns (t (n_t,), force (n_frf, n_avg,
+    n_t), accel (same)).
+    """
+    settings = ImpactTestSettings(**options) if settings is None else replace(settings, **options)
+    natural_hz, damping_ratio, shapes, labels, layout = _checked_modes(
+        natural_hz, damping_ratio, shapes, dof_labels, layout
+    )
     rng = np.random.default_rng(seed)
-    n_t = int(round(duration_s * sample_rate_hz))
-    t = np.arange(n_t) / sample_rate_hz
-    f_all = np.fft.rfftfreq(n_t, 1 / sample_rate_hz)
+    n_t = int(round(settings.duration_s * settings.sample_rate_hz))
+    f_all = np.fft.rfftfreq(n_t, 1 / settings.sample_rate_hz)
     index = {lab: i for i, lab in enumerate(labels)}
     resp = shapes[[index[a] for a, _ in layout]]
     ref = shapes[[index[b] for _, b in layout]]
     h_true = synthesize_from_modes(f_all, natural_hz, damping_ratio, resp, ref, "accelerance")
-    force = half_sine_pulse(t, pulse_s)
-    accel = np.fft.irfft(h_true * np.fft.rfft(force)[None, :], n=n_t, axis=1)  # (n_frf, n_t)
-    shape = (len(layout), n_averages, n_t)
-    force_rms = np.sqrt(np.mean(force**2))
-    accel_rms = np.sqrt(np.mean(accel**2, axis=1))[:, None, None]
-    force_n = force[None, None, :] + noise * force_rms * rng.standard_normal(shape)
-    accel_n = accel[:, None, :] + noise * accel_rms * rng.standard_normal(shape)
+    t, force_n, accel_n = _noisy_signals(h_true, settings, n_t, rng)
     freqs, h1, _, coh = h1_h2_coherence(
-        force_n, accel_n, sample_rate_hz, segment=n_t, window="rect"
+        force_n, accel_n, settings.sample_rate_hz, segment=n_t, window="rect"
     )
-    keep = freqs <= f_max_hz + 1e-9
+    keep = freqs <= settings.f_max_hz + 1e-9
     frfs = FrfSet(
         frequencies_hz=freqs[keep],
         frf=h1[:, keep],

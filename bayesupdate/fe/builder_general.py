@@ -238,20 +238,14 @@ def add_beams(
     xyz = np.array(builder._nodes, dtype=float)  # noqa: SLF001
     off = _per_element(0.0 if offsets is None else offsets, n, (2, 3), what, "offsets")
     axis = xyz[pairs[:, 1]] + off[:, 1] - xyz[pairs[:, 0]] - off[:, 0]
-    E = material.youngs_modulus
-    G = E / (2 * (1 + material.poisson)) if shear_modulus is None else float(shear_modulus)
-    if torsion_inertia is None:
-        torsion_inertia = material.density * (section.iy + section.iz)
+    values, per = _beam_properties(material, section, shear_modulus, torsion_inertia, what)
     per = dict(
         nsm=_per_element(nsm, n, (), what, "nsm"),
-        torsion_inertia=_per_element(torsion_inertia, n, (), what, "torsion_inertia"),
+        torsion_inertia=_per_element(per["torsion_inertia"], n, (), what, "torsion_inertia"),
         up=_default_up(axis) if up is None else _per_element(up, n, (3,), what, "up"),
     )
-    if not (np.isfinite(G) and G > 0) or min(per["nsm"].min(), per["torsion_inertia"].min()) < 0:
+    if min(per["nsm"].min(), per["torsion_inertia"].min()) < 0:
         raise BayesUpdateError(f"{what}: needs shear modulus > 0, nsm >= 0, torsion_inertia >= 0")
-    values = dict(E=E, G=G, rho=material.density, area=section.area, iy=section.iy,
-                  iz=section.iz, iyz=section.iyz, torsion=section.torsion,
-                  shear_y=section.shear_y, shear_z=section.shear_z)  # fmt: skip
     beams = gb.GeneralBeams(
         nodes=pairs,
         part=np.zeros(n, int),
@@ -266,6 +260,21 @@ def add_beams(
     start = sum(b.n_elements for b in builder._general_beams)  # noqa: SLF001
     builder._general_beams.append(beams)  # noqa: SLF001
     return start + np.arange(n)
+
+
+def _beam_properties(material, section, shear_modulus, torsion_inertia, what: str):
+    """(uniform element values: E, G [Pa], rho [kg/m^3], section A [m^2], I [m^4], shear
+    factors; {"torsion_inertia": [kg m] per length, default rho (iy + iz)})."""
+    E = material.youngs_modulus
+    G = E / (2 * (1 + material.poisson)) if shear_modulus is None else float(shear_modulus)
+    if not (np.isfinite(G) and G > 0):
+        raise BayesUpdateError(f"{what}: needs shear modulus > 0, nsm >= 0, torsion_inertia >= 0")
+    if torsion_inertia is None:
+        torsion_inertia = material.density * (section.iy + section.iz)
+    values = dict(E=E, G=G, rho=material.density, area=section.area, iy=section.iy,
+                  iz=section.iz, iyz=section.iyz, torsion=section.torsion,
+                  shear_y=section.shear_y, shear_z=section.shear_z)  # fmt: skip
+    return values, {"torsion_inertia": torsion_inertia}
 
 
 def _check_beams(xyz, b, what: str) -> None:

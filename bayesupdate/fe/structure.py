@@ -302,12 +302,7 @@ class StructureBuilder:
                 f"pipe run {part!r}: need one bend radius/name per interior vertex ({k_int})"
             )
         path = _centre_line(pts, radii, names, 0.5 * section.width, part)
-        if start_node is None:
-            ids = [self.add_node(pts[0])]
-        else:
-            if np.linalg.norm(self.node_xyz(start_node) - pts[0]) > 1e-9:
-                raise BayesUpdateError(f"pipe run {part!r}: start_node is not at the first point")
-            ids = [self._check_node(start_node)]
+        ids = [self._run_end(start_node, pts[0], f"pipe run {part!r}: start_node")]
         beam = dict(up=up, elbow_flexibility=elbow_flexibility)
         for seg_index, seg in enumerate(path):
             default_name = f"{part}_bend{len(self._bends)}"
@@ -316,20 +311,22 @@ class StructureBuilder:
             )
             last_segment = seg_index == len(path) - 1
             for j, p in enumerate(new_pts):
-                if last_segment and j == len(new_pts) - 1 and end_node is not None:
-                    if np.linalg.norm(self.node_xyz(end_node) - p) > 1e-9:
-                        raise BayesUpdateError(
-                            f"pipe run {part!r}: end_node is not at the last point"
-                        )
-                    nid = self._check_node(end_node)
-                else:
-                    nid = self.add_node(p)
+                last = last_segment and j == len(new_pts) - 1
+                nid = self._run_end(end_node if last else None, p, f"pipe run {part!r}: end_node")
                 bname, R = bend_info[j]
                 self.add_beam(
                     ids[-1], nid, section, material, part, bend=bname, bend_radius=R, **beam
                 )
                 ids.append(nid)
         return ids
+
+    def _run_end(self, node: int | None, xyz: np.ndarray, what: str) -> int:
+        """``node`` checked to lie at ``xyz`` [m], or a new node there when None."""
+        if node is None:
+            return self.add_node(xyz)
+        if np.linalg.norm(self.node_xyz(node) - xyz) > 1e-9:
+            raise BayesUpdateError(f"{what} is not at the run's end point")
+        return self._check_node(node)
 
     def add_point_mass(self, node, mass: float, part: str, inertia=None, offset=(0, 0, 0)) -> int:
         """Rigid point mass [kg] with a 3x3 inertia tensor about its own centre [kg m^2] (global

@@ -30,9 +30,6 @@ class StopRequest:
         """Record a stop request (called from the signal handler)."""
         self._requested = True
 
-    def clear(self) -> None:
-        self._requested = False
-
     def requested(self) -> bool:
         return self._requested
 

@@ -133,22 +133,30 @@ def section_properties(shape_code, width, height, thickness, poisson) -> dict:
 
     oval = code == 1
     if np.any(oval):
-        tt = t[oval][:, None]
-        ay = 0.5 * (w[oval][:, None] - tt)  # mid-line semi-axes
-        az = 0.5 * (h[oval][:, None] - tt)
-        y = ay * np.cos(_PHI)
-        z = az * np.sin(_PHI)
-        dy = -ay * np.sin(_PHI)
-        dz = az * np.cos(_PHI)
-        ds = np.sqrt(dy**2 + dz**2)
-        wq = _PHI_W * ds  # quadrature weights for arc length, quarter ellipse
-        perimeter = 4 * np.sum(wq, axis=1)
-        A[oval] = perimeter * tt[:, 0]
-        Iy[oval] = 4 * tt[:, 0] * np.sum(wq * z**2, axis=1)
-        Iz[oval] = 4 * tt[:, 0] * np.sum(wq * y**2, axis=1)
-        enclosed = np.pi * ay[:, 0] * az[:, 0]
-        J[oval] = 4 * enclosed**2 * tt[:, 0] / perimeter
-        # shear flow along the wall carries the part of the shear force parallel to the wall
-        Asy[oval] = 4 * tt[:, 0] * np.sum(wq * (dy / ds) ** 2, axis=1)
-        Asz[oval] = 4 * tt[:, 0] * np.sum(wq * (dz / ds) ** 2, axis=1)
+        props = _thin_oval(w[oval], h[oval], t[oval])
+        A[oval], Iy[oval], Iz[oval], J[oval], Asy[oval], Asz[oval] = props
     return {"A": A, "Iy": Iy, "Iz": Iz, "J": J, "Asy": Asy, "Asz": Asz}
+
+
+def _thin_oval(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple:
+    """(A, Iy, Iz, J, Asy, Asz) (n,) each of thin elliptical tubes of outer width w, height h and
+    wall t [m]: wall integrals by quadrature over the mid-line (Bredt's J for the torsion)."""
+    tt = t[:, None]
+    ay = 0.5 * (w[:, None] - tt)  # mid-line semi-axes
+    az = 0.5 * (h[:, None] - tt)
+    y = ay * np.cos(_PHI)
+    z = az * np.sin(_PHI)
+    dy = -ay * np.sin(_PHI)
+    dz = az * np.cos(_PHI)
+    ds = np.sqrt(dy**2 + dz**2)
+    wq = _PHI_W * ds  # quadrature weights for arc length, quarter ellipse
+    perimeter = 4 * np.sum(wq, axis=1)
+    area = perimeter * tt[:, 0]
+    iy = 4 * tt[:, 0] * np.sum(wq * z**2, axis=1)
+    iz = 4 * tt[:, 0] * np.sum(wq * y**2, axis=1)
+    enclosed = np.pi * ay[:, 0] * az[:, 0]
+    torsion = 4 * enclosed**2 * tt[:, 0] / perimeter
+    # shear flow along the wall carries the part of the shear force parallel to the wall
+    asy = 4 * tt[:, 0] * np.sum(wq * (dy / ds) ** 2, axis=1)
+    asz = 4 * tt[:, 0] * np.sum(wq * (dz / ds) ** 2, axis=1)
+    return area, iy, iz, torsion, asy, asz

@@ -21,6 +21,7 @@ import argparse
 import os
 import sys
 import warnings
+from pathlib import Path
 
 if __name__ == "__main__":
     _threads = "1"
@@ -34,7 +35,9 @@ from timing import time_median  # noqa: E402
 
 from bayesupdate.correlation import mac_matrix  # noqa: E402
 from bayesupdate.ema import FrfSet, identify, virtual_impact_test  # noqa: E402
-from bayesupdate.ema.virtual_test import exhaust_like_model  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from synthetic_models import exhaust_like_model  # noqa: E402  (the tests' model)
 
 
 def make_data(seed: int = 3) -> tuple[FrfSet, tuple]:

@@ -11,11 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from synthetic_models import exhaust_like_model
 
 from bayesupdate.cli import main
 from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.ema.uff_io import write_uff58
-from bayesupdate.ema.virtual_test import exhaust_like_model, virtual_impact_test
+from bayesupdate.ema.virtual_test import virtual_impact_test
 
 
 @pytest.fixture(scope="module")

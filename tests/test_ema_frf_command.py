@@ -4,10 +4,11 @@ warning; never a traceback or RuntimeWarning).  The real mAEWing1 sweep: tests/t
 
 import numpy as np
 import pytest
+from synthetic_models import exhaust_like_model
 
 from bayesupdate.cli import main
 from bayesupdate.ema.uff_io import read_uff58
-from bayesupdate.ema.virtual_test import exhaust_like_model, virtual_impact_test
+from bayesupdate.ema.virtual_test import virtual_impact_test
 
 
 def run_cli(argv, capsys):

@@ -2,11 +2,12 @@
 
 import numpy as np
 import pytest
+from synthetic_models import exhaust_like_model, free_beam_shapes
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.ema.bands import sum_frf
 from bayesupdate.ema.identify import identify
-from bayesupdate.ema.virtual_test import exhaust_like_model, free_beam_shapes, virtual_impact_test
+from bayesupdate.ema.virtual_test import virtual_impact_test
 
 
 @pytest.fixture(scope="module")

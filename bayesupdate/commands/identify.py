@@ -94,15 +94,14 @@ def _write_plots(folder, result, frfs) -> None:
         pass  # labels that are not <node><L|H|V> have no geometry to draw
 
 
-def _identify(args, inp):
-    """identify() on the merged set; on failure with --report, a report of the data and the
-    failure is written before the error goes to the CLI."""
-    from bayesupdate.ema.identify import IdentifySettings, identify
+def _identify(args, request, data, inp):
+    """The identify pipeline on the merged set; on failure with --report, a report of the data
+    and the failure is written before the error goes to the CLI."""
+    from bayesupdate.pipelines.identify import identify_frfs
     from bayesupdate.report.identify_report import write_identify_report
 
     try:
-        settings = IdentifySettings(max_order=inp.max_order, method=inp.method)
-        return identify(inp.frfs, band_hz=inp.band_hz, settings=settings)
+        return identify_frfs(data, request)
     except BayesUpdateError as exc:
         if args.report:
             html, _ = write_identify_report(args.report, inp, None, failure=str(exc))
@@ -111,43 +110,47 @@ def _identify(args, inp):
 
 
 def run(args) -> int:
-    from bayesupdate.ema.frf_set import merge_frf_sets
     from bayesupdate.ema.modal_h5 import write_modal_h5
-    from bayesupdate.ema.uff_io import read_uff58
+    from bayesupdate.pipelines.identify import IdentifyRequest, read_frf_files
     from bayesupdate.report.identify_report import (
         IdentifyInput,
         check_report_folder,
-        identification_notes,
         write_identify_report,
     )
 
     out = check_output_path(args.out, args.force)
-    band = _parse_band(args.band)
-    if args.max_order is not None and args.max_order < 2:
-        raise BayesUpdateError(f"--max-order {args.max_order}: must be at least 2")
+    request = IdentifyRequest(
+        tuple(args.frf_file), _parse_band(args.band), args.max_order, args.method
+    )
     if args.report:
         check_report_folder(args.report, args.force)
-    file_sets = tuple(read_uff58(path) for path in args.frf_file)
-    frfs, merge_notes = merge_frf_sets(list(file_sets))
+    data = read_frf_files(request.files)
     inp = IdentifyInput(
-        files=tuple(str(p) for p in args.frf_file),
-        file_sets=file_sets,
-        frfs=frfs,
-        method=args.method,
-        band_hz=band,
-        max_order=args.max_order,
-        merge_notes=tuple(merge_notes),
+        files=data.files,
+        file_sets=data.file_sets,
+        frfs=data.frfs,
+        method=request.method,
+        band_hz=request.band_hz,
+        max_order=request.max_order,
+        merge_notes=data.merge_notes,
         out=str(out),
     )
-    result = _identify(args, inp)
+    run_ = _identify(args, request, data, inp)
+    result = run_.identification
     write_modal_h5(out, result.modes)
     if args.plots:
-        _write_plots(args.plots, result, frfs)
+        _write_plots(args.plots, result, data.frfs)
     report = write_identify_report(args.report, inp, result)[0] if args.report else None
-    summary = _summary(result, out, identification_notes(result, merge_notes), report)
+    summary = _summary(result, out, run_.notes, report)
     if args.json:
         print(json.dumps(summary))
         return 0
+    _print_modes(summary, out, report)
+    return 0
+
+
+def _print_modes(summary: dict, out, report) -> None:
+    """The terminal table of the modes, the notes and the files written."""
     for r, m in enumerate(summary["modes"], 1):
         mpc_text = "MPC   n/a" if m["mpc"] is None else f"MPC {m['mpc']:.3f}"
         print(
@@ -160,7 +163,6 @@ def run(args) -> int:
     print(f"wrote {out}")
     if report is not None:
         print(f"report: {report}")
-    return 0
 
 
 def _summary(result, out, notes, report) -> dict:

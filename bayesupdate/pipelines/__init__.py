@@ -20,6 +20,7 @@ Modules:
     calibrate     ``run_calibration``: the multi-start optimum
     sample        ``run_sampling``: optimum, posterior, diagnostics, predictions (checkpointed)
     simulate      ``simulate_test``: a virtual roving-hammer test of a model with a hidden truth
+    identify      ``read_frf_files`` + ``identify_frfs``: FRF files of one test -> modes, notes
     discover      ``discover_study``: what physics the model is missing
     demo          ``run_demo``: the seed's whole story (figures and report are made at the edge)
 

@@ -233,12 +233,12 @@ def _virtual_test_part(settings) -> tuple[VirtualTest, Path]:
 
 
 def _identify_part(out: Path, uff: Path) -> IdentifiedPart:
-    from bayesupdate.ema.identify import identify
     from bayesupdate.ema.modal_h5 import write_modal_h5
-    from bayesupdate.ema.uff_io import read_uff58
+    from bayesupdate.pipelines.identify import IdentifyRequest, identify_frfs, read_frf_files
 
-    frfs = read_uff58(uff)  # the round trip through the file a user would bring
-    ident = identify(frfs)
+    data = read_frf_files([uff])  # the round trip through the file a user would bring
+    frfs = data.frfs
+    ident = identify_frfs(data, IdentifyRequest((str(uff),))).identification
     modes = ident.modes.subset(np.flatnonzero(ident.modes.frequencies_hz < IDENTIFIED_BELOW_HZ))
     write_modal_h5(out / "virtual_modes.h5", modes)
     return IdentifiedPart(frfs, ident, modes)

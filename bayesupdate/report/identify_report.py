@@ -13,9 +13,10 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate.ema.frf_set import FrfSet
-from bayesupdate.ema.identify import MAX_SHAPE_SD, Identification
+from bayesupdate.ema.identify import Identification
 from bayesupdate.ema.lsfd import realise
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.pipelines.identify import identification_notes
 from bayesupdate.report.document import Alert, Document, Figure, Section, Table
 
 METHOD_TEXT = {
@@ -67,30 +68,6 @@ class IdentifyInput:
     max_order: int | None = None
     merge_notes: tuple[str, ...] = ()
     out: str = ""
-
-
-def identification_notes(result: Identification, merge_notes=()) -> tuple[str, ...]:
-    """What a user must know to read the modes (the same lines on the terminal and in the
-    report): merged ranges, MPC not defined, unscaled shapes, capped shape errors, dropped
-    poles."""
-    modes = result.modes
-    notes = list(merge_notes)
-    if len(modes.dof_labels) < 2:
-        notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
-    if not np.all(modes.extra.get("mass_normalised", result.mass_normalised)):
-        notes.append(
-            "shapes without a driving point are unscaled (largest component 1), "
-            "not mass-normalised; measure a driving point to scale them"
-        )
-    if np.any(modes.extra.get("shape_sd_fallback", False)):
-        notes.append(f"shape_sd_rel not estimable for some modes: set to {MAX_SHAPE_SD}")
-    dropped = np.asarray(result.extra.get("dropped_hz", ()), dtype=float)
-    if dropped.size:
-        notes.append(
-            "stable poles dropped as not physical (explain little of the FRF, peak near the "
-            "fit residual): " + ", ".join(f"{x:.2f}" for x in dropped) + " Hz"
-        )
-    return tuple(notes)
 
 
 def mpc_reasons(modes) -> list[str | None]:

@@ -30,6 +30,7 @@ from bayesupdate.models.exhaust import (
     mode_character,
 )
 from bayesupdate.paper import (
+from bayesupdate.inference.parameter_space import FAILED_RELATIVE_ERROR
     OPTIMUM_MASS_KG,
     TABLE1_FEA_HZ,
     TABLE3_INITIAL_SI,
@@ -124,8 +125,8 @@ def residuals(u: np.ndarray, table4_weight: float = TABLE4_WEIGHT) -> np.ndarray
     n = len(TABLE1_FEA_HZ)
     try:
         ev = evaluate(to_values(u))
-    except BayesUpdateError:
-        return np.full(2 * n + 7, 1.0)
+    except BayesUpdateError:  # an impossible geometry: the one failure convention
+        return np.full(2 * n + 7, FAILED_RELATIVE_ERROR)
     r1 = ev["f_initial"] / TABLE1_FEA_HZ - 1.0
     r4 = table4_weight * (ev["f_optimum"] / TABLE4_FINAL_HZ - 1.0)
     pen = []

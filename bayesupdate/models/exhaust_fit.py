@@ -20,6 +20,7 @@ from scipy.optimize import least_squares
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import FEModel
+from bayesupdate.inference.parameter_space import FAILED_RELATIVE_ERROR
 from bayesupdate.models.exhaust import (
     DESIGN_BINDINGS,
     DESIGN_BOUNDS,
@@ -30,7 +31,6 @@ from bayesupdate.models.exhaust import (
     mode_character,
 )
 from bayesupdate.paper import (
-from bayesupdate.inference.parameter_space import FAILED_RELATIVE_ERROR
     OPTIMUM_MASS_KG,
     TABLE1_FEA_HZ,
     TABLE3_INITIAL_SI,

@@ -6,6 +6,7 @@ Example (issue 4 item 9)::
     source = "exhaust"              # built-in name, or "package.module:function"
     options = {}                    # keyword arguments of the built-in model's factory
     sensors = ["1", "2"]            # custom model only: labels of the rows of its shapes
+    test_points = { "12" = 1012 }   # Nastran deck: test node -> GRID id (default: the same id)
     [data]
     source = "paper:ema"            # or a file (.csv, .h5, .uff), or inline:
     # frequencies_hz = [...], weights = [...], sd_hz = [...]
@@ -13,6 +14,8 @@ Example (issue 4 item 9)::
     mass_sd_kg = 0.12               # its sd
     [parameters.t_hot_pipe]         # optional for built-in models (defaults from the model)
     bounds = [0.5e-3, 3.0e-3]
+    # binds = "PSHELL 3,5 T"        # Nastran deck: the deck field it sets (deck units), or
+                                    # "MAT1 2 E scale" (a factor); bayesupdate.nastran.bindings
     prior = { kind = "uniform" }    # lognormal {mu, sigma} | normal {mean, sd} | halfnormal {scale}
     start = 1.0e-3
     [pairing]
@@ -83,6 +86,7 @@ class ModelConfig:
     source: str = "exhaust"
     options: dict = field(default_factory=dict)
     sensors: tuple = ()
+    test_points: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -187,7 +191,7 @@ _SECTIONS = {
     "likelihood": LikelihoodConfig,
     "sampler": SamplerConfig,
 }
-_PARAMETER_KEYS = {"bounds": list, "prior": dict, "start": float}
+_PARAMETER_KEYS = {"bounds": list, "prior": dict, "start": float, "binds": str}
 
 
 def _check_type(value, annotation, where: str):
@@ -248,7 +252,7 @@ def _parse_parameters(table, where: str) -> dict:
         for key, value in entry.items():
             if key not in _PARAMETER_KEYS:
                 raise BayesUpdateError(
-                    f"{here}.{key}: unknown key; valid keys are bounds, prior, start"
+                    f"{here}.{key}: unknown key; valid keys are bounds, prior, start, binds"
                 )
             if key == "bounds":
                 ok = (
@@ -269,6 +273,8 @@ def _parse_parameters(table, where: str) -> dict:
                         f'{here}.prior: must be a table like {{ kind = "uniform" }}'
                     )
                 clean[key] = dict(value)
+            elif key == "binds":
+                clean[key] = _check_type(value, "str", f"{here}.{key}")
             else:
                 clean[key] = _check_type(value, "float", f"{here}.{key}")
         out[name] = clean

@@ -85,6 +85,23 @@ def study_from_args(args):
     return study
 
 
+def write_bdf(path, model, values) -> None:
+    """``--write-bdf``: the Nastran deck with ``values`` in its bound fields (no path: nothing)."""
+    if path:
+        from bayesupdate.nastran.writer import write_updated_deck
+
+        write_updated_deck(model, values, path)
+
+
+def add_write_bdf_argument(parser) -> None:
+    parser.add_argument(
+        "--write-bdf",
+        metavar="FILE",
+        help="Nastran deck model: write the deck with the calibrated values (calibrate: the "
+        "optimum; sample: the posterior mean) in its bound fields",
+    )
+
+
 def add_full_argument(parser) -> None:
     parser.add_argument(
         "--full",
@@ -96,6 +113,7 @@ def add_full_argument(parser) -> None:
 def add_arguments(parser) -> None:
     add_study_arguments(parser)
     add_full_argument(parser)
+    add_write_bdf_argument(parser)
     parser.add_argument(
         "--no-polish",
         action="store_true",
@@ -112,10 +130,13 @@ def run(args) -> int:
     study = study_from_args(args)
     if args.out:
         check_output_path(args.out, args.force)
+    if args.write_bdf:
+        check_output_path(args.write_bdf, args.force)
     prepared = prepare(study, effects=tuple(args.effect))
     result = run_calibration(prepared)
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
+    write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
     if args.json:
         out = result.to_json()
         out["measured_mass_kg"] = prepared.problem.data.mass_kg

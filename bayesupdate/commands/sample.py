@@ -9,7 +9,9 @@ import numpy as np
 from bayesupdate.commands.calibrate import (
     add_full_argument,
     add_study_arguments,
+    add_write_bdf_argument,
     study_from_args,
+    write_bdf,
 )
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.interrupts import StopRequest
@@ -42,6 +44,7 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 def add_arguments(parser) -> None:
     add_study_arguments(parser, sampling=True)
     add_full_argument(parser)
+    add_write_bdf_argument(parser)
 
 
 def run(args) -> int:
@@ -53,6 +56,8 @@ def run(args) -> int:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
     if args.out:
         check_output_path(args.out, force=args.force or args.resume)
+    if args.write_bdf:
+        check_output_path(args.write_bdf, force=args.force)
     prepared = prepare(study, effects=tuple(args.effect))
     run = _sample_with_stop_handlers(prepared, args)
     posterior = run.posterior
@@ -61,6 +66,8 @@ def run(args) -> int:
         print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)
         raise KeyboardInterrupt
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
+    means = {k: v["mean"] for k, v in out["parameters"].items()}
+    write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table
         reason = (out["convergence"] or {}).get("reason", "")
         print(f"warning: the posterior did not converge: {reason}", file=sys.stderr)

@@ -10,20 +10,33 @@ from bayesupdate.nastran.deck import SUFFIXES, is_nastran_path
 __all__ = ["SUFFIXES", "is_nastran_path", "load_nastran_model"]
 
 
-def load_nastran_model(path, **options):
-    """``FEModel`` of the Nastran deck at ``path`` (no parameters yet: the deck's values)."""
+def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, **options):
+    """``NastranModel`` of the deck at ``path``.
+
+    parameters : the study's ``{name: {binds, bounds, ...}}`` tables (``nastran.bindings``); none:
+    the deck's DESVARs (``nastran.desvar``) if it has any, else no parameters.
+    test_labels : test DOF labels the model reads shapes at (``nastran.test_points``);
+    test_points : ``[model.test_points]`` {test node: GRID id}."""
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.fe.model import FEModel
-    from bayesupdate.nastran.reader import build_structure
+    from bayesupdate.nastran.model import NastranModel, deck_bindings
+    from bayesupdate.nastran.reader import read_structure
+    from bayesupdate.nastran.test_points import with_test_points
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info = build_structure(path)
+    structure, info, bdf = read_structure(path)
     if not _has_mass(structure):
         raise BayesUpdateError(
             f"Nastran model {path}: the deck has no mass (MAT1 RHO, NSM, CONM2 all zero)"
         )
-    return FEModel(structure, {}, {}, {}, name=info["deck"])
+    if test_labels:
+        structure = with_test_points(structure, test_labels, test_points, info["deck"])
+    if not parameters and bdf.desvars:
+        from bayesupdate.nastran.desvar import desvar_parameters
+
+        parameters = desvar_parameters(bdf)
+    bindings, defaults, bounds = deck_bindings(parameters or {}, bdf, structure)
+    return NastranModel(structure, bindings, defaults, bounds, name=info["deck"], deck=path)
 
 
 def _has_mass(structure) -> bool:

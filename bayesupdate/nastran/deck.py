@@ -25,10 +25,12 @@ ELEMENT_CARDS = {
     "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2", "RBE3", "RBAR", "SPC", "SPC1", "SPCADD",
     "EIGRL", "EIGR", "PARAM",
 }  # fmt: skip
+#: design variables: parameters when the study names none (``desvar``)
+DESIGN_CARDS = {"DESVAR", "DVPREL1"}
 #: cards with no effect on the normal modes: output sets, rigid-body reference DOFs (the solver
 #: finds the rigid-body modes itself), the end marker
 NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "ENDDATA"}
-SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS
+SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS
 #: PARAMs that change the model (``reader``) and PARAMs that only select output
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
 OUTPUT_PARAMS = {

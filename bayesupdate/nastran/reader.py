@@ -34,16 +34,24 @@ def _param(model, name, default):
     return value if value is not None else default
 
 
+def _case_value(subcase, name):
+    """An integer case-control selection, or None (pyNastran's has_parameter can say yes for a
+    name its get_parameter then refuses: the global subcase 0 of a deck without subcases)."""
+    if subcase is None or not subcase.has_parameter(name):
+        return None
+    try:
+        return int(subcase.get_parameter(name)[0])
+    except KeyError:
+        return None
+
+
 def deck_settings(model) -> dict:
     """PARAMs and case-control selections that shape the model (module docstring)."""
     cc = model.case_control_deck
     spc_id = method_id = None
     if cc is not None:
         sub = cc.subcases.get(1) or cc.subcases.get(0)
-        if sub is not None and sub.has_parameter("SPC"):
-            spc_id = int(sub.get_parameter("SPC")[0])
-        if sub is not None and sub.has_parameter("METHOD"):
-            method_id = int(sub.get_parameter("METHOD")[0])
+        spc_id, method_id = _case_value(sub, "SPC"), _case_value(sub, "METHOD")
     n_modes = None
     if method_id is not None and method_id in model.methods:
         n_modes = model.methods[method_id].nd
@@ -219,9 +227,9 @@ def _autospc(ctx, structure):
     return zero.size
 
 
-def build_structure(path) -> tuple:
-    """(Structure, info) of the Nastran deck at ``path``; info records units, PARAMs, counts
-    and notes (``NastranModel.info``)."""
+def read_structure(path) -> tuple:
+    """(Structure, info, pyNastran BDF) of the Nastran deck at ``path``; info records units,
+    PARAMs, counts and notes (also in ``structure.metadata["nastran"]``)."""
     model = read_deck(path)
     settings = deck_settings(model)
     grids = read_grids(model)
@@ -247,7 +255,7 @@ def build_structure(path) -> tuple:
         if n_auto:
             structure = _finish(ctx, eids, pids, props if eids.size else None)
     info = _info(ctx, settings, model, grids, structure, n_auto)
-    return replace(structure, metadata={**structure.metadata, "nastran": info}), info
+    return replace(structure, metadata={**structure.metadata, "nastran": info}), info, model
 
 
 def _finish(ctx, eids, pids, props):

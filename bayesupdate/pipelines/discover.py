@@ -13,7 +13,7 @@ from bayesupdate.discovery.results_io import extend_with_specs
 from bayesupdate.discovery.workflow import DiscoveryResult, DiscoverySettings, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data
-from bayesupdate.pipelines.model_source import study_model
+from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
 
 @dataclass(frozen=True)
@@ -45,19 +45,19 @@ def discover_study(
     progress: Callable[[str], None] | None = None,
 ) -> DiscoveryRun:
     """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
-    model = study_model(study)
+    data = load_modal_data(study.data.as_source())
+    model = study_model(study, data.dof_labels if data.shapes is not None else ())
     if not hasattr(model, "structure"):
         raise BayesUpdateError(
             f"model {study.model.source!r}: discovery extends an FE model's structure; "
             "use a built-in FE model such as 'exhaust'"
         )
     model = extend_with_specs(model, request.effects)
-    data = load_modal_data(study.data.as_source())
     result = discover(
         model,
         data,
         request.settings,
-        parameters=study.parameters or None,
+        parameters=problem_parameters(study.parameters) or None,
         pairing=study.pairing.method,
         progress=progress,
     )

@@ -10,17 +10,39 @@ from collections.abc import Mapping
 from bayesupdate.errors import BayesUpdateError
 
 
-def resolve_model(source: str, parameters: Mapping | None = None, sensors=(), options=None):
+def resolve_model(
+    source: str, parameters: Mapping | None = None, sensors=(), options=None, deck=None
+):
     """A built-in model name (``bayesupdate.models.get_model``), a Nastran deck path, or a
     ``module:function`` spec (``inference.user_model.load_user_model``: its parameters and
     bounds come from ``parameters``, the study's ``{name: {bounds, start}}`` tables; ``sensors``
-    labels its shape rows).  ``options`` are the built-in model factory's keyword arguments."""
+    labels its shape rows).  ``options`` are the built-in model factory's keyword arguments.
+
+    A Nastran deck (``nastran.load_nastran_model``) takes its parameters from the tables'
+    ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``."""
     from bayesupdate.inference.user_model import load_user_model
     from bayesupdate.models import BUILTIN_MODELS, get_model
-    from bayesupdate.nastran import is_nastran_path
+    from bayesupdate.nastran import is_nastran_path, load_nastran_model
 
     if is_nastran_path(source):
-        return get_model(str(source), **(options or {}))
+        if options:
+            raise BayesUpdateError(f"model.options: a Nastran deck takes none ({source})")
+        labels, points = deck if deck is not None else ((), None)
+        model = load_nastran_model(str(source), parameters, labels, points)
+        if not model.parameter_names:
+            raise BayesUpdateError(
+                f"model {source}: a Nastran deck's parameters are deck fields; give them in a "
+                'study file, e.g. [parameters.t] binds = "PSHELL 3 T" (or DESVAR/DVPREL1 cards)'
+            )
+        return model
+    if _points_given(deck):
+        raise BayesUpdateError("model.test_points: only a Nastran deck (model.source) maps them")
+    bound = [name for name, entry in (parameters or {}).items() if "binds" in entry]
+    if bound:
+        raise BayesUpdateError(
+            f"parameters.{bound[0]}.binds: only a Nastran deck's parameters bind deck fields "
+            f"(model.source {source!r})"
+        )
     if ":" in str(source):
         return load_user_model(source, parameters or {}, tuple(sensors))
     if source not in BUILTIN_MODELS:
@@ -38,11 +60,25 @@ def resolve_model(source: str, parameters: Mapping | None = None, sensors=(), op
         raise BayesUpdateError(f"model.options: not accepted by {source!r} ({exc})") from exc
 
 
-def study_model(study):
-    """The model of a ``config.StudyConfig`` (its ``[model]`` table and parameter tables)."""
+def _points_given(deck) -> bool:
+    return deck is not None and bool(deck[1])
+
+
+def study_model(study, test_labels=()):
+    """The model of a ``config.StudyConfig`` (its ``[model]`` table and parameter tables);
+    a Nastran deck reads shapes at ``test_labels`` (the test data's DOF labels)."""
     return resolve_model(
-        study.model.source, study.parameters, study.model.sensors, study.model.options
+        study.model.source,
+        study.parameters,
+        study.model.sensors,
+        study.model.options,
+        deck=(tuple(test_labels), dict(study.model.test_points)),
     )
+
+
+def problem_parameters(parameters: Mapping) -> dict:
+    """The study's parameter tables without ``binds`` (which the model has consumed)."""
+    return {k: {f: v for f, v in e.items() if f != "binds"} for k, e in parameters.items()}
 
 
 def extended_model_from_result(path):

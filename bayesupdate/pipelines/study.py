@@ -17,7 +17,7 @@ from bayesupdate.inference.likelihood import LikelihoodSpec
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, build_problem
 from bayesupdate.modal_data import ModalData
-from bayesupdate.pipelines.model_source import study_model
+from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
 #: weight of the mass term of the fit objective when the data carry a measured mass: on seed
 #: Table 2 it keeps the exhaust's mass within 0.4 % of the weighed 12.29 kg (the seed keeps its
@@ -98,17 +98,22 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     effects : effect specs ``KIND@LOCATION[:name=value]`` added to the study's ``[effects]``
     (``study_effects``); the model is extended by all of them."""
     specs = study_effects(study, effects)
-    model = study_model(study)
+    data = measured_mass(study, load_modal_data(study.data.as_source()))
+    # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
+    model = study_model(study, data.dof_labels if data.shapes is not None else ())
+    if getattr(model, "deck", None) and model.structure.is_general and study.sampler.reduced:
+        # the certified reduced basis is built on beam structures only (fe.reduced): a deck with
+        # shells, supports or rigid elements is solved in full, without a warning about it
+        study = replace(study, sampler=replace(study.sampler, reduced=False))
     if specs:
         from bayesupdate.discovery.results_io import extend_with_specs
 
         model = extend_with_specs(model, specs)
-    data = measured_mass(study, load_modal_data(study.data.as_source()))
     objective = objective_spec(study, data)
     problem = build_problem(
         model,
         data,
-        study.parameters or None,
+        problem_parameters(study.parameters) or None,
         study.pairing.method,
         study.pairing.extra_modes,
         objective,

@@ -1,0 +1,255 @@
+"""Parameters bound to fields of a Nastran deck: ``binds = "PSHELL 3,5 T"`` in a study file.
+
+A binding is ``"CARD ids FIELD"`` (the parameter is the field's value, in the deck's units) or
+``"CARD ids FIELD scale"`` (the parameter is a factor on the deck's values, 1 = the deck).
+Several ids share one parameter.  Each binding becomes an ``fe.model`` property on element masks
+(``DeckBinding``) with a factor ``c``: the FE model's value = c x the parameter (WTMASS, or
+the nominal value of an absolute spring / mass bound as a factor).
+
+==============  =====================  ==========================================
+card field      FE property             acts on
+==============  =====================  ==========================================
+PSHELL T        thickness              its shells (exact powers of t: reduced basis)
+MAT1 E          youngs_modulus /       the shells of every PSHELL with that MID1
+                modulus_factor (scale)
+MAT1 RHO        density                the same shells
+CONM2 M         mass_factor            that point mass
+CELAS2 K        stiffness_factor       that spring
+PELAS K         stiffness_factor       the CELAS1 springs of that property
+PBUSH K1-K6     stiffness_factor       the CBUSH springs of that property (its only K)
+PBUSH K scale   stiffness_factor       the CBUSH springs of that property (all six)
+==============  =====================  ==========================================
+
+Line elements (PBAR/PBARL/PBEAM/PROD) are assembled once (``fe.general``): their fields, and a
+MAT1 they use, cannot be bound yet and give a one-line error naming the binding.
+"""
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+
+#: card -> {field: (FE property, pyNastran attribute, structure family)}
+FIELDS = {
+    "PSHELL": {"T": ("thickness", "t", "shell")},
+    "MAT1": {"E": ("youngs_modulus", "e", "shell"), "RHO": ("density", "rho", "shell")},
+    "CONM2": {"M": ("mass_factor", "mass", "mass")},
+    "CELAS2": {"K": ("stiffness_factor", "k", "spring")},
+    "PELAS": {"K": ("stiffness_factor", "k", "spring")},
+    "PBUSH": {
+        **{f"K{i}": ("stiffness_factor", f"Ki{i - 1}", "spring") for i in range(1, 7)},
+        "K": ("stiffness_factor", "Ki", "spring"),
+    },
+}
+#: cards a user may name whose fields cannot be bound yet
+LINE_CARDS = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "CONROD")
+_LINE_MATERIAL = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD")
+_SYNTAX = re.compile(r"^\s*([A-Za-z0-9]+)\s+([0-9][0-9,\s]*?)\s+([A-Za-z0-9]+)(\s+scale)?\s*$")
+
+
+@dataclass(frozen=True)
+class DeckField:
+    """A parsed binding: card, ids, field (upper case) and whether it is a scale factor."""
+
+    spec: str
+    card: str
+    ids: tuple[int, ...]
+    field: str
+    scale: bool
+
+
+@dataclass(frozen=True)
+class DeckBinding:
+    """A deck field as an ``fe.model`` binding (the ``Binding`` interface: target, property).
+
+    target : the spec text.  property : the FE property (module table).
+    shell, mass, spring : boolean masks over the structure's shells, point masses and springs.
+    factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
+    default : the parameter at the deck's values (nominal, or 1 for a scale).
+    coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
+    """
+
+    target: str
+    property: str
+    field: DeckField
+    shell: np.ndarray
+    mass: np.ndarray
+    spring: np.ndarray
+    factor: float
+    nominal: tuple[float, ...]
+    default: float
+    coefficient: float = 1.0
+    desvar: int | None = None
+
+
+def parse_binding(text, name: str) -> DeckField:
+    """``"PSHELL 3,5 T"`` / ``"MAT1 2 E scale"`` -> ``DeckField``; a one-line error otherwise."""
+    m = _SYNTAX.match(str(text))
+    where = f"parameter {name}: binds = {text!r}"
+    if not m:
+        raise BayesUpdateError(f"{where}: give 'CARD ids FIELD' or 'CARD ids FIELD scale'")
+    card, field = m.group(1).upper(), m.group(3).upper()
+    ids = tuple(int(x) for x in re.split(r"[,\s]+", m.group(2).strip()) if x)
+    if card in LINE_CARDS:
+        raise BayesUpdateError(
+            f"{where}: {card} fields cannot be bound yet (line elements are assembled once); "
+            f"bindable: {_bindable()}"
+        )
+    if card not in FIELDS or field not in FIELDS[card]:
+        raise BayesUpdateError(f"{where}: no bindable field {card} {field}; use {_bindable()}")
+    if field == "K" and card == "PBUSH" and not m.group(4):
+        raise BayesUpdateError(f"{where}: PBUSH K (all six) is a factor: add 'scale'")
+    return DeckField(str(text).strip(), card, ids, field, bool(m.group(4)))
+
+
+def _bindable() -> str:
+    return "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2 K, PELAS K, PBUSH K1-K6 (or K scale)"
+
+
+def _card(bdf, f: DeckField, i: int):
+    table = {
+        "PSHELL": bdf.properties,
+        "PELAS": bdf.properties,
+        "PBUSH": bdf.properties,
+        "MAT1": bdf.materials,
+        "CONM2": bdf.masses,
+        "CELAS2": bdf.elements,
+    }[f.card]
+    card = table.get(i)
+    if card is None or card.type != f.card:
+        raise BayesUpdateError(f"parameter binds {f.spec!r}: the deck has no {f.card} {i}")
+    return card
+
+
+def field_value(card, f: DeckField) -> float:
+    """The deck's value of field ``f`` on pyNastran ``card`` (PBUSH K scale: the largest K)."""
+    _, attr, _ = FIELDS[f.card][f.field]
+    if attr.startswith("Ki"):
+        k = [float(v or 0.0) for v in card.Ki]
+        return max(k) if attr == "Ki" else k[int(attr[2:])]
+    return float(getattr(card, attr) or 0.0)
+
+
+def set_field(card, f: DeckField, value: float, nominal: float) -> None:
+    """Write ``value`` (an absolute value, or a factor on ``nominal`` for a scale) into ``card``."""
+    _, attr, _ = FIELDS[f.card][f.field]
+    if attr == "Ki":
+        card.Ki = [None if v is None else float(v) * value for v in card.Ki]
+        return
+    new = value * nominal if f.scale else value
+    if attr.startswith("Ki"):
+        k = list(card.Ki)
+        k[int(attr[2:])] = new
+        card.Ki = k
+    else:
+        setattr(card, attr, new)
+    if f.card == "PSHELL" and f.field == "T":
+        # blank Z1/Z2 mean -+T/2 (pyNastran fills them in): they follow the new T
+        for z, sign in (("z1", -0.5), ("z2", 0.5)):
+            if getattr(card, z, None) is not None and abs(getattr(card, z) - sign * nominal) < (
+                1e-12 * abs(nominal)
+            ):
+                setattr(card, z, sign * new)
+
+
+def resolve(f: DeckField, bdf, structure, name: str) -> DeckBinding:
+    """The masks, factor and default of field ``f`` on the structure built from ``bdf``."""
+    cards = [_card(bdf, f, i) for i in f.ids]
+    nominal = np.array([field_value(c, f) for c in cards])
+    prop, _, family = FIELDS[f.card][f.field]
+    masks = _masks(f, bdf, structure, cards)
+    if not any(m.any() for m in masks.values()):
+        raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
+    wtmass = float(structure.metadata["nastran"]["wtmass"])
+    relative = prop in ("mass_factor", "stiffness_factor")  # the FE value is a factor
+    if f.card == "MAT1" and f.field == "E" and f.scale:
+        prop, factor = "modulus_factor", 1.0
+    elif relative == f.scale:
+        factor = wtmass if f.field == "RHO" else 1.0
+    else:
+        if np.ptp(nominal) > 1e-12 * np.abs(nominal).max() or not nominal[0] > 0:
+            raise BayesUpdateError(
+                f"parameter {name}: binds {f.spec!r}: the ids' values differ or are 0 "
+                f"({nominal.tolist()}); bind them separately"
+                + ("" if f.scale else " or as a 'scale'")
+            )
+        factor = 1.0 / nominal[0] if relative else nominal[0] * (wtmass if f.field == "RHO" else 1)
+    # several ids with different values set to one value: the default is their mean
+    default = 1.0 if f.scale else float(nominal.mean())
+    return DeckBinding(
+        f.spec, prop, f, masks["shell"], masks["mass"], masks["spring"], float(factor),
+        tuple(nominal.tolist()), default,
+    )  # fmt: skip
+
+
+def _masks(f: DeckField, bdf, structure, cards) -> dict:
+    s = structure
+    parts = list(s.parts)
+    n_shell = 0 if s.shells is None else s.shells.n_elements
+    out = dict(
+        shell=np.zeros(n_shell, bool),
+        mass=np.zeros(len(s.mass_part), bool),
+        spring=np.zeros(len(s.spring_part), bool),
+    )
+    if f.card in ("PSHELL", "MAT1"):
+        pids = f.ids if f.card == "PSHELL" else _pshells_of(bdf, f)
+        names = [parts.index(f"PSHELL {p}") for p in pids if f"PSHELL {p}" in parts]
+        if n_shell:
+            out["shell"] = np.isin(s.shells.part, names)
+        if f.card == "PSHELL":
+            _check_uniform_thickness(f, s, out["shell"], cards)
+    elif f.card == "CONM2":
+        out["mass"] = _part_mask(s.mass_part, parts, [f"CONM2 {i}" for i in f.ids])
+    else:
+        if f.card == "CELAS2":
+            names = [f"CELAS2 {i}" for i in f.ids]
+        elif f.card == "PELAS":
+            names = [f"CELAS1 {e.eid}" for e in bdf.elements.values()
+                     if e.type == "CELAS1" and e.pid in f.ids]  # fmt: skip
+        else:
+            names = [f"PBUSH {i}" for i in f.ids]
+            _check_pbush(f, cards)
+        out["spring"] = _part_mask(s.spring_part, parts, names)
+    return out
+
+
+def _part_mask(part_of, parts, names) -> np.ndarray:
+    idx = [parts.index(n) for n in names if n in parts]
+    return np.isin(part_of, idx)
+
+
+def _pshells_of(bdf, f: DeckField) -> list[int]:
+    """PSHELL ids whose MID1 is one of ``f.ids``; a line property using the MAT1 is an error."""
+    for p in bdf.properties.values():
+        if p.type in _LINE_MATERIAL and int(p.mid) in f.ids:
+            raise BayesUpdateError(
+                f"parameter binds {f.spec!r}: MAT1 {p.mid} is used by {p.type} {p.pid}, whose "
+                "material cannot be bound yet (line elements are assembled once)"
+            )
+    return [p.pid for p in bdf.properties.values() if p.type == "PSHELL" and p.mid1 in f.ids]
+
+
+def _check_uniform_thickness(f: DeckField, s, mask, cards) -> None:
+    t = np.array([c.t for c in cards], float)
+    pid_t = dict(zip(f.ids, t, strict=True))
+    parts = np.array([pid_t.get(int(s.parts[p].split()[1]), np.nan) for p in s.shells.part[mask]])
+    if not np.allclose(s.shells.thickness[mask], parts, rtol=1e-9):
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: some of its shells have corner thicknesses (T1-T4) "
+            "other than T; T cannot be bound"
+        )
+
+
+def _check_pbush(f: DeckField, cards) -> None:
+    if f.field == "K":
+        return
+    j = int(f.field[1:]) - 1
+    for c in cards:
+        k = [float(v or 0.0) for v in c.Ki]
+        if any(v != 0 for i, v in enumerate(k) if i != j):
+            raise BayesUpdateError(
+                f"parameter binds {f.spec!r}: PBUSH {c.pid} has other non-zero K; "
+                f"bind 'PBUSH {c.pid} K scale' (all six)"
+            )

@@ -38,6 +38,15 @@ def check_output_path(path: str | os.PathLike, force: bool = False) -> Path:
     return target
 
 
+def make_writable_folder(folder: Path) -> None:
+    """Create ``folder`` (and parents) and write-probe it for real (os.access says yes to root
+    even on read-only mounts); raises OSError if nothing can be written there."""
+    folder.mkdir(parents=True, exist_ok=True)
+    probe = folder / ".write_test"
+    probe.write_text("")
+    probe.unlink()
+
+
 def _current_umask() -> int:
     mask = os.umask(0)
     os.umask(mask)

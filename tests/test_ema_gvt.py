@@ -11,15 +11,14 @@ when the data are not beside the checkout.
 import contextlib
 import io
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from gvt_runs import GVT, frf_argv
 
 from bayesupdate.cli import main
 from bayesupdate.ema.uff_io import read_uff58
 
-GVT = Path(__file__).resolve().parents[2] / "shared" / "data" / "gvt_maewing1" / "data"
 PEAK_PICKS_HZ = np.array([7.797, 19.06, 23.82, 31.78])
 #: explog.txt "Peak Picking" ranges, a) to g)
 RANGES_HZ = [(7.3, 8.3), (8.8, 9.8), (15.4, 16.4), (18.5, 19.5), (23.3, 24.3), (30.2, 31.2),
@@ -41,12 +40,7 @@ def gvt_frfs(tmp_path_factory):
     paths, texts = [], []
     for k in range(1, 6):
         out = folder / f"run{k}.uff"
-        argv = [
-            "frf", GVT / f"run_Run{k}.mat", "--force-channel", "Force",
-            "--response", f"Accel1={2 * k - 1}V", "--response", f"Accel2={2 * k}V",
-            "--reference", "25V", "--force-unit", "lbf", "--force-sensitivity", "0.4684",
-            "--response-unit", "g", "--response-sensitivity", "1.028", "--out", out,
-        ]  # fmt: skip
+        argv = frf_argv(k, out)
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             assert main([str(a) for a in argv]) == 0

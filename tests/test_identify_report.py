@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gvt_runs import GVT, frf_argv
 
 from bayesupdate.cli import main
 from bayesupdate.ema.lsfd import realise
@@ -18,7 +19,6 @@ ZETA = np.array([0.01, 0.015, 0.02])
 X = np.linspace(0, 1, 5)
 SHAPES = np.stack([np.cos(np.pi * X), np.cos(2 * np.pi * X), np.cos(3 * np.pi * X)], 1)
 LABELS = tuple(f"{k}V" for k in range(1, 6))
-GVT = Path(__file__).resolve().parents[2] / "shared" / "data" / "gvt_maewing1" / "data"
 
 
 def _uff(folder: Path, layout, name: str) -> Path:
@@ -159,12 +159,7 @@ def test_gvt_report_shapes_over_the_ten_accelerometers(tmp_path):
     paths = []
     for k in range(1, 6):
         out = tmp_path / f"run{k}.uff"
-        argv = [
-            "frf", GVT / f"run_Run{k}.mat", "--force-channel", "Force",
-            "--response", f"Accel1={2 * k - 1}V", "--response", f"Accel2={2 * k}V",
-            "--reference", "25V", "--force-unit", "lbf", "--force-sensitivity", "0.4684",
-            "--response-unit", "g", "--response-sensitivity", "1.028", "--out", out,
-        ]  # fmt: skip
+        argv = frf_argv(k, out)
         assert main([str(a) for a in argv]) == 0
         paths.append(str(out))
     h5, report = tmp_path / "gvt.h5", tmp_path / "gvt_report"

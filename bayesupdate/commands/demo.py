@@ -4,6 +4,7 @@ import sys
 import time
 from pathlib import Path
 
+from bayesupdate.atomic import make_writable_folder
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "demo"
@@ -64,10 +65,7 @@ def check_out_folder(out: Path, force: bool) -> Path:
     if out.exists() and any(out.iterdir()) and not force:
         raise BayesUpdateError(f"--out {out}: folder is not empty; use --force to overwrite")
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".write_test"
-        probe.write_text("")
-        probe.unlink()
+        make_writable_folder(out)
     except OSError:
         raise BayesUpdateError(f"--out {out}: cannot write there; choose another folder") from None
     return out

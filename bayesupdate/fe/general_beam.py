@@ -38,6 +38,7 @@ from bayesupdate.fe.beam import (
     to_global,
 )
 from bayesupdate.fe.constraints import rigid_link
+from bayesupdate.fe.rod import line_dofs
 
 #: mass formulations of a line element
 MASS_KINDS = ("consistent", "lumped", "none")
@@ -79,7 +80,7 @@ class GeneralBeams:
 
     def dofs(self) -> np.ndarray:
         """(n, 12) global DOF numbers."""
-        return (6 * self.nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
+        return line_dofs(self.nodes)
 
     def has_mass(self) -> bool:
         """True if some element carries mass of its own (mass kind not 'none')."""

@@ -36,7 +36,7 @@ class Rods:
 
     def dofs(self) -> np.ndarray:
         """(n, 12) global DOF numbers."""
-        return (6 * self.nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
+        return line_dofs(self.nodes)
 
     def has_mass(self) -> bool:
         """True if some rod carries mass of its own."""
@@ -68,3 +68,8 @@ def rod_matrices(xyz: np.ndarray, r: Rods):
             3
         )
     return K, M
+
+
+def line_dofs(nodes: np.ndarray) -> np.ndarray:
+    """(n, 12) global DOF numbers of two-node elements with end nodes ``nodes`` (n, 2)."""
+    return (6 * nodes[:, :, None] + np.arange(6)).reshape(-1, 12)

@@ -357,12 +357,7 @@ class StructureBuilder:
         ``frame`` (3x3, default global axes).  Nodes should coincide (zero-length spring)."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
-        k = np.asarray(stiffness, dtype=float).reshape(-1)
-        if k.shape != (6,) or np.any(~np.isfinite(k)) or np.any(k < 0):
-            raise BayesUpdateError(f"spring in part {part!r}: stiffness must be 6 values >= 0")
-        R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
-        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
-            raise BayesUpdateError(f"spring in part {part!r}: frame must be a 3x3 rotation")
+        k, R = _six_along_frame(stiffness, frame, f"spring in part {part!r}: stiffness")
         self._springs.append(dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part)))
         return len(self._springs) - 1
 
@@ -374,12 +369,7 @@ class StructureBuilder:
         ``frame`` (3x3, default global axes)."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
-        c = np.asarray(damping, dtype=float).reshape(-1)
-        if c.shape != (6,) or np.any(~np.isfinite(c)) or np.any(c < 0):
-            raise BayesUpdateError(f"damper in part {part!r}: damping must be 6 values >= 0")
-        R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
-        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
-            raise BayesUpdateError(f"damper in part {part!r}: frame must be a 3x3 rotation")
+        c, R = _six_along_frame(damping, frame, f"damper in part {part!r}: damping")
         self._dampers.append(dict(nodes=(node_a, node_b), c=c, frame=R, part=self._part(part)))
         return len(self._dampers) - 1
 
@@ -524,6 +514,18 @@ class StructureBuilder:
             structure = replace(structure, **general_parts(self))
         check_connected(structure)
         return structure
+
+
+def _six_along_frame(values, frame, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(6,) values >= 0 of a spring or damper and its frame (3, 3) rotation (default global
+    axes), checked; ``what`` names the element and quantity in the error."""
+    v = np.asarray(values, dtype=float).reshape(-1)
+    if v.shape != (6,) or np.any(~np.isfinite(v)) or np.any(v < 0):
+        raise BayesUpdateError(f"{what} must be 6 values >= 0")
+    R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+        raise BayesUpdateError(f"{what.rsplit(':', 1)[0]}: frame must be a 3x3 rotation")
+    return v, R
 
 
 def _dampers(records: list[dict]) -> "Dampers":

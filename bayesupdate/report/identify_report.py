@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bayesupdate.atomic import make_writable_folder
 from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.ema.identify import Identification
 from bayesupdate.ema.lsfd import realise
@@ -336,10 +337,8 @@ def check_report_folder(folder, force: bool) -> Path:
                 f"--report {folder}: {name} already exists; use --force to overwrite it"
             )
     try:
-        (folder / "figures").mkdir(parents=True, exist_ok=True)
-        probe = folder / ".write_test"
-        probe.write_text("")
-        probe.unlink()
+        make_writable_folder(folder)
+        (folder / "figures").mkdir(exist_ok=True)
     except OSError:
         raise BayesUpdateError(f"--report {folder}: cannot write there; choose another") from None
     return folder

@@ -21,6 +21,16 @@ Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--shell-repeats 3
     parameters: build, set-up, re-assembly at new thicknesses (share of the solve), eigen-solve
     (CHOLMOD and SuperLU), memory; OpenSeesPy ShellMITC4 and pyfe3d on the same mesh.
 
+--shell-reduced (alone): the certified reduced basis on a clamped shell box with seven shell
+    parameters (``shell_speed.reduced_speed``): build time, size, error, time per point against
+    the full sparse solve (the speed-up is printed, not asserted).
+
+--dofs N (alone): size scaling.  A free square steel plate (NAFEMS FV12: 10 x 10 x 0.05 m) of
+    MITC4 quads with about N DOFs, one thickness parameter, through ``StructureBuilder`` /
+    ``FEModel``: structure build, model set-up, re-assembly, ``FEModel.solve`` of the first 20
+    elastic modes (default factorisation), each timed once, and the process's peak RSS.  Run one
+    size per process so that the RSS is that size's.
+
 All timings are medians over repeats in this one process (the machine is noisy); ratios come from
 the same run.
 """
@@ -164,8 +174,21 @@ def main(argv=None) -> int:
     parser.add_argument("--shell-repeats", type=int, default=3, help="repeats of the shell part")
     parser.add_argument("--no-shells", action="store_true", help="skip the shell part (d)")
     parser.add_argument("--shells-only", action="store_true", help="run only the shell part (d)")
+    parser.add_argument("--dofs", type=int, default=0, help="only: a free plate of ~N DOFs")
+    parser.add_argument("--shell-reduced", action="store_true", help="only: shell reduced basis")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
+    if args.dofs:
+        return report_dofs(args.dofs, args.json)
+    if args.shell_reduced:
+        import shell_speed
+
+        out = shell_speed.reduced_speed()
+        if args.json:
+            print(json.dumps(out, indent=1))
+        else:
+            shell_speed.print_reduced(out)
+        return 0
     if args.threads_default:  # child process: only (a)
         print(json.dumps(solve_time(args.repeats)))
         return 0
@@ -214,6 +237,57 @@ def report_shells(args) -> int:
         print(json.dumps(out, indent=1, default=_jsonable))
     else:
         shell_speed.print_shells(out)
+    return 0
+
+
+def plate_scaling(n_dofs: int) -> dict:
+    """--dofs: times [s], peak RSS [bytes] and frequencies [Hz] of a free FV12 plate with about
+    ``n_dofs`` DOFs (module docstring)."""
+    import resource
+
+    from bayesupdate.fe import Binding, Material, StructureBuilder
+    from bayesupdate.fe import shell_mesh as sm
+
+    n = max(2, int(round(np.sqrt(n_dofs / 6.0))) - 1)  # n x n quads, 6 (n + 1)^2 DOFs
+    steel = Material(200e9, 0.3, 8000.0, "fv12 steel")
+    t = {}
+    t0 = time.perf_counter()
+    nodes, quads, _ = sm.plate(10.0, 10.0, n, n)
+    b = StructureBuilder()
+    b.add_shells(nodes, quads, thickness=0.05, material=steel, part="plate")
+    structure = b.build()
+    t["build"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    model = FEModel(structure, {"t": Binding("plate", "thickness")}, {"t": 0.05},
+                    {"t": (0.02, 0.1)}, name="fv12 plate")  # fmt: skip
+    t["setup"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    model.matrices({"t": 0.06})
+    t["reassembly"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    result = model.solve(n_modes=20)
+    t["solve"] = time.perf_counter() - t0
+    return dict(
+        n_dof=structure.n_dof, n_quads=len(quads), times=t, n_rigid=result.modes.n_rigid,
+        peak_rss=1024.0 * resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+        frequencies_hz=result.frequencies_hz.tolist(),
+    )  # fmt: skip
+
+
+def report_dofs(n_dofs: int, as_json: bool) -> int:
+    out = plate_scaling(n_dofs)
+    if as_json:
+        print(json.dumps(out, indent=1))
+        return 0
+    t = out["times"]
+    print(f"free FV12 plate: {out['n_quads']} MITC4 quads, {out['n_dof']} DOFs, first 20 modes")
+    labels = dict(build="structure build", setup="model set-up (FEModel)",
+                  reassembly="re-assembly K(t), M(t)", solve="FEModel.solve")  # fmt: skip
+    for key, label in labels.items():
+        print(f"    {label:28s} {t[key]:9.2f} s")
+    print(f"    peak RSS                     {out['peak_rss'] / 2**30:9.2f} GiB")
+    print(f"    rigid modes {out['n_rigid']}; f [Hz] =",
+          np.array2string(np.array(out["frequencies_hz"][:8]), precision=4))  # fmt: skip
     return 0
 
 

@@ -22,6 +22,12 @@ BLAS on one thread:
       rotary inertia (ShellMITC4's mass model);
   (c) pyfe3d (if installed): its Quad4 matrices assembled by one Cython call per element,
       solved with our solver; frequencies compared with ours.
+
+Reduced basis (``fe_speed.py --shell-reduced``): the same clamped box, coarser (``RB_CELLS``), six
+face thicknesses (2 mm +- 25 %) and the density of the top face (+- 10 %) as parameters: the
+certified reduced basis (``fe.reduced``, first 12 modes, tol 1e-4) built once, then the time
+per parameter point of a batch of reduced solves against ``FEModel.solve`` (sparse), and the
+largest relative frequency difference at fresh random points.
 """
 
 import resource
@@ -156,22 +162,21 @@ def opensees(cells, repeats: int) -> dict:
     )  # fmt: skip
 
 
-def pyfe3d(cells, frequencies) -> dict:
-    """(c): pyfe3d Quad4 (consistent mass) assembly time [s], frequencies vs ours."""
+def pyfe3d_matrices(nodes, quads, thickness: float, material: Material):
+    """K, M CSR of pyfe3d's Quad4 (consistent mass) on nodes (N, 3), quads (nq, 4): one Cython
+    call per element for each matrix (also used by ``tests/test_fe_peer_pyfe3d.py``)."""
     from pyfe3d import DOF, INT, Quad4, Quad4Data, Quad4Probe
     from pyfe3d.shellprop_utils import isotropic_plate
 
-    nodes, quads, _, clamped = box_faces(cells)
-    t0 = time.perf_counter()
     data, probe = Quad4Data(), Quad4Probe()
     ne, n = len(quads), DOF * len(nodes)
     Kr = np.zeros(data.KC0_SPARSE_SIZE * ne, dtype=INT)
     Kc, Kv = np.zeros_like(Kr), np.zeros(len(Kr))
     Mr = np.zeros(data.M_SPARSE_SIZE * ne, dtype=INT)
     Mc, Mv = np.zeros_like(Mr), np.zeros(len(Mr))
-    x = np.ascontiguousarray(nodes).ravel()
-    prop = isotropic_plate(thickness=T0, E=STEEL.youngs_modulus, nu=STEEL.poisson,
-                           rho=STEEL.density)  # fmt: skip
+    x = np.ascontiguousarray(nodes, dtype=float).ravel()
+    prop = isotropic_plate(thickness=thickness, E=material.youngs_modulus, nu=material.poisson,
+                           rho=material.density)  # fmt: skip
     for i, q in enumerate(quads):
         el = Quad4(probe)
         el.n1, el.n2, el.n3, el.n4 = map(int, q)
@@ -183,10 +188,71 @@ def pyfe3d(cells, frequencies) -> dict:
         el.update_M(Mr, Mc, Mv, prop, mtype=0)
     K = sp.coo_matrix((Kv, (Kr, Kc)), shape=(n, n)).tocsr()
     M = sp.coo_matrix((Mv, (Mr, Mc)), shape=(n, n)).tocsr()
+    return K, M
+
+
+def pyfe3d(cells, frequencies) -> dict:
+    """(c): pyfe3d Quad4 (consistent mass) assembly time [s], frequencies vs ours."""
+    nodes, quads, _, clamped = box_faces(cells)
+    t0 = time.perf_counter()
+    K, M = pyfe3d_matrices(nodes, quads, T0, STEEL)
     t_asm = time.perf_counter() - t0
     fixed = (6 * clamped[:, None] + np.arange(6)).ravel()
     fp = solve_sparse_modes(K, M, nodes, ModalSettings(n_modes=N_MODES), fixed).frequencies_hz
     return dict(assembly=t_asm, max_rel_diff=float(np.max(np.abs(fp / frequencies - 1))))
+
+
+RB_CELLS = (20, 12, 8)
+
+
+def reduced_speed(cells=RB_CELLS, n_points: int = 200, n_full: int = 5) -> dict:
+    """Reduced basis on the box (module docstring): build time [s], size, certified error, time
+    per point [s] of the reduced batch and of full solves, and their error at ``n_full`` points."""
+    from bayesupdate.fe.reduced import reduced_model_for
+
+    structure = build_structure(cells)
+    fe = make_model(structure).with_structure(
+        structure,
+        {"rho_top": Binding("face5", "density")},
+        {"rho_top": STEEL.density},
+        {"rho_top": (6000.0, 9000.0)},
+    )
+    # a calibration box: +-25 % on the thicknesses, +-10 % on the density
+    bounds = {k: (0.75 * T0, 1.25 * T0) for k in fe.parameter_names if k != "rho_top"}
+    bounds["rho_top"] = (0.9 * STEEL.density, 1.1 * STEEL.density)
+    t0 = time.perf_counter()
+    rom = reduced_model_for(fe, bounds, tol=1e-4, seed=0, n_modes=12)
+    t_build = time.perf_counter() - t0
+    if not getattr(rom, "certified", False):
+        return dict(n_dof=structure.n_dof, build=t_build, certified=False)
+    rng = np.random.default_rng(5)
+    theta = rom.scale(rng.random((n_points, len(fe.parameter_names))))
+    t_rom, f_rom = time_median(lambda: rom.predict_frequencies_batch(theta), 3)
+    t0 = time.perf_counter()
+    f_full = fe.predict_frequencies_batch(theta[:n_full], fe.parameter_names, 12)
+    t_full = (time.perf_counter() - t0) / n_full
+    return dict(
+        n_dof=structure.n_dof, n_params=len(fe.parameter_names), build=t_build, size=rom.size,
+        n_rigid=rom.n_rigid, certified=rom.certified, max_rel_error=rom.max_rel_error,
+        per_point_reduced=t_rom / n_points, per_point_full=t_full,
+        fresh_max_rel=float(np.max(np.abs(f_rom[:n_full] / f_full - 1))),
+    )  # fmt: skip
+
+
+def print_reduced(out: dict) -> None:
+    if not out["certified"]:
+        print(f"reduced basis on the {out['n_dof']}-DOF box NOT certified (build "
+              f"{out['build']:.1f} s): full solves would be used")  # fmt: skip
+        return
+    print(f"reduced basis, clamped box {out['n_dof']} DOFs, {out['n_params']} parameters (six "
+          "thicknesses, one density), 12 modes, tol 1e-4")  # fmt: skip
+    print(f"    build (snapshots, POD, certification)    {out['build']:8.1f} s; size "
+          f"{out['size']} ({out['n_rigid']} rigid), certified {out['certified']}, max rel. "
+          f"error {out['max_rel_error']:.1e}")  # fmt: skip
+    print(f"    per point: reduced batch {1e3 * out['per_point_reduced']:.3f} ms, full sparse "
+          f"solve {1e3 * out['per_point_full']:.1f} ms: speed-up x"
+          f"{out['per_point_full'] / out['per_point_reduced']:.0f}")  # fmt: skip
+    print(f"    max |f_reduced / f_full - 1| at fresh points {out['fresh_max_rel']:.1e}")
 
 
 def run(repeats: int = 3, cells=CELLS, peers: bool = True) -> dict:

@@ -113,7 +113,7 @@ def test_bad_shell_input_names_the_part_and_element():
     with pytest.raises(BayesUpdateError, match=r"parameter t = 0.0: thickness must be"):
         model.solve({"t": 0.0})
     with pytest.raises(BayesUpdateError, match=r"has shells, supports or rigid elements"):
-        _ = model.assembler  # the beam-only reduced model does not apply
+        _ = model.assembler  # the banded beam-only assembler does not apply
 
 
 # -- springs to ground: suspension modes apart, stiff springs converged ---------------------------

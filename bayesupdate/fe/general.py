@@ -137,6 +137,10 @@ class GeneralAssembler:
             out.append((idx, dofs, shell.to_global(K, f.R), shell.to_global(M, f.R)))
         return out
 
+    def line_data(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K data, M data) (nnz,) of the general beams and rods (constant: no parameters)."""
+        return self._line_K, self._line_M
+
     # -- assembly and solution ------------------------------------------------------------------
     def csr(self, data: np.ndarray) -> sp.csr_matrix:
         return sp.csr_matrix((data, self.cols, self.indptr), shape=(self.n_dof, self.n_dof))

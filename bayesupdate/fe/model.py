@@ -25,6 +25,7 @@ a beam structure without them keeps the banded Krylov path (``method="sparse"`` 
 sparse one).
 """
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -108,7 +109,11 @@ class ParameterTerm:
         value x ``scale`` x the element matrices assembled from ``AffineTerms.unit``;
         "nonlinear" (thickness, bend_factor) when the element matrices must be re-computed.
     scale : factor on the value in a linear term: 1 / (nominal total of the part's point masses)
-        [1/kg] for "mass" (the value is the part's total mass), else 1.
+        [1/kg] for "mass" (the value is the part's total mass), else 1.  On shells the element
+        value is ``scale`` x the value for every property (a deck's factor, ``NastranModel``).
+    shells : (n,) int, the shells (``Structure.shells`` order) it acts on (empty: none).  Shell K
+        and M are exact polynomials in it: thickness t enters K as t, t^2, t^3 and M as t, t^2,
+        t^3 (``shell.power_matrices``), density M and modulus K linearly.
     """
 
     name: str
@@ -118,6 +123,7 @@ class ParameterTerm:
     field: str
     enters: str
     scale: float
+    shells: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=int))
 
 
 @dataclass(frozen=True)
@@ -238,13 +244,49 @@ class FEModel:
 
     @property
     def assembler(self) -> Assembler:
-        """The beam ``Assembler`` of a beam structure (the reduced model builds on it)."""
+        """The beam ``Assembler`` of a beam structure (the banded path)."""
         if self._general is not None:
             raise BayesUpdateError(
                 f"model {self.name}: the structure has shells, supports or rigid elements; the "
-                "beam-only assembler and the reduced model do not apply (full solves are used)"
+                "beam-only assembler does not apply (use FEModel.matrices)"
             )
         return self._assembler
+
+    @property
+    def beam_assembler(self) -> Assembler:
+        """The ``Assembler`` of the structure's tube beams, point masses and springs (on both
+        paths; on the general one it is ``general.beams``)."""
+        return self._assembler
+
+    @property
+    def general(self) -> GeneralAssembler | None:
+        """The ``GeneralAssembler`` (shells, general beams, rods, constraints) of a general
+        structure; None on the banded beam path."""
+        return self._general
+
+    def matrices(self, params: Mapping[str, float] | None = None):
+        """Full (K, M) CSR (n_dof, n_dof) [N/m, kg] at ``params``: every element, before the
+        supports and rigid elements are applied (``general.transform`` does that)."""
+        p = self.full_parameters(params)
+        props = self.element_properties(p)
+        if self._general is None:
+            return self._assembler.assemble(props)[:2]
+        shell_props = self.shell_properties(p) if self.structure.shells is not None else None
+        return self._general.assemble(props, shell_props)[:2]
+
+    def rigid_motions(self) -> np.ndarray:
+        """(n_dof, r) rigid-body motions the supports and rigid elements allow (full DOFs): the
+        six of ``rigid_basis`` for a free beam structure."""
+        if self._general is None:
+            return self.rigid_basis
+        g = self._general
+        return np.asarray(g.transform.expand(g.rigid))
+
+    def total_mass(self, params: Mapping[str, float] | None = None) -> tuple[float, np.ndarray]:
+        """Total mass [kg] and centre of gravity (3,) [m] at ``params``."""
+        if self._general is None:
+            return self._assembler.total_mass(self.element_properties(params))
+        return self._general.total_mass(self.matrices(params)[1])
 
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)
@@ -258,9 +300,17 @@ class FEModel:
             family, field, enters = PROPERTY_TERMS[binding.property]
             mask = self._masks[name]
             scale = 1.0 / s.mass_value[mask].sum() if binding.property == "mass" else 1.0
+            shells = np.flatnonzero(self._shell_masks.get(name, np.zeros(0, bool)))
             terms.append(
                 ParameterTerm(
-                    name, binding.property, family, np.flatnonzero(mask), field, enters, scale
+                    name,
+                    binding.property,
+                    family,
+                    np.flatnonzero(mask),
+                    field,
+                    enters,
+                    scale,
+                    shells,
                 )
             )
         defaults = self.element_properties(self._defaults)

@@ -7,7 +7,10 @@ Offline (``ReducedFEModel.build``), one module per step:
    matrices, wall thickness and bend factor are interpolated in log(value) (``interpolation``:
    barycentric Chebyshev, Berrut & Trefethen, SIAM Rev. 46, 2004) to ``interp_tol``.
    Interpolation weights are linear in the interpolated matrices, so projecting the node
-   matrices once gives the reduced matrices for every theta.
+   matrices once gives the reduced matrices for every theta.  Shells (thickness, modulus,
+   density), general beams and rods enter exactly, with no interpolation (``shell_terms``:
+   shell K and M are polynomials of degree 3 in the thickness).  Supports and rigid elements
+   are allowed: the basis holds the rigid motions they allow (none for a clamped structure).
 2. ``basis``: elastic mode shapes (n_modes + ``extra_modes``) at seeded scrambled-Sobol points of
    the box (snapshots), rigid-body part removed, compressed by POD in the energy (K) norm of the
    box centre (Quarteroni, Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, ch. 6); the

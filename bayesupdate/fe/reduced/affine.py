@@ -10,6 +10,10 @@ on Chebyshev points of the second kind (``reduced.interpolation``), piecewise be
 the B31.3 factor and tensor-product when two such parameters act on the same beams.  The degree
 is raised until the element matrices are reproduced to ``interp_tol`` (relative, checked between
 the nodes), so the interpolation is exact to far below the frequency tolerance.
+
+Shells, general beams and rods (a general structure, ``FEModel.general``) need no interpolation:
+shell K and M are exact polynomials in the thickness and linear in modulus and density
+(``reduced.shell_terms``), hence the features theta^2 and theta^3.
 """
 
 from collections.abc import Mapping
@@ -25,6 +29,7 @@ from bayesupdate.fe.reduced.interpolation import (
     piecewise_nodes,
     tensor_weights,
 )
+from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms
 
 #: 1-D interpolation degrees tried in turn for each non-linear parameter
 DEGREES = (4, 6, 8, 12, 16, 24, 32)
@@ -57,12 +62,13 @@ class InterpolatedGroup:
 class AffineDecomposition:
     """theta -> K(theta), M(theta) as sums coefficient(theta) x fixed element-matrix stacks.
 
-    ``k_stacks`` / ``m_stacks``: per term, the parts (dofs (n_e, d), mats (n_e, d, d)) summed into
-    it; ``coefficients(theta)`` -> (B, n_terms) with the term order of the stacks.  Term 0 is the
-    constant part (coefficient 1).  A term's coefficient is F[:, a] * F[:, b] * c over the
-    features F = [1, theta, interpolation weights of every group], (a, b, c) = ``k_gather`` /
-    ``m_gather``; ``one_d`` batches the groups interpolated in one parameter by (degree, piece
-    count): (group indices, parameter indices, stacked log breakpoints (G, P + 1), degree).
+    ``k_stacks`` / ``m_stacks``: per term, the parts (dofs (n_e, d), mats (n_e, d, d)) or
+    ``SparsePart`` summed into it; ``coefficients(theta)`` -> (B, n_terms) with the term order of
+    the stacks.  Term 0 is the constant part (coefficient 1).  A term's coefficient is
+    F[:, a] * F[:, b] * c over the features F = [1, theta, theta^2, theta^3, interpolation
+    weights of every group], (a, b, c) = ``k_gather`` / ``m_gather``; ``one_d`` batches the
+    groups interpolated in one parameter by (degree, piece count): (group indices, parameter
+    indices, stacked log breakpoints (G, P + 1), degree).
     """
 
     names: tuple[str, ...]
@@ -84,7 +90,9 @@ class AffineDecomposition:
             if weights[g] is None:
                 cols = theta[:, list(group.nonaffine)]
                 weights[g] = tensor_weights(cols, group.pieces, group.degrees)
-        F = np.concatenate([np.ones((theta.shape[0], 1)), theta, *weights], axis=1)
+        F = np.concatenate(
+            [np.ones((theta.shape[0], 1)), theta, theta**2, theta**3, *weights], axis=1
+        )
         return tuple(F[:, a] * F[:, b] * c for a, b, c in (self.k_gather, self.m_gather))
 
     @staticmethod
@@ -93,7 +101,11 @@ class AffineDecomposition:
         r = V.shape[1]
         out = np.zeros((len(stacks), r, r))
         for t, parts in enumerate(stacks):
-            for dofs, mats in parts:
+            for part in parts:
+                if isinstance(part, SparsePart):
+                    out[t] += part.project(V)
+                    continue
+                dofs, mats = part
                 if mats.shape[0]:
                     Vd = V[dofs]
                     out[t] += np.einsum("eir,eij,ejs->rs", Vd, mats, Vd, optimize=True)
@@ -103,21 +115,36 @@ class AffineDecomposition:
 def decompose(
     fe: FEModel, bounds: Mapping[str, tuple[float, float]], interp_tol: float
 ) -> AffineDecomposition:
-    """The decomposition of ``fe`` (a free beam structure) over the box ``bounds`` (name ->
-    (low, high), SI).  Raises ``BayesUpdateError`` when two parameters set the same property of
-    an element or an interpolation does not reach ``interp_tol``."""
+    """The decomposition of ``fe`` (beams, point masses, springs, shells, general beams, rods) over
+    the box ``bounds`` (name -> (low, high), SI).  Raises ``BayesUpdateError`` when two
+    parameters set the same property of an element or an interpolation does not reach
+    ``interp_tol``."""
     names = fe.parameter_names
     low = np.array([bounds[n][0] for n in names])
     high = np.array([bounds[n][1] for n in names])
     terms = fe.affine_terms()
     keys = _beam_keys(terms, len(fe.structure.beam_part))
     k_stacks, m_stacks, k_entries, m_entries = _fixed_terms(fe, terms, keys)
+    # shell terms are stored at their size at the box centre (coefficient 1 there): the term
+    # compression (``basis.compress_terms``) cuts relative to the largest term
+    centre = 0.5 * (low + high)
+    f_ref = np.concatenate([[1.0], centre, centre**2, centre**3])
+    for stacks, entries, parts in zip(
+        (k_stacks, m_stacks), (k_entries, m_entries), general_terms(fe, terms, f_ref), strict=True
+    ):
+        for (a, b), part in parts.items():
+            if (a, b) == (0, 0):
+                stacks[0].append(part)
+            else:
+                stacks.append([part])
+                entries.append((a, b, 1.0 / (f_ref[a] * f_ref[b])))
     groups = []
-    offset = 1 + len(names)  # features before the first group's weights: [1, theta]
+    # features before the first group's weights: [1, theta, theta^2, theta^3]
+    offset = 1 + 3 * len(names)
     for key in sorted({k for k in keys if k}):
         elements = np.array([i for i, k in enumerate(keys) if k == key], dtype=int)
         group, Kn, Mn = _interpolated_group(fe, terms, elements, key, (low, high), interp_tol)
-        dofs = fe.assembler.beam_dofs[elements]
+        dofs = fe.beam_assembler.beam_dofs[elements]
         k_col = 1 + group.k_scale if group.k_scale >= 0 else 0
         m_col = 1 + group.m_scale if group.m_scale >= 0 else 0
         for n in range(Kn.shape[0]):
@@ -169,7 +196,7 @@ def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
     """The constant term (beams without parameters at the defaults, unbound masses and springs)
     and one linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
     m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``."""
-    s, a = fe.structure, fe.assembler
+    s, a = fe.structure, fe.beam_assembler
     props0, unit = terms.defaults, terms.unit
     point = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "mass"]
     spring = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "spring"]
@@ -249,7 +276,7 @@ class _GroupMatrices:
         """points (n, len(fields)) -> K, M (n, n_e, 12, 12)."""
         Ks, Ms = [], []
         for row in points:
-            K, M = self.fe.assembler.beam_matrices(self._props(row), elements=self.elements)
+            K, M = self.fe.beam_assembler.beam_matrices(self._props(row), elements=self.elements)
             Ks.append(K)
             Ms.append(M)
         return np.array(Ks), np.array(Ms)

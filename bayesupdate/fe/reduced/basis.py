@@ -112,8 +112,8 @@ def pod_basis(
     each), then the affine terms projected on [rigid motions, POD vectors].  Keeps the smallest
     rank whose discarded energy per snapshot (on average) is <= pod_tol: that is about the
     relative eigenvalue error, twice the relative frequency error; at least ``n_modes``."""
-    K0, M0, _ = fe.assembler.assemble(fe.element_properties(centre))
-    R = fe.rigid_basis
+    K0, M0 = fe.matrices(centre)
+    R = fe.rigid_motions()
     MR = M0 @ R
     Rr = R @ np.linalg.inv(np.linalg.cholesky(R.T @ MR)).T  # M0-orthonormal rigid motions
     Y = snaps - Rr @ (Rr.T @ (M0 @ snaps))

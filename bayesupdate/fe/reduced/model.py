@@ -28,7 +28,7 @@ class ReducedFEModel:
     (low, high) of the box (SI; missing names take the model's default bounds); settings :
     ``ReducedSettings``; outer : the model predicting points outside the box (default ``fe``).
     ``ReducedFEModel(fe, ...)`` is not built yet (every prediction a full solve): ``build()``
-    returns the built one.  After the build: ``size`` (basis vectors incl. 6 rigid),
+    returns the built one.  After the build: ``size`` (basis vectors incl. the rigid motions),
     ``max_rel_error`` (certified on full solves), ``certified`` (False -> every prediction is a
     full solve).
     """
@@ -88,7 +88,9 @@ class ReducedFEModel:
 
     @property
     def n_rigid(self) -> int:
-        return self.certification.basis.n_rigid
+        """Rigid motions in the basis (0 before the build)."""
+        basis = self.certification.basis
+        return 0 if basis is None else basis.n_rigid
 
     @property
     def sensor_labels(self) -> tuple[str, ...]:
@@ -103,7 +105,8 @@ class ReducedFEModel:
     def __str__(self) -> str:
         state = "certified" if self.certified else "NOT certified: full solves are used"
         return (
-            f"reduced basis of {self.fe.name}: size {self.size} (6 rigid + {self.size - 6} "
+            f"reduced basis of {self.fe.name}: size {self.size} ({self.n_rigid} rigid + "
+            f"{self.size - self.n_rigid} "
             f"elastic), {self.n_modes} modes, max relative frequency error "
             f"{self.max_rel_error:.2e} over {self.certificate.n_points} full solves "
             f"(tol {self.tol:g}); {state}"
@@ -261,13 +264,12 @@ class ReducedFEModel:
         row = np.array([[p[k] for k in self.parameter_names]])
         if not self._usable(n_modes) or np.any(row < self.low) or np.any(row > self.high):
             return (self.fe if not self.certified else self.outer).predict(p, n_modes)
-        props = self.fe.element_properties(p)  # validates the values
         basis = self.certification.basis
         lam, y = basis.eigen(row, n_modes, vectors=True)
         phi = basis.V @ y[0]
         idx = np.argmax(np.abs(phi), axis=0)
         phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
-        mass, _ = self.fe.assembler.total_mass(props)
+        mass, _ = self.fe.total_mass(p)  # validates the values
         freqs = np.sqrt(np.maximum(lam[0], 0.0)) / (2 * np.pi)
         return Prediction(freqs, self.fe.sensor_shapes(phi), self.fe.structure.sensor_labels, mass)
 

@@ -4,8 +4,9 @@ Data (../shared/data beside the checkout, each folder's README gives source and 
 - beam_frf_sdpy: one measured accelerance of the LADISK free beam (UFF 58, 1-10000 Hz); the
   authors' frequencies 176.07, 476.46, 932.29, 1534.79, 2286.32, 3162.16, 4181.72 Hz (LSCF
   over 10-5000 Hz).  Other poles are split into those within the authors' range, bending modes
-  8-11 above it (within 2 % of the free-free sequence extrapolated from the authors' 7:
-  (beta_k L)^2 times a quadratic in k fitted to the measured ratio) and unexplained ones.
+  8-11 above it (within 1 % of the free-free Timoshenko sequence fitted to the authors' 7,
+  tests/free_beam_theory.py; the pole-by-pole table is studies/beam_frf_poles.py) and
+  unexplained ones.
 - plate_sweep: ``bayesupdate frf`` (default settings: a sine sweep, one whole-record spectrum
   per repetition, 0.5 Hz lines) on the four view-0 repetitions, then the automatic band and
   60:500, 100:480, 80:470; peaks near 126, 214, 264, 348, 450 Hz (README: 126, 214, 265, 350,
@@ -33,7 +34,10 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate.cli import main as cli
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from free_beam_theory import timoshenko_fit, timoshenko_hz  # noqa: E402
+
+from bayesupdate.cli import main as cli  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 BEAM_UFF = SHARED / "beam_frf_sdpy" / "data" / "measurement.uff"
@@ -98,28 +102,17 @@ def beam(tmp: Path) -> None:
         cols[f"sdypy {method}"] = near
     print_table("beam FRF (measurement.uff), automatic band; within 0.5 %", BEAM_HZ, cols,
                 np.full(BEAM_HZ.size, 0.005))  # fmt: skip
-    bending = bending_sequence_hz(np.arange(8, 12))
+    bending = timoshenko_hz(np.arange(8, 12), timoshenko_fit())
     fmt = ", ".join
     for method, x in extra.items():
         x = np.array(x)
         inside, above = x[x <= 5000.0], x[x > 5000.0]
-        is_bending = np.array([np.min(np.abs(v / bending - 1)) < 0.02 for v in above], bool)
+        is_bending = np.array([np.min(np.abs(v / bending - 1)) < 0.01 for v in above], bool)
         print(f"  {method} other poles: {x.size}; within 5 kHz: {inside.size} ("
               + fmt(f"{v:.1f}" for v in inside) + "); bending modes 8-11 above it: "
               + fmt(f"{v:.1f}" for v in above[is_bending]) + " (predicted "
               + fmt(f"{v:.0f}" for v in bending) + "); unexplained above 5 kHz: "
               + fmt(f"{v:.1f}" for v in above[~is_bending]))  # fmt: skip
-
-
-def bending_sequence_hz(k: np.ndarray) -> np.ndarray:
-    """Free-free bending frequencies [Hz] of modes k (1-based) from the authors' 7 (see
-    tests/test_ema_real_data.py): (beta_k / beta_1)^2 f_1 times the measured ratio to it,
-    fitted by a quadratic in k over k = 2..7 (shear and rotary inertia lower it, 0.98 -> 0.96)."""
-    beta1 = 4.730040745
-    ideal = (np.where(k == 1, beta1, (k + 0.5) * np.pi) / beta1) ** 2 * BEAM_HZ[0]
-    k_ref = np.arange(2, 8)
-    ratio = BEAM_HZ[1:] / (((k_ref + 0.5) * np.pi / beta1) ** 2 * BEAM_HZ[0])
-    return ideal * np.polyval(np.polyfit(k_ref, ratio, 2), k)
 
 
 def sdypy_beam() -> dict:

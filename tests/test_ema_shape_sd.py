@@ -8,15 +8,28 @@ reference barely moves in mode 3, the H reference in mode 4: 1 - MAC ~ 6e-3 to 8
 Measured (issue 16): ratio realised / predicted over seeds 1-4 has median 1.46 and range
 0.35-6.3 (seeds 5-8, kept for confirmation: median 1.09, range 0.07-11.8); before the scale
 and correlation terms, median 16 and range 0.28-406.
+
+A mode near the top of the band (exhaust with the joint flexibility k_rot = 3e3 at cold_pipe/
+main_muffler: mode 13 at 144.37 Hz, damping fixed at 2.5 %, so its half-power band reaches 3.6
+Hz of the 150 Hz end) is repeated over noise seeds with the truth held fixed: its realised
+1 - MAC (2.1e-5 to 2.5e-5, nearly all bias, the same in every repeat) is 1.55x the predicted
+sd^2 on average over 8 repeats (seeds 100-107; the test runs 100-102), so its shape sd is
+calibrated.  Its frequency is not: biased low by 0.02-0.04 % in every repeat (noise sd about
+0.006 %; the modes inside the band: mostly within 0.01 %) and identification states no
+frequency uncertainty (the strict xfail below).  That bias, not the shape sd, is what failed
+discovery's adequacy test at mode 13 on the CLI path (seed 7085: -0.040 %, z = 4.15 at the
+0.01 % frequency floor; every shape p-value 1.0).
 """
 
 import numpy as np
 import pytest
 
 from bayesupdate.correlation import mac_matrix
+from bayesupdate.discovery.effects import extend_model, parse_effect_spec
 from bayesupdate.ema.identify import identify
+from bayesupdate.ema.virtual_test import best_reference_points, seed_layout, virtual_impact_test
 from bayesupdate.models import get_model
-from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
+from bayesupdate.pipelines.simulate import BAND_HZ, VirtualTestSettings, simulate_test
 
 
 def _case(seed):
@@ -57,3 +70,40 @@ def test_weak_set_modes_get_their_large_sd(cases):
         assert bad.sum() >= 2
         assert np.all(modes.extra["shape_weak_part"][bad])
         assert np.min(modes.shape_sd_rel[bad]) ** 2 > 1e-3
+
+
+EDGE_MODE = 12  # 0-based: mode 13, 144.37 Hz, below the 150 Hz end of the virtual test
+
+
+@pytest.fixture(scope="module")
+def edge_repeats():
+    """(n_rep, 3): 1 - MAC to the truth, predicted sd^2 and relative frequency error of the
+    band-edge mode, over noise seeds 100-102 with modes, damping and layout fixed."""
+    effect = parse_effect_spec("joint_flexibility@cold_pipe/main_muffler:k_rot=3e3")
+    res = extend_model(get_model("exhaust"), effect).solve(None, n_modes=20)
+    f, shapes, labels = res.frequencies_hz, res.sensor_shapes, list(res.sensor_labels)
+    damping = np.random.default_rng(1).uniform(0.005, 0.03, f.size)
+    damping[EDGE_MODE] = 0.025
+    layout = seed_layout(20, *best_reference_points(shapes[:, f <= BAND_HZ], res.sensor_labels))
+    rows = []
+    for seed in (100, 101, 102):
+        frfs = virtual_impact_test(f, damping, shapes, labels, layout=layout, noise=0.01, seed=seed)
+        modes = identify(frfs).modes
+        k = int(np.argmin(np.abs(modes.frequencies_hz - f[EDGE_MODE])))
+        true = shapes[[labels.index(lab) for lab in modes.dof_labels], EDGE_MODE]
+        omm = 1 - mac_matrix(modes.shapes[:, [k]], true[:, None])[0, 0]
+        err = modes.frequencies_hz[k] / f[EDGE_MODE] - 1
+        rows.append((omm, modes.shape_sd_rel[k] ** 2, err))
+    return np.array(rows)
+
+
+def test_band_edge_mode_shape_sd_against_repeats(edge_repeats):
+    assert np.all(np.abs(edge_repeats[:, 2]) < 0.01)  # the edge mode is found in every repeat
+    ratio = np.mean(edge_repeats[:, 0]) / np.mean(edge_repeats[:, 1])
+    assert 1 / 3 <= ratio <= 3.0, ratio
+
+
+@pytest.mark.xfail(strict=True, reason="band-edge mode frequency biased 0.02-0.04 % low (LSCE)")
+def test_band_edge_mode_frequency_unbiased(edge_repeats):
+    # within 0.01 %, as the modes inside the band are
+    assert np.max(np.abs(edge_repeats[:, 2])) < 1e-4, edge_repeats[:, 2]

@@ -54,7 +54,7 @@ Example (issue 4 item 9)::
 
     [effects]                       # effects the model is extended by before anything else
     add = ["joint_flexibility@cold_pipe/main_muffler:k_rot=2e3"]   # (an earlier discovery's)
-    [discovery]                     # discovery.workflow.DiscoverySettings
+    [discovery]                     # discovery.settings.DiscoverySettings
     kinds = ["added_mass", "joint_flexibility"]     # default: the whole library
     locations = { added_mass = ["12", "14"] }       # default: every admissible location
     sigma = 0.005                   # fixed relative noise (default: data sd, else inferred)
@@ -77,7 +77,7 @@ from pathlib import Path
 from typing import Any
 
 from bayesupdate.discovery.effects import parse_effect_spec
-from bayesupdate.discovery.workflow import DiscoverySettings
+from bayesupdate.discovery.settings import DiscoverySettings, flat_names
 from bayesupdate.errors import BayesUpdateError
 
 
@@ -179,6 +179,9 @@ class StudyConfig:
         """Plain dict (JSON-able) of everything but ``path``; stored in result files."""
         out = dataclasses.asdict(self)
         out.pop("path")
+        discovery = self.extensions.get("discovery")
+        if discovery is not None:  # stored flat, with the names the study file gives the knobs
+            out["extensions"]["discovery"] = discovery.flat()
         return out
 
 
@@ -297,7 +300,9 @@ _DISCOVERY_FLOAT_KEYS = {
     "threshold_log_odds",
     "margin_ln_bf",
     "effect_prior",
+    "bound_tolerance",
     "adequacy_p",
+    "max_noise_rel",
     "alpha",
 }
 
@@ -317,12 +322,12 @@ def _parse_effects_table(table: Mapping, where: str) -> tuple[str, ...]:
 
 def _parse_discovery_table(table: Mapping, where: str) -> DiscoverySettings:
     """``[discovery]`` -> DiscoverySettings (strict keys and types)."""
-    valid = {f.name for f in dataclasses.fields(DiscoverySettings)}
+    valid = flat_names()
     values = {}
     for key, value in table.items():
         here = f"{where}.{key}"
         if key not in valid:
-            raise BayesUpdateError(f"{here}: unknown key; valid keys are {sorted(valid)}")
+            raise BayesUpdateError(f"{here}: unknown key; valid keys are {valid}")
         if key in _DISCOVERY_INT_KEYS:
             if isinstance(value, bool) or not isinstance(value, int):
                 raise BayesUpdateError(f"{here}: must be an integer, got {value!r}")
@@ -343,7 +348,7 @@ def _parse_discovery_table(table: Mapping, where: str) -> DiscoverySettings:
                 raise BayesUpdateError(f"{here}: must be a table kind = [locations]")
             value = {k: [str(x) for x in v] for k, v in value.items()}
         values[key] = value
-    return DiscoverySettings(**values)
+    return DiscoverySettings.from_flat(**values)
 
 
 #: the discovery tables: the study file knows discovery's settings record directly

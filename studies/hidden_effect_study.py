@@ -234,12 +234,13 @@ def shift_after_recalibration(base, data, case: str, path: str) -> float:
 
 
 def divergences(rows, noise: float, shape_noise: float) -> list[dict]:
-    """For each out-of-library row: D (nats, ``discovery.equivalence``) from the noise-free truth
+    """For each out-of-library row: D (nats, ``model_equivalence``) from the noise-free truth
     to the baseline and to the row's named effect (else its best candidate), each re-fitted with
     the five design variables at the study's noise levels.  A confident name with a D of a few
     nats names a change the test cannot tell from that library effect."""
+    from model_equivalence import fit_to_truth, noise_free_modes
+
     from bayesupdate.discovery.effects import Effect
-    from bayesupdate.discovery.equivalence import fit_to_truth, noise_free_modes
 
     out = []
     for row in rows:
@@ -271,7 +272,7 @@ def divergences(rows, noise: float, shape_noise: float) -> list[dict]:
 def report_divergences(items, noise: float, shape_noise: float) -> None:
     print(
         f"\nout-of-library truths vs the library (noise-free, {noise:g} frequency / "
-        f"{shape_noise:g} shape noise; D = min chi^2 / 2 in nats, discovery.equivalence)"
+        f"{shape_noise:g} shape noise; D = min chi^2 / 2 in nats, studies/model_equivalence.py)"
     )
     print(f"{'case':58s} {'verdict':12s} {'candidate':38s} {'D base':>9s} {'D cand':>9s} max|z|")
     for d in items:
@@ -411,12 +412,13 @@ def report_cli(rows) -> None:
 def run_case(args_tuple):
     case, path, noise, seed, shape_noise = args_tuple
     from bayesupdate.discovery.effects import parse_effect_spec
+    from bayesupdate.discovery.results_io import discovery_summary
     from bayesupdate.discovery.workflow import discover
 
     t0 = time.perf_counter()
     data, shift, base = case_data(case, path, noise, seed, shape_noise)
     result = discover(base, data)
-    out = result.to_json()
+    out = discovery_summary(result)
     named = out["named_effect"]
     if case.startswith("none"):
         category, true_kind, true_loc = "null", "none", "-"

@@ -1,4 +1,9 @@
-"""calibrate/sample take the effects discovery names (--effect or a study's [effects] table)."""
+"""calibrate/sample take the effects discovery names (--effect or a study's [effects] table).
+
+Both runs skip the full-model Nelder-Mead polish (--no-polish, ``[optimizer] polish = false``):
+what is checked is that the effect's parameter is calibrated with the design variables (named,
+within its kind's bounds, stored), which the reduced-basis search already decides; the polish,
+checked elsewhere (test_calibration_exhaust), would cost most of the run."""
 
 import json
 
@@ -18,6 +23,7 @@ def test_calibrate_with_an_effect_calibrates_its_parameter_too(tmp_path, capsys)
             "paper:ema",
             "--starts",
             "1",
+            "--no-polish",
             "--effect",
             "bend_flexibility@hot_bend1:factor=3",
             "--out",
@@ -38,7 +44,7 @@ def test_study_file_effects_table(tmp_path, capsys):
     study = tmp_path / "s.toml"
     study.write_text(
         '[model]\nsource = "exhaust"\n[data]\nsource = "paper:ema"\n'
-        '[optimizer]\nstarts = 1\n[effects]\nadd = ["added_mass@14:m=0.2"]\n'
+        '[optimizer]\nstarts = 1\npolish = false\n[effects]\nadd = ["added_mass@14:m=0.2"]\n'
     )
     code = main(["calibrate", str(study), "--json"])
     assert code == 0

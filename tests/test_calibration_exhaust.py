@@ -47,6 +47,15 @@ def mass_kept(rom):
     return problem, calibrate(search, CalibrationSettings(starts=8, seed=0), refine=problem)
 
 
+@pytest.fixture(scope="module")
+def sampled():
+    """(full problem, its sampling problem, the certified ROM): the sampler's reduced basis of
+    the default exhaust problem, built once for the tests that read it."""
+    problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
+    reduced_problem, rom = sampling_problem(problem)
+    return problem, reduced_problem, rom
+
+
 def test_pair_batch_equals_hungarian_per_point():
     rng = np.random.default_rng(4)
     reference = rng.standard_normal((10, 4))
@@ -135,12 +144,11 @@ def test_mass_kept_starts_reach_one_optimum_on_the_mode_6_7_kink(mass_kept):
     assert {6, 7} <= flips <= {6, 7, 11, 12}
 
 
-def test_sampling_problem_uses_certified_rom_and_full_on_request():
-    fe = get_model("exhaust")
-    problem = build_problem(fe, load_modal_data("paper:ema"))
+def test_sampling_problem_uses_certified_rom_and_full_on_request(sampled):
+    problem, reduced_problem, rom = sampled
+    fe = problem.model
     full_problem, none = sampling_problem(problem, reduced=False)
     assert none is None and full_problem.model is fe
-    reduced_problem, rom = sampling_problem(problem)
     assert rom.certified and rom.max_rel_error <= 1e-4 and rom.n_modes == 14
     assert LogPosterior(reduced_problem, LikelihoodSpec(sigma=0.05)).mode == "shape-batch"
     full = LogPosterior(full_problem, LikelihoodSpec(sigma=0.05))
@@ -172,11 +180,10 @@ def test_joint_nuisance_option():
     assert np.min(soft / f0 - 1) < -0.1
 
 
-def test_screening_posteriors_for_reduced_and_full_sampling(rom):
+def test_screening_posteriors_for_reduced_and_full_sampling(rom, sampled):
     from bayesupdate.pipelines.surrogates import screening_posterior
 
-    problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
-    reduced_problem, _ = sampling_problem(problem)
+    problem, reduced_problem, _ = sampled
     spec = LikelihoodSpec(sigma=0.05)
     exact = LogPosterior(reduced_problem, spec)
     coarse = screening_posterior(reduced_problem, reduced_problem.model, spec)

@@ -1,11 +1,19 @@
 """Study file: parsing, defaults, unknown keys and wrong types named in the error."""
 
+import dataclasses
 import textwrap
 
 import pytest
 
 from bayesupdate.config import load_study, parse_study, with_overrides
-from bayesupdate.discovery.workflow import DiscoverySettings
+from bayesupdate.discovery.settings import (
+    FLAT_NAMES,
+    DiscoverySettings,
+    EvidenceSettings,
+    LibraryScan,
+    RefitBudget,
+    VerdictThresholds,
+)
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.pipelines.study import prepare
 
@@ -131,9 +139,11 @@ def test_discovery_tables_are_part_of_the_schema():
     )
     assert study.extensions == {
         "effects": ("added_mass@14:m=0.2",),
-        "discovery": DiscoverySettings(max_refits=2, sigma=1.0),
+        "discovery": DiscoverySettings(
+            refit=RefitBudget(max_refits=2), evidence=EvidenceSettings(sigma=1.0)
+        ),
     }
-    assert isinstance(study.extensions["discovery"].sigma, float)
+    assert isinstance(study.extensions["discovery"].evidence.sigma, float)
     with pytest.raises(BayesUpdateError, match=r"valid tables are \[.*'discovery', 'effects'"):
         parse_study({"effect": {}}, "s.toml")
     with pytest.raises(BayesUpdateError, match=r"s.toml: discovery.max_refits: must be an integer"):
@@ -159,3 +169,38 @@ def test_prepare_extends_the_model_by_the_study_effects_then_the_extra_ones():
 def test_overrides():
     study = with_overrides(parse_study({}), sampler__seed=9, sampler__steps=None)
     assert study.sampler.seed == 9 and study.sampler.steps == 5000
+
+
+def test_discovery_settings_group_the_flat_knobs_of_the_study_file():
+    """Every flat [discovery] key belongs to exactly one record field; flat <-> records round
+    trip; a result file stores the knobs flat; each record validates its own fields."""
+    records = {
+        "scan": LibraryScan,
+        "refit": RefitBudget,
+        "evidence": EvidenceSettings,
+        "verdict": VerdictThresholds,
+    }
+    grouped = {(g, f.name) for g, r in records.items() for f in dataclasses.fields(r)}
+    assert {(g, n) for n, g in FLAT_NAMES if g} == grouped
+    assert len(FLAT_NAMES) == len(grouped) + 1  # + the seed
+    table = {"max_refits": 2, "sigma": 0.01, "alpha": 0.1, "seed": 3, "kinds": ["added_mass"]}
+    s = parse_study({"discovery": table}, "s.toml").extensions["discovery"]
+    assert (s.refit.max_refits, s.evidence.sigma, s.scan.alpha, s.seed) == (2, 0.01, 0.1, 3)
+    assert s.scan.kinds == ("added_mass",) and s.refit.max_nfev == RefitBudget().max_nfev
+    assert DiscoverySettings.from_flat(**s.flat()) == s
+    assert list(s.flat()) == [n for n, _ in FLAT_NAMES]
+    assert s.replaced(max_nfev=7).refit == RefitBudget(max_refits=2, max_nfev=7)
+    stored = parse_study({"discovery": table}).to_dict()["extensions"]["discovery"]
+    assert stored == s.flat() and "refit" not in stored
+    for key, value, message in [
+        ("max_nfev", 0, "discovery.max_nfev: must be >= 1"),
+        ("loo_draws", 0, "discovery.loo_draws: must be >= 1"),
+        ("sigma", float("nan"), "discovery.sigma: must be > 0"),
+        ("margin_ln_bf", -1.0, "thresholds on log odds"),
+        ("effect_prior", 1.0, "strictly between 0 and 1"),
+        ("bound_tolerance", "x", "s.toml: discovery.bound_tolerance: must be a number"),
+    ]:
+        with pytest.raises(BayesUpdateError, match=message):
+            parse_study({"discovery": {key: value}}, "s.toml")
+    with pytest.raises(BayesUpdateError, match=r"discovery.quick: unknown key; valid keys are"):
+        parse_study({"discovery": {"quick": 1}}, "s.toml")

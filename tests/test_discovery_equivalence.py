@@ -2,15 +2,21 @@
 model's best fit is zero for the true model, and grows with the part of the truth's signature
 the model cannot reproduce."""
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from test_discovery_workflow import TRUE_T, frame_model
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.discovery.effects import Effect, extend_model, parse_effect_spec
-from bayesupdate.discovery.equivalence import fit_to_truth, noise_free_modes
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
+
+# the study helper under test (studies/model_equivalence.py), imported as the studies do
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from model_equivalence import fit_to_truth, noise_free_modes  # noqa: E402
 
 
 @pytest.fixture(scope="module")

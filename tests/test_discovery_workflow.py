@@ -10,11 +10,18 @@ import pytest
 
 from bayesupdate.discovery.effects import extend_model, parse_effect_spec
 from bayesupdate.discovery.results_io import (
+    discovery_summary,
     extend_with_specs,
     read_discovery_summary,
     write_discovery,
 )
-from bayesupdate.discovery.workflow import DiscoverySettings, discover
+from bayesupdate.discovery.settings import (
+    DiscoverySettings,
+    EvidenceSettings,
+    LibraryScan,
+    RefitBudget,
+)
+from bayesupdate.discovery.workflow import discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, Binding, FEModel, StructureBuilder, circular_tube
 from bayesupdate.modal_data import ModalData, noisy_modes
@@ -23,13 +30,8 @@ SEC = circular_tube(0.045, 1.5e-3)
 NOISE = 0.002  # relative frequency sd of the synthetic tests
 TRUE_T = 1.8e-3
 FAST = DiscoverySettings(
-    baseline_starts=1,
-    quick_refits=5,
-    per_kind=2,
-    max_refits=2,
-    max_nfev=15,
-    loo_top=1,
-    loo_draws=200,
+    refit=RefitBudget(baseline_starts=1, quick_refits=5, per_kind=2, max_refits=2, max_nfev=15),
+    evidence=EvidenceSettings(loo_top=1, loo_draws=200),
 )
 
 
@@ -105,7 +107,7 @@ def synthetic(model, specs=(), n_modes=8, seed=0, truth_model=None, shape_noise=
 def test_each_kind_is_named_at_its_location(frame, spec):
     effect = parse_effect_spec(spec)
     result = discover(frame, synthetic(frame, [spec]), FAST)
-    out = result.to_json()
+    out = discovery_summary(result)
     assert out["verdict"] == "explained", out["reason"]
     assert (out["named_effect"]["kind"], out["named_effect"]["location"]) == (
         effect.kind,
@@ -127,7 +129,7 @@ def test_each_kind_is_named_at_its_location(frame, spec):
 
 
 def test_no_effect_gives_no_discrepancy(frame):
-    out = discover(frame, synthetic(frame, [], seed=4), FAST).to_json()
+    out = discovery_summary(discover(frame, synthetic(frame, [], seed=4), FAST))
     assert out["verdict"] == "no discrepancy"
     assert out["named_effect"] is None and out["flagged_modes"] == []
     assert out["gap_after"] == out["gap_before"]
@@ -137,9 +139,11 @@ def test_shapes_name_a_mass_the_frequencies_alone_cannot(frame):
     """A 50 g mass at point 3 moves frequencies by ~2x noise: from frequencies alone the best
     candidate cannot be told apart; the shapes (3 % noise, 1 - MAC ~ 1e-3) name it."""
     spec = "added_mass@3:m=0.05"
-    without = discover(frame, synthetic(frame, [spec]), FAST).to_json()
+    without = discovery_summary(discover(frame, synthetic(frame, [spec]), FAST))
     assert without["verdict"] != "explained"
-    with_shapes = discover(frame, synthetic(frame, [spec], shape_noise=0.03), FAST).to_json()
+    with_shapes = discovery_summary(
+        discover(frame, synthetic(frame, [spec], shape_noise=0.03), FAST)
+    )
     assert with_shapes["verdict"] == "explained", with_shapes["reason"]
     named = with_shapes["named_effect"]
     assert (named["kind"], named["location"]) == ("added_mass", "3")
@@ -168,14 +172,14 @@ def test_noisy_and_biased_shapes_cause_no_false_discovery(frame):
         source="biased shapes",
     )
     result = discover(frame, biased, FAST)
-    out = result.to_json()
+    out = discovery_summary(result)
     assert 1 - result.baseline.mac[2] > 1e-2
     assert out["verdict"] == "no discrepancy", out["reason"]
     assert out["named_effect"] is None
     assert out["noise"]["shapes"]["source"] == "floor"
     assert 3 in out["noise"]["shapes"]["raised_to_baseline_misfit"]
     stated = dataclasses.replace(biased, shape_sd_rel=np.full(biased.n_modes, 0.03))
-    out = discover(frame, stated, FAST).to_json()
+    out = discovery_summary(discover(frame, stated, FAST))
     assert out["noise"]["shapes"]["source"] == "data sd"
     assert out["noise"]["shapes"]["raised_to_baseline_misfit"] == [3]
     assert out["noise"]["shapes"]["sd_rel"][2] > 0.1  # ~ sqrt(2e-2): the bias, not the 3 %
@@ -185,7 +189,7 @@ def test_noisy_and_biased_shapes_cause_no_false_discovery(frame):
 def test_geometry_change_outside_the_library_is_unexplained(frame):
     """pipe_b 10 % longer in the 'real' structure: no library effect fits within noise."""
     data = synthetic(frame, [], truth_model=frame_model(1.75))
-    out = discover(frame, data, FAST).to_json()
+    out = discovery_summary(discover(frame, data, FAST))
     assert out["verdict"] == "unexplained"
     assert out["named_effect"] is None
     assert out["flagged_modes"]
@@ -195,7 +199,7 @@ def test_a_longer_pipe_seen_in_known_noise_shapes_is_unexplained(frame):
     """pipe_b 3 % longer, shapes with their stated 3 % noise: the best library effect (a softer
     pipe_b) gains a large Bayes factor but leaves modes misfitting beyond the stated noise."""
     data = synthetic(frame, [], truth_model=frame_model(1.65), shape_noise=0.03)
-    out = discover(frame, data, FAST).to_json()
+    out = discovery_summary(discover(frame, data, FAST))
     assert out["verdict"] == "unexplained" and out["named_effect"] is None, out["reason"]
     assert out["candidates"][0]["log_bayes_factor"] > 100
     assert "misfit remains" in out["reason"]
@@ -203,20 +207,20 @@ def test_a_longer_pipe_seen_in_known_noise_shapes_is_unexplained(frame):
 
 def test_two_effects_at_once_are_not_named(frame):
     data = synthetic(frame, ["added_mass@6:m=0.4", "stiffness_change@pipe_a:factor=0.7"])
-    out = discover(frame, data, FAST).to_json()
+    out = discovery_summary(discover(frame, data, FAST))
     assert out["verdict"] == "unexplained" and out["named_effect"] is None
 
 
 def test_bad_inputs_are_clear_errors(frame):
     data = synthetic(frame, [])
     with pytest.raises(BayesUpdateError, match="unknown effect kind"):
-        discover(frame, data, DiscoverySettings(kinds=("added_mas",)))
+        discover(frame, data, DiscoverySettings(LibraryScan(kinds=("added_mas",))))
     with pytest.raises(BayesUpdateError, match="unknown location"):
-        discover(frame, data, DiscoverySettings(locations={"added_mass": ["9"]}))
+        discover(frame, data, DiscoverySettings(LibraryScan(locations={"added_mass": ["9"]})))
     with pytest.raises(BayesUpdateError, match="cannot decide"):
         discover(frame, data.subset(slice(0, 2)), FAST)
     with pytest.raises(BayesUpdateError, match="sigma"):
-        DiscoverySettings(sigma=-1.0)
+        EvidenceSettings(sigma=-1.0)
     with pytest.raises(BayesUpdateError, match="outside the bounds"):
         extend_with_specs(frame, ["added_mass@2:m=7"])
 
@@ -274,12 +278,12 @@ def test_an_effect_pinned_on_its_bound_is_never_named(named_mass):
     fits = [pinned, *result.fits[1:]]
     prior = result.prior_log_odds
     verdict, reason, named, _ = decide(
-        result.baseline, fits, result.flags, result.noise, result.settings, prior
+        result.baseline, fits, result.flags, result.noise, result.settings.verdict, prior
     )
     assert (verdict, named) == ("unexplained", None)
     assert "on its bound" in reason
     verdict, _, named, _ = decide(
-        result.baseline, result.fits, result.flags, result.noise, result.settings, prior
+        result.baseline, result.fits, result.flags, result.noise, result.settings.verdict, prior
     )
     assert verdict == "explained" and named is result.fits[0]
 
@@ -295,7 +299,7 @@ def test_prior_odds_spread_over_the_library_set_the_bar(named_mass):
     n = len(result.localization.scores)
     assert n == 6 + 6 + 2 + 1 + 1  # masses and springs at 6 points, 2 parts, a joint, a bend
     assert result.prior_log_odds == pytest.approx(-np.log(16))
-    s = result.settings
+    s = result.settings.verdict
     assert dataclasses.replace(s, effect_prior=0.9).prior_log_odds(58) == pytest.approx(
         np.log(9 / 58)
     )
@@ -314,7 +318,7 @@ def test_prior_odds_spread_over_the_library_set_the_bar(named_mass):
     odds = [result.log_posterior_odds(f) for f in result.fits[:2]]
     assert log_probability[1] - log_probability[0] == pytest.approx(odds[0])
     assert log_probability[2] - log_probability[0] == pytest.approx(odds[1])
-    out = result.to_json()
+    out = discovery_summary(result)
     assert out["candidates"][0]["posterior_probability"] == pytest.approx(
         np.exp(log_probability[1])
     )

@@ -121,6 +121,22 @@ def add_arguments(parser) -> None:
     )
 
 
+def calibration_json(result, problem) -> dict:
+    """The ``calibrate --json`` object (issue 4 item 10) of a ``CalibrationResult`` of
+    ``problem``."""
+    return {
+        "parameters": result.parameters,
+        "objective": float(result.expr),
+        "mass_kg": None if result.mass_kg is None else float(result.mass_kg),
+        "frequencies_hz": [float(f) for f in result.frequencies_hz],
+        "targets_hz": [float(f) for f in result.table.test_hz],
+        "starts": int(result.starts),
+        "converged_starts": int(result.converged_starts),
+        "measured_mass_kg": problem.data.mass_kg,
+        "mass_weight": problem.objective.mass_weight,
+    }
+
+
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.inference.results import write_result
@@ -138,10 +154,7 @@ def run(args) -> int:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
     if args.json:
-        out = result.to_json()
-        out["measured_mass_kg"] = prepared.problem.data.mass_kg
-        out["mass_weight"] = prepared.problem.objective.mass_weight
-        print(json.dumps(out))
+        print(json.dumps(calibration_json(result, prepared.problem)))
     else:
         print(
             f"objective (seed eq. 19): {result.expr:.5g}   starts: {result.converged_starts}"

@@ -74,7 +74,7 @@ def _study(args):
 
 
 def _settings(study, args):
-    from bayesupdate.discovery.workflow import DiscoverySettings
+    from bayesupdate.discovery.settings import DiscoverySettings
 
     settings = study.extensions.get("discovery") or DiscoverySettings()
     changes = {
@@ -86,12 +86,12 @@ def _settings(study, args):
         "max_refits": args.max_refits,
         "kinds": tuple(k.strip() for k in args.kinds.split(",")) if args.kinds else None,
     }
-    return dataclasses.replace(settings, **{k: v for k, v in changes.items() if v is not None})
+    return settings.replaced(**{k: v for k, v in changes.items() if v is not None})
 
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.discovery.results_io import write_discovery
+    from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
 
@@ -113,7 +113,7 @@ def run(args) -> int:
         from bayesupdate.discovery.plots import save_plots
 
         save_plots(result, args.plots, getattr(found.model, "structure", None))
-    summary = result.to_json()
+    summary = discovery_summary(result)
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:

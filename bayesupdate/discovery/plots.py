@@ -77,7 +77,7 @@ def plot_ranking(result, top: int = 12):
     ax.set_yticks(y, [f"{f.label}{' (quick)' if f.stage == 'quick' else ''}" for f in fits])
     # the threshold is on the posterior log odds; on the Bayes-factor axis it sits higher by
     # the (negative) prior log odds of a candidate
-    bar = result.settings.threshold_log_odds - result.prior_log_odds
+    bar = result.settings.verdict.threshold_log_odds - result.prior_log_odds
     ax.axvline(bar, color="r", ls="--", label=f"threshold (ln BF {bar:.1f})")
     ax.axvline(0, color="k", lw=0.5)
     ax.set(xlabel="ln Bayes factor vs baseline (Laplace)", title="candidate ranking")

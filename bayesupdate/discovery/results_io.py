@@ -5,7 +5,8 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
 /                   attrs: schema, kind = "discovery", verdict, reason, created_utc, command,
                     model (base model name), base_effects_json (effects the model had before),
                     effects_json (spec list of the extended model: base effects + the named one),
-                    summary_json (the ``discover --json`` object), settings_json, config_json
+                    summary_json (``discovery_summary``: also the ``discover --json`` object),
+                    settings_json (``DiscoverySettings.flat``), config_json
 /versions           attrs: package versions
 /inputs             frequencies_hz (m,), [weights (m,)], [sd_hz (m,)], attrs: source
 /baseline           theta (d,), residual_rel (m,), frequencies_hz (m,), attrs: names,
@@ -35,6 +36,7 @@ import h5py
 import numpy as np
 
 from bayesupdate.atomic import atomic_path
+from bayesupdate.discovery.shape_evidence import SHAPE_SD_FLOOR_REL
 from bayesupdate.errors import BayesUpdateError
 
 SCHEMA = "bayesupdate-discovery/1"
@@ -59,6 +61,88 @@ def _write_fit(group, fit) -> None:
     )
 
 
+def _candidate_summary(result, fit, probability: float, score_delta_chi2: float) -> dict:
+    """One fitted candidate of ``discovery_summary``."""
+    return {
+        "kind": fit.kind,
+        "location": fit.location,
+        "log_evidence": float(fit.log_evidence),
+        "loo": None if fit.loo is None else fit.loo["elpd"],
+        "log_bayes_factor": result.log_bayes_factor(fit),
+        "log_posterior_odds": result.log_posterior_odds(fit),
+        "posterior_probability": float(probability),
+        "expr": float(fit.expr),
+        "parameters": fit.effect_parameters,
+        "score_delta_chi2": float(score_delta_chi2),
+        "optima": len(fit.optima),
+        "stage": fit.stage,
+    }
+
+
+def _shape_noise_summary(fit) -> dict | None:
+    """How the shape block's levels were set (``shape_evidence``): the stated source ("data sd",
+    or "floor" when the data give none: a stated fallback), the floor, each used mode's level as
+    a fraction of the RMS amplitude, the modes raised to their baseline misfit and the modes whose
+    misfit rejects their stated level in this fit (1-based)."""
+    shapes = fit.space.shapes
+    if shapes is None:
+        return None
+    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :])
+    return {
+        "source": shapes.source,
+        "floor_sd_rel": SHAPE_SD_FLOOR_REL,
+        "sd_rel": [float(v) for v in shapes.scale * np.sqrt(shapes.n_dof)],
+        "modes": [int(i) + 1 for i in shapes.modes],
+        "raised_to_baseline_misfit": [int(i) + 1 for i in shapes.modes[shapes.raised]],
+        "rejecting_stated_level": [int(i) + 1 for i in shapes.modes[rejects]],
+    }
+
+
+def discovery_summary(result) -> dict:
+    """The summary of a ``workflow.DiscoveryResult`` (issue 6 item 7, plus documented extras):
+    stored as the result file's ``summary_json`` and printed by ``discover --json``."""
+    scores = {s.label: s.delta_chi2 for s in result.localization.scores}
+    probability = np.exp(result.log_posterior_probabilities())
+    named, final, baseline = result.named, result.final, result.baseline
+    if named is not None:
+        named = {
+            "kind": named.kind,
+            "location": named.location,
+            "parameters": named.effect_parameters,
+        }
+    return {
+        "verdict": result.verdict,
+        "flagged_modes": result.flags.flagged_modes,
+        "named_effect": named,
+        "candidates": [
+            _candidate_summary(result, f, probability[k + 1], scores.get(f.label, np.nan))
+            for k, f in enumerate(result.fits)
+        ],
+        "prior_log_odds": result.prior_log_odds,
+        "gap_before": float(baseline.expr),
+        "gap_after": float(final.expr),
+        "reason": result.reason,
+        "ambiguous_with": [f.label for f in result.ambiguous_with],
+        "baseline": {
+            "log_evidence": float(baseline.log_evidence),
+            "posterior_probability": float(probability[0]),
+            "loo": None if baseline.loo is None else baseline.loo["elpd"],
+            "parameters": baseline.parameters,
+        },
+        "design_after": final.parameters,
+        "error_pct_before": [float(v) for v in 100 * baseline.residual_rel],
+        "error_pct_after": [float(v) for v in 100 * final.residual_rel],
+        "noise": {
+            "source": result.noise.source,
+            "sigma_rel": float(result.noise.sigma),
+            "shapes": _shape_noise_summary(baseline),
+        },
+        "effects": result.effects,
+        "scanned": len(result.localization.scores),
+        "wall_s": float(result.wall_s),
+    }
+
+
 def write_discovery(
     path,
     result,
@@ -71,7 +155,7 @@ def write_discovery(
     posterior : optional (PosteriorResult, summary dict) of the final model."""
     from bayesupdate.inference.results import package_versions
 
-    summary = result.to_json()
+    summary = discovery_summary(result)
     problem = result.baseline.space.problem
     data = problem.data
     effects = list(base_effects) + result.effects
@@ -87,7 +171,7 @@ def write_discovery(
             base_effects_json=json.dumps(list(base_effects)),
             effects_json=json.dumps(effects),
             summary_json=json.dumps(summary),
-            settings_json=json.dumps(result.settings.__dict__, default=str),
+            settings_json=json.dumps(result.settings.flat(), default=str),
             config_json=json.dumps(config or {}, default=str),
         )
         h5.create_group("versions").attrs.update(package_versions())

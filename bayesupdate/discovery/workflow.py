@@ -1,6 +1,7 @@
 """Discovery end to end: baseline -> flag -> localise -> name -> add and show.
 
-``discover(model, data, settings)`` returns a ``DiscoveryResult``:
+``discover(model, data, settings)`` returns a ``DiscoveryResult`` (the knobs named below are
+fields of ``settings.DiscoverySettings``' records):
 
 1. the baseline calibration of the design variables (or the one given), its noise model and
    Laplace evidence (``flagging``, ``evidence``);
@@ -71,75 +72,12 @@ from bayesupdate.discovery.localization import (
     localize,
     screen_grid,
 )
-from bayesupdate.discovery.shape_evidence import (
-    FAILURE_RATE,
-    SHAPE_SD_FLOOR_REL,
-    STATED_REJECTION,
-    shape_evidence,
-)
+from bayesupdate.discovery.settings import DiscoverySettings, VerdictThresholds
+from bayesupdate.discovery.shape_evidence import FAILURE_RATE, STATED_REJECTION, shape_evidence
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
-
-
-@dataclass(frozen=True)
-class DiscoverySettings:
-    """Knobs of a discovery run (defaults as documented in the module docstring).
-
-    kinds / locations : restrict the library (None: all kinds at all admissible locations).
-    sigma : fixed relative noise level (None: the data's sd, else inferred).
-    """
-
-    kinds: tuple | None = None
-    locations: dict | None = None
-    sigma: float | None = None
-    baseline_starts: int = 4
-    seed: int = 0
-    quick_refits: int = 20
-    per_kind: int = 3
-    quick_nfev: int = 4
-    max_refits: int = 5
-    max_nfev: int = 25
-    threshold_log_odds: float = 3.0
-    margin_ln_bf: float = 2.0
-    effect_prior: float = 0.5
-    bound_tolerance: float = 0.005
-    adequacy_p: float = 1e-3
-    max_noise_rel: float = 0.01
-    alpha: float = 0.05
-    loo_top: int = 3
-    loo_draws: int = 400
-
-    def __post_init__(self):
-        if self.sigma is not None and not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise BayesUpdateError(f"discovery.sigma: must be > 0, got {self.sigma}")
-        for name in (
-            "baseline_starts",
-            "quick_refits",
-            "quick_nfev",
-            "max_refits",
-            "max_nfev",
-            "loo_draws",
-        ):
-            if int(getattr(self, name)) < 1:
-                raise BayesUpdateError(f"discovery.{name}: must be >= 1")
-        if not (0 <= self.threshold_log_odds < np.inf and 0 <= self.margin_ln_bf < np.inf):
-            raise BayesUpdateError(  # NaN fails the chained comparison too
-                "discovery: thresholds on log odds (threshold_log_odds, margin_ln_bf, "
-                "--threshold) must be finite numbers >= 0"
-            )
-        if not 0 < self.effect_prior < 1:
-            raise BayesUpdateError(
-                "discovery.effect_prior (--effect-prior): the prior probability that a library "
-                f"effect is present must lie strictly between 0 and 1, got {self.effect_prior}"
-            )
-
-    def prior_log_odds(self, n_candidates: int) -> float:
-        """Prior log odds of one of ``n_candidates`` equally likely candidates against the
-        baseline: ln(p / (1 - p)) - ln N (module docstring, "Prior odds")."""
-        p = self.effect_prior
-        return float(np.log(p / (1 - p)) - np.log(max(int(n_candidates), 1)))
 
 
 @dataclass
@@ -171,7 +109,7 @@ class DiscoveryResult:
     @property
     def prior_log_odds(self) -> float:
         """Prior log odds of each scanned candidate against the baseline."""
-        return self.settings.prior_log_odds(len(self.localization.scores))
+        return self.settings.verdict.prior_log_odds(len(self.localization.scores))
 
     def log_posterior_odds(self, fit: ModelFit) -> float:
         """ln BF + prior log odds: what ``threshold_log_odds`` is compared with."""
@@ -195,65 +133,8 @@ class DiscoveryResult:
     def final(self) -> ModelFit:
         return self.named if self.named is not None else self.baseline
 
-    def to_json(self) -> dict:
-        """The ``discover --json`` object (issue 6 item 7), plus documented extras."""
-        scores = {s.label: s.delta_chi2 for s in self.localization.scores}
-        probability = np.exp(self.log_posterior_probabilities())
 
-        def candidate(k: int, fit: ModelFit) -> dict:
-            return {
-                "kind": fit.kind,
-                "location": fit.location,
-                "log_evidence": float(fit.log_evidence),
-                "loo": None if fit.loo is None else fit.loo["elpd"],
-                "log_bayes_factor": self.log_bayes_factor(fit),
-                "log_posterior_odds": self.log_posterior_odds(fit),
-                "posterior_probability": float(probability[k + 1]),
-                "expr": float(fit.expr),
-                "parameters": fit.effect_parameters,
-                "score_delta_chi2": float(scores.get(fit.label, np.nan)),
-                "optima": len(fit.optima),
-                "stage": fit.stage,
-            }
-
-        named = None
-        if self.named is not None:
-            named = {
-                "kind": self.named.kind,
-                "location": self.named.location,
-                "parameters": self.named.effect_parameters,
-            }
-        return {
-            "verdict": self.verdict,
-            "flagged_modes": self.flags.flagged_modes,
-            "named_effect": named,
-            "candidates": [candidate(k, f) for k, f in enumerate(self.fits)],
-            "prior_log_odds": self.prior_log_odds,
-            "gap_before": float(self.baseline.expr),
-            "gap_after": float(self.final.expr),
-            "reason": self.reason,
-            "ambiguous_with": [f.label for f in self.ambiguous_with],
-            "baseline": {
-                "log_evidence": float(self.baseline.log_evidence),
-                "posterior_probability": float(probability[0]),
-                "loo": None if self.baseline.loo is None else self.baseline.loo["elpd"],
-                "parameters": self.baseline.parameters,
-            },
-            "design_after": self.final.parameters,
-            "error_pct_before": [float(v) for v in 100 * self.baseline.residual_rel],
-            "error_pct_after": [float(v) for v in 100 * self.final.residual_rel],
-            "noise": {
-                "source": self.noise.source,
-                "sigma_rel": float(self.noise.sigma),
-                "shapes": _shape_noise_json(self.baseline),
-            },
-            "effects": self.effects,
-            "scanned": len(self.localization.scores),
-            "wall_s": float(self.wall_s),
-        }
-
-
-def _within_noise(flags: ModeFlags, sigma: float, inferred: bool, s: DiscoverySettings) -> bool:
+def _within_noise(flags: ModeFlags, sigma: float, inferred: bool, s: VerdictThresholds) -> bool:
     """A model fits within the noise: no flagged mode, and (inferred noise) its robust relative
     level ``sigma`` [-] <= ``max_noise_rel`` or (known noise) the global chi^2 p >
     ``adequacy_p``."""
@@ -269,7 +150,7 @@ def _below_threshold(
     prior_log_odds: float,
     baseline_ok: bool,
     flags: ModeFlags,
-    s: DiscoverySettings,
+    s: VerdictThresholds,
 ) -> tuple[str, str, None, list]:
     """Verdict when the best candidate's posterior log odds do not exceed the threshold:
     "no discrepancy" if the baseline fits within noise, else "unexplained"."""
@@ -294,7 +175,7 @@ def _below_threshold(
 
 
 def _not_confident(
-    fits: list, ln_bf: float, n_design: int, s: DiscoverySettings
+    fits: list, ln_bf: float, n_design: int, s: VerdictThresholds
 ) -> tuple[str, str, None, list] | None:
     """The "unexplained" verdict of a winner ``fits[0]`` that beats the baseline but cannot be
     named: runners-up within ``margin_ln_bf`` (returned as ambiguous), or an effect parameter
@@ -322,7 +203,7 @@ def _not_confident(
 
 
 def _adequacy(
-    best: ModelFit, baseline: ModelFit, noise: NoiseModel, s: DiscoverySettings
+    best: ModelFit, baseline: ModelFit, noise: NoiseModel, s: VerdictThresholds
 ) -> tuple[ModeFlags, bool]:
     """The winner's mode flags at family-wise level ``adequacy_p`` and whether it fits within
     the noise (for inferred noise judged at its own robust residual level)."""
@@ -351,12 +232,12 @@ def decide(
     fits: list,
     flags: ModeFlags,
     noise: NoiseModel,
-    s: DiscoverySettings,
+    s: VerdictThresholds,
     prior_log_odds: float,
     polish=None,
 ) -> tuple[str, str, ModelFit | None, list]:
     """Verdict, reason, named fit (or None), ambiguous fits (module docstring, step 5).
-    ``prior_log_odds``: of each candidate against the baseline (``settings.prior_log_odds``).
+    ``prior_log_odds``: of each candidate against the baseline (``s.prior_log_odds``).
     ``polish(fit) -> ModelFit | None``: the winner re-fitted at its own noise level before it is
     judged (``polish_at_own_level``); its Bayes factors stay those of the comparison."""
     baseline_ok = _within_noise(flags, noise.sigma, noise.inferred, s)
@@ -422,25 +303,6 @@ def polish_at_own_level(
     return polished
 
 
-def _shape_noise_json(fit: ModelFit) -> dict | None:
-    """How the shape block's levels were set (``shape_evidence``): the stated source ("data sd",
-    or "floor" when the data give none: a stated fallback), the floor, each used mode's level as
-    a fraction of the RMS amplitude, the modes raised to their baseline misfit and the modes whose
-    misfit rejects their stated level in this fit (1-based)."""
-    shapes = fit.space.shapes
-    if shapes is None:
-        return None
-    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :])
-    return {
-        "source": shapes.source,
-        "floor_sd_rel": SHAPE_SD_FLOOR_REL,
-        "sd_rel": [float(v) for v in shapes.scale * np.sqrt(shapes.n_dof)],
-        "modes": [int(i) + 1 for i in shapes.modes],
-        "raised_to_baseline_misfit": [int(i) + 1 for i in shapes.modes[shapes.raised]],
-        "rejecting_stated_level": [int(i) + 1 for i in shapes.modes[rejects]],
-    }
-
-
 def shape_tests(fit: ModelFit) -> ShapeTests | None:
     """The per-mode shape tests of ``fit`` (``flagging.ShapeTests``), None without shapes: each
     mode's chi^2 at its level, and the count of modes rejecting their stated level against the
@@ -478,13 +340,13 @@ def _effect_at_bound(fit: ModelFit, n_design: int, tolerance: float) -> list[str
 
 def _select(scores, settings: DiscoverySettings) -> list:
     """Top ``quick_refits`` by score plus the best ``per_kind`` of every kind, score order."""
-    chosen = list(scores[: settings.quick_refits])
+    chosen = list(scores[: settings.refit.quick_refits])
     seen = {s.label for s in chosen}
     per_kind: dict[str, int] = {}
     for s in scores:
         kind = s.candidate.effect.kind
         per_kind[kind] = per_kind.get(kind, 0) + 1
-        if per_kind[kind] <= settings.per_kind and s.label not in seen:
+        if per_kind[kind] <= settings.refit.per_kind and s.label not in seen:
             chosen.append(s)
             seen.add(s.label)
     return chosen
@@ -539,12 +401,12 @@ def _prepare(
         pairing = "mac" if data.shapes is not None else "order"
     problem = build_problem(model, data, parameters, pairing=pairing)
     check_enough_modes(problem)
-    effects = enumerate_effects(model, settings.kinds, settings.locations)
+    effects = enumerate_effects(model, settings.scan.kinds, settings.scan.locations)
     if baseline is None:
-        say(f"baseline calibration ({settings.baseline_starts} starts)")
+        starts = settings.refit.baseline_starts
+        say(f"baseline calibration ({starts} starts)")
         baseline = calibrate(
-            problem,
-            CalibrationSettings(starts=settings.baseline_starts, seed=settings.seed, max_nfev=100),
+            problem, CalibrationSettings(starts=starts, seed=settings.seed, max_nfev=100)
         )
     return problem, effects, baseline
 
@@ -561,7 +423,7 @@ def _baseline_fit(problem, baseline, settings: DiscoverySettings) -> ModelFit:
     factor sum over the same basins.  Its ``space`` carries the noise and shapes."""
     data = problem.data
     e0 = relative_errors(baseline.frequencies_hz, data.frequencies_hz)
-    noise = noise_model(data, e0, len(problem.parameters), settings.sigma)
+    noise = noise_model(data, e0, len(problem.parameters), settings.evidence.sigma)
     shapes = None
     if problem.pairing.method == "mac":  # the test's shapes are evidence too (shape_evidence)
         at_baseline = problem.evaluate(baseline.theta)
@@ -569,7 +431,7 @@ def _baseline_fit(problem, baseline, settings: DiscoverySettings) -> ModelFit:
             shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
     base_space = FitSpace(problem, problem.parameters, noise, shapes)
     starts = [baseline.theta, _box_centre(problem)]
-    return fit_model(base_space, starts, "baseline", max_nfev=settings.max_nfev)
+    return fit_model(base_space, starts, "baseline", max_nfev=settings.refit.max_nfev)
 
 
 def _flag_baseline(
@@ -584,7 +446,7 @@ def _flag_baseline(
         len(base_fit.space.axes),
         predictive_rel_var,
         mac,
-        settings.alpha,
+        settings.scan.alpha,
         shapes=shape_tests(base_fit),
     )
 
@@ -628,7 +490,7 @@ def _quick_refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings)
             score.label,
             effect.kind,
             effect.location,
-            max_nfev=settings.quick_nfev,
+            max_nfev=settings.refit.quick_nfev,
             stage="quick",
             best_start_only=True,
         )
@@ -642,14 +504,15 @@ def _full_refits(quick: list, base_fit: ModelFit, settings: DiscoverySettings, s
     the rest keep their quick fit.  All fits, best evidence first."""
     centre = _box_centre(base_fit.space.problem)
     n_design = len(base_fit.space.axes)
-    fits = [f for f, _ in quick[settings.max_refits :]]
-    for fit, score in quick[: settings.max_refits]:
+    budget = settings.refit
+    fits = [f for f, _ in quick[budget.max_refits :]]
+    for fit, score in quick[: budget.max_refits]:
         say(f"full refit {score.label}")
         # the quick end point, plus the box centre with the quick fit's effect value: the
         # design variables of a far-off baseline can hold the fit in another basin
         starts = [fit.theta, np.append(centre, fit.theta[n_design:])]
         full = fit_model(
-            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.max_nfev
+            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=budget.max_nfev
         )
         fits.append(replace(full, evaluations=full.evaluations + fit.evaluations))
     fits.sort(key=lambda f: -f.log_evidence)
@@ -667,12 +530,13 @@ def _refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings, say) 
 def _with_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> tuple[ModelFit, list]:
     """The baseline and the fits, the baseline and the ``loo_top`` best with their PSIS-LOO
     (``laplace_loo``, ``loo_draws`` draws; the k-th of them seeded ``seed + k``)."""
-    top = [base_fit, *fits[: settings.loo_top]]
+    loo, seed = settings.evidence, settings.seed
+    top = [base_fit, *fits[: loo.loo_top]]
     done = [
-        replace(fit, loo=laplace_loo(fit, settings.loo_draws, seed=settings.seed + k))
+        replace(fit, loo=laplace_loo(fit, loo.loo_draws, seed=seed + k))
         for k, fit in enumerate(top)
     ]
-    return done[0], done[1:] + list(fits[settings.loo_top :])
+    return done[0], done[1:] + list(fits[loo.loo_top :])
 
 
 @contextmanager
@@ -694,9 +558,9 @@ def _verdict(
         fits,
         flags,
         noise,
-        settings,
-        settings.prior_log_odds(n_scanned),
-        polish=lambda fit: polish_at_own_level(fit, noise, settings.max_nfev),
+        settings.verdict,
+        settings.verdict.prior_log_odds(n_scanned),
+        polish=lambda fit: polish_at_own_level(fit, noise, settings.refit.max_nfev),
     )
 
 

@@ -76,18 +76,6 @@ class CalibrationResult:
     def swapped(self) -> bool:
         return self.table.swapped
 
-    def to_json(self) -> dict:
-        """The ``calibrate --json`` object (issue 4 item 10)."""
-        return {
-            "parameters": self.parameters,
-            "objective": float(self.expr),
-            "mass_kg": None if self.mass_kg is None else float(self.mass_kg),
-            "frequencies_hz": [float(f) for f in self.frequencies_hz],
-            "targets_hz": [float(f) for f in self.table.test_hz],
-            "starts": int(self.starts),
-            "converged_starts": int(self.converged_starts),
-        }
-
 
 @dataclass(frozen=True)
 class CalibrationSettings:

@@ -22,7 +22,7 @@ import numpy as np
 from bayesupdate import paper
 from bayesupdate.config import StudyConfig, parse_study
 from bayesupdate.discovery.results_io import write_discovery
-from bayesupdate.discovery.workflow import DiscoverySettings
+from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.pipelines.calibrate import run_calibration
 from bayesupdate.pipelines.discover import DiscoveryRequest, DiscoveryRun, discover_study
 from bayesupdate.pipelines.sample import SamplingOptions, SamplingRun, run_sampling
@@ -249,6 +249,6 @@ def _discovery_part(settings, data_source, path: Path) -> DiscoveryPart:
     if settings.quick:
         options.update(quick_refits=5, per_kind=1, max_refits=2, loo_top=1, loo_draws=100)
     study = parse_study({"model": {"source": "exhaust"}, "data": {"source": data_source}}, "demo")
-    run = discover_study(study, DiscoveryRequest(DiscoverySettings(**options)))
+    run = discover_study(study, DiscoveryRequest(DiscoverySettings.from_flat(**options)))
     write_discovery(path, run.result, command="demo")
     return DiscoveryPart(run, path)

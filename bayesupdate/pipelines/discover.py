@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 
 from bayesupdate.config import StudyConfig
 from bayesupdate.discovery.results_io import extend_with_specs
-from bayesupdate.discovery.workflow import DiscoveryResult, DiscoverySettings, discover
+from bayesupdate.discovery.settings import DiscoverySettings
+from bayesupdate.discovery.workflow import DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data
 from bayesupdate.pipelines.model_source import problem_parameters, study_model

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate import paper
+from bayesupdate.discovery.results_io import discovery_summary
 from bayesupdate.pipelines.demo import (
     IDENTIFIED_BELOW_HZ,
     CalibrationPart,
@@ -212,7 +213,7 @@ def _virtual_sections(
 
 def discovery_headline(part: DiscoveryPart) -> str:
     """One paragraph: verdict, named effect, flagged modes, gap before -> after, scan size."""
-    summary = part.run.result.to_json()
+    summary = discovery_summary(part.run.result)
     named = summary["named_effect"]
     name = "none" if named is None else f"{named['kind']}@{named['location']}"
     return (
@@ -235,7 +236,7 @@ def _discovery_table(part: DiscoveryPart) -> Table:
             c["loo"],
             c["expr"],
         )
-        for c in part.run.result.to_json()["candidates"][:10]
+        for c in discovery_summary(part.run.result)["candidates"][:10]
     )
     return Table(
         (

@@ -18,6 +18,10 @@ however the evidence is computed; when D of the baseline is large and D of a can
 every such test prefers the candidate: an out-of-library truth is then *observationally
 equivalent* to that library effect, and naming it is not a failure of the decision rule but a
 limit of the data.
+
+A study helper (``hidden_effect_study.divergences``; checked by
+tests/test_discovery_equivalence.py): it composes the package's discovery likelihood
+(``discovery.evidence.FitSpace``) but no command or pipeline uses it.
 """
 
 from dataclasses import dataclass

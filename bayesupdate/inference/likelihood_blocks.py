@@ -1,5 +1,5 @@
 """The Gaussian likelihood blocks that calibration (``inference.likelihood``) and discovery
-(``discovery.evidence``, ``discovery.equivalence``) compose: frequencies, shapes and mass.
+(``discovery.evidence``, ``studies/model_equivalence.py``) compose: frequencies, shapes and mass.
 
 Each block turns a prediction into residuals r in noise units and the Gaussian log-density
 

@@ -1,6 +1,7 @@
 """Built-in structures, looked up by name with ``get_model``.
 
-``exhaust``: the seed's exhaust system (Lupea 2013).  ``shear_building``: the two-DOF shear building
+``exhaust``: the seed's exhaust system (Lupea 2013); ``exhaust_shell``: the same with shell
+bodies (catalyst, mufflers).  ``shear_building``: the two-DOF shear building
 used to verify the sampler against quadrature.  Each factory returns a ``ParametricModel``.
 """
 
@@ -11,6 +12,7 @@ from bayesupdate.errors import BayesUpdateError
 #: model name -> "module:factory" (imported lazily, so the CLI starts fast)
 BUILTIN_MODELS = {
     "exhaust": "bayesupdate.models.exhaust:build_exhaust_model",
+    "exhaust_shell": "bayesupdate.models.exhaust_shell:build_exhaust_shell_model",
     "shear_building": "bayesupdate.models.shear_building:build_shear_building_model",
 }
 

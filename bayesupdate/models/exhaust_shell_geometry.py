@@ -1,0 +1,148 @@
+"""Geometry of the shell exhaust (``exhaust_shell``): the beam exhaust's fitted routing plus the
+shell bodies' quantities, each with its plausible range, and the one-time fit of the few the
+paper does not give (``studies/exhaust_shell_fit.py``; stored in ``FITS``).
+
+Kept from ``exhaust`` (its best fit, ``bayesupdate/data/exhaust_geometry.json``): pipe diameter,
+walls, routing, lengths, bend radii, hangers, flange, the bodies' lengths and positions.  The beam
+model's joint springs and main-muffler sheet factor have no meaning here (the caps and baffles
+are modelled) and are dropped.
+"""
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.models import exhaust
+
+_A = "assumption"
+_F = "fitted to seed Table 1 (studies/exhaust_shell_fit.py) within the range"
+#: name -> (initial value, (low, high) plausible range, unit, source).  A geometry dict passed to
+#: ``exhaust_shell`` may override any of these; values outside the range are refused.
+SHELL_QUANTITIES = {
+    "cat_width": (0.16, (0.10, 0.22), "m", _F + ": oval can of a ~1 L substrate"),
+    "cat_height": (0.11, (0.08, 0.16), "m", _A + ": oval can of a ~1 L substrate (as exhaust)"),
+    "cat_wall": (1.5e-3, (1.0e-3, 2.0e-3), "m", _A + ": catalyst can (as exhaust)"),
+    "cat_cap_wall": (2.42e-3, (1.0e-3, 3.0e-3), "m", _F + ": cones/caps, formed, thicker"),
+    "cat_cone": (0.00373, (0.0, 0.08), "m", _F + ": depth of the inlet/outlet cones"),
+    "im_cone": (0.0, (0.0, 0.05), "m", _A + ": flat (deep-drawn) end caps"),
+    "mm_cone": (0.0333, (0.0, 0.06), "m", _F + ": depth of the domed (conical) end caps"),
+    "im_width": (0.20, (0.14, 0.26), "m", _F + ": pre-silencer of a small car"),
+    "im_height": (0.13, (0.09, 0.17), "m", _F + ": pre-silencer of a small car"),
+    "im_wall": (0.8e-3, (0.6e-3, 1.2e-3), "m", _A + ": pre-silencer wrapper (as exhaust)"),
+    "im_cap_wall": (1.31e-3, (0.8e-3, 2.5e-3), "m", _F + ": deep-drawn end caps"),
+    "mm_width": (0.394, (0.26, 0.42), "m", _F + ": oval rear silencer, along y"),
+    "mm_height": (0.235, (0.14, 0.24), "m", _F + ": oval rear silencer, along z"),
+    "rear_bar_weld": (0.05, (0.02, 0.10), "m", _A + ": weld of the hanger bar on the mantle"),
+}
+#: the main muffler's sheets (mantle, caps, baffles) are one gauge: seed Table 3 t_main_muffler
+MM_WALL = 1.0e-3
+
+#: quantities of the one-time fit (``studies/exhaust_shell_fit.py``), best first
+FIT_NAMES = (
+    "cat_cone",
+    "cat_cap_wall",
+    "im_cap_wall",
+    "mm_cone",
+    "mm_width",
+    "mm_height",
+    "cat_width",
+    "im_width",
+    "im_height",
+)
+FITS: tuple[dict, ...] = (
+    # best: 9 quantities, cost 0.01154 at mesh density 16 (RMS 4.39 %, internals 0.31 kg)
+    {
+        "cat_cone": 0.00106,
+        "cat_cap_wall": 0.00241,
+        "im_cap_wall": 0.00175,
+        "mm_cone": 0.03327,
+        "mm_width": 0.39251,
+        "mm_height": 0.24,
+        "cat_width": 0.11894,
+        "im_width": 0.2423,
+        "im_height": 0.10439,
+    },
+    # runner-up: the first 6 quantities only, cost 0.01306 (RMS 4.64 %, internals 0.12 kg)
+    {
+        "cat_cone": 0.00373,
+        "cat_cap_wall": 0.00242,
+        "im_cap_wall": 0.00131,
+        "mm_cone": 0.0333,
+        "mm_width": 0.39409,
+        "mm_height": 0.23992,
+    },
+    # runner-up: all 9, also fitting 12.12 kg at the Table 3 optimum (--table3-mass): cost
+    # 0.01386, Table 1 RMS 4.47 %, 12.86 kg at Table 3 (best: 13.20 kg)
+    {
+        "cat_cone": 0.00129,
+        "cat_cap_wall": 0.00254,
+        "im_cap_wall": 0.00124,
+        "mm_cone": 0.03429,
+        "mm_width": 0.40767,
+        "mm_height": 0.23921,
+        "cat_width": 0.13898,
+        "im_width": 0.22337,
+        "im_height": 0.09914,
+    },
+)
+
+#: mesh density: elements around each oval body (a multiple of 4), default and range.  Measured
+#: max change of the 12 modes against density 64: 16 -> 1.72 %, 24 -> 0.78 %, 32 -> 0.39 %
+#: (docs/guide/exhaust-shell.md); 96 is ~200k DOF
+MESH_DENSITY_DEFAULT = 32
+MESH_DENSITY_RANGE = (16, 96)
+
+
+def check_mesh_density(mesh_density) -> int:
+    """``mesh_density`` as an int, a multiple of 4 within ``MESH_DENSITY_RANGE``, else a one-line
+    error."""
+    lo, hi = MESH_DENSITY_RANGE
+    try:
+        value = float(mesh_density)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (lo <= value <= hi and value % 4 == 0):
+        raise BayesUpdateError(
+            f"exhaust_shell: mesh_density = {mesh_density!r} is outside its range: a multiple of 4 "
+            f"in [{lo}, {hi}] (elements around each oval body)"
+        )
+    return int(value)
+
+
+def _choice(geometry) -> dict:
+    if isinstance(geometry, dict):
+        return dict(geometry)
+    choice = 0 if geometry == "best" else geometry
+    if isinstance(choice, str) and choice.isdigit():
+        choice = int(choice)
+    if not isinstance(choice, int) or not 0 <= choice < len(FITS):
+        raise BayesUpdateError(
+            f"exhaust_shell geometry {geometry!r}: use 'best', an index 0..{len(FITS) - 1} "
+            "or a dict of quantities (exhaust_shell_geometry.SHELL_QUANTITIES)"
+        )
+    return dict(FITS[choice])
+
+
+def shell_geometry(geometry="best") -> dict:
+    """All quantities (SI): the beam exhaust's best geometry plus ``SHELL_QUANTITIES`` at their
+    values, the stored fit ``geometry`` ("best" or an index into ``FITS``) or a dict overriding
+    shell quantities (each checked against its range)."""
+    overrides = _choice(geometry)
+    unknown = sorted(set(overrides) - set(SHELL_QUANTITIES))
+    if unknown:
+        raise BayesUpdateError(
+            f"exhaust_shell geometry: unknown quantities {unknown}; "
+            f"known: {sorted(SHELL_QUANTITIES)}"
+        )
+    g = exhaust.full_geometry(exhaust.fitted_geometry("best"))
+    g.update({k: v[0] for k, v in SHELL_QUANTITIES.items()})
+    for name, value in overrides.items():
+        lo, hi = SHELL_QUANTITIES[name][1]
+        unit = SHELL_QUANTITIES[name][2]
+        if not (np.isfinite(float(value)) and lo <= float(value) <= hi):
+            raise BayesUpdateError(
+                f"exhaust_shell geometry: {name} = {value} {unit} is outside its plausible "
+                f"range [{lo}, {hi}] {unit}"
+            )
+        g[name] = float(value)
+    g.update(mm_wall=MM_WALL, mm_cap_wall=MM_WALL)
+    return g

@@ -9,6 +9,8 @@
   wall time of the whole run, frequencies from its F06 eigenvalue table.
 * OpenSeesPy: the structure bayesupdate converted (same nodes, thicknesses, springs, RBE2, SPC),
   ASDShellQ4/ASDShellT3 elements, ``eigen -genBandArpack``; time of the eigen call.
+* ``--lines``: only the cost of line-element bindings (``nastran.lines``: the bound elements
+  re-built at each solve) on MSC's beam deck, against the same deck without parameters.
 * ``--k6rot``: mode 1's sensitivity to the drilling stiffness: MYSTRAN at PARAM K6ROT 0, 1, 10
   and bayesupdate at drilling penalties alpha G with alpha 1e-6, 1e-3 (default), 1e-1.
 Reference: NX Nastran's frequencies (shared/data/nastran/README.md).  Nothing is asserted here.
@@ -125,6 +127,27 @@ def opensees(structure, n_modes=10):
     return np.sqrt(lam) / (2 * np.pi), wall
 
 
+def line_bindings(repeats=5):
+    """Solve time of the MSC beam deck with PBARL/PBEAML DIM1 and MAT1 E/RHO bound (every line
+    element re-built at each solve) and without parameters."""
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = DECK.parents[1] / "beam_modes" / "beam_modes.dat"
+    params = {
+        "r1": {"binds": "PBARL 1 DIM1"},
+        "r3": {"binds": "PBEAML 3 DIM1"},
+        "e": {"binds": "MAT1 2 E scale"},
+        "rho": {"binds": "MAT1 2 RHO scale"},
+    }
+    bound, plain = load_nastran_model(deck, params), load_nastran_model(deck)
+    theta = {"r1": 1.1, "r3": 0.9, "e": 1.05, "rho": 0.95}
+    t_bound, _ = time_median(lambda: bound.solve(theta, n_modes=10), repeats)
+    t_plain, _ = time_median(lambda: plain.solve(n_modes=10), repeats)
+    n = len(bound.bindings["r1"].lines) + len(bound.bindings["r3"].lines)
+    print(f"beam deck, {n} line elements re-built: solve {t_bound * 1e3:.1f} ms with 4 line "
+          f"bindings, {t_plain * 1e3:.1f} ms without (median of {repeats})")  # fmt: skip
+
+
 def row(name, f, seconds, what):
     dev = np.abs(f[1:] / NX_HZ[1:] - 1).max() * 100
     print(f"{name:<12} {f[0]:7.3f} {dev:8.2f} % {seconds:8.2f} s  ({what})")
@@ -135,7 +158,11 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-opensees", action="store_true")
     parser.add_argument("--k6rot", action="store_true")
+    parser.add_argument("--lines", action="store_true", help="only the line-binding timing")
     args = parser.parse_args()
+    if args.lines:
+        line_bindings()
+        return
     print(f"deck {DECK.name}; NX modes: {' '.join(f'{v:.3f}' for v in NX_HZ)}")
     print(f"{'solver':<12} {'mode 1':>7} {'max dev 2-10':>10} {'time':>10}")
     f, t_load, t_solve, structure = ours()

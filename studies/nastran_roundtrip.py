@@ -1,17 +1,29 @@
 """Worked example (issue 19): calibrate a Nastran deck nobody here wrote and write it back.
 
 The NX FEMAP exhaust (``../shared/data/nastran/femap_exhaust/exhaust.bdf``, 4,466 shells, inch-
-lbf-s units): two PSHELL thicknesses are perturbed (PSHELL 3 +8 %, PSHELL 9 -6 %), a roving-
-hammer test is simulated at the three hanger GRIDs and 17 shell GRIDs spread over the system
-(``pipelines.simulate``, 1 % noise), identified (``bayesupdate identify``), calibrated back from
-the deck's values (``bayesupdate calibrate study.toml --write-bdf``), and the written deck is read
-again: its frequencies must be the calibrated ones.  Prints one JSON object; slow (full sparse
-solves of 26,832 DOFs, several minutes; two starts without polish).
+lbf-s units), on the user's path, the commands a user types (``bayesupdate.cli.main``):
 
-    PYTHONPATH=. python studies/nastran_roundtrip.py [--out DIR]
+1. a study file binds two PSHELL thicknesses and maps 20 test points (the three hanger GRIDs and
+   17 shell GRIDs spread over the system by farthest-point sampling: pre-test planning, the one
+   step done in Python) in ``[model.test_points]``;
+2. ``bayesupdate simulate --study study.toml --set t_3=.. --set t_9=..`` (PSHELL 3 +8 %,
+   PSHELL 9 -6 %, 1 % time-signal noise): a roving-hammer test at those points, V and H;
+3. ``bayesupdate identify test.uff --out modes.h5``;
+4. ``bayesupdate calibrate study.toml --write-bdf updated.bdf --json`` (from the deck's values);
+5. ``bayesupdate modes --model updated.bdf --json``: the written deck read again.
+
+The thicknesses' posterior sd is the Laplace (Gauss-Newton) sd at the optimum, (J^T W J)^-1 with
+J by central differences of full solves, under the study's likelihood (relative sd 0.05, the
+default of ``sample``), under the identified frequencies' own sd (when the data has it) and with
+the relative sd estimated from the residuals (least squares): ``sample`` is not run (every
+full solve of 26,832 DOFs takes seconds; a deck with shells gets no reduced basis yet).  Prints
+one JSON object; slow (several minutes; two starts without polish).
+
+    PYTHONPATH=. python studies/nastran_roundtrip.py [--out DIR] [--reuse]
 """
 
 import argparse
+import functools
 import json
 import tempfile
 from pathlib import Path
@@ -44,26 +56,57 @@ def spread_points(model, n: int) -> list[int]:
 
 def main(argv=None) -> dict:
     from bayesupdate.cli import main as cli
-    from bayesupdate.ema.uff_io import write_uff58
     from bayesupdate.nastran import load_nastran_model
-    from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", help="folder for the test, the study and the updated deck")
+    parser.add_argument(
+        "--reuse", action="store_true", help="reuse the commands' JSON outputs found in --out"
+    )
     args = parser.parse_args(argv)
     out = Path(args.out or tempfile.mkdtemp(prefix="nastran_roundtrip_"))
     out.mkdir(parents=True, exist_ok=True)
 
     plain = load_nastran_model(str(DECK), PARAMETERS)
     grids = list(HANGERS) + [g for g in spread_points(plain, 20) if g not in HANGERS][:17]
-    table = {str(k): g for k, g in enumerate(grids, start=1)}
-    labels = [f"{k}{d}" for d in "VH" for k in range(1, 21)]
-    model = load_nastran_model(str(DECK), PARAMETERS, labels, table)
-    test = simulate_test(model, VirtualTestSettings(TRUTH, noise=0.01, seed=0, n_modes=14))
-    if not (out / "modes.h5").is_file():  # seeded: a second run reuses the identified test
-        write_uff58(out / "test.uff", test.frfs)
-        cli(["identify", str(out / "test.uff"), "--out", str(out / "modes.h5"), "--force"])
+    study = write_study(out, {str(k): g for k, g in enumerate(grids, start=1)})
+    sets = [f"--set={n}={v!r}" for n, v in TRUTH.items()]
+    run = functools.partial(_run_json, cli, out, args.reuse)
+    test = run(["simulate", "--study", str(study), *sets, "--modes", "14", "--noise", "0.01",
+                "--seed", "0", "--out", str(out / "test.uff"), "--force", "--json"])  # fmt: skip
+    run(["identify", str(out / "test.uff"), "--out", str(out / "modes.h5"), "--force", "--json"])
+    updated = out / "updated.bdf"
+    calibrated = run(["calibrate", str(study), "--json", "--force", "--write-bdf", str(updated)])
+    reread = run(["modes", "--model", str(updated), "--modes", "12", "--json"])
+    fitted = np.asarray(calibrated["frequencies_hz"])
+    again = np.asarray(reread["frequencies_hz"])
+    nearest = again[np.argmin(np.abs(again[None, :] - fitted[:, None]), axis=1)]
+    theta = calibrated["parameters"]
+    sd = laplace_sd(plain, theta, np.asarray(calibrated["targets_hz"]), out / "modes.h5")
+    result = {
+        "truth": TRUTH,
+        "deck": {n: float(v) for n, v in plain.default_parameters().items()},
+        "calibrated": theta,
+        "error_pct": {n: 100 * (theta[n] / TRUTH[n] - 1) for n in TRUTH},
+        **{
+            f"error_in_sd_{k}": {n: (theta[n] - TRUTH[n]) / s[n] for n in TRUTH}
+            for k, s in sd.items()
+        },
+        "sd": sd,
+        "true_hz": test["true_frequencies_hz"][:10],
+        "targets_hz": calibrated["targets_hz"],
+        "calibrated_hz": [round(float(f), 4) for f in fitted],
+        "reread_hz": [round(float(f), 4) for f in again],
+        "reread_max_rel_diff": float(np.max(np.abs(nearest / fitted - 1))),
+        "objective": calibrated["objective"],
+        "out": str(out),
+    }
+    print(json.dumps(result))
+    return result
 
+
+def write_study(out: Path, table: dict) -> Path:
+    """The study file: the deck, its test points, the identified data, the two thicknesses."""
     rows = "\n".join(f'"{k}" = {g}' for k, g in table.items())
     params = "".join(
         f'[parameters.{n}]\nbinds = "{p["binds"]}"\nbounds = {p["bounds"]}\n'
@@ -76,36 +119,63 @@ def main(argv=None) -> dict:
         # each full solve takes seconds: two starts, no Nelder-Mead polish
         "[optimizer]\nstarts = 2\npolish = false\n"
     )
-    updated = out / "updated.bdf"
-    calibrated = _run_json(cli, ["calibrate", str(study), "--json", "--force",
-                                 "--write-bdf", str(updated)])  # fmt: skip
-    reread = load_nastran_model(str(updated)).solve(n_modes=10).frequencies_hz
-    fitted = model.solve(calibrated["parameters"], n_modes=10).frequencies_hz
-    result = {
-        "truth": TRUTH,
-        "deck": {n: float(v) for n, v in plain.default_parameters().items()},
-        "calibrated": calibrated["parameters"],
-        "error_pct": {n: 100 * (calibrated["parameters"][n] / TRUTH[n] - 1) for n in TRUTH},
-        "true_hz": [round(float(f), 4) for f in test.frequencies_hz[:10]],
-        "calibrated_hz": [round(float(f), 4) for f in fitted],
-        "reread_max_rel_diff": float(np.max(np.abs(reread / fitted - 1))),
-        "objective": calibrated["objective"],
-        "out": str(out),
-    }
-    print(json.dumps(result))
-    return result
+    return study
 
 
-def _run_json(cli, argv) -> dict:
+def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
+    """{likelihood: {parameter: sd}}: the Gauss-Newton posterior sd at ``theta`` of the paired
+    frequencies (each target paired with the nearest model frequency at ``theta``), relative
+    sd 0.05 (``[likelihood] sigma``'s default) and the identified sd of each frequency."""
+    from bayesupdate.inference.data import load_modal_data
+
+    names = list(theta)
+    base = model.solve(theta, n_modes=14).frequencies_hz
+    pick = np.argmin(np.abs(base[None, :] - targets[:, None]), axis=1)
+    jac = []
+    for n in names:
+        h = 1e-3 * theta[n]
+        hi = model.solve({**theta, n: theta[n] + h}, n_modes=14).frequencies_hz[pick]
+        lo = model.solve({**theta, n: theta[n] - h}, n_modes=14).frequencies_hz[pick]
+        jac.append((hi - lo) / (2 * h))
+    jac = np.array(jac).T  # (n_targets, n_parameters) [Hz / deck unit]
+    data = load_modal_data(str(data_path))
+    measured_sd = None
+    if data.frequency_sd_hz is not None:  # each target's own identified sd
+        f = np.asarray(data.frequencies_hz)
+        pick_data = np.argmin(np.abs(f[None] - targets[:, None]), axis=1)
+        measured_sd = np.asarray(data.frequency_sd_hz)[pick_data]
+    # least squares: the relative sd estimated from the residuals at the optimum (n - p dof)
+    rel = base[pick] / targets - 1
+    s_hat = float(np.sqrt(np.sum(rel**2) / max(rel.size - len(names), 1)))
+    out = {}
+    options = (("sigma_0.05", 0.05 * targets), ("identified_sd", measured_sd),
+               (f"lsq_sigma_{s_hat:.2e}", s_hat * targets))  # fmt: skip
+    for key, sd_hz in options:
+        if sd_hz is None:
+            continue
+        w = jac / np.asarray(sd_hz)[:, None]
+        cov = np.linalg.inv(w.T @ w)
+        out[key] = {n: float(np.sqrt(cov[i, i])) for i, n in enumerate(names)}
+    return out
+
+
+def _run_json(cli, folder: Path, reuse: bool, argv) -> dict:
+    """The JSON a ``bayesupdate`` command prints, saved as ``<command>.json`` in ``folder``
+    (``reuse``: a saved one is read instead of running the command again)."""
     import contextlib
     import io
 
+    cache = folder / f"{argv[0]}.json"
+    if reuse and cache.is_file():
+        return json.loads(cache.read_text())
     buffer = io.StringIO()
     with contextlib.redirect_stdout(buffer):
         code = cli(argv)
     if code != 0:
         raise SystemExit(f"{' '.join(argv[:2])} failed (exit {code})")
-    return json.loads(buffer.getvalue().strip().splitlines()[-1])
+    result = json.loads(buffer.getvalue().strip().splitlines()[-1])
+    cache.write_text(json.dumps(result))
+    return result
 
 
 if __name__ == "__main__":

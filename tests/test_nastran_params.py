@@ -129,7 +129,7 @@ def test_calibrate_recovers_thicknesses_and_write_bdf_round_trip(tmp_path, capsy
     [
         ("PSHELL 9 T", "no PSHELL 9"),
         ("PSHELL 1 Q", "no bindable field PSHELL Q"),
-        ("PBARL 1 DIM1", "PBARL fields cannot be bound yet"),
+        ("PBARL 1 DIM1", "the deck has no PBARL 1"),
         ("PSHELL T", "give 'CARD ids FIELD'"),
         ("MAT1 3 E", "no MAT1 3"),
     ],

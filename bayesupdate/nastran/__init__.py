@@ -36,7 +36,9 @@ def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, 
 
         parameters = desvar_parameters(bdf)
     bindings, defaults, bounds = deck_bindings(parameters or {}, bdf, structure)
-    return NastranModel(structure, bindings, defaults, bounds, name=info["deck"], deck=path)
+    return NastranModel(
+        structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=bdf
+    )
 
 
 def _has_mass(structure) -> bool:

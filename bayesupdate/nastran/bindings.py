@@ -18,10 +18,18 @@ CELAS2 K        stiffness_factor       that spring
 PELAS K         stiffness_factor       the CELAS1 springs of that property
 PBUSH K1-K6     stiffness_factor       the CBUSH springs of that property (its only K)
 PBUSH K scale   stiffness_factor       the CBUSH springs of that property (all six)
+PBAR A I1 I2 J  line (re-built)        the CBARs of that property (``lines``), also NSM
+PBEAM A I1 I2 J line (re-built)        the CBEAMs of that property (every station), NSM
+PBARL DIMk      line (re-built)        the CBARs of that property, also NSM
+PBEAML DIMk     line (re-built)        the CBEAMs of that property (every station), NSM
+PROD A J NSM    line (re-built)        the CRODs of that property
+MAT1 E / RHO    (re-built)             also every line element (CONROD too) with that MID
 ==============  =====================  ==========================================
 
-Line elements (PBAR/PBARL/PBEAM/PROD) are assembled once (``fe.general``): their fields, and a
-MAT1 they use, cannot be bound yet and give a one-line error naming the binding.
+Line-element fields are applied by re-building the bound elements from copies of their cards
+with the value written in (``lines``): the same conversion as reading the edited deck, so exact
+whatever the field (A, I, J, E, RHO enter the Euler-Bernoulli matrices linearly, but the
+Timoshenko shear parameter 12 EI / (k G A L^2) and a PBARL's A, I in its dimensions do not).
 """
 
 import re
@@ -31,6 +39,8 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 
+_BAR = (("A", "A"), ("I1", "i1"), ("I2", "i2"), ("J", "j"), ("NSM", "nsm"))
+_DIMS = {f"DIM{k}": ("line", f"dim{k}", "line") for k in range(1, 11)}
 #: card -> {field: (FE property, pyNastran attribute, structure family)}
 FIELDS = {
     "PSHELL": {"T": ("thickness", "t", "shell")},
@@ -42,10 +52,16 @@ FIELDS = {
         **{f"K{i}": ("stiffness_factor", f"Ki{i - 1}", "spring") for i in range(1, 7)},
         "K": ("stiffness_factor", "Ki", "spring"),
     },
+    "PBAR": {f: ("line", a, "line") for f, a in _BAR},
+    "PBEAM": {f: ("line", a, "line") for f, a in _BAR},
+    "PROD": {f: ("line", a, "line") for f, a in (("A", "A"), ("J", "j"), ("NSM", "nsm"))},
+    "PBARL": {**_DIMS, "NSM": ("line", "nsm", "line")},
+    "PBEAML": {**_DIMS, "NSM": ("line", "nsm", "line")},
 }
-#: cards a user may name whose fields cannot be bound yet
-LINE_CARDS = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "CONROD")
-_LINE_MATERIAL = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD")
+#: line properties (their elements are re-built: ``lines``)
+LINE_PROPERTIES = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD")
+#: line elements and the property cards they take
+LINE_ELEMENTS = {"CBAR": ("PBAR", "PBARL"), "CBEAM": ("PBEAM", "PBEAML"), "CROD": ("PROD",)}
 _SYNTAX = re.compile(r"^\s*([A-Za-z0-9]+)\s+([0-9][0-9,\s]*?)\s+([A-Za-z0-9]+)(\s+scale)?\s*$")
 
 
@@ -69,6 +85,7 @@ class DeckBinding:
     factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
+    lines : ids of the CBAR/CBEAM/CROD elements re-built with the field (``lines``).
     """
 
     target: str
@@ -82,6 +99,7 @@ class DeckBinding:
     default: float
     coefficient: float = 1.0
     desvar: int | None = None
+    lines: tuple[int, ...] = ()
 
 
 def parse_binding(text, name: str) -> DeckField:
@@ -92,11 +110,6 @@ def parse_binding(text, name: str) -> DeckField:
         raise BayesUpdateError(f"{where}: give 'CARD ids FIELD' or 'CARD ids FIELD scale'")
     card, field = m.group(1).upper(), m.group(3).upper()
     ids = tuple(int(x) for x in re.split(r"[,\s]+", m.group(2).strip()) if x)
-    if card in LINE_CARDS:
-        raise BayesUpdateError(
-            f"{where}: {card} fields cannot be bound yet (line elements are assembled once); "
-            f"bindable: {_bindable()}"
-        )
     if card not in FIELDS or field not in FIELDS[card]:
         raise BayesUpdateError(f"{where}: no bindable field {card} {field}; use {_bindable()}")
     if field == "K" and card == "PBUSH" and not m.group(4):
@@ -105,14 +118,15 @@ def parse_binding(text, name: str) -> DeckField:
 
 
 def _bindable() -> str:
-    return "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2 K, PELAS K, PBUSH K1-K6 (or K scale)"
+    return (
+        "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2 K, PELAS K, PBUSH K1-K6 (or K scale), "
+        "PBAR/PBEAM A I1 I2 J NSM, PROD A J NSM, PBARL/PBEAML DIM1-DIM10 NSM"
+    )
 
 
 def _card(bdf, f: DeckField, i: int):
     table = {
-        "PSHELL": bdf.properties,
-        "PELAS": bdf.properties,
-        "PBUSH": bdf.properties,
+        **{c: bdf.properties for c in ("PSHELL", "PELAS", "PBUSH", *LINE_PROPERTIES)},
         "MAT1": bdf.materials,
         "CONM2": bdf.masses,
         "CELAS2": bdf.elements,
@@ -124,16 +138,29 @@ def _card(bdf, f: DeckField, i: int):
 
 
 def field_value(card, f: DeckField) -> float:
-    """The deck's value of field ``f`` on pyNastran ``card`` (PBUSH K scale: the largest K)."""
+    """The deck's value of field ``f`` on pyNastran ``card`` (PBUSH K scale: the largest K; a
+    PBEAM(L): its first station)."""
     _, attr, _ = FIELDS[f.card][f.field]
     if attr.startswith("Ki"):
         k = [float(v or 0.0) for v in card.Ki]
         return max(k) if attr == "Ki" else k[int(attr[2:])]
-    return float(getattr(card, attr) or 0.0)
+    if attr.startswith("dim"):
+        dims = np.atleast_2d(np.asarray(card.dim, dtype=float))
+        k = int(attr[3:]) - 1
+        if k >= dims.shape[1]:
+            raise BayesUpdateError(
+                f"parameter binds {f.spec!r}: {f.card} {card.pid} ({card.Type}) has "
+                f"{dims.shape[1]} dimensions"
+            )
+        return float(dims[0, k])
+    value = getattr(card, attr)
+    return float(np.atleast_1d(np.asarray(value if value is not None else 0.0, float))[0])
 
 
 def set_field(card, f: DeckField, value: float, nominal: float) -> None:
-    """Write ``value`` (an absolute value, or a factor on ``nominal`` for a scale) into ``card``."""
+    """Write ``value`` (an absolute value, or a factor on ``nominal`` for a scale) into ``card``
+    (a PBEAM(L): at every station; a MAT1 E whose G was blank: G follows, as Nastran derives
+    it)."""
     _, attr, _ = FIELDS[f.card][f.field]
     if attr == "Ki":
         card.Ki = [None if v is None else float(v) * value for v in card.Ki]
@@ -143,6 +170,17 @@ def set_field(card, f: DeckField, value: float, nominal: float) -> None:
         k = list(card.Ki)
         k[int(attr[2:])] = new
         card.Ki = k
+    elif attr.startswith("dim"):
+        dims = np.array(card.dim, dtype=float)  # a copy; (stations, n) for a PBEAML
+        dims[..., int(attr[3:]) - 1] = new
+        card.dim = dims if isinstance(card.dim, np.ndarray) else dims.tolist()
+    elif np.ndim(getattr(card, attr)):  # a PBEAM(L)'s value at each station
+        old = getattr(card, attr)
+        values = np.full(np.shape(old), new, dtype=float)
+        setattr(card, attr, values if isinstance(old, np.ndarray) else values.tolist())
+    elif f.card == "MAT1" and attr == "e" and card.repr_fields()[3] is None:
+        card.e = new
+        card.g = new / (2.0 * (1.0 + (card.nu or 0.0)))
     else:
         setattr(card, attr, new)
     if f.card == "PSHELL" and f.field == "T":
@@ -160,11 +198,14 @@ def resolve(f: DeckField, bdf, structure, name: str) -> DeckBinding:
     nominal = np.array([field_value(c, f) for c in cards])
     prop, _, family = FIELDS[f.card][f.field]
     masks = _masks(f, bdf, structure, cards)
-    if not any(m.any() for m in masks.values()):
+    lines = line_elements(bdf, f)
+    if not any(m.any() for m in masks.values()) and not lines:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
     wtmass = float(structure.metadata["nastran"]["wtmass"])
     relative = prop in ("mass_factor", "stiffness_factor")  # the FE value is a factor
-    if f.card == "MAT1" and f.field == "E" and f.scale:
+    if prop == "line":  # re-built from the value itself (``lines``)
+        factor = 1.0
+    elif f.card == "MAT1" and f.field == "E" and f.scale:
         prop, factor = "modulus_factor", 1.0
     elif relative == f.scale:
         factor = wtmass if f.field == "RHO" else 1.0
@@ -180,8 +221,25 @@ def resolve(f: DeckField, bdf, structure, name: str) -> DeckBinding:
     default = 1.0 if f.scale else float(nominal.mean())
     return DeckBinding(
         f.spec, prop, f, masks["shell"], masks["mass"], masks["spring"], float(factor),
-        tuple(nominal.tolist()), default,
+        tuple(nominal.tolist()), default, lines=lines,
     )  # fmt: skip
+
+
+def line_elements(bdf, f: DeckField) -> tuple[int, ...]:
+    """Ids of the CBAR/CBEAM/CROD/CONROD elements a binding re-builds: those of its line
+    properties, or (MAT1) of every line property or CONROD with that MID."""
+    if f.card in LINE_PROPERTIES:
+        pids = set(f.ids)
+    elif f.card == "MAT1":
+        pids = {p.pid for p in bdf.properties.values()
+                if p.type in LINE_PROPERTIES and int(p.mid) in f.ids}  # fmt: skip
+    else:
+        return ()
+    return tuple(sorted(
+        e.eid for e in bdf.elements.values()
+        if (e.type in LINE_ELEMENTS and e.pid in pids)
+        or (f.card == "MAT1" and e.type == "CONROD" and int(e.mid) in f.ids)
+    ))  # fmt: skip
 
 
 def _masks(f: DeckField, bdf, structure, cards) -> dict:
@@ -193,6 +251,8 @@ def _masks(f: DeckField, bdf, structure, cards) -> dict:
         mass=np.zeros(len(s.mass_part), bool),
         spring=np.zeros(len(s.spring_part), bool),
     )
+    if f.card in LINE_PROPERTIES:
+        return out
     if f.card in ("PSHELL", "MAT1"):
         pids = f.ids if f.card == "PSHELL" else _pshells_of(bdf, f)
         names = [parts.index(f"PSHELL {p}") for p in pids if f"PSHELL {p}" in parts]
@@ -221,13 +281,7 @@ def _part_mask(part_of, parts, names) -> np.ndarray:
 
 
 def _pshells_of(bdf, f: DeckField) -> list[int]:
-    """PSHELL ids whose MID1 is one of ``f.ids``; a line property using the MAT1 is an error."""
-    for p in bdf.properties.values():
-        if p.type in _LINE_MATERIAL and int(p.mid) in f.ids:
-            raise BayesUpdateError(
-                f"parameter binds {f.spec!r}: MAT1 {p.mid} is used by {p.type} {p.pid}, whose "
-                "material cannot be bound yet (line elements are assembled once)"
-            )
+    """PSHELL ids whose MID1 is one of ``f.ids`` (line properties: ``line_elements``)."""
     return [p.pid for p in bdf.properties.values() if p.type == "PSHELL" and p.mid1 in f.ids]
 
 

@@ -27,9 +27,9 @@ ELEMENT_CARDS = {
 }  # fmt: skip
 #: design variables: parameters when the study names none (``desvar``)
 DESIGN_CARDS = {"DESVAR", "DVPREL1"}
-#: cards with no effect on the normal modes: output sets, rigid-body reference DOFs (the solver
-#: finds the rigid-body modes itself), the end marker
-NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "ENDDATA"}
+#: cards with no effect on the normal modes: output sets (SET1: test points, ``test_points``),
+#: rigid-body reference DOFs (the solver finds the rigid-body modes itself), the end marker
+NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "SET1", "ENDDATA"}
 SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS
 #: PARAMs that change the model (``reader``) and PARAMs that only select output
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}

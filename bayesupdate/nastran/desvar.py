@@ -10,8 +10,13 @@ lower bound <= 0, takes ``model.DEFAULT_RANGE`` of the deck's value instead).
 
 from bayesupdate.errors import BayesUpdateError
 
-#: DVPREL1 field numbers of the bindable fields (MSC QRG: PSHELL T is field 4, PELAS K 3)
-_FIELD_NUMBER = {("PSHELL", 4): "T", ("PELAS", 3): "K", ("CONM2", 4): "M"}
+#: DVPREL1 field numbers of the bindable fields (MSC QRG: PSHELL T is field 4, PELAS K 3,
+#: PBAR A I1 I2 J NSM 4-8, PROD A J 4-5); names (PNAME) are read as they are
+_FIELD_NUMBER = {
+    ("PSHELL", 4): "T", ("PELAS", 3): "K", ("CONM2", 4): "M",
+    **{("PBAR", 4 + k): f for k, f in enumerate(("A", "I1", "I2", "J", "NSM"))},
+    ("PROD", 4): "A", ("PROD", 5): "J",
+}  # fmt: skip
 _NO_BOUND = 1e19
 
 

@@ -22,20 +22,37 @@ _COLUMN = dict(thickness=0, youngs_modulus=1, modulus_factor=1, density=2)
 
 
 class NastranModel(FEModel):
-    """``FEModel`` with ``DeckBinding`` parameters (deck units); ``deck`` is the deck's path."""
+    """``FEModel`` with ``DeckBinding`` parameters (deck units); ``deck`` is the deck's path;
+    ``bdf`` its pyNastran model (needed when a binding acts on line elements: ``lines``)."""
 
-    def __init__(self, structure, bindings, defaults, bounds, name="deck", deck=""):
-        self.deck = str(deck)
+    def __init__(self, structure, bindings, defaults, bounds, name="deck", deck="", bdf=None):
+        self.deck, self.bdf = str(deck), bdf
         super().__init__(structure, bindings, defaults, bounds, name=name)
+        if any(getattr(b, "lines", ()) for b in self.bindings.values()):
+            from bayesupdate.nastran.lines import LineAssembler
+
+            self._general = LineAssembler(
+                structure, self._shell_keys(), bdf, self.bindings, self.deck
+            )
+            self._assembler = self._general.beams
 
     def _mask(self, name, binding):
         if not isinstance(binding, DeckBinding):
             return super()._mask(name, binding)
         if binding.shell.any():
             self._shell_masks[name] = binding.shell
-        family = PROPERTY_TERMS[binding.property][0]
         beams = np.zeros(len(self.structure.beam_part), bool)
+        if binding.property == "line":  # re-built elements (``lines``): no FE property
+            return beams
+        family = PROPERTY_TERMS[binding.property][0]
         return {"beam": beams, "mass": binding.mass, "spring": binding.spring}[family]
+
+    def _solve_general(self, p, props, n_modes, energies, method):
+        from bayesupdate.nastran.lines import LineAssembler
+
+        if isinstance(self._general, LineAssembler):
+            self._general.values = p
+        return super()._solve_general(p, props, n_modes, energies, method)
 
     def fe_values(self, params: Mapping[str, float] | None) -> dict[str, float]:
         """The FE model's values (factor x parameter) of the full parameter set at ``params``."""
@@ -61,6 +78,12 @@ class NastranModel(FEModel):
 
     def affine_terms(self) -> AffineTerms:
         """``FEModel.affine_terms`` with each deck parameter's factor in its term's scale."""
+        lines = [n for n, b in self.bindings.items() if getattr(b, "lines", ())]
+        if lines:
+            raise BayesUpdateError(
+                f"model {self.name}: parameter {lines[0]} acts on line elements, which are "
+                "re-built at each solve; the reduced basis does not apply (full solves)"
+            )
         terms = super().affine_terms()
         scaled = tuple(
             replace(t, scale=t.scale * getattr(self.bindings[t.name], "factor", 1.0))
@@ -74,7 +97,9 @@ class NastranModel(FEModel):
         b.update(bindings or {})
         d = dict(self._defaults, **(defaults or {}))
         bo = dict(self._bounds, **(bounds or {}))
-        return NastranModel(structure, b, d, bo, name=name or self.name, deck=self.deck)
+        return NastranModel(
+            structure, b, d, bo, name=name or self.name, deck=self.deck, bdf=self.bdf
+        )
 
 
 def _pad(binding, structure):

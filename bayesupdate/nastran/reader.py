@@ -277,13 +277,32 @@ def _info(ctx, settings, model, grids, structure, n_auto) -> dict:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
                      "penalty is fixed (fe.shell.DRILL_ALPHA)")  # fmt: skip
         notes.append("shell mass is consistent (Nastran's default is lumped, COUPMASS -1)")
+    used = ctx.node >= 0
     grid_of_node = np.zeros(structure.n_nodes, np.int64)
-    grid_of_node[ctx.node[ctx.node >= 0]] = grids.ids[ctx.node >= 0]
+    grid_of_node[ctx.node[used]] = grids.ids[used]
+    # each node's output (CD) frame, rows = its axes in basic: test directions given in it
+    frame_of_node = np.broadcast_to(np.eye(3), (structure.n_nodes, 3, 3)).copy()
+    frame_of_node[ctx.node[used]] = grids.frame[used]
     return dict(
         deck=str(Path(ctx.path).name),
         units=unit_system(moduli, settings["wtmass"]),
         **settings,
         card_count={k: int(v) for k, v in sorted(model.card_count.items())},
         grid_ids=grid_of_node,
+        grid_frames=frame_of_node,
+        grid_sets=_grid_sets(model),
         notes=notes,
     )
+
+
+def _grid_sets(model) -> dict[int, tuple[int, ...]]:
+    """{set id: GRID ids} of the bulk SET1 cards and the case control's SET lines (test points
+    'all GRIDs of a set', ``test_points``)."""
+    sets = {int(sid): tuple(int(i) for i in s.ids) for sid, s in model.sets.items()}
+    deck = getattr(model, "case_control_deck", None)
+    for subcase in deck.subcases.values() if deck is not None else ():
+        for key, value in subcase.params.items():
+            if key.startswith("SET ") and isinstance(value[0], list):
+                ids = [i for i in value[0] if isinstance(i, int)]
+                sets.setdefault(int(key.split()[1]), tuple(ids))
+    return sets

@@ -60,6 +60,21 @@ def resolve_model(
         raise BayesUpdateError(f"model.options: not accepted by {source!r} ({exc})") from exc
 
 
+def deck_test_model(source, parameters: Mapping | None, table: Mapping | None):
+    """The Nastran deck at ``source`` measured in V (z) and H (y) at every point of the
+    test-point ``table`` (``nastran.test_points``; labels ``<point>V``, ``<point>H``): the
+    model ``simulate`` tests.  parameters : ``{name: {binds, ...}}`` tables."""
+    from bayesupdate.nastran import load_nastran_model
+    from bayesupdate.nastran.test_points import HOW, table_points, with_test_points
+
+    if not table:
+        raise BayesUpdateError(f"model {source}: a Nastran deck has no sensor layout; {HOW}")
+    model = load_nastran_model(str(source), parameters)
+    points = table_points(model.structure, table)
+    labels = [f"{k}{d}" for k in points for d in "VH"]
+    return model.with_structure(with_test_points(model.structure, labels, table, model.name))
+
+
 def _points_given(deck) -> bool:
     return deck is not None and bool(deck[1])
 

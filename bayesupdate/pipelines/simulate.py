@@ -67,13 +67,13 @@ def simulate_test(model, settings: VirtualTestSettings) -> VirtualTest:
     damping = rng.uniform(0.005, 0.03, size=n_modes)
     # like a test engineer, place the accelerometers where the (nominal) modes in band are seen
     in_band = result.frequencies_hz <= BAND_HZ
-    ref_v, ref_h = best_reference_points(result.sensor_shapes[:, in_band], result.sensor_labels)
+    layout, ref_v, ref_h = roving_layout(result.sensor_shapes[:, in_band], result.sensor_labels)
     frfs = virtual_impact_test(
         result.frequencies_hz,
         damping,
         result.sensor_shapes,
         result.sensor_labels,
-        layout=seed_layout(20, ref_v, ref_h),
+        layout=layout,
         noise=settings.noise,
         seed=rng,
     )
@@ -88,3 +88,33 @@ def simulate_test(model, settings: VirtualTestSettings) -> VirtualTest:
         dof_labels=result.sensor_labels,
         reference_points=(ref_v, ref_h),
     )
+
+
+def roving_layout(shapes: np.ndarray, labels) -> tuple[list[tuple[str, str]], int, int]:
+    """(layout, V reference point, H reference point): the seed's roving-hammer layout
+    (``ema.virtual_test.seed_layout``) over the test points that carry both a V and an H label
+    (``<point>V``, ``<point>H``), whatever their numbers, references placed by
+    ``best_reference_points``.  shapes : (n_dof, m) at ``labels``."""
+    from bayesupdate.errors import BayesUpdateError
+
+    def split(label):
+        return (int(label[:-1]), label[-1]) if label[:-1].isdigit() else (None, "")
+
+    found = [split(str(lab)) for lab in labels]
+    points = sorted({p for p, d in found if d == "V"} & {p for p, d in found if d == "H"})
+    if len(points) < 2:
+        raise BayesUpdateError(
+            f"simulate: the model has {len(points)} test point(s) with V and H sensors; "
+            "a roving-hammer test needs at least 2"
+        )
+    # the layout's points are 1..n: number the model's points in order, then name them back
+    number = {p: i + 1 for i, p in enumerate(points)}
+    local = tuple(f"{number[p]}{d}" if p in number else str(lab)
+                  for (p, d), lab in zip(found, labels, strict=True))  # fmt: skip
+    ref_v, ref_h = best_reference_points(shapes, local, n_points=len(points))
+
+    def name(label):
+        return f"{points[int(label[:-1]) - 1]}{label[-1]}"
+
+    pairs = [(name(a), name(b)) for a, b in seed_layout(len(points), ref_v, ref_h)]
+    return pairs, points[ref_v - 1], points[ref_h - 1]

@@ -1,0 +1,117 @@
+"""Line-element fields of a Nastran deck as parameters, by re-building the bound elements.
+
+A binding to a PBAR/PBARL/PBEAM/PBEAML/PROD field, or to the MAT1 E or RHO of a line property,
+acts on CBAR/CBEAM/CROD/CONROD elements, which ``fe.general`` assembles once.  At each solve,
+copies of the bound cards get the parameters' values (``bindings.set_field``, as ``--write-bdf``
+writes them), the bound elements alone are converted again on the structure's nodes
+(``cards.add_beams``/``add_rods``: sections, offsets, pins, lumped or consistent mass, WTMASS),
+and K_L(theta) - K_L(deck) (and M) is added into the assembled matrices at its place in their
+pattern.  That is the reading of the edited deck, so exact whatever the field: the Timoshenko
+shear parameter 12 EI / (k G A L^2) and a PBARL's section in its dimensions are not affine, and
+even A, I, J, E, RHO enter linearly only without shear flexibility.
+"""
+
+import copy
+from types import SimpleNamespace
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.general import GeneralAssembler
+from bayesupdate.fe.structure import StructureBuilder
+from bayesupdate.nastran import cards
+from bayesupdate.nastran.bindings import _card, set_field
+from bayesupdate.nastran.frames import read_grids
+
+
+class LineRebuild:
+    """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on.
+
+    bdf : the deck's pyNastran model; structure : the structure read from it; bindings :
+    {parameter: DeckBinding}, those with ``lines``; keys : (nnz,) row x n_dof + col of the
+    assembled pattern the differences are added into (sorted)."""
+
+    def __init__(self, bdf, structure, bindings, keys, path):
+        self.bdf, self.structure, self.path = bdf, structure, str(path)
+        self.bindings = {k: b for k, b in bindings.items() if b.lines}
+        eids = sorted({e for b in self.bindings.values() for e in b.lines})
+        self.elements = {e: bdf.elements[e] for e in eids}
+        self.grids = read_grids(bdf)
+        grid_of_node = np.asarray(structure.metadata["nastran"]["grid_ids"])
+        pos = np.searchsorted(self.grids.ids, grid_of_node)
+        self.node = -np.ones(len(self.grids.ids), np.int64)
+        self.node[pos] = np.arange(grid_of_node.size)
+        self.keys, self.n = keys, keys.size
+        rows = [self.grids.index(e.node_ids, f"{e.type} {e.eid}") for e in self.elements.values()]
+        self._used = np.unique(self.node[np.concatenate(rows)])
+        self._base = self._data(None)
+
+    def delta(self, values) -> tuple[np.ndarray, np.ndarray]:
+        """(dK, dM) (nnz,) at the parameter values {name: deck units}."""
+        K, M = self._data(values)
+        return K - self._base[0], M - self._base[1]
+
+    def _cards(self, values):
+        """Proxy model: the bound elements with copies of their property / material cards, the
+        parameters' values written in."""
+        bdf = self.bdf
+        props = {e.pid: copy.copy(bdf.properties[e.pid])
+                 for e in self.elements.values() if e.type != "CONROD"}  # fmt: skip
+        mids = {int(p.mid) for p in props.values()} | {
+            int(e.mid) for e in self.elements.values() if e.type == "CONROD"
+        }
+        mats = {m: copy.copy(bdf.materials[m]) for m in mids}
+        for name, b in self.bindings.items():
+            if values is None:
+                continue
+            table = mats if b.field.card == "MAT1" else props
+            for i, nominal in zip(b.field.ids, b.nominal, strict=True):
+                card = table.get(i) or _card(bdf, b.field, i)
+                set_field(card, b.field, float(values[name]) * b.coefficient, nominal)
+        return SimpleNamespace(elements=self.elements, properties=props, materials=mats)
+
+    def _data(self, values) -> tuple[np.ndarray, np.ndarray]:
+        s = self.structure
+        builder = StructureBuilder()
+        for xyz in s.nodes:
+            builder.add_node(xyz)
+        meta = s.metadata["nastran"]
+        lumped = meta["coupmass"] < 1
+        ctx = cards.Context(self._cards(values), self.path, self.grids, self.node,
+                            meta["wtmass"], lumped, builder)  # fmt: skip
+        cards.add_beams(ctx)
+        cards.add_rods(ctx)
+        # a structure uses and connects all its nodes: tie the others on by springs of 0
+        for n in np.setdiff1d(np.arange(s.n_nodes), self._used):
+            builder.add_spring(int(n), int(self._used[0]), np.zeros(6), "(not re-built)")
+        g = GeneralAssembler(builder.build())
+        K, M, _ = g.assemble(g.beams.default_properties())
+        keep = (K.data != 0) | (M.data != 0)  # the padding's zeros need no place
+        mine = (g.rows.astype(np.int64) * s.n_dof + g.cols)[keep]
+        pos = np.searchsorted(self.keys, mine)
+        if np.any(pos >= self.n) or np.any(self.keys[np.minimum(pos, self.n - 1)] != mine):
+            raise BayesUpdateError(
+                f"Nastran model {self.path}: a bound line element gains entries outside the "
+                "deck's pattern (a mass or stiffness that is 0 in the deck); bind another field"
+            )
+        return np.bincount(pos, K.data[keep], self.n), np.bincount(pos, M.data[keep], self.n)
+
+
+class LineAssembler(GeneralAssembler):
+    """``GeneralAssembler`` whose line elements follow the parameters: ``values`` (set by the
+    model before each assembly) go through ``LineRebuild``; the K returned is the very object
+    ``solve`` matches its ground springs by."""
+
+    def __init__(self, structure, shell_keys, bdf, bindings, path):
+        super().__init__(structure, shell_keys)
+        keys = self.rows.astype(np.int64) * self.n_dof + self.cols
+        self.lines = LineRebuild(bdf, structure, bindings, keys, path)
+        self.values = None
+
+    def assemble(self, props, shell_props=None):
+        K, M, elem = super().assemble(props, shell_props)
+        if self.values is not None:
+            dK, dM = self.lines.delta(self.values)
+            K.data += dK  # same positions: the pattern's data in its sorted order
+            M.data += dM
+        return K, M, elem

@@ -156,6 +156,7 @@ class SamplerConfig:
     reduced_tol: float = 1e-4
     screen: bool = True
     transform: str = "logit"
+    moves: str = "mixture"
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,10 @@
 """Exhaust posterior (five design variables + sigma, data = seed Table 2) from a cold start to
-R-hat <= 1.01 and bulk ESS >= 1000: certified reduced basis vs full FE solves.
+R-hat <= 1.01 and bulk ESS >= 1000: move schemes side by side, certified reduced basis vs full FE.
 
 BLAS is pinned to one thread (set below, before numpy is imported).
 
 Run:
+  .venv/bin/python benchmarks/posterior_speed.py --seeds 5      # DE vs mixture, 5 seeds each
   .venv/bin/python benchmarks/posterior_speed.py --save rom.npz   # reduced basis (default)
   .venv/bin/python benchmarks/posterior_speed.py --full --steps 1000 --starts 1 --save full.npz
   .venv/bin/python benchmarks/posterior_speed.py --compare rom.npz full.npz   # no sampling
@@ -139,6 +140,75 @@ def report(r: dict) -> None:
     print(f"  R-hat <= 1.01 and ESS >= 1000 for every parameter: {ok}")
 
 
+def _reference_study():
+    """studies/posterior_reference.py as a module (its problem builder and reference file)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "studies" / "posterior_reference.py"
+    spec = importlib.util.spec_from_file_location("posterior_reference", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module, path.parents[1] / "tests" / "data" / "posterior_reference_exhaust.json"
+
+
+def timed_runs(args) -> list[dict]:
+    """Each move scheme of ``--moves`` on ``--seeds`` seeds from ``--first-seed`` (interleaved, so
+    both see the same machine load), on one problem built once (its set-up time is measured and
+    added to each run's sampling time: "cold start" = set-up + sampling)."""
+    import json
+
+    study, ref_path = _reference_study()
+    reference = json.loads(ref_path.read_text()) if ref_path.exists() else None
+    t0, c0 = time.perf_counter(), time.process_time()
+    log_post, calibration, screen, _ = study.exhaust_posterior(True, args.starts, args.max_nfev)
+    setup_wall, setup_cpu = time.perf_counter() - t0, time.process_time() - c0
+    rows = []
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        for moves in args.moves:
+            settings = SamplerSettings(
+                walkers=args.walkers, steps=args.steps, seed=seed, check_every=args.check_every,
+                transform=args.transform, target_rhat=1.01, target_ess=1000, moves=moves,
+            )  # fmt: skip
+            fresh = LogPosterior(log_post.problem, log_post.spec)
+            t1, c1 = time.perf_counter(), time.process_time()
+            post = sample_posterior(fresh, calibration, settings, screen=screen)
+            wall, cpu = time.perf_counter() - t1, time.process_time() - c1
+            summary = summarise(post)
+            row = dict(
+                moves=moves, seed=seed, wall_s=setup_wall + wall, cpu_s=setup_cpu + cpu,
+                sampling_s=wall, steps=post.chain.shape[0], evaluations=post.evaluations,
+                screen_evaluations=post.screen_evaluations, tau=float(np.max(post.autocorr_time)),
+                converged=post.converged,
+                r_hat=max(v["r_hat"] for v in summary.values()),
+                ess=min(v["ess_bulk"] for v in summary.values()),
+                kind=(post.diagnostics.get("moves") or {}).get("kind"),
+            )  # fmt: skip
+            if reference is not None:
+                row.update(study.compare(reference, post.samples()))
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    print(f"set-up (model, reduced basis, optimum, screen basis): wall {setup_wall:.1f} s, "
+          f"CPU {setup_cpu:.1f} s")  # fmt: skip
+    return rows
+
+
+def table(rows: list[dict]) -> None:
+    """Median and range per move scheme, and the accuracy against the reference."""
+    for moves in dict.fromkeys(r["moves"] for r in rows):
+        mine = [r for r in rows if r["moves"] == moves]
+        print(f"\n[{moves}] {len(mine)} seeds, all converged: {all(r['converged'] for r in mine)}")
+        for key in ("wall_s", "cpu_s", "sampling_s", "evaluations", "screen_evaluations", "tau"):
+            v = np.array([r[key] for r in mine], dtype=float)
+            print(f"  {key:<20} median {np.median(v):>10.1f}   min {v.min():>10.1f}   "
+                  f"max {v.max():>10.1f}")  # fmt: skip
+        if "mean_error_in_sd" in mine[0]:
+            worst_mean = max(max(r["mean_error_in_sd"]) for r in mine)
+            worst_sd = max(max(map(abs, r["sd_error_relative"])) for r in mine)
+            print(f"  against the reference: worst |mean error| {worst_mean:.3f} sd, worst "
+                  f"|sd error| {100 * worst_sd:.1f} %")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--full", action="store_true", help="full FE solves instead of the ROM")
@@ -151,6 +221,9 @@ def main() -> None:
     ap.add_argument("--starts", type=int, default=4, help="optimizer starts")
     ap.add_argument("--max-nfev", type=int, default=300, help="evaluations per start")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--seeds", type=int, default=0, help="timed runs: N seeds per move scheme")
+    ap.add_argument("--first-seed", type=int, default=1, help="with --seeds: the first seed")
+    ap.add_argument("--moves", nargs="+", default=["de", "mixture"], help="with --seeds")
     ap.add_argument(
         "--no-screen", action="store_true", help="no delayed acceptance (every proposal exact)"
     )
@@ -161,6 +234,9 @@ def main() -> None:
         compare(*args.compare)
         return
     warnings.simplefilter("default")
+    if args.seeds:
+        table(timed_runs(args))
+        return
     r = run(args, reduced=not args.full)
     report(r)
     if args.save:

@@ -110,8 +110,11 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
         assert set(row) == {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}
         assert row["hdi_low"] < row["mean"] < row["hdi_high"]
     assert result["sigma"] == {"fixed": 0.05}
-    # one model call per proposal inside the bounds (+ the starting walkers)
-    assert 0.5 * 400 * 16 < result["evaluations"] <= 400 * 16 + 3 * 16 and result["wall_s"] > 0
+    # one model call per proposal inside the bounds (+ the starting walkers), the two
+    # adaptation stages of the mixture moves (250 steps each) included
+    assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == 500
+    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 500) * 16 + 3 * 16
+    assert result["wall_s"] > 0
     assert len(result["autocorr_time"]) == 2
     with h5py.File(outs[0]) as a, h5py.File(outs[1]) as b:
         assert a.attrs["status"] == "complete"
@@ -126,17 +129,20 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
 
 def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monkeypatch, capsys):
     reference = tmp_path / "ref.h5"
-    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
     original = LogPosterior.__call__
-    calls = {"n": 0}
+    calls = {"n": 0, "stop": None}
 
     def interrupting(self, theta):
         calls["n"] += 1
-        if calls["n"] == 500:
+        if calls["n"] == calls["stop"]:
             raise KeyboardInterrupt
         return original(self, theta)
 
     monkeypatch.setattr(LogPosterior, "__call__", interrupting)
+    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
+    # stop 100 calls before the end: inside the kept run (~480 calls; the mixture's adaptation
+    # stages take the first ~800)
+    calls.update(n=0, stop=calls["n"] - 100)
     partial = tmp_path / "run.h5"
     assert main(["sample", str(study), "--out", str(partial), "--json"]) == 130
     with h5py.File(partial) as h5:
@@ -231,6 +237,9 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
         "[optimizer]\nstarts = 2\n[likelihood]\nsigma = 0.1\n"
         "[sampler]\nwalkers = 12\nsteps = 600\ncheck_every = 100\nmin_autocorr_times = 1\n"
         "target_rhat = 1.5\ntarget_ess = 20\npredictive_draws = 20\n"
+        # DE: its proposals mostly fail the screen; the mixture's mostly pass it (the
+        # mixture with screening is checked against the reference, test_posterior_reference)
+        'moves = "de"\n'
     )
     out = tmp_path / "post.h5"
     assert main(["sample", str(study), "--out", str(out), "--json"]) == 0
@@ -240,6 +249,7 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     # every proposal is screened, only the survivors are solved on the certified basis
     proposals = result["steps"] * result["walkers"]
     assert result["screen"]["evaluations"] >= proposals > 2 * result["evaluations"]
+    assert result["moves"] == {"kind": "de", "requested": "de", "fallback": None}
     # loose targets: met at a block boundary before the budget, and they hold in the summary
     assert result["converged"] and result["steps"] in (100, 200, 300, 400, 500)
     assert max(p["r_hat"] for p in result["parameters"].values()) <= 1.5

@@ -30,8 +30,9 @@ class Gaussian:
 def _run(target, screen, seed=3):
     rng = np.random.default_rng(seed)
     start = MEAN + 0.1 * rng.standard_normal((16, 2))
+    # DE moves: these targets have no priors to build the mixture's defensive component
     settings = SamplerSettings(
-        walkers=16, steps=3000, seed=seed, min_autocorr_times=1e9, check_every=1000
+        walkers=16, steps=3000, seed=seed, min_autocorr_times=1e9, check_every=1000, moves="de"
     )
     return sample_posterior(target, settings=settings, initial=start, screen=screen)
 
@@ -94,7 +95,7 @@ def test_interrupted_screened_run_resumes_to_the_identical_chain():
     rng = np.random.default_rng(3)
     start = MEAN + 0.1 * rng.standard_normal((16, 2))
     settings = SamplerSettings(
-        walkers=16, steps=600, seed=4, min_autocorr_times=1e9, check_every=100
+        walkers=16, steps=600, seed=4, min_autocorr_times=1e9, check_every=100, moves="de"
     )
     surrogate = Gaussian(MEAN + 0.3, COV)
     whole = sample_posterior(

@@ -39,7 +39,10 @@ def _run(problem, optimum, **kwargs):
             {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
         ),
     )
-    options = dict(walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9)
+    # short adaptation stages: these tests are about seeding and resuming, not accuracy
+    options = dict(
+        walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9, adapt_steps=50
+    )
     options.update(kwargs)
     return sample_posterior(LogPosterior(problem, spec), optimum, SamplerSettings(**options))
 
@@ -68,9 +71,12 @@ class _InterruptAt(LogPosterior):
         return super().__call__(theta)
 
 
-def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path):
+# the mixture's two adaptation stages (50 steps each) take ~110 log-posterior calls: interrupt
+# inside the kept run
+@pytest.mark.parametrize("moves, at", [("de", 333), ("mixture", 333)])
+def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path, moves, at):
     problem, optimum = setup
-    full = _run(problem, optimum)
+    full = _run(problem, optimum, moves=moves)
     spec = LikelihoodSpec(
         sigma=None,
         sigma_prior=prior_from_mapping(
@@ -78,9 +84,10 @@ def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path):
         ),
     )
     settings = SamplerSettings(
-        walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9
-    )
-    broken = sample_posterior(_InterruptAt(problem, spec, at=333), optimum, settings)
+        walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9, moves=moves,
+        adapt_steps=50,
+    )  # fmt: skip
+    broken = sample_posterior(_InterruptAt(problem, spec, at=at), optimum, settings)
     assert broken.interrupted and 0 < broken.chain.shape[0] < 300
     np.testing.assert_array_equal(broken.chain, full.chain[: broken.chain.shape[0]])
     # through the result file, as `sample --resume` does
@@ -90,6 +97,22 @@ def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path):
     resumed = sample_posterior(LogPosterior(problem, spec), optimum, settings, resume=state)
     assert np.array_equal(resumed.chain, full.chain)
     assert np.array_equal(resumed.log_prob, full.log_prob)
+    assert resumed.diagnostics["moves"]["kind"] == moves
+
+
+def test_stopped_while_adapting_resumes_to_the_identical_chain(setup):
+    """A stop inside the adaptation stages leaves an empty chain and no proposal; the resume
+    starts again from the seed and ends with the uninterrupted chain."""
+    problem, optimum = setup
+    spec = LikelihoodSpec(sigma=0.05)
+    settings = SamplerSettings(walkers=16, steps=100, seed=5, min_autocorr_times=1e9)
+    whole = sample_posterior(LogPosterior(problem, spec), optimum, settings)
+    broken = sample_posterior(_InterruptAt(problem, spec, at=20), optimum, settings)
+    assert broken.interrupted and broken.chain.shape[0] == 0 and broken.state.moves is None
+    resumed = sample_posterior(LogPosterior(problem, spec), optimum, settings, resume=broken.state)
+    assert resumed.chain.shape == (100, 16, 1) and not resumed.interrupted
+    assert np.array_equal(resumed.chain, whole.chain)
+    assert resumed.diagnostics["moves"]["kind"] == "mixture"
 
 
 def test_stops_at_fifty_autocorrelation_times(setup):

@@ -17,11 +17,15 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.interrupts import StopRequest
 
 NAME = "sample"
-HELP = "posterior of the parameters with emcee (DE moves), diagnostics, predictive bands"
+HELP = "posterior of the parameters with emcee (mixture or DE moves), diagnostics, predictive bands"
 DESCRIPTION = """Sample the posterior: Gaussian likelihood on relative frequency errors
-(sigma_i = sigma / sqrt(w_i)), priors per parameter, emcee with differential-evolution moves,
-walkers started at the multi-start optimum, run until 50 autocorrelation times and R-hat <= 1.01,
-bulk ESS >= 400 (sampler.target_rhat / target_ess) or --steps.
+(sigma_i = sigma / sqrt(w_i)), priors per parameter, emcee, walkers started at the multi-start
+optimum, run until 50 autocorrelation times and R-hat <= 1.01, bulk ESS >= 400
+(sampler.target_rhat / target_ess) or --steps.  Moves (--moves, sampler.moves): "mixture"
+(default) fits a Gaussian mixture + prior independence proposal in two adaptation stages, freezes
+it and keeps only the run after that (0.8 mixture, 0.2 differential evolution); "de" uses
+differential-evolution moves alone.  A mixture that cannot be fitted falls back to DE ("moves":
+{"kind": "de", "fallback": why} in --json).
 
   bayesupdate sample study.toml --out post.h5
   bayesupdate sample --model shear_building --data freqs.csv --out post.h5 --json
@@ -38,20 +42,26 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
 "autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
 "screen": {"size", "max_rel_error", "evaluations"} | null,
-"pairing", "pair_differs_fraction", ...}."""
+"pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
+"adapt_steps"}, ...}."""
 
 
 def add_arguments(parser) -> None:
     add_study_arguments(parser, sampling=True)
     add_full_argument(parser)
     add_write_bdf_argument(parser)
+    parser.add_argument(
+        "--moves",
+        metavar="KIND",
+        help="sampler moves: mixture (default; frozen mixture proposal + DE) or de",
+    )
 
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.pipelines.study import prepare
 
-    study = study_from_args(args)
+    study = _with_moves(study_from_args(args), args.moves)
     if args.resume and not args.out:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
     if args.out:
@@ -76,6 +86,16 @@ def run(args) -> int:
     else:
         _print_summary(out, run.summary, study.sampler)
     return 0
+
+
+def _with_moves(study, moves: str | None):
+    """The study with ``--moves`` applied, its move scheme checked before any model is built."""
+    from bayesupdate.config import with_overrides
+    from bayesupdate.inference.sampling import check_moves
+
+    study = with_overrides(study, sampler__moves=moves)
+    check_moves(study.sampler.moves)
+    return study
 
 
 def _sample_with_stop_handlers(prepared, args):
@@ -177,6 +197,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
         "pair_differs_fraction": _finite_or_none(
             posterior.diagnostics.get("pair_differs_fraction")
         ),
+        "moves": posterior.diagnostics.get("moves"),
         "swap_fraction": None
         if not predictions or not np.isfinite(predictions["swap_fraction"])
         else float(predictions["swap_fraction"]),

@@ -70,6 +70,25 @@ class ScreenedLogDensity:
         self._cache = {k: v for k, v in self._cache.items() if k in live}
 
 
+def _two_stage(model, screen: ScreenedLogDensity, current, proposal, factors, current_lp):
+    """Both stages for proposals (n, d) from current (n, d) with log proposal factors (n,) and
+    the current exact log-densities (n,): (accepted (n,) bool, exact log p of the proposals,
+    -inf where not computed).  Draws 2 n uniforms from ``model.random``."""
+    q_current = screen.at(current)
+    q_proposal = screen(proposal)
+    n = proposal.shape[0]
+    stage1 = factors + q_proposal - q_current > np.log(model.random.rand(n))
+    exact = np.full(n, -np.inf)
+    if np.any(stage1):
+        exact[stage1] = model.compute_log_prob_fn(proposal[stage1])[0]
+    log_u2 = np.log(model.random.rand(n))
+    with np.errstate(invalid="ignore"):
+        stage2 = exact - current_lp - (q_proposal - q_current) > log_u2
+    ok = stage1 & stage2
+    screen.remember(proposal[ok], q_proposal[ok])
+    return ok, exact
+
+
 class DelayedAcceptanceMove(emcee.moves.Move):
     """A red-blue ensemble move (DE, DE snooker, ...) with two-stage acceptance (module
     docstring).  ``base`` gives the proposals and the ensemble split; ``screen`` the
@@ -96,31 +115,44 @@ class DelayedAcceptanceMove(emcee.moves.Move):
                 current, sets[:split] + sets[split + 1 :], model.random
             )
             idx = all_inds[active]
-            q_current = self.screen.at(current)
-            q_proposal = self.screen(proposal)
-            stage1 = factors + q_proposal - q_current > np.log(model.random.rand(idx.size))
-            exact = np.full(idx.size, -np.inf)
-            if np.any(stage1):
-                exact[stage1] = model.compute_log_prob_fn(proposal[stage1])[0]
-            log_u2 = np.log(model.random.rand(idx.size))
-            with np.errstate(invalid="ignore"):
-                stage2 = exact - state.log_prob[idx] - (q_proposal - q_current) > log_u2
-            ok = stage1 & stage2
+            ok, exact = _two_stage(
+                model, self.screen, current, proposal, factors, state.log_prob[idx]
+            )
             accepted[idx] = ok
-            self.screen.remember(proposal[ok], q_proposal[ok])
             new = emcee.State(proposal, log_prob=exact, blobs=None)
             state = self.update(state, new, accepted, active)
         self.screen.keep_only(state.coords)
         return state, accepted
 
 
-def delayed_acceptance_moves(
-    moves: list, screen: ScreenedLogDensity
-) -> list[tuple[DelayedAcceptanceMove, float]]:
-    """Wrap (move, weight) pairs of red-blue moves; every wrapped move shares ``screen``."""
+class DelayedAcceptanceMHMove(emcee.moves.Move):
+    """A Metropolis-Hastings move (every walker proposes at once from its own position, e.g. the
+    independence move of ``moves.independence``) with two-stage acceptance."""
+
+    def __init__(self, base: emcee.moves.MHMove, screen: ScreenedLogDensity):
+        self.base = base
+        self.screen = screen
+
+    def propose(self, model, state):
+        proposal, factors = self.base.get_proposal(state.coords, model.random)
+        accepted, exact = _two_stage(
+            model, self.screen, state.coords, proposal, factors, state.log_prob
+        )
+        state = self.update(state, emcee.State(proposal, log_prob=exact, blobs=None), accepted)
+        self.screen.keep_only(state.coords)
+        return state, accepted
+
+
+def delayed_acceptance_moves(moves: list, screen: ScreenedLogDensity) -> list:
+    """Wrap (move, weight) pairs of red-blue or MH moves; every wrapped move shares ``screen``."""
     out = []
     for move, weight in moves:
-        if not isinstance(move, emcee.moves.RedBlueMove):
-            raise TypeError(f"delayed acceptance needs red-blue moves, got {type(move).__name__}")
-        out.append((DelayedAcceptanceMove(move, screen), weight))
+        if isinstance(move, emcee.moves.RedBlueMove):
+            out.append((DelayedAcceptanceMove(move, screen), weight))
+        elif isinstance(move, emcee.moves.MHMove):
+            out.append((DelayedAcceptanceMHMove(move, screen), weight))
+        else:
+            raise TypeError(
+                f"delayed acceptance needs red-blue or MH moves, got {type(move).__name__}"
+            )
     return out

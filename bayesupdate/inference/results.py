@@ -20,7 +20,8 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
                        wall_s, converged (the run met its R-hat / ESS / tau targets),
                        convergence_reason ("" when converged), interrupted, seed
 /posterior/state       coords (walkers, d), last_log_prob (walkers,), accepted (walkers,),
-                       rng_keys (624,) uint32, attrs: rng_pos, rng_has_gauss, rng_cached_gaussian
+                       rng_keys (624,) uint32, attrs: rng_pos, rng_has_gauss, rng_cached_gaussian,
+                       moves_json (the move scheme and frozen proposal, ``SamplerState.moves``)
 /posterior/diagnostics attrs: summary_json (see diagnostics.summarise), sampling_json
                        ({"pairing_mode", "pair_differs_fraction", "rom": {size,
                        max_rel_error, certified, tol, n_modes, error_at (posterior mean)},
@@ -82,6 +83,8 @@ def _write_state(group: h5py.Group, state: SamplerState) -> None:
         wall_s=float(state.wall_s),
         finished=bool(state.finished),
     )
+    if state.moves is not None:  # the frozen proposal a resume continues with
+        group.attrs["moves_json"] = json.dumps(state.moves)
 
 
 def write_result(
@@ -251,6 +254,7 @@ def read_sampler_state(path: str | Path) -> SamplerState:
             failed=int(a["failed"]),
             wall_s=float(a["wall_s"]),
             finished=bool(a["finished"]),
+            moves=json.loads(a["moves_json"]) if "moves_json" in a else None,
         )
 
 

@@ -152,6 +152,7 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
         target_rhat=cfg.target_rhat,
         target_ess=cfg.target_ess or None,
         progress=options.progress,
+        moves=cfg.moves,
     )
     return sample_posterior(
         log_post,

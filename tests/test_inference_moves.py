@@ -1,0 +1,167 @@
+"""The mixture moves (bayesupdate.inference.moves): the EM fit, the independence move's MH
+correction, the frozen proposal of the kept run, the DE fallback, and the move-name checks."""
+
+import emcee
+import numpy as np
+import pytest
+
+from bayesupdate.cli import main
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference import (
+    CalibrationSettings,
+    LikelihoodSpec,
+    LogPosterior,
+    SamplerSettings,
+    build_problem,
+    calibrate,
+    sample_posterior,
+)
+from bayesupdate.inference.moves import (
+    DefensiveProposal,
+    GaussianMixture,
+    IndependenceMove,
+    fit_gaussian_mixture,
+    staged_proposal,
+)
+from bayesupdate.inference.sampling import sampler_space
+from bayesupdate.modal_data import ModalData
+from bayesupdate.models import get_model
+from bayesupdate.models.shear_building import shear_building_frequencies
+
+
+def test_em_recovers_a_known_two_component_mixture():
+    rng = np.random.default_rng(0)
+    a = rng.normal([0.0, 0.0], [1.0, 0.5], size=(3000, 2))
+    b = rng.normal([6.0, -3.0], [0.5, 1.0], size=(1000, 2))
+    fit = fit_gaussian_mixture(np.vstack([a, b]), 2, seed=1)
+    order = np.argsort(fit.means[:, 0])
+    np.testing.assert_allclose(fit.weights[order], [0.75, 0.25], atol=0.02)
+    np.testing.assert_allclose(fit.means[order], [[0, 0], [6, -3]], atol=0.06)
+    cov = fit.chols @ np.swapaxes(fit.chols, 1, 2)
+    np.testing.assert_allclose(
+        np.sqrt(cov[order][:, [0, 1], [0, 1]]), [[1, 0.5], [0.5, 1]], rtol=0.06
+    )
+    # the density integrates to one (grid quadrature)
+    g = np.linspace(-6, 10, 321)
+    x, y = np.meshgrid(g, g, indexing="ij")
+    dens = np.exp(fit.logpdf(np.column_stack([x.ravel(), y.ravel()])))
+    assert dens.sum() * (g[1] - g[0]) ** 2 == pytest.approx(1.0, abs=2e-3)
+    assert np.array_equal(fit.means, fit_gaussian_mixture(np.vstack([a, b]), 2, seed=1).means)
+
+
+def test_too_few_distinct_points_cannot_be_fitted():
+    stuck = np.repeat([[0.0, 1.0], [1.0, 0.0]], 50, axis=0)  # 100 points, 2 distinct
+    with pytest.raises(ValueError, match="2 distinct points"):
+        fit_gaussian_mixture(stuck, 1, seed=0)
+
+
+class _Gaussian:
+    def __init__(self, mean, cov):
+        self.mean, self.prec = np.asarray(mean), np.linalg.inv(cov)
+
+    def __call__(self, x):
+        r = np.atleast_2d(x) - self.mean
+        return -0.5 * np.einsum("ni,ij,nj->n", r, self.prec, r)
+
+
+class _Frozen:
+    """A proposal that is deliberately wrong (shifted, too wide): only the MH ratio with g's
+    density makes the chain target p."""
+
+    def __init__(self):
+        self.mixture = GaussianMixture(np.ones(1), np.array([[1.0, -1.0]]), 2.0 * np.eye(2)[None])
+
+    def sample(self, random, n):
+        return self.mixture.sample(random, n)
+
+    def logpdf(self, x):
+        return self.mixture.logpdf(x)
+
+
+def test_independence_move_with_a_frozen_wrong_proposal_targets_p():
+    mean, cov = np.array([0.5, -0.5]), np.array([[1.0, 0.5], [0.5, 0.8]])
+    sampler = emcee.EnsembleSampler(
+        16, 2, _Gaussian(mean, cov), moves=[(IndependenceMove(_Frozen()), 1.0)], vectorize=True
+    )
+    rng = np.random.default_rng(2)
+    sampler.random_state = np.random.RandomState(3).get_state()
+    sampler.run_mcmc(mean + 0.1 * rng.standard_normal((16, 2)), 4000)
+    draws = sampler.get_chain(discard=200, flat=True)
+    # independence MH: tau of a few steps, so ~60,000 draws give se(mean) < 0.01
+    np.testing.assert_allclose(draws.mean(axis=0), mean, atol=0.03)
+    np.testing.assert_allclose(np.cov(draws.T), cov, atol=0.04)
+    assert 0.2 < np.mean(sampler.acceptance_fraction) < 0.8
+
+
+@pytest.fixture(scope="module")
+def shear():
+    data = ModalData(frequencies_hz=shear_building_frequencies(np.array([1.1, 0.9])) * [1.01, 0.99])
+    bounds = {"theta_1": {"bounds": [0.2, 3.0]}, "theta_2": {"bounds": [0.2, 3.0]}}
+    problem = build_problem(get_model("shear_building"), data, bounds, pairing="order")
+    return problem, calibrate(problem, CalibrationSettings(starts=8, seed=0))
+
+
+def test_the_kept_run_never_changes_its_proposal(shear):
+    """Why the kept chain is valid: the proposal is fixed before the first kept step and every
+    checkpoint of the kept run carries the same one (no adaptation inside the kept run)."""
+    problem, optimum = shear
+    seen = []
+    settings = SamplerSettings(
+        walkers=16, steps=400, seed=4, check_every=100, adapt_steps=60, min_autocorr_times=1e9
+    )
+    post = sample_posterior(
+        LogPosterior(problem, LikelihoodSpec(sigma=0.05)), optimum, settings,
+        checkpoint=lambda state: seen.append(state.moves),
+    )  # fmt: skip
+    assert len(seen) == 4 and all(m == seen[0] for m in seen)
+    assert seen[0]["proposal"]["prior_weight"] == 0.1 and seen[0]["adapt_steps"] == 120
+    assert post.diagnostics["moves"] == {
+        "kind": "mixture", "requested": "mixture", "fallback": None,
+        "components": len(seen[0]["proposal"]["mixture"]["weights"]), "adapt_steps": 120,
+    }  # fmt: skip
+    assert post.chain.shape[0] == 400  # the adaptation steps are not in the chain
+
+
+def test_stuck_walkers_fall_back_to_de_and_say_so(shear):
+    problem, _ = shear
+    space = sampler_space(LogPosterior(problem, LikelihoodSpec(sigma=0.05)))
+    stuck = np.zeros((50, 8, 2))  # every walker at one point: nothing to fit
+
+    proposal, info = staged_proposal(lambda moves, n: stuck, [], space, True, 50, seed=0)
+    assert proposal is None
+    assert info["fallback"].startswith("mixture proposal not fitted (1 distinct points")
+
+
+def test_defensive_proposal_density_matches_its_draws(shear):
+    problem, _ = shear
+    space = sampler_space(LogPosterior(problem, LikelihoodSpec(sigma=0.05)))
+    mixture = GaussianMixture(np.ones(1), np.zeros((1, 2)), 0.3 * np.eye(2)[None])
+    g = DefensiveProposal(mixture, 0.5, space, logit=True)
+    draws = g.sample(np.random.RandomState(0), 100000)
+    # expectations under the draws against quadrature of exp(logpdf): the prior part in y is a
+    # logistic density per coordinate, with tails far beyond the Gaussian part's
+    grid = np.linspace(-20, 20, 801)
+    x, y = np.meshgrid(grid, grid, indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel()])
+    weight = np.exp(g.logpdf(points)) * (grid[1] - grid[0]) ** 2
+    assert weight.sum() == pytest.approx(1.0, abs=1e-3)
+    # smooth test functions: an indicator's edge on the grid would bias the quadrature
+    tests = (
+        lambda p: np.tanh(p[:, 0] - 2.0),
+        lambda p: p[:, 1] ** 2,
+        lambda p: np.exp(-(p**2).sum(1)),
+    )
+    for f in tests:
+        exact, mc = weight @ f(points), f(draws).mean()
+        assert mc == pytest.approx(exact, abs=4 * f(draws).std() / np.sqrt(draws.shape[0]))
+
+
+def test_unknown_move_name_is_a_one_line_error(tmp_path, capsys):
+    with pytest.raises(BayesUpdateError, match="sampler.moves: unknown 'slice'"):
+        SamplerSettings(moves="slice")
+    csv = tmp_path / "f.csv"
+    csv.write_text("mode,frequency_hz\n1,4.30\n2,10.80\n")
+    code = main(["sample", "--model", "shear_building", "--data", str(csv), "--moves", "slice"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "sampler.moves: unknown 'slice'; use one of mixture, de" in err
+    assert len(err.splitlines()) == 1

@@ -65,7 +65,8 @@ Example (issue 4 item 9)::
 
 Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
 ``file: table.key``.  The parsed ``[effects]`` (a tuple of spec strings) and ``[discovery]`` (a
-``DiscoverySettings``) land in ``StudyConfig.extensions``.
+``DiscoverySettings``) land in ``StudyConfig.extensions``, and so does ``[compute]``
+(``workers = N`` or ``scheduler = "tcp://head:8786"``: a ``parallel_executor.ComputeSettings``).
 """
 
 import dataclasses
@@ -79,6 +80,7 @@ from typing import Any
 from bayesupdate.discovery.effects import parse_effect_spec
 from bayesupdate.discovery.settings import DiscoverySettings, flat_names
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.parallel_executor import parse_compute_table
 
 
 @dataclass(frozen=True)
@@ -356,6 +358,7 @@ def _parse_discovery_table(table: Mapping, where: str) -> DiscoverySettings:
 _EXTENSION_TABLES: dict[str, Callable[[Mapping, str], Any]] = {
     "effects": _parse_effects_table,
     "discovery": _parse_discovery_table,
+    "compute": parse_compute_table,
 }
 
 

@@ -1,15 +1,16 @@
-"""Process pool for models without batch support (e.g. a user's own model function).
+"""Batch evaluation on an executor for models without batch support (e.g. a user's own model).
 
-``PoolEvaluator(model, n_workers)`` spawns the workers once, sends the model once (pool
-initializer, so a large FE model is pickled n_workers times, not once per call) and pins BLAS to one
-thread in every worker (the variables are set before the worker imports numpy: with n_workers
-processes on n cores, threaded BLAS would only oversubscribe).  ``predict_frequencies_batch`` maps
-the rows of a parameter batch to the workers in contiguous chunks and returns (B, n_modes)
-frequencies, NaN rows for points where the model raised or returned non-finite values, so the
-evaluator is itself a ``BatchParametricModel`` (emcee ``vectorize=True``).
+``PoolEvaluator(model, n_workers)`` runs on ``n_workers`` spawned local processes
+(``parallel_executor.ProcessExecutor``: BLAS pinned to one thread in every worker, set before the
+worker imports numpy, since with n_workers processes on n cores threaded BLAS would only
+oversubscribe); ``PoolEvaluator(model, executor=...)`` on any executor (Dask included).  The
+model is shared once (``executor.share``), not sent per call.  ``predict_frequencies_batch`` maps
+the rows of a parameter batch to the workers in contiguous chunks (results in chunk order) and
+returns (B, n_modes) frequencies, NaN rows for points where the model raised or returned
+non-finite values, so the evaluator is itself a ``BatchParametricModel`` (emcee
+``vectorize=True``).
 """
 
-import multiprocessing as mp
 import os
 from collections.abc import Mapping
 
@@ -24,13 +25,6 @@ BLAS_THREAD_VARIABLES = (
     "VECLIB_MAXIMUM_THREADS",
     "NUMEXPR_NUM_THREADS",
 )
-
-_WORKER_MODEL = None
-
-
-def _init_worker(model) -> None:
-    global _WORKER_MODEL
-    _WORKER_MODEL = model
 
 
 def _frequencies(result, n_modes: int) -> np.ndarray:
@@ -47,14 +41,12 @@ def _frequencies(result, n_modes: int) -> np.ndarray:
     return f[:n_modes]
 
 
-def _evaluate_chunk(args) -> np.ndarray:
+def _evaluate_chunk(model, args) -> np.ndarray:
     rows, names, n_modes = args
     out = np.full((rows.shape[0], n_modes), np.nan)
     for i, row in enumerate(rows):
         try:
-            f = _frequencies(
-                _WORKER_MODEL.predict(dict(zip(names, row, strict=True)), n_modes), n_modes
-            )
+            f = _frequencies(model.predict(dict(zip(names, row, strict=True)), n_modes), n_modes)
         except Exception:  # noqa: BLE001 - a failing point is a NaN row (-inf log-probability)
             continue
         if np.all(np.isfinite(f)):
@@ -63,27 +55,24 @@ def _evaluate_chunk(args) -> np.ndarray:
 
 
 class PoolEvaluator:
-    """Evaluate a ``ParametricModel`` on batches of points in ``n_workers`` processes.
+    """Evaluate a ``ParametricModel`` on batches of points in ``n_workers`` processes, or on
+    ``executor`` (then not closed here; ``n_workers`` defaults to its worker count).
 
     Use as a context manager (or call ``close``).  Protocol attributes are forwarded to the model.
     """
 
-    def __init__(self, model, n_workers: int | None = None):
+    def __init__(self, model, n_workers: int | None = None, executor=None):
+        from bayesupdate.parallel_executor import ProcessExecutor
+
         self.model = model
         self.parameter_names = tuple(model.parameter_names)
-        self.n_workers = int(n_workers or os.cpu_count() or 1)
-        saved = {k: os.environ.get(k) for k in BLAS_THREAD_VARIABLES}
-        # spawned workers inherit the environment at start, before they import numpy
-        os.environ.update({k: "1" for k in BLAS_THREAD_VARIABLES})
-        try:
-            ctx = mp.get_context("spawn")
-            self._pool = ctx.Pool(self.n_workers, initializer=_init_worker, initargs=(model,))
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        if executor is None:
+            self.n_workers = int(n_workers or os.cpu_count() or 1)
+            self._executor, self._owned = ProcessExecutor(self.n_workers), True
+        else:
+            self.n_workers = int(n_workers or executor.workers)
+            self._executor, self._owned = executor, False
+        self._model = self._executor.share(model)
 
     def default_parameters(self) -> dict[str, float]:
         return self.model.default_parameters()
@@ -100,12 +89,13 @@ class PoolEvaluator:
         """(B, n_modes) frequencies [Hz] for theta (B, len(names)); NaN rows for failed points."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         chunks = np.array_split(theta, min(self.n_workers, max(theta.shape[0], 1)))
-        parts = self._pool.map(_evaluate_chunk, [(c, tuple(names), n_modes) for c in chunks])
+        tasks = [(c, tuple(names), n_modes) for c in chunks]
+        parts = self._executor.map(_evaluate_chunk, tasks, self._model)
         return np.concatenate(parts, axis=0)
 
     def close(self) -> None:
-        self._pool.close()
-        self._pool.join()
+        if self._owned:
+            self._executor.close()
 
     def __enter__(self) -> "PoolEvaluator":
         return self

@@ -55,6 +55,35 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
         parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
+def add_compute_arguments(parser) -> None:
+    """--workers / --scheduler: where independent tasks run (``parallel_executor``)."""
+    parser.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="run independent tasks in N local processes (default: the study's [compute], "
+        "else $BAYESUPDATE_SCHEDULER, else serial); results are the same bits",
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run independent tasks on the workers of a Dask scheduler, e.g. tcp://head:8786 "
+        "(pip install 'bayesupdate[dask]')",
+    )
+
+
+def compute_from_args(args, study):
+    """``ComputeSettings`` from --workers/--scheduler, the study's [compute] table and
+    $BAYESUPDATE_SCHEDULER (``parallel_executor.compute_settings``)."""
+    from bayesupdate.parallel_executor import compute_settings
+
+    return compute_settings(
+        getattr(args, "workers", None),
+        getattr(args, "scheduler", None),
+        study.extensions.get("compute"),
+    )
+
+
 def study_from_args(args):
     """StudyConfig from a study file and/or --model/--data flags (flags win)."""
     from bayesupdate.config import StudyConfig, load_study, with_overrides
@@ -112,6 +141,7 @@ def add_full_argument(parser) -> None:
 
 def add_arguments(parser) -> None:
     add_study_arguments(parser)
+    add_compute_arguments(parser)
     add_full_argument(parser)
     add_write_bdf_argument(parser)
     parser.add_argument(
@@ -140,6 +170,7 @@ def calibration_json(result, problem) -> dict:
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.inference.results import write_result
+    from bayesupdate.parallel_executor import open_executor
     from bayesupdate.pipelines.calibrate import run_calibration
     from bayesupdate.pipelines.study import prepare
 
@@ -148,8 +179,10 @@ def run(args) -> int:
         check_output_path(args.out, args.force)
     if args.write_bdf:
         check_output_path(args.write_bdf, args.force)
+    compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
-    result = run_calibration(prepared)
+    with open_executor(compute) as executor:
+        result = run_calibration(prepared, executor)
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)

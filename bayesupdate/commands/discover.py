@@ -31,7 +31,7 @@ design away from what the frequencies say (bayesupdate.discovery.shape_evidence)
 
 
 def add_arguments(parser) -> None:
-    from bayesupdate.commands.calibrate import add_study_arguments
+    from bayesupdate.commands.calibrate import add_compute_arguments, add_study_arguments
 
     # study, --model, --data, --out, --force, --json, --seed, --starts, --effect: as calibrate
     add_study_arguments(parser)
@@ -50,6 +50,7 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--max-refits", type=int, help="candidates fitted to convergence")
     parser.add_argument("--plots", metavar="DIR", help="write residuals/localization/ranking PNG")
+    add_compute_arguments(parser)
     parser.add_argument(
         "--posterior-steps",
         type=int,
@@ -91,6 +92,7 @@ def _settings(study, args):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+    from bayesupdate.commands.calibrate import compute_from_args
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
@@ -101,7 +103,8 @@ def run(args) -> int:
     if args.posterior_steps < 0:
         raise BayesUpdateError(f"--posterior-steps must be >= 0, got {args.posterior_steps}")
     specs = study_effects(study, tuple(args.effect))
-    request = DiscoveryRequest(_settings(study, args), specs, args.posterior_steps)
+    compute = compute_from_args(args, study)
+    request = DiscoveryRequest(_settings(study, args), specs, args.posterior_steps, compute)
     progress = None if args.json else (lambda message: print(message, file=sys.stderr))
     found = discover_study(study, request, progress)
     result, posterior = found.result, found.posterior
@@ -114,6 +117,7 @@ def run(args) -> int:
 
         save_plots(result, args.plots, getattr(found.model, "structure", None))
     summary = discovery_summary(result)
+    summary["compute"] = found.compute
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:

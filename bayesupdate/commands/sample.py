@@ -7,9 +7,11 @@ import sys
 import numpy as np
 
 from bayesupdate.commands.calibrate import (
+    add_compute_arguments,
     add_full_argument,
     add_study_arguments,
     add_write_bdf_argument,
+    compute_from_args,
     study_from_args,
     write_bdf,
 )
@@ -48,6 +50,7 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 
 def add_arguments(parser) -> None:
     add_study_arguments(parser, sampling=True)
+    add_compute_arguments(parser)
     add_full_argument(parser)
     add_write_bdf_argument(parser)
     parser.add_argument(
@@ -68,8 +71,9 @@ def run(args) -> int:
         check_output_path(args.out, force=args.force or args.resume)
     if args.write_bdf:
         check_output_path(args.write_bdf, force=args.force)
+    compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
-    run = _sample_with_stop_handlers(prepared, args)
+    run = _sample_with_stop_handlers(prepared, args, compute)
     posterior = run.posterior
     if posterior.interrupted:
         where = f"; partial result in {args.out}, continue with --resume" if args.out else ""
@@ -98,7 +102,7 @@ def _with_moves(study, moves: str | None):
     return study
 
 
-def _sample_with_stop_handlers(prepared, args):
+def _sample_with_stop_handlers(prepared, args, compute):
     """``pipelines.sample.run_sampling`` with SIGTERM/SIGINT turned into a checkpointed stop."""
     from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
 
@@ -108,6 +112,7 @@ def _sample_with_stop_handlers(prepared, args):
         resume=args.resume,
         progress=not (args.json or args.no_progress),
         stop=stop,
+        compute=compute,
     )
     previous_hook, sys.unraisablehook = sys.unraisablehook, stop.quiet_unraisable
     previous_excepthook, sys.excepthook = sys.excepthook, stop.quiet_excepthook

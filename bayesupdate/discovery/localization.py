@@ -29,6 +29,7 @@ from bayesupdate.correlation import comac
 from bayesupdate.discovery.candidates import Candidate
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.problem import build_problem
+from bayesupdate.parallel_executor import executor_or_serial
 
 #: probe step as a fraction of the effect parameter's z range
 PROBE_FRACTION = 0.02
@@ -253,6 +254,12 @@ def shape_comac(problem, theta, evaluation) -> dict:
     return dict(zip(data.dof_labels, map(float, values), strict=True))
 
 
+def _score_task(shared, candidate):
+    """``score_candidate`` of one candidate (an executor task; shared: the baseline problem,
+    design theta, design Jacobian and residuals_fn)."""
+    return score_candidate(*shared, candidate)
+
+
 def localize(
     baseline_problem,
     design_theta,
@@ -261,13 +268,13 @@ def localize(
     candidates: list[Candidate],
     model_modes: np.ndarray,
     flagged: np.ndarray,
+    executor=None,
 ) -> Localization:
     """All three views (module docstring).  residuals_fn and design_jac are in noise units
-    (``score_candidate``), so the chi^2 drops are too."""
-    scores = [
-        score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, c)
-        for c in candidates
-    ]
+    (``score_candidate``), so the chi^2 drops are too.  The score tests run on ``executor``
+    (``parallel_executor``; None: serially); residuals_fn must then be picklable."""
+    shared = (baseline_problem, design_theta, design_jac, residuals_fn)
+    scores = executor_or_serial(executor).map(_score_task, candidates, shared)
     scores.sort(key=lambda s: -s.delta_chi2)
     structure = (
         baseline_problem.model.structure if hasattr(baseline_problem.model, "structure") else None

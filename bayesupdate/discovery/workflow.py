@@ -78,6 +78,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
+from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass
@@ -451,80 +452,93 @@ def _flag_baseline(
     )
 
 
-def _localize(model, effects: list, base_fit: ModelFit, baseline, flags: ModeFlags):
+def _localize(model, effects: list, base_fit: ModelFit, baseline, flags: ModeFlags, executor=None):
     """``localization.localize`` of every library effect around the baseline fit (score tests
-    in the noise units of the baseline's likelihood)."""
+    in the noise units of the baseline's likelihood, on ``executor``)."""
     candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
     base_space = base_fit.space
-
-    def residuals_fn(e, model_shapes):
-        return base_space.residual_vector(e, model_shapes)
-
     model_modes = baseline.table.model_mode - 1
     return localize(
         base_space.problem,
         base_fit.theta,
         base_fit.best.jac_z,
-        residuals_fn,
+        base_space.residual_vector,
         candidates,
         model_modes,
         flags.flagged,
+        executor,
     )
 
 
-def _quick_refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings) -> list:
+def _quick_refit(shared: tuple, score) -> ModelFit:
+    """Quick-tier fit of one candidate (an executor task; shared: (base_fit, settings))."""
+    base_fit, settings = shared
+    problem, axes = base_fit.space.problem, base_fit.space.axes
+    problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
+    space = FitSpace(
+        problem_c, axes + score.candidate.axes, base_fit.space.noise, base_fit.space.shapes
+    )
+    effect = score.candidate.effect
+    return fit_model(
+        space,
+        _candidate_starts(base_fit.theta, score, (problem.start, _box_centre(problem))),
+        score.label,
+        effect.kind,
+        effect.location,
+        max_nfev=settings.refit.quick_nfev,
+        stage="quick",
+        best_start_only=True,
+    )
+
+
+def _quick_refits(
+    scores: list, base_fit: ModelFit, settings: DiscoverySettings, executor=None
+) -> list:
     """Quick tier (module docstring, step 4): (fit, score) of the ``_select``-ed candidates,
     each ``quick_nfev`` iterations from its best ``_candidate_starts`` start, best evidence
-    first."""
-    problem, axes = base_fit.space.problem, base_fit.space.axes
-    noise, shapes = base_fit.space.noise, base_fit.space.shapes
-    centre = _box_centre(problem)
-    quick = []
-    for score in _select(scores, settings):
-        problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
-        space = FitSpace(problem_c, axes + score.candidate.axes, noise, shapes)
-        effect = score.candidate.effect
-        fit = fit_model(
-            space,
-            _candidate_starts(base_fit.theta, score, (problem.start, centre)),
-            score.label,
-            effect.kind,
-            effect.location,
-            max_nfev=settings.refit.quick_nfev,
-            stage="quick",
-            best_start_only=True,
-        )
-        quick.append((fit, score))
+    first (fits on ``executor``)."""
+    chosen = _select(scores, settings)
+    fits = executor_or_serial(executor).map(_quick_refit, chosen, (base_fit, settings))
+    quick = list(zip(fits, chosen, strict=True))
     quick.sort(key=lambda item: -item[0].log_evidence)
     return quick
 
 
-def _full_refits(quick: list, base_fit: ModelFit, settings: DiscoverySettings, say) -> list:
-    """Full tier: the ``max_refits`` best quick (fit, score) pairs re-fitted to convergence;
-    the rest keep their quick fit.  All fits, best evidence first."""
-    centre = _box_centre(base_fit.space.problem)
-    n_design = len(base_fit.space.axes)
-    budget = settings.refit
-    fits = [f for f, _ in quick[budget.max_refits :]]
-    for fit, score in quick[: budget.max_refits]:
-        say(f"full refit {score.label}")
-        # the quick end point, plus the box centre with the quick fit's effect value: the
-        # design variables of a far-off baseline can hold the fit in another basin
-        starts = [fit.theta, np.append(centre, fit.theta[n_design:])]
-        full = fit_model(
-            fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=budget.max_nfev
-        )
-        fits.append(replace(full, evaluations=full.evaluations + fit.evaluations))
+def _full_refit(shared: tuple, fit: ModelFit) -> ModelFit:
+    """Full-tier fit from one quick fit (an executor task; shared: (box centre, number of
+    design variables, settings))."""
+    centre, n_design, settings = shared
+    # the quick end point, plus the box centre with the quick fit's effect value: the
+    # design variables of a far-off baseline can hold the fit in another basin
+    starts = [fit.theta, np.append(centre, fit.theta[n_design:])]
+    full = fit_model(
+        fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.refit.max_nfev
+    )
+    return replace(full, evaluations=full.evaluations + fit.evaluations)
+
+
+def _full_refits(
+    quick: list, base_fit: ModelFit, settings: DiscoverySettings, say, executor=None
+) -> list:
+    """Full tier: the ``max_refits`` best quick (fit, score) pairs re-fitted to convergence
+    (on ``executor``); the rest keep their quick fit.  All fits, best evidence first."""
+    shared = (_box_centre(base_fit.space.problem), len(base_fit.space.axes), settings)
+    best = [fit for fit, _ in quick[: settings.refit.max_refits]]
+    say("full refits: " + ", ".join(fit.label for fit in best))
+    fits = [f for f, _ in quick[settings.refit.max_refits :]]
+    fits.extend(executor_or_serial(executor).map(_full_refit, best, shared))
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
 
 
-def _refits(scores: list, base_fit: ModelFit, settings: DiscoverySettings, say) -> list:
+def _refits(
+    scores: list, base_fit: ModelFit, settings: DiscoverySettings, say, executor=None
+) -> list:
     """Both refit tiers (module docstring, step 4): every fitted candidate, best evidence
     first."""
-    quick = _quick_refits(scores, base_fit, settings)
+    quick = _quick_refits(scores, base_fit, settings, executor)
     say("quick refits: " + ", ".join(f"{f.label} {f.log_evidence:.1f}" for f, _ in quick))
-    return _full_refits(quick, base_fit, settings, say)
+    return _full_refits(quick, base_fit, settings, say, executor)
 
 
 def _with_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> tuple[ModelFit, list]:
@@ -573,6 +587,7 @@ def discover(
     pairing: str = "auto",
     predictive_rel_var: np.ndarray | None = None,
     progress=None,
+    executor=None,
 ) -> DiscoveryResult:
     """Run discovery (module docstring).
 
@@ -582,6 +597,8 @@ def discover(
     predictive_rel_var : (m,) posterior-predictive variance of the relative frequencies, if a
     posterior is available (widens the flagging z-scores).
     progress : optional callable(str) for progress messages.
+    executor : where the score tests and the refits run (``parallel_executor``; None: in this
+    process); the result is the same bits on every executor.
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise: test
     frequencies without shapes are sorted, so the honest likelihood compares them with the
     model's sorted frequencies.  (Shape tracking against the reference design, the calibration
@@ -597,9 +614,9 @@ def discover(
     flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     with _stopwatch(timings, "localization_s"):
-        where = _localize(model, effects, base_fit, baseline, flags)
+        where = _localize(model, effects, base_fit, baseline, flags, executor)
     with _stopwatch(timings, "refits_s"):
-        fits = _refits(where.scores, base_fit, settings, say)
+        fits = _refits(where.scores, base_fit, settings, say, executor)
     with _stopwatch(timings, "loo_s"):
         base_fit, fits = _with_loo(base_fit, fits, settings)
     verdict, reason, named, ambiguous = _verdict(base_fit, fits, flags, len(where.scores), settings)

@@ -14,6 +14,7 @@ from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.discovery.workflow import DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data
+from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
 
@@ -21,23 +22,26 @@ from bayesupdate.pipelines.model_source import problem_parameters, study_model
 class DiscoveryRequest:
     """settings : the discovery knobs.  effects : checked effect specs the model is extended by
     first (``pipelines.study.study_effects``).  posterior_steps : > 0 also samples the final
-    model's posterior for that many steps (seed ``settings.seed + 1``; 0: not sampled)."""
+    model's posterior for that many steps (seed ``settings.seed + 1``; 0: not sampled).
+    compute : where the scan and refits run (``parallel_executor``; the result is the same)."""
 
     settings: DiscoverySettings = field(default_factory=DiscoverySettings)
     effects: tuple[str, ...] = ()
     posterior_steps: int = 0
+    compute: ComputeSettings = SERIAL
 
 
 @dataclass(frozen=True)
 class DiscoveryRun:
     """model : the (extended) FE model discovery ran on.  effects : the specs it was extended
     by.  result : what discovery found.  posterior : (PosteriorResult, summary dict) of the final
-    model, or None."""
+    model, or None.  compute : where the work ran ({"kind", "workers", ...})."""
 
     model: object
     effects: tuple[str, ...]
     result: DiscoveryResult
     posterior: tuple | None = None
+    compute: dict = field(default_factory=lambda: {"kind": "serial", "workers": 1})
 
 
 def discover_study(
@@ -54,14 +58,17 @@ def discover_study(
             "use a built-in FE model such as 'exhaust'"
         )
     model = extend_with_specs(model, request.effects)
-    result = discover(
-        model,
-        data,
-        request.settings,
-        parameters=problem_parameters(study.parameters) or None,
-        pairing=study.pairing.method,
-        progress=progress,
-    )
+    with open_executor(request.compute) as executor:
+        compute = executor.describe()
+        result = discover(
+            model,
+            data,
+            request.settings,
+            parameters=problem_parameters(study.parameters) or None,
+            pairing=study.pairing.method,
+            progress=progress,
+            executor=executor,
+        )
     posterior = None
     if request.posterior_steps > 0:
         from bayesupdate.discovery.posterior import sample_final
@@ -70,4 +77,4 @@ def discover_study(
         seed = request.settings.seed + 1
         chain, _ = sample_final(result, steps=request.posterior_steps, seed=seed)
         posterior = (chain, summarise(chain))
-    return DiscoveryRun(model, tuple(request.effects), result, posterior)
+    return DiscoveryRun(model, tuple(request.effects), result, posterior, compute)

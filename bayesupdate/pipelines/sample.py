@@ -25,6 +25,7 @@ from bayesupdate.inference.sampling import (
     sample_posterior,
 )
 from bayesupdate.interrupts import StopRequest
+from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
     certify_rom,
@@ -42,12 +43,14 @@ class SamplingOptions:
     progress : show a progress bar.
     stop : the run's ``interrupts.StopRequest`` (the command's signal handler sets it); None:
     the run cannot be stopped but by an exception.
+    compute : where the reduced basis's full solves run (``parallel_executor``).
     """
 
     out: str | Path | None = None
     resume: bool = False
     progress: bool = False
     stop: StopRequest | None = None
+    compute: ComputeSettings = SERIAL
 
 
 @dataclass(frozen=True)
@@ -78,7 +81,10 @@ def run_sampling(
     cfg = study.sampler
     # the reduced model first: the multi-start optimum is then cheap too (checked in full at
     # the optimum below; a miss there falls back to full solves)
-    problem, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
+    with open_executor(options.compute) as executor:
+        problem, rom = sampling_problem(
+            prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
+        )
     if calibration is None:
         opt = study.optimizer
         # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the

@@ -23,13 +23,15 @@ def sampling_problem(
     reduced: bool = True,
     tol: float = 1e-4,
     seed: int = 0,
+    executor=None,
 ) -> tuple[CalibrationProblem, object | None]:
     """The problem the sampler uses: a built-in FE model gets a certified reduced basis
     (``fe.reduced.reduced_model_for``) over the calibrated parameters' bounds, with the model
     modes the pairing needs (test modes + extra modes), certified again at the optimum.
     Fixed parameters keep a narrow box (+-0.1 %) around their value.  Returns (problem, rom);
     rom is None with ``reduced=False``, for other models, or when no certified basis exists
-    (then a RuntimeWarning says full solves are used)."""
+    (then a RuntimeWarning says full solves are used).  The basis's full solves run on
+    ``executor`` (``parallel_executor``; None: in this process)."""
     from bayesupdate.fe.model import FEModel
     from bayesupdate.fe.reduced import ReducedFEModel, reduced_model_for
 
@@ -42,7 +44,9 @@ def sampling_problem(
             bounds[name] = (value * (1 - 1e-3), value * (1 + 1e-3))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        rom = reduced_model_for(model, bounds, tol=tol, seed=seed, n_modes=problem.pairing.n_model)
+        rom = reduced_model_for(
+            model, bounds, tol=tol, seed=seed, n_modes=problem.pairing.n_model, executor=executor
+        )
     for w in caught:
         warnings.warn(str(w.message), RuntimeWarning, stacklevel=2)
     if not isinstance(rom, ReducedFEModel) or not rom.certified:

@@ -21,6 +21,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced.affine import AffineDecomposition
+from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,20 +84,32 @@ class ReducedBasis:
         )
 
 
-def full_solves(fe: FEModel, names: tuple[str, ...], theta: np.ndarray, n_modes: int):
-    """Full solves at theta (B, len(names)) (SI): (B, n_modes) frequencies [Hz] (NaN rows on
+def _solve_point(shared: tuple, row: np.ndarray):
+    """(frequencies (n_modes,) [Hz], shapes (n_dof, n_modes)) of one full solve, None where it
+    fails (an executor task; shared: (fe, names, n_modes))."""
+    fe, names, n_modes = shared
+    try:
+        sol = fe.solve(dict(zip(names, map(float, row), strict=True)), n_modes).modes
+    except (BayesUpdateError, np.linalg.LinAlgError):
+        return None
+    return sol.frequencies_hz, sol.shapes
+
+
+def full_solves(
+    fe: FEModel, names: tuple[str, ...], theta: np.ndarray, n_modes: int, executor=None
+):
+    """Full solves at theta (B, len(names)) (SI), one task per point on ``executor``
+    (``parallel_executor``; None: in this process): (B, n_modes) frequencies [Hz] (NaN rows on
     failure) and the (n_dof, k) mode shapes of the points that solved, side by side."""
+    solved = executor_or_serial(executor).map(_solve_point, list(theta), (fe, names, n_modes))
     freqs = np.full((theta.shape[0], n_modes), np.nan)
     shapes = []
-    for i, row in enumerate(theta):
-        try:
-            sol = fe.solve(dict(zip(names, map(float, row), strict=True)), n_modes).modes
-        except (BayesUpdateError, np.linalg.LinAlgError):
-            # a snapshot whose eigen-solve fails is left out (its row stays NaN); the
-            # certification then runs on the points that solved
-            continue
-        freqs[i] = sol.frequencies_hz
-        shapes.append(sol.shapes)
+    for i, point in enumerate(solved):
+        # a snapshot whose eigen-solve fails is left out (its row stays NaN); the
+        # certification then runs on the points that solved
+        if point is not None:
+            freqs[i] = point[0]
+            shapes.append(point[1])
     return freqs, np.concatenate(shapes, axis=1)
 
 

@@ -77,16 +77,17 @@ def compare(basis: ReducedBasis, theta: np.ndarray, f_full: np.ndarray, n_modes:
     return Certificate(float(np.max(np.abs(signed))), float(np.min(signed)), int(ok.sum()))
 
 
-def build(model: "ReducedFEModel") -> Certification:
+def build(model: "ReducedFEModel", executor=None) -> Certification:
     """Decompose, snapshot, compress, certify, enrich (module docstring) over ``model``'s box
-    with its settings; warns and returns an uncertified result when ``max_size`` is reached."""
+    with its settings; warns and returns an uncertified result when ``max_size`` is reached.
+    The snapshot and validation solves run on ``executor`` (None: in this process)."""
     fe, st, names = model.fe, model.settings, model.parameter_names
     centre = model.mapping(model.centre())
     _check_free_free(fe, centre)
     decomposition = decompose(fe, model.bounds, st.interp_tol)
     dim = len(names)
     snap_theta = model.scale(qmc.Sobol(dim, scramble=True, seed=st.seed).random(st.n_snapshots))
-    snaps = full_solves(fe, names, snap_theta, st.n_modes + st.extra_modes)[1]
+    snaps = full_solves(fe, names, snap_theta, st.n_modes + st.extra_modes, executor)[1]
     pod_tol = 0.5 * st.tol
     history = []
     certificate = UNBUILT.certificate
@@ -96,7 +97,7 @@ def build(model: "ReducedFEModel") -> Certification:
             break
         sobol = qmc.Sobol(dim, scramble=True, seed=st.seed + 1000 + rnd)
         theta_v = model.scale(sobol.random(st.n_validation))
-        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes)
+        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes, executor)
         certificate = compare(basis, theta_v, f_full, st.n_modes)
         history.append(BuildRound(rnd, basis.size, certificate.max_rel_error, pod_tol))
         _check_upper_bound(certificate, st.tol)

@@ -155,10 +155,11 @@ class ReducedFEModel:
         return np.all((full >= self.low) & (full <= self.high), axis=1)
 
     # -- offline -------------------------------------------------------------------------------
-    def build(self) -> "ReducedFEModel":
+    def build(self, executor=None) -> "ReducedFEModel":
         """The built model: decomposed, snapshots compressed, certified (``reduced.certification``;
-        an uncertified one, with a warning, when the size limit is reached first)."""
-        return replace(self, certification=certification.build(self))
+        an uncertified one, with a warning, when the size limit is reached first).  The full
+        solves run on ``executor`` (``parallel_executor``; None: in this process)."""
+        return replace(self, certification=certification.build(self, executor))
 
     def certify_at(
         self, theta: np.ndarray, names: tuple[str, ...] | None = None, enrich: bool = True
@@ -280,18 +281,20 @@ def reduced_model_for(
     tol: float = 1e-4,
     seed: int = 0,
     n_modes: int = 12,
+    executor=None,
     **options,
 ):
     """A built, certified ``ReducedFEModel`` of ``fe_model``; the model itself (with a warning)
     when it is not an ``FEModel`` or has no reduced form (not free-free, overlapping bindings).
     An uncertified reduced model (size limit) is returned too: it falls back to full solves.
-    ``options``: other ``ReducedSettings`` fields, or ``outer``."""
+    ``options``: other ``ReducedSettings`` fields, or ``outer``.  executor : where the
+    snapshot and certification solves run (``parallel_executor``; None: in this process)."""
     if not isinstance(fe_model, FEModel):
         return fe_model
     outer = options.pop("outer", None)
     try:
         settings = ReducedSettings(n_modes=n_modes, tol=tol, seed=seed, **options)
-        return ReducedFEModel(fe_model, bounds, settings, outer).build()
+        return ReducedFEModel(fe_model, bounds, settings, outer).build(executor)
     except BayesUpdateError as exc:
         warnings.warn(f"{exc}; using full solves", RuntimeWarning, stacklevel=2)
         return fe_model

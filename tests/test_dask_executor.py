@@ -1,0 +1,203 @@
+"""``discover`` on Dask (bayesupdate.parallel_dask), needs the optional extra ``bayesupdate[dask]``.
+
+A ``dask scheduler`` and two ``dask worker`` processes (each with a nanny, one thread) are started
+on 127.0.0.1 at a free port, as a user would by hand; ``bayesupdate discover --scheduler`` must
+give the serial run's JSON bit for bit (verdict, every candidate's evidence, parameters), also
+when a worker is killed while it holds tasks, and on a ``LocalCluster`` of two threaded workers
+talking tcp (``processes=False``: no worker start-up cost, but every task and result still goes
+through the scheduler's serialisation).  A worker with another bayesupdate version, or no
+scheduler at the address, is a one-line error and exit 2."""
+
+import contextlib
+import io
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+pytest.importorskip("distributed")
+
+from distributed import Client, LocalCluster  # noqa: E402
+from test_parallel_executor import small_discovery_study  # noqa: E402
+
+from bayesupdate.cli import main  # noqa: E402
+
+START_TIMEOUT_S = 120
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _run_json(argv: list[str]) -> dict:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(argv) == 0
+    return json.loads(out.getvalue())
+
+
+def _comparable(summary: dict) -> dict:
+    """The JSON less what legitimately differs between runs: wall time and where it ran."""
+    return {k: v for k, v in summary.items() if k not in ("wall_s", "compute")}
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    return str(small_discovery_study(tmp_path_factory.mktemp("dask")))
+
+
+@pytest.fixture(scope="module")
+def serial(study):
+    return _run_json(["discover", study, "--json"])
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """Address of a ``dask scheduler`` with two ``dask worker`` processes on 127.0.0.1."""
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    python = [sys.executable, "-m"]
+    common = ["--no-dashboard"]
+    procs = [
+        subprocess.Popen(
+            [
+                *python,
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                address.rsplit(":", 1)[1],
+                *common,
+            ],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    for _ in range(2):
+        procs.append(
+            subprocess.Popen(
+                [
+                    *python,
+                    "distributed.cli.dask_worker",
+                    address,
+                    "--nthreads",
+                    "1",
+                    "--host",
+                    "127.0.0.1",
+                    *common,
+                ],
+                env=env,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+    try:
+        with Client(address, timeout=START_TIMEOUT_S) as client:
+            client.wait_for_workers(2, timeout=START_TIMEOUT_S)
+        yield address
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_scheduler_and_two_worker_processes_give_the_serial_result(study, serial, scheduler):
+    on_dask = _run_json(["discover", study, "--json", "--scheduler", scheduler])
+    assert on_dask["compute"] == {"kind": "dask", "workers": 2, "scheduler": scheduler}
+    assert on_dask["verdict"] == serial["verdict"]
+    assert [c["log_evidence"] for c in on_dask["candidates"]] == [
+        c["log_evidence"] for c in serial["candidates"]
+    ]
+    assert _comparable(on_dask) == _comparable(serial)
+
+
+def _kill_a_busy_worker(address: str, done: threading.Event, killed: list) -> None:
+    """SIGKILL the first worker seen holding a task (its nanny starts a fresh one)."""
+    with Client(address, timeout=30) as client:
+        pids = client.run(os.getpid)
+        while not done.is_set():
+            busy = [w for w, keys in client.processing().items() if keys]
+            if busy:
+                os.kill(pids[busy[0]], signal.SIGKILL)
+                killed.append(busy[0])
+                return
+            time.sleep(0.02)
+
+
+def test_a_worker_killed_mid_run_changes_nothing(study, serial, scheduler):
+    done, killed = threading.Event(), []
+    watcher = threading.Thread(target=_kill_a_busy_worker, args=(scheduler, done, killed))
+    watcher.start()
+    try:
+        on_dask = _run_json(["discover", study, "--json", "--scheduler", scheduler])
+    finally:
+        done.set()
+        watcher.join()
+    assert len(killed) == 1  # a worker died holding tasks; they ran again on the other
+    assert _comparable(on_dask) == _comparable(serial)
+
+
+def test_local_cluster_of_two_workers_gives_the_serial_result(study, serial):
+    with LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=False,
+        protocol="tcp://",
+        dashboard_address=":0",
+    ) as cluster:
+        on_dask = _run_json(["discover", study, "--json", "--scheduler", cluster.scheduler_address])
+    assert on_dask["compute"]["workers"] == 2
+    assert _comparable(on_dask) == _comparable(serial)
+
+
+def test_other_bayesupdate_version_on_the_workers_is_refused(study, scheduler, monkeypatch, capsys):
+    import bayesupdate.parallel_dask as pd
+
+    monkeypatch.setattr(pd, "client_version", lambda: "0.0.0-other")
+    assert main(["discover", study, "--json", "--scheduler", scheduler]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "this client 0.0.0-other" in err and "runs bayesupdate" in err
+
+
+def test_no_scheduler_at_the_address_is_a_one_line_error(study, monkeypatch, capsys):
+    import bayesupdate.parallel_dask as pd
+
+    monkeypatch.setattr(pd, "CONNECT_TIMEOUT_S", 2)
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    assert main(["discover", study, "--scheduler", address]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot reach the Dask scheduler" in err
+
+
+def test_pool_evaluator_on_dask_is_the_per_point_model_bit_for_bit(scheduler):
+    """The sampler's batch wrapper of a model that cannot batch, on the Dask workers."""
+    import numpy as np
+
+    from bayesupdate.models import get_model
+    from bayesupdate.parallel import PoolEvaluator
+    from bayesupdate.parallel_dask import DaskExecutor
+
+    fe = get_model("exhaust")
+    names = fe.parameter_names
+    low, high = np.array([fe.default_bounds()[n] for n in names]).T
+    theta = low + np.array([[0.3], [0.7]]) * (high - low)  # two points inside the box
+    serial = np.array(
+        [fe.predict(dict(zip(names, row, strict=True)), 6).frequencies_hz[:6] for row in theta]
+    )
+    with DaskExecutor(scheduler) as ex, PoolEvaluator(fe, executor=ex) as pool:
+        assert pool.n_workers == 2
+        out = pool.predict_frequencies_batch(theta, names, 6)
+    np.testing.assert_array_equal(out, serial)

@@ -100,15 +100,14 @@ class GeneralAssembler:
         self.terms = []  # (union positions, K {p: values}, M_nsm values, M {p: values}) per group
         for g in range(first.size):
             Kp, Mp = self.shells.power_data(group.ravel() == g)
-            nz = np.any([np.abs(v) > 0 for v in (*Kp.values(), *Mp.values())], axis=0)
-            pos = np.flatnonzero(nz)
-            m0 = Mp.pop(0)[pos] if 0 in Mp else np.zeros(pos.size)
+            take = _nonzero_take(self.shells.pattern.nnz, (*Kp.values(), *Mp.values()))
+            m0 = take(Mp.pop(0)) if 0 in Mp else np.zeros(take(self._pos_shell).size)
             self.terms.append(
                 (
-                    self._pos_shell[pos],
-                    {p: v[pos] for p, v in Kp.items()},
+                    take(self._pos_shell),
+                    {p: take(v) for p, v in Kp.items()},
                     m0,
-                    {p: v[pos] for p, v in Mp.items()},
+                    {p: take(v) for p, v in Mp.items()},
                 )
             )
 
@@ -211,6 +210,18 @@ def line_matrices(structure: Structure) -> list:
     if r is not None:
         out.append((r.dofs(), *rod_matrices(structure.nodes, r)))
     return out
+
+
+def _nonzero_take(nnz: int, values):
+    """The function v -> v[pos] for the positions pos where any of ``values`` (each (nnz,)) is
+    non-zero; the identity (no copy) when that is every position (a group covering the mesh)."""
+    nz = np.zeros(nnz, bool)
+    for v in values:
+        nz |= np.abs(v) > 0
+    if nz.all():
+        return lambda v: v
+    pos = np.flatnonzero(nz)
+    return lambda v: v[pos]
 
 
 def _block_keys(dofs: np.ndarray, n: int) -> np.ndarray:

@@ -319,15 +319,40 @@ def local_pieces(ops: _Operators, E, nu, lumped: bool = False) -> LocalPieces:
     S = np.zeros((6 * k, 6 * k))
     S[np.arange(U, 6 * k, 6), np.arange(RY, 6 * k, 6)] = 1.0
     S[np.arange(V, 6 * k, 6), np.arange(RX, 6 * k, 6)] = -1.0
+    # scaled in place: the same products as X * factor without a second (n, d, d) copy
+    Km *= E[:, None, None]
+    Ks *= (SHEAR_FACTOR * G)[:, None, None]
+    Kd *= (DRILL_ALPHA * G)[:, None, None]
+    Kb *= (E / 12.0)[:, None, None]
     return LocalPieces(
-        membrane=Km * E[:, None, None],
-        shear=Ks * (SHEAR_FACTOR * G)[:, None, None],
-        drilling=Kd * (DRILL_ALPHA * G)[:, None, None],
-        bending=Kb * (E / 12.0)[:, None, None],
-        mass_t=Mt,
-        mass_r=Mr,
-        offset=S,
+        membrane=Km, shear=Ks, drilling=Kd, bending=Kb, mass_t=Mt, mass_r=Mr, offset=S
     )
+
+
+#: elements per chunk of ``element_pieces`` (and of ``ShellAssembly.power_data``): the
+#: temporaries are then ~15 (CHUNK, 24, 24) float64 stacks (~70 MB) whatever the mesh size
+CHUNK = 2048
+PIECE_NAMES = ("membrane", "shear", "drilling", "bending", "mass_t", "mass_r")
+
+
+def element_pieces(xy, E, nu, lumped: bool = False, height=None) -> LocalPieces:
+    """``local_pieces`` (then ``warp_link`` with node heights height (n, k) [m]) of elements with
+    in-plane node coordinates xy (n, k, 2) [m] (k = 4: MITC4 quads, 3: MITC3 triangles), E [Pa]
+    and nu (n,), computed ``CHUNK`` elements at a time into the (n, d, d) result stacks, so the
+    operators and the quadrature temporaries exist for one chunk only."""
+    n, k = xy.shape[:2]
+    operators = quad_operators if k == 4 else tria_operators
+    out = {a: np.empty((n, 6 * k, 6 * k)) for a in PIECE_NAMES}
+    S = None
+    for lo in range(0, n, CHUNK):
+        c = slice(lo, lo + CHUNK)
+        p = local_pieces(operators(xy[c]), E[c], nu[c], lumped)
+        if height is not None:
+            p = warp_link(p, height[c])
+        for a in PIECE_NAMES:
+            out[a][c] = getattr(p, a)
+        S = p.offset
+    return LocalPieces(**out, offset=S)
 
 
 def warp_link(p: LocalPieces, height: np.ndarray) -> LocalPieces:
@@ -364,12 +389,15 @@ def power_matrices(p: LocalPieces, rho, nsm, offset, offset_ratio):
 
     rho [kg/m^3], nsm [kg/m^2], offset [m], offset_ratio [-] : (n,).  With
     e = offset + offset_ratio t, t T(e)^T X T(e) expands into powers 1..3 of t.
-    Returns (K, M) dicts {power: (n, d, d)}; K has powers 1, 2, 3 and M has 0, 1, 2, 3.
+    Returns (K, M) dicts {power: (n, d, d)}; K has powers 1, 2, 3 and M has 0, 1, 2, 3, where
+    the t^2 powers (present only with an offset) are left out when every offset is zero.
     """
+    r = rho[:, None, None]
+    if not (np.any(offset) or np.any(offset_ratio)):
+        return _power_matrices_centred(p, r, nsm)
     e0, c = offset[:, None, None], offset_ratio[:, None, None]
     m1, m2 = _sandwich(p.offset, p.membrane)
     t1, t2 = _sandwich(p.offset, p.mass_t)
-    r = rho[:, None, None]
     K = {
         1: p.membrane + e0 * m1 + e0**2 * m2 + p.shear + p.drilling,
         2: c * m1 + 2 * e0 * c * m2,
@@ -381,6 +409,15 @@ def power_matrices(p: LocalPieces, rho, nsm, offset, offset_ratio):
         2: r * (c * t1 + 2 * e0 * c * t2),
         3: r * (c**2 * t2 + p.mass_r / 12.0),
     }
+    return K, M
+
+
+def _power_matrices_centred(p: LocalPieces, r, nsm):
+    """``power_matrices`` without offsets (e = 0): the same sums with the zero offset terms
+    left out (adding +0.0 is exact, so the values are identical) and no t^2 power; r (n, 1, 1)
+    density [kg/m^3]."""
+    K = {1: p.membrane + p.shear + p.drilling, 3: p.bending}
+    M = {0: nsm[:, None, None] * p.mass_t, 1: r * p.mass_t, 3: r * (p.mass_r / 12.0)}
     return K, M
 
 

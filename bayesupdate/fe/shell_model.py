@@ -199,14 +199,8 @@ class ShellAssembly:
             if not conn.size:
                 continue
             x = mesh.nodes[conn]
-            if kind == "quad":
-                f = shell.quad_frames(x)
-                ops = shell.quad_operators(f.xy)
-            else:
-                f = shell.tria_frames(x)
-                ops = shell.tria_operators(f.xy)
-            pieces = shell.local_pieces(ops, mesh.E[idx], mesh.nu[idx], lumped=lumped)
-            pieces = shell.warp_link(pieces, f.height)
+            f = shell.quad_frames(x) if kind == "quad" else shell.tria_frames(x)
+            pieces = shell.element_pieces(f.xy, mesh.E[idx], mesh.nu[idx], lumped, f.height)
             if not rotary_inertia:
                 pieces = replace(pieces, mass_r=np.zeros_like(pieces.mass_r))
             self.families.append((idx, element_dofs(conn), f, pieces))
@@ -237,31 +231,39 @@ class ShellAssembly:
 
     def power_data(self, elements=None):
         """Per-power CSR data of the elements ``elements`` (bool/int index, default all):
-        (K {p: (nnz,)}, M {p: (nnz,)}) with K = sum_p t^p K_p for a common thickness t."""
+        (K {p: (nnz,)}, M {p: (nnz,)}) with K = sum_p t^p K_p for a common thickness t.
+
+        Elements go through ``power_matrices`` and ``to_global`` in chunks of ``shell.CHUNK`` (each
+        chunk vectorised), so the (n, d, d) temporaries of the seven powers never exist for the
+        whole mesh at once; a power that is zero everywhere is left out."""
         m = self.mesh
         sel = np.zeros(m.n_elements, bool)
         sel[np.arange(m.n_elements) if elements is None else elements] = True
-        Kp, Mp = {}, {}
+        store = ({}, {})
         for b, (idx, _, f, p) in enumerate(self.families):
-            keep = sel[idx]
-            if not np.any(keep):
-                continue
-            i = idx[keep]
-            sub = shell.LocalPieces(
-                *(getattr(p, n)[keep] for n in ("membrane", "shear", "drilling", "bending")),
-                p.mass_t[keep],
-                p.mass_r[keep],
-                p.offset,
-            )
-            K, M = shell.power_matrices(sub, m.rho[i], m.nsm[i], m.offset[i], m.offset_ratio[i])
-            pos = self.pattern.positions[b].reshape(len(idx), -1)[keep].ravel()
-            for store, mats in ((Kp, K), (Mp, M)):
-                for power, X in mats.items():
-                    if np.any(X):
-                        Xg = shell.to_global(X, f.R[keep])
-                        d = np.bincount(pos, Xg.ravel(), self.pattern.nnz)
-                        store[power] = store.get(power, 0.0) + d
-        return Kp, Mp
+            rows = np.flatnonzero(sel[idx])
+            pos = self.pattern.positions[b].reshape(len(idx), -1)
+            for lo in range(0, rows.size, shell.CHUNK):
+                k = rows[lo : lo + shell.CHUNK]
+                i = idx[k]
+                sub = shell.LocalPieces(*(getattr(p, n)[k] for n in shell.PIECE_NAMES), p.offset)
+                mats = shell.power_matrices(sub, m.rho[i], m.nsm[i], m.offset[i], m.offset_ratio[i])
+                for out, by_power in zip(store, mats, strict=True):
+                    for power, X in by_power.items():
+                        if np.any(X):
+                            _add_into(
+                                out, power, pos[k], shell.to_global(X, f.R[k]), self.pattern.nnz
+                            )
+        return store
+
+
+def _add_into(out: dict, power: int, pos: np.ndarray, X: np.ndarray, nnz: int) -> None:
+    """out[power] (nnz,) += the element stack X (n, d, d) summed at CSR positions pos (n, d^2);
+    the bincount spans only the chunk's range of positions."""
+    lo, hi = int(pos.min()), int(pos.max()) + 1
+    if power not in out:
+        out[power] = np.zeros(nnz)
+    out[power][lo:hi] += np.bincount((pos - lo).ravel(), X.ravel(), hi - lo)
 
 
 class ThicknessParametrisation:

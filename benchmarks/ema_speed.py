@@ -7,7 +7,8 @@ narrow bands.  pLSCF (``method="plscf"``) likewise.  Peers: sdypy-EMA's LSCE and
 (``get_poles(method="lsce"|"lscf")``, pol_order_high=30, i.e. 60 poles) on the same FRFs,
 poles picked by its ``select_closest_poles`` at the true frequencies (LSCE); for its LSCF that
 selection returns zeros, so the highest order's pole nearest each true frequency is taken.
-Prints median times of repeats, the time ratios and the accuracies.
+Prints median times of repeats, the time ratios and the accuracies; the band rows are repeated
+without the refinement of the poles at the range's ends (``refine=False``) to show its cost.
 
 BLAS threads: with OpenBLAS's default of one thread per core, small matrix products slow down
 5-10x when other processes load the cores (threads spin-wait for each other).  The benchmark
@@ -92,6 +93,20 @@ def main() -> int:
             {"band_hz": (0.0, 149.9), "max_order": 60, "band_lines": 4096, "method": "plscf"},
         ),
         ("ours pLSCF, automatic bands, orders 2..40", {"method": "plscf"}),
+        (
+            "  same as row 1, no end-pole refinement",
+            {"band_hz": (0.0, 149.9), "max_order": 60, "band_lines": 4096, "refine": False},
+        ),
+        (
+            "  same as row 3, no end-pole refinement",
+            {
+                "band_hz": (0.0, 149.9),
+                "max_order": 60,
+                "band_lines": 4096,
+                "method": "plscf",
+                "refine": False,
+            },
+        ),
     ):
         t, res = time_median(lambda kw=kwargs: identify(frfs, **kw), args.repeats)
         m = res.modes
@@ -149,6 +164,10 @@ def main() -> int:
         print(
             f"time ratio sdypy LSCF (poles only) / ours pLSCF (whole identification, band): "
             f"{peer_t['lscf'] / rows[2][1]:.1f}x"
+        )
+        print(
+            f"  without end-pole refinement (IdentifySettings.refine=False): LSCE "
+            f"{peer_t['lsce'] / rows[4][1]:.1f}x, pLSCF {peer_t['lscf'] / rows[5][1]:.1f}x"
         )
     return 0
 

@@ -3,7 +3,9 @@ LSFD shapes -> :class:`~bayesupdate.modal_data.ModalData` plus diagnostics.
 
 The range (the whole axis, or the band given) is split into consecutive narrow bands
 (:mod:`bayesupdate.ema.bands`); the modes of all bands are merged, a duplicate pair (frequency
-within 1 %, pole-vector MAC >= 0.9) keeping the estimate farther from its band's edges.  Poles are
+within 1 %, pole-vector MAC >= 0.9) keeping the estimate farther from its band's edges; the poles
+at the ends of the analysed range are then refined on the FRFs by variable projection with an
+extra pole beyond the end (:func:`_refine_ends`).  Poles are
 estimated globally over all FRFs of all test sets; the residues of all FRFs are then fitted at
 once by LSFD over the analysed range, and the shapes of the sets are scaled by their driving
 points and aligned on shared DOFs (:func:`~bayesupdate.ema.lsfd.shapes_from_residues`).
@@ -14,19 +16,20 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bayesupdate.correlation import mac_matrix
-from bayesupdate.ema.bands import automatic_bands
+from bayesupdate.ema.bands import automatic_bands, default_band_lines
 from bayesupdate.ema.frf_set import KIND_POWER, FrfSet
 from bayesupdate.ema.indicators import frf_correlation
 from bayesupdate.ema.lsce import band_indices, lsce
 from bayesupdate.ema.lsfd import LsfdFit, ScaledShapes, lsfd, mpc, shapes_from_residues
 from bayesupdate.ema.plscf import plscf
+from bayesupdate.ema.pole_refinement import refine_poles
 from bayesupdate.ema.stabilization import (
     SelectedPole,
     StabilizationDiagram,
     select_poles,
     stabilization_diagram,
 )
-from bayesupdate.ema.synthesis import synthesize_frf
+from bayesupdate.ema.synthesis import modal_from_poles, synthesize_frf
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
 
@@ -158,6 +161,7 @@ class IdentifySettings:
     tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 %
     between orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that
     pass are removed by :func:`modal_significance`.  method : a key of ``ESTIMATORS``.
+    refine : refine the poles at the ends of the range on the FRFs (:func:`_refine_ends`).
     """
 
     max_order: int | None = None
@@ -167,6 +171,7 @@ class IdentifySettings:
     tol_damping: float = 0.2
     min_mac: float = 0.98
     method: str = "lsce"
+    refine: bool = True
 
     def __post_init__(self):
         order = 40 if self.max_order is None else int(self.max_order)
@@ -249,6 +254,65 @@ def _residual_poles(selected: list, edge: list) -> np.ndarray:
     return np.array([p for p in edge if p.imag / (2 * np.pi) > f_top * 1.01])[:1]
 
 
+#: starting guess of an extra pole beyond an end of the analysed range: frequency ratio to
+#: that end and damping ratio (the fit moves it onto the neighbour's flank)
+EXTRA_POLE_START = (1.15, 0.03)
+
+
+def _extra_pole(f_hz: float, above: bool) -> np.ndarray:
+    """Starting extra pole (1,) [rad/s] beyond f_hz [Hz], above or below it."""
+    ratio, zeta = EXTRA_POLE_START
+    w = 2 * np.pi * f_hz * (ratio if above else 1 / ratio)
+    return np.array([complex(-zeta * w, w * np.sqrt(1 - zeta**2))])
+
+
+def _end_windows(frfs: FrfSet, lo_i: int, hi_i: int, residual_poles) -> list:
+    """(first line, last line, extra poles) of each end of the analysed range lines lo_i..hi_i
+    whose poles :func:`_refine_ends` refines: the top end, and the bottom end when the range
+    starts more than 10 lines above 0 Hz; each one automatic band wide
+    (:func:`~bayesupdate.ema.bands.default_band_lines`).  At the top a residual pole is the
+    neighbour beyond (fixed, no extra pole); else a free extra pole starts beyond the end."""
+    f, width = frfs.frequencies_hz, default_band_lines(hi_i - lo_i + 1)
+    first = max(lo_i, int(np.searchsorted(f, 0.0, side="right")))
+    top_extra = _extra_pole(f[hi_i], above=True) if residual_poles.size == 0 else np.zeros(0)
+    windows = [(max(first, hi_i - width), hi_i, top_extra)]
+    if f[lo_i] > 10 * frfs.df_hz:
+        windows.append((first, min(hi_i, first + width), _extra_pole(f[first], above=False)))
+    return windows
+
+
+def _refine_ends(frfs: FrfSet, lo_i: int, hi_i: int, selected: list, residual_poles) -> list:
+    """The selected poles, those at the ends of the analysed range refined by variable
+    projection (:func:`~bayesupdate.ema.pole_refinement.refine_poles`) on the lines of each
+    end's window (:func:`_end_windows`).  The rule: a pole is refined when it lies in such a
+    window, as there no identified pole models the flank of a mode beyond the range (the
+    poles of the inner bands have their neighbours on both sides); the poles within one
+    window's width of it and the residual poles enter the basis fixed."""
+    f = frfs.frequencies_hz
+    poles = np.array([p.pole for p in selected])
+    for a, b, extra in _end_windows(frfs, lo_i, hi_i, residual_poles):
+        fd = poles.imag / (2 * np.pi)
+        free = (fd >= f[a]) & (fd <= f[b])
+        span = f[b] - f[a]
+        near = ~free & (fd > f[a] - span) & (fd < f[b] + span)
+        if not free.any():
+            continue
+        ref = refine_poles(
+            f[a : b + 1],
+            frfs.frf[:, a : b + 1],
+            poles[free],
+            extra.astype(complex),
+            np.concatenate([poles[near], residual_poles]),
+            frfs.kind,
+        )
+        poles[free] = ref.poles
+    fn, zeta = modal_from_poles(poles)
+    return [
+        p if p.pole == s else replace(p, pole=s, frequency_hz=float(n), damping_ratio=float(z))
+        for p, s, n, z in zip(selected, poles, fn, zeta, strict=True)
+    ]
+
+
 def _fit_end(frfs: FrfSet, f_top: float, fit_hi: int) -> int:
     """Last line index of the LSFD fit: the sum-FRF minimum between the highest selected mode
     f_top [Hz] and line fit_hi (fit_hi itself with under 3 lines there).  A resonance just
@@ -326,6 +390,14 @@ def identify(
     selected, fit, significance, dropped = _fit_and_prune(
         frfs, selected, residual_poles, fit_lo, fit_hi
     )
+    refined = selected
+    if settings.refine:
+        refined = _refine_ends(frfs, lo_i, hi_i, selected, residual_poles)
+    if any(new is not old for new, old in zip(refined, selected, strict=True)):  # refit
+        selected, fit, significance, more = _fit_and_prune(
+            frfs, refined, residual_poles, fit_lo, fit_hi
+        )
+        dropped += more
     poles = np.array([p.pole for p in selected])
     lines = slice(fit_lo, fit_hi + 1)
     synth, frac = _synthesis(frfs, fit, np.concatenate([poles, residual_poles]), lines)

@@ -15,6 +15,7 @@ psi_qr = sqrt(2 j w_dr A_qqr) and psi_ir = 2 j w_dr A_iqr / psi_qr.
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 
 from bayesupdate.ema.frf_set import KIND_POWER
 from bayesupdate.ema.synthesis import frf_basis
@@ -114,8 +115,9 @@ def _correlation_inflation(resid: np.ndarray, near: np.ndarray) -> np.ndarray:
         n = seg.shape[0]
         if n < 3:
             continue
-        spec = np.fft.fft(seg, 2 * n, axis=0)
-        acf = np.sum(np.fft.ifft(np.abs(spec) ** 2, axis=0).real[:n], axis=1)
+        # any length >= 2n - 1 gives the linear autocorrelation: take a fast one
+        spec = scipy.fft.fft(seg, scipy.fft.next_fast_len(2 * n), axis=0)
+        acf = np.sum(scipy.fft.ifft(np.abs(spec) ** 2, axis=0).real[:n], axis=1)
         if acf[0] <= 0:
             continue
         k = np.arange(1, n)

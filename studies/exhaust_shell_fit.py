@@ -91,11 +91,19 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=8, help="least-squares iterations")
     ap.add_argument("--mesh-density", type=int, default=16)
     ap.add_argument("--table3-mass", action="store_true", help="also fit 12.12 kg at Table 3")
+    ap.add_argument(
+        "--start-at",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="first start: this quantity at VALUE [m] instead of the stored best (repeatable)",
+    )
     args = ap.parse_args()
     MESH["density"] = args.mesh_density
     MESH["table3_mass"] = args.table3_mass
     rng = np.random.default_rng(args.seed)
-    best = FITS[0]  # the first start is the stored best fit (or the initial values)
+    best = dict(FITS[0])  # the first start is the stored best fit (or the initial values)
+    best.update({k: float(v) for k, v in (a.split("=") for a in args.start_at)})
     u0 = (np.array([best.get(n, SHELL_QUANTITIES[n][0]) for n in FIT_NAMES]) - LO) / (HI - LO)
     starts = [np.clip(u0, 0.02, 0.98)] + [rng.uniform(0.1, 0.9, len(FIT_NAMES)) for _ in range(9)]
     for k, u in enumerate(starts[: args.starts]):

@@ -56,12 +56,16 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
     """A closed oval body (``key`` in cat, im, mm) from the pipe end node ``inlet`` along x.
 
     Walls: mantle ``{key}_wall``, caps and baffles ``{key}_cap_wall``; the caps are cones of
-    depth ``{key}_cone``; internal tubes (``_TUBES``) join hole rings.  Returns (outlet pipe node
-    at the outlet cap centre, axis nodes (RBE3) at the interior mantle rings, the body mesh and
-    its structure node numbers)."""
+    depth ``{key}_cone``; internal tubes (``_TUBES``) join hole rings; both caps' holes sit at
+    (``{key}_pipe_dy``, ``{key}_pipe_dz``) [m] from the body's axis (0 if absent).  Returns
+    (outlet pipe node at the outlet cap centre, axis nodes (RBE3) at the interior mantle rings on
+    the pipe line, the body mesh and its structure node numbers)."""
     length, width, height = g[f"{key}_length"], g[f"{key}_width"], g[f"{key}_height"]
     depth = g[f"{key}_cone"]
     x0 = b.node_xyz(inlet)
+    # off-centre pipes: the body's axis sits at -offset from the pipe line (both caps' holes at
+    # +offset, so the tail keeps the beam model's line and sensor points)
+    offset = np.array([g.get(f"{key}_pipe_dy", 0.0), g.get(f"{key}_pipe_dz", 0.0)])
     fixed = [0.5 * length] + [length * k / 3 for k in (1, 2)] * (key == "mm")
     body = oval_body(
         width,
@@ -70,9 +74,10 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
         0.5 * g["pipe_od"],
         n_c,
         [x - depth for x in baffles],
-        x0 + (depth, 0.0, 0.0),
+        x0 + (depth, -offset[0], -offset[1]),
         [x - depth for x in fixed],
         cone=depth,
+        offset=offset,
     )
     thickness = np.where(body.surface == 0, g[f"{key}_wall"], g[f"{key}_cap_wall"])
     part = _PART[key]
@@ -80,7 +85,7 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
     outlet = b.add_node(x0 + (length, 0.0, 0.0))
     hole_centre = [inlet, outlet]
     for xb in baffles:  # tube nodes at the baffles (a few per body: not a hot path)
-        hole_centre.append(b.add_node(x0 + (xb, 0.0, 0.0)))
+        hole_centre.append(b.add_node(x0 + (xb, -offset[0], -offset[1])))
     for disc, centre in enumerate(hole_centre):
         b.add_rbe2(centre, ids[body.holes[disc]], _SPIDER)
     tube = circular_tube(g["pipe_od"], g["pipe_wall"])

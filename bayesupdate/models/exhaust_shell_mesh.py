@@ -1,11 +1,13 @@
 """Structured quad meshes of the exhaust's closed shell bodies (catalyst, mufflers): an oval
 (elliptic) mantle along x with flat or conical oval end caps and flat internal baffles, each cap or
-baffle pierced by a central circular hole of the pipe's radius.  Arrays only, no FE objects.
+baffle pierced by a circular hole of the pipe's radius (centred; the caps' may be off-centre).
+Arrays only, no FE objects.
 
 Coordinates: body axis along +x from ``x0``, centre line at (y0, z0); the oval has semi-axes
 a = width / 2 along y and b = height / 2 along z.  Node (k, i) of a disc (cap or baffle) sits at
 parametric angle phi_k = 2 pi k / n_circ on ring i, interpolated between the hole circle (i = 0,
-radius r0) and the oval (i = n_ring): p = (1 - s_i) r0 (cos, sin) + s_i (a cos, b sin), with the
+radius r0 about c) and the oval (i = n_ring): p = (1 - s_i) (c + r0 (cos, sin)) + s_i (a cos,
+b sin), c the hole's offset (0 for baffles and centred caps), with the
 rings graded geometrically so the elements near the hole are not needle-thin.  The mantle uses the
 same angles, so a disc's outer ring and the mantle's ring at that station coincide and the FE
 builder merges them (shared DOFs, a welded seam).
@@ -95,12 +97,15 @@ def _add_layer(x, at, step, spacing, protected=()) -> np.ndarray:
     return np.sort(np.concatenate([x[keep], new]))
 
 
-def oval_body(width, height, length, r0, n_c, baffles=(), x0=(0.0, 0.0, 0.0), fixed=(), cone=0.0):
+def oval_body(
+    width, height, length, r0, n_c, baffles=(), x0=(0.0, 0.0, 0.0), fixed=(), cone=0.0, offset=None
+):
     """``OvalBodyMesh`` of a closed oval body: mantle from x0 to x0 + length, two end caps and
-    baffles at the axial positions ``baffles`` [m from x0], all with a central hole of radius
-    ``r0`` [m]; element size about ``size`` [m]; ``fixed`` extra mantle ring positions [m from
-    x0].  ``cone`` [m]: the caps' hole rings stand that far out of the mantle's ends (conical
-    caps, as on a catalyst can; 0 = flat caps)."""
+    baffles at the axial positions ``baffles`` [m from x0], all with a hole of radius ``r0`` [m];
+    element size about ``size`` [m]; ``fixed`` extra mantle ring positions [m from x0].
+    ``cone`` [m]: the caps' hole rings stand that far out of the mantle's ends (conical caps, as
+    on a catalyst can; 0 = flat caps).  ``offset`` (2,) [m]: (y, z) of both caps' hole centres
+    from the body axis (off-centre pipes; None = centred); the baffles' holes stay centred."""
     x0 = np.asarray(x0, dtype=float)
     size = ASPECT * oval_perimeter(width, height) / n_c
     layer = size / (4 * ASPECT)
@@ -117,8 +122,7 @@ def oval_body(width, height, length, r0, n_c, baffles=(), x0=(0.0, 0.0, 0.0), fi
     quads = [_grid(len(st) - 1, n_c, wrap)]
     surface = [np.zeros(len(quads[0]), int)]
     s = ring_fractions(r0, width, height, n_c, size, layer)
-    disc_y = (1 - s)[:, None] * r0 * cos + s[:, None] * a * cos  # (n_ring + 1, n_c)
-    disc_z = (1 - s)[:, None] * r0 * sin + s[:, None] * b * sin
+    cy, cz = (0.0, 0.0) if offset is None else offset
     nodes, holes = [mantle], []
     n_next = len(mantle)
     disc_x = [0.0, length, *sorted(baffles)]
@@ -131,6 +135,9 @@ def oval_body(width, height, length, r0, n_c, baffles=(), x0=(0.0, 0.0, 0.0), fi
         quads.append(q[:, ::-1] if d == 0 else q)  # inlet cap faces -x
         surface.append(np.full(len(q), 1 if d < 2 else 2))
         rise = {0: -cone, 1: cone}.get(d, 0.0) * (1 - s[:-1])  # conical caps
+        oy, oz = (cy, cz) if d < 2 else (0.0, 0.0)
+        disc_y = (1 - s)[:, None] * (r0 * cos + oy) + s[:, None] * a * cos  # (n_ring + 1, n_c)
+        disc_z = (1 - s)[:, None] * (r0 * sin + oz) + s[:, None] * b * sin
         xs = np.repeat(xd + rise, n_c)
         pts = np.stack([xs, disc_y[:-1].ravel(), disc_z[:-1].ravel()])
         nodes.append(pts.T)

@@ -47,6 +47,7 @@ from bayesupdate.inference.sampling import (
     default_moves,
     sample_posterior,
 )
+from bayesupdate.inference.tmcmc import TMCMCResult, TMCMCSettings, tmcmc
 from bayesupdate.inference.user_model import FunctionModel, load_user_model
 
 __all__ = [
@@ -64,6 +65,8 @@ __all__ = [
     "ResidualTable",
     "SamplerSettings",
     "SamplerState",
+    "TMCMCResult",
+    "TMCMCSettings",
     "build_parameter_specs",
     "build_problem",
     "calibrate",
@@ -81,6 +84,7 @@ __all__ = [
     "register_loader",
     "sample_posterior",
     "summarise",
+    "tmcmc",
     "to_datatree",
     "write_result",
 ]

@@ -283,3 +283,22 @@ def test_a_posterior_that_misses_its_targets_says_so_everywhere(study, tmp_path,
     result = json.loads(captured.out.splitlines()[-1])
     assert result["converged"] is True and result["convergence"]["reason"] is None
     assert result["convergence"]["max_r_hat"] <= 1.5 and "warning" not in captured.err
+
+
+def test_sample_tmcmc_is_the_pipeline_with_the_study_settings(study, capsys):
+    """``sample --sampler tmcmc``: the JSON is ``pipelines.sample_tmcmc`` on the study's own
+    posterior and seed, bit for bit; --out (emcee's checkpointed file) is refused with exit 2."""
+    from bayesupdate.config import load_study
+    from bayesupdate.inference.tmcmc import TMCMCSettings
+    from bayesupdate.pipelines.sample_tmcmc import sample_tmcmc, tmcmc_json
+    from bayesupdate.pipelines.study import prepare
+
+    assert main(["sample", str(study), "--sampler", "tmcmc", "--particles", "300", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["sampler"] == "tmcmc" and out["particles"] == 300 and out["failed"] == 0
+    config = load_study(study)
+    run = sample_tmcmc(prepare(config), TMCMCSettings(particles=300, seed=config.sampler.seed))
+    expected = tmcmc_json(run, config.sampler.hdi_prob)
+    assert out["log_evidence"] == expected["log_evidence"] and np.isfinite(out["log_evidence"])
+    assert out["parameters"] == expected["parameters"]
+    assert main(["sample", str(study), "--sampler", "tmcmc", "--out", "x.h5"]) == 2

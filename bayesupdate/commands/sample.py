@@ -58,6 +58,15 @@ def add_arguments(parser) -> None:
         metavar="KIND",
         help="sampler moves: mixture (default; frozen mixture proposal + DE) or de",
     )
+    parser.add_argument(
+        "--sampler",
+        choices=("emcee", "tmcmc"),
+        default="emcee",
+        help="emcee (default) or tmcmc: tempered SMC from the prior, with the log evidence",
+    )
+    parser.add_argument(
+        "--particles", type=int, default=1000, help="tmcmc: number of particles (default 1000)"
+    )
 
 
 def run(args) -> int:
@@ -73,6 +82,8 @@ def run(args) -> int:
         check_output_path(args.write_bdf, force=args.force)
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
+    if args.sampler == "tmcmc":
+        return _run_tmcmc(prepared, args)
     run = _sample_with_stop_handlers(prepared, args, compute)
     posterior = run.posterior
     if posterior.interrupted:
@@ -221,3 +232,26 @@ def _rom_json(rom: dict | None) -> dict | None:
 
 def _finite_or_none(value) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
+
+
+def _run_tmcmc(prepared, args) -> int:
+    """``--sampler tmcmc``: ``pipelines.sample_tmcmc``; the JSON or a short table."""
+    from bayesupdate.inference.tmcmc import TMCMCSettings
+    from bayesupdate.pipelines.sample_tmcmc import sample_tmcmc, tmcmc_json
+
+    if args.out or args.resume or args.write_bdf:
+        raise BayesUpdateError("--sampler tmcmc: --out, --resume and --write-bdf need emcee")
+    cfg = prepared.study.sampler
+    settings = TMCMCSettings(particles=args.particles, seed=cfg.seed)
+    out = tmcmc_json(sample_tmcmc(prepared, settings), cfg.hdi_prob)
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    for name, p in out["parameters"].items():
+        interval = f"[{p['q_low']:.6g}, {p['q_high']:.6g}]"
+        print(f"{name:28s} {p['mean']:12.6g} sd {p['sd']:10.4g}  {interval}")
+    print(
+        f"log evidence {out['log_evidence']:.3f} nats; {out['stages']} stages, "
+        f"{out['evaluations']} evaluations"
+    )
+    return 0

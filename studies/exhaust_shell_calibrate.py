@@ -13,7 +13,9 @@ MAC at the sensors to the initial design's) against Table 4 and, by eq. 19, Tabl
 """
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -37,6 +39,9 @@ from bayesupdate.paper import (
     TABLE4_FINAL_HZ,
 )
 from bayesupdate.pipelines.surrogates import sampling_problem
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from paper_optimum import print_table4  # noqa: E402  (the same Table 4 print as the beam model)
 
 
 def at_paper_design(mesh_density: int) -> None:
@@ -102,14 +107,7 @@ def main() -> None:
         same = np.sign(ours - start) == np.sign(paper - start)
         print(f"{name:26s} {start:9.4g} {paper:10.4g} {ours:10.4g}   {same}")
     print("mode   EMA   paper-opt   ours  (error %, MAC vs initial shape, model mode)")
-    for i, row in enumerate(best.table.rows()):
-        print(
-            f"{row['mode']:3d} {row['test_hz']:7.2f} {TABLE4_FINAL_HZ[i]:7.2f} "
-            f"{row['model_hz']:7.2f}"
-            f" ({row['error_pct']:+6.2f} %, MAC {row['mac']:.3f}, mode {row['model_mode']})"
-        )
-    if best.swapped:
-        print("WARNING: the optimum swaps modes relative to the initial design")
+    print_table4(best)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """bayesupdate: probabilistic finite-element model updating in structural dynamics.
 
-Layers (see README "Architecture"): ``fe`` (structures, modal solve), ``models`` (built-in
+Layers (see docs/architecture.md): ``fe`` (structures, modal solve), ``models`` (built-in
 structures), ``ema`` (modal identification from tests), ``inference`` (calibration and posterior),
 ``discovery`` (missing physics), with ``modal_data`` and ``correlation`` as the shared hand-off, and
 the CLI, files and plots at the edge.

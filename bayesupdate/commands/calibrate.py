@@ -26,7 +26,9 @@ error %, MAC) is printed otherwise, with a warning when modes are swapped."""
 
 def add_study_arguments(parser, sampling: bool = False) -> None:
     """Arguments shared by calibrate and sample."""
-    parser.add_argument("study", nargs="?", help="TOML study file (docs/reference/study-file.md); optional")
+    parser.add_argument(
+        "study", nargs="?", help="TOML study file (docs/reference/study-file.md); optional"
+    )
     parser.add_argument("--model", help="built-in model name or package.module:function")
     parser.add_argument("--data", help="test data: paper:ema, a CSV frequency table, .h5 or .uff")
     parser.add_argument("--out", help="result file (HDF5)")

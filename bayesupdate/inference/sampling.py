@@ -29,6 +29,7 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 import emcee
 import numpy as np
@@ -622,6 +623,15 @@ def _kept_moves(
     return mixture_moves(DefensiveProposal.from_dict(fitted, space))
 
 
+def _first_run(log_posterior, calibration, initial, settings, space, resume, moves) -> _Run:
+    """The run to continue: ``resume``'s, or a fresh one (also when ``resume`` was stopped
+    while adapting: nothing was kept, so starting again from the seed gives the uninterrupted
+    chain)."""
+    if resume is not None and not _stopped_while_adapting(resume, moves, settings):
+        return _resumed_run(resume, log_posterior, settings.walkers)
+    return _fresh_run(log_posterior, calibration, initial, settings, space)
+
+
 def sample_posterior(
     log_posterior: LogPosterior,
     calibration: CalibrationResult | None = None,
@@ -659,19 +669,11 @@ def sample_posterior(
     stop = {"requested": False}
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
 
-    def guard(density: LogPosterior) -> Callable[[np.ndarray], np.ndarray]:
-        return _guard(density, space, stop)
-
+    guard = partial(_guard, space=space, stop=stop)  # a density -> its guarded batch function
     guarded = guard(log_posterior)
     d = log_posterior.ndim
     screened = _screened(screen, d, guarded, guard)
-    if resume is not None and _stopped_while_adapting(resume, moves, settings):
-        # nothing kept yet: start again from the seed, so the chain is the uninterrupted one
-        resume = None
-    if resume is not None:
-        run = _resumed_run(resume, log_posterior, settings.walkers)
-    else:
-        run = _fresh_run(log_posterior, calibration, initial, settings, space)
+    run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
     _start(run, guarded)
     request = stop_request or StopRequest()
 

@@ -296,7 +296,7 @@ def test_eigen_solve_failure_in_the_fe_model_is_counted(tmp_path, monkeypatch, c
         "--data",
         "paper:ema",
         "--starts",
-        "3",
+        "1",
         "--no-polish",
     ]
     # full solves: every failure is one failed evaluation of the fit

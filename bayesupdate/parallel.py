@@ -9,6 +9,11 @@ the rows of a parameter batch to the workers in contiguous chunks (results in ch
 returns (B, n_modes) frequencies, NaN rows for points where the model raised or returned
 non-finite values, so the evaluator is itself a ``BatchParametricModel`` (emcee
 ``vectorize=True``).
+
+``PointEvaluator(problem, executor)`` is what the posterior of a model that cannot batch uses
+(``LogPosterior(..., executor=...)``): ``problem.evaluate`` (predict and pair) at every walker of
+a step on the executor, the problem shared once for the whole run, the evaluations returned in
+walker order, so the chain is the serial chain bit for bit.
 """
 
 import os
@@ -102,3 +107,27 @@ class PoolEvaluator:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _evaluate_points(problem, rows: np.ndarray) -> list:
+    """``problem.evaluate`` at each row of ``rows`` (n, d) (an executor task)."""
+    return [problem.evaluate(theta) for theta in rows]
+
+
+class PointEvaluator:
+    """``problem.evaluate`` at a batch of points theta (n, d) on ``executor`` -> n Evaluations
+    in point order (module docstring): contiguous chunks, one per worker; the problem is shared
+    once here, not sent per call."""
+
+    def __init__(self, problem, executor):
+        self._executor = executor
+        self._workers = max(int(executor.workers), 1)
+        self._problem = executor.share(problem)
+
+    def __call__(self, theta: np.ndarray) -> list:
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        if theta.shape[0] == 0:
+            return []
+        chunks = np.array_split(theta, min(self._workers, theta.shape[0]))
+        parts = self._executor.map(_evaluate_points, chunks, self._problem)
+        return [evaluation for part in parts for evaluation in part]

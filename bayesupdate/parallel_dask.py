@@ -96,7 +96,7 @@ class DaskExecutor(SerialExecutor):
             return obj
         return self.client.scatter(obj, broadcast=True, hash=False)
 
-    def map(self, fn, items, shared=None) -> list:
+    def map(self, fn, items, shared=None, progress=None) -> list:
         items = list(items)
         if not items:
             return []
@@ -110,12 +110,31 @@ class DaskExecutor(SerialExecutor):
                 pure=False,
                 retries=self.retries,
             )
-            return self.client.gather(futures)
+            return self._gather(futures, progress)
         except (OSError, TimeoutError) as exc:
             raise BayesUpdateError(
                 f"--scheduler {self.address}: lost the Dask scheduler mid-run "
                 f"({type(exc).__name__}); restart it and run again"
             ) from None
+
+    def _gather(self, futures: list, progress) -> list:
+        """The futures' results in submission order; ``progress(index, result)`` as each
+        finishes.  A task that raised: the first such task's error in submission order."""
+        if progress is None:
+            return self.client.gather(futures)
+        from distributed import as_completed
+
+        index = {future.key: i for i, future in enumerate(futures)}
+        results = {}
+        # this client is not the default one (``set_as_default=False``): give its loop
+        for future in as_completed(futures, loop=self.client.loop):
+            if future.status == "finished":
+                i = index[future.key]
+                results[i] = future.result()
+                progress(i, results[i])
+        if len(results) < len(futures):
+            self.client.gather(futures)  # raises the error of the first failed task
+        return [results[i] for i in range(len(futures))]
 
     def describe(self) -> dict:
         return {"kind": self.kind, "workers": self.workers, "scheduler": self.address}

@@ -5,6 +5,8 @@ snapshots): ``executor.map(fn, items, shared)`` returns ``[fn(shared, item) for 
 in submission order, whatever order the workers finish in, so a seeded run gives the same bits on
 every executor (each task is a pure function of ``shared`` and its item; nothing is reduced in
 arrival order).  ``fn`` must be a module-level function (it is pickled by reference).
+``progress(index, result)``, when given, is called in this process as each task finishes (in
+arrival order: for progress lines only, never for the result).
 
 ``shared`` (e.g. the FE model and the calibration problem) is sent to each worker once per
 ``map``, not once per task: local processes read it from one pickle file and keep it in a
@@ -27,7 +29,7 @@ import pickle
 import re
 import tempfile
 import uuid
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
@@ -133,8 +135,13 @@ class SerialExecutor:
     def share(self, obj):
         return obj
 
-    def map(self, fn, items, shared=None) -> list:
-        return [fn(shared, item) for item in items]
+    def map(self, fn, items, shared=None, progress=None) -> list:
+        results = []
+        for i, item in enumerate(items):
+            results.append(fn(shared, item))
+            if progress is not None:
+                progress(i, results[-1])
+        return results
 
     def describe(self) -> dict:
         """The result file's ``"compute"`` record."""
@@ -202,30 +209,45 @@ class ProcessExecutor(SerialExecutor):
         path.write_bytes(pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
         return _SharedFile(token, str(path))
 
-    def map(self, fn, items, shared=None) -> list:
+    def map(self, fn, items, shared=None, progress=None) -> list:
         items = list(items)
         handle = self.share(shared)
         results: dict[int, object] = {}
         for attempt in range(self.retries + 1):
-            todo = [i for i in range(len(items)) if i not in results]
-            futures = {i: self._pool.submit(_run_task, fn, handle, items[i]) for i in todo}
-            try:
-                for i, future in futures.items():
-                    results[i] = future.result()
+            if self._attempt(fn, handle, items, results, progress):
                 break
-            except BrokenProcessPool:
-                # a worker died: finished results are kept, the rest run again on a new pool
-                for i, future in futures.items():
-                    if future.done() and not future.cancelled() and future.exception() is None:
-                        results[i] = future.result()
-                self._pool.shutdown(wait=False, cancel_futures=True)
-                self._pool = self._new_pool()
-                if attempt == self.retries:
-                    raise BayesUpdateError(
-                        f"local workers died {self.retries + 1} times (killed, or out of "
-                        "memory?); run with fewer --workers"
-                    ) from None
+            # a worker died: finished results are kept, the rest run again on a new pool
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._new_pool()
+            if attempt == self.retries:
+                raise BayesUpdateError(
+                    f"local workers died {self.retries + 1} times (killed, or out of "
+                    "memory?); run with fewer --workers"
+                )
         return [results[i] for i in range(len(items))]
+
+    def _attempt(self, fn, handle, items: list, results: dict, progress) -> bool:
+        """Run the items not yet in ``results`` (filled in as they finish); False if the pool
+        broke (a worker died).  A task that raised: the first such task's error in submission
+        order is raised once every task has finished, whatever order they finished in."""
+        todo = [i for i in range(len(items)) if i not in results]
+        futures = {self._pool.submit(_run_task, fn, handle, items[i]): i for i in todo}
+        broken, errors = False, {}
+        for future in as_completed(futures):
+            i = futures[future]
+            try:
+                results[i] = future.result()
+            except BrokenProcessPool:
+                broken = True
+                continue
+            except Exception as exc:  # noqa: BLE001 - re-raised below, in submission order
+                errors[i] = exc
+                continue
+            if progress is not None:
+                progress(i, results[i])
+        if errors:
+            raise errors[min(errors)]
+        return not broken
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)

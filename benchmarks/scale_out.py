@@ -1,6 +1,7 @@
 """Scale-out: wall time of two parallel phases on 1 and 2 workers, local and through Dask.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/scale_out.py [--snapshots 8] [--no-deck]
+        [--starts 8] [--phases snapshots discovery calibration]
 
 Needs ``bayesupdate[dask]`` (and pyNastran for the deck).  Phases:
 
@@ -9,7 +10,11 @@ Needs ``bayesupdate[dask]`` (and pyNastran for the deck).  Phases:
   model the project has, the FEMAP exhaust deck (4,466 shells, 26,832 DOFs; ``--no-deck``: the
   built-in exhaust instead);
 * discovery: one ``discover`` of the built-in exhaust against the paper's test (one baseline
-  start, 8 quick refits, 2 full refits; the baseline calibration and the LOO are serial).
+  start, 8 quick refits, 2 full refits; the baseline calibration and the LOO are serial);
+* calibration: the multi-start calibration of ``calibrate --model exhaust --data paper:ema``
+  (the reference start and ``--starts`` Sobol starts, one task each: least squares and
+  Nelder-Mead on the reduced basis, then the near-best ends polished on the full model, one
+  task each); the reduced basis is built once before the timings.
 
 Executors: serial (this process), local processes (``ProcessExecutor``) with 1 and 2 workers, and
 a ``dask scheduler`` with 1 then 2 ``dask worker`` processes (one thread each) started on
@@ -30,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+PHASES = ("snapshots", "discovery", "calibration")
 DECK = Path(__file__).resolve().parents[2] / "shared/data/nastran/femap_exhaust/exhaust.bdf"
 
 
@@ -55,6 +61,25 @@ def snapshot_phase(use_deck: bool, n_points: int):
     u = qmc.Sobol(len(names), scramble=True, seed=0).random(n_points)
     theta = low + u * (high - low)
     return (lambda ex: full_solves(fe, names, theta, 12, ex)), label
+
+
+def calibration_phase(starts: int):
+    """(callable(executor) -> (end points, end objectives, evaluations), label)."""
+    from bayesupdate.config import StudyConfig, with_overrides
+    from bayesupdate.inference.optimize import CalibrationSettings, calibrate
+    from bayesupdate.pipelines.study import prepare
+    from bayesupdate.pipelines.surrogates import sampling_problem
+
+    study = with_overrides(StudyConfig(), model__source="exhaust", data__source="paper:ema")
+    prepared = prepare(study)
+    search, _ = sampling_problem(prepared.problem, None, True, study.sampler.reduced_tol)
+    settings = CalibrationSettings(starts=starts, seed=study.optimizer.seed)
+
+    def run(ex):
+        result = calibrate(search, settings, refine=prepared.problem, executor=ex)
+        return result.end_points, result.end_objectives, result.evaluations
+
+    return run, f"calibration of the built-in exhaust ({starts + 1} starts, full-model polish)"
 
 
 def discovery_phase():
@@ -182,12 +207,16 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--snapshots", type=int, default=8)
     parser.add_argument("--no-deck", action="store_true", help="built-in exhaust snapshots")
+    parser.add_argument("--starts", type=int, default=8, help="calibration: Sobol starts")
+    parser.add_argument("--phases", nargs="+", default=list(PHASES), choices=PHASES)
     args = parser.parse_args(argv)
     print(f"cores: {os.cpu_count()}, load average: {os.getloadavg()}")
-    phases = {
-        "snapshots": snapshot_phase(not args.no_deck, args.snapshots),
-        "discovery": discovery_phase(),
+    make = {
+        "snapshots": lambda: snapshot_phase(not args.no_deck, args.snapshots),
+        "discovery": discovery_phase,
+        "calibration": lambda: calibration_phase(args.starts),
     }
+    phases = {name: make[name]() for name in args.phases}
     dask = DaskProcesses()
     try:
         rows = run_all(phases, dask)

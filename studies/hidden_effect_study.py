@@ -29,8 +29,14 @@ Each case runs the whole ``discover`` (baseline calibration of the five design v
 flagging, score-test scan of the library, refits, evidence).  Prints one line per case, the
 confusion table (true kind vs named kind), location accuracy, and the gap shrink.
 
-    .venv/bin/python studies/hidden_effect_study.py --jobs 2 --json-out study.json
+    .venv/bin/python studies/hidden_effect_study.py --workers 2 --json-out study.json
     .venv/bin/python studies/hidden_effect_study.py --quick          # a 10-case subset
+    .venv/bin/python studies/hidden_effect_study.py --scheduler tcp://head:8786   # on Dask
+
+The cases are independent tasks on the project's executor (``bayesupdate.parallel_executor``:
+``--workers N`` local processes, ``--scheduler ADDRESS`` a Dask scheduler, else
+``BAYESUPDATE_SCHEDULER``, else serial); each case is a pure function of its (case, seed), so
+the rows (less their wall times) are the same whichever executor ran them, in case order.
 """
 
 import argparse
@@ -543,7 +549,10 @@ def main(argv=None) -> int:
         help="fast path: shape noise, fraction of each shape's RMS amplitude (0: no shapes)",
     )
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--jobs", type=int, default=1, help="parallel processes")
+    parser.add_argument(
+        "--workers", "--jobs", type=int, help="cases in N local processes (default: serial)"
+    )
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="cases on a Dask scheduler")
     parser.add_argument("--quick", action="store_true", help="10-case subset")
     parser.add_argument("--cases", nargs="*", help="explicit cases (effect specs, none#k, ...)")
     parser.add_argument("--json-out", help="write the per-case rows as JSON")
@@ -585,23 +594,27 @@ def main(argv=None) -> int:
     return _run_all(run_case, work, args, summary)
 
 
-def _run_all(fn, work, args, summary) -> int:
-    """Run ``fn`` over ``work`` (``--jobs`` processes), print progress and ``summary(rows)``."""
-    t0 = time.perf_counter()
-    rows = []
-    if args.jobs > 1:
-        import multiprocessing as mp
+def _case_task(fn, item):
+    """One case on the executor (``fn`` is the shared payload: ``run_case`` or ``run_cli_case``)."""
+    return fn(item)
 
-        with mp.get_context("fork").Pool(args.jobs) as pool:
-            for row in pool.imap(fn, work):
-                rows.append(row)
-                print(f"[{len(rows)}/{len(work)}] {row['case']}: {row['verdict']} {row['named']}",
-                      file=sys.stderr, flush=True)  # fmt: skip
-    else:
-        for item in work:
-            rows.append(fn(item))
-            print(f"[{len(rows)}/{len(work)}] {item[0]}: {rows[-1]['verdict']} "
-                  f"{rows[-1]['named']}", file=sys.stderr, flush=True)  # fmt: skip
+
+def _run_all(fn, work, args, summary) -> int:
+    """Run ``fn`` over ``work`` on the executor of ``--workers``/``--scheduler``, print a line
+    as each case finishes and ``summary(rows)`` (rows in case order)."""
+    from bayesupdate.parallel_executor import compute_settings, open_executor
+
+    t0 = time.perf_counter()
+    done = []
+
+    def progress(i, row):
+        done.append(i)
+        print(f"[{len(done)}/{len(work)}] {row['case']}: {row['verdict']} {row['named']}",
+              file=sys.stderr, flush=True)  # fmt: skip
+
+    with open_executor(compute_settings(args.workers, args.scheduler)) as executor:
+        print(f"cases on {executor.describe()}", file=sys.stderr, flush=True)
+        rows = executor.map(_case_task, work, fn, progress=progress)
     summary(rows)
     print(f"total wall {time.perf_counter() - t0:.0f} s")
     if args.json_out:

@@ -1,12 +1,16 @@
-"""``discover`` on Dask (bayesupdate.parallel_dask), needs the optional extra ``bayesupdate[dask]``.
+"""``discover`` and ``calibrate`` on Dask (bayesupdate.parallel_dask), needs ``distributed``
+(the ``dask`` extra, also in ``test``).
 
 A ``dask scheduler`` and two ``dask worker`` processes (each with a nanny, one thread) are started
 on 127.0.0.1 at a free port, as a user would by hand; ``bayesupdate discover --scheduler`` must
-give the serial run's JSON bit for bit (verdict, every candidate's evidence, parameters), also
-when a worker is killed while it holds tasks, and on a ``LocalCluster`` of two threaded workers
-talking tcp (``processes=False``: no worker start-up cost, but every task and result still goes
-through the scheduler's serialisation).  A worker with another bayesupdate version, or no
-scheduler at the address, is a one-line error and exit 2."""
+give the serial run's JSON bit for bit (verdict, every candidate's evidence, parameters), and so
+must a ``LocalCluster`` of two threaded workers talking tcp (``processes=False``: no worker
+start-up cost, but every task and result still goes through the scheduler's serialisation), and
+``calibrate --scheduler`` of a user's model (its starts on the workers).  A worker with another
+bayesupdate version, or no scheduler at the address, is a one-line error and exit 2.
+
+These run in CI (tens of seconds, most of it the discoveries).  With BAYESUPDATE_LONG_TESTS=1
+also: a worker killed while it holds tasks changes nothing (one more discovery)."""
 
 import contextlib
 import io
@@ -24,11 +28,20 @@ import pytest
 pytest.importorskip("distributed")
 
 from distributed import Client, LocalCluster  # noqa: E402
-from test_parallel_executor import small_discovery_study  # noqa: E402
+from test_parallel_executor import (  # noqa: E402
+    serial_small_discovery,
+    small_discovery_study,
+    user_model_study,
+)
 
 from bayesupdate.cli import main  # noqa: E402
 
 START_TIMEOUT_S = 120
+TESTS = os.path.dirname(os.path.abspath(__file__))
+long_test = pytest.mark.skipif(
+    not os.environ.get("BAYESUPDATE_LONG_TESTS"),
+    reason="long: set BAYESUPDATE_LONG_TESTS=1 (one more discovery, a worker killed mid-run)",
+)
 
 
 def _free_port() -> int:
@@ -55,8 +68,8 @@ def study(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def serial(study):
-    return _run_json(["discover", study, "--json"])
+def serial(tmp_path_factory):
+    return serial_small_discovery(tmp_path_factory.mktemp("serial"))
 
 
 @pytest.fixture(scope="module")
@@ -64,6 +77,9 @@ def scheduler():
     """Address of a ``dask scheduler`` with two ``dask worker`` processes on 127.0.0.1."""
     address = f"tcp://127.0.0.1:{_free_port()}"
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    # the workers import the user's model module (``test_parallel_executor``) as users' workers
+    # import theirs: from their path
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (TESTS, env.get("PYTHONPATH")) if p)
     python = [sys.executable, "-m"]
     common = ["--no-dashboard"]
     procs = [
@@ -137,6 +153,7 @@ def _kill_a_busy_worker(address: str, done: threading.Event, killed: list) -> No
             time.sleep(0.02)
 
 
+@long_test
 def test_a_worker_killed_mid_run_changes_nothing(study, serial, scheduler):
     done, killed = threading.Event(), []
     watcher = threading.Thread(target=_kill_a_busy_worker, args=(scheduler, done, killed))
@@ -161,6 +178,33 @@ def test_local_cluster_of_two_workers_gives_the_serial_result(study, serial):
         on_dask = _run_json(["discover", study, "--json", "--scheduler", cluster.scheduler_address])
     assert on_dask["compute"]["workers"] == 2
     assert _comparable(on_dask) == _comparable(serial)
+
+
+def test_calibration_starts_on_dask_worker_processes_are_serial_bit_for_bit(tmp_path, scheduler):
+    """``calibrate --scheduler`` of a user's model that cannot batch: its starts on the two
+    ``dask worker`` processes; the JSON (less "compute") is the serial run's."""
+    study = str(user_model_study(tmp_path))
+    serial = _run_json(["calibrate", study, "--json"])
+    on_dask = _run_json(["calibrate", study, "--json", "--scheduler", scheduler])
+    assert serial.pop("compute") == {"kind": "serial", "workers": 1}
+    assert on_dask.pop("compute") == {"kind": "dask", "workers": 2, "scheduler": scheduler}
+    assert on_dask == serial
+    assert 1e-6 < serial["objective"] < 1e-3  # not an exact fit: digits that could move
+
+
+def _cube(offset, x):
+    time.sleep(0.05 * (3 - x))  # later items finish first
+    return offset + x**3
+
+
+def test_dask_map_is_in_submission_order_with_progress_in_arrival_order(scheduler):
+    from bayesupdate.parallel_dask import DaskExecutor
+
+    arrived = []
+    with DaskExecutor(scheduler) as ex:
+        out = ex.map(_cube, range(4), 100, lambda i, r: arrived.append((i, r)))
+    assert out == [100, 101, 108, 127]
+    assert sorted(arrived) == list(enumerate(out))
 
 
 def test_other_bayesupdate_version_on_the_workers_is_refused(study, scheduler, monkeypatch, capsys):

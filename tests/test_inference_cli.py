@@ -59,7 +59,9 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "converged_starts",
         "measured_mass_kg",
         "mass_weight",
+        "compute",
     }
+    assert result["compute"] == {"kind": "serial", "workers": 1}
     assert result["measured_mass_kg"] is None and result["mass_weight"] == 0.0  # none measured
     assert result["targets_hz"] == [4.30, 10.80]
     assert result["objective"] < 1e-14  # two frequencies, two stiffnesses: an exact fit

@@ -185,11 +185,12 @@ def run(args) -> int:
     prepared = prepare(study, effects=tuple(args.effect))
     with open_executor(compute) as executor:
         result = run_calibration(prepared, executor)
+        where = executor.describe()
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
     if args.json:
-        print(json.dumps(calibration_json(result, prepared.problem)))
+        print(json.dumps({**calibration_json(result, prepared.problem), "compute": where}))
     else:
         print(
             f"objective (seed eq. 19): {result.expr:.5g}   starts: {result.converged_starts}"

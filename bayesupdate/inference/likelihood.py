@@ -24,7 +24,10 @@ to get the paired frequencies (``mode``):
 * ``"order-batch"``: frequencies in order from ``predict_frequencies_batch`` (the problem pairs by
   order, or ``pairing="order"`` was asked for).
 * ``"points"``: one ``problem.evaluate`` per point (the problem's pairing, mass term, models
-  without batch support).
+  without batch support).  Given an executor (``LogPosterior(..., executor=...)``), the points
+  of each call are evaluated on it (``parallel.PointEvaluator``: the problem sent to each worker
+  once; evaluations back in point order, so the chain is the serial one bit for bit).  The
+  batched modes always run here: one batched solve beats shipping points to workers.
 
 A point where the model raises or returns NaN gets -inf and is counted in ``failed``.
 """
@@ -43,6 +46,7 @@ from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
+from bayesupdate.parallel import PointEvaluator
 
 PAIRING_CHOICES = ("auto", "tracked", "problem", "order")
 
@@ -88,7 +92,7 @@ class LogPosterior:
     Call with theta (n_walkers, d) where d = number of parameters (+1 for sigma, last column).
     """
 
-    def __init__(self, problem: CalibrationProblem, spec: LikelihoodSpec):
+    def __init__(self, problem: CalibrationProblem, spec: LikelihoodSpec, executor=None):
         self.problem = problem
         self.spec = spec
         self.priors = tuple(p.prior for p in problem.parameters)
@@ -102,6 +106,9 @@ class LogPosterior:
         )
         self.mode = likelihood_mode(problem, spec)
         self.batched = self.mode != "points"
+        self._remote = None  # points mode on an executor (module docstring)
+        if not self.batched and executor is not None and executor.kind != "serial":
+            self._remote = PointEvaluator(problem, executor)
         if self.mode == "shape-batch":
             pairing = problem.pairing
             self._reference = (
@@ -165,8 +172,11 @@ class LogPosterior:
         freqs = np.full((theta.shape[0], n_test), np.nan)
         mass = np.full(theta.shape[0], np.nan)
         use_order = self.spec.pairing == "order"
-        for k, point in enumerate(theta):
-            evaluation = self.problem.evaluate(point)
+        if self._remote is not None:
+            evaluations = self._remote(theta)
+        else:
+            evaluations = (self.problem.evaluate(point) for point in theta)
+        for k, evaluation in enumerate(evaluations):
             if not evaluation.ok:
                 self.last_error = evaluation.error
                 continue

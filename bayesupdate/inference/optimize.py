@@ -20,10 +20,14 @@ A cheap surrogate (the certified reduced basis) may do the search, with the exac
 where a surrogate's small shape error matters most: at the exhaust's surrogate optimum the full
 model's tracked pairing of modes 6 and 7 flips (Expr 0.067 -> 0.078); 60 d exact Nelder-Mead
 evaluations from each end bring it back to the surrogate's value within 1 %.
+
+The starts are independent: each (least squares and polish), and each end's polish on
+``refine``, is one task on an executor (``parallel_executor``: serial, local processes or Dask),
+a pure function of the problem and its start, so the result is the same bits on any executor.
 """
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import optimize, stats
@@ -37,6 +41,7 @@ from bayesupdate.inference.parameter_space import (
 )
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.interrupts import StopRequest
+from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass(frozen=True)
@@ -142,11 +147,15 @@ def unit_box(problem: CalibrationProblem) -> ParameterSpace:
     return ParameterSpace(problem.parameters).linear()
 
 
-def _residual_function(problem: CalibrationProblem, count: EvaluationCount):
-    """r(u): the weighted residuals of ``problem`` over its unit box (eq. 19 plus extra terms).
-    They are relative errors (unit 1): a failed model gets a 1000 % error in each
+def _residual_count(problem: CalibrationProblem) -> int:
+    """Size of the residual vector (eq. 19 terms plus extra terms) of ``problem``."""
+    return problem.residual_vector(problem.evaluate(problem.start)).size
+
+
+def _residual_function(problem: CalibrationProblem, count: EvaluationCount, n_res: int):
+    """r(u): the weighted residuals (n_res,) of ``problem`` over its unit box (eq. 19 plus extra
+    terms).  They are relative errors (unit 1): a failed model gets a 1000 % error in each
     (``parameter_space.FAILED_RELATIVE_ERROR``), counted in ``count``."""
-    n_res = problem.residual_vector(problem.evaluate(problem.start)).size
 
     def residuals_at(theta: np.ndarray) -> np.ndarray | None:
         evaluation = problem.evaluate(theta)
@@ -192,15 +201,32 @@ def _start_points(
     return u_starts
 
 
-def _local_fits(
-    residuals, u_starts: np.ndarray, max_nfev: int | None, polish: bool, stop: StopRequest
-) -> tuple[list, list]:
-    """Bounded trust-region least squares from each start (n, d), each end Nelder-Mead polished
-    (400 d evaluations) when ``polish``: (end points u (d,) each, objectives each)."""
-    d = u_starts.shape[1]
-    ends, objectives = [], []
-    for u0 in u_starts:
-        stop.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
+@dataclass(frozen=True)
+class _Fits:
+    """The shared payload of the start tasks (sent to each worker once): the problem, its
+    residual count, the least-squares budget (``max_nfev``; ``least_squares=False``: none, the
+    ends are only re-evaluated), the Nelder-Mead budget per parameter (0: no polish) and the
+    run's stop request (only the serial executor shares the object itself)."""
+
+    problem: CalibrationProblem
+    n_res: int
+    max_nfev: int | None
+    polish_per_dim: int
+    least_squares: bool = True
+    stop: StopRequest = field(default_factory=StopRequest)
+
+
+def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple[np.ndarray, float, int, int]:
+    """One start (an executor task; item: start u (d,), whether to polish): bounded
+    trust-region least squares, then the bounded Nelder-Mead polish; (end u (d,), objective,
+    evaluations, failures).  A pure function of ``job`` and ``item``: the same bits wherever it
+    runs."""
+    u0, polish = item
+    job.stop.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
+    count = EvaluationCount()
+    residuals = _residual_function(job.problem, count, job.n_res)
+    d = u0.size
+    if job.least_squares:
         fit = optimize.least_squares(
             residuals,
             np.clip(u0, 0.0, 1.0),
@@ -210,14 +236,36 @@ def _local_fits(
             xtol=1e-12,
             ftol=1e-12,
             gtol=1e-12,
-            max_nfev=max_nfev,
+            max_nfev=job.max_nfev,
         )
         end, value = np.clip(fit.x, 0.0, 1.0), float(np.sum(fit.fun**2))
-        if polish:
-            end, value = _nelder_mead_polish(residuals, end, value, max_evaluations=400 * d)
-        ends.append(end)
-        objectives.append(value)
-    return ends, objectives
+    else:
+        end, value = u0, float(np.sum(residuals(u0) ** 2))
+    if polish and job.polish_per_dim:
+        end, value = _nelder_mead_polish(residuals, end, value, job.polish_per_dim * d)
+    return end, value, count.evaluations, count.failed
+
+
+def _run_fits(job: _Fits, items: list, counter: EvaluationCount, executor) -> tuple[list, list]:
+    """``_fit_start`` of every item on ``executor`` (results in item order): (ends, objectives);
+    the tasks' evaluations and failures are added to ``counter``."""
+    stop = job.stop
+    if getattr(executor, "kind", "serial") != "serial":
+        job = replace(job, stop=StopRequest())  # a signal reaches this process, not the workers
+    out = executor_or_serial(executor).map(_fit_start, items, job)
+    stop.check()
+    counter.evaluations += sum(o[2] for o in out)
+    counter.failed += sum(o[3] for o in out)
+    return [o[0] for o in out], [o[1] for o in out]
+
+
+def _local_fits(
+    job: _Fits, u_starts: np.ndarray, counter: EvaluationCount, executor=None
+) -> tuple[list, list]:
+    """Bounded trust-region least squares from each start (n, d), each end Nelder-Mead polished
+    (``job.polish_per_dim`` d evaluations); one task per start on ``executor``
+    (``parallel_executor``; None: here): (end points u (d,) each, objectives each)."""
+    return _run_fits(job, [(u0, True) for u0 in u_starts], counter, executor)
 
 
 def _refined(
@@ -226,25 +274,21 @@ def _refined(
     counter: EvaluationCount,
     ends: list,
     objectives: list,
-) -> None:
+    executor=None,
+) -> tuple[list, list]:
     """Re-evaluate every end point (u, (d,)) of a surrogate ``problem`` on the exact ``refine``
-    and polish those within 5 % of the best there (60 d evaluations); ``ends`` and
-    ``objectives`` are updated in place, ``counter`` counts both models."""
+    and polish those within 5 % of the best there (60 d evaluations), one task per end on
+    ``executor``: (ends, objectives) on ``refine``; ``counter`` counts both models."""
     if refine.names != problem.names or not (
         np.array_equal(refine.lower, problem.lower) and np.array_equal(refine.upper, problem.upper)
     ):
         raise ValueError("calibrate: refine must have the parameters and bounds of problem")
-    d = len(problem.parameters)
-    # one count over both models: a failure of either is reported
-    residuals = _residual_function(refine, counter)
     # ends more than 5 % above the best on the surrogate lie in other basins: re-evaluated
     # exactly, not polished (the surrogate's error is ~1e-4 in frequency)
     near_best = np.asarray(objectives) <= 1.05 * min(objectives)
-    for k, end in enumerate(ends):
-        value = float(np.sum(residuals(end) ** 2))
-        if near_best[k]:
-            end, value = _nelder_mead_polish(residuals, end, value, max_evaluations=60 * d)
-        ends[k], objectives[k] = end, value
+    job = _Fits(refine, _residual_count(refine), None, 60, least_squares=False)
+    items = [(end, bool(near)) for end, near in zip(ends, near_best, strict=True)]
+    return _run_fits(job, items, counter, executor)
 
 
 def _best_evaluation(
@@ -287,6 +331,7 @@ def calibrate(
     settings: CalibrationSettings = CalibrationSettings(),
     refine: CalibrationProblem | None = None,
     stop: StopRequest | None = None,
+    executor=None,
 ) -> CalibrationResult:
     """Point optimum of the fit objective over the parameter bounds (module docstring).
 
@@ -296,18 +341,20 @@ def calibrate(
     60 d evaluations), every end is re-evaluated on it, and the result (objectives, table) is that
     of ``refine``; ``evaluations`` counts both models' evaluations.
     stop : the run's ``interrupts.StopRequest``, checked before each start (None: none).
+    executor : where the starts (and the refine polishes) run, one task each
+    (``parallel_executor``; None: in this process); the result is the same bits on any.
     Returns CalibrationResult.  Model failures are counted in ``failed_evaluations``.
     """
     t0 = time.perf_counter()
     box = unit_box(problem)
     counter = EvaluationCount()
-    residuals = _residual_function(problem, counter)
-    u_starts = _start_points(problem, box, residuals, settings)
-    ends, objectives = _local_fits(
-        residuals, u_starts, settings.max_nfev, settings.polish_ends, stop or StopRequest()
-    )
+    n_res = _residual_count(problem)
+    u_starts = _start_points(problem, box, _residual_function(problem, counter, n_res), settings)
+    polish = 400 if settings.polish_ends else 0  # Nelder-Mead budget per parameter
+    job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest())
+    ends, objectives = _local_fits(job, u_starts, counter, executor)
     if refine is not None:
-        _refined(refine, problem, counter, ends, objectives)
+        ends, objectives = _refined(refine, problem, counter, ends, objectives, executor)
         problem = refine
     ends = np.array(ends)
     objectives = np.array(objectives)
@@ -353,8 +400,6 @@ def pareto_front_mass(
     For each weight W the fit minimises Expr + W ((m - m_T)/m_T)^2.  Returns one dict per weight:
     {"mass_weight", "expr", "mass_kg", "mass_error_pct", "parameters", "swapped"}.
     """
-    from dataclasses import replace
-
     from bayesupdate.inference.problem import ObjectiveSpec
 
     weights = np.geomspace(1e-3, 1e3, 13) if mass_weights is None else np.asarray(mass_weights)

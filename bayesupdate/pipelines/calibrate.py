@@ -9,7 +9,8 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     """Multi-start optimum.  Built-in FE models search on their certified reduced basis and
     polish every end point on the full model (``calibrate(..., refine=...)``), so the result is
     the full model's; ``sampler.reduced = false`` (``--full``) searches on full solves.  The
-    reduced basis's full solves run on ``executor`` (``parallel_executor``; None: here)."""
+    reduced basis's full solves, the starts and the polishes run on ``executor``
+    (``parallel_executor``; None: here)."""
     opt = prepared.study.optimizer
     cfg = prepared.study.sampler
     search, rom = sampling_problem(
@@ -18,4 +19,5 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     settings = CalibrationSettings(
         starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=opt.polish
     )
-    return calibrate(search, settings, refine=None if rom is None else prepared.problem)
+    refine = None if rom is None else prepared.problem
+    return calibrate(search, settings, refine=refine, executor=executor)

@@ -43,7 +43,7 @@ class SamplingOptions:
     progress : show a progress bar.
     stop : the run's ``interrupts.StopRequest`` (the command's signal handler sets it); None:
     the run cannot be stopped but by an exception.
-    compute : where the reduced basis's full solves run (``parallel_executor``).
+    compute : where the independent work runs (``parallel_executor``; ``run_sampling``).
     """
 
     out: str | Path | None = None
@@ -74,17 +74,23 @@ def run_sampling(
     options: SamplingOptions = SamplingOptions(),
     calibration: CalibrationResult | None = None,
 ) -> SamplingRun:
-    """Optimum (unless ``calibration`` is given), then the posterior (module docstring)."""
+    """Optimum (unless ``calibration`` is given), then the posterior (module docstring), with
+    the independent work (the reduced basis's solves, the optimum's starts, the walkers of a
+    model that cannot batch) on the executor of ``options.compute``."""
+    with open_executor(options.compute) as executor:
+        return _run_sampling(prepared, options, calibration, executor)
+
+
+def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
     study = prepared.study
     config = study.to_dict()
     state = _resume_state(options, config)
     cfg = study.sampler
     # the reduced model first: the multi-start optimum is then cheap too (checked in full at
     # the optimum below; a miss there falls back to full solves)
-    with open_executor(options.compute) as executor:
-        problem, rom = sampling_problem(
-            prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
-        )
+    problem, rom = sampling_problem(
+        prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
+    )
     if calibration is None:
         opt = study.optimizer
         # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the
@@ -92,13 +98,13 @@ def run_sampling(
         settings = CalibrationSettings(
             starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False
         )
-        calibration = calibrate(problem, settings, stop=options.stop)
+        calibration = calibrate(problem, settings, stop=options.stop, executor=executor)
     if rom is not None:
         rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
         problem = replace(problem, model=rom)
         if not rom.certified:
             problem, rom = prepared.problem, None
-    log_post = LogPosterior(problem, prepared.likelihood)
+    log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
     screen = (
         screening_posterior(problem, rom, prepared.likelihood, cfg.reduced_tol)
         if cfg.screen

@@ -118,6 +118,7 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
     assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 500) * 16 + 3 * 16
     assert result["wall_s"] > 0
     assert len(result["autocorr_time"]) == 2
+    assert result["compute"] == {"kind": "serial", "workers": 1}
     with h5py.File(outs[0]) as a, h5py.File(outs[1]) as b:
         assert a.attrs["status"] == "complete"
         for key in ("chain", "log_prob", "predictions/predictive_hz", "predictions/frequencies_hz"):

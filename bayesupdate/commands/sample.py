@@ -45,7 +45,7 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 "autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
 "screen": {"size", "max_rel_error", "evaluations"} | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
-"adapt_steps"}, ...}."""
+"adapt_steps"}, "compute": {"kind", "workers"}, ...}."""
 
 
 def add_arguments(parser) -> None:
@@ -91,6 +91,7 @@ def run(args) -> int:
         print(f"sample: stopped after {posterior.chain.shape[0]} steps{where}", file=sys.stderr)
         raise KeyboardInterrupt
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
+    out["compute"] = run.compute
     means = {k: v["mean"] for k, v in out["parameters"].items()}
     write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table

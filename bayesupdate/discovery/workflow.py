@@ -393,11 +393,11 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
 
 
 def _prepare(
-    model, data, settings: DiscoverySettings, parameters, baseline, pairing: str, say
+    model, data, settings: DiscoverySettings, parameters, baseline, pairing: str, say, executor
 ) -> tuple[object, list, object]:
     """The calibration problem (``pairing`` "auto" resolved as ``discover`` says), the library's
     effects and the baseline ``CalibrationResult`` (calibrated here from ``baseline_starts``
-    starts, seeded by ``seed``, when none is given)."""
+    starts, seeded by ``seed``, on ``executor``, when none is given)."""
     if pairing == "auto":
         pairing = "mac" if data.shapes is not None else "order"
     problem = build_problem(model, data, parameters, pairing=pairing)
@@ -407,7 +407,9 @@ def _prepare(
         starts = settings.refit.baseline_starts
         say(f"baseline calibration ({starts} starts)")
         baseline = calibrate(
-            problem, CalibrationSettings(starts=starts, seed=settings.seed, max_nfev=100)
+            problem,
+            CalibrationSettings(starts=starts, seed=settings.seed, max_nfev=100),
+            executor=executor,
         )
     return problem, effects, baseline
 
@@ -597,8 +599,8 @@ def discover(
     predictive_rel_var : (m,) posterior-predictive variance of the relative frequencies, if a
     posterior is available (widens the flagging z-scores).
     progress : optional callable(str) for progress messages.
-    executor : where the score tests and the refits run (``parallel_executor``; None: in this
-    process); the result is the same bits on every executor.
+    executor : where the baseline's starts, the score tests and the refits run
+    (``parallel_executor``; None: in this process); the result is the same bits on every executor.
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise: test
     frequencies without shapes are sorted, so the honest likelihood compares them with the
     model's sorted frequencies.  (Shape tracking against the reference design, the calibration
@@ -608,7 +610,9 @@ def discover(
     settings = settings or DiscoverySettings()
     say = progress or (lambda message: None)
     t0 = time.perf_counter()
-    problem, effects, baseline = _prepare(model, data, settings, parameters, baseline, pairing, say)
+    problem, effects, baseline = _prepare(
+        model, data, settings, parameters, baseline, pairing, say, executor
+    )
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)
     flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)

@@ -60,13 +60,15 @@ class SamplingRun:
     calibration : the optimum the walkers started from.  posterior : the chain and its
     diagnostics (``posterior.interrupted`` after a stop request).  summary : per-parameter
     diagnostics (``inference.diagnostics.summarise``), {} when interrupted.  predictions : the
-    posterior predictive (``posterior_predictive``), {} when interrupted.
+    posterior predictive (``posterior_predictive``), {} when interrupted.  compute : where the
+    independent work ran (the executor's ``describe()``: {"kind", "workers"[, "scheduler"]}).
     """
 
     calibration: CalibrationResult
     posterior: PosteriorResult
     summary: dict
     predictions: dict
+    compute: dict | None = None
 
 
 def run_sampling(
@@ -78,7 +80,8 @@ def run_sampling(
     the independent work (the reduced basis's solves, the optimum's starts, the walkers of a
     model that cannot batch) on the executor of ``options.compute``."""
     with open_executor(options.compute) as executor:
-        return _run_sampling(prepared, options, calibration, executor)
+        run = _run_sampling(prepared, options, calibration, executor)
+        return replace(run, compute=executor.describe())
 
 
 def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:

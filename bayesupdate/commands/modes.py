@@ -15,12 +15,15 @@ Examples:
   bayesupdate modes --model exhaust
   bayesupdate modes --model exhaust --set t_hot_pipe=2.08mm --set rho_catalyst=8.9e-9t/mm3 --json
   bayesupdate modes --model exhaust.bdf --modes 10 --json
+  bayesupdate modes --model exhaust_shell --sed-map sed/
 
 A Nastran deck is solved in its own units (mass_kg is then in the deck's mass unit; the JSON's
 "units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count.
 
 Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
-each mode's frequency and the share of its strain energy in each part (seed section 3.2)."""
+each mode's frequency and the share of its strain energy in each part (seed section 3.2).
+--sed-map DIR writes, for a model with shells, one PNG per mode: the modal strain energy per unit
+area of every shell element drawn on the mesh (seed Fig. 6)."""
 
 
 def add_arguments(parser):
@@ -40,6 +43,12 @@ def add_arguments(parser):
     parser.add_argument(
         "--geometry", default=None, help="exhaust only: 'best' or the index of a runner-up geometry"
     )
+    parser.add_argument(
+        "--sed-map",
+        default=None,
+        metavar="DIR",
+        help="models with shells: write each mode's strain-energy density map (PNG) into DIR",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -56,7 +65,11 @@ def run(args) -> int:
         raise BayesUpdateError(f"model {args.model!r} is not an FE model; 'modes' needs one")
     deck = model.structure.metadata.get("nastran", {})
     n_modes = args.modes or deck.get("n_modes") or 12
-    result = model.solve(params, n_modes=n_modes, energies=not args.json)
+    if args.sed_map is not None:
+        _check_sed_map(model, args)
+    result = model.solve(params, n_modes=n_modes, energies=not args.json or bool(args.sed_map))
+    if args.sed_map is not None:
+        _write_sed_maps(model, result, args.sed_map)
     if args.json:
         out = {
             "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
@@ -71,6 +84,37 @@ def run(args) -> int:
         return 0
     print(format_modes_table(result))
     return 0
+
+
+def _check_sed_map(model, args) -> None:
+    """--sed-map needs shells and a folder it may write into (checked before the solve)."""
+    from pathlib import Path
+
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.report.energy_maps import has_shells
+
+    if not has_shells(model.structure):
+        raise BayesUpdateError(
+            f"--sed-map: model {args.model!r} has no shell elements; the map needs a shell "
+            "model (e.g. --model exhaust_shell)"
+        )
+    folder = Path(args.sed_map)
+    if folder.exists() and not folder.is_dir():
+        raise BayesUpdateError(f"--sed-map {folder}: is a file; give a folder")
+
+
+def _write_sed_maps(model, result, folder) -> None:
+    """One PNG per mode into ``folder``; the files go to stderr (stdout keeps the table/JSON)."""
+    import sys
+
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.report.energy_maps import write_energy_density_maps
+
+    try:
+        written = write_energy_density_maps(model.structure, result, folder)
+    except OSError as exc:
+        raise BayesUpdateError(f"--sed-map {folder}: cannot write there ({exc.strerror})") from None
+    print(f"strain-energy density maps: {len(written)} PNG files in {folder}", file=sys.stderr)
 
 
 def _geometry(text):

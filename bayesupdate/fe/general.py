@@ -94,12 +94,15 @@ class GeneralAssembler:
         # thickness matter
         t_bound = shell_keys[:, 0] >= 0 if shell_keys.shape[1] else np.zeros(sh.n_elements, bool)
         t0 = np.where(t_bound, 0.0, sh.thickness)
+        # a bound element's thickness is factor x the parameter: factor^p goes into its terms
+        scale = np.where(t_bound, sh.factor(), 1.0)
         key = np.column_stack([shell_keys, sh.part, sh.E, sh.rho, t0])
         _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
         self.group_rep = first
+        self.group_scale = scale[first]
         self.terms = []  # (union positions, K {p: values}, M_nsm values, M {p: values}) per group
         for g in range(first.size):
-            Kp, Mp = self.shells.power_data(group.ravel() == g)
+            Kp, Mp = self.shells.power_data(group.ravel() == g, scale)
             take = _nonzero_take(self.shells.pattern.nnz, (*Kp.values(), *Mp.values()))
             m0 = take(Mp.pop(0)) if 0 in Mp else np.zeros(take(self._pos_shell).size)
             self.terms.append(
@@ -113,12 +116,14 @@ class GeneralAssembler:
 
     def shell_data(self, t, E, rho):
         """(K data, M data) (nnz,) of the shells with per-element thickness t [m], E [Pa], rho
-        [kg/m^3] (n_shell,), uniform within each group (as the FE model's bindings make them)."""
+        [kg/m^3] (n_shell,), uniform within each group (as the FE model's bindings make them;
+        where a parameter binds the thickness, t / thickness_factor is uniform)."""
         K, M = np.zeros(self.nnz), np.zeros(self.nnz)
         rep = self.group_rep
         e_factor = E[rep] / self.structure.shells.E[rep]
+        theta = t[rep] / self.group_scale
         for (pos, Kp, m0, Mp), tg, fe, rg in zip(
-            self.terms, t[rep], e_factor, rho[rep], strict=True
+            self.terms, theta, e_factor, rho[rep], strict=True
         ):
             K[pos] += fe * sum(tg**p * v for p, v in Kp.items())
             M[pos] += m0 + rg * sum(tg**p * v for p, v in Mp.items())

@@ -378,12 +378,15 @@ class FEModel:
         return ElementProperties(t, rho, E, bend, ms, ss)
 
     def shell_properties(self, params: Mapping[str, float] | None = None):
-        """Per-shell (thickness [m], E [Pa], rho [kg/m^3]) arrays (n_shell,) at ``params``."""
+        """Per-shell (thickness [m], E [Pa], rho [kg/m^3]) arrays (n_shell,) at ``params``; a
+        bound thickness is the parameter times the shells' ``thickness_factor``."""
         p = self.full_parameters(params)
         sh = self.structure.shells
         t, E, rho = sh.thickness.copy(), sh.E.copy(), sh.rho.copy()
         for name, mask in self._shell_masks.items():
             _set_material(self.bindings[name].property, p[name], mask, (t, rho, E), sh.E)
+            if self.bindings[name].property == "thickness":
+                t[mask] *= sh.factor()[mask]
         return t, E, rho
 
     # -- analysis ----------------------------------------------------------------------------

@@ -229,9 +229,11 @@ class ShellAssembly:
         pat = self.pattern
         return pat.csr(pat.data([k for k, _ in mats])), pat.csr(pat.data([m for _, m in mats]))
 
-    def power_data(self, elements=None):
+    def power_data(self, elements=None, scale=None):
         """Per-power CSR data of the elements ``elements`` (bool/int index, default all):
-        (K {p: (nnz,)}, M {p: (nnz,)}) with K = sum_p t^p K_p for a common thickness t.
+        (K {p: (nnz,)}, M {p: (nnz,)}) with K = sum_p t^p K_p for a common thickness t;
+        ``scale`` (n_el,) (default ones): element e has thickness scale_e t, so its power-p
+        matrices are multiplied by scale_e^p.
 
         Elements go through ``power_matrices`` and ``to_global`` in chunks of ``shell.CHUNK`` (each
         chunk vectorised), so the (n, d, d) temporaries of the seven powers never exist for the
@@ -239,6 +241,7 @@ class ShellAssembly:
         m = self.mesh
         sel = np.zeros(m.n_elements, bool)
         sel[np.arange(m.n_elements) if elements is None else elements] = True
+        scale = np.ones(m.n_elements) if scale is None else np.asarray(scale, dtype=float)
         store = ({}, {})
         for b, (idx, _, f, p) in enumerate(self.families):
             rows = np.flatnonzero(sel[idx])
@@ -251,6 +254,7 @@ class ShellAssembly:
                 for out, by_power in zip(store, mats, strict=True):
                     for power, X in by_power.items():
                         if np.any(X):
+                            X = X * (scale[i] ** power)[:, None, None]
                             _add_into(
                                 out, power, pos[k], shell.to_global(X, f.R[k]), self.pattern.nnz
                             )
@@ -313,7 +317,10 @@ class ThicknessParametrisation:
 class ShellElements:
     """The shell elements of a ``Structure`` (global node numbers, quads first): quads (nq, 4),
     trias (nt, 3), and per element (nq + nt,) part index, thickness [m], E [Pa], nu,
-    rho [kg/m^3], offset [m], offset_ratio [-], nsm [kg/m^2] as in ``ShellMesh``."""
+    rho [kg/m^3], offset [m], offset_ratio [-], nsm [kg/m^2] as in ``ShellMesh``;
+    thickness_factor (nq + nt,) or None (all 1): the element's thickness over its part's
+    thickness parameter, where one binds it (t_e = factor_e theta: caps of another gauge than the
+    mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep)."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -325,10 +332,17 @@ class ShellElements:
     offset: np.ndarray
     offset_ratio: np.ndarray
     nsm: np.ndarray
+    thickness_factor: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
         return len(self.quads) + len(self.trias)
+
+    def factor(self) -> np.ndarray:
+        """(n_el,) ``thickness_factor`` (ones where it is None)."""
+        if self.thickness_factor is None:
+            return np.ones(self.n_elements)
+        return np.asarray(self.thickness_factor, dtype=float)
 
     def mesh(self, nodes: np.ndarray, **changes) -> ShellMesh:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes

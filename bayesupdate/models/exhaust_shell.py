@@ -11,7 +11,10 @@ pipe's radius, and is joined to every node of the hole's ring by an RBE2 spider 
 components). A closed tube welded into the hole is far stiffer in its own section plane than the
 cap sheet, so a rigid ring is the welded pipe; the cap around it flexes with its own thickness, and
 that is the joint stiffness the beam model lumps into springs. (An RBE3 would add no stiffness and
-leave the ring free to ovalise, which a welded pipe does not allow.) The sensors on the shell
+leave the ring free to ovalise, which a welded pipe does not allow.)  At the main muffler's
+inlet the ring is an oval collar (fitted width and height: the pipe's welded footprint, a formed
+neck or doubler), which makes that joint stiffer in vertical than in horizontal bending, as seed
+Table 1's modes 9/10 (H5 71.0, V5 88.6 Hz) need. The sensors on the shell
 bodies read an RBE3 reference node on the body axis (the weighted rigid motion of the mantle ring
 there, no stiffness added), so they measure the body's cross-section motion at the beam model's
 points.
@@ -24,10 +27,13 @@ welded over a patch of the mantle (RBE2 from that node to the mantle nodes withi
 non-structural mass spread over its sheets; their amount closes the 12.29 kg budget.
 
 Design variables (seed Table 3): ``t_hot_pipe``/``t_cold_pipe`` -> the pipes' beam walls;
-``t_main_muffler`` -> every sheet of the main muffler (mantle, caps, baffles: one sheet gauge);
+``t_main_muffler`` -> every sheet of the main muffler (mantle and baffles at it, the caps at a
+fixed fitted ratio of it: ``fe``'s per-element ``thickness_factor``);
 ``rho_catalyst``/``rho_intermediate_muffler`` -> the density of those bodies' shells (mantle and
 caps).  Shell thickness and density enter K and M as exact sums of powers (``fe.general``).
 """
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -38,6 +44,7 @@ from bayesupdate.models import exhaust
 from bayesupdate.models.exhaust_shell_geometry import (
     MESH_DENSITY_DEFAULT,
     check_mesh_density,
+    inlet_collar,
     shell_geometry,
 )
 from bayesupdate.models.exhaust_shell_mesh import oval_body
@@ -55,9 +62,10 @@ _SPIDER = "123456"
 def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_c, baffles=()):
     """A closed oval body (``key`` in cat, im, mm) from the pipe end node ``inlet`` along x.
 
-    Walls: mantle ``{key}_wall``, caps and baffles ``{key}_cap_wall``; the caps are cones of
-    depth ``{key}_cone``; internal tubes (``_TUBES``) join hole rings; both caps' holes sit at
-    (``{key}_pipe_dy``, ``{key}_pipe_dz``) [m] from the body's axis (0 if absent).  Returns
+    Walls: mantle and baffles ``{key}_wall``, caps at ``_thickness_factor`` of it; the caps are
+    cones of depth ``{key}_cone``; internal tubes (``_TUBES``) join hole rings; both caps' holes
+    sit at (``{key}_pipe_dy``, ``{key}_pipe_dz``) [m] from the body's axis (0 if absent), the
+    main muffler's inlet hole is its oval collar (``_collar``).  Returns
     (outlet pipe node at the outlet cap centre, axis nodes (RBE3) at the interior mantle rings on
     the pipe line, the body mesh and its structure node numbers)."""
     length, width, height = g[f"{key}_length"], g[f"{key}_width"], g[f"{key}_height"]
@@ -78,8 +86,10 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
         [x - depth for x in fixed],
         cone=depth,
         offset=offset,
+        collar=_collar(g, key),
     )
-    thickness = np.where(body.surface == 0, g[f"{key}_wall"], g[f"{key}_cap_wall"])
+    factor = _thickness_factor(g, key, body)
+    thickness = g[f"{key}_wall"] * factor
     part = _PART[key]
     ids = b.add_shells(body.nodes, body.quads, thickness=thickness, material=material, part=part)
     outlet = b.add_node(x0 + (length, 0.0, 0.0))
@@ -97,6 +107,27 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
         b.add_rbe3(node, ids[body.rings[j]])
         axis.append(node)
     return outlet, axis, body, ids
+
+
+def _collar(g: dict, key: str):
+    """Semi-axes (y, z) [m] of the inlet cap's collar (the main muffler's only), or None."""
+    return inlet_collar(g) if key == "mm" else None
+
+
+def _thickness_factor(g: dict, key: str, body) -> np.ndarray:
+    """(n_quads,) each sheet's thickness over the body's mantle wall: 1 on the mantle and the
+    baffles, the caps' gauge ratio on the caps (``{key}_cap_wall`` / ``{key}_wall``, for the main
+    muffler ``mm_cap_ratio``), times ``mm_bead_factor`` on the main muffler's inlet cap within
+    ``mm_bead_width`` / 2 of the vertical line through its hole (a vertical bead band)."""
+    ratio = g[f"{key}_cap_wall"] / g[f"{key}_wall"] if key != "mm" else g["mm_cap_ratio"]
+    factor = np.where(body.surface == 1, ratio, 1.0)
+    if key == "mm":
+        centre = body.nodes[body.quads].mean(axis=1)
+        inlet = (body.surface == 1) & (centre[:, 0] < body.stations.mean())
+        hole_y = body.nodes[body.holes[0], 1].mean()
+        band = inlet & (np.abs(centre[:, 1] - hole_y) < 0.5 * g["mm_bead_width"])
+        factor = np.where(band, factor * g["mm_bead_factor"], factor)
+    return factor
 
 
 #: internal tubes as (disc, disc) pairs (0 inlet cap, 1 outlet cap, 2.. baffles): the
@@ -195,6 +226,11 @@ def build_exhaust_shell_structure(g: dict, mesh_density: float = MESH_DENSITY_DE
     _downstream(b, g, mesh_density, path)
     s_path = _place_sensors(b, g, path)
     structure = b.build()
+    # t_main_muffler binds the main muffler's sheets: each at its own fixed fraction of it
+    sh = structure.shells
+    mm = sh.part == structure.part_index("main_muffler")
+    factor = np.where(mm, sh.thickness / g["mm_wall"], 1.0)
+    structure = replace(structure, shells=replace(sh, thickness_factor=factor))
     m_int = _internal_mass(structure)
     structure = _with_internal_mass(structure, m_int)
     structure.metadata.update(
@@ -226,8 +262,6 @@ def _internal_mass(structure) -> float:
 
 def _with_internal_mass(structure, m_int: float):
     """The main muffler's internals as non-structural mass [kg/m^2] on all its sheets."""
-    from dataclasses import replace
-
     if m_int < 0:
         raise BayesUpdateError(
             f"exhaust_shell geometry: the structure alone weighs {MEASURED_MASS_KG - m_int:.2f} kg"

@@ -98,14 +98,26 @@ def _add_layer(x, at, step, spacing, protected=()) -> np.ndarray:
 
 
 def oval_body(
-    width, height, length, r0, n_c, baffles=(), x0=(0.0, 0.0, 0.0), fixed=(), cone=0.0, offset=None
+    width,
+    height,
+    length,
+    r0,
+    n_c,
+    baffles=(),
+    x0=(0.0, 0.0, 0.0),
+    fixed=(),
+    cone=0.0,
+    offset=None,
+    collar=None,
 ):
     """``OvalBodyMesh`` of a closed oval body: mantle from x0 to x0 + length, two end caps and
     baffles at the axial positions ``baffles`` [m from x0], all with a hole of radius ``r0`` [m];
     element size about ``size`` [m]; ``fixed`` extra mantle ring positions [m from x0].
     ``cone`` [m]: the caps' hole rings stand that far out of the mantle's ends (conical caps, as
     on a catalyst can; 0 = flat caps).  ``offset`` (2,) [m]: (y, z) of both caps' hole centres
-    from the body axis (off-centre pipes; None = centred); the baffles' holes stay centred."""
+    from the body axis (off-centre pipes; None = centred); the baffles' holes stay centred.
+    ``collar`` (2,) [m]: semi-axes (y, z) of the inlet cap's hole ring (an oval collar welded
+    around the pipe; None = the circle of radius ``r0``)."""
     x0 = np.asarray(x0, dtype=float)
     size = ASPECT * oval_perimeter(width, height) / n_c
     layer = size / (4 * ASPECT)
@@ -136,8 +148,9 @@ def oval_body(
         surface.append(np.full(len(q), 1 if d < 2 else 2))
         rise = {0: -cone, 1: cone}.get(d, 0.0) * (1 - s[:-1])  # conical caps
         oy, oz = (cy, cz) if d < 2 else (0.0, 0.0)
-        disc_y = (1 - s)[:, None] * (r0 * cos + oy) + s[:, None] * a * cos  # (n_ring + 1, n_c)
-        disc_z = (1 - s)[:, None] * (r0 * sin + oz) + s[:, None] * b * sin
+        ry, rz = collar if (d == 0 and collar is not None) else (r0, r0)
+        disc_y = (1 - s)[:, None] * (ry * cos + oy) + s[:, None] * a * cos  # (n_ring + 1, n_c)
+        disc_z = (1 - s)[:, None] * (rz * sin + oz) + s[:, None] * b * sin
         xs = np.repeat(xd + rise, n_c)
         pts = np.stack([xs, disc_y[:-1].ravel(), disc_z[:-1].ravel()])
         nodes.append(pts.T)

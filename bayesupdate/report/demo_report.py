@@ -268,10 +268,17 @@ def _discovery_section(title, part: DiscoveryPart, plots, out) -> Section:
     return Section(title, tuple(blocks))
 
 
+#: the modes whose strain-energy density maps a report shows (the seed shows modes 1 and 2)
+SED_MAP_MODES = 4
+
+
 def _fe_figures(fe: FePart, folder: Path) -> list:
-    from bayesupdate.report import fe_figures
+    from bayesupdate.report import energy_maps, fe_figures
 
     structure, result = fe.model.structure, fe.result
+    maps = []
+    if energy_maps.has_shells(structure):  # a shell model: the seed's Fig. 6 for the first modes
+        maps = energy_maps.write_energy_density_maps(structure, result, folder, SED_MAP_MODES)
     return [
         (
             fe_figures.plot_layout(structure, folder / "fe_layout.png"),
@@ -285,6 +292,7 @@ def _fe_figures(fe: FePart, folder: Path) -> list:
             fe_figures.plot_strain_energy(result, folder / "fe_strain_energy.png"),
             "Modal strain energy per part (seed section 3.2).",
         ),
+        *maps,
     ]
 
 
@@ -354,11 +362,17 @@ def demo_figures(results: DemoResults) -> dict:
     }
 
 
-def write_demo_report(results: DemoResults) -> tuple[Path, Path]:
-    """Figures, then report.html and report.md in ``results.settings.out``; returns the two."""
+def write_demo_report(results: DemoResults, comparison: dict | None = None) -> tuple[Path, Path]:
+    """Figures, then report.html and report.md in ``results.settings.out``; returns the two.
+    ``comparison``: the two exhausts' records (``pipelines.exhaust_comparison``), shown after the
+    FE section when given."""
     figures = demo_figures(results)
     settings, out = results.settings, results.settings.out
     sections = [_fe_section(results.fe, figures["fe"], out)]
+    if comparison is not None:
+        from bayesupdate.report.exhaust_comparison import comparison_section
+
+        sections.append(comparison_section(comparison, out, out / "figures"))
     sections += _calibration_sections(
         "seed", "Seed case (Table 2)", results.seed, figures["seed"], out
     )

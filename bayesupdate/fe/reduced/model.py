@@ -14,6 +14,7 @@ import numpy as np
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced import certification, coarsening
+from bayesupdate.fe.reduced import mass as reduced_mass
 from bayesupdate.fe.reduced.certification import UNBUILT, Certificate, Certification
 from bayesupdate.fe.reduced.settings import ReducedSettings
 from bayesupdate.model_protocol import Prediction
@@ -270,7 +271,7 @@ class ReducedFEModel:
         phi = basis.V @ y[0]
         idx = np.argmax(np.abs(phi), axis=0)
         phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
-        mass, _ = self.fe.total_mass(p)  # validates the values
+        mass = reduced_mass.total_mass(self.fe, p)  # validates the values; no K, M assembly
         freqs = np.sqrt(np.maximum(lam[0], 0.0)) / (2 * np.pi)
         return Prediction(freqs, self.fe.sensor_shapes(phi), self.fe.structure.sensor_labels, mass)
 

@@ -1,0 +1,85 @@
+"""The total mass of a general structure (shells) without assembling K and M.
+
+The total mass is the linear functional m(M) = (1/3) sum_{i=x,y,z} r_i^T M r_i of the mass
+matrix, r_i the rigid translations (``GeneralAssembler.total_mass``).  M is an exact affine sum
+(``reduced.shell_terms``): per shell group g with density rho_g and thickness parameter theta_g,
+M_g = M_nsm + rho_g sum_p theta_g^p M_p, so
+
+    m(theta) = m_beams(theta) + m(M_lines) + sum_g [m(M_nsm,g) + rho_g sum_p theta_g^p m(M_p,g)],
+
+the scalars m(.) computed once.  The beams and point masses keep their own exact formula
+(rho A(t) L and the point masses, ``Assembler.total_mass``), equal to the functional of their
+assembled M: a rigid translation carries an element's mass alone.  One evaluation is a few
+array operations on the shells' property arrays instead of an assembly of the full K and M.
+"""
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.fe.assembly import check_properties
+from bayesupdate.fe.model import FEModel
+
+
+def _translational_mass(g, pos: np.ndarray, values: np.ndarray) -> float:
+    """m(X) of the matrix with ``values`` on the general CSR positions ``pos``: the entries
+    coupling the same translation direction of two nodes (DOF index mod 6 < 3, equal)."""
+    rows, cols = g.rows[pos] % 6, g.cols[pos] % 6
+    same = (rows == cols) & (rows < 3)
+    return float(values[same].sum() / 3.0)
+
+
+@dataclass(frozen=True, eq=False)
+class ShellMassTerms:
+    """Per shell group: ``nsm`` m(M_nsm,g) (n_groups,) and ``powers`` {p: m(M_p,g) (n_groups,)}
+    [kg per unit density and theta^p]; ``lines`` m(M_lines) [kg] (general beams, rods).  Holds
+    no reference to its FE model (it is the value of a weak-keyed cache on that model)."""
+
+    lines: float
+    nsm: np.ndarray
+    powers: dict
+
+    @classmethod
+    def of(cls, fe: FEModel) -> "ShellMassTerms":
+        g = fe.general
+        line_M = g.line_data()[1]
+        lines = _translational_mass(g, np.arange(g.nnz), line_M)
+        nsm, powers = [], {}
+        if fe.structure.shells is not None:
+            for k, (pos, _, m0, Mp) in enumerate(g.terms):
+                nsm.append(_translational_mass(g, pos, m0))
+                for p, v in Mp.items():
+                    powers.setdefault(p, np.zeros(len(g.terms)))[k] = _translational_mass(g, pos, v)
+        return cls(lines, np.array(nsm), powers)
+
+    def total_mass(self, fe: FEModel, params) -> float:
+        """Total mass [kg] of ``fe`` (the model these terms are of) at ``params`` (name -> SI
+        value), the values validated as ``FEModel.total_mass`` validates them."""
+        g = fe.general
+        props = fe.element_properties(params)
+        check_properties(fe.structure, props)
+        with np.errstate(invalid="ignore", divide="ignore"):  # its CoG is 0/0 without beams
+            m = g.beams.total_mass(props)[0] + self.lines
+        if fe.structure.shells is None:
+            return m
+        t, _, rho = fe.shell_properties(params)
+        rep = g.group_rep
+        theta, rho_g = t[rep] / g.group_scale, rho[rep]
+        shells = sum(theta**p * v for p, v in self.powers.items())
+        return m + float(np.sum(self.nsm + rho_g * shells))
+
+
+_TERMS: "weakref.WeakKeyDictionary[FEModel, ShellMassTerms]" = weakref.WeakKeyDictionary()
+
+
+def total_mass(fe: FEModel, params) -> float:
+    """Total mass [kg] of ``fe`` at ``params`` (name -> SI value, all names): ``FEModel.total_mass``
+    on the banded beam path (no assembly there), the per-term masses on a general structure,
+    computed once per FE model (the reduced models of one FE model share them)."""
+    if fe.general is None:
+        return fe.total_mass(params)[0]
+    terms = _TERMS.get(fe)
+    if terms is None:
+        terms = _TERMS[fe] = ShellMassTerms.of(fe)
+    return terms.total_mass(fe, params)

@@ -1,0 +1,195 @@
+"""The certified reduced basis of the shell exhaust at its default mesh (density 32, 28,386 DOFs),
+and the posterior on it against the beam exhaust in the same run (issue 20, "Must show").
+
+BLAS is pinned to one thread (set below, before numpy is imported).
+
+Run (slow: the basis's full solves, then two posteriors; about an hour on the shared machine):
+  .venv/bin/python benchmarks/exhaust_shell_basis.py
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --mesh-density 16 --steps 500  # a quick look
+
+Path (the CLI's, ``pipelines.sample.run_sampling`` / ``benchmarks/posterior_speed.py``): the model
+(``get_model``), the calibration problem against seed Table 2 (tracked pairing at the reference
+design, 12 test modes + 2 extra, the measured mass kept as in the demo), the certified reduced
+basis over the whole bounds box (``pipelines.surrogates.sampling_problem``:
+``fe.reduced.reduced_model_for``, tol 1e-4, default settings), then:
+  (a) the basis: size, its largest relative frequency error on the validation points (the error
+      bound it is certified to), build time (wall and CPU);
+  (b) speed: the median time of one full sparse solve (``FEModel.solve``, the modes the pairing
+      needs) against one reduced solve (``ReducedFEModel.predict``) and per point of a batch of
+      ``--batch`` points (``predict_frequencies_batch``), at fresh random points of the box,
+      with the largest relative frequency difference there;
+  (c) the posterior, for the shell and the beam exhaust one after the other in this process (same
+      load): the optimum (``--starts`` starts on the basis), the basis certified at it, delayed
+      acceptance on a coarser basis, emcee (mixture moves, logit coordinates) for a fixed budget
+      of ``--steps`` x ``--walkers`` (stopping earlier only if R-hat <= 1.01 and ESS >= 1000 are
+      met); wall and CPU time of each stage, exact and screening evaluations, R-hat and ESS.
+"""
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from dataclasses import replace  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from bayesupdate.inference.data import paper_ema  # noqa: E402
+from bayesupdate.inference.diagnostics import summarise  # noqa: E402
+from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noqa: E402
+from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
+from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
+from bayesupdate.inference.problem import ObjectiveSpec, build_problem  # noqa: E402
+from bayesupdate.inference.sampling import SamplerSettings, sample_posterior  # noqa: E402
+from bayesupdate.models import get_model  # noqa: E402
+from bayesupdate.paper import MEASURED_MASS_KG  # noqa: E402
+from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior  # noqa: E402
+
+
+class Clock:
+    """Wall and CPU time since the last ``lap``."""
+
+    def __init__(self):
+        self.wall, self.cpu = time.perf_counter(), time.process_time()
+
+    def lap(self) -> tuple[float, float]:
+        w, c = time.perf_counter(), time.process_time()
+        out = (w - self.wall, c - self.cpu)
+        self.wall, self.cpu = w, c
+        return out
+
+
+def model_and_basis(name: str, options: dict) -> dict:
+    """(a): the model, the problem against Table 2 and its certified basis, each timed."""
+    clock = Clock()
+    fe = get_model(name, **options)
+    t_model = clock.lap()
+    # the demo's objective: the measured 12.29 kg kept (weight 10)
+    objective = ObjectiveSpec(mass_target_kg=MEASURED_MASS_KG, mass_weight=10.0)
+    problem = build_problem(fe, paper_ema(), objective=objective)
+    t_problem = clock.lap()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        problem_r, rom = sampling_problem(problem)
+    t_basis = clock.lap()
+    return dict(
+        fe=fe, problem=problem, problem_r=problem_r, rom=rom, n_dof=fe.structure.n_dof,
+        model_s=t_model, problem_s=t_problem, basis_s=t_basis,
+        warnings=[str(w.message) for w in caught],
+        summary=None if rom is None else rom.summary(),
+    )  # fmt: skip
+
+
+def speed(fe, rom, names, n_modes: int, repeats: int, batch: int) -> dict:
+    """(b): median full and reduced solve times [s] at fresh random points of the box and the
+    largest relative frequency difference between them."""
+    rng = np.random.default_rng(12345)
+    low, high = rom.low, rom.high
+    theta = low + rng.random((max(repeats, batch), len(low))) * (high - low)
+    t_full, t_red, err = [], [], []
+    for row in theta[:repeats]:
+        p = dict(zip(names, map(float, row), strict=True))
+        t0 = time.perf_counter()
+        f_full = fe.solve(p, n_modes=n_modes).frequencies_hz
+        t_full.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        f_red = rom.predict(p, n_modes=n_modes).frequencies_hz
+        t_red.append(time.perf_counter() - t0)
+        err.append(np.max(np.abs(f_red / f_full - 1)))
+    t0 = time.perf_counter()
+    rom.predict_frequencies_batch(theta[:batch], names, n_modes)
+    t_batch = (time.perf_counter() - t0) / batch
+    full, red = float(np.median(t_full)), float(np.median(t_red))
+    return dict(
+        full_solve_s=full, reduced_solve_s=red, reduced_batch_per_point_s=t_batch,
+        speedup=full / red, speedup_batch=full / t_batch, max_rel_diff=float(max(err)),
+        points=repeats,
+    )  # fmt: skip
+
+
+def posterior(problem, rom, args) -> dict:
+    """(c): optimum, certification at it, screening basis and a fixed-budget posterior."""
+    clock = Clock()
+    fit = CalibrationSettings(starts=args.starts, seed=0, max_nfev=args.max_nfev)
+    calibration = calibrate(problem, fit)
+    t_opt = clock.lap()
+    error_at_optimum = None
+    if rom is not None:
+        rom, error_at_optimum = rom.certify_at(calibration.theta[None, :], problem.names)
+        problem = replace(problem, model=rom)
+    t_cert = clock.lap()
+    sigma_prior = prior_from_mapping({"kind": "halfnormal", "scale": 0.1}, (0.0, 1.0), "sigma")
+    spec = LikelihoodSpec(sigma=None, sigma_prior=sigma_prior)
+    log_post = LogPosterior(problem, spec)
+    screen = screening_posterior(problem, rom, spec)
+    t_screen = clock.lap()
+    settings = SamplerSettings(
+        walkers=args.walkers, steps=args.steps, seed=1, check_every=args.check_every,
+        transform="logit", target_rhat=1.01, target_ess=1000,
+    )  # fmt: skip
+    post = sample_posterior(log_post, calibration, settings, screen=screen)
+    t_sample = clock.lap()
+    summary = summarise(post)
+    return dict(
+        expr=float(calibration.expr), theta=[float(v) for v in calibration.theta],
+        error_at_optimum=None if error_at_optimum is None else float(error_at_optimum),
+        optimum=t_opt, certify=t_cert, screen_basis=t_screen, sampling=t_sample,
+        steps=int(post.chain.shape[0]), walkers=int(post.chain.shape[1]),
+        evaluations=int(post.evaluations), screen_evaluations=post.screen_evaluations,
+        converged=bool(post.converged),
+        max_r_hat=max(v["r_hat"] for v in summary.values()),
+        min_ess=min(v["ess_bulk"] for v in summary.values()),
+        means={k: v["mean"] for k, v in summary.items()},
+    )  # fmt: skip
+
+
+def one_model(name: str, options: dict, args) -> dict:
+    built = model_and_basis(name, options)
+    rom, problem = built["rom"], built["problem"]
+    print(
+        f"[{name}] {built['n_dof']} DOFs; model {built['model_s'][0]:.1f} s, problem "
+        f"{built['problem_s'][0]:.1f} s, basis wall {built['basis_s'][0]:.1f} s CPU "
+        f"{built['basis_s'][1]:.1f} s: {built['summary']}; warnings {built['warnings']}",
+        flush=True,
+    )
+    out = {k: v for k, v in built.items() if k not in ("fe", "problem", "problem_r", "rom")}
+    if rom is not None:
+        n_modes = problem.pairing.n_model
+        out["speed"] = speed(built["fe"], rom, problem.names, n_modes, args.repeats, args.batch)
+        print(f"[{name}] speed {json.dumps(out['speed'])}", flush=True)
+    if args.steps > 0:
+        out["posterior"] = posterior(built["problem_r"], rom, args)
+        print(f"[{name}] posterior {json.dumps(out['posterior'])}", flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mesh-density", type=int, default=32, help="shell mesh density (32)")
+    ap.add_argument("--repeats", type=int, default=3, help="full solves timed (3)")
+    ap.add_argument("--batch", type=int, default=200, help="points of the reduced batch (200)")
+    ap.add_argument("--steps", type=int, default=2000, help="posterior budget (0: none)")
+    ap.add_argument("--walkers", type=int, default=16)
+    ap.add_argument("--check-every", type=int, default=250)
+    ap.add_argument("--starts", type=int, default=2, help="optimizer starts")
+    ap.add_argument("--max-nfev", type=int, default=150, help="evaluations per start")
+    ap.add_argument("--save", help="write the numbers to this JSON file")
+    args = ap.parse_args()
+    warnings.simplefilter("default")
+    print(f"load average at start: {os.getloadavg()}", flush=True)
+    rows = {
+        "exhaust_shell": one_model("exhaust_shell", {"mesh_density": args.mesh_density}, args),
+        "exhaust": one_model("exhaust", {}, args),
+    }
+    print(f"load average at end: {os.getloadavg()}", flush=True)
+    if args.save:
+        with open(args.save, "w") as fh:
+            json.dump(rows, fh, indent=1, default=float)
+
+
+if __name__ == "__main__":
+    main()

@@ -14,7 +14,9 @@ Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--shell-repeats 3
     the time ratio OpenSees / bayesupdate, for model build + eigen and for eigen alone.  OpenSees'
     beam with rotary inertia cannot carry the B31.3 elbow factor exactly, so this runs on two
     like-for-like variants: Timoshenko + rotary inertia without elbow factor, and Euler-Bernoulli
-    without rotary inertia with the elbow factor.
+    without rotary inertia with the elbow factor.  Like for like (``opensees_frame.like_for_like``):
+    OpenSees' own assembled K and M against ours, and both pencils through one Lanczos solve, as
+    OpenSees' free-free solver (dense QZ) carries round-off of its own.
 
 (d) shells (``shell_speed.py``, the issue's speed benchmark): a closed box of 28,860 DOFs, first
     20 modes, built and solved through ``StructureBuilder`` / ``FEModel`` with six thickness
@@ -48,7 +50,7 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import subprocess  # noqa: E402
 import time  # noqa: E402
-from dataclasses import replace  # noqa: E402
+from dataclasses import asdict, replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -149,7 +151,9 @@ def versus_opensees(model, label: str, repeats: int) -> dict:
     t_ours, c_ours = median_times(lambda: model.solve(n_modes=N_MODES), repeats)
     t_eigen, c_eigen = median_times(eigen_only, n_peer)
     t_full, c_full = median_times(build_and_solve, n_peer)
+    like = opensees_frame.like_for_like(model, n_modes=N_MODES)
     return dict(
+        like_for_like=asdict(like),
         cpu_ratio_build_eigen=c_full / c_ours,
         cpu_ratio_eigen=c_eigen / c_ours,
         variant=label,
@@ -334,14 +338,15 @@ def print_table(out: dict) -> None:
         return
     for row in out["opensees"]:
         print(f"(c) vs OpenSeesPy {row['opensees_element']}: {row['variant']}")
-        print(f"    max |f_opensees / f_ours - 1|     {row['max_rel_diff']:8.1e}")
+        print(f"    max |f_opensees / f_ours - 1|     {row['max_rel_diff']:8.1e}  (OpenSees' QZ)")
+        _print_like_for_like(row["like_for_like"])
         print(f"    bayesupdate solve                 {row['bayesupdate_ms']:8.3f} ms")
         print(
             f"    OpenSees build + eigen            {row['opensees_build_eigen_ms']:8.3f} ms"
             f"  (x{row['ratio_build_eigen']:.1f})"
         )
         print(
-            f"    OpenSees eigen only (ARPACK)      {row['opensees_eigen_ms']:8.3f} ms"
+            f"    OpenSees eigen only               {row['opensees_eigen_ms']:8.3f} ms"
             f"  (x{row['ratio_eigen']:.1f})"
         )
         print(
@@ -354,6 +359,15 @@ def print_table(out: dict) -> None:
         print("    mode  bayesupdate [Hz]  OpenSees [Hz]  rel. diff")
         for i, (a, b) in enumerate(zip(f, g, strict=True)):
             print(f"    {i + 1:4d}  {a:16.6f}  {b:13.6f}  {b / a - 1:9.1e}")
+
+
+def _print_like_for_like(like: dict) -> None:
+    """The rows of ``opensees_frame.like_for_like``: matrices, then frequencies."""
+    print(f"    OpenSees' assembled K, M vs ours  {like['matrix_k']:8.1e}, {like['matrix_m']:.1e}")
+    print(f"    both through one Lanczos solve    {like['same_solver']:8.1e}  (like for like)")
+    print(f"    our solve vs Lanczos(OpenSees)    {like['our_solve']:8.1e}  (FEModel.solve)")
+    print(f"    OpenSees' QZ vs Lanczos(OpenSees) {like['peer_solve']:8.1e}")
+    print(f"    scipy QZ on our K, M vs Lanczos   {like['qz_on_ours']:8.1e}  (QZ round-off alone)")
 
 
 def _load(avg) -> str:

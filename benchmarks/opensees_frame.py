@@ -27,12 +27,17 @@ ElasticBeam3d.cpp, and by extracting their 12x12 matrices):
   springs to ground end on a fixed extra node.
 
 Eigen-solver: ``-fullGenLapack`` (dense QZ) handles the free-free (singular K) problem; the rigid
-modes come out as ~0 eigenvalues and are dropped by count.
+modes come out as ~0 eigenvalues and are dropped by count.  QZ on the whole singular pencil
+carries round-off of ~1e-10 (Timoshenko exhaust) to ~5e-9 (Euler-Bernoulli exhaust) on the
+lowest elastic frequencies, on OpenSees' matrices and on ours alike (scipy's ``eig(K, M)``), so
+the like-for-like comparison (``like_for_like``) reads OpenSees' own assembled K and M
+(``opensees_matrices``) and puts both pencils through one accurate solver.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 try:  # optional peer: the example frame is usable without it
     import openseespy.opensees as ops
@@ -42,6 +47,7 @@ except ImportError:  # pragma: no cover
 from bayesupdate.fe import STEEL, Material, StructureBuilder, circular_tube, oval_tube
 from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.sections import section_properties
+from bayesupdate.fe.sparse_modal import ModalSettings, solve_sparse_modes
 from bayesupdate.fe.structure import Structure
 
 
@@ -252,6 +258,93 @@ def opensees_frequencies(
     if info.n_rigid_expected and np.max(np.abs(rigid)) > 1e-6 * (2 * np.pi * f[0]) ** 2:
         raise RuntimeError(f"OpenSees rigid-body eigenvalues not ~0: {rigid}")
     return f
+
+
+def opensees_matrices(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """OpenSees' own assembled (K, M), dense (6 n_nodes, 6 n_nodes), of the domain that
+    ``build_opensees`` made, in bayesupdate's DOF order (node i, component c at 6 i + c).
+
+    Read with the ``GimmeMCK`` integrator (the system matrix is m M + c C + k K) into a
+    ``FullGeneral`` system, printed by ``printA``; the ``Transformation`` constraint handler
+    condenses the rigidly linked extra nodes (offset masses) onto their masters and removes the
+    fixed ground nodes, so the equations are exactly the structure's own DOFs."""
+    out = []
+    for m, k in ((0.0, 1.0), (1.0, 0.0)):
+        ops.wipeAnalysis()
+        ops.system("FullGeneral")
+        ops.numberer("Plain")
+        ops.constraints("Transformation")
+        ops.algorithm("Linear")
+        ops.integrator("GimmeMCK", m, 0.0, k)
+        ops.analysis("Transient")
+        ops.analyze(1, 0.0)
+        A = np.asarray(ops.printA("-ret"), dtype=float)
+        n = int(round(np.sqrt(A.size)))
+        out.append(A.reshape(n, n))
+    eq = np.concatenate([ops.nodeDOFs(i + 1) for i in range(n_nodes)])
+    if eq.size != n or np.unique(eq).size != n or eq.min() < 0:
+        raise ValueError(f"OpenSees has {n} equations, not the structure's {6 * n_nodes} DOFs")
+    return out[0][np.ix_(eq, eq)], out[1][np.ix_(eq, eq)]
+
+
+def accurate_frequencies(K, M, nodes, n_modes: int) -> np.ndarray:
+    """First ``n_modes`` elastic frequencies [Hz] of a free-free pencil (K, M) (n, n) by the
+    package's shift-invert Lanczos with exact rigid modes (``fe.sparse_modal``, forced at any
+    size: its dense branch works on the ill-conditioned projected pencil and carries ~1e-10)."""
+    settings = ModalSettings(n_modes=n_modes, dense_below=0)
+    return solve_sparse_modes(sp.csr_matrix(K), sp.csr_matrix(M), nodes, settings).frequencies_hz
+
+
+@dataclass(frozen=True)
+class LikeForLike:
+    """OpenSees against bayesupdate on one free-free beam structure (relative differences).
+
+    matrix_k, matrix_m : max |X_opensees - X| / max |X| of the assembled K and M;
+    same_solver : frequencies of the two pencils through ``accurate_frequencies``;
+    our_solve : ``FEModel.solve`` (the user's path) against OpenSees' pencil so solved;
+    peer_solve : OpenSees' own eigen (``well_posed_solver``: dense QZ) against the same;
+    qz_on_ours : scipy's QZ (``eig(K, M)``) on *our* pencil against ``accurate_frequencies`` of
+    it, i.e. the round-off of that kind of solver alone."""
+
+    matrix_k: float
+    matrix_m: float
+    same_solver: float
+    our_solve: float
+    peer_solve: float
+    qz_on_ours: float
+
+
+def like_for_like(model, params=None, n_modes: int = 12) -> LikeForLike:
+    """``LikeForLike`` of an ``FEModel`` of a free-free beam structure at ``params``."""
+    import scipy.linalg as sl
+
+    s = model.structure
+    props = model.element_properties(model.full_parameters(params))
+    info = build_opensees(s, props)
+    if info.n_rigid_expected != 6:
+        raise ValueError("like_for_like compares free-free structures (no springs to ground)")
+    peer, _ = eigen_frequencies(n_modes, info.n_rigid_expected)
+    K_os, M_os = opensees_matrices(s.n_nodes)
+    K, M, _ = model.assembler.assemble(props)
+    K, M = K.toarray(), M.toarray()
+    ref_os = accurate_frequencies(K_os, M_os, s.nodes, n_modes)
+    ref = accurate_frequencies(K, M, s.nodes, n_modes)
+    lam = sl.eig(K, M, right=False)
+    lam = np.sort(lam.real[np.isfinite(lam)])  # the 6 rigid ~0, the elastic ones, (massless inf)
+    qz = np.sqrt(lam[6 : 6 + n_modes]) / (2 * np.pi)
+    ours = model.solve(params, n_modes=n_modes).frequencies_hz
+
+    def rel(a, b):
+        return float(np.max(np.abs(a / b - 1.0)))
+
+    return LikeForLike(
+        matrix_k=float(np.abs(K_os - K).max() / np.abs(K).max()),
+        matrix_m=float(np.abs(M_os - M).max() / np.abs(M).max()),
+        same_solver=rel(ref, ref_os),
+        our_solve=rel(ours, ref_os),
+        peer_solve=rel(peer, ref_os),
+        qz_on_ours=rel(qz, ref),
+    )
 
 
 def _pin_hole_rod(diameter):

@@ -9,7 +9,7 @@ vector operations on the CSR data.  Element numbering: quads first, then triangl
 """
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -184,13 +184,14 @@ def _check_geometry(mesh: ShellMesh, warp_limit: float) -> None:
 
 
 class ShellAssembly:
-    """Geometry-dependent precomputation of a ``ShellMesh``: element frames, the thickness-free
-    element pieces and the sparse pattern.  ``lumped``: lumped (row-sum) mass;
+    """Geometry-dependent precomputation of a ``ShellMesh``: element frames, the sources of the
+    thickness-free element pieces (``shell.PieceSource``: the pieces themselves are computed in
+    chunks when needed, not kept) and the sparse pattern.  ``lumped``: lumped (row-sum) mass;
     ``rotary_inertia=False`` drops the rho t^3 / 12 rotary inertia (for peers without it)."""
 
     def __init__(self, mesh: ShellMesh, lumped: bool = False, rotary_inertia: bool = True):
         self.mesh = mesh
-        self.families = []  # (element indices, dofs (n_e, d), frames, pieces)
+        self.families = []  # (element indices, dofs (n_e, d), frames, piece source)
         nq = len(mesh.quads)
         for conn, idx, kind in (
             (mesh.quads, np.arange(nq), "quad"),
@@ -200,10 +201,10 @@ class ShellAssembly:
                 continue
             x = mesh.nodes[conn]
             f = shell.quad_frames(x) if kind == "quad" else shell.tria_frames(x)
-            pieces = shell.element_pieces(f.xy, mesh.E[idx], mesh.nu[idx], lumped, f.height)
-            if not rotary_inertia:
-                pieces = replace(pieces, mass_r=np.zeros_like(pieces.mass_r))
-            self.families.append((idx, element_dofs(conn), f, pieces))
+            source = shell.PieceSource(
+                f.xy, f.height, mesh.E[idx], mesh.nu[idx], lumped, rotary_inertia
+            )
+            self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
 
     def element_matrices(self, thickness=None):
@@ -235,21 +236,19 @@ class ShellAssembly:
         ``scale`` (n_el,) (default ones): element e has thickness scale_e t, so its power-p
         matrices are multiplied by scale_e^p.
 
-        Elements go through ``power_matrices`` and ``to_global`` in chunks of ``shell.CHUNK`` (each
-        chunk vectorised), so the (n, d, d) temporaries of the seven powers never exist for the
-        whole mesh at once; a power that is zero everywhere is left out."""
+        Elements go through their pieces, ``power_matrices`` and ``to_global`` in chunks of
+        ``shell.CHUNK`` (each chunk vectorised), so the (n, d, d) temporaries of the pieces and the
+        seven powers never exist for the whole mesh at once; a power that is zero everywhere is
+        left out."""
         m = self.mesh
         sel = np.zeros(m.n_elements, bool)
         sel[np.arange(m.n_elements) if elements is None else elements] = True
         scale = np.ones(m.n_elements) if scale is None else np.asarray(scale, dtype=float)
         store = ({}, {})
-        for b, (idx, _, f, p) in enumerate(self.families):
-            rows = np.flatnonzero(sel[idx])
+        for b, (idx, _, f, source) in enumerate(self.families):
             pos = self.pattern.positions[b].reshape(len(idx), -1)
-            for lo in range(0, rows.size, shell.CHUNK):
-                k = rows[lo : lo + shell.CHUNK]
+            for k, sub in source.chunks(np.flatnonzero(sel[idx])):
                 i = idx[k]
-                sub = shell.LocalPieces(*(getattr(p, n)[k] for n in shell.PIECE_NAMES), p.offset)
                 mats = shell.power_matrices(sub, m.rho[i], m.nsm[i], m.offset[i], m.offset_ratio[i])
                 for out, by_power in zip(store, mats, strict=True):
                     for power, X in by_power.items():

@@ -3,7 +3,7 @@ moves under model-form uncertainty (joint stiffnesses as nuisance parameters; ru
 geometries of the FE fit).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python studies/uncertainty_study.py \
-        [--steps 6000] [--runner-ups 2] [--out studies/out/uncertainty]
+        [--steps 6000] [--runner-ups 2] [--out studies/out/uncertainty] [--workers 2]
     OPENBLAS_NUM_THREADS=1 .venv/bin/python studies/uncertainty_study.py --coverage 20 \
         --steps 1500        # synthetic exhaust, coverage of the 90 % intervals only
 
@@ -161,6 +161,25 @@ def coverage_study(replicates: int, steps: int, noise: float = 0.02) -> dict:
     return result
 
 
+def _case_task(shared: tuple, item: tuple) -> dict:
+    """One case on the executor (shared: the parsed arguments and the output folder)."""
+    args, out = shared
+    return run_case(*item, args, out)
+
+
+def _run_cases(plan: list, args, out: Path) -> list[dict]:
+    """The cases of ``plan`` on the executor of ``--workers``/``--scheduler`` (independent,
+    each seeded by ``--seed``: the same results serial or parallel), in plan order."""
+    from bayesupdate.parallel_executor import compute_settings, open_executor
+
+    def progress(i, case):
+        print(f"{case['label']}: {case['steps']} steps, {case['wall_s']:.0f} s, "
+              f"R-hat max {case['r_hat_max']:.3f}", flush=True)  # fmt: skip
+
+    with open_executor(compute_settings(args.workers, args.scheduler)) as executor:
+        return executor.map(_case_task, plan, (args, out), progress=progress)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=6000)
@@ -170,6 +189,8 @@ def main(argv=None):
     parser.add_argument("--runner-ups", type=int, default=2, help="runner-up geometries 1..N")
     parser.add_argument("--joint-sigma", type=float, default=0.7, help="sd of log joint factor")
     parser.add_argument("--out", default="studies/out/uncertainty")
+    parser.add_argument("--workers", type=int, help="cases in N local processes (default: serial)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="cases on a Dask scheduler")
     parser.add_argument(
         "--coverage", type=int, default=0, help="only the synthetic coverage check, N seeds"
     )
@@ -185,14 +206,7 @@ def main(argv=None):
 
     plan = [("best", "best", False), ("best+joints", "best", True)]
     plan += [(f"geometry {g}", g, False) for g in range(1, args.runner_ups + 1)]
-    cases = []
-    for label, geometry, joints in plan:
-        cases.append(run_case(label, geometry, joints, args, out))
-        print(
-            f"{label}: {cases[-1]['steps']} steps, {cases[-1]['wall_s']:.0f} s, "
-            f"R-hat max {cases[-1]['r_hat_max']:.3f}",
-            flush=True,
-        )
+    cases = _run_cases(plan, args, out)
     save_all(read_result(cases[0]["path"]), out)
     print_table(cases)
 

@@ -5,12 +5,12 @@ plate with a point mass on a rigid element, and on the shell exhaust (beams, she
 
 import numpy as np
 import pytest
+from test_reduced_shells import SETTINGS, box_model, clamped_plate_model
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.fe.reduced.mass import total_mass
 from bayesupdate.models import get_model
-from tests.test_reduced_shells import SETTINGS, box_model, clamped_plate_model
 
 
 def _random_points(fe, n, seed):

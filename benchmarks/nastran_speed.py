@@ -11,6 +11,10 @@
   ASDShellQ4/ASDShellT3 elements, ``eigen -genBandArpack``; time of the eigen call.
 * ``--lines``: only the cost of line-element bindings (``nastran.lines``: the bound elements
   re-built at each solve) on MSC's beam deck, against the same deck without parameters.
+* ``--reduced``: only the certified reduced basis on the deck's PSHELL 3 T and PSHELL 9 T
+  (bounds 0.04-0.08 and 0.04-0.09 in, 10 modes, tol 1e-4; ``fe.reduced.reduced_model_for``, as
+  ``calibrate`` and ``sample`` build it): build time (wall and CPU), size, certified error, and
+  the time of 64 reduced solves at once.
 * ``--k6rot``: mode 1's sensitivity to the drilling stiffness: MYSTRAN at PARAM K6ROT 0, 1, 10
   and bayesupdate at drilling penalties alpha G with alpha 1e-6, 1e-3 (default), 1e-1.
 Reference: NX Nastran's frequencies (shared/data/nastran/README.md).  Nothing is asserted here.
@@ -148,6 +152,26 @@ def line_bindings(repeats=5):
           f"bindings, {t_plain * 1e3:.1f} ms without (median of {repeats})")  # fmt: skip
 
 
+def reduced_basis(n_points=64):
+    """Build time, size and certified error of the reduced basis on two PSHELL thicknesses, and
+    the time of ``n_points`` reduced solves in one batch."""
+    from bayesupdate.fe.reduced import reduced_model_for
+    from bayesupdate.nastran import load_nastran_model
+
+    bounds = {"t_3": (0.04, 0.08), "t_9": (0.04, 0.09)}
+    params = {n: {"binds": f"PSHELL {n[2:]} T", "bounds": list(b)} for n, b in bounds.items()}
+    model = load_nastran_model(DECK, params)
+    t0, c0 = time.perf_counter(), time.process_time()
+    rom = reduced_model_for(model, bounds, tol=1e-4, n_modes=10)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    print(f"reduced basis: {rom}")
+    print(f"build {wall:.0f} s wall, {cpu:.0f} s CPU; rounds (size, error): "
+          f"{[(h.size, f'{h.max_rel_error:.1e}') for h in rom.certification.history]}")  # fmt: skip
+    theta = rom.scale(np.random.default_rng(0).random((n_points, 2)))
+    t_batch, _ = time_median(lambda: rom.predict_frequencies_batch(theta), 3)
+    print(f"{n_points} reduced solves in one batch: {t_batch * 1e3:.1f} ms (median of 3)")
+
+
 def row(name, f, seconds, what):
     dev = np.abs(f[1:] / NX_HZ[1:] - 1).max() * 100
     print(f"{name:<12} {f[0]:7.3f} {dev:8.2f} % {seconds:8.2f} s  ({what})")
@@ -159,9 +183,13 @@ def main():
     parser.add_argument("--no-opensees", action="store_true")
     parser.add_argument("--k6rot", action="store_true")
     parser.add_argument("--lines", action="store_true", help="only the line-binding timing")
+    parser.add_argument("--reduced", action="store_true", help="only the reduced basis's timing")
     args = parser.parse_args()
     if args.lines:
         line_bindings()
+        return
+    if args.reduced:
+        reduced_basis()
         return
     print(f"deck {DECK.name}; NX modes: {' '.join(f'{v:.3f}' for v in NX_HZ)}")
     print(f"{'solver':<12} {'mode 1':>7} {'max dev 2-10':>10} {'time':>10}")

@@ -10,14 +10,18 @@ lbf-s units), on the user's path, the commands a user types (``bayesupdate.cli.m
    PSHELL 9 -6 %, 1 % time-signal noise): a roving-hammer test at those points, V and H;
 3. ``bayesupdate identify test.uff --out modes.h5``;
 4. ``bayesupdate calibrate study.toml --write-bdf updated.bdf --json`` (from the deck's values);
-5. ``bayesupdate modes --model updated.bdf --json``: the written deck read again.
+5. ``bayesupdate sample study.toml --write-bdf sampled.bdf --json`` with the default settings,
+   on the certified reduced basis built on the deck's two thicknesses;
+6. ``bayesupdate modes --model updated.bdf --json``: the written deck read again.
 
-The thicknesses' posterior sd is the Laplace (Gauss-Newton) sd at the optimum, (J^T W J)^-1 with
-J by central differences of full solves, under the study's likelihood (relative sd 0.05, the
-default of ``sample``), under the identified frequencies' own sd (when the data has it) and with
-the relative sd estimated from the residuals (least squares): ``sample`` is not run (every
-full solve of 26,832 DOFs takes seconds; a deck with shells gets no reduced basis yet).  Prints
-one JSON object; slow (several minutes; two starts without polish).
+The thicknesses' posterior sd is ``sample``'s, and the Laplace (Gauss-Newton) sd at the optimum,
+(J^T W J)^-1 with J by central differences of full solves, under the study's likelihood
+(relative sd 0.05, the default of ``sample``), under the identified frequencies' own sd (when the
+data has it) and with the relative sd estimated from the residuals (least squares).  Why an
+estimate misses the truth: ``attribution`` splits the linearised least-squares error of each
+thickness into the share of each mode's identification error (target / true frequency - 1), with
+the relative sensitivities d ln f / d ln t at the truth.  Prints one JSON object; slow (the
+reduced basis of each of calibrate and sample takes about 100 full solves of 26,832 DOFs).
 
     PYTHONPATH=. python studies/nastran_roundtrip.py [--out DIR] [--reuse]
 """
@@ -77,6 +81,8 @@ def main(argv=None) -> dict:
     run(["identify", str(out / "test.uff"), "--out", str(out / "modes.h5"), "--force", "--json"])
     updated = out / "updated.bdf"
     calibrated = run(["calibrate", str(study), "--json", "--force", "--write-bdf", str(updated)])
+    sampled = run(["sample", str(study), "--json", "--force", "--write-bdf",
+                   str(out / "sampled.bdf"), "--out", str(out / "posterior.h5")])  # fmt: skip
     reread = run(["modes", "--model", str(updated), "--modes", "12", "--json"])
     fitted = np.asarray(calibrated["frequencies_hz"])
     again = np.asarray(reread["frequencies_hz"])
@@ -93,6 +99,8 @@ def main(argv=None) -> dict:
             for k, s in sd.items()
         },
         "sd": sd,
+        "sample": posterior_summary(sampled, TRUTH),
+        "attribution": attribution(plain, np.asarray(calibrated["targets_hz"])),
         "true_hz": test["true_frequencies_hz"][:10],
         "targets_hz": calibrated["targets_hz"],
         "calibrated_hz": [round(float(f), 4) for f in fitted],
@@ -122,6 +130,21 @@ def write_study(out: Path, table: dict) -> Path:
     return study
 
 
+def paired_jacobian(model, theta: dict, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(f (n_targets,) [Hz], J (n_targets, n_parameters) [Hz / deck unit]): the model's
+    frequency nearest each target at ``theta`` and its central differences (step 1e-3 x each
+    value) by full solves."""
+    base = model.solve(theta, n_modes=14).frequencies_hz
+    pick = np.argmin(np.abs(base[None, :] - targets[:, None]), axis=1)
+    jac = []
+    for n in theta:
+        h = 1e-3 * theta[n]
+        hi = model.solve({**theta, n: theta[n] + h}, n_modes=14).frequencies_hz[pick]
+        lo = model.solve({**theta, n: theta[n] - h}, n_modes=14).frequencies_hz[pick]
+        jac.append((hi - lo) / (2 * h))
+    return base[pick], np.array(jac).T
+
+
 def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
     """{likelihood: {parameter: sd}}: the Gauss-Newton posterior sd at ``theta`` of the paired
     frequencies (each target paired with the nearest model frequency at ``theta``), relative
@@ -129,15 +152,7 @@ def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
     from bayesupdate.inference.data import load_modal_data
 
     names = list(theta)
-    base = model.solve(theta, n_modes=14).frequencies_hz
-    pick = np.argmin(np.abs(base[None, :] - targets[:, None]), axis=1)
-    jac = []
-    for n in names:
-        h = 1e-3 * theta[n]
-        hi = model.solve({**theta, n: theta[n] + h}, n_modes=14).frequencies_hz[pick]
-        lo = model.solve({**theta, n: theta[n] - h}, n_modes=14).frequencies_hz[pick]
-        jac.append((hi - lo) / (2 * h))
-    jac = np.array(jac).T  # (n_targets, n_parameters) [Hz / deck unit]
+    paired, jac = paired_jacobian(model, theta, targets)
     data = load_modal_data(str(data_path))
     measured_sd = None
     if data.frequency_sd_hz is not None:  # each target's own identified sd
@@ -145,7 +160,7 @@ def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
         pick_data = np.argmin(np.abs(f[None] - targets[:, None]), axis=1)
         measured_sd = np.asarray(data.frequency_sd_hz)[pick_data]
     # least squares: the relative sd estimated from the residuals at the optimum (n - p dof)
-    rel = base[pick] / targets - 1
+    rel = paired / targets - 1
     s_hat = float(np.sqrt(np.sum(rel**2) / max(rel.size - len(names), 1)))
     out = {}
     options = (("sigma_0.05", 0.05 * targets), ("identified_sd", measured_sd),
@@ -157,6 +172,42 @@ def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
         cov = np.linalg.inv(w.T @ w)
         out[key] = {n: float(np.sqrt(cov[i, i])) for i, n in enumerate(names)}
     return out
+
+
+def posterior_summary(sampled: dict, truth: dict) -> dict:
+    """``sample --json``'s posterior of each thickness against the truth, and its basis."""
+    post = sampled["parameters"]
+    return {
+        "mean": {n: post[n]["mean"] for n in truth},
+        "sd": {n: post[n]["sd"] for n in truth},
+        "error_in_sd": {n: (post[n]["mean"] - truth[n]) / post[n]["sd"] for n in truth},
+        "hdi_90": {n: [post[n]["hdi_low"], post[n]["hdi_high"]] for n in truth},
+        "converged": sampled["converged"],
+        "sampling_wall_s": sampled["wall_s"],
+        "evaluations": sampled["evaluations"],
+        "rom": sampled["rom"],
+    }
+
+
+def attribution(model, targets: np.ndarray) -> dict:
+    """Which mode's identification error moves each thickness: the relative sensitivities
+    S = d ln f / d ln t (n_targets, 2) at the truth (central differences of full solves), the
+    identification errors r = target / true - 1, and the linearised least-squares estimate error
+    (S^T S)^-1 S^T r split into each mode's term [%]."""
+    names = list(TRUTH)
+    true_hz, jac = paired_jacobian(model, TRUTH, targets)
+    sens = jac * np.array([TRUTH[n] for n in names])[None, :] / true_hz[:, None]
+    r = targets / true_hz - 1
+    gain = np.linalg.solve(sens.T @ sens, sens.T)  # (2, n_targets)
+    return {
+        "true_hz": [round(float(f), 4) for f in true_hz],
+        "identification_error": [float(x) for x in r],
+        "sensitivity": {n: [round(float(x), 4) for x in sens[:, i]] for i, n in enumerate(names)},
+        "estimate_error_pct": {n: float(100 * gain[i] @ r) for i, n in enumerate(names)},
+        "share_pct": {
+            n: [round(float(x), 4) for x in 100 * gain[i] * r] for i, n in enumerate(names)
+        },
+    }
 
 
 def _run_json(cli, folder: Path, reuse: bool, argv) -> dict:

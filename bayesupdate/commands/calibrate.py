@@ -137,7 +137,7 @@ def add_full_argument(parser) -> None:
     parser.add_argument(
         "--full",
         action="store_true",
-        help="full FE solves (no certified reduced basis) for built-in FE models",
+        help="full FE solves (no certified reduced basis) for FE models and Nastran decks",
     )
 
 

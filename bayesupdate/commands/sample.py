@@ -32,10 +32,11 @@ differential-evolution moves alone.  A mixture that cannot be fitted falls back 
   bayesupdate sample study.toml --out post.h5
   bayesupdate sample --model shear_building --data freqs.csv --out post.h5 --json
 
-Built-in FE models are sampled on a certified reduced basis (checked in full at the optimum and
-the posterior mean; a warning suggests --full when it misses its tolerance); --full forces full
-solves.  Proposals are first screened on a coarser basis (delayed acceptance; exact, only the
-survivors are solved; with --full the certified basis screens the full solves; sampler.screen).
+FE models (built-in ones and Nastran decks) are sampled on a certified reduced basis (checked in
+full at the optimum and the posterior mean; a warning suggests --full when it misses its
+tolerance); --full forces full solves.  Proposals are first screened on a coarser basis
+(delayed acceptance; exact, only the survivors are solved; with --full the certified basis
+screens the full solves; sampler.screen).
 With frequency-only data, model modes are tracked by shape against the reference
 design for every walker (no silent mode swaps).
 

@@ -82,7 +82,7 @@ class NastranModel(FEModel):
         if lines:
             raise BayesUpdateError(
                 f"model {self.name}: parameter {lines[0]} acts on line elements, which are "
-                "re-built at each solve; the reduced basis does not apply (full solves)"
+                "re-built at each solve and have no affine form for the reduced basis"
             )
         terms = super().affine_terms()
         scaled = tuple(

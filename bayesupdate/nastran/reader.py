@@ -14,6 +14,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.shell import SHEAR_FACTOR
@@ -219,7 +220,7 @@ def _autospc(ctx, structure):
             diag[(6 * conn.ravel()[:, None] + np.arange(6)).ravel()] += 1.0
     c = structure.constraints if structure.constraints is not None else Constraints()
     tr = constraint_transform(structure.nodes, c)
-    reduced = tr.reduce(__import__("scipy.sparse", fromlist=["diags"]).diags(diag)).diagonal()
+    reduced = tr.reduce(sp.diags(diag)).diagonal()
     zero = tr.independent[reduced <= 1e-12 * max(diag.max(), 1.0)]
     for node in np.unique(zero // 6):
         comps = "".join(str(int(d % 6) + 1) for d in zero[zero // 6 == node])

@@ -101,10 +101,6 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     data = measured_mass(study, load_modal_data(study.data.as_source()))
     # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
-    if getattr(model, "deck", None) and model.structure.is_general and study.sampler.reduced:
-        # the certified reduced basis is built on beam structures only (fe.reduced): a deck with
-        # shells, supports or rigid elements is solved in full, without a warning about it
-        study = replace(study, sampler=replace(study.sampler, reduced=False))
     if specs:
         from bayesupdate.discovery.results_io import extend_with_specs
 

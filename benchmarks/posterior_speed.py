@@ -5,6 +5,7 @@ BLAS is pinned to one thread (set below, before numpy is imported).
 
 Run:
   .venv/bin/python benchmarks/posterior_speed.py --seeds 5      # DE vs mixture, 5 seeds each
+  .venv/bin/python benchmarks/posterior_speed.py --seed-list 31 47 --moves mixture   # chosen seeds
   .venv/bin/python benchmarks/posterior_speed.py --save rom.npz   # reduced basis (default)
   .venv/bin/python benchmarks/posterior_speed.py --full --steps 1000 --starts 1 --save full.npz
   .venv/bin/python benchmarks/posterior_speed.py --compare rom.npz full.npz   # no sampling
@@ -20,6 +21,12 @@ relative errors with sigma inferred (half-normal prior, scale 0.1), uniform prio
 model bounds, modes paired by shape for every walker (batched on the reduced model, per point
 in full).  Wall and CPU time count everything from building the model; the reduced run is
 checked in full at the posterior mean too.
+
+Timed runs (``--seeds`` / ``--seed-list``) print each set-up phase (model + reduced basis,
+optimum, screening basis; wall and CPU), then one JSON row per run: cold-start wall and CPU,
+steps, exact and screened evaluations, tau, acceptance, the sampler's own wall-time split
+(``diagnostics["timings"]``: adaptation stages, exact and screening calls, convergence checks)
+and the accuracy against the importance-sampling reference; then medians and ranges.
 """
 
 import os
@@ -40,7 +47,7 @@ from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noq
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
 from bayesupdate.inference.problem import build_problem  # noqa: E402
-from bayesupdate.inference.sampling import SamplerSettings, sample_posterior  # noqa: E402
+from bayesupdate.inference.sampling import TIMED, SamplerSettings, sample_posterior  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior  # noqa: E402
 
@@ -152,44 +159,79 @@ def _reference_study():
     return module, path.parents[1] / "tests" / "data" / "posterior_reference_exhaust.json"
 
 
+def setup(args) -> tuple:
+    """The reference study's problem (``exhaust_posterior``: the same calls, in order), each
+    set-up phase timed: (log_post, calibration, screen, phases {name: (wall, CPU) [s]})."""
+    study, _ = _reference_study()
+    phases, clock = {}, [time.perf_counter(), time.process_time()]
+
+    def lap(name: str) -> None:
+        now = [time.perf_counter(), time.process_time()]
+        phases[name] = (now[0] - clock[0], now[1] - clock[1])
+        clock[:] = now
+
+    problem = build_problem(get_model("exhaust"), paper_ema())
+    problem, rom = sampling_problem(problem, reduced=True)
+    lap("model + reduced basis")
+    fit = CalibrationSettings(starts=args.starts, seed=0, max_nfev=args.max_nfev)
+    calibration = calibrate(problem, fit)
+    rom = rom.certify_at(calibration.theta[None, :], problem.names)[0]
+    problem = replace(problem, model=rom)
+    lap("optimum")
+    spec = study.likelihood()
+    screen = screening_posterior(problem, rom, spec)
+    lap("screening basis")
+    return LogPosterior(problem, spec), calibration, screen, phases
+
+
+def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> dict:
+    """One sampling run from the built problem, with the set-up's time added ("cold start")."""
+    log_post, calibration, screen, phases = setup_parts
+    settings = SamplerSettings(
+        walkers=args.walkers, steps=args.steps, seed=seed, check_every=args.check_every,
+        transform=args.transform, target_rhat=1.01, target_ess=1000, moves=moves,
+    )  # fmt: skip
+    fresh = LogPosterior(log_post.problem, log_post.spec)
+    t1, c1 = time.perf_counter(), time.process_time()
+    post = sample_posterior(fresh, calibration, settings, screen=screen)
+    wall, cpu = time.perf_counter() - t1, time.process_time() - c1
+    summary = summarise(post)
+    acceptance = post.acceptance
+    row = dict(
+        moves=moves, seed=seed,
+        wall_s=sum(w for w, _ in phases.values()) + wall,
+        cpu_s=sum(c for _, c in phases.values()) + cpu,
+        sampling_s=wall, sampling_cpu_s=cpu, steps=post.chain.shape[0],
+        evaluations=post.evaluations, screen_evaluations=post.screen_evaluations,
+        tau=float(np.max(post.autocorr_time)), tau_each=np.round(post.autocorr_time, 1).tolist(),
+        acceptance=float(np.mean(acceptance)), converged=post.converged,
+        r_hat=max(v["r_hat"] for v in summary.values()),
+        ess=min(v["ess_bulk"] for v in summary.values()),
+        kind=(post.diagnostics.get("moves") or {}).get("kind"),
+        **post.diagnostics.get("timings", {}),
+    )  # fmt: skip
+    if reference is not None:
+        row.update(_reference_study()[0].compare(reference, post.samples()))
+    return row
+
+
 def timed_runs(args) -> list[dict]:
-    """Each move scheme of ``--moves`` on ``--seeds`` seeds from ``--first-seed`` (interleaved, so
-    both see the same machine load), on one problem built once (its set-up time is measured and
-    added to each run's sampling time: "cold start" = set-up + sampling)."""
+    """Each move scheme of ``--moves`` on each seed (``--seed-list``, or ``--seeds`` from
+    ``--first-seed``; interleaved, so both see the same machine load), on one problem built once
+    (its set-up time, per phase, is added to each run: "cold start" = set-up + sampling)."""
     import json
 
-    study, ref_path = _reference_study()
+    _, ref_path = _reference_study()
     reference = json.loads(ref_path.read_text()) if ref_path.exists() else None
-    t0, c0 = time.perf_counter(), time.process_time()
-    log_post, calibration, screen, _ = study.exhaust_posterior(True, args.starts, args.max_nfev)
-    setup_wall, setup_cpu = time.perf_counter() - t0, time.process_time() - c0
+    parts = setup(args)
+    for name, (wall, cpu) in parts[3].items():
+        print(f"set-up: {name}: wall {wall:.1f} s, CPU {cpu:.1f} s", flush=True)
+    seeds = args.seed_list or list(range(args.first_seed, args.first_seed + args.seeds))
     rows = []
-    for seed in range(args.first_seed, args.first_seed + args.seeds):
+    for seed in seeds:
         for moves in args.moves:
-            settings = SamplerSettings(
-                walkers=args.walkers, steps=args.steps, seed=seed, check_every=args.check_every,
-                transform=args.transform, target_rhat=1.01, target_ess=1000, moves=moves,
-            )  # fmt: skip
-            fresh = LogPosterior(log_post.problem, log_post.spec)
-            t1, c1 = time.perf_counter(), time.process_time()
-            post = sample_posterior(fresh, calibration, settings, screen=screen)
-            wall, cpu = time.perf_counter() - t1, time.process_time() - c1
-            summary = summarise(post)
-            row = dict(
-                moves=moves, seed=seed, wall_s=setup_wall + wall, cpu_s=setup_cpu + cpu,
-                sampling_s=wall, steps=post.chain.shape[0], evaluations=post.evaluations,
-                screen_evaluations=post.screen_evaluations, tau=float(np.max(post.autocorr_time)),
-                converged=post.converged,
-                r_hat=max(v["r_hat"] for v in summary.values()),
-                ess=min(v["ess_bulk"] for v in summary.values()),
-                kind=(post.diagnostics.get("moves") or {}).get("kind"),
-            )  # fmt: skip
-            if reference is not None:
-                row.update(study.compare(reference, post.samples()))
-            rows.append(row)
-            print(json.dumps(row), flush=True)
-    print(f"set-up (model, reduced basis, optimum, screen basis): wall {setup_wall:.1f} s, "
-          f"CPU {setup_cpu:.1f} s")  # fmt: skip
+            rows.append(_timed_run(args, moves, seed, parts, reference))
+            print(json.dumps(rows[-1]), flush=True)
     return rows
 
 
@@ -198,10 +240,12 @@ def table(rows: list[dict]) -> None:
     for moves in dict.fromkeys(r["moves"] for r in rows):
         mine = [r for r in rows if r["moves"] == moves]
         print(f"\n[{moves}] {len(mine)} seeds, all converged: {all(r['converged'] for r in mine)}")
-        for key in ("wall_s", "cpu_s", "sampling_s", "evaluations", "screen_evaluations", "tau"):
-            v = np.array([r[key] for r in mine], dtype=float)
-            print(f"  {key:<20} median {np.median(v):>10.1f}   min {v.min():>10.1f}   "
-                  f"max {v.max():>10.1f}")  # fmt: skip
+        keys = ("wall_s", "cpu_s", "sampling_s", "sampling_cpu_s", "steps", "evaluations",
+                "screen_evaluations", "tau", "acceptance", *TIMED)  # fmt: skip
+        for key in keys:
+            v = np.array([r.get(key, np.nan) for r in mine], dtype=float)
+            print(f"  {key:<20} median {np.median(v):>10.2f}   min {v.min():>10.2f}   "
+                  f"max {v.max():>10.2f}")  # fmt: skip
         if "mean_error_in_sd" in mine[0]:
             worst_mean = max(max(r["mean_error_in_sd"]) for r in mine)
             worst_sd = max(max(map(abs, r["sd_error_relative"])) for r in mine)
@@ -223,6 +267,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--seeds", type=int, default=0, help="timed runs: N seeds per move scheme")
     ap.add_argument("--first-seed", type=int, default=1, help="with --seeds: the first seed")
+    ap.add_argument("--seed-list", type=int, nargs="+", help="timed runs on these seeds")
     ap.add_argument("--moves", nargs="+", default=["de", "mixture"], help="with --seeds")
     ap.add_argument(
         "--no-screen", action="store_true", help="no delayed acceptance (every proposal exact)"
@@ -234,7 +279,7 @@ def main() -> None:
         compare(*args.compare)
         return
     warnings.simplefilter("default")
-    if args.seeds:
+    if args.seeds or args.seed_list:
         table(timed_runs(args))
         return
     r = run(args, reduced=not args.full)

@@ -23,7 +23,8 @@ from bayesupdate.inference.moves import (
     fit_gaussian_mixture,
     staged_proposal,
 )
-from bayesupdate.inference.sampling import sampler_space
+from bayesupdate.inference.moves.staged import STAGE_PRIOR_WEIGHTS
+from bayesupdate.inference.sampling import TIMED, sampler_space
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
 from bayesupdate.models.shear_building import shear_building_frequencies
@@ -114,12 +115,18 @@ def test_the_kept_run_never_changes_its_proposal(shear):
         checkpoint=lambda state: seen.append(state.moves),
     )  # fmt: skip
     assert len(seen) == 4 and all(m == seen[0] for m in seen)
-    assert seen[0]["proposal"]["prior_weight"] == 0.1 and seen[0]["adapt_steps"] == 120
+    adapt_steps = 60 * len(STAGE_PRIOR_WEIGHTS)  # a DE stage, then one per refit but the last
+    assert seen[0]["proposal"]["prior_weight"] == STAGE_PRIOR_WEIGHTS[-1] == 0.1
     assert post.diagnostics["moves"] == {
         "kind": "mixture", "requested": "mixture", "fallback": None,
-        "components": len(seen[0]["proposal"]["mixture"]["weights"]), "adapt_steps": 120,
+        "components": len(seen[0]["proposal"]["mixture"]["weights"]), "adapt_steps": adapt_steps,
     }  # fmt: skip
     assert post.chain.shape[0] == 400  # the adaptation steps are not in the chain
+    # where the time went: adaptation, exact and screening calls, checks, inside the run's wall
+    timings = post.diagnostics["timings"]
+    assert set(timings) == set(TIMED) and timings["screen_s"] == 0.0  # no screen given
+    assert 0 < timings["adapt_s"] < post.wall_s and 0 < timings["exact_s"] < post.wall_s
+    assert 0 < timings["check_s"] < post.wall_s
 
 
 def test_stuck_walkers_fall_back_to_de_and_say_so(shear):

@@ -44,6 +44,10 @@ from bayesupdate.interrupts import StopRequest
 
 #: the move schemes ``SamplerSettings.moves`` names (module docstring)
 MOVE_KINDS = ("mixture", "de")
+#: wall-time parts of a run in ``diagnostics["timings"]`` [s]: the adaptation stages (their
+#: evaluations count in the next two as well), exact and screening log-posterior calls, and
+#: the convergence checks
+TIMED = ("adapt_s", "exact_s", "screen_s", "check_s")
 
 
 def check_moves(kind: str) -> str:
@@ -298,21 +302,30 @@ def _log_jacobian(space: ParameterSpace | None, x: np.ndarray) -> np.ndarray:
 
 
 def _guard(
-    density: LogPosterior, space: ParameterSpace | None, stop: dict
+    density: LogPosterior,
+    space: ParameterSpace | None,
+    stop: dict,
+    clock: dict | None = None,
+    key: str = "exact_s",
 ) -> Callable[[np.ndarray], np.ndarray]:
     """The log-density emcee sees, (n_walkers, d) sampler coordinates -> (n_walkers,): in y
-    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf."""
+    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf.  The
+    wall time of each call is added to ``clock[key]`` [s] when ``clock`` is given."""
 
     def guarded(x: np.ndarray) -> np.ndarray:
         # Ctrl-C inside the model: finish the step without evaluating (it is discarded
         # below); raising through emcee would print every walker's parameters and a traceback
         if not stop["requested"]:
+            t0 = time.perf_counter()
             try:
                 if space is None:
                     return density(x)
                 return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
             except KeyboardInterrupt:
                 stop["requested"] = True
+            finally:
+                if clock is not None:
+                    clock[key] += time.perf_counter() - t0
         return np.full(np.shape(x)[0], -np.inf)
 
     return guarded
@@ -325,7 +338,7 @@ def _screened(screen: LogPosterior | None, d: int, guarded, guard) -> ScreenedLo
         return None
     if screen.ndim != d:
         raise BayesUpdateError("sampler: the screening posterior has other parameters")
-    return ScreenedLogDensity(guard(screen), guarded)
+    return ScreenedLogDensity(guard(screen, key="screen_s"), guarded)
 
 
 def _ensemble(walkers: int, d: int, guarded, moves: list, screened: ScreenedLogDensity | None):
@@ -352,6 +365,7 @@ class _Run:
     wall_before: float
     t0: float = 0.0
     moves_info: dict | None = None
+    clock: dict = field(default_factory=lambda: dict.fromkeys(TIMED, 0.0))
 
     @property
     def done(self) -> int:
@@ -514,7 +528,9 @@ def _sample_blocks(
             _append(run, sampler, coords, lps, space)
             if interrupted:
                 break
+            t0 = time.perf_counter()
             tau, converged = _stop_rule(np.concatenate(run.chain_parts), run.done, settings)
+            run.clock["check_s"] += time.perf_counter() - t0
             if checkpoint is not None:
                 checkpoint(run.snapshot(log_posterior, finished=converged or run.done >= steps))
         if converged:
@@ -552,7 +568,10 @@ def _posterior_result(
         interrupted=interrupted,
         state=final,
         seed=seed,
-        diagnostics={"moves": _public(run.moves_info)},
+        diagnostics={
+            "moves": _public(run.moves_info),
+            "timings": {k: round(v, 3) for k, v in run.clock.items()},
+        },
         screen_evaluations=0 if screened is None else screened.screen_evaluations,
     )
 
@@ -623,6 +642,26 @@ def _kept_moves(
     return mixture_moves(DefensiveProposal.from_dict(fitted, space))
 
 
+def _adaptation_stage(
+    run: _Run,
+    walkers: int,
+    d: int,
+    guarded,
+    screened,
+    stop: dict,
+    step_moves: list,
+    n: int,
+    request: StopRequest,
+) -> np.ndarray | None:
+    """An adaptation stage: n steps with ``step_moves`` from ``run.state``; nothing is kept but
+    the walkers' positions (n, walkers, d), None when stopped.  Timed in ``run.clock``."""
+    t0 = time.perf_counter()
+    stage = _ensemble(walkers, d, guarded, step_moves, screened)
+    coords, _, interrupted = _run_block(stage, run, n, stop, request, _NoBar())
+    run.clock["adapt_s"] += time.perf_counter() - t0
+    return None if interrupted else np.array(coords)
+
+
 def _first_run(log_posterior, calibration, initial, settings, space, resume, moves) -> _Run:
     """The run to continue: ``resume``'s, or a fresh one (also when ``resume`` was stopped
     while adapting: nothing was kept, so starting again from the seed gives the uninterrupted
@@ -669,21 +708,16 @@ def sample_posterior(
     stop = {"requested": False}
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
 
-    guard = partial(_guard, space=space, stop=stop)  # a density -> its guarded batch function
+    run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
+    # a density -> its guarded batch function, timed in run.clock
+    guard = partial(_guard, space=space, stop=stop, clock=run.clock)
     guarded = guard(log_posterior)
     d = log_posterior.ndim
     screened = _screened(screen, d, guarded, guard)
-    run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
     _start(run, guarded)
     request = stop_request or StopRequest()
-
-    def run_steps(step_moves: list, n: int) -> np.ndarray | None:
-        # an adaptation stage: n steps from run.state, nothing kept but the walkers' positions
-        stage = _ensemble(settings.walkers, d, guarded, step_moves, screened)
-        coords, _, interrupted = _run_block(stage, run, n, stop, request, _NoBar())
-        return None if interrupted else np.array(coords)
-
-    kept = _kept_moves(moves, settings, run, log_posterior, run_steps)
+    stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, stop)
+    kept = _kept_moves(moves, settings, run, log_posterior, partial(stage, request=request))
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
         outcome = (True, False, np.full(d, np.inf))
         return _posterior_result(run, log_posterior, outcome, settings.seed, screened)

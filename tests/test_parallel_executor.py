@@ -342,6 +342,8 @@ def test_sample_of_a_user_model_with_two_workers_is_the_serial_run(tmp_path, cap
         outs.append(json.loads(capsys.readouterr().out.splitlines()[-1]))
     serial, local = outs
     assert serial.pop("wall_s") > 0 and local.pop("wall_s") > 0
+    assert serial.pop("compute") == {"kind": "serial", "workers": 1}
+    assert local.pop("compute") == {"kind": "processes", "workers": 2}
     assert local == serial
     assert serial["pairing"] == "points" and serial["steps"] == 60
     assert serial["parameters"]["k1"]["sd"] > 0

@@ -2,7 +2,8 @@
 e.g. ``ema`` imports no ``fe``, ``inference`` no ``discovery``/``models``/``config``, nothing below
 the edge imports ``commands``, ``cli``, ``report`` or a plots module) are kept, and vulture finds
 no dead code in the package, tests, studies and benchmarks (names only used from outside, such
-as dataclass fields users read and emcee's move API, are listed in vulture_whitelist.py)."""
+as dataclass fields users read and emcee's move API, are listed in vulture_whitelist.py), and no
+function of the package is over 60 lines."""
 
 from pathlib import Path
 
@@ -29,3 +30,18 @@ def test_no_dead_code():
         for item in vulture.get_unused_code(min_confidence=60)
     ]
     assert unused == []
+
+
+def test_no_function_in_the_package_is_over_60_lines():
+    """Issue 17: every function of the package is at most 60 lines (signature, docstring and body),
+    so each one reads on one screen; measured 2026-11-24: the longest is 60."""
+    import ast
+
+    long = []
+    for path in sorted((ROOT / "bayesupdate").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > 60:
+                    long.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name} ({lines})")
+    assert long == []

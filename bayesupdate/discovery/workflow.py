@@ -607,9 +607,8 @@ def discover(
     default, puts a wall in the objective wherever a hidden effect reorders two close modes: a
     refit then stalls there.)
     """
-    settings = settings or DiscoverySettings()
+    settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
-    t0 = time.perf_counter()
     problem, effects, baseline = _prepare(
         model, data, settings, parameters, baseline, pairing, say, executor
     )

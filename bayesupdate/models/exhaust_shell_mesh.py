@@ -97,6 +97,19 @@ def _add_layer(x, at, step, spacing, protected=()) -> np.ndarray:
     return np.sort(np.concatenate([x[keep], new]))
 
 
+def _disc_points(s, phi, semi_axes, hole, centre, x) -> np.ndarray:
+    """(n_ring n_c, 3) nodes of a cap or baffle [m] inside its mantle ring: rings at fractions
+    ``s`` (n_ring + 1,) from the hole (semi-axes ``hole`` (2,), centred at ``centre`` (2,)) to the
+    mantle (semi-axes ``semi_axes``), at angles ``phi`` (n_c,), axial positions ``x`` (n_ring,)
+    (the outermost ring, the mantle's own, is left out)."""
+    (a, b), (ry, rz), (oy, oz) = semi_axes, hole, centre
+    cos, sin = np.cos(phi), np.sin(phi)
+    disc_y = (1 - s)[:, None] * (ry * cos + oy) + s[:, None] * a * cos  # (n_ring + 1, n_c)
+    disc_z = (1 - s)[:, None] * (rz * sin + oz) + s[:, None] * b * sin
+    xs = np.repeat(x, phi.size)
+    return np.stack([xs, disc_y[:-1].ravel(), disc_z[:-1].ravel()]).T
+
+
 def oval_body(
     width,
     height,
@@ -148,12 +161,8 @@ def oval_body(
         surface.append(np.full(len(q), 1 if d < 2 else 2))
         rise = {0: -cone, 1: cone}.get(d, 0.0) * (1 - s[:-1])  # conical caps
         oy, oz = (cy, cz) if d < 2 else (0.0, 0.0)
-        ry, rz = collar if (d == 0 and collar is not None) else (r0, r0)
-        disc_y = (1 - s)[:, None] * (ry * cos + oy) + s[:, None] * a * cos  # (n_ring + 1, n_c)
-        disc_z = (1 - s)[:, None] * (rz * sin + oz) + s[:, None] * b * sin
-        xs = np.repeat(xd + rise, n_c)
-        pts = np.stack([xs, disc_y[:-1].ravel(), disc_z[:-1].ravel()])
-        nodes.append(pts.T)
+        hole = collar if (d == 0 and collar is not None) else (r0, r0)
+        nodes.append(_disc_points(s, phi, (a, b), hole, (oy, oz), xd + rise))
         holes.append(inner[0])
         n_next += inner.size
     xyz = np.concatenate(nodes) + x0

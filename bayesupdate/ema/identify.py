@@ -270,11 +270,16 @@ def _end_windows(frfs: FrfSet, lo_i: int, hi_i: int, residual_poles) -> list:
     """(first line, last line, extra poles) of each end of the analysed range lines lo_i..hi_i
     whose poles :func:`_refine_ends` refines: the top end, and the bottom end when the range
     starts more than 10 lines above 0 Hz; each one automatic band wide
-    (:func:`~bayesupdate.ema.bands.default_band_lines`).  At the top a residual pole is the
-    neighbour beyond (fixed, no extra pole); else a free extra pole starts beyond the end."""
+    (:func:`~bayesupdate.ema.bands.default_band_lines`).  The extra pole is free: at the top
+    it starts at the residual pole (:func:`_residual_poles`) if there is one, else beyond the
+    end.  Free, not fixed: a residual pole hugging the data's last line can be an artefact of
+    the edge (FEMAP deck, 0-150 Hz: a pole at 150.00 Hz, damping 0.2 %, while the mode there
+    is at 149.78 Hz); held fixed in the window it moved the refined 120.4 Hz mode by -2e-3.
+    A free extra pole that stays on the lines fails the refinement's test (it stands for a
+    mode beyond them), and the stabilised poles are kept."""
     f, width = frfs.frequencies_hz, default_band_lines(hi_i - lo_i + 1)
     first = max(lo_i, int(np.searchsorted(f, 0.0, side="right")))
-    top_extra = _extra_pole(f[hi_i], above=True) if residual_poles.size == 0 else np.zeros(0)
+    top_extra = _extra_pole(f[hi_i], above=True) if residual_poles.size == 0 else residual_poles
     windows = [(max(first, hi_i - width), hi_i, top_extra)]
     if f[lo_i] > 10 * frfs.df_hz:
         windows.append((first, min(hi_i, first + width), _extra_pole(f[first], above=False)))
@@ -287,7 +292,7 @@ def _refine_ends(frfs: FrfSet, lo_i: int, hi_i: int, selected: list, residual_po
     end's window (:func:`_end_windows`).  The rule: a pole is refined when it lies in such a
     window, as there no identified pole models the flank of a mode beyond the range (the
     poles of the inner bands have their neighbours on both sides); the poles within one
-    window's width of it and the residual poles enter the basis fixed."""
+    window's width of it enter the basis fixed."""
     f = frfs.frequencies_hz
     poles = np.array([p.pole for p in selected])
     for a, b, extra in _end_windows(frfs, lo_i, hi_i, residual_poles):
@@ -302,7 +307,7 @@ def _refine_ends(frfs: FrfSet, lo_i: int, hi_i: int, selected: list, residual_po
             frfs.frf[:, a : b + 1],
             poles[free],
             extra.astype(complex),
-            np.concatenate([poles[near], residual_poles]),
+            poles[near],
             frfs.kind,
         )
         poles[free] = ref.poles

@@ -112,10 +112,10 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
         assert set(row) == {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}
         assert row["hdi_low"] < row["mean"] < row["hdi_high"]
     assert result["sigma"] == {"fixed": 0.05}
-    # one model call per proposal inside the bounds (+ the starting walkers), the two
+    # one model call per proposal inside the bounds (+ the starting walkers), the three
     # adaptation stages of the mixture moves (250 steps each) included
-    assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == 500
-    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 500) * 16 + 3 * 16
+    assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == 750
+    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 750) * 16 + 3 * 16
     assert result["wall_s"] > 0
     assert len(result["autocorr_time"]) == 2
     assert result["compute"] == {"kind": "serial", "workers": 1}

@@ -19,7 +19,7 @@ from bayesupdate.ema.uff_io import read_uff58
 EXE = Path(sys.executable).with_name("bayesupdate")
 
 #: attributes that are clocks, not results
-TIME_ATTRS = {"created_utc", "wall_s"}
+TIME_ATTRS = {"created_utc", "wall_s", "timings_json"}
 
 STUDY = """
 [model]

@@ -25,7 +25,8 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 /posterior/diagnostics attrs: summary_json (see diagnostics.summarise), sampling_json
                        ({"pairing_mode", "pair_differs_fraction", "rom": {size,
                        max_rel_error, certified, tol, n_modes, error_at (posterior mean)},
-                       "convergence": diagnostics.convergence_report})
+                       "convergence": diagnostics.convergence_report}), timings_json
+                       (the run's wall-time parts [s]; like wall_s, not reproducible)
 /posterior/predictions draw_index (n,), frequencies_hz (n, m), predictive_hz (n, m),
                        attrs: swap_fraction
 """
@@ -125,9 +126,15 @@ def write_result(
             if diagnostics is not None:
                 group = post.create_group("diagnostics")
                 group.attrs["summary_json"] = json.dumps(diagnostics)
-                extra = {k: v for k, v in posterior.diagnostics.items() if k != "summary"}
+                # the run's clock (wall-time parts) apart, as wall_s: the rest is the seeded
+                # run's and the same bits on every rerun
+                extra = posterior.diagnostics
+                clock = extra.get("timings")
+                extra = {k: v for k, v in extra.items() if k not in ("summary", "timings")}
                 if extra:
                     group.attrs["sampling_json"] = json.dumps(extra, default=float)
+                if clock:
+                    group.attrs["timings_json"] = json.dumps(clock)
             if predictions is not None:
                 pred = post.create_group("predictions")
                 for name in ("draw_index", "frequencies_hz", "predictive_hz"):

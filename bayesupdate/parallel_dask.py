@@ -10,6 +10,9 @@ again up to ``retries`` times.  At connection the workers' bayesupdate version m
 client's: a different version could compute different numbers, so nothing runs.
 """
 
+import logging
+from concurrent.futures import CancelledError
+
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.parallel_executor import SerialExecutor
 
@@ -54,6 +57,10 @@ class DaskExecutor(SerialExecutor):
         except ImportError:
             raise BayesUpdateError(f"--scheduler needs Dask (distributed); {INSTALL}") from None
         self.address, self.retries = address, int(retries)
+        # a lost scheduler is said in one line (``map``): not the client's reconnection
+        # attempts, logged as errors with their tracebacks; restored at ``close``
+        self._log = logging.getLogger("distributed.client")
+        self._log_level = self._log.level
         try:
             self.client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
         except (OSError, TimeoutError) as exc:
@@ -61,10 +68,11 @@ class DaskExecutor(SerialExecutor):
                 f"--scheduler {address}: cannot reach the Dask scheduler "
                 f"({type(exc).__name__}); start one with 'dask scheduler' or check the address"
             ) from None
+        self._log.setLevel(logging.CRITICAL)
         try:
             self._check_workers()
         except BaseException:
-            self.client.close()
+            self.close()
             raise
 
     def _check_workers(self) -> None:
@@ -111,10 +119,13 @@ class DaskExecutor(SerialExecutor):
                 retries=self.retries,
             )
             return self._gather(futures, progress)
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, CancelledError) as exc:
+            # our futures are cancelled by the client when its scheduler connection is lost
+            # (``FutureCancelledError``, reason "scheduler-connection-lost"); nobody else
+            # cancels them
             raise BayesUpdateError(
                 f"--scheduler {self.address}: lost the Dask scheduler mid-run "
-                f"({type(exc).__name__}); restart it and run again"
+                f"({type(exc).__name__}); restart it and run again (sample --out: add --resume)"
             ) from None
 
     def _gather(self, futures: list, progress) -> list:
@@ -140,4 +151,7 @@ class DaskExecutor(SerialExecutor):
         return {"kind": self.kind, "workers": self.workers, "scheduler": self.address}
 
     def close(self) -> None:
-        self.client.close()
+        try:
+            self.client.close()
+        finally:
+            self._log.setLevel(self._log_level)

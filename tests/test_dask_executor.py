@@ -72,9 +72,10 @@ def serial(tmp_path_factory):
     return serial_small_discovery(tmp_path_factory.mktemp("serial"))
 
 
-@pytest.fixture(scope="module")
-def scheduler():
-    """Address of a ``dask scheduler`` with two ``dask worker`` processes on 127.0.0.1."""
+@contextlib.contextmanager
+def _dask_processes():
+    """(address, scheduler process) of a ``dask scheduler`` with two ``dask worker`` processes
+    on 127.0.0.1, all stopped at the end."""
     address = f"tcp://127.0.0.1:{_free_port()}"
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     # the workers import the user's model module (``test_parallel_executor``) as users' workers
@@ -82,44 +83,20 @@ def scheduler():
     env["PYTHONPATH"] = os.pathsep.join(p for p in (TESTS, env.get("PYTHONPATH")) if p)
     python = [sys.executable, "-m"]
     common = ["--no-dashboard"]
+    port = address.rsplit(":", 1)[1]
+    commands = [[*python, "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", port]]
+    worker = [*python, "distributed.cli.dask_worker", address, "--nthreads", "1"]
+    commands += [[*worker, "--host", "127.0.0.1"]] * 2
     procs = [
         subprocess.Popen(
-            [
-                *python,
-                "distributed.cli.dask_scheduler",
-                "--host",
-                "127.0.0.1",
-                "--port",
-                address.rsplit(":", 1)[1],
-                *common,
-            ],
-            env=env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            [*command, *common], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
         )
+        for command in commands
     ]
-    for _ in range(2):
-        procs.append(
-            subprocess.Popen(
-                [
-                    *python,
-                    "distributed.cli.dask_worker",
-                    address,
-                    "--nthreads",
-                    "1",
-                    "--host",
-                    "127.0.0.1",
-                    *common,
-                ],
-                env=env,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-            )
-        )
     try:
         with Client(address, timeout=START_TIMEOUT_S) as client:
             client.wait_for_workers(2, timeout=START_TIMEOUT_S)
-        yield address
+        yield address, procs[0]
     finally:
         for p in reversed(procs):
             p.terminate()
@@ -128,6 +105,13 @@ def scheduler():
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 p.kill()
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """Address of a ``dask scheduler`` with two ``dask worker`` processes on 127.0.0.1."""
+    with _dask_processes() as (address, _):
+        yield address
 
 
 def test_scheduler_and_two_worker_processes_give_the_serial_result(study, serial, scheduler):
@@ -245,3 +229,49 @@ def test_pool_evaluator_on_dask_is_the_per_point_model_bit_for_bit(scheduler):
         assert pool.n_workers == 2
         out = pool.predict_frequencies_batch(theta, names, 6)
     np.testing.assert_array_equal(out, serial)
+
+
+def test_scheduler_lost_mid_run_stops_sample_and_resume_gives_the_serial_chain(tmp_path):
+    """The user's path: ``bayesupdate sample --scheduler ADDR --out post.h5`` of a model that
+    cannot batch (its walkers on the two ``dask worker`` processes); the ``dask scheduler``
+    process killed after the first checkpoint.  The run stops with one line naming the
+    scheduler and exit 2, the file holds the complete steps so far, and ``--resume`` (serial)
+    ends with the uninterrupted serial run's chain, bit for bit."""
+    h5py = pytest.importorskip("h5py")
+    import numpy as np
+
+    steps = 600  # about a minute on Dask: the kill lands long before the end
+    study = user_model_study(tmp_path)
+    study.write_text(study.read_text().replace("steps = 60", f"steps = {steps}"))
+    reference, out = tmp_path / "ref.h5", tmp_path / "post.h5"
+    _run_json(["sample", str(study), "--out", str(reference), "--json"])
+    with _dask_processes() as (address, scheduler_process):
+        cmd = [sys.executable, "-m", "bayesupdate", "sample", str(study), "--json"]
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (TESTS, env.get("PYTHONPATH")) if p)
+        proc = subprocess.Popen(
+            [*cmd, "--scheduler", address, "--out", str(out)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert out.exists() and proc.poll() is None, "no checkpoint while the run was going"
+        scheduler_process.kill()
+        stdout, stderr = proc.communicate(timeout=START_TIMEOUT_S)
+    assert proc.returncode == 2, stderr
+    assert stdout == "" and stderr.count("\n") == 1 and stderr.startswith("error: "), stderr
+    assert f"--scheduler {address}: lost the Dask scheduler mid-run" in stderr
+    with h5py.File(out) as h5:
+        assert h5.attrs["status"] == "partial"
+        assert 30 <= h5["posterior/chain"].shape[0] < steps
+    resumed = _run_json(["sample", str(study), "--out", str(out), "--resume", "--json"])
+    assert resumed["steps"] == steps
+    with h5py.File(out) as a, h5py.File(reference) as b:
+        assert a.attrs["status"] == "complete"
+        for name in ("posterior/chain", "posterior/log_prob"):
+            np.testing.assert_array_equal(a[name][()], b[name][()], err_msg=name)
+        assert np.ptp(b["posterior/chain"][-1, :, 0]) > 0  # walkers apart: a chain that can differ

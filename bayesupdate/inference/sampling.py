@@ -309,7 +309,8 @@ def _guard(
     key: str = "exact_s",
 ) -> Callable[[np.ndarray], np.ndarray]:
     """The log-density emcee sees, (n_walkers, d) sampler coordinates -> (n_walkers,): in y
-    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf.  The
+    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf, and
+    after a BayesUpdateError (kept in ``stop["error"]``, raised by ``_raise_failure``).  The
     wall time of each call is added to ``clock[key]`` [s] when ``clock`` is given."""
 
     def guarded(x: np.ndarray) -> np.ndarray:
@@ -323,6 +324,8 @@ def _guard(
                 return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
             except KeyboardInterrupt:
                 stop["requested"] = True
+            except BayesUpdateError as exc:  # e.g. the Dask scheduler lost: stop, then say it
+                stop["requested"], stop["error"] = True, exc
             finally:
                 if clock is not None:
                     clock[key] += time.perf_counter() - t0
@@ -436,11 +439,23 @@ def _fresh_run(
     return _Run(state, chain_parts, lp_parts, np.zeros(walkers), 0.0)
 
 
-def _start(run: _Run, guarded) -> None:
+def _raise_failure(stop: dict, run: _Run | None = None, checkpoint=None, density=None) -> None:
+    """Raise the BayesUpdateError a density call met (``_guard``), if any, after a checkpoint of
+    ``run``'s complete steps when ``checkpoint`` is given: ``resume`` continues from them."""
+    error = stop.get("error")
+    if error is None:
+        return
+    if checkpoint is not None and run is not None and run.done:
+        checkpoint(run.snapshot(density, finished=False))
+    raise error
+
+
+def _start(run: _Run, guarded, stop: dict) -> None:
     """Fill in the initial log-density, check it and start the clock."""
     if run.state.log_prob is None:
         # what emcee would compute first; done here so a checkpoint always has it (no RNG use)
         run.state.log_prob = guarded(run.state.coords)
+        _raise_failure(stop)
     if not np.all(np.isfinite(run.state.log_prob)):
         raise BayesUpdateError("sampler: some initial walkers have zero posterior density")
     run.t0 = time.perf_counter()
@@ -714,15 +729,17 @@ def sample_posterior(
     guarded = guard(log_posterior)
     d = log_posterior.ndim
     screened = _screened(screen, d, guarded, guard)
-    _start(run, guarded)
+    _start(run, guarded, stop)
     request = stop_request or StopRequest()
     stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, stop)
     kept = _kept_moves(moves, settings, run, log_posterior, partial(stage, request=request))
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
+        _raise_failure(stop)
         outcome = (True, False, np.full(d, np.inf))
         return _posterior_result(run, log_posterior, outcome, settings.seed, screened)
     sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
     outcome = _sample_blocks(
         sampler, run, log_posterior, settings, stop, checkpoint, space, request
     )
+    _raise_failure(stop, run, checkpoint, log_posterior)
     return _posterior_result(run, log_posterior, outcome, settings.seed, screened)

@@ -269,9 +269,11 @@ class LogPosterior:
 
 
 def mass_function(model) -> Callable[[dict], float] | None:
-    """params -> total mass [kg] without a solve: ``total_mass`` of an FE model, or of the FE
-    model a reduced model wraps (its ``fe``, where its own ``predict`` takes the mass from);
-    None for other models."""
+    """params -> total mass [kg] without a solve: a reduced model's ``mass_kg`` (per-term masses,
+    the same its ``predict`` reports, no K, M assembly), else ``total_mass`` of an FE model or
+    of the FE model a model wraps (its ``fe``); None for other models."""
+    if callable(getattr(model, "mass_kg", None)):
+        return model.mass_kg
     for candidate in (model, getattr(model, "fe", None)):
         total_mass = getattr(candidate, "total_mass", None)
         if callable(total_mass):

@@ -260,6 +260,11 @@ class ReducedFEModel:
             shapes[i] = pred.shapes
         return freqs, shapes
 
+    def mass_kg(self, params: Mapping[str, float] | None = None) -> float:
+        """Total mass [kg] of the FE model at ``params`` from its per-term masses
+        (``fe.reduced.mass``: values validated, no K, M assembly)."""
+        return reduced_mass.total_mass(self.fe, self.fe.full_parameters(params))
+
     def predict(self, params: Mapping[str, float] | None = None, n_modes: int = 12) -> Prediction:
         """Prediction with reduced frequencies and shapes (full solve outside the certified use)."""
         p = self.fe.full_parameters(params)
@@ -271,7 +276,7 @@ class ReducedFEModel:
         phi = basis.V @ y[0]
         idx = np.argmax(np.abs(phi), axis=0)
         phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
-        mass = reduced_mass.total_mass(self.fe, p)  # validates the values; no K, M assembly
+        mass = self.mass_kg(p)
         freqs = np.sqrt(np.maximum(lam[0], 0.0)) / (2 * np.pi)
         return Prediction(freqs, self.fe.sensor_shapes(phi), self.fe.structure.sensor_labels, mass)
 

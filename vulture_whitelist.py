@@ -14,6 +14,7 @@ shell_kinetic_density  # ModalEnergies: kinetic energy share per area
 rigid_eigenvalues  # SparseModes: the rigid-body eigenvalues found (reported apart)
 n_springs  # benchmarks/opensees_frame.OpenSeesBuild: what was put into OpenSees
 # called from outside our code
+pytest_collection_modifyitems  # tests/conftest.py: a pytest hook
 _.propose  # inference/delayed_acceptance: emcee's Move API
 build_shear_building_model  # models/__init__ registry: "module:function" strings
 extended_model_from_result  # pipelines/model_source: public, named in results_io and README

@@ -58,9 +58,10 @@ class DaskExecutor(SerialExecutor):
             raise BayesUpdateError(f"--scheduler needs Dask (distributed); {INSTALL}") from None
         self.address, self.retries = address, int(retries)
         # a lost scheduler is said in one line (``map``): not the client's reconnection
-        # attempts, logged as errors with their tracebacks; restored at ``close``
-        self._log = logging.getLogger("distributed.client")
-        self._log_level = self._log.level
+        # attempts (errors with tracebacks) nor the closed comm's notice ("distributed.batched",
+        # INFO on distributed's own handler); every level is restored at ``close``
+        self._logs = [logging.getLogger(n) for n in ("distributed", "distributed.client")]
+        self._log_levels = [log.level for log in self._logs]
         try:
             self.client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
         except (OSError, TimeoutError) as exc:
@@ -68,7 +69,8 @@ class DaskExecutor(SerialExecutor):
                 f"--scheduler {address}: cannot reach the Dask scheduler "
                 f"({type(exc).__name__}); start one with 'dask scheduler' or check the address"
             ) from None
-        self._log.setLevel(logging.CRITICAL)
+        for log in self._logs:
+            log.setLevel(logging.CRITICAL)
         try:
             self._check_workers()
         except BaseException:
@@ -154,4 +156,5 @@ class DaskExecutor(SerialExecutor):
         try:
             self.client.close()
         finally:
-            self._log.setLevel(self._log_level)
+            for log, level in zip(self._logs, self._log_levels, strict=True):
+                log.setLevel(level)

@@ -203,8 +203,8 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
     import sys
     import time
 
-    text = study.read_text().replace("steps = 400", "steps = 1500")
-    study.write_text(text)
+    # 400 kept steps, checked every 100: after the first checkpoint 300 steps (~5,000 model
+    # calls, seconds) remain, while the signal follows the checkpoint within the 50 ms poll
     reference = tmp_path / "ref.h5"
     assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
     out = tmp_path / "run.h5"
@@ -228,7 +228,7 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
     assert "Traceback" not in err and "--resume" in err
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial"
-        assert h5["posterior/chain"].shape[0] < 1500
+        assert h5["posterior/chain"].shape[0] < 400
     assert main(["sample", str(study), "--out", str(out), "--resume", "--json"]) == 0
     with h5py.File(out) as a, h5py.File(reference) as b:
         assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])

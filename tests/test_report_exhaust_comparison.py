@@ -86,3 +86,55 @@ def test_the_section_shows_both_models_and_the_fronts(tmp_path):
     assert "No calibration file given for exhaust_shell" in text
     assert "![The front of Expr" in text and (tmp_path / "exhaust_fronts.png").is_file()
     assert "data:image/png;base64," in html.read_text()
+
+
+def test_the_demo_compares_its_own_seed_case_optimum_with_a_shell_front(tmp_path):
+    """The demo's path (one call: measuring the shell exhaust takes seconds): its seed-case
+    result file (a ``calibrate`` HDF5, Table 2 with the mass
+    kept) for the beam exhaust, a front file for the shell exhaust; the record carries each
+    file's optimum, and the rule then counts three numbers."""
+    from dataclasses import replace
+
+    from bayesupdate.config import parse_study
+    from bayesupdate.inference.results import write_result
+    from bayesupdate.pipelines.calibrate import run_calibration
+    from bayesupdate.pipelines.exhaust_comparison import demo_comparison
+    from bayesupdate.pipelines.study import prepare
+
+    study = parse_study(
+        {
+            "model": {"source": "exhaust"},
+            "data": {"source": "paper:ema"},
+            "objective": {"mass_kg": paper.MEASURED_MASS_KG, "mass_weight": 10.0},
+            "optimizer": {"starts": 1, "seed": 0, "polish": False},
+        }
+    )
+    prepared = prepare(study)
+    optimum = run_calibration(prepared)
+    seed_case = tmp_path / "seed_case.h5"
+    write_result(seed_case, prepared.problem, optimum, study.to_dict(), command="calibrate")
+    front = tmp_path / "front.json"
+    point = {"expr": 0.0639, "mass_kg": 12.31, "swapped": False}
+    front.write_text(json.dumps({"optimum": point, "front": [{"mass_error_pct": 0.2, **point}]}))
+
+    records = demo_comparison(seed_case, front, solves=1)
+    beam, shell = records["exhaust"].calibrated, records["exhaust_shell"].calibrated
+    assert beam.expr == pytest.approx(optimum.expr, rel=1e-12)
+    assert beam.mass_kg == pytest.approx(optimum.mass_kg, rel=1e-12) and not beam.swapped
+    assert (shell.expr, shell.front) == (0.0639, ((0.2, 0.0639),))
+    winner, reason = better_exhaust(records)
+    assert "of 3 numbers" in reason and winner in records
+    # without a shell front only the beam exhaust is calibrated: the rule counts Table 1 alone
+    assert records["exhaust_shell"].table1_rms_pct < records["exhaust"].table1_rms_pct
+    alone = {**records, "exhaust_shell": replace(records["exhaust_shell"], calibrated=None)}
+    assert "of 2 numbers" in better_exhaust(alone)[1]
+
+
+def test_demo_refuses_a_missing_shell_front_before_running(tmp_path, capsys):
+    from bayesupdate.cli import main
+
+    code = main(["demo", "--out", str(tmp_path / "o"), "--shell-front", str(tmp_path / "x.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "--shell-front" in err and "x.json: not found" in err
+    assert not (tmp_path / "o").exists()  # refused before anything is written

@@ -25,15 +25,23 @@ def add_arguments(parser):
     parser.add_argument("--quick", action="store_true", help="smaller run for a first look")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
+    parser.add_argument(
+        "--shell-front",
+        metavar="FILE",
+        help="the shell exhaust's calibrated front (studies/exhaust_shell_front.py JSON), shown "
+        "beside the beam exhaust's optimum in the report's comparison",
+    )
 
 
 def run(args) -> int:
     from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo
+    from bayesupdate.pipelines.exhaust_comparison import better_exhaust, demo_comparison
     from bayesupdate.report.demo_report import summary_rows, write_demo_report
 
+    shell_front = _front_file(args.shell_front)
     out = check_out_folder(Path(args.out), args.force)
     settings = DemoSettings(out=out, quick=args.quick, seed=args.seed, progress=sys.stderr.isatty())
-    steps = (*demo_steps(settings), "report")
+    steps = (*demo_steps(settings), "the two exhausts side by side", "report")
     t0 = time.perf_counter()
     counter = iter(range(1, len(steps) + 1))
 
@@ -41,9 +49,12 @@ def run(args) -> int:
         say(f"[{next(counter)}/{len(steps)}] {name}  ({time.perf_counter() - t0:.0f} s)")
 
     results = run_demo(settings, step)
+    step("the two exhausts side by side")
+    comparison = demo_comparison(out / "seed_case.h5", shell_front)
     step("report")
-    files = write_demo_report(results)
+    files = write_demo_report(results, comparison)
     rows = summary_rows(results, time.perf_counter() - t0)
+    rows.insert(-1, ("beam or shell exhaust", better_exhaust(comparison)[1]))
     width = max(len(k) for k, _ in rows)
     print("\nsummary")
     for key, value in rows:
@@ -55,6 +66,18 @@ def run(args) -> int:
 def say(line: str) -> None:
     """Progress goes to stderr: stdout carries the summary only."""
     print(line, file=sys.stderr, flush=True)
+
+
+def _front_file(path: str | None) -> Path | None:
+    """``--shell-front``, checked before the run (a missing file found after 25 minutes would
+    waste them)."""
+    if path is None:
+        return None
+    if not Path(path).is_file():
+        raise BayesUpdateError(
+            f"--shell-front {path}: not found; write one with studies/exhaust_shell_front.py"
+        )
+    return Path(path)
 
 
 def check_out_folder(out: Path, force: bool) -> Path:

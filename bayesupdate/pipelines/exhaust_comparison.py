@@ -160,3 +160,17 @@ def _with(record: ExhaustRecord, calibrated: Calibrated) -> ExhaustRecord:
     from dataclasses import replace
 
     return replace(record, calibrated=calibrated)
+
+
+def demo_comparison(
+    seed_case: Path, shell_front: Path | None = None, solves: int = 3
+) -> dict[str, ExhaustRecord]:
+    """The demo's side by side (issue 20 item 4): both exhausts measured here, the beam
+    exhaust with the demo's own seed-case optimum (``seed_case``: its ``calibrate`` result file,
+    Table 2 with the mass kept) and the shell exhaust with ``shell_front`` when given (a front
+    file of ``studies/exhaust_shell_front.py``; its calibration takes tens of minutes, so the
+    demo reads it and never recomputes it); ``solves``: as ``measure``."""
+    files = {"exhaust": Path(seed_case)}
+    if shell_front is not None:
+        files["exhaust_shell"] = Path(shell_front)
+    return compare_exhausts(files, solves=solves)

@@ -14,6 +14,10 @@ boundary_spring    sensor point (1..20)   k [N/m] in [0, 1e5], 3 translations   
 stiffness_change   a part                 factor [-] on Young's modulus in [0.5, 1.5]   uniform
 =================  =====================  ============================================  =========
 
+On a Nastran deck (``structure.metadata["nastran"]``) a stiffness change may also sit on a
+PSHELL property (``stiffness_change@PSHELL 3``: a factor on the modulus of its shells), unless
+a parameter already sets those shells' modulus.
+
 A user adds a kind with ``register_effect_kind``.  Extended models name their extra parameters
 ``KIND@LOCATION:NAME`` (e.g. ``added_mass@14:m``).
 """
@@ -135,9 +139,25 @@ def _extend_bend(model, location, tag):
     return model.structure, {"factor": Binding(location, "bend_factor")}
 
 
+def _stiffness_parts(model: FEModel) -> list[str]:
+    """The beam parts, and on a Nastran deck also its PSHELL parts (``PSHELL 3``) whose shells
+    no parameter already sets the modulus of (a MAT1 E binding)."""
+    s = model.structure
+    if s.shells is None or "nastran" not in s.metadata:
+        return _beam_parts(model)
+    taken = np.zeros(s.shells.n_elements, bool)
+    for name, binding in model.bindings.items():
+        if binding.property in ("youngs_modulus", "modulus_factor"):
+            taken |= model._shell_masks.get(name, taken)
+    shells = [p for i, p in enumerate(s.parts)
+              if p.startswith("PSHELL ") and np.any(s.shells.part == i)
+              and not np.any(taken[s.shells.part == i])]  # fmt: skip
+    return _beam_parts(model) + shells
+
+
 def _extend_stiffness(model, location, tag):
-    if location not in _beam_parts(model):
-        raise BayesUpdateError(f"unknown part {location!r}; parts are {_beam_parts(model)}")
+    if location not in _stiffness_parts(model):
+        raise BayesUpdateError(f"unknown part {location!r}; parts are {_stiffness_parts(model)}")
     return model.structure, {"factor": Binding(location, "modulus_factor")}
 
 
@@ -203,7 +223,7 @@ for _kind in (
                 "factor", 0.8, (0.5, 1.5), _UNIFORM, "-", "factor on the part's Young's modulus"
             ),
         ),
-        _beam_parts,
+        _stiffness_parts,
         _extend_stiffness,
         "a part stiffer or softer than modelled",
     ),

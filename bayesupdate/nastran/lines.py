@@ -9,9 +9,17 @@ and K_L(theta) - K_L(deck) (and M) is added into the assembled matrices at its p
 pattern.  That is the reading of the edited deck, so exact whatever the field: the Timoshenko
 shear parameter 12 EI / (k G A L^2) and a PBARL's section in its dimensions are not affine, and
 even A, I, J, E, RHO enter linearly only without shear flexibility.
+
+For the reduced basis (``fe.reduced``), ``affine_line_terms`` finds the fields that do enter
+linearly: a shear-rigid PBAR's A, I1, I2, J, a PROD's / CONROD's A and J and every NSM give
+K_L(theta) = K_L(deck) + sum_j (theta_j - theta0_j) dK_j (M likewise) exactly, dK_j the
+difference quotient over one step.  The sum is checked against re-built elements at seeded
+points of the box, so a non-linear field (a PBARL/PBEAML DIM, a shear-flexible PBEAM's A or I,
+E and A of the same elements: a product) is found and named, never approximated.
 """
 
 import copy
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -95,6 +103,66 @@ class LineRebuild:
                 "deck's pattern (a mass or stiffness that is 0 in the deck); bind another field"
             )
         return np.bincount(pos, K.data[keep], self.n), np.bincount(pos, M.data[keep], self.n)
+
+
+#: relative round-off allowed between the affine sum and the re-built elements (exact: ~1e-15)
+LINEAR_TOL = 1e-9
+#: the seeded points of the box where the affine sum is checked
+LINEAR_SEED, LINEAR_POINTS = 0, 3
+
+
+@dataclass(frozen=True)
+class LineTerm:
+    """One parameter's exact affine line term: K_L(theta) - K_L(deck) = (theta - theta0) dK
+    (summed over the parameters), M likewise; dK, dM (nnz,) on the general CSR pattern."""
+
+    name: str
+    theta0: float
+    dK: np.ndarray
+    dM: np.ndarray
+
+
+def affine_line_terms(rebuild: LineRebuild, defaults, bounds) -> tuple[LineTerm, ...]:
+    """The ``LineTerm`` of each parameter of ``rebuild`` ({name: deck value}, {name: (low,
+    high)}, deck units).  Checked at seeded points of the box: each parameter alone (the others
+    at the deck's values), then all together.  Raises ``BayesUpdateError`` naming the parameter
+    (or the product) when the sum misses the re-built elements by more than ``LINEAR_TOL``."""
+    names = list(rebuild.bindings)
+    theta0 = np.array([defaults[n] for n in names])
+    low, high = (np.array([bounds[n][k] for n in names]) for k in (0, 1))
+    step = np.where(high > theta0, high, low) - theta0
+    terms = []
+    for j, name in enumerate(names):
+        dK, dM = rebuild.delta(dict(zip(names, theta0 + step[j] * (np.arange(len(names)) == j),
+                                        strict=True)))  # fmt: skip
+        terms.append(LineTerm(name, float(theta0[j]), dK / step[j], dM / step[j]))
+    rng = np.random.default_rng(LINEAR_SEED)
+    u = rng.uniform(size=(LINEAR_POINTS, len(names)))
+    where = low + u * (high - low)
+    for j, name in enumerate(names):  # each alone, the others at the deck's values
+        theta = np.where(np.arange(len(names)) == j, where[0], theta0)
+        what = f"parameter {name} ({rebuild.bindings[name].target!r}) does not enter"
+        _check_linear(rebuild, terms, theta, what)
+    if len(names) > 1:
+        for theta in where:
+            what = f"parameters {', '.join(names)} together do not enter"
+            _check_linear(rebuild, terms, theta, what)
+    return tuple(terms)
+
+
+def _check_linear(rebuild: LineRebuild, terms, theta, what: str) -> None:
+    exact = rebuild.delta({t.name: v for t, v in zip(terms, theta, strict=True)})
+    for which, (x, base) in enumerate(zip(exact, rebuild._base, strict=True)):
+        affine = sum(
+            (v - t.theta0) * (t.dK, t.dM)[which] for t, v in zip(terms, theta, strict=True)
+        )
+        miss = np.abs(x - affine).max() / max(np.abs(base).max(initial=0.0), 1e-300)
+        if miss > LINEAR_TOL:
+            raise BayesUpdateError(
+                f"{what} the line elements' {'KM'[which]} linearly (relative miss {miss:.1e}; a "
+                "PBARL/PBEAML dimension, a shear-flexible beam's A or I, or E with A or I do not), "
+                "so the reduced basis does not cover it"
+            )
 
 
 class LineAssembler(GeneralAssembler):

@@ -3,9 +3,11 @@
 Parameters are in the deck's units (``bindings``); each ``DeckBinding`` acts on element masks
 of the structure, and the FE value is ``factor`` x the parameter (WTMASS on densities, 1 / the
 deck's value for a spring or mass bound absolutely).  Everything else is ``FEModel``'s: shell
-thickness enters K and M as exact powers (``fe.general``), so the reduced basis applies.
+thickness enters K and M as exact powers (``fe.general``), so the reduced basis applies; so
+does a line-element field that enters K and M linearly (``lines.affine_line_terms``).
 """
 
+import copy
 from collections.abc import Mapping
 from dataclasses import replace
 
@@ -54,6 +56,14 @@ class NastranModel(FEModel):
             self._general.values = p
         return super()._solve_general(p, props, n_modes, energies, method)
 
+    def matrices(self, params: Mapping[str, float] | None = None):
+        """``FEModel.matrices`` with the line elements at ``params`` too (``lines``)."""
+        from bayesupdate.nastran.lines import LineAssembler
+
+        if isinstance(self._general, LineAssembler):
+            self._general.values = self.full_parameters(params)
+        return super().matrices(params)
+
     def fe_values(self, params: Mapping[str, float] | None) -> dict[str, float]:
         """The FE model's values (factor x parameter) of the full parameter set at ``params``."""
         p = self.full_parameters(params)
@@ -77,19 +87,38 @@ class NastranModel(FEModel):
         return super().shell_properties(self.fe_values(params))
 
     def affine_terms(self) -> AffineTerms:
-        """``FEModel.affine_terms`` with each deck parameter's factor in its term's scale."""
-        lines = [n for n, b in self.bindings.items() if getattr(b, "lines", ())]
-        if lines:
-            raise BayesUpdateError(
-                f"model {self.name}: parameter {lines[0]} acts on line elements, which are "
-                "re-built at each solve and have no affine form for the reduced basis"
-            )
-        terms = super().affine_terms()
+        """``FEModel.affine_terms`` with each deck parameter's factor in its term's scale; a
+        line-element parameter is a "line" term (no elements of its own: ``line_terms`` are
+        its matrices), and raises ``BayesUpdateError`` when it does not enter linearly."""
+        if any(getattr(b, "lines", ()) for b in self.bindings.values()):
+            self.line_terms()  # the linearity check: a one-line reason for full solves
+        # a line binding has no FE property: stand in a modulus factor on no beams (a MAT1
+        # binding keeps its shell term; its line elements are in ``line_terms`` too)
+        lines = {n for n, b in self.bindings.items() if b.property == "line"}
+        stand_in = copy.copy(self)
+        stand_in.bindings = {
+            n: replace(b, property="modulus_factor") if n in lines else b
+            for n, b in self.bindings.items()
+        }
+        terms = FEModel.affine_terms(stand_in)
         scaled = tuple(
-            replace(t, scale=t.scale * getattr(self.bindings[t.name], "factor", 1.0))
+            replace(t, property="line", family="line", field="line", enters="linear")
+            if t.name in lines
+            else replace(t, scale=t.scale * getattr(self.bindings[t.name], "factor", 1.0))
             for t in terms.parameters
         )
         return replace(terms, parameters=scaled)
+
+    def line_terms(self) -> tuple:
+        """The exact affine terms of the line-element parameters (``lines.LineTerm``; empty
+        without them), computed once; raises when one does not enter linearly."""
+        from bayesupdate.nastran.lines import LineAssembler, affine_line_terms
+
+        if not isinstance(self._general, LineAssembler):
+            return ()
+        if getattr(self, "_line_terms", None) is None:
+            self._line_terms = affine_line_terms(self._general.lines, self._defaults, self._bounds)
+        return self._line_terms
 
     def with_structure(self, structure, bindings=None, defaults=None, bounds=None, name=None):
         """A new model on an extended structure (effects append elements: masks are padded)."""

@@ -128,7 +128,8 @@ def _check_upper_bound(certificate: Certificate, tol: float) -> None:
         raise BayesUpdateError(
             f"reduced model: reduced frequencies fall {-certificate.min_signed_error:.1e} below "
             "full ones (Rayleigh-Ritz forbids it): the parameter interpolation is too "
-            "coarse; lower interp_tol or use the full model (--full)"
+            "coarse (lower interp_tol), or DOFs without mass (a lumped-mass beam's rotations) "
+            "move with the parameters; use the full model (--full)"
         )
 
 

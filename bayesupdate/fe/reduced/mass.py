@@ -33,12 +33,15 @@ def _translational_mass(g, pos: np.ndarray, values: np.ndarray) -> float:
 @dataclass(frozen=True, eq=False)
 class ShellMassTerms:
     """Per shell group: ``nsm`` m(M_nsm,g) (n_groups,) and ``powers`` {p: m(M_p,g) (n_groups,)}
-    [kg per unit density and theta^p]; ``lines`` m(M_lines) [kg] (general beams, rods).  Holds
-    no reference to its FE model (it is the value of a weak-keyed cache on that model)."""
+    [kg per unit density and theta^p]; ``lines`` m(M_lines) [kg] (general beams, rods);
+    ``line_terms`` ((name, theta0, m(dM)), ...) of a deck's linear line-element parameters
+    (``NastranModel.line_terms``).  Holds no reference to its FE model (it is the value of a
+    weak-keyed cache on that model)."""
 
     lines: float
     nsm: np.ndarray
     powers: dict
+    line_terms: tuple = ()
 
     @classmethod
     def of(cls, fe: FEModel) -> "ShellMassTerms":
@@ -51,7 +54,11 @@ class ShellMassTerms:
                 nsm.append(_translational_mass(g, pos, m0))
                 for p, v in Mp.items():
                     powers.setdefault(p, np.zeros(len(g.terms)))[k] = _translational_mass(g, pos, v)
-        return cls(lines, np.array(nsm), powers)
+        line_terms = tuple(
+            (t.name, t.theta0, _translational_mass(g, np.arange(g.nnz), t.dM))
+            for t in getattr(fe, "line_terms", tuple)()
+        )
+        return cls(lines, np.array(nsm), powers, line_terms)
 
     def total_mass(self, fe: FEModel, params) -> float:
         """Total mass [kg] of ``fe`` (the model these terms are of) at ``params`` (name -> SI
@@ -61,6 +68,8 @@ class ShellMassTerms:
         check_properties(fe.structure, props)
         with np.errstate(invalid="ignore", divide="ignore"):  # its CoG is 0/0 without beams
             m = g.beams.total_mass(props)[0] + self.lines
+        for name, theta0, dm in self.line_terms:
+            m += (params[name] - theta0) * dm
         if fe.structure.shells is None:
             return m
         t, _, rho = fe.shell_properties(params)

@@ -10,7 +10,9 @@ K_p at the nominal modulus E0, M_p per unit density.  With t = s_t theta_t (s th
 t0^p) times theta_E (or 1), theta_t^p times theta_rho (or 1), the constant factors folded into the
 matrices.  Terms with the same feature pair are summed, so a deck with many fixed-thickness
 property groups adds to the constant term only.  No interpolation: the decomposition is exact.
-General beams and rods carry no parameters and join the constant term.
+General beams and rods join the constant term; a Nastran deck's line-element fields that enter
+K and M linearly (``NastranModel.line_terms``: a shear-rigid PBAR's A, I1, I2, J, a PROD's A, J,
+NSM) add theta_j x dK_j and the constant -theta0_j x dK_j.
 
 Matrices are kept sparse on the DOFs they touch (``SparsePart``), as assembled by the full model.
 """
@@ -77,6 +79,14 @@ def general_terms(fe: FEModel, terms: AffineTerms, f_ref: np.ndarray):
     line_K, line_M = g.line_data()
     K.add((0, 0), np.flatnonzero(line_K), line_K[line_K != 0])
     M.add((0, 0), np.flatnonzero(line_M), line_M[line_M != 0])
+    # a deck's line-element fields that enter linearly (``nastran.lines.LineTerm``):
+    # K_L(theta) = K_L(deck) + sum_j (theta_j - theta0_j) dK_j, M likewise
+    for t in getattr(fe, "line_terms", tuple)():
+        j = fe.parameter_names.index(t.name)
+        for acc, d in ((K, t.dK), (M, t.dM)):
+            nz = np.flatnonzero(d)
+            acc.add((1 + j, 0), nz, d[nz])
+            acc.add((0, 0), nz, -t.theta0 * d[nz])
     sh = fe.structure.shells
     if sh is not None:
         bound = shell_parameters(terms, sh.n_elements)

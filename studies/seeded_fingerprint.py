@@ -30,7 +30,8 @@ import numpy as np
 
 from bayesupdate.cli import main as cli
 
-VOLATILE = {"wall_s", "created_utc", "versions", "elapsed_s", "timings"}
+#: run-to-run clocks and versions, never results (timings_json: the sampler's stage clocks)
+VOLATILE = {"wall_s", "created_utc", "versions", "elapsed_s", "timings", "timings_json"}
 
 
 def run(argv: list) -> str:

@@ -146,3 +146,29 @@ def test_sample_on_line_bindings_uses_the_certified_basis(variant, tmp_path, cap
     assert out["rom"]["error_at_posterior_mean"] <= 1e-4
     a = out["parameters"]["a"]
     assert abs(a["mean"] - 3.3) < 3 * a["sd"] < 0.1 * 3.3  # A is pinned by the data
+    assert out["full_solves_reason"] is None
+
+
+def test_sample_json_says_why_a_dimension_binding_gets_full_solves(tmp_path, capsys):
+    # the user's path on the MSC deck: a PBARL dimension does not enter K linearly, so `sample`
+    # solves in full and says why in its JSON (besides its warning)
+    import json
+
+    from bayesupdate.cli import main
+
+    deck = BEAM / "beam_modes.dat"
+    fe = _load(deck, {"r1": {"binds": "PBARL 1 DIM1", "bounds": [0.7, 1.4]}})
+    f = fe.solve(n_modes=3).frequencies_hz
+    study = tmp_path / "study.toml"
+    study.write_text(
+        f'[model]\nsource = "{deck}"\n[data]\nfrequencies_hz = {[float(x) for x in f]}\n'
+        '[parameters.r1]\nbinds = "PBARL 1 DIM1"\nbounds = [0.7, 1.4]\n'
+        "[optimizer]\nstarts = 1\n[likelihood]\nsigma = 0.01\n"
+        '[sampler]\nwalkers = 4\nsteps = 10\ncheck_every = 10\nmoves = "de"\n'
+    )
+    assert main(["sample", str(study), "--json"]) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out.strip().splitlines()[-1])
+    assert out["rom"] is None
+    reason = out["full_solves_reason"]
+    assert "parameter r1 (" in reason and "PBARL" in reason and "\n" not in reason

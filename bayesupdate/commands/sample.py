@@ -44,6 +44,7 @@ Ctrl-C (or SIGTERM) keeps a valid partial result in --out; --resume continues it
 same seed, ends with the same chain as an uninterrupted run.  --json prints {"parameters": {NAME:
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
 "autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
+"full_solves_reason": why an FE model got full solves instead of its reduced basis | null,
 "screen": {"size", "max_rel_error", "evaluations"} | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps"}, "compute": {"kind", "workers"}, ...}."""
@@ -210,6 +211,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
         "converged": bool(posterior.converged),
         "convergence": posterior.diagnostics.get("convergence"),
         "rom": _rom_json(posterior.diagnostics.get("rom")),
+        "full_solves_reason": posterior.diagnostics.get("full_solves_reason"),
         "screen": posterior.diagnostics.get("screen"),
         "pairing": posterior.diagnostics.get("pairing_mode"),
         "pair_differs_fraction": _finite_or_none(

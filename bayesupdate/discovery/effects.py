@@ -148,7 +148,7 @@ def _stiffness_parts(model: FEModel) -> list[str]:
     taken = np.zeros(s.shells.n_elements, bool)
     for name, binding in model.bindings.items():
         if binding.property in ("youngs_modulus", "modulus_factor"):
-            taken |= model._shell_masks.get(name, taken)
+            taken |= model.shells_of(name)
     shells = [p for i, p in enumerate(s.parts)
               if p.startswith("PSHELL ") and np.any(s.shells.part == i)
               and not np.any(taken[s.shells.part == i])]  # fmt: skip

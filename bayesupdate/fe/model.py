@@ -231,6 +231,12 @@ class FEModel:
             )
         return mask
 
+    def shells_of(self, name: str) -> np.ndarray:
+        """(n_shell,) bool: the shells parameter ``name`` acts on (all False when it binds no
+        shell property or the structure has no shells)."""
+        n = 0 if self.structure.shells is None else self.structure.shells.n_elements
+        return self._shell_masks.get(name, np.zeros(n, bool))
+
     def _shell_keys(self) -> np.ndarray | None:
         """(n_shell, 3) index of the parameter setting each shell's thickness, modulus and
         density (-1: none; the last binding wins, as in ``element_properties``)."""

@@ -5,6 +5,7 @@ every block while sampling, so an interrupted run (Ctrl-C, SIGTERM) leaves a val
 that ``resume`` continues.  Seeded: the same study gives the same chain, interrupted or not.
 """
 
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -91,9 +92,7 @@ def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
     cfg = study.sampler
     # the reduced model first: the multi-start optimum is then cheap too (checked in full at
     # the optimum below; a miss there falls back to full solves)
-    problem, rom = sampling_problem(
-        prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
-    )
+    problem, rom, full_reason = _reduced_or_why(prepared, cfg, executor)
     if calibration is None:
         opt = study.optimizer
         # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the
@@ -107,6 +106,7 @@ def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
         problem = replace(problem, model=rom)
         if not rom.certified:
             problem, rom = prepared.problem, None
+            full_reason = "the reduced basis missed its tolerance at the optimum"
     log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
     screen = (
         screening_posterior(problem, rom, prepared.likelihood, cfg.reduced_tol)
@@ -119,9 +119,27 @@ def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
         write(state=posterior.state)
         return SamplingRun(calibration, posterior, {}, {})
     posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg)
+    if full_reason:
+        posterior = replace(
+            posterior, diagnostics={**posterior.diagnostics, "full_solves_reason": full_reason}
+        )
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     write(posterior=posterior, diagnostics=summary, predictions=predictions)
     return SamplingRun(calibration, posterior, summary, predictions)
+
+
+def _reduced_or_why(prepared, cfg: SamplerConfig, executor):
+    """``sampling_problem``'s (problem, rom) and, when a built-in or deck FE model gets full
+    solves although the study asks for the reduced basis, why (its warnings, re-issued)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        problem, rom = sampling_problem(
+            prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
+        )
+    for w in caught:
+        warnings.warn(str(w.message), RuntimeWarning, stacklevel=2)
+    why = "; ".join(str(w.message) for w in caught) if rom is None and cfg.reduced else ""
+    return problem, rom, why or None
 
 
 def _resume_state(options: SamplingOptions, config: dict) -> SamplerState | None:

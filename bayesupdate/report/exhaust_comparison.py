@@ -63,7 +63,8 @@ def _calibrated(records) -> list:
     if missing:
         blocks.append(
             f"No calibration file given for {', '.join(missing)}: its optimum and front are not "
-            "shown (studies/exhaust_shell_front.py MODEL --out FILE writes one)."
+            "shown (studies/exhaust_shell_front.py MODEL --out FILE writes one; the demo reads "
+            "the shell exhaust's with --shell-front FILE)."
         )
     return blocks
 

@@ -21,6 +21,7 @@ import contextlib
 import hashlib
 import io
 import json
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -79,9 +80,11 @@ def from_json(prefix: str, obj, out: dict, tmp: str) -> None:
 def from_attrs(prefix: str, attrs, out: dict, tmp: str) -> None:
     """HDF5 attributes; JSON text (``*_json``) compared field by field, wall times left out."""
     for key, value in attrs.items():
+        if key in VOLATILE:
+            continue
         if key.endswith("_json"):
             from_json(f"{prefix}@{key}", json.loads(value), out, tmp)
-        elif key not in VOLATILE:
+        else:
             out[f"{prefix}@{key}"] = digest(value, tmp)
 
 
@@ -125,8 +128,13 @@ def _text(fingerprint: dict, key: str) -> str:
     return json.dumps(fingerprint.get(key, "<missing>"))
 
 
+def _volatile(key: str) -> bool:
+    """A key under a volatile name (a baseline written before that name was listed)."""
+    return any(part in VOLATILE for part in re.split(r"[@./:\[]", key))
+
+
 def compare(now: dict, before: dict) -> int:
-    keys = sorted(set(now) | set(before))
+    keys = sorted(k for k in set(now) | set(before) if not _volatile(k))
     # through JSON text, so that NaN equals NaN
     differ = [k for k in keys if _text(now, k) != _text(before, k)]
     for key in differ:

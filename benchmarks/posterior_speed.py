@@ -197,6 +197,7 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
     wall, cpu = time.perf_counter() - t1, time.process_time() - c1
     summary = summarise(post)
     acceptance = post.acceptance
+    moves_info = post.diagnostics.get("moves") or {}
     row = dict(
         moves=moves, seed=seed,
         wall_s=sum(w for w, _ in phases.values()) + wall,
@@ -207,7 +208,9 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
         acceptance=float(np.mean(acceptance)), converged=post.converged,
         r_hat=max(v["r_hat"] for v in summary.values()),
         ess=min(v["ess_bulk"] for v in summary.values()),
-        kind=(post.diagnostics.get("moves") or {}).get("kind"),
+        kind=moves_info.get("kind"), coverage=moves_info.get("coverage"),
+        stuck=moves_info.get("stuck"), fallback=moves_info.get("fallback"),
+        load=round(os.getloadavg()[0], 1),
         **post.diagnostics.get("timings", {}),
     )  # fmt: skip
     if reference is not None:
@@ -241,7 +244,7 @@ def table(rows: list[dict]) -> None:
         mine = [r for r in rows if r["moves"] == moves]
         print(f"\n[{moves}] {len(mine)} seeds, all converged: {all(r['converged'] for r in mine)}")
         keys = ("wall_s", "cpu_s", "sampling_s", "sampling_cpu_s", "steps", "evaluations",
-                "screen_evaluations", "tau", "acceptance", *TIMED)  # fmt: skip
+                "screen_evaluations", "tau", "acceptance", "load", *TIMED)  # fmt: skip
         for key in keys:
             v = np.array([r.get(key, np.nan) for r in mine], dtype=float)
             print(f"  {key:<20} median {np.median(v):>10.2f}   min {v.min():>10.2f}   "
@@ -251,6 +254,11 @@ def table(rows: list[dict]) -> None:
             worst_sd = max(max(map(abs, r["sd_error_relative"])) for r in mine)
             print(f"  against the reference: worst |mean error| {worst_mean:.3f} sd, worst "
                   f"|sd error| {100 * worst_sd:.1f} %")  # fmt: skip
+    schemes = {r["moves"] for r in rows}
+    if {"de", "mixture"} <= schemes:
+        for key in ("wall_s", "cpu_s"):
+            med = {m: np.median([r[key] for r in rows if r["moves"] == m]) for m in schemes}
+            print(f"\nmedian {key}: de / mixture = {med['de'] / med['mixture']:.2f}")
 
 
 def main() -> None:

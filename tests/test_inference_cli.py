@@ -9,6 +9,7 @@ import pytest
 from bayesupdate.cli import main
 from bayesupdate.inference import load_modal_data, read_result, to_datatree
 from bayesupdate.inference.likelihood import LogPosterior
+from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS
 from bayesupdate.paper import TABLE2_EMA_HZ
 
 STUDY = """
@@ -113,9 +114,11 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
         assert row["hdi_low"] < row["mean"] < row["hdi_high"]
     assert result["sigma"] == {"fixed": 0.05}
     # one model call per proposal inside the bounds (+ the starting walkers), the three
-    # adaptation stages of the mixture moves (250 steps each) included
+    # adaptation stages of the mixture moves (250 steps each) and the coverage check's draws
+    # included
     assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == 750
-    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 750) * 16 + 3 * 16
+    check = COVERAGE_DRAWS
+    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 750) * 16 + 3 * 16 + check
     assert result["wall_s"] > 0
     assert len(result["autocorr_time"]) == 2
     assert result["compute"] == {"kind": "serial", "workers": 1}

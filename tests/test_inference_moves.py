@@ -23,7 +23,8 @@ from bayesupdate.inference.moves import (
     fit_gaussian_mixture,
     staged_proposal,
 )
-from bayesupdate.inference.moves.staged import STAGE_PRIOR_WEIGHTS
+from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS, importance_ess, stuck_share
+from bayesupdate.inference.moves.staged import MAX_STUCK, MIN_COVERAGE, STAGE_PRIOR_WEIGHTS
 from bayesupdate.inference.sampling import TIMED, sampler_space
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
@@ -117,10 +118,14 @@ def test_the_kept_run_never_changes_its_proposal(shear):
     assert len(seen) == 4 and all(m == seen[0] for m in seen)
     adapt_steps = 60 * len(STAGE_PRIOR_WEIGHTS)  # a DE stage, then one per refit but the last
     assert seen[0]["proposal"]["prior_weight"] == STAGE_PRIOR_WEIGHTS[-1] == 0.1
+    coverage = post.diagnostics["moves"]["coverage"]
     assert post.diagnostics["moves"] == {
         "kind": "mixture", "requested": "mixture", "fallback": None,
         "components": len(seen[0]["proposal"]["mixture"]["weights"]), "adapt_steps": adapt_steps,
+        "coverage": coverage, "stuck": post.diagnostics["moves"]["stuck"],
     }  # fmt: skip
+    # a unimodal 2-D posterior: the frozen mixture covers it (the fallback's tests are below)
+    assert MIN_COVERAGE <= coverage <= 1.0 and post.diagnostics["moves"]["stuck"] <= MAX_STUCK
     assert post.chain.shape[0] == 400  # the adaptation steps are not in the chain
     # where the time went: adaptation, exact and screening calls, checks, inside the run's wall
     timings = post.diagnostics["timings"]
@@ -134,7 +139,9 @@ def test_stuck_walkers_fall_back_to_de_and_say_so(shear):
     space = sampler_space(LogPosterior(problem, LikelihoodSpec(sigma=0.05)))
     stuck = np.zeros((50, 8, 2))  # every walker at one point: nothing to fit
 
-    proposal, info = staged_proposal(lambda moves, n: stuck, [], space, True, 50, seed=0)
+    proposal, info = staged_proposal(
+        lambda moves, n: (stuck, np.zeros(stuck.shape[:2])), [], space, True, 50, seed=0
+    )
     assert proposal is None
     assert info["fallback"].startswith("mixture proposal not fitted (1 distinct points")
 
@@ -172,3 +179,67 @@ def test_unknown_move_name_is_a_one_line_error(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "sampler.moves: unknown 'slice'; use one of mixture, de" in err
     assert len(err.splitlines()) == 1
+
+
+def test_importance_ess_of_a_too_wide_gaussian_matches_the_closed_form():
+    """p = N(0, I_d), g = N(0, s^2 I_d): E_g[(p/g)^2] = (s^2 / sqrt(2 s^2 - 1))^d, so the
+    ESS fraction is its inverse: 0.661 per dimension for s = 2, 0.289 in 3-D."""
+    rng = np.random.default_rng(5)
+    s, d, n = 2.0, 3, 400_000
+    y = s * rng.standard_normal((n, d))
+    log_p = -0.5 * np.sum(y**2, axis=1) + 17.0  # unnormalised: the constant must not matter
+    log_g = -0.5 * np.sum((y / s) ** 2, axis=1) - d * np.log(s)
+    expected = (np.sqrt(2 * s**2 - 1) / s**2) ** d
+    assert importance_ess(log_p, log_g) == pytest.approx(expected, rel=0.02)
+    assert importance_ess(log_g, log_g) == pytest.approx(1.0)
+    assert importance_ess(np.full(3, -np.inf), np.zeros(3)) == 0.0
+
+
+def test_a_mixture_that_misses_a_mode_falls_back_to_de_and_says_so(shear):
+    """The adaptation saw one mode of a bimodal p (its walkers never crossed): the frozen
+    mixture covers half of p, its importance ESS is far below MIN_COVERAGE, and the kept run
+    uses DE; with the second mode absent from p the same mixture passes."""
+    problem, _ = shear
+    space = sampler_space(LogPosterior(problem, LikelihoodSpec(sigma=0.05)))
+    a, b, sd = np.array([-1.0, 0.5]), np.array([1.0, -0.5]), 0.2
+
+    def one_mode(y, centre=a):
+        return -0.5 * np.sum(((y - centre) / sd) ** 2, axis=1)
+
+    seen = a + sd * np.random.default_rng(0).standard_normal((100, 16, 2))
+    stage = (seen, one_mode(seen.reshape(-1, 2)).reshape(100, 16))
+
+    def two_modes(y):
+        return np.logaddexp(one_mode(y), one_mode(y, b))
+
+    proposal, info = staged_proposal(
+        lambda moves, n: stage, [], space, True, 100, seed=0, log_density=two_modes
+    )
+    assert proposal is None and info["coverage"] < 0.05
+    assert info["fallback"].startswith("mixture proposal covers the posterior poorly")
+    assert f"of {COVERAGE_DRAWS} draws, >= {MIN_COVERAGE} needed" in info["fallback"]
+    assert info["fallback"].endswith("DE moves used")
+    proposal, info = staged_proposal(
+        lambda moves, n: stage, [], space, True, 100, seed=0, log_density=one_mode
+    )
+    assert proposal is not None and info["fallback"] is None and info["coverage"] > 0.5
+
+
+def test_stuck_share_of_a_too_narrow_gaussian_matches_the_closed_form():
+    """p = N(0, 1), g = N(0, s^2), s = 0.8 < 1: w / Z = p / g = s exp(x^2 (1/s^2 - 1) / 2)
+    exceeds r where |x| > sqrt(2 ln(r / s) / (1/s^2 - 1)); its p-probability is the share."""
+    from scipy.stats import norm
+
+    rng = np.random.default_rng(9)
+    s, r, n = 0.8, 3.0, 400_000
+    x, y = rng.standard_normal(n), s * rng.standard_normal(n)
+
+    def log_p(v):
+        return -0.5 * v**2 + 4.0  # unnormalised
+
+    def log_g(v):
+        return norm.logpdf(v, scale=s)
+
+    edge = np.sqrt(2 * np.log(r / s) / (1 / s**2 - 1))
+    share = stuck_share(log_p(x), log_g(x), log_p(y), log_g(y), ratio=r)
+    assert share == pytest.approx(2 * norm.sf(edge), rel=0.05)  # 0.030

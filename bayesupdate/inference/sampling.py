@@ -5,7 +5,8 @@ Moves (``SamplerSettings.moves``).  "mixture" (default): a frozen defensive Gaus
 independence proposal (0.8) with DE (0.2), fitted in stages before the kept run
 (``inference.moves.staged``, which says why the kept chain is valid); issue 21 found the DE moves
 alone under-estimate the exhaust posterior's sds by 4-10 %.  When the mixture cannot be fitted
-(too few distinct points) the run uses the DE moves and says so (``diagnostics["moves"]``).
+(too few distinct points) or covers the posterior poorly (the coverage check before the kept
+run, ``moves.coverage``) the run uses the DE moves and says so (``diagnostics["moves"]``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not
@@ -620,12 +621,14 @@ def _kept_moves(
     settings: SamplerSettings,
     run: _Run,
     log_posterior: LogPosterior,
-    run_steps: Callable[[list, int], np.ndarray | None],
+    run_steps: Callable[[list, int], tuple | None],
+    log_density: Callable[[np.ndarray], np.ndarray | None] | None = None,
 ) -> list | None:
     """The kept run's (move, weight) pairs; sets ``run.moves_info``.  Caller-given ``moves`` as
     they are; "de": ``default_moves()``; "mixture": the proposal of a resumed run, else the
-    staged adaptation (``moves.staged``) from ``run.state``, or DE when it cannot be fitted.
-    None when a stop request ended the adaptation."""
+    staged adaptation (``moves.staged``) from ``run.state``, or DE when it cannot be fitted or
+    covers the posterior poorly (``log_density``: the exact log-density in the sampler's
+    coordinates, None after a stop).  None when a stop request ended the adaptation."""
     if moves is not None:
         return moves
     if settings.moves == "de":
@@ -644,8 +647,9 @@ def _kept_moves(
     if run.moves_info is None:  # a fresh run, or one stopped while adapting: adapt from here
         logit = settings.transform == "logit"
         proposal, info = staged_proposal(
-            run_steps, default_moves(), space, logit, settings.adapt_steps, settings.seed
-        )
+            run_steps, default_moves(), space, logit, settings.adapt_steps, settings.seed,
+            log_density,
+        )  # fmt: skip
         if info.pop("interrupted"):
             return None
         kind = "de" if proposal is None else "mixture"
@@ -667,14 +671,22 @@ def _adaptation_stage(
     step_moves: list,
     n: int,
     request: StopRequest,
-) -> np.ndarray | None:
+) -> tuple[np.ndarray, np.ndarray] | None:
     """An adaptation stage: n steps with ``step_moves`` from ``run.state``; nothing is kept but
-    the walkers' positions (n, walkers, d), None when stopped.  Timed in ``run.clock``."""
+    the walkers' positions (n, walkers, d) and log-densities (n, walkers) in the sampler's
+    coordinates, None when stopped.  Timed in ``run.clock``."""
     t0 = time.perf_counter()
     stage = _ensemble(walkers, d, guarded, step_moves, screened)
-    coords, _, interrupted = _run_block(stage, run, n, stop, request, _NoBar())
+    coords, lps, interrupted = _run_block(stage, run, n, stop, request, _NoBar())
     run.clock["adapt_s"] += time.perf_counter() - t0
-    return None if interrupted else np.array(coords)
+    return None if interrupted else (np.array(coords), np.array(lps))
+
+
+def _checked(guarded, stop: dict, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
+    """The exact log-density (n,) at points x (n, d) off the chain (the coverage check,
+    ``moves.coverage``), None after a stop request."""
+    lp = guarded(x)
+    return None if stop["requested"] or request.requested() else lp
 
 
 def _first_run(log_posterior, calibration, initial, settings, space, resume, moves) -> _Run:
@@ -732,7 +744,10 @@ def sample_posterior(
     _start(run, guarded, stop)
     request = stop_request or StopRequest()
     stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, stop)
-    kept = _kept_moves(moves, settings, run, log_posterior, partial(stage, request=request))
+    checked = partial(_checked, guarded, stop, request)
+    kept = _kept_moves(
+        moves, settings, run, log_posterior, partial(stage, request=request), checked
+    )
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
         _raise_failure(stop)
         outcome = (True, False, np.full(d, np.inf))

@@ -1,5 +1,6 @@
 """emcee moves beyond DE: a frozen defensive Gaussian-mixture independence proposal, fitted in
-stages before the kept run (``staged``)."""
+stages before the kept run (``staged``) and checked for coverage of the posterior first
+(``coverage``)."""
 
 from bayesupdate.inference.moves.defensive_proposal import DefensiveProposal
 from bayesupdate.inference.moves.gaussian_mixture import GaussianMixture, fit_gaussian_mixture

@@ -47,7 +47,7 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 "full_solves_reason": why an FE model got full solves instead of its reduced basis | null,
 "screen": {"size", "max_rel_error", "evaluations"} | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
-"adapt_steps"}, "compute": {"kind", "workers"}, ...}."""
+"adapt_steps", "coverage", "stuck"}, "compute": {"kind", "workers"}, ...}."""
 
 
 def add_arguments(parser) -> None:

@@ -9,10 +9,18 @@ kind               location               parameters                            
 =================  =====================  ============================================  =========
 added_mass         sensor point (1..20)   m [kg] in [0, 2]                              uniform
 joint_flexibility  joint ``partA/partB``  k_rot [N m/rad] in [1e2, 1e6], both planes    lognormal
+connection_        pipe-to-shell-body     k_rot [N m/rad] in [1e3, 1e8] of the spring   lognormal
+flexibility        connection ``a/b``     between pipe and spider, both planes
 bend_flexibility   a named bend           factor [-] in [1, 6] dividing EI              uniform
 boundary_spring    sensor point (1..20)   k [N/m] in [0, 1e5], 3 translations           uniform
-stiffness_change   a part                 factor [-] on Young's modulus in [0.5, 1.5]   uniform
+stiffness_change   a part (beams, or a    factor [-] on Young's modulus in [0.5, 1.5]   uniform
+                   shell body's sheets)
 =================  =====================  ============================================  =========
+
+Joints are the spring parts ``a/b`` of a beam model (``exhaust``); connections are the spring
+parts a model lists in ``structure.metadata["connections"]``: springs in series with a rigid
+spider that joins a pipe to a shell body (``exhaust_shell``), whose modelled stiffness is
+effectively rigid, so their range reaches far higher than a beam joint's.
 
 A user adds a kind with ``register_effect_kind``.  Extended models name their extra parameters
 ``KIND@LOCATION:NAME`` (e.g. ``added_mass@14:m``).
@@ -96,16 +104,39 @@ def _sensor_node(model: FEModel, location: str) -> int:
 
 def _joints(model: FEModel) -> list[str]:
     s = model.structure
-    return [p for i, p in enumerate(s.parts) if "/" in p and np.any(s.spring_part == i)]
+    listed = s.metadata.get("connections", ())
+    return [
+        p
+        for i, p in enumerate(s.parts)
+        if "/" in p
+        and np.any(s.spring_part == i)
+        and p not in listed
+        and not p.startswith("connection_flexibility@")
+    ]
+
+
+def _connections(model: FEModel) -> list[str]:
+    """Spring parts the model names as pipe-to-shell connections (``metadata["connections"]``)
+    that still carry their bending stiffness (a connection already extended by
+    ``connection_flexibility`` has moved it to the effect's part: it is not offered again)."""
+    s = model.structure
+    listed = s.metadata.get("connections", ())
+    return [
+        p
+        for i, p in enumerate(s.parts)
+        if p in listed and np.any(s.spring_k[s.spring_part == i][:, 4:6] > 0)
+    ]
 
 
 def _bends(model: FEModel) -> list[str]:
     return list(model.structure.bends)
 
 
-def _beam_parts(model: FEModel) -> list[str]:
+def _stiff_parts(model: FEModel) -> list[str]:
+    """Parts with beams or shells (a modulus factor acts on both), in part order."""
     s = model.structure
-    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i)]
+    shell_part = s.shells.part if s.shells is not None else np.zeros(0, dtype=int)
+    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i) or np.any(shell_part == i)]
 
 
 # -- extensions -------------------------------------------------------------------------------
@@ -129,6 +160,16 @@ def _extend_joint(model, location, tag):
     }
 
 
+def _extend_connection(model, location, tag):
+    if location not in _connections(model):
+        raise BayesUpdateError(
+            f"unknown connection {location!r}; connections are {_connections(model)}"
+        )
+    return split_joint_bending(model.structure, location, tag), {
+        "k_rot": Binding(tag, "stiffness_factor")
+    }
+
+
 def _extend_bend(model, location, tag):
     if location not in model.structure.bends:
         raise BayesUpdateError(f"unknown bend {location!r}; bends are {_bends(model)}")
@@ -136,8 +177,8 @@ def _extend_bend(model, location, tag):
 
 
 def _extend_stiffness(model, location, tag):
-    if location not in _beam_parts(model):
-        raise BayesUpdateError(f"unknown part {location!r}; parts are {_beam_parts(model)}")
+    if location not in _stiff_parts(model):
+        raise BayesUpdateError(f"unknown part {location!r}; parts are {_stiff_parts(model)}")
     return model.structure, {"factor": Binding(location, "modulus_factor")}
 
 
@@ -203,9 +244,25 @@ for _kind in (
                 "factor", 0.8, (0.5, 1.5), _UNIFORM, "-", "factor on the part's Young's modulus"
             ),
         ),
-        _beam_parts,
+        _stiff_parts,
         _extend_stiffness,
         "a part stiffer or softer than modelled",
+    ),
+    EffectKind(
+        "connection_flexibility",
+        (
+            EffectParameter(
+                "k_rot",
+                1e5,
+                (1e3, 1e8),
+                {"kind": "lognormal", "mu": float(np.log(10**5.5)), "sigma": 3.0},
+                "N m/rad",
+                "bending stiffness of the pipe-to-spider spring in both planes",
+            ),
+        ),
+        _connections,
+        _extend_connection,
+        "a pipe-to-shell-body connection (weld, neck, clamp) more flexible than the rigid spider",
     ),
 ):
     register_effect_kind(_kind)

@@ -9,7 +9,8 @@ z = log(theta) (``ParameterSpace``).
 
 The *null value* of an effect parameter is the value at which the extended model equals the
 model without the effect (zero added mass, zero spring, factor 1, the joint's modelled
-stiffness): the localisation step probes each candidate by a small step away from it.
+stiffness, a connection's modelled spring): the localisation step probes each candidate by a
+small step away from it.
 """
 
 from collections.abc import Callable, Mapping
@@ -38,6 +39,7 @@ NULL_VALUES: dict[str, Callable] = {
     "bend_flexibility": lambda model, loc: {"factor": 1.0},
     "stiffness_change": lambda model, loc: {"factor": 1.0},
     "joint_flexibility": lambda model, loc: {"k_rot": _joint_null(model, loc)},
+    "connection_flexibility": lambda model, loc: {"k_rot": _joint_null(model, loc)},
 }
 
 

@@ -9,14 +9,22 @@ kind               location               parameters                            
 =================  =====================  ============================================  =========
 added_mass         sensor point (1..20)   m [kg] in [0, 2]                              uniform
 joint_flexibility  joint ``partA/partB``  k_rot [N m/rad] in [1e2, 1e6], both planes    lognormal
+connection_        pipe-to-shell-body     k_rot [N m/rad] in [1e3, 1e8] of the spring   lognormal
+flexibility        connection ``a/b``     between pipe and spider, both planes
 bend_flexibility   a named bend           factor [-] in [1, 6] dividing EI              uniform
 boundary_spring    sensor point (1..20)   k [N/m] in [0, 1e5], 3 translations           uniform
-stiffness_change   a part                 factor [-] on Young's modulus in [0.5, 1.5]   uniform
+stiffness_change   a part (beams, or a    factor [-] on Young's modulus in [0.5, 1.5]   uniform
+                   shell body's sheets)
 =================  =====================  ============================================  =========
 
-On a Nastran deck (``structure.metadata["nastran"]``) a stiffness change may also sit on a
-PSHELL property (``stiffness_change@PSHELL 3``: a factor on the modulus of its shells), unless
-a parameter already sets those shells' modulus.
+A stiffness change sits on a part with beams or shells (a shell body of ``exhaust_shell``; on a
+Nastran deck a PSHELL property, ``stiffness_change@PSHELL 3``), unless a parameter already sets
+the modulus of those shells.
+
+Joints are the spring parts ``a/b`` of a beam model (``exhaust``); connections are the spring
+parts a model lists in ``structure.metadata["connections"]``: springs in series with a rigid
+spider that joins a pipe to a shell body (``exhaust_shell``), whose modelled stiffness is
+effectively rigid, so their range reaches far higher than a beam joint's.
 
 A user adds a kind with ``register_effect_kind``.  Extended models name their extra parameters
 ``KIND@LOCATION:NAME`` (e.g. ``added_mass@14:m``).
@@ -100,16 +108,32 @@ def _sensor_node(model: FEModel, location: str) -> int:
 
 def _joints(model: FEModel) -> list[str]:
     s = model.structure
-    return [p for i, p in enumerate(s.parts) if "/" in p and np.any(s.spring_part == i)]
+    listed = s.metadata.get("connections", ())
+    return [
+        p
+        for i, p in enumerate(s.parts)
+        if "/" in p
+        and np.any(s.spring_part == i)
+        and p not in listed
+        and not p.startswith("connection_flexibility@")
+    ]
+
+
+def _connections(model: FEModel) -> list[str]:
+    """Spring parts the model names as pipe-to-shell connections (``metadata["connections"]``)
+    that still carry their bending stiffness (a connection already extended by
+    ``connection_flexibility`` has moved it to the effect's part: it is not offered again)."""
+    s = model.structure
+    listed = s.metadata.get("connections", ())
+    return [
+        p
+        for i, p in enumerate(s.parts)
+        if p in listed and np.any(s.spring_k[s.spring_part == i][:, 4:6] > 0)
+    ]
 
 
 def _bends(model: FEModel) -> list[str]:
     return list(model.structure.bends)
-
-
-def _beam_parts(model: FEModel) -> list[str]:
-    s = model.structure
-    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i)]
 
 
 # -- extensions -------------------------------------------------------------------------------
@@ -133,6 +157,16 @@ def _extend_joint(model, location, tag):
     }
 
 
+def _extend_connection(model, location, tag):
+    if location not in _connections(model):
+        raise BayesUpdateError(
+            f"unknown connection {location!r}; connections are {_connections(model)}"
+        )
+    return split_joint_bending(model.structure, location, tag), {
+        "k_rot": Binding(tag, "stiffness_factor")
+    }
+
+
 def _extend_bend(model, location, tag):
     if location not in model.structure.bends:
         raise BayesUpdateError(f"unknown bend {location!r}; bends are {_bends(model)}")
@@ -140,19 +174,17 @@ def _extend_bend(model, location, tag):
 
 
 def _stiffness_parts(model: FEModel) -> list[str]:
-    """The beam parts, and on a Nastran deck also its PSHELL parts (``PSHELL 3``) whose shells
-    no parameter already sets the modulus of (a MAT1 E binding)."""
+    """Parts with beams or shells (a modulus factor acts on both), in part order; a shell part
+    only where no parameter already sets its shells' modulus (a deck's MAT1 E binding)."""
     s = model.structure
-    if s.shells is None or "nastran" not in s.metadata:
-        return _beam_parts(model)
+    if s.shells is None:
+        return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i)]
     taken = np.zeros(s.shells.n_elements, bool)
     for name, binding in model.bindings.items():
         if binding.property in ("youngs_modulus", "modulus_factor"):
             taken |= model.shells_of(name)
-    shells = [p for i, p in enumerate(s.parts)
-              if p.startswith("PSHELL ") and np.any(s.shells.part == i)
-              and not np.any(taken[s.shells.part == i])]  # fmt: skip
-    return _beam_parts(model) + shells
+    free = s.shells.part[~taken]
+    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i) or np.any(free == i)]
 
 
 def _extend_stiffness(model, location, tag):
@@ -226,6 +258,22 @@ for _kind in (
         _stiffness_parts,
         _extend_stiffness,
         "a part stiffer or softer than modelled",
+    ),
+    EffectKind(
+        "connection_flexibility",
+        (
+            EffectParameter(
+                "k_rot",
+                1e5,
+                (1e3, 1e8),
+                {"kind": "lognormal", "mu": float(np.log(10**5.5)), "sigma": 3.0},
+                "N m/rad",
+                "bending stiffness of the pipe-to-spider spring in both planes",
+            ),
+        ),
+        _connections,
+        _extend_connection,
+        "a pipe-to-shell-body connection (weld, neck, clamp) more flexible than the rigid spider",
     ),
 ):
     register_effect_kind(_kind)

@@ -11,7 +11,10 @@ pipe's radius, and is joined to every node of the hole's ring by an RBE2 spider 
 components). A closed tube welded into the hole is far stiffer in its own section plane than the
 cap sheet, so a rigid ring is the welded pipe; the cap around it flexes with its own thickness, and
 that is the joint stiffness the beam model lumps into springs. (An RBE3 would add no stiffness and
-leave the ring free to ovalise, which a welded pipe does not allow.)  At the main muffler's
+leave the ring free to ovalise, which a welded pipe does not allow.)  The spider's centre follows
+the pipe end through a connection spring (``_connection``: bending ``connection_k_rot``, rigid
+by default) in parts named as the beam model's joints, which discovery scans
+(``connection_flexibility``) and the uncertainty study floats.  At the main muffler's
 inlet the ring is an oval collar (fitted width and height: the pipe's welded footprint, a formed
 neck or doubler), which makes that joint stiffer in vertical than in horizontal bending, as seed
 Table 1's modes 9/10 (H5 71.0, V5 88.6 Hz) need. The sensors on the shell
@@ -55,12 +58,21 @@ DESIGN_BINDINGS = exhaust.DESIGN_BINDINGS
 DESIGN_DEFAULTS = exhaust.DESIGN_DEFAULTS
 DESIGN_BOUNDS = exhaust.DESIGN_BOUNDS
 
+#: default bending stiffness [N m/rad] of each pipe-to-body connection spring (``_connection``):
+#: effectively rigid (against RBE2-rigid connections the 12 modes move by at most 0.004 % at
+#: mesh density 16, 1e6 would move them by 0.4 %: docs/guide/exhaust-shell.md, "Connection
+#: springs"), and the null of discovery's ``connection_flexibility``, whose range ends at it
+CONNECTION_K_ROT = 1.0e8
+#: the option's range [N m/rad], discovery's range too: from rigid down to a connection as soft
+#: as 5 m of the 40 mm pipe (EI / L, about 1e3), where all six at it lower the modes by 40-60 %
+CONNECTION_K_RANGE = (1.0e3, 1.0e8)
 _SHELL_10K = Material(STEEL.youngs_modulus, STEEL.poisson, 10.0e3, "steel, altered density")
 _SPIDER = "123456"
 
 
 def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_c, baffles=()):
-    """A closed oval body (``key`` in cat, im, mm) from the pipe end node ``inlet`` along x.
+    """A closed oval body (``key`` in cat, im, mm) from the pipe end node ``inlet`` along x,
+    joined to the pipes at both caps by ``_connection`` springs (``g["connection_k_rot"]``).
 
     Walls: mantle and baffles ``{key}_wall``, caps at ``_thickness_factor`` of it; the caps are
     cones of depth ``{key}_cone``; internal tubes (``_TUBES``) join hole rings; both caps' holes
@@ -93,7 +105,10 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
     part = _PART[key]
     ids = b.add_shells(body.nodes, body.quads, thickness=thickness, material=material, part=part)
     outlet = b.add_node(x0 + (length, 0.0, 0.0))
-    hole_centre = [inlet, outlet]
+    hole_centre = [b.add_node(x0), b.add_node(x0 + (length, 0.0, 0.0))]
+    upstream, downstream = CONNECTIONS[key]
+    _connection(b, inlet, hole_centre[0], g["connection_k_rot"][upstream], upstream)
+    _connection(b, outlet, hole_centre[1], g["connection_k_rot"][downstream], downstream)
     for xb in baffles:  # tube nodes at the baffles (a few per body: not a hot path)
         hole_centre.append(b.add_node(x0 + (xb, -offset[0], -offset[1])))
     for disc, centre in enumerate(hole_centre):
@@ -107,6 +122,25 @@ def _shell_body(b: StructureBuilder, g: dict, key: str, inlet: int, material, n_
         b.add_rbe3(node, ids[body.rings[j]])
         axis.append(node)
     return outlet, axis, body, ids
+
+
+#: the pipe-to-body connections of each body (inlet, outlet), named as the beam model's joints
+CONNECTIONS = {
+    "cat": ("hot_pipe/catalyst", "catalyst/cold_pipe"),
+    "im": ("cold_pipe/intermediate_muffler", "intermediate_muffler/cold_pipe"),
+    "mm": ("cold_pipe/main_muffler", "main_muffler/tail_pipe"),
+}
+CONNECTION_NAMES = tuple(name for pair in CONNECTIONS.values() for name in pair)
+
+
+def _connection(b: StructureBuilder, pipe: int, spider: int, k_rot: float, name: str) -> None:
+    """The pipe end ``pipe`` joined to its spider's centre ``spider`` (same point): translations
+    and torsion rigid (RBE2 ``"1234"``, the pipe axis is x), bending in both planes through a
+    spring of ``k_rot`` [N m/rad] in part ``name`` (``"pipe/body"``), in series with the cap's own
+    flexibility.  The spring is what discovery's ``connection_flexibility`` scales and what the
+    uncertainty study floats; at the default (``CONNECTION_K_ROT``) it is effectively rigid."""
+    b.add_rbe2(pipe, [spider], "1234")
+    b.add_spring(pipe, spider, [0.0, 0.0, 0.0, 0.0, k_rot, k_rot], name)
 
 
 def _collar(g: dict, key: str):
@@ -214,13 +248,48 @@ def _downstream(b: StructureBuilder, g: dict, n_c: int, path: list):
     return body, ids
 
 
+def connection_stiffnesses(k_rot: float | dict | None = None) -> dict:
+    """{connection name: bending stiffness [N m/rad]} of the six pipe-to-body connections from
+    one value, a partial dict (the rest at ``CONNECTION_K_ROT``) or None (all at it); each must
+    lie in ``CONNECTION_K_RANGE``, else a one-line error with the range."""
+    if k_rot is None or isinstance(k_rot, dict):
+        given = dict(k_rot or {})
+    else:
+        given = dict.fromkeys(CONNECTION_NAMES, k_rot)
+    unknown = sorted(set(given) - set(CONNECTION_NAMES))
+    if unknown:
+        raise BayesUpdateError(
+            f"exhaust_shell connection_k_rot: unknown connections {unknown}; "
+            f"they are {list(CONNECTION_NAMES)}"
+        )
+    out = dict.fromkeys(CONNECTION_NAMES, CONNECTION_K_ROT)
+    lo, hi = CONNECTION_K_RANGE
+    for name, value in given.items():
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            v = float("nan")
+        if not lo <= v <= hi:
+            shown = f"{v:g}" if np.isfinite(v) else repr(value)
+            raise BayesUpdateError(
+                f"exhaust_shell connection_k_rot: {name} = {shown} N m/rad is outside its range "
+                f"[{lo:g}, {hi:g}] N m/rad"
+            )
+        out[name] = v
+    return out
+
+
 def build_exhaust_shell_structure(g: dict, mesh_density: float = MESH_DENSITY_DEFAULT):
     """The shell exhaust ``Structure`` at the initial design for a full geometry
-    (``exhaust_shell_geometry.shell_geometry``) and ``mesh_density`` elements around each oval body.
+    (``exhaust_shell_geometry.shell_geometry``; ``g["connection_k_rot"]`` as
+    ``connection_stiffnesses`` gives, all at ``CONNECTION_K_ROT`` when absent) and
+    ``mesh_density`` elements around each oval body.
 
     ``metadata``: path_nodes (gas path from the manifold to the tail, pipe nodes and body axis
     nodes), path_s (their arc length [m]), mm_internal_mass_kg (the internals' mass closing the
-    12.29 kg budget), n_shells."""
+    12.29 kg budget), n_shells, connections (the connection springs' parts, which discovery's
+    ``connection_flexibility`` scans)."""
+    g = {"connection_k_rot": connection_stiffnesses(), **g}
     b = StructureBuilder()
     path = _upstream(b, g, mesh_density)
     _downstream(b, g, mesh_density, path)
@@ -238,6 +307,7 @@ def build_exhaust_shell_structure(g: dict, mesh_density: float = MESH_DENSITY_DE
         path_s=s_path,
         mm_internal_mass_kg=float(m_int),
         n_shells=int(structure.shells.n_elements),
+        connections=CONNECTION_NAMES,
     )
     return structure
 
@@ -292,16 +362,23 @@ def _place_sensors(b: StructureBuilder, g: dict, path: list) -> np.ndarray:
 
 
 def build_exhaust_shell_model(
-    geometry: str | int | dict = "best", mesh_density: float = MESH_DENSITY_DEFAULT
+    geometry: str | int | dict = "best",
+    mesh_density: float = MESH_DENSITY_DEFAULT,
+    connection_k_rot: float | dict | None = None,
 ) -> FEModel:
     """The shell exhaust ``FEModel`` with the five design variables of seed Table 3.
 
     geometry : "best", an index (0 = best, 1.. = runner-ups) or a dict of shell quantities
     overriding the stored fit (``exhaust_shell_geometry.SHELL_QUANTITIES``; each checked against
     its plausible range).  mesh_density : elements around each oval body (a multiple of 4 in
-    ``MESH_DENSITY_RANGE``; axial and radial sizes follow, ``exhaust_shell_mesh``)."""
+    ``MESH_DENSITY_RANGE``; axial and radial sizes follow, ``exhaust_shell_mesh``).
+    connection_k_rot : bending stiffness [N m/rad] of the pipe-to-body connection springs
+    (``_connection``): one value for all six, or {connection name: value} for some
+    (``CONNECTION_NAMES``; the rest at ``CONNECTION_K_ROT``), each in ``CONNECTION_K_RANGE``."""
     mesh_density = check_mesh_density(mesh_density)
-    structure = build_exhaust_shell_structure(shell_geometry(geometry), mesh_density)
+    g = shell_geometry(geometry)
+    g["connection_k_rot"] = connection_stiffnesses(connection_k_rot)
+    structure = build_exhaust_shell_structure(g, mesh_density)
     return FEModel(
         structure,
         dict(DESIGN_BINDINGS),

@@ -247,10 +247,14 @@ def test_result_file_round_trip_and_extended_model(frame, named_mass, tmp_path):
     f = extended.solve({"t_a": summary["final_parameters"]["t_a"]}, 8).frequencies_hz
     np.testing.assert_allclose(f, result.final.frequencies_hz, rtol=1e-5)
     # the optional posterior of the re-calibrated model: walkers from the Laplace Gaussian,
-    # a short emcee run; its mean mass sits within 4 posterior sd of the truth (0.3 kg)
+    # a short emcee run; its mean mass sits within 4 posterior sd of the truth (0.3 kg).  DE
+    # moves: the default mixture's adaptation (2 x 250 steps + 1000 coverage solves) would be
+    # 19x this 40-step run; the moves' accuracy is test_posterior_reference's and
+    # test_inference_moves' subject, the extended model's parameters are this test's
     from bayesupdate.discovery.posterior import sample_final
 
-    chain, _ = sample_final(result, steps=40, walkers=8, seed=3)
+    chain, _ = sample_final(result, steps=40, walkers=8, seed=3, moves="de")
+    assert chain.diagnostics["moves"]["kind"] == "de"
     draws = chain.chain[10:, :, 1].ravel()
     assert np.all(np.isfinite(chain.log_prob))
     assert abs(draws.mean() - 0.3) < 4 * max(draws.std(), 1e-3)

@@ -7,8 +7,9 @@ data's frequency sd (sigma ~ 0, the sd added in quadrature), a fixed sigma, or a
 with a half-normal prior (scale 5 %) integrated out by the sampler.  It is a likelihood of the
 frequencies only: test shapes (``shape_evidence``) shape the evidence and the optimum, not this
 posterior.
-Costs ``walkers x steps`` model solves (e.g. 16 x 500 = 8,000 solves, minutes on the exhaust),
-hence off by default.
+Costs ``walkers x steps`` model solves for the kept run (e.g. 16 x 500 = 8,000 solves, minutes on
+the exhaust), plus, with the default "mixture" moves, ``walkers x 2 x adapt_steps`` adaptation
+solves and 1000 for the coverage check (``inference.sampling``), hence off by default.
 """
 
 import numpy as np
@@ -32,8 +33,13 @@ def likelihood_for(noise, pairing_method: str) -> LikelihoodSpec:
     return LikelihoodSpec(sigma=None, sigma_prior=prior, pairing=pairing)
 
 
-def sample_final(result, steps: int = 500, walkers: int | None = None, seed: int = 1):
-    """(PosteriorResult, LogPosterior) of ``result.final`` (module docstring)."""
+def sample_final(
+    result, steps: int = 500, walkers: int | None = None, seed: int = 1, moves: str = "mixture"
+):
+    """(PosteriorResult, LogPosterior) of ``result.final`` (module docstring).
+
+    moves : ``SamplerSettings.moves``: "mixture" (default) or "de" (no adaptation stages: the
+    cheaper choice for a short look, with DE's narrower tails, issue 21)."""
     fit = result.final
     space = fit.space
     problem = space.problem
@@ -52,7 +58,7 @@ def sample_final(result, steps: int = 500, walkers: int | None = None, seed: int
         sigma = np.sqrt(max(rss / m, 1e-8)) * np.exp(rng.normal(0, np.sqrt(0.5 / m), walkers))
         theta = np.column_stack([theta, sigma])
     settings = SamplerSettings(
-        walkers=walkers, steps=steps, seed=seed, check_every=max(steps // 4, 1)
+        walkers=walkers, steps=steps, seed=seed, check_every=max(steps // 4, 1), moves=moves
     )
     posterior = sample_posterior(log_post, settings=settings, initial=theta)
     return posterior, log_post

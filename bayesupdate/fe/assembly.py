@@ -18,7 +18,7 @@ import scipy.sparse as sp
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
 from bayesupdate.fe.rotations import skew
-from bayesupdate.fe.sections import section_properties
+from bayesupdate.fe.sections import section_areas, section_properties
 from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
 
 
@@ -224,9 +224,7 @@ class Assembler:
         s = self.structure
         memo = getattr(self, "_area_memo", None)  # areas change only with the wall thickness
         if memo is None or not np.array_equal(memo[0], props.beam_thickness):
-            area = section_properties(
-                s.beam_shape, s.beam_width, s.beam_height, props.beam_thickness, s.beam_nu
-            )["A"]
+            area = section_areas(s.beam_shape, s.beam_width, s.beam_height, props.beam_thickness)
             self._area_memo = memo = (props.beam_thickness.copy(), area)
         m_beam = props.beam_rho * memo[1] * self.lengths
         mid = 0.5 * (s.nodes[s.beam_nodes[:, 0]] + s.nodes[s.beam_nodes[:, 1]])

@@ -113,7 +113,7 @@ def section_properties(shape_code, width, height, thickness, poisson) -> dict:
     if np.any(tube):
         ro = 0.5 * w[tube]
         ri = ro - t[tube]
-        a = np.pi * (ro**2 - ri**2)
+        a = _tube_area(ro, ri)
         i = np.pi / 4.0 * (ro**4 - ri**4)
         m = ri / ro
         n = nu[tube]
@@ -125,7 +125,7 @@ def section_properties(shape_code, width, height, thickness, poisson) -> dict:
     solid = code == 2
     if np.any(solid):
         r = 0.5 * w[solid]
-        a = np.pi * r**2
+        a = _disc_area(r)
         i = np.pi / 4.0 * r**4
         k = 6 * (1 + nu[solid]) / (7 + 6 * nu[solid])
         A[solid], Iy[solid], Iz[solid], J[solid] = a, i, i, 2 * i
@@ -138,18 +138,51 @@ def section_properties(shape_code, width, height, thickness, poisson) -> dict:
     return {"A": A, "Iy": Iy, "Iz": Iz, "J": J, "Asy": Asy, "Asz": Asz}
 
 
+def section_areas(shape_code, width, height, thickness) -> np.ndarray:
+    """(n,) areas A [m^2]: ``section_properties(...)["A"]`` to the bit, without the other
+    properties (the total mass needs A alone, at every thickness a calibration tries)."""
+    code = np.asarray(shape_code)
+    w = np.asarray(width, dtype=float)
+    t = np.asarray(thickness, dtype=float)
+    A = np.empty_like(w)
+    tube, solid, oval = code == 0, code == 2, code == 1
+    ro = 0.5 * w[tube]
+    A[tube] = _tube_area(ro, ro - t[tube])
+    A[solid] = _disc_area(0.5 * w[solid])
+    if np.any(oval):
+        wq = _oval_midline(w[oval], np.asarray(height, dtype=float)[oval], t[oval])[-1]
+        A[oval] = 4 * np.sum(wq, axis=1) * t[oval]
+    return A
+
+
+def _tube_area(outer_radius, inner_radius):
+    return np.pi * (outer_radius**2 - inner_radius**2)
+
+
+def _disc_area(radius):
+    return np.pi * radius**2
+
+
+def _oval_midline(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple:
+    """(ay, az, dy, dz, ds, wq) of thin elliptical tubes' mid-lines: semi-axes (n, 1) [m], the
+    tangent (n, 24) [m/rad], its length and the quadrature weights for arc length over the
+    quarter ellipse (n, 24) [m]."""
+    tt = t[:, None]
+    ay = 0.5 * (w[:, None] - tt)
+    az = 0.5 * (h[:, None] - tt)
+    dy = -ay * np.sin(_PHI)
+    dz = az * np.cos(_PHI)
+    ds = np.sqrt(dy**2 + dz**2)
+    return ay, az, dy, dz, ds, _PHI_W * ds
+
+
 def _thin_oval(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple:
     """(A, Iy, Iz, J, Asy, Asz) (n,) each of thin elliptical tubes of outer width w, height h and
     wall t [m]: wall integrals by quadrature over the mid-line (Bredt's J for the torsion)."""
     tt = t[:, None]
-    ay = 0.5 * (w[:, None] - tt)  # mid-line semi-axes
-    az = 0.5 * (h[:, None] - tt)
+    ay, az, dy, dz, ds, wq = _oval_midline(w, h, t)
     y = ay * np.cos(_PHI)
     z = az * np.sin(_PHI)
-    dy = -ay * np.sin(_PHI)
-    dz = az * np.cos(_PHI)
-    ds = np.sqrt(dy**2 + dz**2)
-    wq = _PHI_W * ds  # quadrature weights for arc length, quarter ellipse
     perimeter = 4 * np.sum(wq, axis=1)
     area = perimeter * tt[:, 0]
     iy = 4 * tt[:, 0] * np.sum(wq * z**2, axis=1)

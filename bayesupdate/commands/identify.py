@@ -165,6 +165,9 @@ def _print_modes(summary: dict, out, report) -> None:
         print(f"report: {report}")
 
 
+CUT_KEYS = ("cut_hz", "cut_damping", "cut_end")
+
+
 def _summary(result, out, notes, report) -> dict:
     """The modes, dropped poles, notes and files as printed by --json."""
     from bayesupdate.report.identify_report import mpc_reasons
@@ -184,6 +187,11 @@ def _summary(result, out, notes, report) -> dict:
             for r in range(modes.n_modes)
         ],
         "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
+        # resonances an end of the range cuts: fitted, not reported as modes (ema.identify)
+        "cut": [
+            {"frequency_hz": float(f), "damping_ratio": float(z), "end": e}
+            for f, z, e in zip(*(result.extra[k] for k in CUT_KEYS), strict=True)
+        ],
         "out": str(out),
         "notes": list(notes),
     }

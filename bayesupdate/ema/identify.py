@@ -5,7 +5,9 @@ The range (the whole axis, or the band given) is split into consecutive narrow b
 (:mod:`bayesupdate.ema.bands`); the modes of all bands are merged, a duplicate pair (frequency
 within 1 %, pole-vector MAC >= 0.9) keeping the estimate farther from its band's edges; the poles
 at the ends of the analysed range are then refined on the FRFs by variable projection with an
-extra pole beyond the end (:func:`_refine_ends`).  Poles are
+extra pole beyond the end (:func:`_refine_ends`).  A resonance that an end of the range cuts
+(its half-power band reaching past the end: :func:`_refine_window`, :func:`_move_cut_modes`)
+stays in the fit but is not reported as a mode; ``extra["cut_hz"]`` names it.  Poles are
 estimated globally over all FRFs of all test sets; the residues of all FRFs are then fitted at
 once by LSFD over the analysed range, and the shapes of the sets are scaled by their driving
 points and aligned on shared DOFs (:func:`~bayesupdate.ema.lsfd.shapes_from_residues`).
@@ -50,6 +52,7 @@ class Identification:
     synthesized: np.ndarray  # (n_frf, n_f) synthesized FRFs on the fit range lines
     frf_correlation: np.ndarray  # (n_frf,) FRAC of synthesized vs measured
     mass_normalised: np.ndarray  # (m,) bool
+    # dropped_hz (pruned poles); cut_hz, cut_damping, cut_end (:func:`_cut_summary`)
     extra: dict = field(default_factory=dict)
 
 
@@ -267,55 +270,96 @@ def _extra_pole(f_hz: float, above: bool) -> np.ndarray:
 
 
 def _end_windows(frfs: FrfSet, lo_i: int, hi_i: int, residual_poles) -> list:
-    """(first line, last line, extra poles) of each end of the analysed range lines lo_i..hi_i
-    whose poles :func:`_refine_ends` refines: the top end, and the bottom end when the range
-    starts more than 10 lines above 0 Hz; each one automatic band wide
+    """(first line, last line, extra poles, top?) of each end of the analysed range lines
+    lo_i..hi_i whose poles :func:`_refine_ends` refines: the top end, and the bottom end when
+    the range starts more than 10 lines above 0 Hz; each one automatic band wide
     (:func:`~bayesupdate.ema.bands.default_band_lines`).  The extra pole is free: at the top
     it starts at the residual pole (:func:`_residual_poles`) if there is one, else beyond the
     end.  Free, not fixed: a residual pole hugging the data's last line can be an artefact of
     the edge (FEMAP deck, 0-150 Hz: a pole at 150.00 Hz, damping 0.2 %, while the mode there
     is at 149.78 Hz); held fixed in the window it moved the refined 120.4 Hz mode by -2e-3.
-    A free extra pole that stays on the lines fails the refinement's test (it stands for a
-    mode beyond them), and the stabilised poles are kept."""
+    A free extra pole that converges on the lines is a resonance the end cuts
+    (:func:`_refine_window`)."""
     f, width = frfs.frequencies_hz, default_band_lines(hi_i - lo_i + 1)
     first = max(lo_i, int(np.searchsorted(f, 0.0, side="right")))
     top_extra = _extra_pole(f[hi_i], above=True) if residual_poles.size == 0 else residual_poles
-    windows = [(max(first, hi_i - width), hi_i, top_extra)]
+    windows = [(max(first, hi_i - width), hi_i, top_extra, True)]
     if f[lo_i] > 10 * frfs.df_hz:
-        windows.append((first, min(hi_i, first + width), _extra_pole(f[first], above=False)))
+        windows.append((first, min(hi_i, first + width), _extra_pole(f[first], above=False), False))
     return windows
 
 
-def _refine_ends(frfs: FrfSet, lo_i: int, hi_i: int, selected: list, residual_poles) -> list:
+def _is_cut(pole: complex, f_lo: float, f_hi: float, top: bool) -> bool:
+    """Whether a stable pole [rad/s] is a resonance that the end (top or bottom) of lines
+    f_lo..f_hi [Hz] cuts: its damped frequency on the lines and its half-power band,
+    w_d +- |Re s|, past that end.  A peak beyond the lines is a mode beyond the range, which
+    an extra pole stands for (:func:`_end_windows`), even when its flank reaches the lines."""
+    w_lo, w_hi = 2 * np.pi * f_lo, 2 * np.pi * f_hi
+    on_lines = pole.real < 0 and w_lo <= pole.imag <= w_hi
+    past = pole.imag - pole.real > w_hi if top else pole.imag + pole.real < w_lo
+    return bool(np.isfinite(pole) and on_lines and past)
+
+
+def _refine_window(frfs: FrfSet, window, poles, fixed) -> tuple[np.ndarray, np.ndarray]:
+    """Refined poles (q,) of one end window (:func:`_end_windows`) and the resonance the end
+    cuts, (0 or 1,) [rad/s].
+
+    First the window's poles with one free extra pole (:func:`~bayesupdate.ema.pole_refinement.
+    refine_poles`).  When that extra pole converges on the lines with its half-power band past
+    the end (:func:`_is_cut`; the refinement is then rejected), it found a resonance the end
+    cuts, and one pole cannot stand for it and for the modes beyond: the window is refined
+    again with that resonance as a free pole, allowed on the lines, and a new extra pole
+    beyond the end, free, or, when the free one is rejected, fixed at its start.
+
+    FEMAP deck, 0-150 Hz, a mode at 149.78 Hz (2.8 Hz half-width), the next at 171.6 Hz: the
+    cut mode's flank biased the 120.4 Hz mode by -4.9e-4 (1 % noise); the one extra pole,
+    moved onto it, left the modes above unmodelled (-1.6e-4 without noise; 2e-7 with the
+    pole beyond).  With noise the window holds too little of the flank beyond to place that
+    pole: free, it went unstable (-6 % damping) in 2 of 4 draws.  When these are rejected,
+    the first refinement's result stands (the starting poles if it was rejected too)."""
+    a, b, extra, top = window
+    f = frfs.frequencies_hz
+    lines, h = f[a : b + 1], frfs.frf[:, a : b + 1]
+    first = refine_poles(lines, h, poles, extra.astype(complex), fixed, frfs.kind)
+    found = first.converged_extra[0]
+    if not _is_cut(found, f[a], f[b], top):
+        return first.poles, np.zeros(0, complex)
+    beyond = _extra_pole(f[b] if top else f[a], above=top)
+    free_beyond = (np.concatenate([[found], beyond]), fixed)
+    for start, held in (free_beyond, (np.array([found]), np.concatenate([fixed, beyond]))):
+        ref = refine_poles(lines, h, poles, start, held, frfs.kind, cut=1)
+        if ref.accepted and _is_cut(ref.extra[0], f[a], f[b], top):
+            return ref.poles, ref.extra[:1]
+    return first.poles, np.zeros(0, complex)
+
+
+def _refine_ends(frfs: FrfSet, lo_i: int, hi_i: int, selected: list, residual_poles) -> tuple:
     """The selected poles, those at the ends of the analysed range refined by variable
-    projection (:func:`~bayesupdate.ema.pole_refinement.refine_poles`) on the lines of each
-    end's window (:func:`_end_windows`).  The rule: a pole is refined when it lies in such a
-    window, as there no identified pole models the flank of a mode beyond the range (the
-    poles of the inner bands have their neighbours on both sides); the poles within one
-    window's width of it enter the basis fixed."""
+    projection (:func:`_refine_window`) on the lines of each end's window
+    (:func:`_end_windows`), and the resonances the ends cut, ((top, bottom) each (0 or 1,)
+    [rad/s]).  The rule: a pole is refined when it lies in such a window, as there no
+    identified pole models the flank of a mode beyond the range (the poles of the inner bands
+    have their neighbours on both sides); the poles within one window's width of it enter the
+    basis fixed."""
     f = frfs.frequencies_hz
     poles = np.array([p.pole for p in selected])
-    for a, b, extra in _end_windows(frfs, lo_i, hi_i, residual_poles):
+    cut = [np.zeros(0, complex), np.zeros(0, complex)]
+    for window in _end_windows(frfs, lo_i, hi_i, residual_poles):
+        a, b = window[:2]
         fd = poles.imag / (2 * np.pi)
         free = (fd >= f[a]) & (fd <= f[b])
         span = f[b] - f[a]
         near = ~free & (fd > f[a] - span) & (fd < f[b] + span)
-        if not free.any():
-            continue
-        ref = refine_poles(
-            f[a : b + 1],
-            frfs.frf[:, a : b + 1],
-            poles[free],
-            extra.astype(complex),
-            poles[near],
-            frfs.kind,
-        )
-        poles[free] = ref.poles
+        if free.any():
+            poles[free], cut[0 if window[3] else 1] = _refine_window(
+                frfs, window, poles[free], poles[near]
+            )
     fn, zeta = modal_from_poles(poles)
-    return [
+    refined = [
         p if p.pole == s else replace(p, pole=s, frequency_hz=float(n), damping_ratio=float(z))
         for p, s, n, z in zip(selected, poles, fn, zeta, strict=True)
     ]
+    return refined, tuple(cut)
 
 
 def _fit_end(frfs: FrfSet, f_top: float, fit_hi: int) -> int:
@@ -366,6 +410,41 @@ def _synthesis(frfs: FrfSet, fit: LsfdFit, fit_poles: np.ndarray, lines: slice) 
     return synth, frf_correlation(frfs.frf[:, lines], synth)
 
 
+def _move_cut_modes(frfs: FrfSet, selected: list, cut: tuple, lo_i: int, hi_i: int) -> tuple:
+    """The selected modes without those whose half-power band an end of the analysed range
+    (lines lo_i..hi_i) cuts (:func:`_is_cut`; the bottom end only where the range starts more
+    than 10 lines above 0 Hz), and those added to the cut resonances ``cut`` (top, bottom).
+    Their estimates rest on one flank, so they are not reported; they stay in the LSFD basis.
+    BayesUpdateError when no mode is left."""
+    f = frfs.frequencies_hz
+    bottom = f[lo_i] > 10 * frfs.df_hz
+    top_cut = [_is_cut(p.pole, f[lo_i], f[hi_i], True) for p in selected]
+    low_cut = [bottom and _is_cut(p.pole, f[lo_i], f[hi_i], False) for p in selected]
+    kept = [p for p, t, b in zip(selected, top_cut, low_cut, strict=True) if not (t or b)]
+    if not kept:
+        raise BayesUpdateError(
+            f"{frfs.source or 'FRF set'}: every mode found has its half-power band cut by the "
+            f"end of the range {f[lo_i]:g}-{f[hi_i]:g} Hz; widen the band"
+        )
+    top = [p.pole for p, t in zip(selected, top_cut, strict=True) if t]
+    low = [p.pole for p, b in zip(selected, low_cut, strict=True) if b]
+    return kept, (np.concatenate([top, cut[0]]), np.concatenate([cut[1], low]))
+
+
+def _cut_summary(cut: tuple) -> dict:
+    """``extra`` entries of the resonances the ends of the range cut (:func:`_refine_window`):
+    natural frequencies [Hz] and damping ratios, (c,) each, bottom end first, and "top" or
+    "bottom" per resonance.  They are in the LSFD basis but not among the modes: with part of
+    the half-power band beyond the range, their estimates rest on one flank."""
+    poles = np.concatenate(cut)
+    fn, zeta = modal_from_poles(poles) if poles.size else (np.zeros(0), np.zeros(0))
+    return {
+        "cut_hz": np.asarray(fn, float),
+        "cut_damping": np.asarray(zeta, float),
+        "cut_end": tuple(["bottom"] * cut[1].size + ["top"] * cut[0].size),
+    }
+
+
 def identify(
     frfs: FrfSet,
     band_hz: tuple[float, float] | None = None,
@@ -395,10 +474,15 @@ def identify(
     selected, fit, significance, dropped = _fit_and_prune(
         frfs, selected, residual_poles, fit_lo, fit_hi
     )
-    refined = selected
+    refined, cut = selected, (np.zeros(0, complex),) * 2
     if settings.refine:
-        refined = _refine_ends(frfs, lo_i, hi_i, selected, residual_poles)
-    if any(new is not old for new, old in zip(refined, selected, strict=True)):  # refit
+        refined, cut = _refine_ends(frfs, lo_i, hi_i, selected, residual_poles)
+    if cut[0].size:  # the resonance at the top replaces the edge pole that stood for it
+        residual_poles = np.zeros(0, complex)
+    refined, cut = _move_cut_modes(frfs, refined, cut, lo_i, hi_i)
+    residual_poles = np.concatenate([cut[1], residual_poles, cut[0]])
+    changed = any(new is not old for new, old in zip(refined, selected, strict=False))
+    if changed or len(refined) < len(selected) or cut[0].size or cut[1].size:  # refit
         selected, fit, significance, more = _fit_and_prune(
             frfs, refined, residual_poles, fit_lo, fit_hi
         )
@@ -420,7 +504,10 @@ def identify(
         synthesized=synth,
         frf_correlation=frac,
         mass_normalised=modes.extra["mass_normalised"],
-        extra={"dropped_hz": np.array([p.frequency_hz for p in dropped])},
+        extra={
+            "dropped_hz": np.array([p.frequency_hz for p in dropped]),
+            **_cut_summary(cut),
+        },
     )
 
 

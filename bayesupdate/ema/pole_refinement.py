@@ -18,8 +18,10 @@ outside it, and the constant upper residual cannot follow that flank, so a mode 
 of the analysed range comes out biased (FE exhaust with a 176 Hz mode above the 150 Hz end:
 mode 13 at 144.37 Hz 0.02-0.04 % low, noise sd ~0.006 %).  Identified poles near the window
 enter the basis fixed; beyond an end of the analysed range, where no identified pole stands for
-the neighbour, a free extra pole does (its residues are not reported).  Which poles are refined
-where: :func:`bayesupdate.ema.identify._refine_ends`.
+the neighbour, a free extra pole does (its residues are not reported).  A resonance that the end
+cuts (its peak on the window's lines, its half-power band beyond them) is one more free pole,
+allowed on the lines, with the extra pole beyond it.  Which poles are refined where:
+:func:`bayesupdate.ema.identify._refine_ends`.
 """
 
 from dataclasses import dataclass
@@ -40,12 +42,15 @@ MAX_MOVE = 0.1
 @dataclass(frozen=True)
 class PoleRefinement:
     """Result of :func:`refine_poles`: poles (q,) and extra poles (e,) [rad/s] (refined, or the
-    starting ones when not ``accepted``); cost (2,): projected cost before and after."""
+    starting ones when not ``accepted``); cost (2,): projected cost before and after;
+    converged_extra (e,) [rad/s]: where the extra poles converged, accepted or not (an extra
+    pole that converged on the lines found a resonance that the window's end cuts)."""
 
     poles: np.ndarray
     extra: np.ndarray
     cost: np.ndarray
     accepted: bool
+    converged_extra: np.ndarray
 
 
 def _design(f: np.ndarray, poles: np.ndarray, kind: str) -> np.ndarray:
@@ -145,14 +150,17 @@ def refine_poles(
     fixed: np.ndarray,
     kind: str = "accelerance",
     max_iter: int = 30,
+    cut: int = 0,
 ) -> PoleRefinement:
     """Refine poles (q,) and extra out-of-band poles (e,) [rad/s], Im > 0, by variable projection
     (module doc) on frf (n_frf, n_f) at frequencies_hz (n_f,) [Hz] > 0, with the poles ``fixed``
-    (k,) in the basis unchanged.
+    (k,) in the basis unchanged.  The first ``cut`` extra poles stand for resonances that the
+    window's end cuts: free like the others, but allowed on the lines.
 
     Accepted only if every refined pole moves by less than ``MAX_MOVE`` of its half-power
-    half-width |Re s| with Re s < 0, and every extra pole stays stable and outside the lines'
-    range (it stands for a mode beyond them); else the start is returned.
+    half-width |Re s| with Re s < 0, and every extra pole stays stable and, except the ``cut``
+    ones, outside the lines' range (it stands for a mode beyond them); else the start is
+    returned.
     """
     f = np.asarray(frequencies_hz, dtype=float)
     h = np.atleast_2d(frf)
@@ -166,7 +174,8 @@ def refine_poles(
     moved = np.abs(new[:q] - start[:q]) / np.abs(start[:q].real)
     near = np.all(moved < MAX_MOVE) and np.all(new.real < 0)
     w_lo, w_hi = 2 * np.pi * f[0], 2 * np.pi * f[-1]
-    outside = np.all((new[q:].imag < w_lo) | (new[q:].imag > w_hi))
+    beyond = new[q + cut :]
+    outside = np.all((beyond.imag < w_lo) | (beyond.imag > w_hi))
     ok = bool(near and outside and np.all(np.isfinite(new)))
     out = new if ok else start
-    return PoleRefinement(out[:q], out[q:], np.array([cost0, cost1]), ok)
+    return PoleRefinement(out[:q], out[q:], np.array([cost0, cost1]), ok, new[q:])

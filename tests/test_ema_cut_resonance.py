@@ -79,6 +79,8 @@ def test_identify_json_names_the_cut_resonance(impact_test, tmp_path, capsys):
     assert abs(cut["frequency_hz"] / FN[CUT] - 1) < 3e-4
     assert abs(cut["damping_ratio"] / ZETA[CUT] - 1) < 0.1
     assert len(summary["modes"]) == CUT  # the modes below it, and not it
+    (note,) = [n for n in summary["notes"] if n.startswith("resonances cut")]
+    assert f"{cut['frequency_hz']:.2f} Hz" in note  # the terminal and the report say it too
 
 
 F = np.linspace(60.0, 96.5, 366)  # [Hz]: ends 0.5 Hz above the 96 Hz peak (half-width 2.4 Hz)

@@ -72,7 +72,7 @@ def identify_frfs(data: FrfFiles, request: IdentifyRequest) -> IdentifyRun:
 def identification_notes(result: Identification, merge_notes=()) -> tuple[str, ...]:
     """What a user must know to read the modes (the same lines on the terminal and in the
     report): merged ranges, MPC not defined, unscaled shapes, capped shape errors, dropped
-    poles."""
+    poles, resonances cut by the range's ends."""
     modes = result.modes
     notes = list(merge_notes)
     if len(modes.dof_labels) < 2:
@@ -89,5 +89,12 @@ def identification_notes(result: Identification, merge_notes=()) -> tuple[str, .
         notes.append(
             "stable poles dropped as not physical (explain little of the FRF, peak near the "
             "fit residual): " + ", ".join(f"{x:.2f}" for x in dropped) + " Hz"
+        )
+    cut = np.asarray(result.extra.get("cut_hz", ()), dtype=float)
+    if cut.size:
+        notes.append(
+            "resonances cut by an end of the analysed range, fitted but not reported as modes: "
+            + ", ".join(f"{x:.2f}" for x in cut)
+            + " Hz; widen the band to identify them"
         )
     return tuple(notes)

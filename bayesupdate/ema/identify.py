@@ -445,6 +445,19 @@ def _cut_summary(cut: tuple) -> dict:
     }
 
 
+def _refined_and_cut(frfs, settings, selected, residual_poles, ends) -> tuple:
+    """(refined poles, cut (top, bottom) poles, the residual poles of the refit): the ends'
+    refinement (``settings.refine``) and the resonances an end of the lines ``ends`` (lo, hi)
+    cuts, which join the fit as poles but are not modes."""
+    refined, cut = selected, (np.zeros(0, complex),) * 2
+    if settings.refine:
+        refined, cut = _refine_ends(frfs, *ends, selected, residual_poles)
+    if cut[0].size:  # the resonance at the top replaces the edge pole that stood for it
+        residual_poles = np.zeros(0, complex)
+    refined, cut = _move_cut_modes(frfs, refined, cut, *ends)
+    return refined, cut, np.concatenate([cut[1], residual_poles, cut[0]])
+
+
 def identify(
     frfs: FrfSet,
     band_hz: tuple[float, float] | None = None,
@@ -474,13 +487,9 @@ def identify(
     selected, fit, significance, dropped = _fit_and_prune(
         frfs, selected, residual_poles, fit_lo, fit_hi
     )
-    refined, cut = selected, (np.zeros(0, complex),) * 2
-    if settings.refine:
-        refined, cut = _refine_ends(frfs, lo_i, hi_i, selected, residual_poles)
-    if cut[0].size:  # the resonance at the top replaces the edge pole that stood for it
-        residual_poles = np.zeros(0, complex)
-    refined, cut = _move_cut_modes(frfs, refined, cut, lo_i, hi_i)
-    residual_poles = np.concatenate([cut[1], residual_poles, cut[0]])
+    refined, cut, residual_poles = _refined_and_cut(
+        frfs, settings, selected, residual_poles, (lo_i, hi_i)
+    )
     changed = any(new is not old for new, old in zip(refined, selected, strict=False))
     if changed or len(refined) < len(selected) or cut[0].size or cut[1].size:  # refit
         selected, fit, significance, more = _fit_and_prune(

@@ -39,6 +39,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
+from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.parameter_space import ParameterSpace, ParameterSpec
 from bayesupdate.interrupts import StopRequest
@@ -648,7 +649,7 @@ def _kept_moves(
         logit = settings.transform == "logit"
         proposal, info = staged_proposal(
             run_steps, default_moves(), space, logit, settings.adapt_steps, settings.seed,
-            log_density,
+            log_density, REPAIR_ROUNDS,
         )  # fmt: skip
         if info.pop("interrupted"):
             return None

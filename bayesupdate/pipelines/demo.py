@@ -64,9 +64,9 @@ class DemoSettings:
     def steps(self) -> int:
         """Step budget; the sampler stops earlier once R-hat, ESS and 50 tau are met.  2,500
         left the demo's posteriors at R-hat 1.02-1.03; with the weighed mass in the likelihood the
-        seed case's mixture proposal fails the coverage check and DE converges at 13,500-21,000
-        kept steps (sampler seeds 1-3, 2026-11-24; the virtual test keeps the mixture and
-        converges at 500); a quick run is not expected to converge and says so."""
+        seed case's mixture proposal is repaired after its coverage check and converges at
+        4,000-6,000 kept steps (17,500 on one of sampler seeds 1, 5-7, 2026-11-24; the virtual
+        test converges at 500-1,000); a quick run is not expected to converge and says so."""
         return 300 if self.quick else 25000
 
 

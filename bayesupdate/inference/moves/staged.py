@@ -11,17 +11,30 @@
    kept run only: the frozen proposal's importance ESS fraction over 1000 draws from it (their
    own seeded generator: the chain's random stream is untouched) must be at least
    ``MIN_COVERAGE`` and the share of the last stage's draws where w / Z > 10 (an independence
-   proposal accepted less than once in ten tries there) at most ``MAX_STUCK``; else the kept run
-   uses DE alone, from the adapted walkers, and says why (``info["fallback"]``).
-5. The kept run (``sampling.sample_posterior``) uses the frozen proposal (0.8) and DE (0.2).
+   proposal accepted less than once in ten tries there) at most ``MAX_STUCK``.
+5. The repair (``repaired_proposal``; the sampler asks for ``REPAIR_ROUNDS``): a proposal that
+   fails the check is refitted twice, each time on draws from the previous fit resampled by
+   their importance weights (so on where p is, including the tails the prior component
+   reached) plus the last stage's draws, with up to 8 components; each refit is checked with
+   fresh draws and the one that passes with the highest importance ESS is frozen; when none
+   passes, the kept run uses DE alone, from the adapted walkers, and says why
+   (``info["fallback"]``).
+6. The kept run (``sampling.sample_posterior``) uses the frozen proposal (0.8) and DE (0.2).
 
 Why the check: on the demo's seed case (seed Table 2 with the weighed mass in the likelihood)
 the mass term makes a thin, curved posterior whose lower rho_catalyst tail (logit y down to -5.6
 against -4.0 in the adaptation's draws) four Gaussians do not cover; walkers that reach it hold
-for hundreds of steps and R-hat stalls at 1.04-1.06, while DE converges.  On 4 sampler seeds
-there the check gave importance ESS 0.05-0.19 and a stuck share 0.066-0.168; on the benchmark's
-exhaust posterior (9 seeds), where the mixture is accurate and 2-2.7 x faster than DE, 0.22-0.42
-and 0.000-0.045.  The thresholds sit between the two.
+for hundreds of steps and R-hat stalls at 1.04-1.06.  On 4 sampler seeds there the check gave
+importance ESS 0.05-0.19 and a stuck share 0.066-0.168; on the benchmark's exhaust posterior (9
+seeds), where the mixture is accurate and 2-2.7 x faster than DE, 0.22-0.42 and 0.000-0.045.
+The thresholds sit between the two.
+
+Why the repair (2026-11-24, docs/validation/posterior.md): the check's thresholds did not hold
+out - the benchmark's fresh sampler seeds 11 and 12 gave importance ESS 0.127 and 0.074 - and
+DE, the fallback, is not accurate where it converges: on the demo's seed case (against an
+importance-sampling reference, studies/posterior_reference.py) the demo's DE posterior had sds
+5-11 % small, as on the benchmark (4-10 %).  Refitted, those proposals passed (0.31-0.40) and
+the kept runs met the reference criterion (means within 0.05 sd, sds within 5 %).
 
 Every fitted component's sd is widened by ``SD_SCALE`` (1.25): a mixture fitted to a short chain
 is narrower than the posterior in its tails, and an independence proposal lighter-tailed than p
@@ -70,6 +83,12 @@ SD_SCALE = 1.25
 #: than once in ``coverage.STUCK_RATIO`` tries (``moves.coverage``); else DE alone
 MIN_COVERAGE = 0.15
 MAX_STUCK = 0.06
+#: a proposal that fails the check is refitted (``repaired_proposal``) REPAIR_ROUNDS times,
+#: each on the last stage's draws plus REPAIR_DRAWS draws from the previous fit resampled by
+#: their importance weights, with up to REPAIR_COMPONENTS components, each checked again
+REPAIR_ROUNDS = 2
+REPAIR_DRAWS = 4000
+REPAIR_COMPONENTS = 8
 
 
 def mixture_moves(proposal: DefensiveProposal) -> list:
@@ -81,12 +100,17 @@ def mixture_moves(proposal: DefensiveProposal) -> list:
 
 
 def fit_proposal(
-    points: np.ndarray, space: ParameterSpace, logit: bool, prior_weight: float, seed: int
+    points: np.ndarray,
+    space: ParameterSpace,
+    logit: bool,
+    prior_weight: float,
+    seed: int,
+    n_components: int = N_COMPONENTS,
 ) -> DefensiveProposal:
-    """A defensive proposal fitted to points (n, d): N_COMPONENTS components, fewer when there
-    are too few distinct points for them; ValueError when not even one can be fitted."""
+    """A defensive proposal fitted to points (n, d): ``n_components`` components, fewer when
+    there are too few distinct points for them; ValueError when not even one can be fitted."""
     error = None
-    for k in range(N_COMPONENTS, 0, -1):
+    for k in range(n_components, 0, -1):
         try:
             mixture = fit_gaussian_mixture(points, k, seed)
         except (ValueError, np.linalg.LinAlgError) as exc:
@@ -111,6 +135,7 @@ def staged_proposal(
     adapt_steps: int,
     seed: int,
     log_density: Callable[[np.ndarray], np.ndarray | None] | None = None,
+    repair_rounds: int = 0,
 ) -> tuple[DefensiveProposal | None, dict]:
     """Stages 1-3 of the module docstring, then the coverage check: (frozen proposal or None,
     info).
@@ -119,7 +144,8 @@ def staged_proposal(
     weight) pairs and returns (coords (n, n_walkers, d), log p (n, n_walkers)), or None when
     stopped.
     log_density(x) : log p at (n, d) sampler coordinates (None when stopped); given, the frozen
-    proposal must cover p (``coverage_fallback``), else DE alone is used.
+    proposal must cover p (``coverage_fallback``), else it is refitted up to ``repair_rounds``
+    times (``repaired_proposal``) and DE alone is used when none passes.
     info : {"fallback": None or why DE alone is used, "interrupted", "components",
     "adapt_steps", "coverage": the importance ESS fraction, "stuck": the stuck share (both None
     without the check)}; the proposal is None on a fallback or a stop.
@@ -147,8 +173,71 @@ def staged_proposal(
     info["components"] = proposal.mixture.n_components
     if log_density is not None:
         chain = (coords.reshape(-1, coords.shape[-1]), np.ravel(log_probs))
-        return coverage_fallback(proposal, log_density, seed, info, chain)
+        return repaired_proposal(proposal, log_density, seed, info, chain, repair_rounds)
     return proposal, info
+
+
+def repaired_proposal(
+    proposal: DefensiveProposal, log_density, seed: int, info: dict, chain, rounds: int
+) -> tuple[DefensiveProposal | None, dict]:
+    """``coverage_fallback`` of ``proposal``; when it fails, ``rounds`` refits
+    (``resampled_refit``), each from the previous one's draws and each checked with fresh
+    draws; the refit that passes with the highest importance ESS is kept (DE alone when none
+    passes).  Nothing here touches the walkers or the chain's random stream; it all happens
+    before the kept run.  When a refit runs, info gets "repairs" (refits made),
+    "first_check" and "repair_checks" ([importance ESS, stuck share] of the first proposal and
+    of each refit); "coverage", "stuck" and "components" are then the kept refit's (or the
+    last one's)."""
+    checked, info = coverage_fallback(proposal, log_density, seed, info, chain)
+    if checked is not None or info["interrupted"] or rounds < 1:
+        return checked, info
+    first = {"first_check": [info["coverage"], info["stuck"]], "repair_checks": []}
+    best, last = None, info
+    for round_ in range(1, rounds + 1):
+        proposal = resampled_refit(proposal, log_density, chain[0], seed + round_)
+        if proposal is None:
+            info["interrupted"] = True
+            return None, info
+        if proposal is False:
+            break
+        trial = {**info, "fallback": None, "components": proposal.mixture.n_components}
+        passed, trial = coverage_fallback(proposal, log_density, seed + round_ + 1, trial, chain)
+        if trial["interrupted"]:
+            return None, trial
+        first["repair_checks"].append([trial["coverage"], trial["stuck"]])
+        last = trial
+        if passed is not None and (best is None or trial["coverage"] > best[1]["coverage"]):
+            best = (passed, trial)
+    chosen, out = best if best is not None else (None, last)
+    return chosen, {**out, "repairs": len(first["repair_checks"]), **first}
+
+
+def resampled_refit(proposal: DefensiveProposal, log_density, points: np.ndarray, seed: int):
+    """``proposal`` refitted on where p is: REPAIR_DRAWS draws y ~ g (own seeded generator),
+    weighted by w = p / g and resampled in proportion to w (sampling importance resampling,
+    Rubin 1988; one population Monte Carlo step, Cappe et al. 2004), are approximately draws
+    from p, also where g's prior component reached tails the chain missed; the mixture (up to
+    REPAIR_COMPONENTS components, widened by SD_SCALE, the prior at PRIOR_WEIGHT_FROZEN) is
+    fitted to them and the last stage's ``points`` (m, d).  None when the run was stopped
+    meanwhile, False when nothing could be fitted (no finite weight, too few points)."""
+    rng = np.random.default_rng([seed, 13])
+    y = proposal.sample(rng, REPAIR_DRAWS)
+    log_p = log_density(y)
+    if log_p is None:
+        return None
+    log_w = np.where(np.isfinite(log_p), log_p - proposal.logpdf(y), -np.inf)
+    if not np.any(np.isfinite(log_w)):
+        return False
+    w = np.exp(log_w - np.max(log_w))
+    points = np.concatenate([points, y[rng.choice(y.shape[0], y.shape[0], p=w / w.sum())]])
+    try:
+        refit = fit_proposal(
+            points, proposal.space, proposal.logit, PRIOR_WEIGHT_FROZEN, seed + 10,
+            REPAIR_COMPONENTS,
+        )  # fmt: skip
+    except ValueError:
+        return False
+    return widened(refit)
 
 
 def coverage_fallback(

@@ -12,19 +12,27 @@ The virtual test is made at the same mesh density as the model discovery runs on
 ``simulate`` command takes no model options, so the test is made with
 ``pipelines.simulate.simulate_test``, as the command does, and written as UFF); identification
 and discovery are the CLI with default settings.  Prints the verdict, the named effect, the
-best candidates and the wall time of each step; writes the files into ``--out``.
+best candidates, the wall and CPU time of each step and the peak memory, and how discovery's
+reduced models did (``discovery.reduced_candidates``: the design basis, the candidates on
+enriched bases, the largest error of a compared fit against its full solve); writes the files
+into ``--out``.  ``--count-solves`` also counts the full solves (``FEModel.solve``) by the
+discovery step on the call stack and by candidate (a ``boundary_spring`` or not), with their CPU.
 """
 
 import argparse
 import contextlib
 import io
 import json
+import resource
 import time
+import traceback
+from collections import Counter
 from pathlib import Path
 
 from bayesupdate.cli import main as cli
 from bayesupdate.discovery.effects import parse_effect_spec
 from bayesupdate.ema.uff_io import write_uff58
+from bayesupdate.fe.model import FEModel
 from bayesupdate.models import get_model
 from bayesupdate.pipelines.simulate import VirtualTestSettings, simulate_test
 
@@ -38,6 +46,30 @@ def _cli(argv: list) -> str:
     return buf.getvalue()
 
 
+#: discovery steps (``discovery.workflow`` functions) a full solve is attributed to, innermost last
+STEPS = ("_prepare", "_baseline_fit", "_localize", "energy_excess", "_quick_refits")
+STEPS += ("_full_refits", "_verdict")
+
+
+def count_solves() -> tuple[Counter, Counter]:
+    """Wrap ``FEModel.solve`` to count calls and their CPU [s] by (step, candidate kind)."""
+    counts, cpu = Counter(), Counter()
+    solve = FEModel.solve
+
+    def counted(self, *args, **kwargs):
+        names = [frame.name for frame in traceback.extract_stack()]
+        step = next((s for s in STEPS[::-1] if s in names), "other")
+        key = (step, "boundary_spring" if "boundary_spring" in self.name else "other")
+        c = time.process_time()
+        out = solve(self, *args, **kwargs)
+        cpu[key] += time.process_time() - c
+        counts[key] += 1
+        return out
+
+    FEModel.solve = counted
+    return counts, cpu
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="folder for the test, modes and result")
@@ -45,7 +77,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--noise", type=float, default=0.01)
     ap.add_argument("--mesh-density", type=int, default=16)
+    ap.add_argument("--count-solves", action="store_true", help="count full solves by step")
     args = ap.parse_args()
+    counts, cpu = count_solves() if args.count_solves else (None, None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -63,14 +97,22 @@ def main() -> None:
         f'[model]\nsource = "exhaust_shell"\noptions = {{ mesh_density = {args.mesh_density} }}\n'
         f'\n[data]\nsource = "{(out / "modes.h5").resolve()}"\n'
     )
+    c2 = time.process_time()
     found = _cli(["discover", study, "--out", out / "discovery.h5", "--force", "--json"])
-    t3 = time.perf_counter()
+    t3, c3 = time.perf_counter(), time.process_time()
     (out / "discovery.json").write_text(found)
     doc = json.loads(found)
-    print(f"discover: {t3 - t2:.0f} s; verdict {doc['verdict']}; named {doc['named_effect']}")
+    print(f"discover: {t3 - t2:.0f} s wall, {c3 - c2:.0f} s CPU; verdict {doc['verdict']}")
+    print(f"named {doc['named_effect']}")
+    print(f"reduced models: {doc.get('reduced')}")
     print(f"flagged modes {doc['flagged_modes']}; gap {doc['gap_before']} -> {doc['gap_after']}")
     for c in doc["candidates"][:6]:
         print(f"  {c['kind']}@{c['location']}: ln BF {c.get('log_bayes_factor')}")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB -> GiB
+    print(f"whole script: {time.process_time():.0f} s CPU, peak RSS {peak:.2f} GiB")
+    if counts is not None:
+        for key in sorted(counts):
+            print(f"  full solves in {key[0]} ({key[1]}): {counts[key]}, {cpu[key]:.1f} s CPU")
 
 
 if __name__ == "__main__":

@@ -198,6 +198,8 @@ class ModelFit:
     best fit (smallest chi^2) first; theta is that optimum.
     log_evidence : Laplace log Z summed over the distinct optima.  loo : PSIS-LOO elpd (None
     unless computed).  mac : (m,) MAC of the paired shapes at theta (None without test shapes).
+    model_error : largest relative frequency error of a reduced model at theta against a full
+    solve (``reduced_candidates.certified_fit``; None: fitted on full solves).
     """
 
     label: str
@@ -216,6 +218,7 @@ class ModelFit:
     loo: dict | None = None
     stage: str = "full"
     mac: np.ndarray | None = None
+    model_error: float | None = None
 
     @property
     def best(self) -> Optimum:

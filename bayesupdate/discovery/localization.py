@@ -27,6 +27,7 @@ import numpy as np
 
 from bayesupdate.correlation import comac
 from bayesupdate.discovery.candidates import Candidate
+from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.problem import build_problem
 from bayesupdate.parallel_executor import executor_or_serial
@@ -94,6 +95,11 @@ def candidate_problem(baseline_problem, design_theta, candidate: Candidate):
     )
 
 
+def full_model(model):
+    """The FE model behind a reduced one (``ReducedFEModel.fe``), else ``model`` itself."""
+    return model.fe if isinstance(model, ReducedFEModel) else model
+
+
 def _probe(axis: ParameterSpec, null: float) -> tuple[float, float]:
     """(z_null, dz): a step into the admissible range."""
     z_lo, z_hi = axis.z_bounds
@@ -129,7 +135,8 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
     relative frequency errors e (m,) and the paired model
     shapes (or None).  design_jac : (size, d) J_d of the same residuals.
     One model solve for kinds whose null value reproduces the model exactly (added mass, spring,
-    factors), two for a joint (its null only approximates two different bending stiffnesses).
+    factors), two for a joint (its null only approximates two different bending stiffnesses) and
+    for a candidate on a reduced basis (both ends of the difference on the same basis).
     """
     axis = candidate.axes[0]
     null = candidate.null[axis.name]
@@ -141,10 +148,11 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
         f, shapes = paired
         return residuals_fn((f - f_test) / f_test, shapes)
 
-    if candidate.effect.kind in EXACT_NULL_KINDS:
+    reduced = isinstance(candidate.model, ReducedFEModel)
+    if candidate.effect.kind in EXACT_NULL_KINDS and not reduced:
         at_null = _paired_prediction(
             baseline_problem,
-            baseline_problem.model,
+            full_model(baseline_problem.model),
             baseline_problem.as_mapping(np.asarray(design_theta, float)),
         )
     else:
@@ -269,16 +277,19 @@ def localize(
     model_modes: np.ndarray,
     flagged: np.ndarray,
     executor=None,
+    scored: list | None = None,
 ) -> Localization:
     """All three views (module docstring).  residuals_fn and design_jac are in noise units
     (``score_candidate``), so the chi^2 drops are too.  The score tests run on ``executor``
-    (``parallel_executor``; None: serially); residuals_fn must then be picklable."""
+    (``parallel_executor``; None: serially); residuals_fn must then be picklable.  scored : the
+    candidates' ``CandidateScore`` made by the caller (then ``candidates`` is not scored)."""
     shared = (baseline_problem, design_theta, design_jac, residuals_fn)
-    scores = executor_or_serial(executor).map(_score_task, candidates, shared)
+    if scored is None:
+        scored = executor_or_serial(executor).map(_score_task, candidates, shared)
+    scores = list(scored)
     scores.sort(key=lambda s: -s.delta_chi2)
-    structure = (
-        baseline_problem.model.structure if hasattr(baseline_problem.model, "structure") else None
-    )
+    fe = full_model(baseline_problem.model)
+    structure = fe.structure if hasattr(fe, "structure") else None
     best_at: dict[str, tuple[float, str]] = {}
     positions = {}
     for s in scores:
@@ -289,7 +300,7 @@ def localize(
             positions[loc] = _position(structure, kind, loc).tolist()
     locations = sorted(((k, v[0], v[1]) for k, v in best_at.items()), key=lambda t: -t[1])
     params = baseline_problem.as_mapping(np.asarray(design_theta, float))
-    part_energy = energy_excess(baseline_problem.model, params, model_modes, flagged)
+    part_energy = energy_excess(fe, params, model_modes, flagged)
     theta = np.asarray(design_theta, float)
     evaluation = baseline_problem.evaluate(theta)
     shape_view = shape_comac(baseline_problem, theta, evaluation)

@@ -76,7 +76,7 @@ def _candidate_summary(result, fit, probability: float, score_delta_chi2: float)
         "score_delta_chi2": float(score_delta_chi2),
         "optima": len(fit.optima),
         "stage": fit.stage,
-    }
+    } | ({} if fit.model_error is None else {"model_error": float(fit.model_error)})
 
 
 def _shape_noise_summary(fit) -> dict | None:
@@ -109,7 +109,7 @@ def discovery_summary(result) -> dict:
             "kind": named.kind,
             "location": named.location,
             "parameters": named.effect_parameters,
-        }
+        } | ({} if named.model_error is None else {"model_error": float(named.model_error)})
     return {
         "verdict": result.verdict,
         "flagged_modes": result.flags.flagged_modes,
@@ -140,7 +140,7 @@ def discovery_summary(result) -> dict:
         "effects": result.effects,
         "scanned": len(result.localization.scores),
         "wall_s": float(result.wall_s),
-    }
+    } | ({} if result.reduced is None else {"reduced": result.reduced})
 
 
 def write_discovery(

@@ -52,6 +52,12 @@ does not grow with the library, and a user who restricts the library (``kinds``,
 
 The named effect's model (baseline + effect at its fitted values, design variables re-fitted)
 is the re-calibrated model; ``effects`` holds its spec list for later use as a model source.
+
+A large FE model with shells (``reduced_candidates.use_reduced``: the shell exhaust) runs every
+step on certified reduced models instead of full solves: the design variables' basis for the
+baseline, each candidate on that basis enriched for its effect, and every compared fit checked
+by a full solve at its optimum (its ``model_error``); ``DiscoveryResult.reduced`` says how.
+Other models (the beam exhaust) take the full-solve path unchanged.
 """
 
 import time
@@ -70,11 +76,21 @@ from bayesupdate.discovery.localization import (
     Localization,
     candidate_problem,
     localize,
+    score_candidate,
     screen_grid,
+)
+from bayesupdate.discovery.reduced_candidates import (
+    CandidateReducer,
+    certified_fit,
+    on_reduced_basis,
+    reduced_problem,
+    stripped,
+    use_reduced,
 )
 from bayesupdate.discovery.settings import DiscoverySettings, VerdictThresholds
 from bayesupdate.discovery.shape_evidence import FAILURE_RATE, STATED_REJECTION, shape_evidence
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
@@ -99,6 +115,7 @@ class DiscoveryResult:
     data_source: str = ""
     model_name: str = ""
     timings: dict = field(default_factory=dict)
+    reduced: dict | None = None
 
     @property
     def best(self) -> ModelFit | None:
@@ -395,13 +412,17 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
 def _prepare(
     model, data, settings: DiscoverySettings, parameters, baseline, pairing: str, say, executor
 ) -> tuple[object, list, object]:
-    """The calibration problem (``pairing`` "auto" resolved as ``discover`` says), the library's
+    """The calibration problem (``pairing`` "auto" resolved as ``discover`` says; on the design
+    variables' certified basis for a large model, ``reduced_candidates``), the library's
     effects and the baseline ``CalibrationResult`` (calibrated here from ``baseline_starts``
     starts, seeded by ``seed``, on ``executor``, when none is given)."""
     if pairing == "auto":
         pairing = "mac" if data.shapes is not None else "order"
     problem = build_problem(model, data, parameters, pairing=pairing)
     check_enough_modes(problem)
+    if use_reduced(model):
+        say("certified reduced basis of the design variables")
+        problem = reduced_problem(problem, executor)[0]
     effects = enumerate_effects(model, settings.scan.kinds, settings.scan.locations)
     if baseline is None:
         starts = settings.refit.baseline_starts
@@ -434,7 +455,9 @@ def _baseline_fit(problem, baseline, settings: DiscoverySettings) -> ModelFit:
             shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
     base_space = FitSpace(problem, problem.parameters, noise, shapes)
     starts = [baseline.theta, _box_centre(problem)]
-    return fit_model(base_space, starts, "baseline", max_nfev=settings.refit.max_nfev)
+    nfev = settings.refit.max_nfev
+    fit = fit_model(base_space, starts, "baseline", max_nfev=nfev)
+    return certified_fit(fit, lambda space, theta: fit_model(space, [theta], max_nfev=nfev))
 
 
 def _flag_baseline(
@@ -454,22 +477,38 @@ def _flag_baseline(
     )
 
 
-def _localize(model, effects: list, base_fit: ModelFit, baseline, flags: ModeFlags, executor=None):
+def _localize(
+    model, effects: list, base_fit: ModelFit, baseline, flags: ModeFlags, settings, executor=None
+):
     """``localization.localize`` of every library effect around the baseline fit (score tests
-    in the noise units of the baseline's likelihood, on ``executor``)."""
-    candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
+    in the noise units of the baseline's likelihood, on ``executor``); on a reduced baseline
+    ``_reduced_scores`` instead."""
     base_space = base_fit.space
     model_modes = baseline.table.model_mode - 1
-    return localize(
-        base_space.problem,
-        base_fit.theta,
-        base_fit.best.jac_z,
-        base_space.residual_vector,
-        candidates,
-        model_modes,
-        flags.flagged,
-        executor,
-    )
+    args = (base_space.problem, base_fit.theta, base_fit.best.jac_z, base_space.residual_vector)
+    if isinstance(base_space.problem.model, ReducedFEModel):
+        scored = _reduced_scores(model, effects, args, settings)
+        return localize(*args, [], model_modes, flags.flagged, scored=scored)
+    candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
+    return localize(*args, candidates, model_modes, flags.flagged, executor)
+
+
+def _reduced_scores(model, effects: list, args: tuple, settings: DiscoverySettings) -> list:
+    """Score tests of every effect, each candidate on its enriched basis
+    (``reduced_candidates.CandidateReducer``), made one after another in this process (the
+    reducer's sparse LU does not travel to workers).  A candidate that can no longer enter the
+    quick tier (``_select``: more candidates only push it further down) keeps a ``Stripped``
+    marker instead of its models, so that at most the quick tier's candidates are held."""
+    problem, theta = args[0], args[1]
+    reducer = CandidateReducer.at(problem.model, problem, theta)
+    scores: list = []
+    for effect in effects:
+        candidate = reducer.reduce(make_candidate(model, effect))
+        scores.append(score_candidate(*args, candidate))
+        ranked = sorted(scores, key=lambda s: -s.delta_chi2)
+        keep = {s.label for s in _select(ranked, settings)}
+        scores = [s if s.label in keep else stripped(s) for s in scores]
+    return scores
 
 
 def _quick_refit(shared: tuple, score) -> ModelFit:
@@ -481,7 +520,7 @@ def _quick_refit(shared: tuple, score) -> ModelFit:
         problem_c, axes + score.candidate.axes, base_fit.space.noise, base_fit.space.shapes
     )
     effect = score.candidate.effect
-    return fit_model(
+    fit = fit_model(
         space,
         _candidate_starts(base_fit.theta, score, (problem.start, _box_centre(problem))),
         score.label,
@@ -491,6 +530,17 @@ def _quick_refit(shared: tuple, score) -> ModelFit:
         stage="quick",
         best_start_only=True,
     )
+    nfev = settings.refit.quick_nfev
+    return certified_fit(fit, lambda s, theta: _refit_from(fit, s, theta, nfev))
+
+
+def _refit_from(fit: ModelFit, space: FitSpace, theta, max_nfev: int) -> ModelFit:
+    """``fit`` repeated from theta on ``space`` (its enriched reduced model), evaluations
+    added up."""
+    again = fit_model(
+        space, [theta], fit.label, fit.kind, fit.location, max_nfev=max_nfev, stage=fit.stage
+    )
+    return replace(again, evaluations=again.evaluations + fit.evaluations)
 
 
 def _quick_refits(
@@ -513,10 +563,10 @@ def _full_refit(shared: tuple, fit: ModelFit) -> ModelFit:
     # the quick end point, plus the box centre with the quick fit's effect value: the
     # design variables of a far-off baseline can hold the fit in another basin
     starts = [fit.theta, np.append(centre, fit.theta[n_design:])]
-    full = fit_model(
-        fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=settings.refit.max_nfev
-    )
-    return replace(full, evaluations=full.evaluations + fit.evaluations)
+    nfev = settings.refit.max_nfev
+    full = fit_model(fit.space, starts, fit.label, fit.kind, fit.location, max_nfev=nfev)
+    full = replace(full, evaluations=full.evaluations + fit.evaluations)
+    return certified_fit(full, lambda s, theta: _refit_from(full, s, theta, nfev))
 
 
 def _full_refits(
@@ -576,8 +626,40 @@ def _verdict(
         noise,
         settings.verdict,
         settings.verdict.prior_log_odds(n_scanned),
-        polish=lambda fit: polish_at_own_level(fit, noise, settings.refit.max_nfev),
+        polish=lambda fit: _certified_polish(fit, noise, settings.refit.max_nfev),
     )
+
+
+def _certified_polish(fit: ModelFit, noise: NoiseModel, max_nfev: int) -> ModelFit | None:
+    """``polish_at_own_level``, its end point checked like every compared fit
+    (``reduced_candidates.certified_fit``; the comparison's evidence and LOO kept)."""
+    polished = polish_at_own_level(fit, noise, max_nfev)
+    if polished is None:
+        return None
+
+    def refit(space, theta):
+        again = _refit_from(polished, space, theta, max_nfev)
+        return replace(again, log_evidence=polished.log_evidence, loo=polished.loo)
+
+    return certified_fit(polished, refit)
+
+
+def reduced_summary(base_fit: ModelFit, where: Localization, fits: list) -> dict | None:
+    """JSON-ready account of the reduced models (``reduced_candidates``; None on full solves):
+    the design basis (size, certified error), the candidates on enriched bases and on full
+    solves, and the largest ``model_error`` of the compared fits (baseline included)."""
+    rom = base_fit.space.problem.model
+    if not isinstance(rom, ReducedFEModel):
+        return None
+    on_basis = [on_reduced_basis(s.candidate.model) for s in where.scores]
+    errors = [f.model_error for f in (base_fit, *fits) if f.model_error is not None]
+    return {
+        "design_basis": rom.summary(),
+        "candidates_reduced": int(sum(on_basis)),
+        "candidates_full": int(len(on_basis) - sum(on_basis)),
+        "max_fit_model_error": float(max(errors)) if errors else None,
+        "fits_checked": len(errors),
+    }
 
 
 def discover(
@@ -617,7 +699,7 @@ def discover(
     flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)
     say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
     with _stopwatch(timings, "localization_s"):
-        where = _localize(model, effects, base_fit, baseline, flags, executor)
+        where = _localize(model, effects, base_fit, baseline, flags, settings, executor)
     with _stopwatch(timings, "refits_s"):
         fits = _refits(where.scores, base_fit, settings, say, executor)
     with _stopwatch(timings, "loo_s"):
@@ -639,4 +721,5 @@ def discover(
         data_source=data.source,
         model_name=getattr(model, "name", ""),
         timings=timings,
+        reduced=reduced_summary(base_fit, where, fits),
     )

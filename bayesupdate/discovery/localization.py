@@ -128,12 +128,24 @@ def _paired_prediction(problem, model, params) -> tuple | None:
         return None
 
 
+def _at_null(problem, candidate, design_theta, params) -> tuple | None:
+    """``_paired_prediction`` at the candidate's null ``params``: the baseline model itself where
+    that null reproduces it exactly (full models of ``EXACT_NULL_KINDS``), else the candidate's
+    model (a joint's null only approximates it; a reduced candidate compares on its own basis)."""
+    if candidate.effect.kind in EXACT_NULL_KINDS and not isinstance(
+        candidate.model, ReducedFEModel
+    ):
+        theta = problem.as_mapping(np.asarray(design_theta, float))
+        return _paired_prediction(problem, full_model(problem.model), theta)
+    return _paired_prediction(problem, candidate.model, params)
+
+
 def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, candidate):
     """Score test of a candidate along its first parameter (module docstring, item 1).
 
     residuals_fn(e, shapes) -> residuals in noise units (``FitSpace.residual_vector``) from the
-    relative frequency errors e (m,) and the paired model
-    shapes (or None).  design_jac : (size, d) J_d of the same residuals.
+    relative frequency errors e (m,) and the paired model shapes (or None).
+    design_jac : (size, d) J_d of the same residuals.
     One model solve for kinds whose null value reproduces the model exactly (added mass, spring,
     factors), two for a joint (its null only approximates two different bending stiffnesses) and
     for a candidate on a reduced basis (both ends of the difference on the same basis).
@@ -148,15 +160,7 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
         f, shapes = paired
         return residuals_fn((f - f_test) / f_test, shapes)
 
-    reduced = isinstance(candidate.model, ReducedFEModel)
-    if candidate.effect.kind in EXACT_NULL_KINDS and not reduced:
-        at_null = _paired_prediction(
-            baseline_problem,
-            full_model(baseline_problem.model),
-            baseline_problem.as_mapping(np.asarray(design_theta, float)),
-        )
-    else:
-        at_null = _paired_prediction(baseline_problem, candidate.model, params)
+    at_null = _at_null(baseline_problem, candidate, design_theta, params)
     z0, dz = _probe(axis, null)
     params[axis.name] = float(axis.from_z(z0 + dz))
     at_step = _paired_prediction(baseline_problem, candidate.model, params)

@@ -683,11 +683,10 @@ def discover(
     progress : optional callable(str) for progress messages.
     executor : where the baseline's starts, the score tests and the refits run
     (``parallel_executor``; None: in this process); the result is the same bits on every executor.
-    pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise: test
-    frequencies without shapes are sorted, so the honest likelihood compares them with the
-    model's sorted frequencies.  (Shape tracking against the reference design, the calibration
-    default, puts a wall in the objective wherever a hidden effect reorders two close modes: a
-    refit then stalls there.)
+    pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
+    frequencies against the model's sorted ones: the honest likelihood without shapes; shape
+    tracking against the reference design, the calibration default, puts a wall in the objective
+    where a hidden effect reorders two close modes, and a refit stalls there).
     """
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)

@@ -109,3 +109,15 @@ def test_refinement_takes_a_cut_resonance_on_the_lines():
     assert not refused.accepted
     np.testing.assert_array_equal(refused.poles, start)
     assert abs(refused.converged_extra[0] - CUT_POLE[0]) < 1e-6 * abs(CUT_POLE[0])
+
+
+def test_cut_resonances_at_both_ends_keep_their_labels():
+    """``extra``'s cut resonances are listed bottom end first, frequencies and labels alike."""
+    from bayesupdate.ema.identify import _cut_summary
+
+    top = poles_from_modal(np.array([FN[CUT]]), np.array([ZETA[CUT]]))
+    bottom = poles_from_modal(np.array([FN[0]]), np.array([ZETA[0]]))
+    summary = _cut_summary((top, bottom))
+    assert summary["cut_end"] == ("bottom", "top")
+    np.testing.assert_allclose(summary["cut_hz"], [FN[0], FN[CUT]], rtol=1e-12)
+    np.testing.assert_allclose(summary["cut_damping"], [ZETA[0], ZETA[CUT]], rtol=1e-12)

@@ -269,6 +269,12 @@ def _extra_pole(f_hz: float, above: bool) -> np.ndarray:
     return np.array([complex(-zeta * w, w * np.sqrt(1 - zeta**2))])
 
 
+def _has_bottom_end(frfs: FrfSet, lo_i: int) -> bool:
+    """Whether the analysed range starting at line lo_i has a bottom end to refine and cut at:
+    it starts more than 10 lines above 0 Hz (below that the range holds the data's start)."""
+    return bool(frfs.frequencies_hz[lo_i] > 10 * frfs.df_hz)
+
+
 def _end_windows(frfs: FrfSet, lo_i: int, hi_i: int, residual_poles) -> list:
     """(first line, last line, extra poles, top?) of each end of the analysed range lines
     lo_i..hi_i whose poles :func:`_refine_ends` refines: the top end, and the bottom end when
@@ -284,7 +290,7 @@ def _end_windows(frfs: FrfSet, lo_i: int, hi_i: int, residual_poles) -> list:
     first = max(lo_i, int(np.searchsorted(f, 0.0, side="right")))
     top_extra = _extra_pole(f[hi_i], above=True) if residual_poles.size == 0 else residual_poles
     windows = [(max(first, hi_i - width), hi_i, top_extra, True)]
-    if f[lo_i] > 10 * frfs.df_hz:
+    if _has_bottom_end(frfs, lo_i):
         windows.append((first, min(hi_i, first + width), _extra_pole(f[first], above=False), False))
     return windows
 
@@ -417,7 +423,7 @@ def _move_cut_modes(frfs: FrfSet, selected: list, cut: tuple, lo_i: int, hi_i: i
     Their estimates rest on one flank, so they are not reported; they stay in the LSFD basis.
     BayesUpdateError when no mode is left."""
     f = frfs.frequencies_hz
-    bottom = f[lo_i] > 10 * frfs.df_hz
+    bottom = _has_bottom_end(frfs, lo_i)
     top_cut = [_is_cut(p.pole, f[lo_i], f[hi_i], True) for p in selected]
     low_cut = [bottom and _is_cut(p.pole, f[lo_i], f[hi_i], False) for p in selected]
     kept = [p for p, t, b in zip(selected, top_cut, low_cut, strict=True) if not (t or b)]
@@ -436,7 +442,7 @@ def _cut_summary(cut: tuple) -> dict:
     natural frequencies [Hz] and damping ratios, (c,) each, bottom end first, and "top" or
     "bottom" per resonance.  They are in the LSFD basis but not among the modes: with part of
     the half-power band beyond the range, their estimates rest on one flank."""
-    poles = np.concatenate(cut)
+    poles = np.concatenate([cut[1], cut[0]])  # bottom first, as the labels
     fn, zeta = modal_from_poles(poles) if poles.size else (np.zeros(0), np.zeros(0))
     return {
         "cut_hz": np.asarray(fn, float),

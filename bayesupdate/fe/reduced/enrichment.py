@@ -103,9 +103,9 @@ def enriched_model(
     certificate lists no checked point yet (module docstring).  Raises ``BayesUpdateError`` when
     ``fe`` is not free-free (a spring to ground strains its rigid motions)."""
     model = ReducedFEModel(fe, bounds, settings, outer)
-    _check_free_free(fe, model.mapping(model.centre()))  # raises: e.g. a spring to ground
-    decomposition = decompose(fe, model.bounds, settings.interp_tol)
     centre = model.mapping(model.centre())
+    _check_free_free(fe, centre)  # raises: e.g. a spring to ground
+    decomposition = decompose(fe, model.bounds, settings.interp_tol)
     basis = pod_basis(fe, decomposition, centre, vectors, 0.0, settings.n_modes)
     unchecked = Certificate(0.0, 0.0, 0)
     certification = Certification(basis, unchecked, True, 0.0)

@@ -11,6 +11,16 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 
+#: the optional per-mode arrays, (m,) each
+_PER_MODE = (
+    "damping_ratio",
+    "frequency_sd_hz",
+    "identification_sd_hz",
+    "weights",
+    "mpc",
+    "shape_sd_rel",
+)
+
 
 @dataclass(frozen=True)
 class ModalData:
@@ -22,7 +32,11 @@ class ModalData:
     damping_ratio : (m,) float or None, viscous damping ratio [-].
     shapes : (n_dof, m) complex or float or None, mode shapes at ``dof_labels``.
     dof_labels : tuple of n_dof str, e.g. ``("1V", "1H", ...)``.
-    frequency_sd_hz : (m,) float or None, standard deviation of each frequency [Hz].
+    frequency_sd_hz : (m,) float or None, standard deviation of each frequency [Hz]: its whole
+        error against the model (a stated sd; it replaces an inferred noise level).
+    identification_sd_hz : (m,) float or None, standard deviation of each frequency's
+        identification from the FRFs [Hz] (``ema.frequency_sd``): the test's part of the
+        error only; the likelihood adds it in quadrature to the model-error level sigma.
     weights : (m,) float or None, importance weights w_i of seed eq. 19.
     mpc : (m,) float or None, modal phase collinearity of each identified shape [-].
     shape_sd_rel : (m,) float or None, standard deviation of each shape's components as a
@@ -45,6 +59,7 @@ class ModalData:
     mass_kg: float | None = None
     mass_sd_kg: float | None = None
     source: str = ""
+    identification_sd_hz: np.ndarray | None = None  # last: positional calls keep their order
     extra: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
@@ -56,7 +71,7 @@ class ModalData:
             raise BayesUpdateError(f"{where}: frequencies must be finite and > 0 Hz")
         object.__setattr__(self, "frequencies_hz", f)
         m = f.size
-        for name in ("damping_ratio", "frequency_sd_hz", "weights", "mpc", "shape_sd_rel"):
+        for name in _PER_MODE:
             value = getattr(self, name)
             if value is None:
                 continue
@@ -67,7 +82,7 @@ class ModalData:
                 )
             if not np.all(np.isfinite(arr)):
                 raise BayesUpdateError(f"{where}: {name} contains NaN or inf")
-            if name in ("frequency_sd_hz", "weights") and np.any(arr < 0):
+            if name in ("frequency_sd_hz", "identification_sd_hz", "weights") and np.any(arr < 0):
                 raise BayesUpdateError(f"{where}: {name} must be >= 0")
             if name == "shape_sd_rel" and self.shapes is None:
                 raise BayesUpdateError(f"{where}: shape_sd_rel needs shapes")
@@ -130,6 +145,7 @@ class ModalData:
             shapes=pick(self.shapes, axis=1),
             dof_labels=self.dof_labels,
             frequency_sd_hz=pick(self.frequency_sd_hz),
+            identification_sd_hz=pick(self.identification_sd_hz),
             weights=pick(self.weights),
             mpc=pick(self.mpc),
             shape_sd_rel=pick(self.shape_sd_rel),

@@ -16,14 +16,18 @@ lbf-s units), on the user's path, the commands a user types (``bayesupdate.cli.m
 
 The thicknesses' posterior sd is ``sample``'s, and the Laplace (Gauss-Newton) sd at the optimum,
 (J^T W J)^-1 with J by central differences of full solves, under the study's likelihood
-(relative sd 0.05, the default of ``sample``), under the identified frequencies' own sd (when the
-data has it) and with the relative sd estimated from the residuals (least squares).  Why an
-estimate misses the truth: ``attribution`` splits the linearised least-squares error of each
-thickness into the share of each mode's identification error (target / true frequency - 1), with
-the relative sensitivities d ln f / d ln t at the truth.  Prints one JSON object; slow (the
-reduced basis of each of calibrate and sample takes about 100 full solves of 26,832 DOFs).
+(relative sd 0.05, the default of ``sample``), with the relative sd estimated from the residuals
+(least squares), and the sandwich sd of the optimum under the identified frequencies' own sds
+added to a model-error level (``error_model``).  Why an estimate misses the truth:
+``attribution`` splits the linearised least-squares error of each thickness into the share of
+each mode's identification error (target / true frequency - 1), with the relative
+sensitivities d ln f / d ln t at the truth; ``linearised_tests`` gives the unweighted and the
+weighted estimates' errors in their sds.  Prints one JSON object; slow (the reduced basis of
+each of calibrate and sample takes about 100 full solves of 26,832 DOFs).  ``--tests`` runs
+only ``linearised_tests`` on given simulated tests (about 10 s a test plus 5 full solves).
 
     PYTHONPATH=. python studies/nastran_roundtrip.py [--out DIR] [--reuse]
+    PYTHONPATH=. python studies/nastran_roundtrip.py --tests test.uff s1.uff ...
 """
 
 import argparse
@@ -62,16 +66,15 @@ def main(argv=None) -> dict:
     from bayesupdate.cli import main as cli
     from bayesupdate.nastran import load_nastran_model
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", help="folder for the test, the study and the updated deck")
-    parser.add_argument(
-        "--reuse", action="store_true", help="reuse the commands' JSON outputs found in --out"
-    )
-    args = parser.parse_args(argv)
+    args = _arguments(argv)
+    plain = load_nastran_model(str(DECK), PARAMETERS)
+    if args.tests:
+        result = {"tests": linearised_tests(plain, args.tests)}
+        print(json.dumps(result))
+        return result
     out = Path(args.out or tempfile.mkdtemp(prefix="nastran_roundtrip_"))
     out.mkdir(parents=True, exist_ok=True)
 
-    plain = load_nastran_model(str(DECK), PARAMETERS)
     grids = list(HANGERS) + [g for g in spread_points(plain, 20) if g not in HANGERS][:17]
     study = write_study(out, {str(k): g for k, g in enumerate(grids, start=1)})
     sets = [f"--set={n}={v!r}" for n, v in TRUTH.items()]
@@ -102,6 +105,8 @@ def main(argv=None) -> dict:
         "sd": sd,
         "sample": posterior_summary(sampled, TRUTH),
         "attribution": attribution(plain, np.asarray(calibrated["targets_hz"])),
+        # the identified sds in the error model: calibrate's and the weighted estimate's errors
+        "linearised": linearised_tests(plain, [out / "test.uff"]),
         "true_hz": test["true_frequencies_hz"][:10],
         "targets_hz": calibrated["targets_hz"],
         # resonances the range's ends cut: fitted by identify, not reported (149.78 Hz here)
@@ -114,6 +119,22 @@ def main(argv=None) -> dict:
     }
     print(json.dumps(result))
     return result
+
+
+def _arguments(argv):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", help="folder for the test, the study and the updated deck")
+    parser.add_argument(
+        "--reuse", action="store_true", help="reuse the commands' JSON outputs found in --out"
+    )
+    parser.add_argument(
+        "--tests",
+        nargs="+",
+        metavar="UFF",
+        help="only the linearised estimates (error_model) of these simulated tests (UFF 58 of "
+        "'simulate --study' at the truth), identified as 'identify' does",
+    )
+    return parser.parse_args(argv)
 
 
 def write_study(out: Path, table: dict) -> Path:
@@ -151,30 +172,74 @@ def paired_jacobian(model, theta: dict, targets: np.ndarray) -> tuple[np.ndarray
 def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
     """{likelihood: {parameter: sd}}: the Gauss-Newton posterior sd at ``theta`` of the paired
     frequencies (each target paired with the nearest model frequency at ``theta``), relative
-    sd 0.05 (``[likelihood] sigma``'s default) and the identified sd of each frequency."""
+    sd 0.05 (``[likelihood] sigma``'s default), the relative sd the residuals give (least
+    squares) and, when the data carry ``identification_sd_hz``, the sandwich sd of the
+    unweighted optimum under variances sigma^2 + (sd_id / f)^2 (``error_model``)."""
     from bayesupdate.inference.data import load_modal_data
 
     names = list(theta)
     paired, jac = paired_jacobian(model, theta, targets)
     data = load_modal_data(str(data_path))
-    measured_sd = None
-    if data.frequency_sd_hz is not None:  # each target's own identified sd
-        f = np.asarray(data.frequencies_hz)
-        pick_data = np.argmin(np.abs(f[None] - targets[:, None]), axis=1)
-        measured_sd = np.asarray(data.frequency_sd_hz)[pick_data]
-    # least squares: the relative sd estimated from the residuals at the optimum (n - p dof)
     rel = paired / targets - 1
     s_hat = float(np.sqrt(np.sum(rel**2) / max(rel.size - len(names), 1)))
     out = {}
-    options = (("sigma_0.05", 0.05 * targets), ("identified_sd", measured_sd),
-               (f"lsq_sigma_{s_hat:.2e}", s_hat * targets))  # fmt: skip
+    options = (("sigma_0.05", 0.05 * targets), (f"lsq_sigma_{s_hat:.2e}", s_hat * targets))
     for key, sd_hz in options:
-        if sd_hz is None:
-            continue
         w = jac / np.asarray(sd_hz)[:, None]
         cov = np.linalg.inv(w.T @ w)
         out[key] = {n: float(np.sqrt(cov[i, i])) for i, n in enumerate(names)}
+    if data.identification_sd_hz is not None:
+        f = np.asarray(data.frequencies_hz)
+        pick = np.argmin(np.abs(f[None] - targets[:, None]), axis=1)
+        sd_rel = np.asarray(data.identification_sd_hz)[pick] / f[pick]
+        sens = jac * np.array([theta[n] for n in names])[None, :] / paired[:, None]
+        model_fit = error_model(sens, -rel, sd_rel)
+        out["identified_sandwich"] = {
+            n: float(model_fit["ols_sd_rel"][i] * theta[n]) for i, n in enumerate(names)
+        }
     return out
+
+
+def error_model(sens: np.ndarray, r: np.ndarray, sd_rel: np.ndarray) -> dict:
+    """The linearised estimates of the parameters under e_i ~ N(0, sigma^2 + sd_rel_i^2), the
+    identification's sd added in quadrature to a model-error level sigma (the likelihood of
+    ``inference.likelihood_blocks``).  sens (n, p) relative sensitivities d ln f / d ln t,
+    r (n,) relative frequency errors of the data, sd_rel (n,) the data's identification sd.
+
+    sigma by restricted maximum likelihood (REML: Patterson & Thompson 1971), on a grid of
+    log sigma.  Returned, relative to each parameter [-]:
+    ``ols`` (S^T S)^-1 S^T r, the unweighted optimum (``calibrate``'s), with ``ols_lsq_sd``
+    s^2 (S^T S)^-1 (one level from the residuals) and ``ols_sd_rel`` the sandwich
+    (S^T S)^-1 S^T V S (S^T S)^-1 (its honest sd under V); ``gls`` (S^T V^-1 S)^-1 S^T V^-1 r
+    with ``gls_sd_rel`` (S^T V^-1 S)^-1, the Laplace posterior of the weighted likelihood at
+    sigma (``sample`` with ``sigma_prior``)."""
+    n, p = sens.shape
+
+    def reml(sigma):
+        v = sigma**2 + sd_rel**2
+        a = sens.T @ (sens / v[:, None])
+        beta = np.linalg.solve(a, sens.T @ (r / v))
+        e = r - sens @ beta
+        return -0.5 * (np.sum(np.log(v)) + np.linalg.slogdet(a)[1] + np.sum(e * e / v))
+
+    grid = np.logspace(-8, -2, 601)
+    sigma = float(grid[np.argmax([reml(x) for x in grid])])
+    v = sigma**2 + sd_rel**2
+    ata_inv = np.linalg.inv(sens.T @ sens)
+    ols = ata_inv @ sens.T @ r
+    e = r - sens @ ols
+    s2 = float(e @ e / max(n - p, 1))
+    sandwich = ata_inv @ (sens.T @ (sens * v[:, None])) @ ata_inv
+    gls_cov = np.linalg.inv(sens.T @ (sens / v[:, None]))
+    gls = gls_cov @ sens.T @ (r / v)
+    return {
+        "sigma_reml": sigma,
+        "ols": ols,
+        "ols_lsq_sd": np.sqrt(s2 * np.diag(ata_inv)),
+        "ols_sd_rel": np.sqrt(np.diag(sandwich)),
+        "gls": gls,
+        "gls_sd_rel": np.sqrt(np.diag(gls_cov)),
+    }
 
 
 def posterior_summary(sampled: dict, truth: dict) -> dict:
@@ -211,6 +276,38 @@ def attribution(model, targets: np.ndarray) -> dict:
             n: [round(float(x), 4) for x in 100 * gain[i] * r] for i, n in enumerate(names)
         },
     }
+
+
+def linearised_tests(model, files) -> dict:
+    """{file: estimates}: each simulated test identified (``ema.identify``, the code of
+    ``bayesupdate identify``) and the thicknesses' linearised errors and sds under its
+    identified frequencies and sds (``error_model``; S at the truth, from one set of full
+    solves), in % of the truth and in sds."""
+    from bayesupdate.ema.identify import identify
+    from bayesupdate.ema.uff_io import read_uff58
+
+    names = list(TRUTH)
+    base = model.solve(TRUTH, n_modes=14).frequencies_hz
+    true_hz, jac = paired_jacobian(model, TRUTH, base[base < 150.0])
+    sens = jac * np.array([TRUTH[n] for n in names])[None, :] / true_hz[:, None]
+    table = {}
+    for path in files:
+        modes = identify(read_uff58(path)).modes
+        f = modes.frequencies_hz
+        pick = np.argmin(np.abs(true_hz[None, :] - f[:, None]), axis=1)
+        fit = error_model(sens[pick], f / true_hz[pick] - 1, modes.identification_sd_hz / f)
+        row = {"sigma_reml": fit["sigma_reml"], "n_modes": int(f.size)}
+        for i, n in enumerate(names):
+            row[n] = {
+                "ols_pct": 100 * fit["ols"][i],
+                "ols_in_lsq_sd": fit["ols"][i] / fit["ols_lsq_sd"][i],
+                "ols_in_sandwich_sd": fit["ols"][i] / fit["ols_sd_rel"][i],
+                "gls_pct": 100 * fit["gls"][i],
+                "gls_sd_pct": 100 * fit["gls_sd_rel"][i],
+                "gls_in_sd": fit["gls"][i] / fit["gls_sd_rel"][i],
+            }
+        table[str(path)] = row
+    return table
 
 
 def _run_json(cli, folder: Path, reuse: bool, argv) -> dict:

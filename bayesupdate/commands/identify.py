@@ -178,6 +178,7 @@ def _summary(result, out, notes, report) -> dict:
         "modes": [
             {
                 "frequency_hz": float(modes.frequencies_hz[r]),
+                "identification_sd_hz": float(modes.identification_sd_hz[r]),
                 "damping_ratio": float(modes.damping_ratio[r]),
                 "mpc": None if no_mpc[r] else float(modes.mpc[r]),
                 "shape_sd_rel": float(modes.shape_sd_rel[r]),

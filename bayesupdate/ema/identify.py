@@ -19,6 +19,7 @@ import numpy as np
 
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.ema.bands import automatic_bands, default_band_lines
+from bayesupdate.ema.frequency_sd import frequency_sd
 from bayesupdate.ema.frf_set import KIND_POWER, FrfSet
 from bayesupdate.ema.indicators import frf_correlation
 from bayesupdate.ema.lsce import band_indices, lsce
@@ -380,11 +381,24 @@ def _fit_end(frfs: FrfSet, f_top: float, fit_hi: int) -> int:
     return fit_hi
 
 
-def _modal_data(frfs: FrfSet, selected: list, fit: LsfdFit, significance) -> ModalData:
+def identification_sd(frfs: FrfSet, poles: np.ndarray, others: np.ndarray, lines) -> tuple:
+    """Each mode's frequency sd [Hz] (m,) from the FRFs (:func:`~bayesupdate.ema.frequency_sd.
+    frequency_sd` on the fit's lines (first, last)) and a fallback mask (m,) bool: where its
+    window holds too few lines, the sd is the half-power half-width |Re s| / 2 pi, as wide
+    as the resonance itself.  poles (m,), others (k,): the modes' and the basis' other poles."""
+    sd = frequency_sd(frfs.frequencies_hz, frfs.frf, poles, others, frfs.kind, lines)
+    bad = ~np.isfinite(sd)
+    return np.where(bad, np.abs(poles.real) / (2 * np.pi), sd), bad
+
+
+def _modal_data(frfs: FrfSet, selected: list, fit: LsfdFit, significance, basis) -> ModalData:
     """The identified modes: the selected poles (m) with the LSFD residues of ``fit`` scaled
     to shapes over all test sets, their errors and the diagnostics in ``extra``;
-    significance (2, m): share and peak-to-residual (:func:`modal_significance`)."""
+    significance (2, m): share and peak-to-residual (:func:`modal_significance`); basis: the
+    fit's other poles and its lines (first, last), for the frequency sds
+    (:func:`identification_sd`)."""
     poles = np.array([p.pole for p in selected])
+    sd = identification_sd(frfs, poles, *basis)
     residues = fit.residues[:, : poles.size]
     scaled = shapes_from_residues(residues, poles, frfs.sets(), fit.residue_var[:, : poles.size])
     sd_rel, sd_fallback = shape_sd_rel(scaled)
@@ -395,8 +409,10 @@ def _modal_data(frfs: FrfSet, selected: list, fit: LsfdFit, significance) -> Mod
         dof_labels=scaled.labels,
         mpc=mpc(scaled.shapes),
         shape_sd_rel=sd_rel,
+        identification_sd_hz=sd[0],
         source=frfs.source or "identify",
         extra={
+            "frequency_sd_fallback": sd[1],
             "stable_orders": np.array([p.stable_orders for p in selected]),
             "cluster_spread_hz": np.array([p.spread_hz for p in selected]),
             "mass_normalised": scaled.mass_normalised,
@@ -505,7 +521,7 @@ def identify(
     poles = np.array([p.pole for p in selected])
     lines = slice(fit_lo, fit_hi + 1)
     synth, frac = _synthesis(frfs, fit, np.concatenate([poles, residual_poles]), lines)
-    modes = _modal_data(frfs, selected, fit, significance)
+    modes = _modal_data(frfs, selected, fit, significance, (residual_poles, (fit_lo, fit_hi)))
     return Identification(
         modes=modes,
         poles=poles,

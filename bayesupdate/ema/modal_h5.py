@@ -2,9 +2,10 @@
 
 Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (m,),
 ``shapes_real`` and ``shapes_imag`` (n_dof, m), ``dof_labels`` (n_dof,) strings, optional
-``mpc``, ``frequency_sd_hz``, ``weights``, ``shape_sd_rel`` (m,), any ``extra`` arrays under
-``/modes/extra``; attributes ``source`` and, when measured, ``mass_kg`` and ``mass_sd_kg`` (the
-structure's weighed mass, test data like the frequencies).  Written atomically.
+``mpc``, ``frequency_sd_hz``, ``identification_sd_hz``, ``weights``, ``shape_sd_rel`` (m,), any
+``extra`` arrays under ``/modes/extra``; attributes ``source`` and, when measured, ``mass_kg``
+and ``mass_sd_kg`` (the structure's weighed mass, test data like the frequencies).  Written
+atomically.
 """
 
 import os
@@ -16,7 +17,14 @@ from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
 
-_OPTIONAL = ("damping_ratio", "mpc", "frequency_sd_hz", "weights", "shape_sd_rel")
+_OPTIONAL = (
+    "damping_ratio",
+    "mpc",
+    "frequency_sd_hz",
+    "identification_sd_hz",
+    "weights",
+    "shape_sd_rel",
+)
 _MASS = ("mass_kg", "mass_sd_kg")
 
 

@@ -7,7 +7,9 @@ For paired frequencies f_i(theta) and test values f_Ti (issue 4 item 5):
     e_i = (f_i - f_Ti) / f_Ti,   e_i ~ N(0, s_i^2),   s_i^2 = sigma^2 / w_i + (sd_i / f_Ti)^2,
 
 with w_i the eq. 19 weights (w_i = 0 drops mode i) and sd_i the test's own frequency standard
-deviation if the data give one (added in quadrature; zero otherwise): ``SampledNoise``.  So
+deviation if the data give one (added in quadrature; zero otherwise): ``SampledNoise``.  sd_i^2
+is the sum of the data's stated ``frequency_sd_hz``^2 and its ``identification_sd_hz``^2 (the
+identification's part, ``identify``; ``likelihood_blocks`` module docstring).  So
 -2 log L is sum_i e_i^2 / s_i^2 + const: with equal s_i it is seed eq. 19 divided by sigma^2.
 sigma is fixed or sampled as one more parameter (named ``sigma``) with its own prior (e.g.
 halfnormal).  Optional mass term: (m - m_T)/m_T ~ N(0, mass_sd_rel^2) (``mass_log_likelihood``).
@@ -107,9 +109,13 @@ class LogPosterior:
         w = problem.weights
         self.mask = w > 0
         self.f_test = f_test[self.mask]
-        sd = problem.data.frequency_sd_hz
+        data = problem.data
+        sd, sd_id = data.frequency_sd_hz, data.identification_sd_hz
         self.noise = SampledNoise.of(
-            self.f_test, w[self.mask], None if sd is None else sd[self.mask]
+            self.f_test,
+            w[self.mask],
+            None if sd is None else sd[self.mask],
+            None if sd_id is None else sd_id[self.mask],
         )
         self.mode = likelihood_mode(problem, spec)
         self.batched = self.mode != "points"

@@ -33,6 +33,15 @@ Noise of the frequency block
 The known sd enters the two forms differently: the fixed form divides it by sqrt(w_i), the
 sampled form does not (both as before this module; equal when all weights are 1).
 
+Two known sds.  ``frequency_sd_hz`` is a frequency's whole error (a stated sd, or virtual data
+drawn with it): it replaces the level in the fixed form.  ``identification_sd_hz`` (written by
+``identify``, ``ema.frequency_sd``) is only the test's part: the model's error, of unknown level
+sigma, comes on top, so it never replaces sigma.  It is added in quadrature in both forms,
+s_i^2 = sigma^2 / w_i + (sd_id_i / f_Ti)^2 (``SampledNoise``), with sigma inferred as
+before ("inferred (robust) + identification sd"): a mode the test fixes poorly (the FEMAP
+deck's damped 110.4 Hz mode, sd 1e-4 against 1e-5 for its neighbours) weighs less, and no
+mode's scale falls below the inferred level, so discovery sees no misfit that was not there.
+
 Arithmetic
 ----------
 (1) is evaluated in two spellings, each kept as its callers always computed it so that seeded
@@ -110,7 +119,8 @@ def noise_model(data, residual_rel: np.ndarray, n_params: int, sigma: float | No
     residuals residual_rel (m,): sigma = 1.4826 MAD(e sqrt(w)) sqrt(m / (m - d)) (median absolute
     deviation about zero, corrected for the d = n_params fitted parameters; Huber 1981), floored
     at ``SIGMA_FLOOR``.  A discrepancy confined to a few modes then stands out instead of
-    inflating the level."""
+    inflating the level.  The data's identification sd, if any, is added in quadrature to the
+    inferred level (module docstring), s_i^2 = (sigma^2 + (sd_id_i / f_Ti)^2) / w_i."""
     w = np.ones(data.n_modes) if data.weights is None else np.asarray(data.weights, float)
     sw = np.sqrt(np.maximum(w, 0.0))
     inv = np.where(sw > 0, 1.0 / np.where(sw > 0, sw, 1.0), np.inf)
@@ -126,23 +136,31 @@ def noise_model(data, residual_rel: np.ndarray, n_params: int, sigma: float | No
     dof_factor = np.sqrt(m / max(m - n_params, 1))
     robust = 1.4826 * float(np.median(e)) * dof_factor
     level = max(robust, SIGMA_FLOOR)
-    return NoiseModel(level * inv, sw, True, "inferred (robust)", level)
+    sd_id = data.identification_sd_hz
+    if sd_id is None:
+        return NoiseModel(level * inv, sw, True, "inferred (robust)", level)
+    scale = np.sqrt(level**2 + (sd_id / data.frequencies_hz) ** 2) * inv
+    return NoiseModel(scale, sw, True, "inferred (robust) + identification sd", level)
 
 
 @dataclass(frozen=True)
 class SampledNoise:
     """Frequency noise with a free level sigma (module docstring, "sampled"), used modes only.
 
-    inv_w : (n,) 1 / w_i.  sd_rel2 : (n,) (sd_i / f_Ti)^2 (zeros when the data give no sd).
+    inv_w : (n,) 1 / w_i.  sd_rel2 : (n,) the known relative variance (sd_i / f_Ti)^2 (zeros
+    when the data give no sd).
     """
 
     inv_w: np.ndarray
     sd_rel2: np.ndarray
 
     @classmethod
-    def of(cls, f_test: np.ndarray, weights: np.ndarray, sd_hz: np.ndarray | None):
-        """From the used modes' f_test (n,) [Hz], weights (n,) > 0 and sd (n,) [Hz] or None."""
+    def of(cls, f_test: np.ndarray, weights: np.ndarray, sd_hz, identification_sd_hz=None):
+        """From the used modes' f_test (n,) [Hz], weights (n,) > 0, stated sd (n,) [Hz] or None
+        and identification sd (n,) [Hz] or None (module docstring: both add in quadrature)."""
         sd_rel2 = np.zeros(f_test.size) if sd_hz is None else (sd_hz / f_test) ** 2
+        if identification_sd_hz is not None:
+            sd_rel2 = sd_rel2 + (identification_sd_hz / f_test) ** 2
         return cls(1.0 / weights, sd_rel2)
 
     def variance(self, sigma: np.ndarray) -> np.ndarray:

@@ -190,6 +190,7 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
     settings = SamplerSettings(
         walkers=args.walkers, steps=args.steps, seed=seed, check_every=args.check_every,
         transform=args.transform, target_rhat=1.01, target_ess=1000, moves=moves,
+        adapt_steps=args.adapt_steps,
     )  # fmt: skip
     fresh = LogPosterior(log_post.problem, log_post.spec)
     t1, c1 = time.perf_counter(), time.process_time()
@@ -210,6 +211,7 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
         ess=min(v["ess_bulk"] for v in summary.values()),
         kind=moves_info.get("kind"), coverage=moves_info.get("coverage"),
         stuck=moves_info.get("stuck"), fallback=moves_info.get("fallback"),
+        repairs=moves_info.get("repairs", 0), first_check=moves_info.get("first_check"),
         load=round(os.getloadavg()[0], 1),
         **post.diagnostics.get("timings", {}),
     )  # fmt: skip
@@ -254,6 +256,11 @@ def table(rows: list[dict]) -> None:
             worst_sd = max(max(map(abs, r["sd_error_relative"])) for r in mine)
             print(f"  against the reference: worst |mean error| {worst_mean:.3f} sd, worst "
                   f"|sd error| {100 * worst_sd:.1f} %")  # fmt: skip
+    for moves in dict.fromkeys(r["moves"] for r in rows):
+        mine = [r for r in rows if r["moves"] == moves]
+        wall, cpu = (np.median([r[k] for r in mine]) for k in ("wall_s", "cpu_s"))
+        print(f"[{moves}] median cold-start wall {wall:.1f} s, CPU {cpu:.1f} s (wall / CPU "
+              f"{wall / cpu:.2f}) over {len(mine)} seeds")  # fmt: skip
     schemes = {r["moves"] for r in rows}
     if {"de", "mixture"} <= schemes:
         for key in ("wall_s", "cpu_s"):
@@ -270,6 +277,10 @@ def main() -> None:
     ap.add_argument("--walkers", type=int, default=16)
     ap.add_argument("--transform", default="logit", choices=("logit", "none"))
     ap.add_argument("--check-every", type=int, default=250, help="steps between checks")
+    ap.add_argument(
+        "--adapt-steps", type=int, default=SamplerSettings.adapt_steps,
+        help="steps of each adaptation stage of the mixture moves",
+    )  # fmt: skip
     ap.add_argument("--starts", type=int, default=4, help="optimizer starts")
     ap.add_argument("--max-nfev", type=int, default=300, help="evaluations per start")
     ap.add_argument("--seed", type=int, default=1)

@@ -50,6 +50,8 @@ MOVE_KINDS = ("mixture", "de")
 #: evaluations count in the next two as well), exact and screening log-posterior calls, and
 #: the convergence checks
 TIMED = ("adapt_s", "exact_s", "screen_s", "check_s")
+#: points per log-density call off the chain (``_checked``)
+CHECK_BATCH = 500
 
 
 def check_moves(kind: str) -> str:
@@ -684,10 +686,17 @@ def _adaptation_stage(
 
 
 def _checked(guarded, stop: dict, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
-    """The exact log-density (n,) at points x (n, d) off the chain (the coverage check,
-    ``moves.coverage``), None after a stop request."""
-    lp = guarded(x)
-    return None if stop["requested"] or request.requested() else lp
+    """The log-density (n,) at points x (n, d) off the chain (the coverage check,
+    ``moves.coverage``, and the repair's 4000 draws), in batches of ``CHECK_BATCH`` points: in
+    one batch of 4000 the exhaust's reduced solves (74 x 74 pencils, ~175 MB per stacked array,
+    several arrays) cost 0.96 ms a point against 0.59 ms in batches of 1000; None after a stop
+    request."""
+    parts = []
+    for start in range(0, x.shape[0], CHECK_BATCH):
+        parts.append(guarded(x[start : start + CHECK_BATCH]))
+        if stop["requested"] or request.requested():
+            return None
+    return np.concatenate(parts) if parts else np.empty(0)
 
 
 def _first_run(log_posterior, calibration, initial, settings, space, resume, moves) -> _Run:

@@ -8,6 +8,7 @@ position whenever a proposal is rejected).
 """
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -32,13 +33,19 @@ class GaussianMixture:
     def n_components(self) -> int:
         return self.weights.size
 
+    @cached_property
+    def _inverse_and_log_det(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K, d, d) inverse Cholesky factors (lower triangular) and (K,) log |cov_k|, made once:
+        a frozen proposal's density is evaluated at every step of the kept run."""
+        log_det = 2.0 * np.sum(np.log(np.diagonal(self.chols, axis1=1, axis2=2)), axis=1)
+        return np.linalg.inv(self.chols), log_det
+
     def component_logpdf(self, x: np.ndarray) -> np.ndarray:
         """(n, d) -> (n, K): log weights[k] + log N(x; mean_k, cov_k)."""
         x = np.atleast_2d(x)
         d = x.shape[1]
-        inverse = np.linalg.inv(self.chols)  # (K, d, d), lower triangular
+        inverse, log_det = self._inverse_and_log_det
         z = np.einsum("kij,nkj->nki", inverse, x[:, None, :] - self.means[None])
-        log_det = 2.0 * np.sum(np.log(np.diagonal(self.chols, axis1=1, axis2=2)), axis=1)
         quad = np.sum(z * z, axis=2)
         return np.log(self.weights) - 0.5 * (quad + log_det + d * np.log(2 * np.pi))
 

@@ -13,12 +13,13 @@
    ``MIN_COVERAGE`` and the share of the last stage's draws where w / Z > 10 (an independence
    proposal accepted less than once in ten tries there) at most ``MAX_STUCK``.
 5. The repair (``repaired_proposal``; the sampler asks for ``REPAIR_ROUNDS``): a proposal that
-   fails the check is refitted twice, each time on draws from the previous fit resampled by
-   their importance weights (so on where p is, including the tails the prior component
-   reached) plus the last stage's draws, with up to 8 components; each refit is checked with
-   fresh draws and the one that passes with the highest importance ESS is frozen; when none
-   passes, the kept run uses DE alone, from the adapted walkers, and says why
-   (``info["fallback"]``).
+   fails the check, or passes it narrowly (importance ESS below ``REPAIR_COVERAGE`` or stuck
+   share above ``REPAIR_STUCK``), is refitted twice, each time on draws from the previous fit
+   resampled by their importance weights (so on where p is, including the tails the prior
+   component reached) plus the last stage's draws, with up to 8 components; each refit is
+   checked with fresh draws and, of the proposals that pass (a narrowly passing first one
+   included), the one with the highest importance ESS is frozen; when none passes, the kept
+   run uses DE alone, from the adapted walkers, and says why (``info["fallback"]``).
 6. The kept run (``sampling.sample_posterior``) uses the frozen proposal (0.8) and DE (0.2).
 
 Why the check: on the demo's seed case (seed Table 2 with the weighed mass in the likelihood)
@@ -89,6 +90,11 @@ MAX_STUCK = 0.06
 REPAIR_ROUNDS = 2
 REPAIR_DRAWS = 4000
 REPAIR_COMPONENTS = 8
+#: a proposal that passes the check narrowly (importance ESS below REPAIR_COVERAGE or stuck
+#: share above REPAIR_STUCK) is refitted as well, and kept only when no refit passes with a
+#: higher importance ESS
+REPAIR_COVERAGE = 0.25
+REPAIR_STUCK = 0.03
 
 
 def mixture_moves(proposal: DefensiveProposal) -> list:
@@ -180,19 +186,20 @@ def staged_proposal(
 def repaired_proposal(
     proposal: DefensiveProposal, log_density, seed: int, info: dict, chain, rounds: int
 ) -> tuple[DefensiveProposal | None, dict]:
-    """``coverage_fallback`` of ``proposal``; when it fails, ``rounds`` refits
+    """``coverage_fallback`` of ``proposal``; when it fails or passes narrowly (importance ESS
+    below ``REPAIR_COVERAGE`` or stuck share above ``REPAIR_STUCK``), ``rounds`` refits
     (``resampled_refit``), each from the previous one's draws and each checked with fresh
-    draws; the refit that passes with the highest importance ESS is kept (DE alone when none
-    passes).  Nothing here touches the walkers or the chain's random stream; it all happens
-    before the kept run.  When a refit runs, info gets "repairs" (refits made),
-    "first_check" and "repair_checks" ([importance ESS, stuck share] of the first proposal and
-    of each refit); "coverage", "stuck" and "components" are then the kept refit's (or the
-    last one's)."""
+    draws; of the proposals that pass (the first one included), the one with the highest
+    importance ESS is kept (DE alone when none passes).  Nothing here touches the walkers or
+    the chain's random stream; it all happens before the kept run.  When a refit runs, info
+    gets "repairs" (refits made), "first_check" and "repair_checks" ([importance ESS, stuck
+    share] of the first proposal and of each refit); "coverage", "stuck" and "components" are
+    then the kept one's (or the last refit's)."""
     checked, info = coverage_fallback(proposal, log_density, seed, info, chain)
-    if checked is not None or info["interrupted"] or rounds < 1:
+    if info["interrupted"] or rounds < 1 or (checked is not None and _covers_well(info)):
         return checked, info
     first = {"first_check": [info["coverage"], info["stuck"]], "repair_checks": []}
-    best, last = None, info
+    best, last = (None if checked is None else (checked, info)), info
     for round_ in range(1, rounds + 1):
         proposal = resampled_refit(proposal, log_density, chain[0], seed + round_)
         if proposal is None:
@@ -210,6 +217,12 @@ def repaired_proposal(
             best = (passed, trial)
     chosen, out = best if best is not None else (None, last)
     return chosen, {**out, "repairs": len(first["repair_checks"]), **first}
+
+
+def _covers_well(info: dict) -> bool:
+    """Whether a proposal that passed the check did so clearly (``REPAIR_COVERAGE``,
+    ``REPAIR_STUCK``), so no refit is tried."""
+    return info["coverage"] >= REPAIR_COVERAGE and (info["stuck"] or 0.0) <= REPAIR_STUCK
 
 
 def resampled_refit(proposal: DefensiveProposal, log_density, points: np.ndarray, seed: int):

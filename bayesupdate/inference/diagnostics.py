@@ -123,7 +123,10 @@ def convergence_report(
         worst = int(np.nanargmin(np.where(np.isfinite(ess), ess, -np.inf)))
         reasons.append(f"bulk ESS {ess[worst]:.0f} < {target_ess:g} ({names[worst]})")
     tau = np.max(result.autocorr_time) if np.size(result.autocorr_time) else np.nan
-    if not (np.isfinite(tau) and steps >= min_autocorr_times * tau):
+    if np.isnan(tau) and np.size(result.autocorr_time):
+        # emcee's estimate is 0 / 0 for a walker whose chain is constant (``_autocorr``)
+        reasons.append("autocorrelation time undefined: a walker never moved")
+    elif not (np.isfinite(tau) and steps >= min_autocorr_times * tau):
         reasons.append(f"{steps} steps < {min_autocorr_times:g} autocorrelation times ({tau:.0f})")
     if not result.converged and not reasons:
         reasons.append("stopped before its convergence check passed")

@@ -36,12 +36,14 @@ import emcee
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference import walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
 from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.parameter_space import ParameterSpace, ParameterSpec
+from bayesupdate.inference.walker_start import axis_sd, uncounted
 from bayesupdate.interrupts import StopRequest
 
 #: the move schemes ``SamplerSettings.moves`` names (module docstring)
@@ -152,8 +154,12 @@ def initial_walkers(
 ) -> np.ndarray:
     """Walker positions (n_walkers, d) in balls around the distinct optima, all with finite lp.
 
-    ball : radius as a fraction of each parameter's bounds width.  The sigma column (if sampled)
-    starts near the rms relative error at the optimum (or ``sigma_start``), within its prior.
+    ball : radius as a fraction of each parameter's bounds width, capped by the posterior's sd
+    along each axis at the best optimum (``walker_start.axis_sd``: a ball wider than the
+    posterior starts the walkers tens of sds out when the data are precise).  The sigma column
+    (if sampled) starts near the rms relative error at the optimum (or ``sigma_start``), within
+    its prior, or at the best sigma of a log grid when that is clearly better
+    (``walker_start.sigma_start``).
     """
     problem = log_posterior.problem
     low, high = problem.lower, problem.upper
@@ -165,9 +171,15 @@ def initial_walkers(
         rms = np.sqrt(calibration.expr / max(problem.data.n_modes, 1))
         s0 = sigma_start if sigma_start is not None else rms
         s0 = float(np.clip(max(s0, 1e-3), *prior.bounds))
+        if sigma_start is None:
+            with uncounted(log_posterior):
+                s0 = walker_start.sigma_start(log_posterior, centres[0], s0)
         if not np.isfinite(prior.logpdf(s0)):
             s0 = float(prior.sample(rng, 1)[0])
         columns.append(s0)
+    width = np.concatenate([high - low, np.abs(columns) + 1e-3])[:d]
+    with uncounted(log_posterior):
+        sd = axis_sd(log_posterior, np.concatenate([centres[0], columns]), ball * width)
     positions = np.empty((n_walkers, d))
     for attempt in range(100):
         which = np.arange(n_walkers) % centres.shape[0]
@@ -176,8 +188,8 @@ def initial_walkers(
             if columns
             else (centres[which])
         )
-        scale = np.concatenate([high - low, np.abs(columns) + 1e-3])[:d]
-        trial = base + ball * scale * rng.standard_normal((n_walkers, d))
+        scale = np.minimum(ball * width, sd)
+        trial = base + scale * rng.standard_normal((n_walkers, d))
         trial[:, : low.size] = np.clip(trial[:, : low.size], low, high)
         if columns:
             trial[:, -1] = np.abs(trial[:, -1])
@@ -202,7 +214,12 @@ def _autocorr(chain: np.ndarray) -> np.ndarray:
     level = logger.level
     logger.setLevel(logging.ERROR)
     try:
-        return np.asarray(emcee.autocorr.integrated_time(chain, c=5, quiet=True), dtype=float)
+        # a walker that never moved has a zero-variance chain: emcee's acf /= acf[0] is 0 / 0
+        # there and tau NaN, which the stop rule and the convergence report read as "not
+        # converged" (``diagnostics.convergence_report``); the warning itself says no more
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tau = emcee.autocorr.integrated_time(chain, c=5, quiet=True)
+        return np.asarray(tau, dtype=float)
     finally:
         logger.setLevel(level)
 
@@ -426,7 +443,9 @@ def _fresh_run(
     space: ParameterSpace | None,
 ) -> _Run:
     """A new run: walkers (``initial``, or balls around the calibration's optima) and emcee's
-    MT19937 state, both from ``settings.seed``."""
+    MT19937 state, both from ``settings.seed``.  In the unconstrained coordinates the walkers
+    are spread by 0.01, or by the posterior's sd along each axis there where that is smaller
+    (``walker_start.axis_sd`` at the first walker)."""
     walkers, d, seed = settings.walkers, log_posterior.ndim, settings.seed
     rng = np.random.default_rng(seed)
     if initial is None:
@@ -437,7 +456,11 @@ def _fresh_run(
     initial = np.asarray(initial, dtype=float)
     if space is not None:
         # walkers clipped onto a bound would coincide in y: spread them a little
-        initial = space.y_from_theta(initial) + 0.01 * rng.standard_normal(initial.shape)
+        y = space.y_from_theta(initial)
+        density = partial(_guard, space=space, stop={"requested": False})(log_posterior)
+        with uncounted(log_posterior):
+            spread = axis_sd(density, y[0], np.full(d, 0.01))
+        initial = y + spread * rng.standard_normal(initial.shape)
     state = emcee.State(initial, random_state=mt.get_state())
     chain_parts, lp_parts = [np.empty((0, walkers, d))], [np.empty((0, walkers))]
     return _Run(state, chain_parts, lp_parts, np.zeros(walkers), 0.0)

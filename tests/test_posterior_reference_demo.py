@@ -2,9 +2,11 @@
 default sampler (``run_sampling`` with the demo's study) gives means within 0.05 sd and sds
 within 5 % of the reference, every parameter.
 
-The references (tests/data/posterior_reference_demo_{seed,virtual}.json, made by
-studies/posterior_reference.py --case seed|virtual) are the posteriors ``bayesupdate demo``
-shows, built with the demo's own study and the calls ``run_sampling`` makes.  The seed case's
+The references (tests/data/posterior_reference_demo_{seed,virtual,seed_shell}.json, made by
+studies/posterior_reference.py --case seed|virtual|seed-shell) are the posteriors ``bayesupdate
+demo`` shows (its seed case on the shell exhaust, ``seed-shell``; its virtual test on the beam
+exhaust; ``seed``: the beam exhaust's seed case, the demo's before issue 20 moved it), built with
+the demo's own study and the calls ``run_sampling`` makes.  The seed case's
 lower rho_catalyst tail (logit down to about -5.6) is where the demo's mixture proposal fails
 its coverage check; the reference's defensive prior component and its refit on resampled draws
 reach it (its weighted 0.5 % quantile is stored with the pilot's).
@@ -28,7 +30,8 @@ LONG = pytest.mark.skipif(
 
 
 def _reference(case: str) -> dict:
-    return json.loads((DATA / f"posterior_reference_demo_{case}.json").read_text())
+    name = case.replace("-", "_")
+    return json.loads((DATA / f"posterior_reference_demo_{name}.json").read_text())
 
 
 def _study():
@@ -45,6 +48,26 @@ def test_the_demo_references_are_precise_enough_to_judge_5_percent(case):
     assert max(ref["mc_error_sd_relative"]) < 0.01
     # no single draw dominates the estimate
     assert ref["max_weight_share"] < 0.01
+
+
+def test_the_shell_seed_reference_is_precise_but_for_the_hot_pipe_tail():
+    """The shell seed case's reference judges 5 % on every parameter but t_hot_pipe: that
+    posterior reaches far up towards its 3 mm bound (logit 0.995 quantile 4.6 against the DE
+    pilot's 2.5, where the frequencies hardly see it), which the defensive prior component
+    alone covers, so its sd carries a Monte Carlo error of about 5 % (docs/guide/
+    exhaust-shell.md, "The demo's shell posterior against its reference")."""
+    ref = _reference("seed-shell")
+    assert ref["case"] == "seed-shell" and ref["names"][0] == "t_hot_pipe"
+    assert ref["ess"] >= 4500 and ref["max_weight_share"] < 0.02
+    assert max(ref["mc_error_mean_in_sd"][1:]) < 0.02
+    assert max(ref["mc_error_sd_relative"][1:]) < 0.015
+    # the tail the pilot did not reach, and the hot pipe's precision it costs
+    (low, high), (pilot_low, pilot_high) = (
+        np.array(ref["tail"][k])[:, 0]
+        for k in ("y_quantiles_0.005_0.995", "pilot_y_quantiles_0.005_0.995")
+    )
+    assert high > pilot_high + 1.5 and abs(low - pilot_low) < 0.2
+    assert 0.02 < ref["mc_error_sd_relative"][0] < 0.06
 
 
 def test_the_weighted_moments_and_quantiles_of_known_weights():
@@ -144,3 +167,36 @@ def test_the_demos_seed_case_posterior_matches_its_reference():
 def test_the_demos_virtual_test_posterior_matches_its_reference():
     run = _demo_default_against("virtual", 1)
     assert run.posterior.diagnostics["moves"]["kind"] == "mixture"
+
+
+@pytest.fixture(scope="module")
+def shell_seed_case():
+    """The demo's shell seed case as the demo prepares it (its certified basis and optimum)."""
+    return _study().demo_posterior("seed-shell")
+
+
+# the demo's seed case on the shell exhaust: the demo's own sampler seed 1 and the fresh seeds
+# 5 and 6 (chosen 2026-11-24 before any run): run_sampling to its convergence targets
+# seed 5 misses (docs/guide/exhaust-shell.md): the mixture fails its coverage check (0.138,
+# repairs 0.132 < 0.15), the DE fallback converges with sds 3-13 % small (inference/moves)
+DE_FALLBACK = pytest.mark.xfail(strict=True, reason="DE fallback: sds 3-13 % small")
+
+
+@LONG
+@pytest.mark.parametrize("seed", [1, pytest.param(5, marks=DE_FALLBACK), 6])
+def test_the_demos_shell_seed_case_posterior_matches_its_reference(shell_seed_case, seed):
+    from dataclasses import replace
+
+    from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
+
+    study, ref = _study(), _reference("seed-shell")
+    log_post, calibration, _, prepared = shell_seed_case
+    assert list(log_post.names) == ref["names"] and prepared.problem.model.name == "exhaust_shell"
+    assert prepared.study.sampler.seed == 1  # the demo's own run
+    sampler = replace(prepared.study.sampler, seed=seed)
+    prepared = replace(prepared, study=replace(prepared.study, sampler=sampler))
+    run = run_sampling(prepared, SamplingOptions(), calibration)
+    assert run.posterior.converged
+    errors = study.compare(ref, run.posterior.samples())
+    assert np.max(errors["mean_error_in_sd"]) <= 0.05, errors
+    assert np.max(np.abs(errors["sd_error_relative"])) <= 0.05, errors

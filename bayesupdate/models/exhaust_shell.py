@@ -286,9 +286,10 @@ def build_exhaust_shell_structure(g: dict, mesh_density: float = MESH_DENSITY_DE
     ``mesh_density`` elements around each oval body.
 
     ``metadata``: path_nodes (gas path from the manifold to the tail, pipe nodes and body axis
-    nodes), path_s (their arc length [m]), mm_internal_mass_kg (the internals' mass closing the
-    12.29 kg budget), n_shells, connections (the connection springs' parts, which discovery's
-    ``connection_flexibility`` scans)."""
+    nodes: ``models.exhaust.mode_character`` reads the modes' plane and node count on them, as
+    on the beam exhaust), path_s (their arc length [m]), mm_internal_mass_kg (the internals'
+    mass closing the 12.29 kg budget), n_shells, connections (the connection springs' parts,
+    which discovery's ``connection_flexibility`` scans), mesh_density."""
     g = {"connection_k_rot": connection_stiffnesses(), **g}
     b = StructureBuilder()
     path = _upstream(b, g, mesh_density)
@@ -308,6 +309,7 @@ def build_exhaust_shell_structure(g: dict, mesh_density: float = MESH_DENSITY_DE
         mm_internal_mass_kg=float(m_int),
         n_shells=int(structure.shells.n_elements),
         connections=CONNECTION_NAMES,
+        mesh_density=int(mesh_density),
     )
     return structure
 

@@ -1,12 +1,17 @@
 """The demo pipeline: the seed's whole story on the embedded default, end to end.
 
-(a) The seed's case: the built-in exhaust at the initial design against seed Table 1, then
-    calibrated against the measured frequencies of seed Table 2 (optimum and posterior), and
-    discovery of what it is missing (full runs only).
-(b) A virtual test campaign: a "true" exhaust with known design values and a hidden effect ->
-    simulated roving-hammer FRFs (UFF 58) -> automatic identification -> calibration against the
-    identified modes (paired by MAC) -> posterior -> discovery, so the chain from FRFs to
-    calibrated values with uncertainty is shown on data whose truth is known.
+(a) The seed's case on the shell exhaust ``exhaust_shell`` (issue 20: the model that reproduces
+    the paper better by the numbers, ``pipelines.exhaust_comparison.better_exhaust``): against
+    seed Table 1, then calibrated against the measured frequencies of seed Table 2 with the mass
+    kept (optimum and front on its certified reduced basis, then the posterior); beside it the
+    beam exhaust ``exhaust`` (its optimum from its own calibration and its front), and
+    discovery of what the beam exhaust is missing (full runs only; on the shell discovery takes
+    about 4 minutes of CPU).
+(b) A virtual test campaign on the beam exhaust: a "true" exhaust with known design values and
+    a hidden effect -> simulated roving-hammer FRFs (UFF 58) -> automatic identification ->
+    calibration against the identified modes (paired by MAC) -> posterior -> discovery, so the
+    chain from FRFs to calibrated values with uncertainty is shown on data whose truth is known
+    (not the paper's reproduction: the beam model keeps it fast).
 
 ``run_demo`` computes and writes the data files a user would keep (HDF5 results, the UFF file,
 the identified modes) into ``settings.out`` and returns frozen records; the figures and the
@@ -23,11 +28,10 @@ from bayesupdate import paper
 from bayesupdate.config import StudyConfig, parse_study
 from bayesupdate.discovery.results_io import write_discovery
 from bayesupdate.discovery.settings import DiscoverySettings
-from bayesupdate.pipelines.calibrate import run_calibration
 from bayesupdate.pipelines.discover import DiscoveryRequest, DiscoveryRun, discover_study
 from bayesupdate.pipelines.sample import SamplingOptions, SamplingRun, run_sampling
 from bayesupdate.pipelines.simulate import VirtualTest, VirtualTestSettings, simulate_test
-from bayesupdate.pipelines.study import prepare
+from bayesupdate.pipelines.study import PreparedStudy, prepare
 
 #: the hidden truth of the virtual campaign: design values (SI) and one hidden effect
 VIRTUAL_TRUTH = {
@@ -40,11 +44,21 @@ VIRTUAL_TRUTH = {
 VIRTUAL_EFFECT = "added_mass@14:m=0.4"
 #: the identified modes kept for calibration: below this [Hz] (the test band ends at 150 Hz)
 IDENTIFIED_BELOW_HZ = 140.0
+#: the shell exhaust's mesh density in the demo: its certified basis builds in about a third of
+#: the CPU of the default density 32's; the mesh error this costs is measured in every run
+#: (``ShellCheck``; docs/guide/exhaust-shell.md, "The demo on the shell exhaust")
+SHELL_MESH_DENSITY = 16
+SHELL_MODEL = {"source": "exhaust_shell", "options": {"mesh_density": SHELL_MESH_DENSITY}}
+BEAM_MODEL = {"source": "exhaust"}
+#: the fronts of Expr against the mass error: these weights of the mass term, each fit on the
+#: model's certified basis with this many starts, not polished
+FRONT_WEIGHTS = (1e-3, 0.1, 10.0, 1e3)
+FRONT_STARTS = 2
 
 
 @dataclass(frozen=True)
 class DemoSettings:
-    """out : the output folder.  quick : a smaller run for a first look (<= 60 s).  seed : every
+    """out : the output folder.  quick : a smaller run for a first look.  seed : every
     random draw derives from it.  progress : show the sampler's progress bars."""
 
     out: Path
@@ -91,6 +105,39 @@ class CalibrationPart:
 
 
 @dataclass(frozen=True)
+class OptimumPart:
+    """An exhaust calibrated against seed Table 2 with the mass kept, on its certified basis.
+
+    name : the model.  calibration : the optimum (``CalibrationResult``).  polished : its ends
+    polished on the full model (the beam's ``run_calibration``) or not (the shell's, as
+    ``run_sampling`` places its walkers).  front : ``inference.pareto_front_mass``'s points,
+    one per ``FRONT_WEIGHTS``.  basis : the basis's ``summary()`` with its build "wall_s",
+    "cpu_s" and "error_at_optimum" (a full solve there), or None without a basis."""
+
+    name: str
+    calibration: object
+    polished: bool
+    front: tuple
+    basis: dict | None
+
+
+@dataclass(frozen=True)
+class ShellCheck:
+    """The demo's shell mesh against the default density 32, by full solves: ``density``; the
+    12 frequencies at the initial design (``initial_hz``, (12,)) and at the seed optimum
+    (``optimum_hz``, (n_test,), paired as the problem pairs them); Expr and mass there; wall and
+    CPU seconds of the check (its build and two solves)."""
+
+    density: int
+    initial_hz: np.ndarray
+    optimum_hz: np.ndarray
+    expr: float
+    mass_kg: float
+    wall_s: float
+    cpu_s: float
+
+
+@dataclass(frozen=True)
 class IdentifiedPart:
     """The identification of the virtual test: the FRFs read back from the UFF file, the
     ``ema.identify`` result and the modes kept (below ``IDENTIFIED_BELOW_HZ``)."""
@@ -110,11 +157,16 @@ class DiscoveryPart:
 
 @dataclass(frozen=True)
 class DemoResults:
-    """Everything the demo computed; the discovery parts are None when not run."""
+    """Everything the demo computed; the discovery parts are None when not run.  fe, seed,
+    seed_optimum, shell_check: the shell exhaust; beam_optimum, seed_discovery and the virtual
+    test: the beam exhaust."""
 
     settings: DemoSettings
     fe: FePart
     seed: CalibrationPart
+    seed_optimum: OptimumPart
+    shell_check: ShellCheck | None
+    beam_optimum: OptimumPart
     seed_discovery: DiscoveryPart | None
     virtual_test: VirtualTest
     uff: Path
@@ -126,15 +178,17 @@ class DemoResults:
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:
     """The steps ``run_demo`` announces, in order."""
     steps = [
-        "FE model vs seed Table 1",
-        "seed case: calibration vs Table 2",
-        "seed case: posterior",
+        "shell exhaust vs seed Table 1",
+        "seed case (shell): certified basis, optimum and front vs Table 2",
+        "seed case (shell): posterior",
+        "seed case (shell): the optimum at mesh density 32",
+        "beam exhaust: optimum and front vs Table 2",
     ]
     # --quick keeps discovery where it has something to find (the virtual test's hidden effect)
     if not settings.quick:
-        steps.append("seed case: discovery")
+        steps.append("beam exhaust vs Table 2: discovery")
     steps += [
-        "virtual test: simulate FRFs",
+        "virtual test (beam): simulate FRFs",
         "virtual test: identify",
         "virtual test: calibrate + posterior",
         "virtual test: discovery",
@@ -146,40 +200,42 @@ def run_demo(
     settings: DemoSettings, step: Callable[[str], None] = lambda name: None
 ) -> DemoResults:
     """Run both parts (module docstring); ``step(name)`` announces each of ``demo_steps``."""
-    out = settings.out
-    step("FE model vs seed Table 1")
-    fe = _fe_part()
-    step("seed case: calibration vs Table 2")
-    seed = _calibration_part(settings, "paper:ema", out / "seed_case.h5", step)
+    out, names = settings.out, iter(demo_steps(settings))
+    step(next(names))
+    fe = fe_part(SHELL_MODEL)
+    step(next(names))
+    prepared = prepare(seed_study(settings))
+    seed_optimum = optimum_part(prepared, polished=False)
+    step(next(names))
+    options = SamplingOptions(out=out / "seed_case.h5", progress=settings.progress)
+    run = run_sampling(prepared, options, calibration=seed_optimum.calibration)
+    seed = CalibrationPart(run, out / "seed_case.h5", prepared.problem)
+    step(next(names))
+    shell_check = check_at_density(prepared, seed_optimum.calibration)
+    step(next(names))
+    beam_optimum = optimum_part(prepare(_study(settings, "paper:ema", BEAM_MODEL)), polished=True)
     seed_discovery = None
     if not settings.quick:
-        step("seed case: discovery")
+        step(next(names))
         seed_discovery = _discovery_part(settings, "paper:ema", out / "seed_discovery.h5")
-    step("virtual test: simulate FRFs")
+    step(next(names))
     virtual_test, uff = _virtual_test_part(settings)
-    step("virtual test: identify")
+    step(next(names))
     identified = _identify_part(out, uff)
-    step("virtual test: calibrate + posterior")
+    step(next(names))
     modes = str(out / "virtual_modes.h5")
     virtual = _calibration_part(settings, modes, out / "virtual_case.h5")
-    step("virtual test: discovery")
+    step(next(names))
     virtual_discovery = _discovery_part(settings, modes, out / "virtual_discovery.h5")
     return DemoResults(
-        settings,
-        fe,
-        seed,
-        seed_discovery,
-        virtual_test,
-        uff,
-        identified,
-        virtual,
-        virtual_discovery,
-    )
+        settings, fe, seed, seed_optimum, shell_check, beam_optimum, seed_discovery,
+        virtual_test, uff, identified, virtual, virtual_discovery,
+    )  # fmt: skip
 
 
-def _study(settings: DemoSettings, data_source) -> StudyConfig:
+def _study(settings: DemoSettings, data_source, model: dict = BEAM_MODEL) -> StudyConfig:
     document = {
-        "model": {"source": "exhaust"},
+        "model": dict(model),
         "data": {"source": data_source},
         "pairing": {"method": "auto"},
         "objective": {"mass_kg": paper.MEASURED_MASS_KG, "mass_weight": 10.0},
@@ -196,21 +252,90 @@ def _study(settings: DemoSettings, data_source) -> StudyConfig:
     return parse_study(document, where="demo")
 
 
-def _fe_part() -> FePart:
+def seed_study(settings: DemoSettings) -> StudyConfig:
+    """The demo's seed case: the shell exhaust (``SHELL_MODEL``) against seed Table 2, the
+    measured mass kept, the demo's optimizer and sampler settings."""
+    return _study(settings, "paper:ema", SHELL_MODEL)
+
+
+def fe_part(model: dict) -> FePart:
+    """The built-in model ``model`` ({"source", "options"}) at its initial design: 12 modes
+    with their energies and characters (plane and node count along the gas path)."""
     from bayesupdate.models import get_model
     from bayesupdate.models.exhaust import mode_character
 
-    model = get_model("exhaust")
-    result = model.solve(n_modes=12, energies=True)
-    return FePart(model, result, mode_character(model.structure, result.modes.shapes))
+    fe = get_model(model["source"], **model.get("options", {}))
+    result = fe.solve(n_modes=12, energies=True)
+    return FePart(fe, result, mode_character(fe.structure, result.modes.shapes))
 
 
-def _calibration_part(settings, data_source, path: Path, step=None) -> CalibrationPart:
-    """Optimum, then (announced by ``step`` when given) the posterior, written to ``path``."""
+def optimum_part(
+    prepared: PreparedStudy, polished: bool, weights: tuple = FRONT_WEIGHTS
+) -> OptimumPart:
+    """The optimum against the study's data and the front (one fit per mass-term weight in
+    ``weights``), both on the certified basis that ``run_sampling`` builds for this study
+    (``pipelines.surrogates.sampling_problem``).  ``polished``: as ``run_calibration`` (ends
+    polished on the full model), else as ``run_sampling`` places its walkers (no polish, the
+    basis checked at the optimum by a full solve)."""
+    import time
+
+    from bayesupdate.inference.optimize import (
+        CalibrationSettings,
+        calibrate,
+        pareto_front_mass,
+    )
+    from bayesupdate.pipelines.surrogates import sampling_problem
+
+    opt, cfg = prepared.study.optimizer, prepared.study.sampler
+    t0, c0 = time.perf_counter(), time.process_time()
+    search, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
+    build = {"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+    fit = CalibrationSettings(
+        starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design,
+        polish=opt.polish if polished else False,
+    )  # fmt: skip
+    refine = prepared.problem if polished and rom is not None else None
+    calibration = calibrate(search, fit, refine=refine)
+    basis = None
+    if rom is not None:
+        error = rom.certify_at(calibration.theta[None, :], search.names)[1]
+        basis = {**rom.summary(), **build, "error_at_optimum": float(error)}
+    front = pareto_front_mass(
+        search, paper.MEASURED_MASS_KG, tuple(weights), starts=FRONT_STARTS, seed=opt.seed,
+        polish=False,
+    )  # fmt: skip
+    name = prepared.study.model.source
+    return OptimumPart(name, calibration, polished, tuple(front), basis)
+
+
+def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) -> ShellCheck:
+    """The shell model of ``prepared`` rebuilt at ``density`` (full solves): Table 1's design
+    and the optimum ``calibration`` evaluated with the same pairing (``ShellCheck``)."""
+    import time
+    from dataclasses import replace
+
+    from bayesupdate.models import get_model
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    options = {**prepared.study.model.options, "mesh_density": density}
+    fe = get_model(prepared.study.model.source, **options)
+    initial = fe.solve(n_modes=12).frequencies_hz
+    problem = replace(prepared.problem, model=fe)
+    evaluation = problem.evaluate(calibration.theta)
+    return ShellCheck(
+        density, np.asarray(initial), evaluation.frequencies_hz,
+        float(problem.expr(evaluation.frequencies_hz)), float(evaluation.mass_kg),
+        time.perf_counter() - t0, time.process_time() - c0,
+    )  # fmt: skip
+
+
+def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
+    """The beam exhaust's optimum (``run_calibration``), then the posterior, written to
+    ``path``."""
+    from bayesupdate.pipelines.calibrate import run_calibration
+
     prepared = prepare(_study(settings, data_source))
     calibration = run_calibration(prepared)
-    if step is not None:
-        step("seed case: posterior")
     options = SamplingOptions(out=path, progress=settings.progress)
     run = run_sampling(prepared, options, calibration=calibration)
     return CalibrationPart(run, path, prepared.problem)
@@ -253,3 +378,18 @@ def _discovery_part(settings, data_source, path: Path) -> DiscoveryPart:
     run = discover_study(study, DiscoveryRequest(DiscoverySettings.from_flat(**options)))
     write_discovery(path, run.result, command="demo")
     return DiscoveryPart(run, path)
+
+
+def side_by_side(results: DemoResults, solves: int = 3) -> dict:
+    """The two exhausts' records (``pipelines.exhaust_comparison.demo_comparison``): Table 1 and
+    the speed measured here (the shell at the demo's mesh), each with the optimum and front this
+    run computed."""
+    from bayesupdate.pipelines.exhaust_comparison import calibrated_in_run, demo_comparison
+
+    shell = f"this run: certified basis, {results.settings.starts} starts, not polished"
+    beam = f"this run: certified basis, {results.settings.starts} starts, polished on full solves"
+    calibrated = {
+        "exhaust": calibrated_in_run(results.beam_optimum, beam),
+        "exhaust_shell": calibrated_in_run(results.seed_optimum, shell),
+    }
+    return demo_comparison(calibrated, {"exhaust_shell": SHELL_MODEL["options"]}, solves)

@@ -1,7 +1,8 @@
 """The two exhausts side by side (issue 20): the beam model ``exhaust`` and the shell model
-``exhaust_shell`` on seed Table 1 (each solved here), their solve time (measured here), and,
-where a file of each is given, the calibrated optimum against Table 2 and the front of Expr
-against the mass error (read, never recomputed: a calibration takes minutes to hours).
+``exhaust_shell`` on seed Table 1 (each solved here), their solve time (measured here), and
+the calibrated optimum against Table 2 and the front of Expr against the mass error, either
+read from a file (``compare_exhausts``: a calibration at the default mesh takes minutes to
+hours) or computed in the run (``demo_comparison``: the demo's own optima and fronts).
 
 ``better_exhaust`` applies the issue's rule, "whichever reproduces the paper better, by the
 numbers", to these records (the model a demo should use); ``report.exhaust_comparison`` draws
@@ -27,7 +28,7 @@ class Calibrated:
 
     expr : seed eq. 19 at the optimum; mass_kg : its mass; swapped : a mode swap in the pairing;
     front : ((mass error [%], Expr), ...) from the lightest mass weight to the heaviest (empty
-    for a calibration result file); source : the file read."""
+    for a calibration result file); source : the file read, or how the run computed it."""
 
     expr: float
     mass_kg: float
@@ -143,34 +144,43 @@ def compare_exhausts(
 ) -> dict[str, ExhaustRecord]:
     """Both exhausts measured (``measure``), each with its calibration file when ``files``
     {model name: path} gives one.  ``options`` {model name: ``get_model`` options}."""
-    files, options = dict(files or {}), dict(options or {})
-    unknown = sorted(set(files) - set(MODELS))
+    files = dict(files or {})
+    _check_names(files, "comparison files")
+    return _measured({k: read_calibrated(v) for k, v in files.items()}, options, solves)
+
+
+def _check_names(mapping: dict, where: str) -> None:
+    unknown = sorted(set(mapping) - set(MODELS))
     if unknown:
-        raise BayesUpdateError(f"comparison files: unknown model {unknown[0]!r}; use {MODELS}")
+        raise BayesUpdateError(f"{where}: unknown model {unknown[0]!r}; use {MODELS}")
+
+
+def _measured(calibrated: dict, options: dict | None, solves: int) -> dict[str, ExhaustRecord]:
+    from dataclasses import replace
+
     records = {}
     for name in MODELS:
-        record = measure(name, options.get(name), solves)
-        if name in files:
-            record = _with(record, read_calibrated(files[name]))
+        record = measure(name, (options or {}).get(name), solves)
+        if name in calibrated:
+            record = replace(record, calibrated=calibrated[name])
         records[name] = record
     return records
 
 
-def _with(record: ExhaustRecord, calibrated: Calibrated) -> ExhaustRecord:
-    from dataclasses import replace
-
-    return replace(record, calibrated=calibrated)
+def calibrated_in_run(optimum, what: str) -> Calibrated:
+    """A ``Calibrated`` record of an optimum and front computed in this run (the demo's
+    ``pipelines.demo.OptimumPart``: .calibration, .front); ``what`` says how, for the report."""
+    c = optimum.calibration
+    front = tuple((float(p["mass_error_pct"]), float(p["expr"])) for p in optimum.front)
+    return Calibrated(float(c.expr), float(c.mass_kg), bool(c.swapped), front, what)
 
 
 def demo_comparison(
-    seed_case: Path, shell_front: Path | None = None, solves: int = 3
+    calibrated: dict[str, Calibrated], options: dict | None = None, solves: int = 3
 ) -> dict[str, ExhaustRecord]:
-    """The demo's side by side (issue 20 item 4): both exhausts measured here, the beam
-    exhaust with the demo's own seed-case optimum (``seed_case``: its ``calibrate`` result file,
-    Table 2 with the mass kept) and the shell exhaust with ``shell_front`` when given (a front
-    file of ``studies/exhaust_shell_front.py``; its calibration takes tens of minutes, so the
-    demo reads it and never recomputes it); ``solves``: as ``measure``."""
-    files = {"exhaust": Path(seed_case)}
-    if shell_front is not None:
-        files["exhaust_shell"] = Path(shell_front)
-    return compare_exhausts(files, solves=solves)
+    """The demo's side by side (issue 20 item 4): both exhausts measured here (``options``:
+    {model name: ``get_model`` options}, the demo's shell mesh), each with its optimum and
+    front against Table 2 with the mass kept as the demo computed them (``calibrated``: {model
+    name: ``calibrated_in_run``}); ``solves``: as ``measure``."""
+    _check_names(calibrated, "comparison")
+    return _measured(calibrated, options, solves)

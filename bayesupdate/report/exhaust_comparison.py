@@ -54,17 +54,16 @@ def _calibrated(records) -> list:
     if rows:
         blocks.append(
             Table(
-                ("model", "Expr vs Table 2", "seed Expr", "mass [kg]", "mode swap", "file"),
+                ("model", "Expr vs Table 2", "seed Expr", "mass [kg]", "mode swap", "source"),
                 tuple(rows),
-                caption="Calibrated against seed Table 2 with the measured 12.29 kg kept (read "
-                "from the files given, not recomputed)",
+                caption="Calibrated against seed Table 2 with the measured 12.29 kg kept (source: "
+                "the file read, or how this run computed it)",
             )
         )
     if missing:
         blocks.append(
             f"No calibration file given for {', '.join(missing)}: its optimum and front are not "
-            "shown (studies/exhaust_shell_front.py MODEL --out FILE writes one; the demo reads "
-            "the shell exhaust's with --shell-front FILE)."
+            "shown (studies/exhaust_shell_front.py MODEL --out FILE writes one)."
         )
     return blocks
 
@@ -98,8 +97,8 @@ def plot_fronts(records, path) -> Path | None:
 
 def comparison_section(records: dict[str, ExhaustRecord], out, folder=None) -> Section:
     """The report section: the choice, Table 1, speed, the calibrated optima and the fronts (a
-    figure ``exhaust_fronts.png`` in ``folder``, default the report folder ``out``, when a front
-    file was given)."""
+    figure ``exhaust_fronts.png`` in ``folder``, default the report folder ``out``, when a record
+    has a front)."""
     winner, reason = better_exhaust(records)
     blocks = [f"Which exhaust reproduces the paper better, by the numbers: {reason}."]
     blocks += [_table1(records), _speed(records), *_calibrated(records)]

@@ -45,7 +45,8 @@ same seed, ends with the same chain as an uninterrupted run.  --json prints {"pa
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
 "autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
 "full_solves_reason": why an FE model got full solves instead of its reduced basis | null,
-"screen": {"size", "max_rel_error", "evaluations"} | null,
+"screen": {"size", "max_rel_error", "evaluations"} | null, "screen_skipped": why a configured
+screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps", "coverage", "stuck"}, "compute": {"kind", "workers"}, ...}."""
 
@@ -157,6 +158,8 @@ def _print_summary(out: dict, summary: dict, sampler) -> None:
         else f"reduced basis: size {rom['size']}, max relative frequency error "
         f"{rom['max_rel_error']:.1e}"
     )
+    if out["screen_skipped"]:
+        print(f"screen: {out['screen_skipped']}")
     if out["pair_differs_fraction"] is not None:
         print(
             f"pairing by shape: {out['pair_differs_fraction']:.0%} of evaluations pair "
@@ -213,6 +216,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
         "rom": _rom_json(posterior.diagnostics.get("rom")),
         "full_solves_reason": posterior.diagnostics.get("full_solves_reason"),
         "screen": posterior.diagnostics.get("screen"),
+        "screen_skipped": posterior.diagnostics.get("screen_skipped"),
         "pairing": posterior.diagnostics.get("pairing_mode"),
         "pair_differs_fraction": _finite_or_none(
             posterior.diagnostics.get("pair_differs_fraction")

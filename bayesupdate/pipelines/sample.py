@@ -31,6 +31,7 @@ from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
     certify_rom,
     sampling_problem,
+    screen_mismatch,
     screening_posterior,
 )
 
@@ -108,21 +109,17 @@ def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
             problem, rom = prepared.problem, None
             full_reason = "the reduced basis missed its tolerance at the optimum"
     log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
-    screen = (
-        screening_posterior(problem, rom, prepared.likelihood, cfg.reduced_tol)
-        if cfg.screen
-        else None
-    )
+    screen, unscreened = _screen(problem, rom, prepared.likelihood, cfg, calibration)
     write = _writer(options.out, prepared, calibration, config)
     posterior = _sample(log_post, calibration, cfg, screen, options, write, state)
     if posterior.interrupted:
         write(state=posterior.state)
         return SamplingRun(calibration, posterior, {}, {})
     posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg)
-    if full_reason:
-        posterior = replace(
-            posterior, diagnostics={**posterior.diagnostics, "full_solves_reason": full_reason}
-        )
+    notes = {"full_solves_reason": full_reason, "screen_skipped": unscreened}
+    notes = {k: v for k, v in notes.items() if v}
+    if notes:
+        posterior = replace(posterior, diagnostics={**posterior.diagnostics, **notes})
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     write(posterior=posterior, diagnostics=summary, predictions=predictions)
     return SamplingRun(calibration, posterior, summary, predictions)
@@ -166,6 +163,15 @@ def _writer(out, prepared: PreparedStudy, calibration: CalibrationResult, config
             write_result(out, prepared.problem, calibration, config, command="sample", **parts)
 
     return write
+
+
+def _screen(problem, rom, likelihood, cfg: SamplerConfig, calibration) -> tuple:
+    """(the screening posterior or None, why a configured screen was dropped or "")."""
+    if not cfg.screen:
+        return None, ""
+    screen = screening_posterior(problem, rom, likelihood, cfg.reduced_tol)
+    why = "" if screen is None else screen_mismatch(screen, calibration)
+    return (None, why) if why else (screen, "")
 
 
 def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, state):

@@ -19,7 +19,7 @@ report are made from them at the edge (``report.demo_report``).
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -112,13 +112,17 @@ class OptimumPart:
     polished on the full model (the beam's ``run_calibration``) or not (the shell's, as
     ``run_sampling`` places its walkers).  front : ``inference.pareto_front_mass``'s points,
     one per ``FRONT_WEIGHTS``.  basis : the basis's ``summary()`` with its build "wall_s",
-    "cpu_s" and "error_at_optimum" (a full solve there), or None without a basis."""
+    "cpu_s" and "error_at_optimum" (a full solve there), or None without a basis.  search, rom:
+    the problem on that basis and the basis (``surrogates.sampling_problem``), for
+    ``run_sampling`` to reuse."""
 
     name: str
     calibration: object
     polished: bool
     front: tuple
     basis: dict | None
+    search: object = field(default=None, repr=False, compare=False)
+    rom: object = field(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -208,7 +212,8 @@ def run_demo(
     seed_optimum = optimum_part(prepared, polished=False)
     step(next(names))
     options = SamplingOptions(out=out / "seed_case.h5", progress=settings.progress)
-    run = run_sampling(prepared, options, calibration=seed_optimum.calibration)
+    surrogate = (seed_optimum.search, seed_optimum.rom)
+    run = run_sampling(prepared, options, seed_optimum.calibration, surrogate)
     seed = CalibrationPart(run, out / "seed_case.h5", prepared.problem)
     step(next(names))
     shell_check = check_at_density(prepared, seed_optimum.calibration)
@@ -305,7 +310,7 @@ def optimum_part(
         polish=False,
     )  # fmt: skip
     name = prepared.study.model.source
-    return OptimumPart(name, calibration, polished, tuple(front), basis)
+    return OptimumPart(name, calibration, polished, tuple(front), basis, search, rom)
 
 
 def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) -> ShellCheck:

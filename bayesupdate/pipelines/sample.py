@@ -77,23 +77,30 @@ def run_sampling(
     prepared: PreparedStudy,
     options: SamplingOptions = SamplingOptions(),
     calibration: CalibrationResult | None = None,
+    surrogate: tuple | None = None,
 ) -> SamplingRun:
     """Optimum (unless ``calibration`` is given), then the posterior (module docstring), with
     the independent work (the reduced basis's solves, the optimum's starts, the walkers of a
-    model that cannot batch) on the executor of ``options.compute``."""
+    model that cannot batch) on the executor of ``options.compute``.  ``surrogate``: the
+    (problem, rom) that ``surrogates.sampling_problem(prepared.problem, None, reduced,
+    reduced_tol)`` already gave for this study (the demo builds it for its optimum), so the
+    basis is not built twice; None: built here."""
     with open_executor(options.compute) as executor:
-        run = _run_sampling(prepared, options, calibration, executor)
+        run = _run_sampling(prepared, options, calibration, executor, surrogate)
         return replace(run, compute=executor.describe())
 
 
-def _run_sampling(prepared, options, calibration, executor) -> SamplingRun:
+def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> SamplingRun:
     study = prepared.study
     config = study.to_dict()
     state = _resume_state(options, config)
     cfg = study.sampler
     # the reduced model first: the multi-start optimum is then cheap too (checked in full at
     # the optimum below; a miss there falls back to full solves)
-    problem, rom, full_reason = _reduced_or_why(prepared, cfg, executor)
+    if surrogate is None:
+        problem, rom, full_reason = _reduced_or_why(prepared, cfg, executor)
+    else:
+        (problem, rom), full_reason = surrogate, None
     if calibration is None:
         opt = study.optimizer
         # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the

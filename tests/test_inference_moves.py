@@ -285,3 +285,27 @@ def test_a_narrowly_passing_proposal_is_repaired_and_the_better_one_kept(shear):
         *args, seed=0, log_density=p_with(0.05), repair_rounds=REPAIR_ROUNDS
     )
     assert clear is not None and info["coverage"] >= REPAIR_COVERAGE and "repairs" not in info
+
+
+def test_when_no_proposal_passes_the_best_with_a_small_stuck_share_is_kept_not_de():
+    """The demo's shell seed case, sampler seed 5 (2026-11-24): first check 0.138 / 0.067
+    (stuck share too high), refits 0.100 / 0.0045 and 0.132 / 0.0032, none passing
+    MIN_COVERAGE; the second refit is kept (DE alone had sds 7-13 % small there).  Below
+    LOW_COVERAGE or above MAX_STUCK nothing is kept: DE alone."""
+    from bayesupdate.inference.moves.staged import LOW_COVERAGE, low_coverage_kept
+
+    def checked(coverage, stuck):
+        return {"coverage": coverage, "stuck": stuck, "fallback": "covers poorly"}
+
+    first, refit_1, refit_2 = object(), object(), object()
+    kept = low_coverage_kept(None, first, checked(0.138, 0.067))
+    assert kept is None  # 0.067 > MAX_STUCK
+    kept = low_coverage_kept(kept, refit_1, checked(0.100, 0.0045))
+    kept = low_coverage_kept(kept, refit_2, checked(0.132, 0.0032))
+    assert kept[0] is refit_2 and kept[1]["fallback"] is None
+    assert "0.132" in kept[1]["low_coverage_kept"]
+    # a later, lower one does not replace it; one below LOW_COVERAGE or too stuck never counts
+    assert low_coverage_kept(kept, object(), checked(0.110, 0.0))[0] is refit_2
+    assert low_coverage_kept(None, object(), checked(LOW_COVERAGE - 0.01, 0.0)) is None
+    assert low_coverage_kept(None, object(), checked(0.14, MAX_STUCK + 0.001)) is None
+    assert LOW_COVERAGE < MIN_COVERAGE

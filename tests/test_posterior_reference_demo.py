@@ -50,24 +50,25 @@ def test_the_demo_references_are_precise_enough_to_judge_5_percent(case):
     assert ref["max_weight_share"] < 0.01
 
 
-def test_the_shell_seed_reference_is_precise_but_for_the_hot_pipe_tail():
-    """The shell seed case's reference judges 5 % on every parameter but t_hot_pipe: that
-    posterior reaches far up towards its 3 mm bound (logit 0.995 quantile 4.6 against the DE
-    pilot's 2.5, where the frequencies hardly see it), which the defensive prior component
-    alone covers, so its sd carries a Monte Carlo error of about 5 % (docs/guide/
+def test_the_shell_seed_reference_is_precise_enough_to_judge_5_percent():
+    """The shell seed case's posterior reaches up towards t_hot_pipe's 3 mm bound (logit 0.995
+    quantile 3.0 against the DE pilot's 2.2, where the frequencies hardly see it), which the
+    defensive prior component alone covers: at 30 % of the proposal and 300,000 draws
+    (``SHELL_SETTINGS``) the Monte Carlo errors stay within 0.015 sd and 1.5 % on every
+    parameter (at 10 % and 200,000 draws the hot pipe's sd had 4.9 %; docs/guide/
     exhaust-shell.md, "The demo's shell posterior against its reference")."""
     ref = _reference("seed-shell")
     assert ref["case"] == "seed-shell" and ref["names"][0] == "t_hot_pipe"
-    assert ref["ess"] >= 4500 and ref["max_weight_share"] < 0.02
-    assert max(ref["mc_error_mean_in_sd"][1:]) < 0.02
-    assert max(ref["mc_error_sd_relative"][1:]) < 0.015
-    # the tail the pilot did not reach, and the hot pipe's precision it costs
+    assert ref["settings"]["prior_weight"] == 0.3 and ref["draws"] == 300_000
+    assert ref["ess"] >= 15000 and ref["max_weight_share"] < 0.01
+    assert max(ref["mc_error_mean_in_sd"]) < 0.015
+    assert max(ref["mc_error_sd_relative"]) < 0.015
+    # the tail the pilot did not reach
     (low, high), (pilot_low, pilot_high) = (
         np.array(ref["tail"][k])[:, 0]
         for k in ("y_quantiles_0.005_0.995", "pilot_y_quantiles_0.005_0.995")
     )
-    assert high > pilot_high + 1.5 and abs(low - pilot_low) < 0.2
-    assert 0.02 < ref["mc_error_sd_relative"][0] < 0.06
+    assert high > pilot_high + 0.5 and abs(low - pilot_low) < 0.2
 
 
 def test_the_weighted_moments_and_quantiles_of_known_weights():
@@ -177,13 +178,14 @@ def shell_seed_case():
 
 # the demo's seed case on the shell exhaust: the demo's own sampler seed 1 and the fresh seeds
 # 5 and 6 (chosen 2026-11-24 before any run): run_sampling to its convergence targets
-# seed 5 misses (docs/guide/exhaust-shell.md): the mixture fails its coverage check (0.138,
-# repairs 0.132 < 0.15), the DE fallback converges with sds 3-13 % small (inference/moves)
-DE_FALLBACK = pytest.mark.xfail(strict=True, reason="DE fallback: sds 3-13 % small")
+# seed 5 misses (docs/guide/exhaust-shell.md): its first refit passes the coverage check
+# (0.196 / 0.006) and the mixture's kept run (3,000 steps, tau 20) has rho_catalyst's sd 6.7 %
+# small and its mean 0.057 sd off: the lower tail (logit down to -7.4) is under-visited
+NARROW_TAIL = pytest.mark.xfail(strict=True, reason="rho_catalyst sd 6.7 % small (lower tail)")
 
 
 @LONG
-@pytest.mark.parametrize("seed", [1, pytest.param(5, marks=DE_FALLBACK), 6])
+@pytest.mark.parametrize("seed", [1, pytest.param(5, marks=NARROW_TAIL), 6])
 def test_the_demos_shell_seed_case_posterior_matches_its_reference(shell_seed_case, seed):
     from dataclasses import replace
 

@@ -155,13 +155,21 @@ def _residual_count(problem: CalibrationProblem) -> int:
     return problem.residual_vector(problem.evaluate(problem.start)).size
 
 
-def _residual_function(problem: CalibrationProblem, count: EvaluationCount, n_res: int):
+#: ``_residual_function``'s default: build the batched path itself
+_BUILD = object()
+
+
+def _residual_function(
+    problem: CalibrationProblem, count: EvaluationCount, n_res: int, batch=_BUILD
+):
     """r(u): the weighted residuals (n_res,) of ``problem`` over its unit box (eq. 19 plus extra
     terms).  They are relative errors (unit 1): a failed model gets a 1000 % error in each
     (``parameter_space.FAILED_RELATIVE_ERROR``), counted in ``count``.  A model with batched
     shapes is evaluated on its batched path (``_batch_residuals``, as a batch of one), so r and
-    its Jacobian (``_forward_jacobian``) come from the same solver."""
-    batch = _unit_box_batch(problem, count, n_res)
+    its Jacobian (``_forward_jacobian``) come from the same solver.  ``batch``: that path as
+    ``_unit_box_batch`` gave it (None: there is none), when the caller already has it."""
+    if batch is _BUILD:
+        batch = _unit_box_batch(problem, count, n_res)
     if batch is not None:
         return lambda u: batch(np.asarray(u, dtype=float)[None, :])[0]
 
@@ -320,8 +328,8 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple[np.ndarray, f
     u0, polish = item
     job.stop.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
     count = EvaluationCount()
-    residuals = _residual_function(job.problem, count, job.n_res)
     batch = _unit_box_batch(job.problem, count, job.n_res)
+    residuals = _residual_function(job.problem, count, job.n_res, batch)
     d = u0.size
     if job.least_squares:
         fit = optimize.least_squares(

@@ -255,6 +255,27 @@ def test_a_screen_coarser_than_the_likelihood_is_dropped(sampled):
     assert "smallest relative sd 1.0e-04" in why
 
 
+def test_the_basis_error_allowed_is_a_tenth_of_the_smallest_sd(sampled):
+    """``basis_error_allowed``: with sigma sampled, the identification sds alone (sigma may fall
+    to 0); with sigma fixed, sqrt(sigma^2 + sd^2); without data sds, the residuals' level."""
+    from bayesupdate.modal_data import ModalData
+    from bayesupdate.pipelines.surrogates import basis_error_allowed
+
+    _, reduced_problem, rom = sampled
+    f_model = rom.predict_frequencies_batch(rom.centre()[None, :], None, 12)[0]
+    sd_rel = np.linspace(2e-5, 4e-4, 12)
+    data = ModalData(f_model * 1.001, identification_sd_hz=sd_rel * f_model * 1.001)
+    problem = build_problem(rom, data)
+    fit = calibrate(problem, CalibrationSettings(starts=1, seed=0))
+    halfnormal = LikelihoodSpec(sigma=None, sigma_prior=_halfnormal(0.01))
+    assert basis_error_allowed(problem, halfnormal, fit) == pytest.approx(2e-6, rel=1e-12)
+    fixed = basis_error_allowed(problem, LikelihoodSpec(sigma=1e-3), fit)
+    assert fixed == pytest.approx(0.1 * np.hypot(1e-3, 2e-5), rel=1e-12)
+    plain = build_problem(rom, ModalData(f_model))
+    level = basis_error_allowed(plain, halfnormal, calibrate(plain, CalibrationSettings(seed=0)))
+    assert level == pytest.approx(1e-5, rel=1e-3)  # the robust floor at a perfect fit
+
+
 def _halfnormal(scale):
     from bayesupdate.inference.priors import prior_from_mapping
 

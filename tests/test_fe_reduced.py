@@ -192,6 +192,19 @@ def test_certify_at_a_point_and_localized_model(fe, rom):
     assert np.max(np.abs(local.predict_frequencies_batch(inside) / full - 1)) <= 1e-4
 
 
+def test_certify_at_enriches_below_the_tolerance_when_asked(fe, rom):
+    # the sampler asks for this at the optimum when the basis's error (within tol) could still
+    # bias a posterior whose data sds are smaller than it (pipelines.surrogates)
+    point = rom.low + np.array([0.3, 0.7, 0.2, 0.6, 0.4]) * (rom.high - rom.low)
+    kept, err = rom.certify_at(point[None, :])
+    assert 1e-9 < err <= 1e-4 and kept.size == rom.size  # within tol: no enrichment by default
+    enriched, err_after = rom.certify_at(point[None, :], enrich_above=0.1 * err)
+    assert enriched.certified and enriched.size > rom.size
+    full = fe.predict_frequencies_batch(point[None, :], fe.parameter_names, N_MODES)
+    exact = np.max(np.abs(enriched.predict_frequencies_batch(point) / full - 1))
+    assert exact == pytest.approx(err_after) and exact < 1e-9  # its own shapes: exact there
+
+
 def test_factory_returns_full_model_for_non_fe_models(fe):
     sentinel = object()
     assert reduced_model_for(sentinel) is sentinel

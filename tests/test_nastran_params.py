@@ -69,6 +69,21 @@ def test_bound_thickness_modulus_and_mass_equal_the_deck_written_with_them(tmp_p
     assert got.mass_kg == pytest.approx(0.4 * 0.1 * 0.002 * 7850 + 0.4 * 0.1 * 0.0021 * 7850 + 0.2)
 
 
+def test_modes_set_on_a_deck_binds_the_field_as_the_deck_written_with_it(tmp_path, capsys):
+    deck = _plate(tmp_path / "plate.bdf")
+    argv = ["modes", "--model", str(deck), "--set", "PSHELL 2 T=0.0021", "--set"]
+    assert main([*argv, "MAT1 7 E scale=1.1", "--modes", "5", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    direct = _plate(tmp_path / "direct.bdf", t2=0.0021)
+    direct.write_text(direct.read_text().replace("MAT1,7,2.1e11", "MAT1,7,2.31e11"))
+    np.testing.assert_allclose(got["frequencies_hz"], _freqs(direct), rtol=1e-6)
+    assert got["mass_kg"] == pytest.approx(
+        0.4 * 0.1 * 0.002 * 7850 + 0.4 * 0.1 * 0.0021 * 7850 + 0.05
+    )
+    assert main(["modes", "--model", str(deck), "--set", "PSHELL 2 T=2mm"]) == 2
+    assert "a plain number in the deck's units" in capsys.readouterr().err
+
+
 def test_several_ids_and_density_scale(tmp_path):
     deck = _plate(tmp_path / "plate.bdf", t1=0.002, t2=0.002)
     model = _model(deck, {"t": {"binds": "PSHELL 1,2 T"}, "rho": {"binds": "MAT1 7 RHO scale"}})

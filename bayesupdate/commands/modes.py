@@ -15,10 +15,13 @@ Examples:
   bayesupdate modes --model exhaust
   bayesupdate modes --model exhaust --set t_hot_pipe=2.08mm --set rho_catalyst=8.9e-9t/mm3 --json
   bayesupdate modes --model exhaust.bdf --modes 10 --json
+  bayesupdate modes --model exhaust.bdf --set "PSHELL 3 T=0.0595" --json
   bayesupdate modes --model exhaust_shell --sed-map sed/
 
 A Nastran deck is solved in its own units (mass_kg is then in the deck's mass unit; the JSON's
-"units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count.
+"units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count; its
+--set names are deck fields ("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the
+deck's units.
 
 Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
 each mode's frequency and the share of its strain energy in each part (seed section 3.2).
@@ -35,7 +38,7 @@ def add_arguments(parser):
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="parameter value, repeatable (e.g. t_hot_pipe=2.08mm)",
+        help='parameter value, repeatable (e.g. t_hot_pipe=2.08mm; a deck: "PSHELL 3 T=0.06")',
     )
     parser.add_argument(
         "--modes", type=int, default=None, help="number of elastic modes (12; a deck: its EIGRL)"
@@ -54,13 +57,10 @@ def add_arguments(parser):
 
 def run(args) -> int:
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.models import get_model
 
     if args.modes is not None and args.modes < 1:
         raise BayesUpdateError(f"--modes must be >= 1, got {args.modes}")
-    params = parse_assignments(args.set)
-    options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
-    model = get_model(args.model, **options)
+    model, params = _model_and_values(args)
     if not hasattr(model, "solve"):
         raise BayesUpdateError(f"model {args.model!r} is not an FE model; 'modes' needs one")
     deck = model.structure.metadata.get("nastran", {})
@@ -84,6 +84,23 @@ def run(args) -> int:
         return 0
     print(format_modes_table(result))
     return 0
+
+
+def _model_and_values(args):
+    """(model, parameter values): a built-in model with SI ``--set`` values, or a Nastran deck
+    whose ``--set`` names are bindings (``"PSHELL 3 T=0.06"``), plain numbers in its units."""
+    from bayesupdate.commands.simulate import deck_set_values
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.models import get_model
+    from bayesupdate.nastran import is_nastran_path, load_nastran_model
+
+    if is_nastran_path(args.model):
+        if args.geometry is not None:
+            raise BayesUpdateError("--geometry: only the exhaust model has a geometry")
+        params = deck_set_values(args.set)
+        return load_nastran_model(args.model, {n: {"binds": n} for n in params}), params
+    options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
+    return get_model(args.model, **options), parse_assignments(args.set)
 
 
 def _check_sed_map(model, args) -> None:

@@ -43,7 +43,9 @@ design for every walker (no silent mode swaps).
 Ctrl-C (or SIGTERM) keeps a valid partial result in --out; --resume continues it and, with the
 same seed, ends with the same chain as an uninterrupted run.  --json prints {"parameters": {NAME:
 {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}}, "sigma", "evaluations", "wall_s",
-"autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean"} | null,
+"autocorr_time", "rom": {"size", "max_rel_error", "error_at_posterior_mean", "error_at_optimum",
+"size_before_optimum", "enrich_above"} | null (the basis is enriched at the optimum when its
+error there exceeds enrich_above, a tenth of the likelihood's smallest relative sd),
 "full_solves_reason": why an FE model got full solves instead of its reduced basis | null,
 "screen": {"size", "max_rel_error", "evaluations"} | null, "screen_skipped": why a configured
 screen was not used (its error above the likelihood's smallest sd) | null,
@@ -235,6 +237,9 @@ def _rom_json(rom: dict | None) -> dict | None:
         "size": int(rom["size"]),
         "max_rel_error": float(rom["max_rel_error"]),
         "error_at_posterior_mean": _finite_or_none(rom.get("error_at")),
+        "error_at_optimum": _finite_or_none(rom.get("error_at_optimum")),
+        "size_before_optimum": rom.get("size_before_optimum"),
+        "enrich_above": _finite_or_none(rom.get("enrich_above")),
     }
 
 

@@ -158,6 +158,23 @@ def run(args) -> int:
     return 0
 
 
+def deck_set_values(items) -> dict[str, float]:
+    """``--set`` items on a Nastran deck -> {name: value}: plain numbers in the deck's units (a
+    unit suffix is refused: the deck's unit system is its own); one-line error otherwise."""
+    from bayesupdate.errors import BayesUpdateError
+
+    params = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        try:
+            params[name.strip()] = float(value)
+        except ValueError:
+            raise BayesUpdateError(
+                f"--set {item!r}: give NAME=VALUE, a plain number in the deck's units"
+            ) from None
+    return params
+
+
 def tested_model(args):
     """(model, true parameters) of ``simulate``'s arguments: a built-in model with ``--set``
     values (SI units), or a Nastran deck measured at its test points (``--test-points``, else the
@@ -184,16 +201,8 @@ def tested_model(args):
     if args.geometry:
         raise BayesUpdateError("--geometry: only the exhaust model has a geometry")
     tables = dict(study.parameters) if study else {}
-    params = {}
-    for item in args.set:
-        name, _, value = item.partition("=")
-        name = name.strip()
-        try:
-            params[name] = float(value)
-        except ValueError:
-            raise BayesUpdateError(
-                f"--set {item!r}: give NAME=VALUE, a plain number in the deck's units"
-            ) from None
+    params = deck_set_values(args.set)
+    for name in params:
         tables.setdefault(name, {"binds": name})  # not a study parameter: a binding itself
     table = read_test_points(args.test_points) if args.test_points else None
     if table is None and study:

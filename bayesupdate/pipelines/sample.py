@@ -29,6 +29,7 @@ from bayesupdate.interrupts import StopRequest
 from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
+    basis_error_allowed,
     certify_rom,
     sampling_problem,
     screen_mismatch,
@@ -109,11 +110,11 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
             starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False
         )
         calibration = calibrate(problem, settings, stop=options.stop, executor=executor)
+    basis_note = {}
     if rom is not None:
-        rom = certify_rom(rom, calibration.theta[None, :], problem.names, "the optimum")[0]
-        problem = replace(problem, model=rom)
-        if not rom.certified:
-            problem, rom = prepared.problem, None
+        problem, rom, basis_note = _basis_at_optimum(problem, rom, prepared.likelihood, calibration)
+        if rom is None:
+            problem = prepared.problem
             full_reason = "the reduced basis missed its tolerance at the optimum"
     log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
     screen, unscreened = _screen(problem, rom, prepared.likelihood, cfg, calibration)
@@ -122,7 +123,7 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     if posterior.interrupted:
         write(state=posterior.state)
         return SamplingRun(calibration, posterior, {}, {})
-    posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg)
+    posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg, basis_note)
     notes = {"full_solves_reason": full_reason, "screen_skipped": unscreened}
     notes = {k: v for k, v in notes.items() if v}
     if notes:
@@ -130,6 +131,23 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     write(posterior=posterior, diagnostics=summary, predictions=predictions)
     return SamplingRun(calibration, posterior, summary, predictions)
+
+
+def _basis_at_optimum(problem, rom, likelihood, calibration) -> tuple:
+    """(problem on the checked basis, the basis or None when it missed its tolerance, what was
+    done: {"enrich_above", "size_before_optimum", "error_at_optimum"}).  The basis is enriched
+    at the optimum when its error there could bias the posterior (``basis_error_allowed``)."""
+    allowed = basis_error_allowed(problem, likelihood, calibration)
+    theta = calibration.theta[None, :]
+    checked, summary = certify_rom(rom, theta, problem.names, "the optimum", allowed)
+    note = {
+        "enrich_above": allowed,
+        "size_before_optimum": int(rom.size),
+        "error_at_optimum": summary["error_at"],
+    }
+    if not checked.certified:
+        return problem, None, note
+    return replace(problem, model=checked), checked, note
 
 
 def _reduced_or_why(prepared, cfg: SamplerConfig, executor):
@@ -211,8 +229,9 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
     )
 
 
-def _diagnosed(posterior, log_post, rom, screen, cfg: SamplerConfig):
-    """(posterior with its convergence verdict and diagnostics, summary table)."""
+def _diagnosed(posterior, log_post, rom, screen, cfg: SamplerConfig, basis_note=None):
+    """(posterior with its convergence verdict and diagnostics, summary table); ``basis_note``
+    (``_basis_at_optimum``) joins the diagnostics' "rom"."""
     summary = summarise(posterior, hdi_prob=cfg.hdi_prob)
     report = convergence_report(
         posterior, summary, cfg.target_rhat, cfg.target_ess, cfg.min_autocorr_times
@@ -226,7 +245,8 @@ def _diagnosed(posterior, log_post, rom, screen, cfg: SamplerConfig):
     names = log_post.problem.names
     if rom is not None:
         mean = posterior.samples()[:, : len(names)].mean(axis=0)
-        extra["rom"] = certify_rom(rom, mean[None, :], names, "the posterior mean")[1]
+        at_mean = certify_rom(rom, mean[None, :], names, "the posterior mean")[1]
+        extra["rom"] = {**at_mean, **(basis_note or {})}
     if screen is not None:
         extra["screen"] = {
             "size": int(screen.problem.model.size),

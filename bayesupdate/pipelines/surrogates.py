@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
-from bayesupdate.inference.likelihood_blocks import noise_model
+from bayesupdate.inference.likelihood_blocks import SampledNoise, noise_model
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.problem import CalibrationProblem
 
@@ -103,10 +103,47 @@ def screen_mismatch(screen: LogPosterior, calibration: CalibrationResult) -> str
     )
 
 
-def certify_rom(rom, theta: np.ndarray, names: tuple[str, ...], where: str) -> tuple:
-    """Full solve(s) at theta (k, len(names)); warn (suggesting --full) when the reduced model
-    misses its tolerance there.  Returns (the checked ROM, its ``summary()`` plus ``error_at``)."""
-    rom, err = rom.certify_at(theta, names)
+#: the reduced basis's error at the optimum allowed, as a share of the likelihood's smallest sd
+BASIS_SHARE = 0.1
+
+
+def basis_error_allowed(problem: CalibrationProblem, spec: LikelihoodSpec, calibration) -> float:
+    """The reduced basis's relative frequency error above which it is enriched at the optimum:
+    ``BASIS_SHARE`` x the smallest relative sd the likelihood can give a used mode there.
+
+    The basis's error is one-sided (Rayleigh-Ritz: reduced frequencies >= full), so it biases
+    the posterior; below a tenth of a mode's sd the bias is a tenth of an sd or less.  The sd is
+    the likelihood's, s_i^2 = sigma^2 / w_i + the data's relative sd_i^2 (``SampledNoise``), at
+    sigma = the fixed sigma; with sigma sampled, at sigma = 0 when every used mode has an sd
+    (sigma falls towards 0 when the sds explain the scatter: the NX round trip's posterior sigma
+    was 8e-6 against a residual plug-in level of 1e-4), else at the residuals' robust level
+    (``noise_model``).  inf when the residuals at the optimum are not finite."""
+    residual = calibration.table.error_pct / 100.0
+    used = problem.weights > 0
+    if not np.all(np.isfinite(residual[used])):
+        return float("inf")
+    data = problem.data
+    sds = [
+        None if v is None else v[used] for v in (data.frequency_sd_hz, data.identification_sd_hz)
+    ]
+    noise = SampledNoise.of(data.frequencies_hz[used], problem.weights[used], *sds)
+    if spec.sigma is not None:
+        level = spec.sigma
+    elif np.all(noise.sd_rel2 > 0):
+        level = 0.0
+    else:
+        level = noise_model(data, residual, len(problem.names)).sigma
+    return BASIS_SHARE * float(np.sqrt(np.min(noise.variance(np.array([level]))[0])))
+
+
+def certify_rom(
+    rom, theta: np.ndarray, names: tuple[str, ...], where: str, enrich_above: float | None = None
+) -> tuple:
+    """Full solve(s) at theta (k, len(names)); the basis is enriched there when its error
+    exceeds ``enrich_above`` (``basis_error_allowed``) or its tolerance; warn (suggesting
+    --full) when it then misses its tolerance.  Returns (the checked ROM, its ``summary()``
+    plus ``error_at``, the error at theta after any enrichment)."""
+    rom, err = rom.certify_at(theta, names, enrich_above=enrich_above)
     if not rom.certified or not err <= rom.tol:
         warnings.warn(
             f"reduced model not certified at {where} (relative frequency error {err:.2e}, tol "

@@ -145,16 +145,18 @@ def _warn_failed(model: "ReducedFEModel", failed: Certification, stacklevel: int
 
 
 def certify_points(
-    model: "ReducedFEModel", theta: np.ndarray, enrich: bool = True
+    model: "ReducedFEModel", theta: np.ndarray, enrich: bool = True, enrich_above=None
 ) -> tuple[Certification, float]:
     """``model``'s certification checked at theta (k, n_params) inside its box (all parameters,
     SI): (new certification, largest relative frequency error at the points).  A miss (error >
-    tol) with ``enrich``: their shapes join the basis and every checked point is re-verified; if
-    the tolerance still fails or the size limit is hit, the result is uncertified (a warning)."""
+    tol, or > ``enrich_above`` when that is smaller) with ``enrich``: their shapes join the basis
+    and every checked point is re-verified; if the tolerance still fails or the size limit is
+    hit, the result is uncertified (a warning)."""
     c, st = model.certification, model.settings
     f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes)[0]
     cert = compare(c.basis, theta, f_full, st.n_modes)
-    if cert.max_rel_error > st.tol and enrich:
+    threshold = st.tol if enrich_above is None else min(st.tol, float(enrich_above))
+    if cert.max_rel_error > threshold and enrich:
         return _enriched(model, theta, f_full)
     max_err = max(c.max_rel_error, cert.max_rel_error)
     return _with_checked(c, c.basis, max_err, cert, (theta, f_full)), cert.max_rel_error

@@ -163,20 +163,25 @@ class ReducedFEModel:
         return replace(self, certification=certification.build(self, executor))
 
     def certify_at(
-        self, theta: np.ndarray, names: tuple[str, ...] | None = None, enrich: bool = True
+        self,
+        theta: np.ndarray,
+        names: tuple[str, ...] | None = None,
+        enrich: bool = True,
+        enrich_above: float | None = None,
     ) -> tuple["ReducedFEModel", float]:
         """Check the reduced frequencies against full solves at extra points (e.g. the posterior
         mean), theta (k, len(names)); points outside the box are skipped.  If the error there
-        exceeds ``tol`` and ``enrich``, their shapes join the basis and all checked points are
-        re-verified; if the tolerance still fails (or the size limit is hit), the returned model
-        falls back to full solves with a warning.  Returns (the model with this check recorded,
-        largest relative error at the points; NaN when none is checked)."""
+        exceeds ``tol`` (or ``enrich_above``, when smaller: a data sd the basis must not bias)
+        and ``enrich``, their shapes join the basis and all checked points are re-verified; if
+        the tolerance still fails (or the size limit is hit), the returned model falls back to
+        full solves with a warning.  Returns (the model with this check recorded, largest
+        relative error at the points; NaN when none is checked)."""
         names = tuple(self.parameter_names if names is None else names)
         full = self._theta_full(np.atleast_2d(np.asarray(theta, dtype=float)), names)
         full = full[self._inside(full)]
         if not self.certified or full.shape[0] == 0:
             return self, float("nan")
-        checked, err = certification.certify_points(self, full, enrich)
+        checked, err = certification.certify_points(self, full, enrich, enrich_above)
         return replace(self, certification=checked), err
 
     def coarsened(self, tol=5e-3, n_train=128, n_check=64, min_size=None) -> "ReducedFEModel":

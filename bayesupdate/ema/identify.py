@@ -482,9 +482,11 @@ def _refined_and_cut(frfs, settings, selected, residual_poles, ends, pruned=()) 
     if settings.refine:
         both, cut = _refine_ends(frfs, *ends, [*selected, *pruned], residual_poles)
         n = len(selected)
-        revived = [old for new, old in zip(both[n:], pruned, strict=True) if new is not old]
-        moved = [new for new in both[n:] if all(new is not old for old in pruned)]
-        refined = sorted([*both[:n], *moved], key=lambda p: p.frequency_hz)
+        pairs = [(new, old) for new, old in zip(both[n:], pruned, strict=True) if new is not old]
+        revived = [old for _, old in pairs]
+        refined = both[:n]
+        if pairs:  # only then can the order change
+            refined = sorted([*refined, *(new for new, _ in pairs)], key=lambda p: p.frequency_hz)
     if cut[0].size:  # the resonance at the top replaces the edge pole that stood for it
         residual_poles = np.zeros(0, complex)
     refined, cut = _move_cut_modes(frfs, refined, cut, *ends)

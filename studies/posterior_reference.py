@@ -67,6 +67,7 @@ from bayesupdate.inference import (  # noqa: E402
     calibrate,
     prior_from_mapping,
     sample_posterior,
+    summarise,
 )
 from bayesupdate.inference.data import paper_ema  # noqa: E402
 from bayesupdate.inference.moves import DefensiveProposal, fit_gaussian_mixture  # noqa: E402
@@ -310,9 +311,17 @@ def accurate(errors: dict) -> bool:
     )
 
 
-def check(ref: dict, seeds: list[int], moves: str, target_ess: int = 1000) -> list[dict]:
+def check(
+    ref: dict, seeds: list[int], moves: str, target_ess: int = 1000, user: bool = False
+) -> list[dict]:
     """The default sampler (or ``moves``) on the reference problem for ``seeds``, each to R-hat
-    <= 1.01 and bulk ESS >= ``target_ess`` (1000: the benchmark's targets)."""
+    <= 1.01 and bulk ESS >= ``target_ess`` (1000: the benchmark's targets).  ``user``: instead
+    the sampler settings a study gets when its ``[sampler]`` table is empty
+    (``pipelines.sample.sampler_settings(SamplerConfig())``: 32 walkers, checks every 500 steps,
+    R-hat <= 1.01, bulk ESS >= 400, at least 50 tau, 5000 steps at most), only the seed set."""
+    from bayesupdate.config import SamplerConfig
+    from bayesupdate.pipelines.sample import sampler_settings
+
     log_post, calibration, screen, _ = exhaust_posterior()
     rows = []
     for seed in seeds:
@@ -320,9 +329,19 @@ def check(ref: dict, seeds: list[int], moves: str, target_ess: int = 1000) -> li
             walkers=16, steps=20000, seed=seed, check_every=250, transform="logit",
             target_rhat=1.01, target_ess=target_ess, moves=moves,
         )  # fmt: skip
+        if user:
+            settings = replace(sampler_settings(SamplerConfig(moves=moves)), seed=seed)
+        c0, t0 = time.process_time(), time.perf_counter()
         post = sample_posterior(log_post, calibration, settings, screen=screen)
         row = {"seed": seed, "steps": int(post.chain.shape[0]), **compare(ref, post.samples())}
-        row.update(ok=accurate(row), moves=post.diagnostics["moves"])
+        summary = summarise(post)
+        row.update(
+            ok=accurate(row), converged=bool(post.converged), walkers=settings.walkers,
+            max_rhat=max(v["r_hat"] for v in summary.values()),
+            min_ess=min(v["ess_bulk"] for v in summary.values()),
+            sampling_cpu_s=round(time.process_time() - c0, 1),
+            sampling_wall_s=round(time.perf_counter() - t0, 1), moves=post.diagnostics["moves"],
+        )  # fmt: skip
         rows.append(row)
         print(json.dumps(row))
     return rows
@@ -423,6 +442,10 @@ def main() -> None:
     ap.add_argument("--from-result", help="demo cases: a result file to check")
     ap.add_argument("--save", help="demo cases: write each run's result file to this folder")
     ap.add_argument("--target-ess", type=int, default=1000, help="exhaust --check: bulk ESS")
+    ap.add_argument(
+        "--user-sampler", action="store_true",
+        help="exhaust --check: the settings of an empty [sampler] table, not the benchmark's",
+    )  # fmt: skip
     ap.add_argument("--coverage-seeds", type=int, nargs="*", help="exhaust: the check's numbers")
     args = ap.parse_args()
     if args.coverage_seeds:
@@ -433,7 +456,7 @@ def main() -> None:
             ref = json.load(f)
         if args.case == "exhaust":
             seeds = args.check_seeds or list(range(1, args.check + 1))
-            check(ref, seeds, args.moves, args.target_ess)
+            check(ref, seeds, args.moves, args.target_ess, args.user_sampler)
         elif args.from_result:
             check_result(args.case, ref, args.from_result)
         else:

@@ -204,3 +204,21 @@ def test_discovery_settings_group_the_flat_knobs_of_the_study_file():
             parse_study({"discovery": {key: value}}, "s.toml")
     with pytest.raises(BayesUpdateError, match=r"discovery.quick: unknown key; valid keys are"):
         parse_study({"discovery": {"quick": 1}}, "s.toml")
+
+
+def test_an_empty_sampler_table_gives_the_documented_sampler_settings():
+    """What ``bayesupdate sample`` runs with no ``[sampler]`` table (the settings
+    studies/posterior_reference.py --user-sampler checks against the reference)."""
+    from bayesupdate.pipelines.sample import sampler_settings
+
+    study = parse_study({"model": {"source": "exhaust"}, "data": {"source": "paper:ema"}})
+    settings = sampler_settings(study.sampler)
+    assert (settings.walkers, settings.steps, settings.seed, settings.check_every) == (
+        32, 5000, 1, 500,
+    )  # fmt: skip
+    assert (settings.target_rhat, settings.target_ess, settings.min_autocorr_times) == (
+        1.01, 400.0, 50.0,
+    )  # fmt: skip
+    assert (settings.moves, settings.transform, settings.progress) == ("mixture", "logit", False)
+    no_ess = parse_study({"model": {"source": "exhaust"}, "sampler": {"target_ess": 0}})
+    assert sampler_settings(no_ess.sampler).target_ess is None

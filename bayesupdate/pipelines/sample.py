@@ -199,14 +199,10 @@ def _screen(problem, rom, likelihood, cfg: SamplerConfig, calibration) -> tuple:
     return (None, why) if why else (screen, "")
 
 
-def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, state):
-    """emcee with the study's sampler settings; a checkpoint after every unfinished block."""
-
-    def checkpoint(sampler_state):
-        if not sampler_state.finished:
-            write(state=sampler_state)
-
-    settings = SamplerSettings(
+def sampler_settings(cfg: SamplerConfig, progress: bool = False) -> SamplerSettings:
+    """The ``SamplerSettings`` a study's ``[sampler]`` table gives (``SamplerConfig()``: the
+    defaults a user gets); ``target_ess = 0`` turns the ESS target off."""
+    return SamplerSettings(
         walkers=cfg.walkers,
         steps=cfg.steps,
         seed=cfg.seed,
@@ -215,13 +211,22 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, s
         transform=cfg.transform,
         target_rhat=cfg.target_rhat,
         target_ess=cfg.target_ess or None,
-        progress=options.progress,
+        progress=progress,
         moves=cfg.moves,
     )
+
+
+def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, state):
+    """emcee with the study's sampler settings; a checkpoint after every unfinished block."""
+
+    def checkpoint(sampler_state):
+        if not sampler_state.finished:
+            write(state=sampler_state)
+
     return sample_posterior(
         log_post,
         calibration,
-        settings,
+        sampler_settings(cfg, options.progress),
         screen=screen,
         checkpoint=checkpoint,
         resume=state,

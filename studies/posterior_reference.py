@@ -37,11 +37,16 @@ Run (each about 2-10 minutes of CPU):
   .venv/bin/python studies/posterior_reference.py --case seed \
       --out tests/data/posterior_reference_demo_seed.json --check-seeds 5 6 7   # run_sampling
   .venv/bin/python studies/posterior_reference.py --case seed-shell \
-      --out tests/data/posterior_reference_demo_seed_shell.json
+      --out bayesupdate/data/posterior_reference_demo_seed_shell.json
   .venv/bin/python studies/posterior_reference.py --case seed-shell \
-      --out tests/data/posterior_reference_demo_seed_shell.json --check-seeds 1 5 6
+      --out bayesupdate/data/posterior_reference_demo_seed_shell.json --check-seeds 1 5 6
   .venv/bin/python studies/posterior_reference.py --case seed-shell \
-      --out tests/data/posterior_reference_demo_seed_shell.json --from-result demo_out/seed_case.h5
+      --out bayesupdate/data/posterior_reference_demo_seed_shell.json \
+      --from-result demo_out/seed_case.h5
+  .venv/bin/python studies/posterior_reference.py --case seed-shell --add-check-points \
+      --out bayesupdate/data/posterior_reference_demo_seed_shell.json   # what the demo checks
+  .venv/bin/python studies/posterior_reference.py --case virtual --add-check-points \
+      --out bayesupdate/data/posterior_reference_demo_virtual.json
 """
 
 import os
@@ -71,6 +76,7 @@ from bayesupdate.inference import (  # noqa: E402
 )
 from bayesupdate.inference.data import paper_ema  # noqa: E402
 from bayesupdate.inference.moves import DefensiveProposal, fit_gaussian_mixture  # noqa: E402
+from bayesupdate.inference.reference_check import reference_errors, within_tolerance  # noqa: E402
 from bayesupdate.inference.sampling import sampler_space  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.pipelines.surrogates import (  # noqa: E402
@@ -295,20 +301,31 @@ def reference(log_post, calibration, screen, settings: dict = SETTINGS) -> dict:
 
 
 def compare(reference_moments: dict, samples: np.ndarray) -> dict:
-    """Sampler draws (n, d) against the reference: |mean - ref| / ref sd and sd / ref sd - 1."""
-    mean, sd = np.asarray(reference_moments["mean"]), np.asarray(reference_moments["sd"])
-    return {
-        "mean_error_in_sd": (np.abs(samples.mean(axis=0) - mean) / sd).tolist(),
-        "sd_error_relative": (samples.std(axis=0, ddof=1) / sd - 1.0).tolist(),
-    }
+    """Sampler draws (n, d) against the reference (``inference.reference_check``)."""
+    return reference_errors(reference_moments, samples)
 
 
 def accurate(errors: dict) -> bool:
     """The issue's criterion: every mean within 0.05 sd and every sd within 5 %."""
-    return bool(
-        max(errors["mean_error_in_sd"]) <= 0.05
-        and max(map(abs, errors["sd_error_relative"])) <= 0.05
-    )
+    return within_tolerance(errors)
+
+
+def add_check_points(case: str, path: str) -> dict:
+    """The demo's ``case`` posterior's log density at its reference mean and at the mean -/+ half
+    a reference sd in every parameter, stored in the reference file ``path`` ("check_points"
+    (3, d) theta, "check_log_p" (3,)): what ``bayesupdate demo`` compares its own posterior
+    with before judging its draws by the reference (``inference.reference_check``)."""
+    with open(path) as f:
+        ref = json.load(f)
+    log_post = demo_posterior(case)[0]
+    mean, sd = np.asarray(ref["mean"]), np.asarray(ref["sd"])
+    points = np.array([mean, mean - 0.5 * sd, mean + 0.5 * sd])
+    ref["check_points"] = points.tolist()
+    ref["check_log_p"] = np.asarray(log_post(points), dtype=float).tolist()
+    with open(path, "w") as f:
+        json.dump(ref, f, indent=1)
+    print(json.dumps({"case": case, "check_log_p": ref["check_log_p"]}))
+    return ref
 
 
 def check(
@@ -447,9 +464,16 @@ def main() -> None:
         help="exhaust --check: the settings of an empty [sampler] table, not the benchmark's",
     )  # fmt: skip
     ap.add_argument("--coverage-seeds", type=int, nargs="*", help="exhaust: the check's numbers")
+    ap.add_argument(
+        "--add-check-points", action="store_true",
+        help="demo cases: store the posterior's log density at 3 points in the --out file",
+    )  # fmt: skip
     args = ap.parse_args()
     if args.coverage_seeds:
         coverage_check(args.coverage_seeds)
+        return
+    if args.add_check_points:
+        add_check_points(args.case, args.out)
         return
     if args.check or args.check_seeds or args.from_result:
         with open(args.out) as f:

@@ -2,7 +2,8 @@
 default sampler (``run_sampling`` with the demo's study) gives means within 0.05 sd and sds
 within 5 % of the reference, every parameter.
 
-The references (tests/data/posterior_reference_demo_{seed,virtual,seed_shell}.json, made by
+The references (posterior_reference_demo_{seed,virtual,seed_shell}.json in tests/data, the
+last two in bayesupdate/data, made by
 studies/posterior_reference.py --case seed|virtual|seed-shell) are the posteriors ``bayesupdate
 demo`` shows (its seed case on the shell exhaust, ``seed-shell``; its virtual test on the beam
 exhaust; ``seed``: the beam exhaust's seed case, the demo's before issue 20 moved it), built with
@@ -30,8 +31,11 @@ LONG = pytest.mark.skipif(
 
 
 def _reference(case: str) -> dict:
-    name = case.replace("-", "_")
-    return json.loads((DATA / f"posterior_reference_demo_{name}.json").read_text())
+    """The stored reference: the demo's two (package data, the demo judges its posteriors by
+    them) or the beam seed case's (test data)."""
+    name = f"posterior_reference_demo_{case.replace('-', '_')}.json"
+    folder = DATA if case == "seed" else ROOT / "bayesupdate" / "data"
+    return json.loads((folder / name).read_text())
 
 
 def _study():

@@ -18,8 +18,10 @@ the identified modes) into ``settings.out`` and returns frozen records; the figu
 report are made from them at the edge (``report.demo_report``).
 """
 
+import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -179,6 +181,15 @@ class DemoResults:
     virtual_discovery: DiscoveryPart | None
 
 
+def demo_reference(case: str) -> dict:
+    """The stored importance-sampling reference of the demo's posterior ``case`` ("seed_shell":
+    the seed case; "virtual": the virtual test at the default settings), package data made by
+    ``studies/posterior_reference.py``; ``run_sampling`` judges the draws by it when the
+    posterior is the one it was made for (``inference.reference_check``)."""
+    name = f"data/posterior_reference_demo_{case}.json"
+    return json.loads(resources.files("bayesupdate").joinpath(name).read_text())
+
+
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:
     """The steps ``run_demo`` announces, in order."""
     steps = [
@@ -211,7 +222,9 @@ def run_demo(
     prepared = prepare(seed_study(settings))
     seed_optimum = optimum_part(prepared, polished=False)
     step(next(names))
-    options = SamplingOptions(out=out / "seed_case.h5", progress=settings.progress)
+    options = SamplingOptions(
+        out=out / "seed_case.h5", progress=settings.progress, reference=demo_reference("seed_shell")
+    )
     surrogate = (seed_optimum.search, seed_optimum.rom)
     run = run_sampling(prepared, options, seed_optimum.calibration, surrogate)
     seed = CalibrationPart(run, out / "seed_case.h5", prepared.problem)
@@ -341,7 +354,8 @@ def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
 
     prepared = prepare(_study(settings, data_source))
     calibration = run_calibration(prepared)
-    options = SamplingOptions(out=path, progress=settings.progress)
+    reference = demo_reference("virtual") if data_source != "paper:ema" else None
+    options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
     run = run_sampling(prepared, options, calibration=calibration)
     return CalibrationPart(run, path, prepared.problem)
 

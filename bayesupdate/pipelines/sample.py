@@ -6,7 +6,7 @@ that ``resume`` continues.  Seeded: the same study gives the same chain, interru
 """
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from bayesupdate.config import SamplerConfig
@@ -18,6 +18,7 @@ from bayesupdate.inference.diagnostics import (
 )
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
+from bayesupdate.inference.reference_check import accuracy_against
 from bayesupdate.inference.results import read_config, read_sampler_state, write_result
 from bayesupdate.inference.sampling import (
     PosteriorResult,
@@ -47,6 +48,9 @@ class SamplingOptions:
     stop : the run's ``interrupts.StopRequest`` (the command's signal handler sets it); None:
     the run cannot be stopped but by an exception.
     compute : where the independent work runs (``parallel_executor``; ``run_sampling``).
+    reference : a stored reference of this posterior (``inference.reference_check``: "mean",
+    "sd", "names", "check_points", "check_log_p"); given, the draws are judged by it when the
+    posterior is the one it was made for (diagnostics "reference").
     """
 
     out: str | Path | None = None
@@ -54,6 +58,7 @@ class SamplingOptions:
     progress: bool = False
     stop: StopRequest | None = None
     compute: ComputeSettings = SERIAL
+    reference: dict | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -125,6 +130,9 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
         return SamplingRun(calibration, posterior, {}, {})
     posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg, basis_note)
     notes = {"full_solves_reason": full_reason, "screen_skipped": unscreened}
+    if options.reference is not None:
+        samples = posterior.samples()
+        notes["reference"] = accuracy_against(options.reference, log_post, samples, log_post.names)
     notes = {k: v for k, v in notes.items() if v}
     if notes:
         posterior = replace(posterior, diagnostics={**posterior.diagnostics, **notes})

@@ -7,6 +7,7 @@ import numpy as np
 
 from bayesupdate import paper
 from bayesupdate.discovery.results_io import discovery_summary
+from bayesupdate.inference.reference_check import MEAN_TOLERANCE_SD, SD_TOLERANCE
 from bayesupdate.pipelines.demo import (
     IDENTIFIED_BELOW_HZ,
     CalibrationPart,
@@ -110,7 +111,10 @@ def _calibration_sections(
     )
     return [
         Section(f"{title}: optimum", (_design_table(c, truth, how), _residual_table(c, tag))),
-        Section(f"{title}: posterior", (*_convergence_warning(p), post, *figs)),
+        Section(
+            f"{title}: posterior",
+            (*_convergence_warning(p), *_reference_accuracy(p), post, *figs),
+        ),
     ]
 
 
@@ -182,6 +186,28 @@ def _convergence_warning(posterior) -> tuple:
         return ()
     reason = report.get("reason") or "it stopped before its convergence check passed"
     return (Alert(f"this posterior did not converge: {reason}. Read its numbers with care."),)
+
+
+def _reference_accuracy(posterior) -> tuple:
+    """The draws against the stored reference of this posterior (``inference.reference_check``):
+    a line when they meet it, a warning when not; nothing when no reference applies."""
+    ref = posterior.diagnostics.get("reference") or {}
+    if not ref.get("applies"):
+        return ()
+    verdict = (
+        f"Against the stored importance-sampling reference of this posterior: worst "
+        f"{ref['worst']} (criterion: means within {MEAN_TOLERANCE_SD} sd, sds within "
+        f"{100 * SD_TOLERANCE:.0f} %)"
+    )
+    if ref["accurate"]:
+        return (f"{verdict}: met.",)
+    return (
+        Alert(
+            f"{verdict}: NOT met, although R-hat and the ESS may pass: the chain under-visits "
+            "part of the posterior. Sample longer (`bayesupdate sample` with more [sampler] "
+            "steps or a higher target_ess) before relying on these sds."
+        ),
+    )
 
 
 def _basis_section(optimum: OptimumPart, check: ShellCheck | None, fe: FePart) -> Section:
@@ -573,6 +599,9 @@ def _calibration_rows(part: CalibrationPart, label: str) -> list[tuple[str, str]
     ess = min(v["ess_bulk"] for v in summary.values())
     report = p.diagnostics.get("convergence") or {}
     state = "converged" if p.converged else f"NOT CONVERGED: {report.get('reason')}"
+    ref = p.diagnostics.get("reference") or {}
+    if ref.get("applies"):
+        state += f"; reference {'met' if ref['accurate'] else 'NOT met'} ({ref['worst']})"
     return [
         optimum_row(c, label),
         (

@@ -348,13 +348,14 @@ def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) ->
 
 
 def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
-    """The beam exhaust's optimum (``run_calibration``), then the posterior, written to
-    ``path``."""
+    """The virtual test on the beam exhaust: its optimum (``run_calibration``), then the
+    posterior, written to ``path`` and judged by the stored reference of the default virtual
+    test (it applies only when ``data_source`` holds that test's modes)."""
     from bayesupdate.pipelines.calibrate import run_calibration
 
     prepared = prepare(_study(settings, data_source))
     calibration = run_calibration(prepared)
-    reference = demo_reference("virtual") if data_source != "paper:ema" else None
+    reference = demo_reference("virtual")
     options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
     run = run_sampling(prepared, options, calibration=calibration)
     return CalibrationPart(run, path, prepared.problem)

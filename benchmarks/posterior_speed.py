@@ -212,6 +212,7 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
         kind=moves_info.get("kind"), coverage=moves_info.get("coverage"),
         stuck=moves_info.get("stuck"), fallback=moves_info.get("fallback"),
         repairs=moves_info.get("repairs", 0), first_check=moves_info.get("first_check"),
+        coordinates=moves_info.get("coordinates"),
         load=round(os.getloadavg()[0], 1),
         **post.diagnostics.get("timings", {}),
     )  # fmt: skip

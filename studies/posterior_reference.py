@@ -391,6 +391,7 @@ def _sampled_row(seed: int, posterior, summary: dict, ref: dict, cpu_s: float | 
         "repairs": moves.get("repairs", 0),
         "first_check": moves.get("first_check"),
         "repair_checks": moves.get("repair_checks"),
+        "coordinates": moves.get("coordinates"),
         "evaluations": int(posterior.evaluations),
         "max_rhat": max(s["r_hat"] for s in summary.values()),
         "min_ess": min(s["ess_bulk"] for s in summary.values()),

@@ -129,7 +129,10 @@ def test_the_kept_run_never_changes_its_proposal(shear):
         "kind": "mixture", "requested": "mixture", "fallback": None,
         "components": len(seen[0]["proposal"]["mixture"]["weights"]), "adapt_steps": adapt_steps,
         "coverage": coverage, "stuck": post.diagnostics["moves"]["stuck"],
+        "coordinates": post.diagnostics["moves"]["coordinates"],
     }  # fmt: skip
+    # one choice per fit; this posterior is far from its bounds: the walkers' own coordinates
+    assert post.diagnostics["moves"]["coordinates"] == ["sampler"] * len(STAGE_PRIOR_WEIGHTS)
     # a unimodal 2-D posterior: the frozen mixture covers it (the fallback's tests are below)
     assert MIN_COVERAGE <= coverage <= 1.0 and post.diagnostics["moves"]["stuck"] <= MAX_STUCK
     assert post.chain.shape[0] == 400  # the adaptation steps are not in the chain
@@ -174,6 +177,132 @@ def test_defensive_proposal_density_matches_its_draws(shear):
     for f in tests:
         exact, mc = weight @ f(points), f(draws).mean()
         assert mc == pytest.approx(exact, abs=4 * f(draws).std() / np.sqrt(draws.shape[0]))
+
+
+def test_a_unit_box_proposal_density_matches_its_draws(shear):
+    """The Gaussian part in s = logistic(y) on column 0: g's density in y has the Jacobian
+    s (1 - s), and the Gaussian's mass outside (0, 1) is draws at -/+inf (rejected), so g
+    integrates to w + (1 - w) P(0 < s < 1)."""
+    from scipy.stats import norm
+
+    problem, _ = shear
+    space = sampler_space(LogPosterior(problem, LikelihoodSpec(sigma=0.05)))
+    mixture = GaussianMixture(np.ones(1), np.array([[0.1, 0.0]]), np.diag([0.15, 0.3])[None])
+    g = DefensiveProposal(mixture, 0.3, space, logit=True, unit=(True, False))
+    draws = g.sample(np.random.RandomState(0), 100000)
+    inside = norm.cdf(0.9 / 0.15) - norm.cdf(-0.1 / 0.15)  # P(0 < s < 1) of N(0.1, 0.15)
+    assert np.mean(np.isinf(draws[:, 0])) == pytest.approx(0.7 * (1 - inside), abs=3e-3)
+    assert np.all(g.logpdf(draws[np.isinf(draws[:, 0])]) == -np.inf)
+    grid = np.linspace(-25, 20, 1801)
+    x, y = np.meshgrid(grid, grid, indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel()])
+    weight = np.exp(g.logpdf(points)) * (grid[1] - grid[0]) ** 2
+    assert weight.sum() == pytest.approx(0.3 + 0.7 * inside, abs=1e-3)
+    valid = np.all(np.isfinite(draws), axis=1)
+    finite = np.where(valid[:, None], draws, 0.0)
+    for f in (lambda p: np.tanh(p[:, 0] + 2.0), lambda p: p[:, 1] ** 2):
+        # E_g[f 1{valid}]: the rejected draws carry no value
+        exact, mc = weight @ f(points), np.mean(np.where(valid, f(finite), 0.0))
+        assert mc == pytest.approx(exact, abs=4 * f(finite).std() / np.sqrt(draws.shape[0]))
+    restored = DefensiveProposal.from_dict(g.to_dict(), space)
+    assert restored.unit == (True, False)
+    np.testing.assert_array_equal(restored.logpdf(points[:50]), g.logpdf(points[:50]))
+
+
+class _BoundedTarget:
+    """A posterior on the unit box with mass against a bound, in y = logit(u): u_0 ~ Beta(1, 4)
+    (density 4 at u = 0: in y an exponential tail to -inf), u_1 ~ Beta(3, 3)."""
+
+    def __call__(self, y):
+        y = np.atleast_2d(y)
+        u = 0.5 * (1.0 + np.tanh(0.5 * y))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            log_p = 3 * np.log1p(-u[:, 0]) + 2 * np.log(u[:, 1]) + 2 * np.log1p(-u[:, 1])
+            out = log_p + np.sum(np.log(u) + np.log1p(-u), axis=1)
+        return np.where(np.all(np.isfinite(y), axis=1) & np.isfinite(out), out, -np.inf)
+
+
+def _unit_box_space(shear):
+    """The shear problem's space with bounds [0, 1] on both parameters (u = theta)."""
+    problem, _ = shear
+    unit_bounds = {"theta_1": {"bounds": [0.0, 1.0]}, "theta_2": {"bounds": [0.0, 1.0]}}
+    data = ModalData(frequencies_hz=shear_building_frequencies(np.array([0.5, 0.5])))
+    boxed = build_problem(get_model("shear_building"), data, unit_bounds, pairing="order")
+    return sampler_space(LogPosterior(boxed, LikelihoodSpec(sigma=0.05)))
+
+
+def test_an_independence_move_in_unit_box_coordinates_targets_p(shear):
+    """MH with g in s = logistic(y) (draws outside (0, 1) rejected) leaves p invariant: the
+    walkers' u match Beta(1, 4) and Beta(3, 3) (means 0.2, 0.5; sds 0.163, 0.189)."""
+    space = _unit_box_space(shear)
+    mixture = GaussianMixture(np.ones(1), np.array([[0.15, 0.5]]), np.diag([0.2, 0.25])[None])
+    g = DefensiveProposal(mixture, 0.1, space, logit=True, unit=(True, True))
+    sampler = emcee.EnsembleSampler(
+        16, 2, _BoundedTarget(), moves=[(IndependenceMove(g), 1.0)], vectorize=True
+    )
+    sampler.random_state = np.random.RandomState(5).get_state()
+    sampler.run_mcmc(np.random.default_rng(6).normal(-1.0, 0.3, (16, 2)), 5000)
+    u = 0.5 * (1.0 + np.tanh(0.5 * sampler.get_chain(discard=200, flat=True)))
+    np.testing.assert_allclose(u.mean(axis=0), [0.2, 0.5], atol=0.006)
+    np.testing.assert_allclose(u.std(axis=0), [0.1633, 0.189], atol=0.006)
+
+
+class _Ridge:
+    """A thin straight ridge in the unit box near a corner, u_0 + u_1 = 0.3 (sd 0.01), u_0 <
+    0.3 (the shape a weighed total mass gives two densities), as a density in y = logit(u):
+    there it is an L, its arms running to -inf."""
+
+    def __call__(self, y):
+        u = 0.5 * (1.0 + np.tanh(0.5 * np.atleast_2d(y)))
+        with np.errstate(divide="ignore"):
+            jacobian = np.sum(np.log(u) + np.log1p(-u), axis=1)
+        log_p = -0.5 * ((u[:, 0] + u[:, 1] - 0.3) / 0.01) ** 2 + jacobian
+        return np.where(u[:, 0] < 0.3, log_p, -np.inf)
+
+
+def test_proposal_coordinates_follow_the_shape_of_the_draws(shear):
+    """Draws along a straight ridge in the unit box (an L in y) choose the unit box; draws that
+    are Gaussian and wide in y choose the sampler's coordinates; no logit, no choice.  (Where
+    both fit about equally - a narrow Gaussian in y is nearly Gaussian in u too - either may
+    be chosen.)"""
+    from bayesupdate.inference.moves.staged import proposal_coordinates
+
+    space = _unit_box_space(shear)
+    rng = np.random.default_rng(7)
+    a = rng.uniform(0.0, 0.3, 4000)
+    u = np.column_stack([a, 0.3 - a + rng.normal(0.0, 0.01, 4000)])
+    u = u[(u[:, 1] > 0) & (u[:, 1] < 1)][:3840].reshape(240, 16, 2)
+    ridge = np.log(u) - np.log1p(-u)
+    log_p = _Ridge()(ridge.reshape(-1, 2)).reshape(240, 16)
+    # wide in y: in the unit box its mass piles at both ends of each axis
+    gaussian = rng.normal(0.0, 2.0, (250, 16, 2))
+    log_q = -0.5 * np.sum((gaussian / 2.0) ** 2, axis=2)
+    assert proposal_coordinates(ridge, log_p, space, True, 0.1, 0) == (True, True)
+    assert proposal_coordinates(gaussian, log_q, space, True, 0.1, 0) == ()
+    assert proposal_coordinates(ridge, log_p, space, False, 0.1, 0) == ()
+
+
+def test_log_acceptance_ranks_proposals_as_their_simulated_acceptance_rates():
+    """p = N(0, 1), g = N(0, s^2) for s = 1.5 and 3: the estimator's ratio of the two
+    independence samplers' stationary acceptance rates (from draws of p only) against the
+    rates simulated directly, E min(1, w(y) / w(x)) over x ~ p, y ~ g."""
+    from bayesupdate.inference.moves.staged import log_acceptance
+
+    rng = np.random.default_rng(11)
+    x = rng.standard_normal(20000)
+    log_p = -0.5 * x**2
+    estimated, simulated = {}, {}
+    for s in (1.5, 3.0):
+        log_g = -0.5 * (x / s) ** 2 - np.log(s)
+        y = s * rng.standard_normal(20000)
+        log_w_x = log_p - log_g
+        log_w_y = -0.5 * y**2 + 0.5 * (y / s) ** 2 + np.log(s)
+        pairs = log_w_y[:5000, None] - log_w_x[None, :1000]  # 5e6 pairs
+        simulated[s] = np.mean(np.minimum(1.0, np.exp(pairs)))
+        estimated[s] = log_acceptance(log_g, log_p)
+    ratio = np.exp(estimated[1.5] - estimated[3.0])
+    assert ratio == pytest.approx(simulated[1.5] / simulated[3.0], rel=0.03)
+    assert simulated[1.5] > simulated[3.0]
 
 
 def test_unknown_move_name_is_a_one_line_error(tmp_path, capsys):
@@ -279,7 +408,9 @@ def test_a_narrowly_passing_proposal_is_repaired_and_the_better_one_kept(shear):
     assert info["repairs"] == REPAIR_ROUNDS and info["first_check"][0] < REPAIR_COVERAGE
     passed = [c for c, stuck in info["repair_checks"] if c >= MIN_COVERAGE and stuck <= MAX_STUCK]
     assert info["coverage"] == max(passed + [info["first_check"][0]]) > 0.5
-    near_b = np.linalg.norm(proposal.mixture.means - b, axis=1) < 3 * sd
+    # the components' centres in y, whichever coordinates the mixture was fitted in
+    centres = proposal.from_mixture_coordinates(proposal.mixture.means)
+    near_b = np.linalg.norm(centres - b, axis=1) < 3 * sd
     assert 0.05 < proposal.mixture.weights[near_b].sum() < 0.3
     clear, info = staged_proposal(
         *args, seed=0, log_density=p_with(0.05), repair_rounds=REPAIR_ROUNDS

@@ -136,7 +136,8 @@ def test_a_proposal_that_misses_part_of_p_is_repaired_before_the_kept_run():
     # there, the points refitted are the 1600 stage draws (all at a) and 4000 resampled ones
     # (about half at b), so about 2000 / 5600 = 0.36 of the mixture
     assert info["coverage"] >= MIN_COVERAGE
-    near_b = np.linalg.norm(proposal.mixture.means - b, axis=1) < 3 * sd
+    centres = proposal.from_mixture_coordinates(proposal.mixture.means)  # in y
+    near_b = np.linalg.norm(centres - b, axis=1) < 3 * sd
     assert 0.25 < proposal.mixture.weights[near_b].sum() < 0.5
 
 

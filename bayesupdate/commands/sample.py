@@ -50,7 +50,8 @@ error there exceeds enrich_above, a tenth of the likelihood's smallest relative 
 "screen": {"size", "max_rel_error", "evaluations"} | null, "screen_skipped": why a configured
 screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
-"adapt_steps", "coverage", "stuck"}, "compute": {"kind", "workers"}, ...}."""
+"adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
+"compute": {"kind", "workers"}, ...}."""
 
 
 def add_arguments(parser) -> None:

@@ -25,9 +25,11 @@ class IndependenceMove(emcee.moves.MHMove):
         """(proposals (n, d), log g(x) - log g(y) (n,)) for the walkers' coords (n, d)."""
         y = self.proposal.sample(random, coords.shape[0])
         log_g_y = self.proposal.logpdf(y)
-        # a draw g calls impossible (a non-finite point) is rejected: factor -inf
+        possible = np.isfinite(log_g_y)
+        # a draw g calls impossible (a unit-box coordinate outside (0, 1): y = -/+inf) is
+        # rejected: the walker proposes its own position with factor -inf (emcee refuses
+        # non-finite points; the delayed-acceptance screen then rejects it without a solve)
+        y = np.where(possible[:, None], y, coords)
         with np.errstate(invalid="ignore"):
-            factors = np.where(
-                np.isfinite(log_g_y), self.proposal.logpdf(coords) - log_g_y, -np.inf
-            )
+            factors = np.where(possible, self.proposal.logpdf(coords) - log_g_y, -np.inf)
         return y, factors

@@ -7,6 +7,10 @@
    to all of them, the prior at 10 %.
 3. ``adapt_steps`` more such steps with the refitted proposal; refitted once more and **frozen**,
    the prior at 10 %.
+   Each fit first chooses the mixture's coordinates (``proposal_coordinates``): the walkers'
+   own (y, logit) or the unit box s = logistic(y) of every two-sided parameter, whichever
+   proposal, fitted to half the walkers, has the higher independence acceptance rate on the
+   other half (``log_acceptance``, from the stage's own log densities: no extra solve).
 4. The coverage check (``moves.coverage``, ``coverage_fallback``), on information from before the
    kept run only: the frozen proposal's importance ESS fraction over 1000 draws from it (their
    own seeded generator: the chain's random stream is untouched) must be at least
@@ -56,6 +60,14 @@ draws are discarded.  (Adaptive MCMC that learns from the kept chain needs dimin
 Roberts & Rosenthal 2009; freezing avoids that question.)  Setting-up costs (the stages'
 evaluations and wall time) count in the run's totals.
 
+Why the choice of coordinates (2026-11-24, docs/validation/posterior.md): the demo's shell seed
+case weighs the exhaust, so the two densities lie on a thin straight ridge (their total mass
+fixed) that runs into rho_catalyst's lower bound; in y the ridge is an L whose arm runs to
+y -> -inf, which Gaussians in y cover poorly: walkers held there for hundreds of steps, runs took
+up to 24,000 kept steps and missed the reference on 2 of 5 seeds.  In the unit box the ridge is
+straight and the Gaussians' mass beyond the bound is only rejected draws.  On the benchmark's
+exhaust posterior the walkers' own coordinates keep winning (its chains are unchanged).
+
 (Issue 21: tau fell from ~56 steps with DE to 7-23 with a two-fit scheme on the exhaust
 posterior, and DE alone under-estimates its sds by 4-10 %.)
 """
@@ -98,6 +110,9 @@ REPAIR_COMPONENTS = 8
 #: higher importance ESS
 REPAIR_COVERAGE = 0.25
 REPAIR_STUCK = 0.03
+#: the coordinates' choice (``proposal_coordinates``) fits and scores at most about this many
+#: points per half of the walkers (thinned by steps)
+SELECTION_POINTS = 1000
 #: when no proposal passes, the one with the highest importance ESS of those with a stuck share
 #: at most MAX_STUCK and an importance ESS at least LOW_COVERAGE is kept rather than DE alone
 #: (``low_coverage_kept``)
@@ -119,18 +134,77 @@ def fit_proposal(
     prior_weight: float,
     seed: int,
     n_components: int = N_COMPONENTS,
+    unit: tuple[bool, ...] = (),
 ) -> DefensiveProposal:
-    """A defensive proposal fitted to points (n, d): ``n_components`` components, fewer when
-    there are too few distinct points for them; ValueError when not even one can be fitted."""
+    """A defensive proposal fitted to points (n, d) (the sampler's coordinates), its mixture in
+    the coordinates ``unit`` says (``DefensiveProposal``): ``n_components`` components, fewer
+    when there are too few distinct points for them; ValueError when not even one fits."""
     error = None
+    blank = DefensiveProposal(None, prior_weight, space, logit, unit)
+    w = blank.mixture_coordinates(points)[0]
     for k in range(n_components, 0, -1):
         try:
-            mixture = fit_gaussian_mixture(points, k, seed)
+            mixture = fit_gaussian_mixture(w, k, seed)
         except (ValueError, np.linalg.LinAlgError) as exc:
             error = exc
             continue
-        return DefensiveProposal(mixture, prior_weight, space, logit)
+        return replace(blank, mixture=mixture)
     raise ValueError(str(error))
+
+
+def proposal_coordinates(
+    coords: np.ndarray,
+    log_probs: np.ndarray,
+    space: ParameterSpace,
+    logit: bool,
+    prior_weight: float,
+    seed: int,
+) -> tuple[bool, ...]:
+    """The mixture's coordinates for a stage's draws coords (n, walkers, d) in y, with their
+    log posterior densities log_probs (n, walkers): () (y itself) or the unit box on every
+    two-sided parameter (``DefensiveProposal``), whichever proposal has the higher estimated
+    independence acceptance rate (``log_acceptance``) on held-out draws (two-fold over the
+    walkers: a proposal fitted to the even walkers is scored on the odd ones and vice versa).
+    () without ``logit`` or a two-sided parameter, and when a fit fails."""
+    two_sided = tuple(bool(b) for b in np.isfinite(space.lower) & np.isfinite(space.upper))
+    if not logit or not any(two_sided) or coords.shape[1] < 2:
+        return ()
+    d = coords.shape[-1]
+    # every k-th step: successive steps are correlated, and the fits' cost grows with the points
+    k = -(-coords.shape[0] * coords.shape[1] // (2 * SELECTION_POINTS))
+    halves = [(coords[::k, j::2].reshape(-1, d), log_probs[::k, j::2].ravel()) for j in (0, 1)]
+    scores = []
+    for unit in ((), two_sided):
+        total = 0.0
+        for (fit_on, _), (score_on, log_p) in (halves, halves[::-1]):
+            try:
+                g = widened(fit_proposal(fit_on, space, logit, prior_weight, seed, unit=unit))
+            except ValueError:
+                return ()
+            total += log_acceptance(g.logpdf(score_on), log_p)
+        scores.append(total)
+    return two_sided if scores[1] > scores[0] else ()
+
+
+def log_acceptance(log_g: np.ndarray, log_p: np.ndarray) -> float:
+    """log of the independence Metropolis-Hastings acceptance rate of a proposal g at
+    stationarity, up to an additive constant the same for every g, from draws x_i ~ p with
+    log g(x_i) and log p(x_i) (p unnormalised, (n,) each).
+
+    With w = p / g, the rate is E_{x ~ p/Z, y ~ g} min(1, w(y) / w(x)) = Z E_{x, y ~ p/Z}
+    min(1 / w(x), 1 / w(y)) (substitute g(y) = p(y) / w(y)), Z = the integral of p: over pairs
+    of draws, the smaller 1 / w.  The i-th smallest of n values is the smaller of 2 (n - i) - 1
+    ordered pairs (i from 0), so the pair mean is a weighted sum over the sorted values."""
+    log_v = np.sort(np.where(np.isfinite(log_p), log_g - log_p, np.nan))
+    log_v = log_v[~np.isnan(log_v)]
+    n = log_v.size
+    if n == 0:
+        return -np.inf
+    terms = log_v + np.log(2.0 * (n - np.arange(n)) - 1.0)
+    top = np.max(terms)
+    if not np.isfinite(top):
+        return -np.inf
+    return float(top + np.log(np.sum(np.exp(terms - top))) - 2.0 * np.log(n))
 
 
 def widened(proposal: DefensiveProposal, scale: float | None = None) -> DefensiveProposal:
@@ -165,7 +239,7 @@ def staged_proposal(
     """
     info = {
         "fallback": None, "interrupted": False, "components": 0, "adapt_steps": 0,
-        "coverage": None, "stuck": None,
+        "coverage": None, "stuck": None, "coordinates": [],
     }  # fmt: skip
     stage_out = run_steps(de_moves, adapt_steps)
     proposal = None
@@ -175,9 +249,15 @@ def staged_proposal(
             return None, info
         coords, log_probs = stage_out
         info["adapt_steps"] += coords.shape[0]
-        points = coords[coords.shape[0] // 2 if stage == 0 else 0 :].reshape(-1, coords.shape[-1])
+        kept = coords[coords.shape[0] // 2 if stage == 0 else 0 :]
+        points = kept.reshape(-1, coords.shape[-1])
+        kept_log_p = log_probs[log_probs.shape[0] // 2 if stage == 0 else 0 :]
+        unit = proposal_coordinates(kept, kept_log_p, space, logit, prior_weight, seed + stage)
+        info["coordinates"].append("unit box" if any(unit) else "sampler")
         try:
-            proposal = widened(fit_proposal(points, space, logit, prior_weight, seed + stage))
+            proposal = widened(
+                fit_proposal(points, space, logit, prior_weight, seed + stage, unit=unit)
+            )
         except ValueError as exc:
             info["fallback"] = f"mixture proposal not fitted ({exc}); DE moves used"
             return None, info
@@ -281,7 +361,7 @@ def resampled_refit(proposal: DefensiveProposal, log_density, points: np.ndarray
     try:
         refit = fit_proposal(
             points, proposal.space, proposal.logit, PRIOR_WEIGHT_FROZEN, seed + 10,
-            REPAIR_COMPONENTS,
+            REPAIR_COMPONENTS, proposal.unit,
         )  # fmt: skip
     except ValueError:
         return False

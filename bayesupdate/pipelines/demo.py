@@ -78,11 +78,11 @@ class DemoSettings:
 
     @property
     def steps(self) -> int:
-        """Step budget; the sampler stops earlier once R-hat, ESS and 50 tau are met.  2,500
-        left the demo's posteriors at R-hat 1.02-1.03; with the weighed mass in the likelihood the
-        seed case's mixture proposal is repaired after its coverage check and converges at
-        4,000-6,000 kept steps (17,500 on one of sampler seeds 1, 5-7, 2026-11-24; the virtual
-        test converges at 500-1,000); a quick run is not expected to converge and says so."""
+        """Step budget; the sampler stops earlier once R-hat, ESS and 50 tau are met.  The
+        shell seed case's mixture, fitted in the unit box (``moves.staged``), converges in
+        1,000-3,500 kept steps on sampler seeds 1, 5, 9, 61-65 (24,000 on seed 1 while it was
+        fitted in logit, 2026-11-24); the virtual test at 500-1,000.  A quick run is not
+        expected to converge and says so."""
         return 300 if self.quick else 25000
 
 

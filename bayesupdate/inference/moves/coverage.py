@@ -22,11 +22,17 @@ COVERAGE_DRAWS = 1000
 STUCK_RATIO = 10.0
 
 
+def _log_weights(log_p: np.ndarray, log_g: np.ndarray) -> np.ndarray:
+    """log p - log g, -inf where either is not finite (a draw beyond a bound: -inf - -inf)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(np.isfinite(log_p) & np.isfinite(log_g), log_p - log_g, -np.inf)
+
+
 def importance_ess(log_p: np.ndarray, log_g: np.ndarray) -> float:
     """Kish's ESS fraction (module docstring) of log weights log_p - log_g, both (n,); non-finite
     log_p (a failed model or a point outside the support) is a zero weight; 0.0 when every
     weight is zero."""
-    log_w = np.where(np.isfinite(log_p) & np.isfinite(log_g), log_p - log_g, -np.inf)
+    log_w = _log_weights(log_p, log_g)
     if not np.any(np.isfinite(log_w)):
         return 0.0
     w = np.exp(log_w - np.max(log_w))
@@ -37,7 +43,7 @@ def stuck_share(log_p_chain, log_g_chain, log_p, log_g, ratio: float = STUCK_RAT
     """The share of chain draws x_j ~ p ((m,) log p and log g at them) where w(x_j) / Z >
     ``ratio``, Z = mean w over draws from g ((n,) log p and log g at them): where an
     independence proposal is accepted less than about once in ``ratio`` tries."""
-    log_w = np.where(np.isfinite(log_p) & np.isfinite(log_g), log_p - log_g, -np.inf)
+    log_w = _log_weights(log_p, log_g)
     if not np.any(np.isfinite(log_w)):
         return 1.0
     top = np.max(log_w)

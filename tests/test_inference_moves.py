@@ -243,8 +243,9 @@ def test_an_independence_move_in_unit_box_coordinates_targets_p(shear):
     sampler.random_state = np.random.RandomState(5).get_state()
     sampler.run_mcmc(np.random.default_rng(6).normal(-1.0, 0.3, (16, 2)), 5000)
     u = 0.5 * (1.0 + np.tanh(0.5 * sampler.get_chain(discard=200, flat=True)))
-    np.testing.assert_allclose(u.mean(axis=0), [0.2, 0.5], atol=0.006)
-    np.testing.assert_allclose(u.std(axis=0), [0.1633, 0.189], atol=0.006)
+    # ~75,000 draws, tau 2-4 steps: Monte Carlo sd of the means and sds about 0.001
+    np.testing.assert_allclose(u.mean(axis=0), [0.2, 0.5], atol=0.004)
+    np.testing.assert_allclose(u.std(axis=0), [0.1633, 0.189], atol=0.004)
 
 
 class _Ridge:

@@ -48,6 +48,11 @@ AXIS_KINDS = ("linear", "log")
 FAILED_RELATIVE_ERROR = 10.0
 
 
+def logistic(y) -> np.ndarray:
+    """1 / (1 + exp(-y)), elementwise, without overflow (as 0.5 (1 + tanh(y / 2)))."""
+    return 0.5 * (1.0 + np.tanh(0.5 * np.asarray(y, dtype=float)))
+
+
 def natural_axis(bounds: tuple[float, float]) -> str:
     """The axis for these bounds: log when positive and high / low >= ``LOG_AXIS_RATIO``."""
     low, high = bounds
@@ -188,7 +193,7 @@ class ParameterSpace:
     def theta_from_y(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         both = self._both
-        s = 0.5 * (1.0 + np.tanh(0.5 * y))  # logistic without overflow
+        s = logistic(y)
         span = np.where(both, self.upper - self.lower, 0.0)
         theta = np.where(both, self.lower + span * s, y)
         theta = np.where(self._upper_only, self.upper - np.exp(np.minimum(-y, 700.0)), theta)

@@ -22,7 +22,33 @@ from functools import cached_property
 import numpy as np
 
 from bayesupdate.inference.moves.gaussian_mixture import GaussianMixture
-from bayesupdate.inference.parameter_space import ParameterSpace
+from bayesupdate.inference.parameter_space import ParameterSpace, logistic
+
+
+def unit_box_coordinates(x: np.ndarray, unit: tuple[bool, ...]) -> tuple:
+    """(w (n, d), log |dw / dx| (n,), or 0.0 without unit columns): x (n, d) with its ``unit``
+    columns as s = logistic(x)."""
+    if not any(unit):
+        return x, 0.0
+    cols = np.flatnonzero(unit)
+    w = x.copy()
+    w[:, cols] = logistic(x[:, cols])
+    # log s (1 - s) = -|y| - 2 log(1 + exp(-|y|)), stable for large |y|
+    a = np.abs(x[:, cols])
+    return w, np.sum(-a - 2.0 * np.log1p(np.exp(-a)), axis=1)
+
+
+def from_unit_box_coordinates(w: np.ndarray, unit: tuple[bool, ...]) -> np.ndarray:
+    """x at w (n, d), the inverse of ``unit_box_coordinates``; a unit column outside (0, 1)
+    gives -/+inf there (a draw the chain rejects: its log-density is -inf)."""
+    if not any(unit):
+        return w
+    cols = np.flatnonzero(unit)
+    s = np.clip(w[:, cols], 0.0, 1.0)
+    x = w.copy()
+    with np.errstate(divide="ignore"):
+        x[:, cols] = np.log(s) - np.log1p(-s)
+    return x
 
 
 @dataclass(frozen=True)
@@ -40,28 +66,12 @@ class DefensiveProposal:
     unit: tuple[bool, ...] = ()
 
     def mixture_coordinates(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:
-        """(w (n, d), log |dw / dx| (n,)): x with its ``unit`` columns as s = logistic(x)."""
-        if not any(self.unit):
-            return x, 0.0
-        cols = np.flatnonzero(self.unit)
-        w = x.copy()
-        s = 0.5 * (1.0 + np.tanh(0.5 * x[:, cols]))
-        w[:, cols] = s
-        # log s (1 - s) = -|y| - 2 log(1 + exp(-|y|)), stable for large |y|
-        a = np.abs(x[:, cols])
-        return w, np.sum(-a - 2.0 * np.log1p(np.exp(-a)), axis=1)
+        """(w (n, d), log |dw / dx| (n,)) of x (n, d): ``unit_box_coordinates``."""
+        return unit_box_coordinates(x, self.unit)
 
     def from_mixture_coordinates(self, w: np.ndarray) -> np.ndarray:
-        """x at mixture coordinates w (n, d); a unit column outside (0, 1) gives -/+inf there (a
-        draw the chain rejects: its log-density is -inf)."""
-        if not any(self.unit):
-            return w
-        cols = np.flatnonzero(self.unit)
-        s = np.clip(w[:, cols], 0.0, 1.0)
-        x = w.copy()
-        with np.errstate(divide="ignore"):
-            x[:, cols] = np.log(s) - np.log1p(-s)
-        return x
+        """x at mixture coordinates w (n, d): ``from_unit_box_coordinates``."""
+        return from_unit_box_coordinates(w, self.unit)
 
     def mixture_logpdf(self, x: np.ndarray) -> np.ndarray:
         """(n, d) -> (n,) log density of the Gaussian part in the sampler's coordinates."""

@@ -79,7 +79,10 @@ import emcee
 import numpy as np
 
 from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS, STUCK_RATIO, proposal_coverage
-from bayesupdate.inference.moves.defensive_proposal import DefensiveProposal
+from bayesupdate.inference.moves.defensive_proposal import (
+    DefensiveProposal,
+    unit_box_coordinates,
+)
 from bayesupdate.inference.moves.gaussian_mixture import fit_gaussian_mixture
 from bayesupdate.inference.moves.independence import IndependenceMove
 from bayesupdate.inference.parameter_space import ParameterSpace
@@ -140,15 +143,14 @@ def fit_proposal(
     the coordinates ``unit`` says (``DefensiveProposal``): ``n_components`` components, fewer
     when there are too few distinct points for them; ValueError when not even one fits."""
     error = None
-    blank = DefensiveProposal(None, prior_weight, space, logit, unit)
-    w = blank.mixture_coordinates(points)[0]
+    w = unit_box_coordinates(points, unit)[0]
     for k in range(n_components, 0, -1):
         try:
             mixture = fit_gaussian_mixture(w, k, seed)
         except (ValueError, np.linalg.LinAlgError) as exc:
             error = exc
             continue
-        return replace(blank, mixture=mixture)
+        return DefensiveProposal(mixture, prior_weight, space, logit, unit)
     raise ValueError(str(error))
 
 
@@ -249,9 +251,9 @@ def staged_proposal(
             return None, info
         coords, log_probs = stage_out
         info["adapt_steps"] += coords.shape[0]
-        kept = coords[coords.shape[0] // 2 if stage == 0 else 0 :]
+        first = coords.shape[0] // 2 if stage == 0 else 0
+        kept, kept_log_p = coords[first:], log_probs[first:]
         points = kept.reshape(-1, coords.shape[-1])
-        kept_log_p = log_probs[log_probs.shape[0] // 2 if stage == 0 else 0 :]
         unit = proposal_coordinates(kept, kept_log_p, space, logit, prior_weight, seed + stage)
         info["coordinates"].append("unit box" if any(unit) else "sampler")
         try:

@@ -31,7 +31,7 @@ from bayesupdate.inference.moves.staged import (
     REPAIR_ROUNDS,
     STAGE_PRIOR_WEIGHTS,
 )
-from bayesupdate.inference.sampling import TIMED, sampler_space
+from bayesupdate.inference.sampling import CHECK_BATCH, TIMED, sampler_space
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
 from bayesupdate.models.shear_building import shear_building_frequencies
@@ -141,6 +141,40 @@ def test_the_kept_run_never_changes_its_proposal(shear):
     assert set(timings) == set(TIMED) and timings["screen_s"] == 0.0  # no screen given
     assert 0 < timings["adapt_s"] < post.wall_s and 0 < timings["exact_s"] < post.wall_s
     assert 0 < timings["check_s"] < post.wall_s
+
+
+class _Recorded(LogPosterior):
+    """A LogPosterior that records the size of every batch it is called with."""
+
+    def __init__(self, problem, spec):
+        super().__init__(problem, spec)
+        self.batches = []
+
+    def __call__(self, theta):
+        self.batches.append(np.atleast_2d(theta).shape[0])
+        return super().__call__(theta)
+
+
+@pytest.mark.parametrize("screened", [False, True])
+def test_the_coverage_check_uses_the_surrogate_when_the_run_screens(shear, screened):
+    """The check's COVERAGE_DRAWS draws (sampling._checked, batches of CHECK_BATCH) go to the
+    delayed-acceptance surrogate when there is one: they only choose the frozen proposal.  The
+    exact posterior then sees only the start's and the walkers' batches (at most 29 points)."""
+    problem, optimum = shear
+    exact = _Recorded(problem, LikelihoodSpec(sigma=0.05))
+    surrogate = _Recorded(problem, LikelihoodSpec(sigma=0.052)) if screened else None
+    settings = SamplerSettings(
+        walkers=16, steps=100, seed=4, check_every=100, adapt_steps=60, min_autocorr_times=1e9
+    )
+    post = sample_posterior(exact, optimum, settings, screen=surrogate)
+    assert post.diagnostics["moves"]["kind"] == "mixture"
+    checks = COVERAGE_DRAWS // CHECK_BATCH  # the check's batches (no repair: one check)
+    assert "repairs" not in post.diagnostics["moves"]
+    assert exact.batches.count(CHECK_BATCH) == (0 if screened else checks)
+    if screened:
+        assert surrogate.batches.count(CHECK_BATCH) == checks
+        # the rest are the walkers' batches and the start's axis probes (walker_start.axis_sd)
+        assert max(exact.batches) < CHECK_BATCH and max(surrogate.batches) <= CHECK_BATCH
 
 
 def test_stuck_walkers_fall_back_to_de_and_say_so(shear):

@@ -654,8 +654,9 @@ def _kept_moves(
     """The kept run's (move, weight) pairs; sets ``run.moves_info``.  Caller-given ``moves`` as
     they are; "de": ``default_moves()``; "mixture": the proposal of a resumed run, else the
     staged adaptation (``moves.staged``) from ``run.state``, or DE when it cannot be fitted or
-    covers the posterior poorly (``log_density``: the exact log-density in the sampler's
-    coordinates, None after a stop).  None when a stop request ended the adaptation."""
+    covers the posterior poorly (``log_density``: the log-density in the sampler's
+    coordinates, the surrogate's when the run screens (``_checked``), None after a stop).  None
+    when a stop request ended the adaptation."""
     if moves is not None:
         return moves
     if settings.moves == "de":
@@ -709,15 +710,21 @@ def _adaptation_stage(
     return None if interrupted else (np.array(coords), np.array(lps))
 
 
-def _checked(guarded, stop: dict, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
+def _checked(density, stop: dict, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
     """The log-density (n,) at points x (n, d) off the chain (the coverage check,
     ``moves.coverage``, and the repair's 4000 draws), in batches of ``CHECK_BATCH`` points: in
     one batch of 4000 the exhaust's reduced solves (74 x 74 pencils, ~175 MB per stacked array,
     several arrays) cost 0.96 ms a point against 0.59 ms in batches of 1000; None after a stop
-    request."""
+    request.
+
+    ``density`` is the delayed-acceptance surrogate when the run has one (``sample_posterior``):
+    these values only choose the frozen proposal, and any fixed proposal leaves the kept chain's
+    target exact, while the surrogate is 4-5 times cheaper a point (the exhaust: 0.07 against
+    0.30 ms in batches of 1000) and close to p (its delayed-acceptance second stage passes 99 %
+    of what its first stage lets through).  A repair's 10,000 points then cost 0.7 s, not 3 s."""
     parts = []
     for start in range(0, x.shape[0], CHECK_BATCH):
-        parts.append(guarded(x[start : start + CHECK_BATCH]))
+        parts.append(density(x[start : start + CHECK_BATCH]))
         if stop["requested"] or request.requested():
             return None
     return np.concatenate(parts) if parts else np.empty(0)
@@ -778,7 +785,7 @@ def sample_posterior(
     _start(run, guarded, stop)
     request = stop_request or StopRequest()
     stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, stop)
-    checked = partial(_checked, guarded, stop, request)
+    checked = partial(_checked, guarded if screened is None else screened, stop, request)
     kept = _kept_moves(
         moves, settings, run, log_posterior, partial(stage, request=request), checked
     )

@@ -114,12 +114,18 @@ def test_mass_kept_optimum_table2(mass_kept):
 
 
 def test_mass_kept_starts_reach_one_optimum_on_the_mode_6_7_kink(mass_kept):
-    """The starts end in two separate basins: the optimum (within 2 % of the best, all
-    swap-free) or a local optimum >= 10 % worse, nothing in between; at least half of them reach
-    the optimum.  The optimum lies on the boundary where the tracked pairing of modes 6 and 7
-    flips (their shapes veer: MAC to the reference ~0.5 / ~0.3; 11 and 12 veer too), so a 1 %
-    step of some variable flips that pair: the kink on which gradient steps stall and the
-    Nelder-Mead polish walks, which is why ends in the optimum's basin spread over ~1 %.
+    """The starts end in two separate basins: the optimum (within 2 % of the best) or a local
+    optimum >= 10 % worse, nothing in between; at least half of them reach the optimum.  The
+    optimum lies on the boundary where the tracked pairing of modes 6 and 7 flips (their shapes
+    veer: MAC to the reference ~0.5 / ~0.3; 11 and 12 veer too), so a 1 % step of some variable
+    flips that pair: the kink on which gradient steps stall and the Nelder-Mead polish walks,
+    which is why ends in the optimum's basin spread over ~1 %.  The best end is swap-free; an
+    end in its basin may have crossed a veering pair's boundary (6 / 7, 11 / 12: the pairs a
+    1 % step flips, asserted last), but no other pair.
+
+    On an AMD EPYC machine (2026-11-25, the same code as a run that passed elsewhere) one of the
+    7 in-basin ends, at 1.0026 x the best, paired 11 and 12 the other way round (MAC 0.92 /
+    0.96): where the polish ends on a kink depends on the last bits of the BLAS in use.
 
     Measured (calibrate seeds 0-5 on the seed-0 basis, seed 0 on a seed-1 basis; numpy 2.5.5,
     scipy 1.18.1): the best objective agrees to 0.012 % across the 7 runs; in-basin ends reach
@@ -132,9 +138,11 @@ def test_mass_kept_starts_reach_one_optimum_on_the_mode_6_7_kink(mass_kept):
     assert not np.any((ratio > 1.02) & (ratio < 1.10))  # two basins, nothing in between
     assert close.sum() >= (opt.starts + 1) // 2
     span = problem.upper - problem.lower
-    for end in opt.end_points[close]:
-        assert not problem.evaluate(end).paired.swapped
     here = problem.evaluate(opt.theta)
+    assert not here.paired.swapped
+    for end in opt.end_points[close]:
+        moved = problem.evaluate(end).paired.model_index != np.arange(12)
+        assert set((np.flatnonzero(moved) + 1).tolist()) <= {6, 7, 11, 12}
     flips = set()
     for k in range(5):
         for h in (-0.01, 0.01):
@@ -205,15 +213,18 @@ def test_screening_posteriors_for_reduced_and_full_sampling(rom, sampled):
     assert full_screen.problem.model.certified and full_screen.problem.model.size == rom.size
 
 
-def test_vectorised_prior_equals_the_sum_of_priors():
-    from bayesupdate.inference.priors import joint_log_prior
+def _sum_of_priors(priors, theta):
+    """The joint log prior as the plain sum of each prior's own logpdf (the definition)."""
+    return sum(prior.logpdf(theta[:, j]) for j, prior in enumerate(priors))
 
+
+def test_vectorised_prior_equals_the_sum_of_priors():
     problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
     lp = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
     rng = np.random.default_rng(1)
     span = problem.upper - problem.lower
     theta = problem.lower - 0.1 * span + rng.random((50, 5)) * 1.2 * span  # some outside
-    expected = joint_log_prior(lp.priors, theta)
+    expected = _sum_of_priors(lp.priors, theta)
     assert np.array_equal(np.isfinite(lp.log_prior(theta)), np.isfinite(expected))
     ok = np.isfinite(expected)
     assert 0 < ok.sum() < 50
@@ -224,9 +235,9 @@ def test_vectorised_prior_equals_the_sum_of_priors():
     mixed = build_problem(get_model("exhaust"), load_modal_data("paper:ema"), params)
     lp_mixed = LogPosterior(mixed, LikelihoodSpec(sigma=0.05))
     assert lp_mixed.priors[0].kind == "normal"
-    expected = joint_log_prior(lp_mixed.priors, theta)
+    expected = _sum_of_priors(lp_mixed.priors, theta)
     np.testing.assert_allclose(lp_mixed.log_prior(theta)[ok], expected[ok], rtol=1e-12)
-    assert not np.allclose(expected[ok], joint_log_prior(lp.priors, theta)[ok])
+    assert not np.allclose(expected[ok], _sum_of_priors(lp.priors, theta)[ok])
 
 
 def test_a_screen_coarser_than_the_likelihood_is_dropped(sampled):

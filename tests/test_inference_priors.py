@@ -56,6 +56,23 @@ def test_samples_follow_the_truncated_prior():
     assert draws.mean() == pytest.approx(mean, abs=0.01)
 
 
+@pytest.mark.parametrize(
+    "spec, bounds",
+    [
+        ({"kind": "uniform"}, BOUNDS),
+        ({"kind": "normal", "mean": 1.0, "sd": 0.4}, BOUNDS),
+        ({"kind": "lognormal", "mu": 0.2, "sigma": 0.5}, BOUNDS),
+        ({"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf)),
+    ],
+)
+def test_closed_form_quantile_is_scipys_ppf_to_the_bit(spec, bounds):
+    """Prior.quantile (the mixture proposal's prior draws) is scipy's ppf without its checks:
+    the same numbers, so the same chains, including the ends 0 and 1."""
+    prior = prior_from_mapping(spec, bounds)
+    u = np.concatenate([[0.0, 1e-300, 1e-12, 0.5, 1 - 1e-12, 1.0], np.linspace(0.001, 0.999, 999)])
+    assert np.array_equal(prior.quantile(u), prior._frozen().ppf(u))
+
+
 def test_prior_with_no_support_inside_bounds_is_an_error():
     with pytest.raises(BayesUpdateError, match="no support inside bounds"):
         prior_from_mapping({"kind": "normal", "mean": 50.0, "sd": 0.1}, BOUNDS, "t_hot_pipe")

@@ -32,19 +32,23 @@ def setup():
     return problem, calibrate(problem, CalibrationSettings(starts=8, seed=0))
 
 
-def _run(problem, optimum, **kwargs):
-    spec = LikelihoodSpec(
-        sigma=None,
-        sigma_prior=prior_from_mapping(
-            {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
-        ),
-    )
+def _spec() -> LikelihoodSpec:
+    sigma_prior = prior_from_mapping({"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma")
+    return LikelihoodSpec(sigma=None, sigma_prior=sigma_prior)
+
+
+def _settings(**kwargs) -> SamplerSettings:
     # short adaptation stages: these tests are about seeding and resuming, not accuracy
     options = dict(
         walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9, adapt_steps=50
     )
-    options.update(kwargs)
-    return sample_posterior(LogPosterior(problem, spec), optimum, SamplerSettings(**options))
+    return SamplerSettings(**{**options, **kwargs})
+
+
+def _run(problem, optimum, stop_request=None, **kwargs):
+    return sample_posterior(
+        LogPosterior(problem, _spec()), optimum, _settings(**kwargs), stop_request=stop_request
+    )
 
 
 def test_seeded_runs_are_identical_and_seeds_differ(setup):
@@ -77,16 +81,7 @@ class _InterruptAt(LogPosterior):
 def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path, moves, at):
     problem, optimum = setup
     full = _run(problem, optimum, moves=moves)
-    spec = LikelihoodSpec(
-        sigma=None,
-        sigma_prior=prior_from_mapping(
-            {"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf), "sigma"
-        ),
-    )
-    settings = SamplerSettings(
-        walkers=16, steps=300, seed=5, check_every=100, min_autocorr_times=1e9, moves=moves,
-        adapt_steps=50,
-    )  # fmt: skip
+    spec, settings = _spec(), _settings(moves=moves)
     broken = sample_posterior(_InterruptAt(problem, spec, at=at), optimum, settings)
     assert broken.interrupted and 0 < broken.chain.shape[0] < 300
     np.testing.assert_array_equal(broken.chain, full.chain[: broken.chain.shape[0]])
@@ -98,6 +93,43 @@ def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path, mo
     assert np.array_equal(resumed.chain, full.chain)
     assert np.array_equal(resumed.log_prob, full.log_prob)
     assert resumed.diagnostics["moves"]["kind"] == moves
+
+
+def test_a_signal_landing_in_the_step_bookkeeping_still_resumes_identically(setup, monkeypatch):
+    """A SIGTERM's handler raises where it lands (``interrupts.StopRequest.handler``).  Landing
+    between a step's record in the chain and the run's state (made here at the 200th state
+    ``_run_block`` records: the 50th kept step after three adaptation stages of 50) used to
+    leave the step recorded but the state one step behind, so the resume drew that step twice;
+    the bookkeeping is now deferred as a whole."""
+    import sys
+
+    import emcee
+
+    from bayesupdate.inference import sampling
+    from bayesupdate.interrupts import StopRequest
+
+    problem, optimum = setup
+    full = _run(problem, optimum)
+    request, made = StopRequest(), []
+
+    state = emcee.State
+
+    def state_then_signal(*args, **kwargs):
+        if sys._getframe(1).f_code.co_name == "_run_block":
+            made.append(1)
+            if len(made) == 200:
+                request.handler(15, None)  # the signal lands here
+        return state(*args, **kwargs)
+
+    monkeypatch.setattr(sampling.emcee, "State", state_then_signal)
+    broken = _run(problem, optimum, stop_request=request)
+    monkeypatch.undo()
+    assert broken.interrupted and 0 < broken.chain.shape[0] < 300
+    assert np.array_equal(broken.state.coords, broken.chain[-1])  # the state is the last step
+    resumed = sample_posterior(
+        LogPosterior(problem, _spec()), optimum, _settings(), resume=broken.state
+    )
+    assert np.array_equal(resumed.chain, full.chain)
 
 
 def test_stopped_while_adapting_resumes_to_the_identical_chain(setup):

@@ -52,7 +52,7 @@ from bayesupdate.inference.likelihood_blocks import (
     relative_errors,
 )
 from bayesupdate.inference.pairing import pair_batch
-from bayesupdate.inference.priors import Prior
+from bayesupdate.inference.priors import JointPrior, Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
 from bayesupdate.parallel import PointEvaluator
@@ -137,17 +137,7 @@ class LogPosterior:
         self.evaluations = 0
         self.failed = 0
         self.last_error = ""
-        # uniform priors (the usual case) as one vectorised box check: priors are evaluated for
-        # every walker at every step, and one call per parameter costs more than the check
-        self._uniform = np.array([p.kind == "uniform" for p in self.priors], dtype=bool)
-        bounds = np.array([p.bounds for p in self.priors], dtype=float).reshape(-1, 2)
-        self._uniform_low, self._uniform_high = bounds[self._uniform].T
-        self._uniform_log_density = -float(
-            np.sum(np.log(bounds[self._uniform, 1] - bounds[self._uniform, 0]))
-        )
-        self._other_priors = tuple(
-            (j, p) for j, p in enumerate(self.priors) if not self._uniform[j]
-        )
+        self._joint_prior = JointPrior(self.priors)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -245,13 +235,8 @@ class LogPosterior:
         return np.where(np.isfinite(ll), ll, -np.inf)
 
     def log_prior(self, theta: np.ndarray) -> np.ndarray:
-        """Joint log prior of the model parameters, theta (n, d) -> (n,) (= joint_log_prior)."""
-        u = theta[:, self._uniform]
-        inside = np.all((u >= self._uniform_low) & (u <= self._uniform_high), axis=1)
-        lp = np.where(inside, self._uniform_log_density, -np.inf)
-        for j, prior in self._other_priors:
-            lp = lp + prior.logpdf(theta[:, j])
-        return lp
+        """Joint log prior of the model parameters, theta (n, d) -> (n,) (``JointPrior``)."""
+        return self._joint_prior.log_density(theta)
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))

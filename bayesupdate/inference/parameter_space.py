@@ -28,10 +28,11 @@ that component's units, and the failure is counted.
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
-from bayesupdate.inference.priors import Prior, joint_log_prior
+from bayesupdate.inference.priors import JointPrior, Prior
 
 #: bounds ratio high / low from which a positive parameter is on a log axis
 LOG_AXIS_RATIO = 100.0
@@ -163,9 +164,15 @@ class ParameterSpace:
         return self.theta_from_z(self.z_from_u(u))
 
     # -- priors -------------------------------------------------------------------------------
+    @cached_property
+    def joint_prior(self) -> JointPrior:
+        """The parameters' priors evaluated together (made once: the mixture proposal asks at
+        every step)."""
+        return JointPrior(tuple(p.prior for p in self.parameters))
+
     def log_prior(self, theta) -> np.ndarray:
         """theta (n, d) -> (n,) joint log prior density in theta (-inf outside the bounds)."""
-        return joint_log_prior(tuple(p.prior for p in self.parameters), theta)
+        return self.joint_prior.log_density(theta)
 
     def log_prior_z(self, z) -> np.ndarray:
         """z (n, d) -> (n,) joint log prior density in z coordinates."""

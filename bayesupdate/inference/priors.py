@@ -10,7 +10,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from bayesupdate.errors import BayesUpdateError
 
@@ -126,12 +126,28 @@ class Prior:
             value = value - log_mass
         return np.where(inside, value, -np.inf)
 
+    def quantile(self, u: np.ndarray) -> np.ndarray:
+        """The untruncated distribution's inverse CDF at probabilities u (any shape): scipy's
+        ``ppf`` in closed form (its own ``_ppf(u) * scale + loc``, so the same numbers), without
+        scipy's ~0.1 ms of argument checks a call: the mixture proposal draws from the prior at
+        every step of a kept run."""
+        u = np.asarray(u, dtype=float)
+        p = self.params
+        if self.kind == "uniform":
+            low, high = self.bounds
+            return u * (high - low) + low
+        if self.kind == "normal":
+            return special.ndtri(u) * p["sd"] + p["mean"]
+        if self.kind == "lognormal":
+            return np.exp(p["sigma"] * special.ndtri(u)) * np.exp(p["mu"])
+        return special.ndtri((1.0 + u) / 2.0) * p["scale"]
+
     def sample(self, rng: np.random.Generator, size: int) -> np.ndarray:
         """Draws from the truncated prior by inverse CDF, (size,)."""
         low, high = self.bounds
         dist = self._frozen()
         u = rng.uniform(dist.cdf(low), dist.cdf(high), size=size)
-        return np.clip(dist.ppf(u), low, high)
+        return np.clip(self.quantile(u), low, high)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, **self.params}
@@ -156,10 +172,33 @@ def prior_from_mapping(spec: Mapping | None, bounds: tuple[float, float], name: 
     return Prior(kind, bounds, tuple(args), name)
 
 
-def joint_log_prior(priors: tuple[Prior, ...], theta: np.ndarray) -> np.ndarray:
-    """Sum of independent log priors.  theta : (n_points, n_params) -> (n_points,)."""
-    theta = np.atleast_2d(theta)
-    total = np.zeros(theta.shape[0])
-    for j, prior in enumerate(priors):
-        total = total + prior.logpdf(theta[:, j])
-    return total
+@dataclass(frozen=True)
+class JointPrior:
+    """Independent priors on the columns of theta (n_points, n_params), evaluated together.
+
+    The uniform ones (the usual case) are one vectorised box check and one constant: priors are
+    evaluated for every walker at every step (the likelihood's and the mixture proposal's), and
+    one call per parameter costs more than the check.
+    """
+
+    priors: tuple[Prior, ...]
+
+    def __post_init__(self):
+        uniform = np.array([p.kind == "uniform" for p in self.priors], dtype=bool)
+        bounds = np.array([p.bounds for p in self.priors], dtype=float).reshape(-1, 2)
+        log_density = -float(np.sum(np.log(bounds[uniform, 1] - bounds[uniform, 0])))
+        others = tuple((j, p) for j, p in enumerate(self.priors) if not uniform[j])
+        for name, value in (("_uniform", uniform), ("_low", bounds[uniform, 0]),
+                            ("_high", bounds[uniform, 1]), ("_log_density", log_density),
+                            ("_others", others)):  # fmt: skip
+            object.__setattr__(self, name, value)
+
+    def log_density(self, theta: np.ndarray) -> np.ndarray:
+        """theta (n_points, n_params) -> (n_points,) joint log prior (-inf outside a bound)."""
+        theta = np.atleast_2d(theta)
+        u = theta[:, self._uniform]
+        inside = np.all((u >= self._low) & (u <= self._high), axis=1)
+        total = np.where(inside, self._log_density, -np.inf)
+        for j, prior in self._others:
+            total = total + prior.logpdf(theta[:, j])
+        return total

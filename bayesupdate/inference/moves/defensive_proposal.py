@@ -96,27 +96,23 @@ class DefensiveProposal:
         return np.where(np.all(np.isfinite(x), axis=1) & ~np.isnan(out), out, -np.inf)
 
     @cached_property
-    def _inverse_cdfs(self) -> tuple:
-        """Per parameter (low, high, F(low), F(high), the untruncated distribution, or None for a
-        uniform prior), made once: ``Prior.sample``'s two scipy CDF calls a draw cost more than a
-        kept run's step otherwise."""
+    def _cdf_bounds(self) -> tuple:
+        """Per parameter (prior, F(low), F(high)), made once: ``Prior.sample``'s two scipy CDF
+        calls a draw cost more than a kept run's step otherwise."""
         out = []
         for spec in self.space.parameters:
-            low, high = spec.prior.bounds
-            dist = spec.prior._frozen()
-            uniform = spec.prior.kind == "uniform"
-            out.append((low, high, dist.cdf(low), dist.cdf(high), None if uniform else dist))
+            dist, (low, high) = spec.prior._frozen(), spec.prior.bounds
+            out.append((spec.prior, dist.cdf(low), dist.cdf(high)))
         return tuple(out)
 
     def sample_prior(self, random, n: int) -> np.ndarray:
         """(n, d) prior draws in the sampler's coordinates (exact logit: no margin clip): the
-        inverse CDF of each truncated prior, the same draws as ``Prior.sample`` (same uniforms,
-        and a uniform prior's quantile u (high - low) + low as scipy computes it)."""
+        inverse CDF of each truncated prior (``Prior.quantile``), the same draws as
+        ``Prior.sample`` from the same uniforms."""
         columns = []
-        for low, high, f_low, f_high, dist in self._inverse_cdfs:
+        for prior, f_low, f_high in self._cdf_bounds:
             u = random.uniform(f_low, f_high, size=n)
-            value = u * (high - low) + low if dist is None else dist.ppf(u)
-            columns.append(np.clip(value, low, high))
+            columns.append(np.clip(prior.quantile(u), *prior.bounds))
         theta = np.column_stack(columns)
         if not self.logit:
             return theta

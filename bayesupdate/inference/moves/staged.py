@@ -13,9 +13,10 @@
    other half (``log_acceptance``, from the stage's own log densities: no extra solve).
 4. The coverage check (``moves.coverage``, ``coverage_fallback``), on information from before the
    kept run only: the frozen proposal's importance ESS fraction over 1000 draws from it (their
-   own seeded generator: the chain's random stream is untouched) must be at least
-   ``MIN_COVERAGE`` and the share of the last stage's draws where w / Z > 10 (an independence
-   proposal accepted less than once in ten tries there) at most ``MAX_STUCK``.
+   own seeded generator: the chain's random stream is untouched; their log densities are the
+   delayed-acceptance surrogate's when the run screens, ``sampling._checked``) must be at
+   least ``MIN_COVERAGE`` and the share of the last stage's draws where w / Z > 10 (an
+   independence proposal accepted less than once in ten tries there) at most ``MAX_STUCK``.
 5. The repair (``repaired_proposal``; the sampler asks for ``REPAIR_ROUNDS``): a proposal that
    fails the check, or passes it narrowly (importance ESS below ``REPAIR_COVERAGE`` or stuck
    share above ``REPAIR_STUCK``), is refitted twice, each time on draws from the previous fit

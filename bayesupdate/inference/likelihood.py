@@ -137,7 +137,7 @@ class LogPosterior:
         self.evaluations = 0
         self.failed = 0
         self.last_error = ""
-        self._joint_prior = JointPrior(self.priors)
+        self._joint_prior = JointPrior.of(self.priors)
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -168,7 +168,7 @@ class ParameterSpace:
     def joint_prior(self) -> JointPrior:
         """The parameters' priors evaluated together (made once: the mixture proposal asks at
         every step)."""
-        return JointPrior(tuple(p.prior for p in self.parameters))
+        return JointPrior.of(tuple(p.prior for p in self.parameters))
 
     def log_prior(self, theta) -> np.ndarray:
         """theta (n, d) -> (n,) joint log prior density in theta (-inf outside the bounds)."""

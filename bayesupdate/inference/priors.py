@@ -174,31 +174,36 @@ def prior_from_mapping(spec: Mapping | None, bounds: tuple[float, float], name: 
 
 @dataclass(frozen=True)
 class JointPrior:
-    """Independent priors on the columns of theta (n_points, n_params), evaluated together.
+    """Independent priors on the columns of theta (n_points, n_params), evaluated together
+    (``JointPrior.of``).
 
     The uniform ones (the usual case) are one vectorised box check and one constant: priors are
     evaluated for every walker at every step (the likelihood's and the mixture proposal's), and
-    one call per parameter costs more than the check.
+    one call per parameter costs more than the check.  uniform : (n_params,) which columns have
+    a uniform prior; low, high : their bounds; uniform_log_density : the sum of their log
+    densities; others : (column, Prior) of the rest.
     """
 
-    priors: tuple[Prior, ...]
+    uniform: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    uniform_log_density: float
+    others: tuple[tuple[int, Prior], ...]
 
-    def __post_init__(self):
-        uniform = np.array([p.kind == "uniform" for p in self.priors], dtype=bool)
-        bounds = np.array([p.bounds for p in self.priors], dtype=float).reshape(-1, 2)
-        log_density = -float(np.sum(np.log(bounds[uniform, 1] - bounds[uniform, 0])))
-        others = tuple((j, p) for j, p in enumerate(self.priors) if not uniform[j])
-        for name, value in (("_uniform", uniform), ("_low", bounds[uniform, 0]),
-                            ("_high", bounds[uniform, 1]), ("_log_density", log_density),
-                            ("_others", others)):  # fmt: skip
-            object.__setattr__(self, name, value)
+    @classmethod
+    def of(cls, priors: tuple[Prior, ...]) -> "JointPrior":
+        uniform = np.array([p.kind == "uniform" for p in priors], dtype=bool)
+        bounds = np.array([p.bounds for p in priors], dtype=float).reshape(-1, 2)
+        low, high = bounds[uniform, 0], bounds[uniform, 1]
+        others = tuple((j, p) for j, p in enumerate(priors) if not uniform[j])
+        return cls(uniform, low, high, -float(np.sum(np.log(high - low))), others)
 
     def log_density(self, theta: np.ndarray) -> np.ndarray:
         """theta (n_points, n_params) -> (n_points,) joint log prior (-inf outside a bound)."""
         theta = np.atleast_2d(theta)
-        u = theta[:, self._uniform]
-        inside = np.all((u >= self._low) & (u <= self._high), axis=1)
-        total = np.where(inside, self._log_density, -np.inf)
-        for j, prior in self._others:
+        u = theta[:, self.uniform]
+        inside = np.all((u >= self.low) & (u <= self.high), axis=1)
+        total = np.where(inside, self.uniform_log_density, -np.inf)
+        for j, prior in self.others:
             total = total + prior.logpdf(theta[:, j])
         return total

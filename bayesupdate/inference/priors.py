@@ -93,12 +93,19 @@ class Prior:
             return stats.lognorm(s=p["sigma"], scale=np.exp(p["mu"]))
         return stats.halfnorm(scale=p["scale"])
 
-    def mass_inside_bounds(self) -> float:
-        if "mass" not in self._cache:
+    def cdf_range(self) -> tuple[float, float]:
+        """(F(low), F(high)) of the untruncated distribution at the bounds, made once: two
+        scipy CDF calls cost more than a kept run's step (the mixture proposal draws from the
+        prior at every step)."""
+        if "cdf" not in self._cache:
             low, high = self.bounds
             dist = self._frozen()
-            self._cache["mass"] = float(dist.cdf(high) - dist.cdf(low))
-        return self._cache["mass"]
+            self._cache["cdf"] = (float(dist.cdf(low)), float(dist.cdf(high)))
+        return self._cache["cdf"]
+
+    def mass_inside_bounds(self) -> float:
+        f_low, f_high = self.cdf_range()
+        return f_high - f_low
 
     def logpdf(self, x: np.ndarray) -> np.ndarray:
         """Log density of the truncated prior; -inf outside [low, high].  x : any shape."""
@@ -144,10 +151,8 @@ class Prior:
 
     def sample(self, rng: np.random.Generator, size: int) -> np.ndarray:
         """Draws from the truncated prior by inverse CDF, (size,)."""
-        low, high = self.bounds
-        dist = self._frozen()
-        u = rng.uniform(dist.cdf(low), dist.cdf(high), size=size)
-        return np.clip(self.quantile(u), low, high)
+        u = rng.uniform(*self.cdf_range(), size=size)
+        return np.clip(self.quantile(u), *self.bounds)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, **self.params}

@@ -17,7 +17,6 @@ rejected draws.  ``proposal_coordinates`` (``moves.staged``) chooses.
 """
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
@@ -95,23 +94,13 @@ class DefensiveProposal:
             )
         return np.where(np.all(np.isfinite(x), axis=1) & ~np.isnan(out), out, -np.inf)
 
-    @cached_property
-    def _cdf_bounds(self) -> tuple:
-        """Per parameter (prior, F(low), F(high)), made once: ``Prior.sample``'s two scipy CDF
-        calls a draw cost more than a kept run's step otherwise."""
-        out = []
-        for spec in self.space.parameters:
-            dist, (low, high) = spec.prior._frozen(), spec.prior.bounds
-            out.append((spec.prior, dist.cdf(low), dist.cdf(high)))
-        return tuple(out)
-
     def sample_prior(self, random, n: int) -> np.ndarray:
         """(n, d) prior draws in the sampler's coordinates (exact logit: no margin clip): the
         inverse CDF of each truncated prior (``Prior.quantile``), the same draws as
         ``Prior.sample`` from the same uniforms."""
         columns = []
-        for prior, f_low, f_high in self._cdf_bounds:
-            u = random.uniform(f_low, f_high, size=n)
+        for prior in (spec.prior for spec in self.space.parameters):
+            u = random.uniform(*prior.cdf_range(), size=n)
             columns.append(np.clip(prior.quantile(u), *prior.bounds))
         theta = np.column_stack(columns)
         if not self.logit:

@@ -27,7 +27,8 @@ constraints than a mesh of triangles has rotational freedom, so it locks as t / 
 plate, one diagonal: modes 1-8 up to 2.1 % high at a/t = 100 and 32 % at a/t = 1000; DKT 0.93
 and 0.98 %).  A locking-free Mindlin triangle with corner DOFs only needs internal bubbles
 condensed with the shear stiffness (MITC3+, Lee & Bathe 2014) or a mesh-dependent shear factor
-t^2 / (t^2 + alpha h^2) (stabilised DSG3 and CS-DSG3, MIN3, DKMT): either makes the stiffness
+t^2 / (t^2 + alpha h^2) (stabilised DSG3 and CS-DSG3, Nguyen-Thoi et al. 2012;
+MIN3, Tessler & Hughes 1985; DKMT, Katili 1993): either makes the stiffness
 a rational function of t, which the exact thickness powers cannot hold.
 
 Local DOFs per node as in ``bayesupdate.fe.shell``: [u v w rx ry rz], beta_x = ry, beta_y = -rx.

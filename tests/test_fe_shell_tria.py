@@ -202,3 +202,39 @@ def test_triangle_matrices_are_exact_thickness_polynomials():
                                    atol=1e-12 * np.abs(Kd).max())  # fmt: skip
         np.testing.assert_allclose(sum(t**q * X for q, X in M.items()), Md, rtol=1e-12,
                                    atol=1e-12 * np.abs(Md).max())  # fmt: skip
+
+
+def _ctria3_deck(path, n, t):
+    """A SOL 103 deck (SI) of the simply supported plate in n x n x 2 CTRIA3 (one diagonal)."""
+    nodes, quads, _ = sm.plate(A, A, n, n)
+    trias = sm.split_quads(quads, np.zeros(len(quads), bool))
+    x, y = nodes[:, 0], nodes[:, 1]
+    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
+    lines += [f"GRID,{i + 1},,{p[0]:.4f},{p[1]:.4f},0." for i, p in enumerate(nodes)]
+    lines += [f"CTRIA3,{e + 1},1,{a + 1},{b + 1},{c + 1}" for e, (a, b, c) in enumerate(trias)]
+    lines += [f"PSHELL,1,1,{t:.4f},1,,1", f"MAT1,1,{E:.3E},,{NU:.2f},{RHO:.1f}"]
+    held = {
+        "126": np.arange(len(nodes)),
+        "34": np.flatnonzero((x < 1e-9) | (x > A - 1e-9)),
+        "35": np.flatnonzero((y < 1e-9) | (y > A - 1e-9)),
+    }
+    lines += [f"SPC1,1,{c},{g + 1}" for c, ids in held.items() for g in ids]
+    path.write_text("\n".join([*lines, "ENDDATA", ""]))
+    return path
+
+
+def test_ctria3_deck_of_the_plate_through_modes(tmp_path, capsys):
+    """The same plate as a Nastran deck (CTRIA3, PSHELL, MAT1, SPC1) through ``bayesupdate modes
+    --model`` (the reader keeps consistent shell mass): modes 1-8 within 1 % of Kirchhoff at
+    a/t = 100 (measured +0.11 ... +0.93 %, as the mesh built directly)."""
+    pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
+    import json
+
+    from bayesupdate.cli import main
+
+    t = A / 100
+    deck = _ctria3_deck(tmp_path / "ctria3_plate.bdf", 32, t)
+    assert main(["modes", "--model", str(deck), "--modes", "8", "--json"]) == 0
+    f = np.array(json.loads(capsys.readouterr().out)["frequencies_hz"])
+    ref = np.array([_kirchhoff(t, m, n) for m, n in MODES_1_TO_8])
+    np.testing.assert_allclose(f, ref, rtol=0.01)

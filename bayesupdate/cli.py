@@ -63,6 +63,11 @@ def build_parser() -> argparse.ArgumentParser:
                 action="store_true",
                 help="neither read nor write the on-disk cache of reduced bases (see: cache)",
             )
+        p.add_argument(
+            "--quiet",
+            action="store_true",
+            help="no progress on stderr (default: bars on a terminal, a line per phase else)",
+        )
         p.set_defaults(_run=module.run)
     return parser
 
@@ -93,10 +98,19 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args) -> int:
-    """The command, with ``--no-cache`` in force for its duration (``compute.cache`` reads the
-    environment; restored after, so an in-process caller keeps its own)."""
-    if not getattr(args, "no_cache", False):
-        return int(args._run(args) or 0)
+    """The command, its long phases shown on stderr (``compute.progress``: bars on a terminal,
+    a line per phase otherwise, nothing with ``--quiet``), with ``--no-cache`` in force for its
+    duration (``compute.cache`` reads the environment; restored after, so an in-process caller
+    keeps its own)."""
+    from bayesupdate.compute.progress import mode_for, reporting
+
+    with reporting(mode_for(getattr(args, "quiet", False))):
+        if not getattr(args, "no_cache", False):
+            return int(args._run(args) or 0)
+        return _without_cache(args)
+
+
+def _without_cache(args) -> int:
     before = os.environ.get("BAYESUPDATE_NO_CACHE")
     os.environ["BAYESUPDATE_NO_CACHE"] = "1"
     try:

@@ -105,7 +105,8 @@ def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certific
     fe, st, names = model.fe, model.settings, model.parameter_names
     dim = len(names)
     snap_theta = model.scale(qmc.Sobol(dim, scramble=True, seed=st.seed).random(st.n_snapshots))
-    snaps = full_solves(fe, names, snap_theta, st.n_modes + st.extra_modes, executor)[1]
+    n_snap = st.n_modes + st.extra_modes
+    snaps = full_solves(fe, names, snap_theta, n_snap, executor, "reduced basis: snapshots")[1]
     pod_tol = 0.5 * st.tol
     history = []
     certificate = UNBUILT.certificate
@@ -115,7 +116,8 @@ def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certific
             break
         sobol = qmc.Sobol(dim, scramble=True, seed=st.seed + 1000 + rnd)
         theta_v = model.scale(sobol.random(st.n_validation))
-        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes, executor)
+        what = f"reduced basis: certification (round {rnd + 1})"
+        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes, executor, what)
         certificate = compare(basis, theta_v, f_full, st.n_modes)
         history.append(BuildRound(rnd, basis.size, certificate.max_rel_error, pod_tol))
         _check_upper_bound(certificate, st.tol)
@@ -185,7 +187,8 @@ def _load(model: "ReducedFEModel", decomposition, arrays, executor) -> Certifica
         return None
     sobol = qmc.Sobol(len(model.parameter_names), scramble=True, seed=st.seed + _RECHECK_SEED)
     theta = model.scale(sobol.random(RECHECK_POINTS))
-    f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes, executor)[0]
+    what = "reduced basis: cached, checked"
+    f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes, executor, what)[0]
     recheck = compare(basis, theta, f_full, st.n_modes)
     if recheck.max_rel_error > st.tol or recheck.min_signed_error < -0.1 * st.tol:
         warnings.warn(

@@ -185,14 +185,30 @@ class Assembler:
         props = self.default_properties() if props is None else props
         check_properties(self.structure, props)
         bK, bM = self._beam_matrices_reusing(props)
-        mM = self.mass_matrices(props)
-        sK = self.spring_matrices(props)
-        K = self._scatter(self._pos_beam, bK) + self._scatter(self._pos_spring, sK)
-        M = self._scatter(self._pos_beam, bM) + self._scatter(self._pos_mass, mM)
+        mM, M_mass = self._reusing("mass", props.mass_scale, self.mass_matrices, self._pos_mass)
+        sK, K_spring = self._reusing(
+            "spring", props.spring_scale, self.spring_matrices, self._pos_spring
+        )
+        K = self._scatter(self._pos_beam, bK) + K_spring
+        M = self._scatter(self._pos_beam, bM) + M_mass
         if len(self._scalar_M):
             M += self._scatter(self._pos_scalar, self._scalar_M)
         elem = dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK, scalar_M=self._scalar_M)
         return self.to_csr(K), self.to_csr(M), elem
+
+    def _reusing(self, name: str, scale: np.ndarray, matrices, positions):
+        """(element matrices, their (nnz,) scatter) of the point masses or springs at factors
+        ``scale``, from the previous call when the factors are the same (no parameter on them:
+        always).  ``matrices(props)`` needs only the factors; the arrays are read-only."""
+        memos = self.__dict__.setdefault("_memos", {})
+        memo = memos.get(name)
+        if memo is None or not np.array_equal(memo[0], scale):
+            kw = {"mass_scale": scale} if name == "mass" else {"spring_scale": scale}
+            mats = matrices(_Factors(**kw))
+            data = self._scatter(positions, mats)
+            mats.flags.writeable = data.flags.writeable = False
+            memo = memos[name] = (scale.copy(), mats, data)
+        return memo[1], memo[2]
 
     def _beam_matrices_reusing(self, props: ElementProperties):
         """Beam matrices at ``props``, recomputing only the beams whose properties differ from
@@ -246,6 +262,15 @@ class Assembler:
             moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
         cog = moment / total
         return float(total), cog
+
+
+@dataclass(frozen=True)
+class _Factors:
+    """The point-mass or spring factors alone (what ``mass_matrices`` / ``spring_matrices``
+    read of ``ElementProperties``)."""
+
+    mass_scale: np.ndarray | None = None
+    spring_scale: np.ndarray | None = None
 
 
 def check_properties(structure: Structure, props: ElementProperties) -> None:

@@ -550,6 +550,9 @@ def identify(
         mass_normalised=modes.extra["mass_normalised"],
         extra={
             "dropped_hz": np.array([p.frequency_hz for p in dropped]),
+            # the fit's other poles (residual poles, cut resonances) [rad/s]: a re-fit of the
+            # residues on part of the FRFs (ema.run_groups) needs the same basis
+            "basis_poles": residual_poles,
             **_cut_summary(cut),
         },
     )

@@ -180,8 +180,8 @@ def merge_frf_sets(sets: list[FrfSet]) -> tuple[FrfSet, list[str]]:
             raise BayesUpdateError(
                 f"{other.source}: frequency axis {f1[0]:g}..{f1[-1]:g} Hz step {other.df_hz:g} "
                 f"does not share lines with {first.source}'s ({f0[0]:g}..{f0[-1]:g} Hz step "
-                f"{df:g}): starts {(f1[0] - f0[0]) / df:.4f} lines apart; estimate all FRFs "
-                "alike"
+                f"{df:g}): starts {abs(f1[0] - f0[0]) / df:.4f} lines apart, not a whole number; "
+                "estimate all FRFs alike"
             )
         if other.kind != first.kind:
             raise BayesUpdateError(

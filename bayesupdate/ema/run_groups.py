@@ -86,8 +86,8 @@ class RunGroups:
     """Result of :func:`group_poles`: the groups, whether they were found automatically, the
     split statistic of each boundary (max over modes of the z of :func:`split_files`), and
     per mode (m,): frequency [Hz], damping, sd [Hz] (mean and spread), spread [Hz] (max - min
-    over the groups that see it), shifted (bool: differs between groups by more than its
-    combined sd), the assembled shapes (n_dof, m) with labels, their MPC and error variance."""
+    over the groups that see it), shifted (bool: its highest and lowest group frequencies
+    differ by more than ``Z_SPLIT`` combined sds), the assembled shapes (n_dof, m) with labels, their MPC and error variance."""
 
     groups: tuple[GroupPoles, ...]
     automatic: bool
@@ -254,7 +254,8 @@ def _combine(groups: tuple[GroupPoles, ...]) -> tuple:
     cols = np.arange(f.shape[1])
     lo = np.argmin(np.where(on, f, np.inf), axis=0)
     hi = np.argmax(np.where(on, f, -np.inf), axis=0)
-    shifted = (on.sum(0) > 1) & (f[hi, cols] - f[lo, cols] > np.hypot(sd[lo, cols], sd[hi, cols]))
+    gap = np.hypot(sd[lo, cols], sd[hi, cols])
+    shifted = (on.sum(0) > 1) & (f[hi, cols] - f[lo, cols] > Z_SPLIT * gap)
     return mean, damping, sd_total, spread, shifted
 
 

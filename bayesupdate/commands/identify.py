@@ -224,6 +224,7 @@ def _group_keys(extra: dict, r: int) -> dict:
     return {
         "frequency_spread_hz": float(extra["frequency_spread_hz"][r]),
         "pole_shift": bool(extra["pole_shift"][r]),
+        "group_poles_used": bool(extra["group_poles_used"][r]),
         "mpc_one_pole": float(extra["mpc_one_pole"][r]),
         "frequency_one_pole_hz": float(extra["frequency_one_pole_hz"][r]),
         "per_group": [

@@ -114,6 +114,7 @@ def _grouped_modes(modes, rg, n_files: int):
         "frequency_one_pole_hz": modes.frequencies_hz,
         "frequency_spread_hz": rg.spread_hz,
         "pole_shift": rg.shifted,
+        "group_poles_used": rg.own_poles,
         "group_frequencies_hz": np.array([g.frequencies_hz for g in rg.groups]).T,
         "group_damping_ratio": np.array([g.damping_ratio for g in rg.groups]).T,
         "group_sd_hz": np.array([g.sd_hz for g in rg.groups]).T,
@@ -189,7 +190,8 @@ def group_notes(result: Identification) -> list[str]:
     names = "; ".join(f"files {_files_text(g.files)}" for g in rg.groups)
     text = f"{len(rg.groups)} run groups ({how}): {names}"
     extra = result.modes.extra
-    shifted = np.flatnonzero(extra["pole_shift"])
+    shifted = np.flatnonzero(extra["group_poles_used"])
+    small = np.flatnonzero(extra["pole_shift"] & ~extra["group_poles_used"])
     if shifted.size:
         parts = []
         for r in shifted:
@@ -200,5 +202,9 @@ def group_notes(result: Identification) -> list[str]:
                 f"{result.modes.mpc[r]:.2f} assembled from the groups)"
             )
         text += "; poles shift between them (roving sensors' mass, shaker attachment or "
-        text += "drift between runs), estimated per group: " + "; ".join(parts)
+        text += "drift between runs), residues fitted at each group's pole: " + "; ".join(parts)
+    if small.size:
+        text += "; shifted by less than a half-power half-width, one pole kept: mode " + ", ".join(
+            str(r + 1) for r in small
+        )
     return [text]

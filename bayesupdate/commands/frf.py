@@ -112,7 +112,8 @@ def _check_numbers(args) -> None:
         ("--tau", args.tau),
     ):
         if value is not None and not (np.isfinite(value) and value > 0):
-            raise BayesUpdateError(f"{flag} {value}: must be a positive number")
+            runs = ", ".join(str(p) for p in args.time_file)
+            raise BayesUpdateError(f"{runs}: {flag} {value:g} must be a positive number")
 
 
 def run(args) -> int:

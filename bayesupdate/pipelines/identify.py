@@ -70,15 +70,15 @@ def read_frf_files(files) -> FrfFiles:
 
 def identify_frfs(data: FrfFiles, request: IdentifyRequest) -> IdentifyRun:
     """The modes of the merged FRFs with the request's band, order and estimator; with
-    several files, per run group (:func:`grouped`)."""
+    several files, per run group (:func:`_grouped`)."""
     settings = IdentifySettings(max_order=request.max_order, method=request.method)
     result = identify(data.frfs, band_hz=request.band_hz, settings=settings)
     if len(data.files) > 1 or request.groups is not None:
-        result = grouped(data, result, request.groups)
+        result = _grouped(data, result, request.groups)
     return IdentifyRun(data, result)
 
 
-def grouped(data: FrfFiles, result: Identification, groups=None) -> Identification:
+def _grouped(data: FrfFiles, result: Identification, groups=None) -> Identification:
     """The identification with its modes re-estimated per run group
     (:func:`~bayesupdate.ema.run_groups.group_poles`) when there is more than one group;
     ``extra["run_groups"]`` holds the groups either way, and the modes' ``extra`` the
@@ -141,7 +141,7 @@ def identification_notes(result: Identification, merge_notes=()) -> tuple[str, .
     poles, resonances cut by the range's ends."""
     modes = result.modes
     notes = list(merge_notes)
-    notes += group_notes(result)
+    notes += _group_notes(result)
     if len(modes.dof_labels) < 2:
         notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
     if not np.all(modes.extra.get("mass_normalised", result.mass_normalised)):
@@ -181,7 +181,7 @@ def _files_text(files) -> str:
     return ", ".join(out)
 
 
-def group_notes(result: Identification) -> list[str]:
+def _group_notes(result: Identification) -> list[str]:
     """The note naming the run groups and the modes whose poles shift between them."""
     rg = result.extra.get("run_groups")
     if rg is None or len(rg.groups) == 1:

@@ -6,8 +6,8 @@ drifts).  One global pole per mode then sits between the runs' own poles, and th
 the runs away from it are fitted at the wrong pole: their phase turns and the assembled shape
 is complex (mAEWing1 GVT, mode 1 at 7.796 Hz in runs 1-5 and 7.817 Hz in runs 6-10, 1.6
 half-power half-widths apart: MPC 0.61 with one pole).  Test engineers identify each group of
-runs apart and assemble the shapes (Ewins 2000, *Modal Testing*, sec. 6.5 on the consistency
-of data sets; Allemang & Brown 1998 on multi-run data).  Here:
+runs apart and assemble the shapes, checking the consistency of the parts (Ewins 2000,
+*Modal Testing: Theory, Practice and Application*, on data from several test set-ups).  Here:
 
 1. Each file's poles are refined on its own FRFs (:func:`local_poles`: per mode, variable
    projection on the lines within ``WINDOW_WIDTHS`` half-widths of the global pole, its
@@ -43,8 +43,8 @@ from bayesupdate.ema.synthesis import modal_from_poles, poles_from_modal
 from bayesupdate.errors import BayesUpdateError
 
 #: a group boundary is placed where a mode's weighted-mean frequencies on its two sides are
-#: this many combined sds apart (mAEWing1 GVT runs 1-5 | 6-10: mode 1 at 8.9 sds; no split
-#: inside either half above 2.6)
+#: this many combined sds apart (noise alone: two-sided probability 6e-5; the GVT's cuts, at
+#: runs 5|6 and 8|9, have z 78 and 35)
 Z_SPLIT = 4.0
 #: ... and by at least this many half-power half-widths |Re s| / 2 pi: the offset at which one
 #: pole shared by both sides turns a side's residues by 45 degrees, so a shift matters for the
@@ -153,15 +153,8 @@ def _fit_group(frfs: FrfSet, rows, poles, others, lines):
     """LSFD residues and their variances (n_rows, m) of the rows at their poles over lines
     (first, last)."""
     a, b = lines
-    sub = FrfSet(
-        frfs.frequencies_hz,
-        frfs.frf[rows],
-        tuple(frfs.response_labels[k] for k in rows),
-        tuple(frfs.reference_labels[k] for k in rows),
-        frfs.kind,
-    )
     basis = np.concatenate([poles, others])
-    fit = lsfd(sub.frequencies_hz[a : b + 1], sub.frf[:, a : b + 1], basis, sub.kind)
+    fit = lsfd(frfs.frequencies_hz[a : b + 1], frfs.frf[rows, a : b + 1], basis, frfs.kind)
     m = poles.size
     return fit.residues[:, :m], fit.residue_var[:, :m]
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bayesupdate.ema.frequency_sd import _window, frequency_sd
+from bayesupdate.ema.frequency_sd import frequency_sd, mode_window
 from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.ema.lsfd import lsfd, mpc, shapes_from_residues
 from bayesupdate.ema.pole_refinement import refine_poles
@@ -53,8 +53,8 @@ MIN_SHIFT_WIDTHS = 1.0
 #: floor of a frequency sd, relative to the frequency (a window without noise gives ~0)
 SD_FLOOR = 1e-6
 #: a group's pole may move this many half-power half-widths from the global pole (the window
-#: of :func:`~bayesupdate.ema.frequency_sd._window` is 5 wide): a shift of a few widths is what
-#: a group estimate exists for (GVT mode 1: 1.6)
+#: of :func:`~bayesupdate.ema.frequency_sd.mode_window` is 5 wide): a shift of a few widths
+#: is what a group estimate exists for (GVT mode 1: 1.6)
 MAX_GROUP_MOVE = 4.0
 
 
@@ -125,8 +125,8 @@ def local_poles(frfs: FrfSet, rows, poles, others, lines) -> tuple[np.ndarray, n
     """Poles (m,) [rad/s] refined on the FRF rows ``rows`` and their frequency sds (m,) [Hz].
 
     Per mode, variable projection (:func:`~bayesupdate.ema.pole_refinement.refine_poles`) on
-    the lines of its window (:func:`~bayesupdate.ema.frequency_sd._window`) within ``lines``
-    (first, last), the other poles there fixed; a refinement moving it more than
+    the lines of its window (:func:`~bayesupdate.ema.frequency_sd.mode_window`) within
+    ``lines`` (first, last), the other poles there fixed; a refinement moving it more than
     ``MAX_GROUP_MOVE`` half-widths or half-way to another pole (onto a neighbour of a
     cluster), or unstable, keeps the global pole.  others (k,): the
     basis' other poles (residual poles, cut resonances), fixed."""
@@ -134,7 +134,7 @@ def local_poles(frfs: FrfSet, rows, poles, others, lines) -> tuple[np.ndarray, n
     everything = np.concatenate([poles, others])
     out = np.array(poles, dtype=complex)
     for r in range(poles.size):
-        idx, free, fixed = _window(f, everything, r, *lines)
+        idx, free, fixed = mode_window(f, everything, r, *lines)
         if idx.size < 4:
             continue
         basis = np.concatenate([free[1:], fixed])

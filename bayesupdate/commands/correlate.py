@@ -57,28 +57,28 @@ def add_arguments(parser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
-def study_inputs(args):
-    """(study, model, data) of a study file and/or --model/--data/--test-points (flags win)."""
+def study_inputs(args, with_model: bool = True):
+    """(study, model, data) of a study file and/or --model/--data/--test-points (flags win);
+    (study, data) without the model."""
+    from dataclasses import replace
+
     from bayesupdate.config import StudyConfig, load_study, with_overrides
     from bayesupdate.inference.data import load_modal_data
 
     if args.study is None and args.model is None:
-        raise BayesUpdateError(f"{NAME}: give a STUDY.toml or --model (and --data)")
+        raise BayesUpdateError(f"{args.command}: give a STUDY.toml or --model (and --data)")
     study = load_study(args.study) if args.study else StudyConfig()
     study = with_overrides(study, model__source=args.model, data__source=args.data)
     if args.data is not None and study.data.frequencies_hz is not None:
-        from dataclasses import replace
-
         study = replace(study, data=replace(study.data, frequencies_hz=None))
     if args.test_points:
-        from dataclasses import replace
-
         from bayesupdate.nastran.test_points import read_test_points
 
-        study = replace(
-            study, model=replace(study.model, test_points=read_test_points(args.test_points))
-        )
+        points = read_test_points(args.test_points)
+        study = replace(study, model=replace(study.model, test_points=points))
     data = load_modal_data(study.data.as_source())
+    if not with_model:
+        return study, data
     labels = data.dof_labels if data.shapes is not None else ()
     return study, study_model_any(study, labels), data
 

@@ -67,11 +67,12 @@ def _points_table(result) -> Table:
     rows = tuple(
         (p.dof, p.test_node, "-" if p.model_node is None else p.model_node,
          "-" if p.model_xyz is None else ", ".join(f"{v:.4g}" for v in p.model_xyz),
-         "-" if p.direction is None else ", ".join(f"{v:+.3f}" for v in p.direction))
+         "-" if p.direction is None else ", ".join(f"{v:+.3f}" for v in p.direction),
+         "-" if p.distance is None else f"{p.distance:.4g}")
         for p in result.mapping.points
     )  # fmt: skip
     return Table(
-        ("test DOF", "test node", "model node", "model xyz", "direction"),
+        ("test DOF", "test node", "model node", "model xyz", "direction", "distance"),
         rows,
         caption=f"Test DOFs on the model ({result.mapping.source}; transform: identity)",
     )

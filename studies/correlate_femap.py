@@ -101,7 +101,7 @@ def run(folder: Path) -> dict:
     return {
         "frequencies_hz": [m["model_hz"] for m in corr["modes"]],
         "mac_diagonal": [m["mac"] for m in corr["modes"]],
-        "pairs": [(m["test"], m["model"]) for m in corr["modes"]],
+        "pairs": [[m["test"], m["model"]] for m in corr["modes"]],
         "cross_orthogonality_diagonal_min": float(np.min(np.abs(np.diag(xor)))),
         "cross_orthogonality_off_max": float(np.max(np.abs(xor - np.diag(np.diag(xor))))),
         "candidates": [c["name"] for c in sens["candidates"]],

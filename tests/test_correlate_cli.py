@@ -135,3 +135,24 @@ def test_a_test_dof_the_model_lacks_is_named(tmp_path, capsys):
     assert err.count("\n") == 1 and "99V" in err and not out.exists()
     assert main(["correlate"]) == 2
     assert "give a STUDY.toml or --model" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_user_path_simulate_identify_correlate(tmp_path, capsys):
+    """The commands a user types: ``simulate --noise 0`` of the unchanged exhaust, ``identify``,
+    ``correlate``.  Each pair's 1 - MAC lies within 3 times identify's own E[1 - MAC] ~
+    shape_sd_rel^2 (modes 3 and 4 at MAC 0.992 and 0.994: their shape sd is 0.08)."""
+    uff, modes = tmp_path / "v.uff", tmp_path / "v.h5"
+    assert main(["simulate", "--model", "exhaust", "--noise", "0", "--out", str(uff)]) == 0
+    assert main(["identify", str(uff), "--out", str(modes)]) == 0
+    capsys.readouterr()
+    out = _json(capsys, ["correlate", "--model", "exhaust", "--data", str(modes), "--json"])
+    from bayesupdate.ema.modal_h5 import read_modal_h5
+
+    sd = read_modal_h5(modes).shape_sd_rel
+    assert [(m["test"], m["model"]) for m in out["modes"]] == [(i, i) for i in range(1, 13)]
+    one_minus = 1 - np.array([m["mac"] for m in out["modes"]])
+    assert np.all(one_minus <= 3 * sd**2 + 1e-4), (one_minus, sd)
+    assert max(abs(m["error_pct"]) for m in out["modes"]) < 0.01
+    xor = np.abs(np.diag(out["cross_orthogonality"]))
+    assert np.all(np.abs(xor - 1) < 0.05), xor

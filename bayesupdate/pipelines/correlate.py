@@ -273,7 +273,8 @@ def _with_serep(
     pairs = base.pairs
     k, n_a = pairs.test.size, rows.size
     if modes.full is None or k == 0:
-        notes.append("no SEREP TAM: the model gives no shapes at all DOFs (not an FE model)")
+        why = "no pairs" if k == 0 else "the model gives no shapes at all DOFs (not an FE model)"
+        notes.append(f"no SEREP TAM: {why}")
         return replace(base, notes=tuple(notes))
     phi_a = base.model_shapes[:, pairs.model]
     if k > n_a or np.linalg.matrix_rank(phi_a) < k:

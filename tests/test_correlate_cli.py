@@ -109,12 +109,13 @@ def test_two_exchanged_test_shapes_are_paired_back_and_named_as_a_swap(virtual, 
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_no_file(tmp_path, capsys, extra, needle):
-    out = tmp_path / "c.h5"
-    argv = ["correlate", "--model", "exhaust", "--data", "paper:ema", "--out", str(out), *extra]
+    out, report = tmp_path / "c.h5", tmp_path / "report"
+    argv = ["correlate", "--model", "exhaust", "--data", "paper:ema", "--out", str(out),
+            "--report", str(report), *extra]  # fmt: skip
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err
-    assert not out.exists()
+    assert not out.exists() and not report.exists()
 
 
 def test_a_test_dof_the_model_lacks_is_named(tmp_path, capsys):

@@ -134,11 +134,13 @@ def test_identifiability_of_hand_matrices():
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_no_file(tmp_path, capsys, extra, needle):
-    out = tmp_path / "s.h5"
-    argv = ["sensitivity", "--model", "exhaust", "--data", "paper:ema", "--out", str(out), *extra]
+    out, report = tmp_path / "s.h5", tmp_path / "report"
+    argv = ["sensitivity", "--model", "exhaust", "--data", "paper:ema", "--out", str(out),
+            "--report", str(report), *extra]  # fmt: skip
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and needle in err and not out.exists()
+    assert err.count("\n") == 1 and needle in err
+    assert not out.exists() and not report.exists()
 
 
 def test_a_card_the_deck_lacks_is_named(tmp_path, capsys):

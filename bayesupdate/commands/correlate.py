@@ -158,9 +158,9 @@ def run(args) -> int:
     if args.out:
         check_output_path(args.out, args.force)
     study, model, data = study_inputs(args)
-    if args.report:
-        check_report_folder(args.report, args.force)
     result = correlate(model, data, settings, name=str(study.model.source))
+    if args.report:  # made only once the inputs have passed (no folder left by bad input)
+        check_report_folder(args.report, args.force)
     if args.out:
         write_correlation_h5(args.out, result)
     report = write_correlate_report(args.report, result)[0] if args.report else None

@@ -129,13 +129,13 @@ def run(args) -> int:
     )
     if args.out:
         check_output_path(args.out, args.force)
-    if args.report:
-        check_report_folder(args.report, args.force)
     study, data = study_inputs(args, with_model=False)
     model, base = candidate_model(args, study, data)
     corr = correlate(model, data, pairing, name=str(study.model.source))
     if not corr.pairs.test.size:
         raise BayesUpdateError("sensitivity: no test mode pairs with a model mode (see correlate)")
+    if args.report:  # made only once the inputs have passed (no folder left by bad input)
+        check_report_folder(args.report, args.force)
     test_shapes = None if data.shapes is None else data.shapes[:, corr.pairs.test]
     inp = SensitivityInput(model, str(study.model.source), base, corr.pairs.model,
                            corr.pairs.test, test_shapes, data.dof_labels, corr.notes)  # fmt: skip

@@ -150,3 +150,23 @@ def test_a_card_the_deck_lacks_is_named(tmp_path, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no PSHELL card" in err
+
+
+def test_a_study_files_bound_parameters_are_the_candidates(tmp_path, capsys):
+    deck = _cantilever(tmp_path, tip_mass=True)
+    data = _frequencies_csv(tmp_path, deck, 4)
+    study = tmp_path / "study.toml"
+    study.write_text(
+        f'[model]\nsource = "{deck}"\n[data]\nsource = "{data}"\n'
+        '[parameters.e]\nbinds = "MAT1 1 E"\n[parameters.m_tip]\nbinds = "CONM2 99 M"\n'
+    )
+    out = _run(capsys, ["sensitivity", str(study), "--out", str(tmp_path / "s.h5")])
+    assert [c["name"] for c in out["candidates"]] == ["e", "m_tip"]
+    assert out["candidates"][0]["value"] == pytest.approx(2.1e11)
+    s = np.asarray(out["sensitivity"])
+    np.testing.assert_allclose(s[:, 0], 0.5, atol=1e-6)
+    assert np.all((s[:, 1] < 0) & (s[:, 1] > -0.5))
+    import h5py
+
+    with h5py.File(tmp_path / "s.h5", "r") as fh:
+        np.testing.assert_allclose(fh["sensitivity/matrix"][()], s, atol=1e-6)

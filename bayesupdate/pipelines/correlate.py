@@ -41,13 +41,11 @@ from bayesupdate.modal_data import ModalData
 @dataclass(frozen=True)
 class CorrelateSettings:
     """mac_threshold : MAC below which a pair is refused, in (0, 1].  extra_modes : model modes
-    computed beyond the test's (so a test mode can pair past a swap), >= 0.  worst_points :
-    how many lowest-COMAC test DOFs are named, >= 1.  parameters : the model's parameter point
-    (SI, or a deck's units; empty: its defaults)."""
+    computed beyond the test's (so a test mode can pair past a swap), >= 0.  parameters : the
+    model's parameter point (SI, or a deck's units; empty: its defaults)."""
 
     mac_threshold: float = DEFAULT_MAC_THRESHOLD
     extra_modes: int = 4
-    worst_points: int = 3
     parameters: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -55,8 +53,6 @@ class CorrelateSettings:
             raise BayesUpdateError(f"--mac-threshold {self.mac_threshold}: give a value in (0, 1]")
         if self.extra_modes < 0:
             raise BayesUpdateError(f"--extra-modes {self.extra_modes}: must be >= 0")
-        if self.worst_points < 1:
-            raise BayesUpdateError(f"worst_points {self.worst_points}: must be >= 1")
 
 
 @dataclass(frozen=True)

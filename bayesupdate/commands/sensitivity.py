@@ -1,7 +1,6 @@
 """``bayesupdate sensitivity``: which parameters the measured modes can inform, before updating."""
 
 import json
-import sys
 
 from bayesupdate.errors import BayesUpdateError
 
@@ -58,7 +57,6 @@ def add_arguments(parser) -> None:
         default=0.99,
         help="|cosine| of two candidates' sensitivities above which they are confounded (0.99)",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress lines (stderr)")
 
 
 def _deck_card_ids(bdf, card: str) -> list[int]:
@@ -99,16 +97,6 @@ def candidate_model(args, study, data):
     return model, base
 
 
-def _progress(args):
-    if args.no_progress or args.json:
-        return None
-
-    def show(j, n, name):
-        print(f"sensitivity: {j + 1}/{n} {name}", file=sys.stderr, flush=True)
-
-    return show
-
-
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.commands.correlate import study_inputs
@@ -139,7 +127,7 @@ def run(args) -> int:
     test_shapes = None if data.shapes is None else data.shapes[:, corr.pairs.test]
     inp = SensitivityInput(model, str(study.model.source), base, corr.pairs.model,
                            corr.pairs.test, test_shapes, data.dof_labels, corr.notes)  # fmt: skip
-    result = run_sensitivity(inp, settings, _progress(args))
+    result = run_sensitivity(inp, settings)
     if args.out:
         write_sensitivity_h5(args.out, result)
     report = write_sensitivity_report(args.report, result)[0] if args.report else None

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.errors import BayesUpdateError
 
@@ -158,7 +159,7 @@ class Sensitivity:
 
 
 def analytic_sensitivity(
-    model, base: Mapping[str, float], modes: np.ndarray, n_modes: int, step: float, progress=None
+    model, base: Mapping[str, float], modes: np.ndarray, n_modes: int, step: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """(frequencies (k,) [Hz], S (k, n_p)) of the FE ``model``'s ``modes`` (0-based) to each
     parameter of ``base`` by the eigenvalue derivative (module docstring)."""
@@ -166,15 +167,15 @@ def analytic_sensitivity(
     lam = r.modes.eigenvalues[modes]
     phi = r.modes.shapes[:, modes]
     s = np.zeros((modes.size, len(base)))
-    for j, name in enumerate(base):
-        if progress:
-            progress(j, len(base), name)
-        plus, minus = (
-            model.matrices({**base, name: base[name] * np.exp(d)}) for d in (step, -step)
-        )
-        dK, dM = (plus[0] - minus[0]) / (2 * step), (plus[1] - minus[1]) / (2 * step)
-        dlam = np.sum(phi * (dK @ phi), axis=0) - lam * np.sum(phi * (dM @ phi), axis=0)
-        s[:, j] = 0.5 * dlam / lam
+    with phase("sensitivities (eigenvalue derivatives)", len(base), "parameter") as shown:
+        for j, name in enumerate(base):
+            plus, minus = (
+                model.matrices({**base, name: base[name] * np.exp(d)}) for d in (step, -step)
+            )
+            dK, dM = (plus[0] - minus[0]) / (2 * step), (plus[1] - minus[1]) / (2 * step)
+            dlam = np.sum(phi * (dK @ phi), axis=0) - lam * np.sum(phi * (dM @ phi), axis=0)
+            s[:, j] = 0.5 * dlam / lam
+            shown.advance()
     return r.frequencies_hz[modes], s
 
 
@@ -190,7 +191,6 @@ def fd_sensitivity(
     modes: np.ndarray,
     step: float,
     test_shapes: np.ndarray | None = None,
-    progress=None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(frequencies (k,), S (k, n_p), d MAC / d ln p (k, n_p) or None) by central differences in
     ln p of ``predict(params) -> (frequencies (m,), shapes (n_a, m) at the test DOFs or None)``;
@@ -199,23 +199,28 @@ def fd_sensitivity(
     ref = predict(dict(base))
     s = np.zeros((modes.size, len(base)))
     dmac = None if test_shapes is None or ref.shapes is None else np.zeros_like(s)
-    for j, name in enumerate(base):
-        if progress:
-            progress(j, len(base), name)
-        ends = []
-        for d in (step, -step):
-            at = predict({**base, name: base[name] * np.exp(d)})
-            index = modes
-            if ref.shapes is not None and at.shapes is not None:
-                index = np.argmax(mac_matrix(ref.shapes[:, modes], at.shapes), axis=1)
-            ends.append((at, index))
-        (fp, ip), (fm, im) = ends
-        s[:, j] = (np.log(fp.frequencies_hz[ip]) - np.log(fm.frequencies_hz[im])) / (2 * step)
-        if dmac is not None:
-            mp = np.diag(mac_matrix(test_shapes, fp.shapes[:, ip]))
-            mm = np.diag(mac_matrix(test_shapes, fm.shapes[:, im]))
-            dmac[:, j] = (mp - mm) / (2 * step)
+    with phase("sensitivities (central differences)", len(base), "parameter") as shown:
+        for j, name in enumerate(base):
+            (fp, ip), (fm, im) = (
+                _tracked(predict, {**base, name: base[name] * np.exp(d)}, ref, modes)
+                for d in (step, -step)
+            )
+            s[:, j] = (np.log(fp.frequencies_hz[ip]) - np.log(fm.frequencies_hz[im])) / (2 * step)
+            if dmac is not None:
+                mp = np.diag(mac_matrix(test_shapes, fp.shapes[:, ip]))
+                mm = np.diag(mac_matrix(test_shapes, fm.shapes[:, im]))
+                dmac[:, j] = (mp - mm) / (2 * step)
+            shown.advance()
     return ref.frequencies_hz[modes], s, dmac
+
+
+def _tracked(predict, params: dict, ref: _Solved, modes: np.ndarray) -> tuple[_Solved, np.ndarray]:
+    """The solution at ``params`` and the index of each of the reference's ``modes`` in it (by
+    MAC with the reference shapes; by index without shapes)."""
+    at = predict(params)
+    if ref.shapes is None or at.shapes is None:
+        return at, modes
+    return at, np.argmax(mac_matrix(ref.shapes[:, modes], at.shapes), axis=1)
 
 
 @dataclass(frozen=True)
@@ -250,7 +255,7 @@ def _predictor(model, labels: tuple[str, ...], n_modes: int):
     return predict
 
 
-def run_sensitivity(inp: SensitivityInput, settings: SensitivitySettings, progress=None):
+def run_sensitivity(inp: SensitivityInput, settings: SensitivitySettings):
     """The ``Sensitivity`` of ``inp`` (module docstring)."""
     method = settings.method
     if method == "auto":
@@ -262,12 +267,10 @@ def run_sensitivity(inp: SensitivityInput, settings: SensitivitySettings, progre
     n_modes = int(inp.modes.max()) + 3
     dmac = None
     if method == "analytic":
-        f, s = analytic_sensitivity(inp.model, inp.base, inp.modes, n_modes, settings.step,
-                                    progress)  # fmt: skip
+        f, s = analytic_sensitivity(inp.model, inp.base, inp.modes, n_modes, settings.step)
     else:
         predict = _predictor(inp.model, inp.labels, n_modes)
-        f, s, dmac = fd_sensitivity(predict, inp.base, inp.modes, settings.step,
-                                    inp.test_shapes, progress)  # fmt: skip
+        f, s, dmac = fd_sensitivity(predict, inp.base, inp.modes, settings.step, inp.test_shapes)
     ident = identifiability(s, settings.rank_tol, settings.group_cos)
     return Sensitivity(
         model=inp.name,

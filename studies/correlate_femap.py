@@ -102,6 +102,7 @@ def run(folder: Path) -> dict:
         "frequencies_hz": [m["model_hz"] for m in corr["modes"]],
         "mac_diagonal": [m["mac"] for m in corr["modes"]],
         "pairs": [[m["test"], m["model"]] for m in corr["modes"]],
+        "points": {p["dof"]: p["model_node"] for p in corr["points"]},
         "cross_orthogonality_diagonal_min": float(np.min(np.abs(np.diag(xor)))),
         "cross_orthogonality_off_max": float(np.max(np.abs(xor - np.diag(np.diag(xor))))),
         "candidates": [c["name"] for c in sens["candidates"]],

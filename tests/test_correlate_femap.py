@@ -32,6 +32,9 @@ needs_deck = pytest.mark.skipif(
 def test_femap_exhaust_correlates_with_itself_and_its_thicknesses_are_seen(tmp_path):
     out = correlate_femap.run(tmp_path)
     assert out["pairs"] == [[i, i] for i in range(1, 11)]
+    # per test DOF its model node: the GRID [model.test_points] maps the test node to
+    grids = correlate_femap.GRIDS
+    assert out["points"] == {f"{k}{d}": grids[k - 1] for k in range(1, 21) for d in "VH"}
     np.testing.assert_allclose(out["mac_diagonal"], 1.0, atol=1e-9)
     assert out["cross_orthogonality_diagonal_min"] == pytest.approx(1.0, abs=1e-6)
     assert out["cross_orthogonality_off_max"] < 1e-6

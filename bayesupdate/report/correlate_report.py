@@ -254,8 +254,8 @@ def sensitivity_document(result, figures: dict | None = None) -> Document:
         Section("Confounded parameters", tuple(f"Moves frequencies as one direction: {g}."
                                                for g in groups) or ("None.",)),
         Section("Suggested parameters", (
-            "A suggestion, by QR with column pivoting of the sensitivity matrix (Golub & Van "
-            "Loan, Matrix Computations, sec. 5.4.1): " + ", ".join(result.suggested) + ".",)),
+            "A suggestion, by QR with column pivoting of the sensitivity matrix (Businger & "
+            "Golub 1965): " + ", ".join(result.suggested) + ".",)),
         Section("Notes", tuple(Alert(n) for n in result.notes) or ("No notes.",)),
     )  # fmt: skip
     return Document(f"bayesupdate sensitivity: {result.model}", "before updating", sections)

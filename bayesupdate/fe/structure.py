@@ -77,6 +77,9 @@ class Structure:
     general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
     dampers : ``dampers.Dampers`` or None: viscous dampers as data (normal modes ignore them).
+    sensor_read : None (each sensor reads its node's translations along its direction) or
+    (DOFs (n_s, K), weights (n_s, K)): sensor s reads sum_k weights[s, k] * shape[DOFs[s, k]]
+    (a test point between nodes, interpolated with a rigid arm: ``testgeom.observation``).
     """
 
     nodes: np.ndarray
@@ -116,6 +119,7 @@ class Structure:
     general_beams: "GeneralBeams | None" = None
     rods: "Rods | None" = None
     dampers: "Dampers | None" = None
+    sensor_read: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def is_general(self) -> bool:
@@ -142,7 +146,10 @@ class Structure:
         return self.parts.index(name)
 
     def sensor_dofs(self) -> tuple[np.ndarray, np.ndarray]:
-        """Translational DOF indices (n_s, 3) of each sensor's node and its direction (n_s, 3)."""
+        """DOF indices (n_s, K) each sensor reads and their weights (n_s, K): its node's
+        translations (K = 3) and its direction, or ``sensor_read``."""
+        if self.sensor_read is not None:
+            return self.sensor_read
         dofs = 6 * self.sensor_node[:, None] + np.arange(3)[None, :]
         return dofs, self.sensor_direction
 

@@ -90,4 +90,3 @@ def resolve_dofs(geometry: TestGeometry, labels) -> tuple[TestDof, ...]:
         direction = local @ geometry.axes(row)
         out.append(TestDof(str(label), int(node), direction / np.linalg.norm(direction)))
     return tuple(out)
-

@@ -164,4 +164,3 @@ def pair_test(geometry: TestGeometry, dofs, mesh: ModelMesh, settings: PairingSe
     return TestPairing(transform, points, _shared(points, mesh), tuple(d.label for d in dofs),
                        directions, sensor_dofs, sensor_weights, nearest, H, mesh.unit,
                        mesh.metres)  # fmt: skip
-

@@ -129,8 +129,10 @@ def geometry_datasets(geometry: TestGeometry, unit: str = "m", dataset: int = 15
                         disp_cs=[int(i) for i in geometry.disp_frame], color=[1] * n,
                         x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2]))  # fmt: skip
     for number, line in enumerate(geometry.trace_lines, start=1):
-        sets.append(pyuff.prepare_82(trace_num=number, n_nodes=len(line), color=1,
-                                     id=f"trace line {number}", nodes=np.asarray(line, int)))  # fmt: skip
+        sets.append(
+            pyuff.prepare_82(trace_num=number, n_nodes=len(line), color=1,
+                             id=f"trace line {number}", nodes=np.asarray(line, int))
+        )  # fmt: skip
     return sets
 
 

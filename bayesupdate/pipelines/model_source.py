@@ -83,9 +83,9 @@ def study_model(study, test_labels=()):
     """The model of a ``config.StudyConfig`` (its ``[model]`` table and parameter tables);
     a Nastran deck reads shapes at ``test_labels`` (the test data's DOF labels), mapped by
     ``[model.test_points]``, or by position through the study's ``[test]`` geometry
-    (``test_paired_model``), which any FE model takes."""
+    (``paired_study_model``), which any FE model takes."""
     if study.test is not None:
-        return test_paired_model(study, test_labels)[0]
+        return paired_study_model(study, test_labels)[0]
     return resolve_model(
         study.model.source,
         study.parameters,
@@ -95,7 +95,7 @@ def study_model(study, test_labels=()):
     )
 
 
-def test_paired_model(study, test_labels=()):
+def paired_study_model(study, test_labels=()):
     """(model, ``testgeom.TestPairing`` or None): the study's FE model whose sensors are the
     test DOFs ``test_labels``, paired with it by the ``[test]`` table (read the geometry, align
     it, pair each point with the nearest node or element point: ``testgeom``).  Without labels

@@ -42,6 +42,7 @@ def _rows(path: Path):
         text = path.read_text()
     except OSError as exc:
         raise BayesUpdateError(f"{path}: cannot read the test geometry ({exc.strerror})") from None
+    first = True
     for number, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [c.strip() for c in row]
         while cells and not cells[-1]:
@@ -49,8 +50,10 @@ def _rows(path: Path):
         if not cells or cells[0].startswith("#"):
             continue
         head = cells[0].lower()
-        if number == 1 and head not in ("frame", "dof") and not head.lstrip("+-").isdigit():
+        if first and head not in ("frame", "dof") and not head.lstrip("+-").isdigit():
+            first = False
             continue  # a header line
+        first = False
         yield number, cells
 
 

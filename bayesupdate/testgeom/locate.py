@@ -156,15 +156,25 @@ class Locator:
 
     def _nearest_nodes(self, points) -> tuple[np.ndarray, np.ndarray]:
         """(distances, rows) of each point's nearest node; of coincident nodes (a spring's
-        grounded end on a structure node) one on a line element or shell wins."""
+        grounded end on a structure node) one on a line element or shell wins, then the lowest
+        row (``coincident`` lists the others)."""
         k = min(8, len(self.mesh.nodes))
         d, i = self.tree.query(points, k=k)
         d, i = d.reshape(len(points), k), i.reshape(len(points), k)
         tie = d <= d[:, :1] + 1e-9 * self.size
         preferred = tie & self.on_element[i]
-        pick = np.where(preferred.any(axis=1), preferred.argmax(axis=1), 0)
+        pick = np.where(preferred.any(axis=1, keepdims=True), preferred, tie)
+        # of the tied nodes (on an element where any is), the lowest row: deterministic
+        rank = np.where(pick, i, np.iinfo(np.int64).max)
+        col = rank.argmin(axis=1)
         rows = np.arange(len(points))
-        return d[rows, pick], i[rows, pick]
+        return d[rows, col], i[rows, col]
+
+    def coincident(self, row: int) -> np.ndarray:
+        """Rows of the other nodes at node ``row``'s position (to 1e-9 of the model's size):
+        the two sides of a joint, a spring's grounded end."""
+        near = self.tree.query_ball_point(self.mesh.nodes[row], 1e-9 * self.size)
+        return np.array(sorted(set(near) - {row}), dtype=np.int64)
 
     def _candidates(self, p, dn) -> list[np.ndarray]:
         """Element rows of each family with a node within dn + h of ``p``."""

@@ -16,7 +16,7 @@ import scipy.sparse as sp
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.testgeom.align import Transform, fit_pairs, from_matrix, icp
 from bayesupdate.testgeom.geometry import TestGeometry
-from bayesupdate.testgeom.locate import Location, Locator, locate
+from bayesupdate.testgeom.locate import Location, Locator
 from bayesupdate.testgeom.mesh import ModelMesh
 from bayesupdate.testgeom.observation import observation_matrix, padded, read_weights
 
@@ -39,13 +39,16 @@ class PairingSettings:
 class PairedPoint:
     """One test node on the model: model_node (label of the nearest model node), element
     ('line 12', 'quad 7', ...; None when paired with the node itself), model_xyz (3,)
-    [model unit], distance [model unit] from the aligned test point."""
+    [model unit], distance [model unit] from the aligned test point; coincident: labels of the
+    other model nodes at model_node's position (a joint's other side: which side the test
+    point is on, position cannot tell)."""
 
     test_node: int
     model_node: int
     element: str | None
     model_xyz: np.ndarray
     distance: float
+    coincident: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -108,12 +111,14 @@ def _on_model(mesh: ModelMesh):
     return closest
 
 
-def _paired_point(node, location: Location, mesh: ModelMesh) -> PairedPoint:
+def _paired_point(node, location: Location, locator: Locator) -> PairedPoint:
+    ids = locator.mesh.node_ids
     element = None if location.kind == "node" else f"{location.kind} {location.element}"
     if location.kind == "edge":
-        element = "shell edge " + "-".join(str(mesh.node_ids[n]) for n in location.nodes)
-    return PairedPoint(int(node), int(mesh.node_ids[location.nearest]), element,
-                       location.foot, location.distance)  # fmt: skip
+        element = "shell edge " + "-".join(str(ids[n]) for n in location.nodes)
+    others = tuple(int(ids[r]) for r in locator.coincident(location.nearest))
+    return PairedPoint(int(node), int(ids[location.nearest]), element, location.foot,
+                       location.distance, others)  # fmt: skip
 
 
 def _check_distances(points, mesh: ModelMesh, tolerance: float) -> None:
@@ -151,8 +156,9 @@ def pair_test(geometry: TestGeometry, dofs, mesh: ModelMesh, settings: PairingSe
     test_xyz = geometry.xyz[rows] / mesh.metres
     transform = _transform(settings, test_xyz, nodes, mesh)
     aligned = transform.apply(test_xyz)
-    locations = locate(aligned, mesh, settings.on_elements)
-    points = tuple(_paired_point(n, loc, mesh) for n, loc in zip(nodes, locations, strict=True))
+    locator = Locator(mesh)
+    locations = locator(aligned, settings.on_elements)
+    points = tuple(_paired_point(n, loc, locator) for n, loc in zip(nodes, locations, strict=True))
     _check_distances(points, mesh, settings.tolerance)
     at = {n: i for i, n in enumerate(nodes)}
     directions = np.array([transform.rotation @ d.direction for d in dofs]).reshape(-1, 3)

@@ -7,7 +7,9 @@ inside, weights = barycentric coordinates (the linear shape functions).  Quads: 
 nearer of its two triangles, then the bilinear natural coordinates (xi, eta) of that foot by
 Gauss-Newton on x(xi, eta) = sum N_i(xi, eta) x_i and weights N_i = (1 +- xi)(1 +- eta) / 4
 (the shape functions of the 4-node element; Zienkiewicz & Taylor, The Finite Element Method,
-vol. 1, sec. 6.2).  A node at least as near as every element point wins (weights 1).
+vol. 1, sec. 6.2).  Pairing on elements, the candidates are the line elements and shell faces
+with their nodes (a node as near as every element point wins, weights 1); a node on no element
+(a point mass's, a spring's grounded end) is none.  Pairing on nodes, every node is one.
 """
 
 from dataclasses import dataclass
@@ -147,28 +149,29 @@ class Locator:
             every) else 0.0  # fmt: skip
 
         n = len(X)
-        self.on_element = np.zeros(n, bool)
+        on_element = np.zeros(n, bool)
         for family in (mesh.lines, mesh.quads, mesh.trias):
-            self.on_element[family.ravel()] = True
+            on_element[family.ravel()] = True
+        self.element_rows = np.flatnonzero(on_element)
+        self.element_tree = cKDTree(X[self.element_rows]) if on_element.any() else None
         # node -> element incidence of each family (lines, edges, trias, quads)
         self.incidence = [_incidence(e, n) for e in (mesh.lines, self.edges, mesh.trias,
                                                      mesh.quads)]  # fmt: skip
 
-    def _nearest_nodes(self, points) -> tuple[np.ndarray, np.ndarray]:
-        """(distances, rows) of each point's nearest node; of coincident nodes (a spring's
-        grounded end on a structure node) one on a line element or shell wins, then the lowest
-        row (``coincident`` lists the others)."""
-        k = min(8, len(self.mesh.nodes))
-        d, i = self.tree.query(points, k=k)
+    def _nearest_nodes(self, points, on_elements: bool) -> tuple[np.ndarray, np.ndarray]:
+        """(distances, rows) of each point's nearest node (``on_elements``: of the nodes on a
+        line element or shell, where the model has any); of coincident nodes the lowest row
+        (``coincident`` lists the others)."""
+        rows = self.element_rows if on_elements and len(self.element_rows) else None
+        tree = self.tree if rows is None else self.element_tree
+        k = min(8, tree.n)
+        d, i = tree.query(points, k=k)
         d, i = d.reshape(len(points), k), i.reshape(len(points), k)
+        i = i if rows is None else rows[i]
         tie = d <= d[:, :1] + 1e-9 * self.size
-        preferred = tie & self.on_element[i]
-        pick = np.where(preferred.any(axis=1, keepdims=True), preferred, tie)
-        # of the tied nodes (on an element where any is), the lowest row: deterministic
-        rank = np.where(pick, i, np.iinfo(np.int64).max)
-        col = rank.argmin(axis=1)
-        rows = np.arange(len(points))
-        return d[rows, col], i[rows, col]
+        col = np.where(tie, i, np.iinfo(np.int64).max).argmin(axis=1)
+        at = np.arange(len(points))
+        return d[at, col], i[at, col]
 
     def coincident(self, row: int) -> np.ndarray:
         """Rows of the other nodes at node ``row``'s position (to 1e-9 of the model's size):
@@ -183,12 +186,13 @@ class Locator:
 
     def __call__(self, points, on_elements: bool = True, weights: bool = True):
         """``Location`` of each point (n, 3) [model unit]: the nearest node, or with
-        ``on_elements`` the nearest point of a line element or shell face where nearer.
+        ``on_elements`` the nearest point of a line element or shell face (nodes on none, such
+        as a point mass's or a spring's, are then no candidates).
         weights : False skips a quad's bilinear weights (its nodes and weights are then those
         of the triangle half the foot is on: enough for the foot point alone)."""
         m, X = self.mesh, self.mesh.nodes
         points = np.atleast_2d(np.asarray(points, dtype=float))
-        d_node, nearest = self._nearest_nodes(points)
+        d_node, nearest = self._nearest_nodes(points, on_elements)
         out = []
         for p, dn, n in zip(points, d_node, nearest, strict=True):
             node = Location("node", -1, np.array([n]), np.ones(1), X[n], float(dn), int(n))

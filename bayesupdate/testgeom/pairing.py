@@ -74,8 +74,9 @@ class TestPairing:
     metres: float
 
 
-def _transform(settings, test_xyz, test_ids, mesh) -> Transform:
-    """The alignment of the test points (n, 3) [model unit] to ``mesh``."""
+def _transform(settings, test_xyz, geometry: TestGeometry, mesh) -> Transform:
+    """The alignment of the test points (n, 3) [model unit] to ``mesh``; named pairs may name
+    any node of the geometry."""
     align = settings.align
     if isinstance(align, str) and align == "none":
         return Transform(np.eye(4), 1.0, np.zeros(0), 0.0, "none")
@@ -86,13 +87,11 @@ def _transform(settings, test_xyz, test_ids, mesh) -> Transform:
     if not settings.pairs:
         on_model = _on_model(mesh) if settings.on_elements else None
         return icp(test_xyz, mesh.nodes, settings.scale, refine=on_model)
-    row = {int(n): i for i, n in enumerate(test_ids)}
     src, dst = [], []
     for test, model in settings.pairs:
-        if int(test) not in row:
-            raise BayesUpdateError(f"test.pairs: test node {test} is not in the test geometry")
-        src.append(test_xyz[row[int(test)]])
-        dst.append(mesh.nodes[mesh.row_of(model, f"test.pairs: [{test}, {model}]")])
+        where = f"test.pairs: [{test}, {model}]"
+        src.append(geometry.xyz[geometry.index(test, where)] / mesh.metres)
+        dst.append(mesh.nodes[mesh.row_of(model, where)])
     return fit_pairs(src, dst, settings.scale, [f"[{t}, {m}]" for t, m in settings.pairs])
 
 
@@ -154,7 +153,7 @@ def pair_test(geometry: TestGeometry, dofs, mesh: ModelMesh, settings: PairingSe
     nodes = list(dict.fromkeys(d.node for d in dofs)) or [int(n) for n in geometry.node_ids]
     rows = [geometry.index(n, "test DOF") for n in nodes]
     test_xyz = geometry.xyz[rows] / mesh.metres
-    transform = _transform(settings, test_xyz, nodes, mesh)
+    transform = _transform(settings, test_xyz, geometry, mesh)
     aligned = transform.apply(test_xyz)
     locator = Locator(mesh)
     locations = locator(aligned, settings.on_elements)

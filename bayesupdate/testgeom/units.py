@@ -75,7 +75,12 @@ def parse_length(value, where: str) -> float:
             raise BayesUpdateError(
                 f"{where} = {value!r}: give a length, e.g. 0.005 (m) or '5 mm'"
             ) from None
-        unit = length_unit(text[split:] or "m", where)
+        try:
+            unit = length_unit(text[split:] or "m", where)
+        except BayesUpdateError:
+            raise BayesUpdateError(
+                f"{where} = {value!r}: unknown length unit; use one of {sorted(METRES_PER)}"
+            ) from None
     if not (math.isfinite(number) and number > 0):
         raise BayesUpdateError(f"{where} = {value!r}: must be a positive length")
     return number * METRES_PER[unit]

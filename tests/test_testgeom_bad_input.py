@@ -106,8 +106,8 @@ def test_study_test_table_keys_and_values():
     both = {"model": {"source": "deck.bdf", "test_points": {"1": 11}},
             "test": {"geometry": "g.unv"}}  # fmt: skip
     _raises("not both", parse_study, both)
-    ok = parse_study({"test": {"geometry": "g.unv", "pair_tolerance": "0.2 in",
-                               "align": [[0, 1, 0, -15.55], [-1, 0, 0, 0], [0, 0, 1, 0]]}})  # fmt: skip
+    to_fe = [[0, 1, 0, -15.55], [-1, 0, 0, 0], [0, 0, 1, 0]]
+    ok = parse_study({"test": {"geometry": "g.unv", "pair_tolerance": "0.2 in", "align": to_fe}})
     assert abs(ok.test.pair_tolerance - 0.00508) < 1e-15
     assert ok.test.align[0] == (0.0, 1.0, 0.0, -15.55)
     assert ok.to_dict()["test"]["geometry"] == "g.unv"

@@ -25,7 +25,6 @@ from bayesupdate.testgeom.units import METRES_PER, UFF_UNITS_CODE, length_unit, 
 _LENGTHS = {"rectangular": [1, 1, 1], "cylindrical": [1, 0, 1], "spherical": [1, 0, 0]}
 #: UFF 164 force factors (file force units per newton) of the unit systems written
 _FORCE = {"m": 1.0, "mm": 1e3, "cm": 1e2, "in": 0.2248089431, "ft": 0.2248089431}
-GEOMETRY_DATASETS = (15, 82, 164, 2411, 2420)
 
 
 def read_uff_sets(path) -> list[dict]:

@@ -9,7 +9,10 @@ inches back, 4.5 inches to the right wing").  ``gvt_geometry`` reads them into a
 leading and trailing edge lines of ``ForwardAccel`` / ``AftAccel`` as UFF 82 trace lines).
 
 Run: .venv/bin/python studies/maewing1_test_geometry.py OUT.unv|OUT.csv
-(a .unv is written as UFF 164 + 15 + 82 in inches; a .csv in inches).
+(a .unv is written as UFF 164 + 15 + 82 in inches; a .csv in inches), or with ``--table`` to
+print the pairing tables of docs/guide/test-geometry.md: the accelerometers on v4.2's GRIDs
+1-20 (nodes) and on v3.3's beams (points on elements; the v3.3 deck is read with pyNastran
+directly while ``load_nastran_model`` stops at its PARAM PRTMAXIM).
 """
 
 import re
@@ -55,7 +58,64 @@ def gvt_geometry(path=GVT_INFO):
     return make_geometry(ids, xyz, trace_lines=lines, unit="in", source=str(path))
 
 
-if __name__ == "__main__":
+#: test (nose, X left, Y aft; in) to FE (x aft, y right; origin 15.55 in aft of the nose)
+TO_FE = ((0.0, 1.0, 0.0, -15.55), (-1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0))
+
+
+def v42_grids():
+    """``ModelMesh`` of v4.2's GRIDs 1-20 (gvt_accelerations.dat, small fields), inches."""
+    from bayesupdate.testgeom import ModelMesh
+
+    ids, xyz = [], []
+    path = GVT_INFO.parents[1] / "fem/v4.2_updated/gvt_accelerations.dat"
+    for line in path.read_text().splitlines():
+        if line.startswith("GRID ") and int(line[8:16]) <= 20:
+            ids.append(int(line[8:16]))
+            xyz.append([float(line[24 + 8 * k : 32 + 8 * k]) for k in range(3)])
+    none = [np.zeros((0, k), int) for k in (2, 4, 3)]
+    return ModelMesh(np.array(xyz), np.array(ids), *none, "in", 0.0254)
+
+
+def v33_beams():
+    """``ModelMesh`` of v3.3's GRIDs and line elements (CBEAM, CBAR), read with pyNastran."""
+    from bayesupdate.nastran.deck import _pynastran_read_bdf  # pyNastran with its NumPy shim
+    from bayesupdate.testgeom import ModelMesh
+
+    deck = GVT_INFO.parents[1] / "fem/v3.3_hati/sol103_mAEWing1_Hati_FEMv3p3.bdf"
+    bdf = _pynastran_read_bdf()(str(deck), xref=True, debug=None)
+    ids = np.array(sorted(bdf.nodes))
+    row = {g: i for i, g in enumerate(ids)}
+    lines = [[row[n] for n in e.node_ids[:2]] for e in bdf.elements.values()
+             if e.type in ("CBEAM", "CBAR")]  # fmt: skip
+    xyz = np.array([bdf.nodes[g].get_position() for g in ids])
+    none = [np.zeros((0, k), int) for k in (4, 3)]
+    return ModelMesh(xyz, ids, np.array(lines), *none, "in", 0.0254)
+
+
+def print_tables() -> None:
+    from bayesupdate.testgeom import PairingSettings, pair_test, resolve_dofs
+
+    geometry = gvt_geometry()
+    dofs = resolve_dofs(geometry, [f"{k}V" for k in range(1, 21)])
+    nodes = pair_test(geometry, dofs, v42_grids(), PairingSettings(TO_FE, tolerance=0.001,
+                                                                   on_elements=False))  # fmt: skip
+    mesh = v33_beams()
+    beams = pair_test(geometry, dofs, mesh, PairingSettings(TO_FE, tolerance=0.1016))
+    print("| accel | v4.2 GRID | distance [in] | v3.3 beam (its GRIDs) | nearest GRID | "
+          "point on the beam (x, y) [in] | distance [in] |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    for a, b in zip(nodes.points, beams.points, strict=True):
+        ends = mesh.node_ids[mesh.lines[int(b.element.split()[1])]]
+        x, y, _ = b.model_xyz
+        print(
+            f"| {a.test_node} | {a.model_node} | {a.distance:.3f} | {ends[0]}-{ends[1]} | "
+            f"{b.model_node} | ({x:.3f}, {y:.3f}) | {b.distance:.3f} |"
+        )
+
+
+if __name__ == "__main__" and "--table" in sys.argv:
+    print_tables()
+elif __name__ == "__main__":
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "/tmp/maewing1_test.unv")
     geometry = gvt_geometry()
     if out.suffix.lower() == ".csv":

@@ -129,3 +129,48 @@ def test_study_test_table_pairs_the_built_in_exhaust_with_its_own_sensors(tmp_pa
     want, got = base.predict(), model.predict()
     np.testing.assert_allclose(got.frequencies_hz, want.frequencies_hz, rtol=1e-12)
     np.testing.assert_allclose(got.shapes, want.shapes, atol=1e-9 * np.abs(want.shapes).max())
+
+
+def test_a_study_with_a_test_table_prepares_without_a_test_point_table(tmp_path):
+    """The study path calibrate, sample and discover take (``pipelines.study.prepare``): data
+    with shapes at 1V ... 20H, a [test] geometry in a turned frame (mm, pairs named), no
+    [model.test_points]; at the model's defaults the problem's paired MACs are 1."""
+    from bayesupdate.ema import write_modal_h5
+    from bayesupdate.modal_data import ModalData
+    from bayesupdate.pipelines.study import prepare
+
+    base = get_model("exhaust")
+    s = base.structure
+    truth = base.predict(n_modes=6)
+    data = ModalData(truth.frequencies_hz, shapes=truth.shapes, dof_labels=truth.dof_labels,
+                     source="virtual")  # fmt: skip
+    write_modal_h5(tmp_path / "modes.h5", data)
+    R = Rotation.from_euler("xyz", [0, 0, 90], degrees=True).as_matrix()
+    frame = CoordinateFrame(1, "rectangular", R, np.zeros(3))
+    points = s.nodes[s.sensor_node[::2]]
+    geometry = make_geometry(range(1, 21), points @ R, np.ones(20, int), (frame,))
+    write_csv_geometry(tmp_path / "test.csv", geometry, unit="mm")
+    node = [int(n) for n in s.sensor_node[::2]]
+    study = parse_study({
+        "model": {"source": "exhaust"},
+        "data": {"source": str(tmp_path / "modes.h5")},
+        "test": {"geometry": str(tmp_path / "test.csv"), "length_unit": "mm",
+                 "pairs": [[1, node[0]], [10, node[9]], [20, node[19]]]},
+    })  # fmt: skip
+    problem = prepare(study).problem
+    assert problem.model.structure.sensor_read is not None
+    evaluation = problem.evaluate(problem.start)
+    np.testing.assert_allclose(evaluation.frequencies_hz, truth.frequencies_hz, rtol=1e-10)
+    np.testing.assert_allclose(evaluation.paired.mac, 1.0, atol=1e-10)
+
+
+def test_pairing_record_to_dict():
+    mesh = _mesh()
+    g = make_geometry([1], [[0.5, 0.0, 0.0]])
+    pairing = pair_test(g, resolve_dofs(g, ["1V"]), mesh, PairingSettings(align="none"))
+    record = pairing.to_dict()
+    assert record["transform"]["matrix"] == np.eye(4).tolist()
+    point = record["points"][0]
+    assert point["model_node"] is None and point["element"] == "line 0"
+    assert point["nearest_node"] in (10, 11) and point["model_xyz"] == [0.5, 0.0, 0.0]
+    assert record["dofs"] == [{"label": "1V", "direction": [0.0, 0.0, 1.0]}]

@@ -73,6 +73,30 @@ class TestPairing:
     unit: str
     metres: float
 
+    def to_dict(self) -> dict:
+        """JSON-able record: ``transform`` (``matrix`` 4x4 test to model, ``rms_residual``,
+        ``scale``, ``method``, ``residuals`` per aligned point), ``points`` (per test node:
+        ``test_node``, ``model_node`` (null when paired with an element point), ``nearest_node``,
+        ``element``, ``model_xyz``, ``distance``, ``coincident``), ``shared``, ``dofs`` (label,
+        direction in the model frame) and ``length_unit`` (of every length here)."""
+        t = self.transform
+        points = [
+            dict(test_node=p.test_node, model_node=p.model_node if p.element is None else None,
+                 nearest_node=p.model_node, element=p.element,
+                 model_xyz=[float(v) for v in p.model_xyz], distance=float(p.distance),
+                 coincident=list(p.coincident))
+            for p in self.points
+        ]  # fmt: skip
+        return dict(
+            transform=dict(matrix=t.matrix.tolist(), rms_residual=float(t.rms), scale=t.scale,
+                           method=t.method, residuals=[float(r) for r in t.residuals]),
+            points=points,
+            shared=[list(g) for g in self.shared],
+            dofs=[dict(label=k, direction=d.tolist())
+                  for k, d in zip(self.dof_labels, self.directions, strict=True)],
+            length_unit=self.unit,
+        )  # fmt: skip
+
 
 def _transform(settings, test_xyz, geometry: TestGeometry, mesh) -> Transform:
     """The alignment of the test points (n, 3) [model unit] to ``mesh``; named pairs may name

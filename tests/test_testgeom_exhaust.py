@@ -35,7 +35,7 @@ def deck():
     from bayesupdate.nastran import load_nastran_model
 
     try:
-        return load_nastran_model(str(DECK)).structure
+        return load_nastran_model(str(DECK))
     except ImportError as exc:
         pytest.skip(f"the Nastran reader needs {exc.name}")
 
@@ -43,6 +43,7 @@ def deck():
 @pytest.fixture(scope="module")
 def virtual_test(deck, tmp_path_factory):
     """(paired, true model points [in], UFF path): the UFF 15 test in mm, paired by ICP."""
+    deck = deck.structure
     ids = np.asarray(deck.metadata["nastran"]["grid_ids"])
     rows = [int(np.flatnonzero(ids == g)[0]) for g in GRIDS]
     model_m = deck.nodes[rows] * INCH
@@ -89,6 +90,7 @@ def test_every_point_pairs_with_the_grid_it_came_from(virtual_test):
 
 def test_observation_reads_rigid_motions_at_the_aligned_points(virtual_test, deck):
     pairing, _, path = virtual_test
+    deck = deck.structure
     H = pairing.observation
     assert H.shape == (40, 6 * deck.n_nodes)
     aligned = pairing.transform.apply(read_geometry(path).xyz / INCH)
@@ -99,3 +101,19 @@ def test_observation_reads_rigid_motions_at_the_aligned_points(virtual_test, dec
     point = np.repeat(aligned, 2, axis=0)  # labels kV, kH per point
     expected = np.einsum("ij,ij->i", pairing.directions, v + np.cross(w, point))
     np.testing.assert_allclose(H @ u.ravel(), expected, atol=1e-9)
+
+
+def test_noise_free_shapes_at_the_paired_points_match_the_grids(virtual_test, deck):
+    """What ``correlate`` checks (MAC diagonal >= 0.999): the first 10 modes read by the
+    observation at the paired points against the same modes at the GRIDs the points came
+    from, along the same directions."""
+    pairing, _, _ = virtual_test
+    shapes = deck.solve(n_modes=10, method="sparse").modes.shapes
+    ids = np.asarray(deck.structure.metadata["nastran"]["grid_ids"])
+    rows = np.repeat([int(np.flatnonzero(ids == g)[0]) for g in GRIDS], 2)
+    at_grids = np.einsum("sk,skm->sm", pairing.directions,
+                         shapes[6 * rows[:, None] + np.arange(3)])  # fmt: skip
+    paired = pairing.observation @ shapes
+    mac = (np.sum(at_grids * paired, axis=0) ** 2
+           / (np.sum(at_grids**2, axis=0) * np.sum(paired**2, axis=0)))  # fmt: skip
+    assert mac.min() >= 0.999, mac

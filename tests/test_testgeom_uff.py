@@ -87,6 +87,63 @@ def test_hand_written_file_with_a_cylindrical_frame(tmp_path):
     np.testing.assert_allclose([x.direction for x in d3], [[-1, 0, 0], [0, -1, 0]], atol=1e-12)
 
 
+# the layout LMS Test.Lab exports (pyuff's data/"TestLab 161 164 18 15 82.uff"): units "user
+# defined" with factor 1 (m), frames as dataset 18 (origin, +x point, +xz point), a trace
+# line padded with zeros; the numbers are ours
+TESTLAB = """\
+    -1
+   164
+         9USER_DEFINED
+  1.00000000000000000D+00  1.00000000000000000D+00  1.00000000000000000D+00
+ -2.73149999999999960D+02
+    -1
+    -1
+    18
+         1         0         0         8         1
+SYS1
+  1.00000e+00  0.00000e+00  0.00000e+00  1.00000e+00  0.00000e+00 -1.00000e+00
+  2.00000e+00  0.00000e+00 -1.00000e+00
+         2         0         1         8         1
+SYS2
+  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  1.00000e+00  0.00000e+00
+  0.00000e+00  1.00000e+00  1.00000e+00
+    -1
+    -1
+    15
+         1         0         1         8  5.00000e-01  0.00000e+00  0.00000e+00
+         2         0         2         8  0.00000e+00  1.00000e+00  0.00000e+00
+         3         1         0         8  1.00000e+00  2.00000e+00  3.00000e+00
+    -1
+    -1
+    82
+         1         3         8
+Edge
+         1         2         3         0         0         0         0         0
+    -1
+"""
+
+
+def test_test_lab_layout_with_dataset_18_frames(tmp_path):
+    path = tmp_path / "testlab.uff"
+    path.write_text(TESTLAB)
+    g = read_geometry(path)
+    assert g.unit == "m" and g.trace_lines == ((1, 2, 3),)
+    # SYS1: origin (1, 0, 0), x toward (1, 0, -1): x' = -Z; z' = x' x ((2, 0, -1) - o) = -Y;
+    # y' = z' x x' = +X
+    np.testing.assert_allclose(g.frame(1).rotation, [[0, 0, -1], [1, 0, 0], [0, -1, 0]],
+                               atol=1e-15)  # fmt: skip
+    # SYS2 in SYS1: origin (1, 0, 0), x toward (2, 0, 0), xz plane through (2, -1, 0) in
+    # global: a half turn about X
+    np.testing.assert_allclose(g.frame(2).rotation, [[1, 0, 0], [0, -1, 0], [0, 0, -1]],
+                               atol=1e-15)  # fmt: skip
+    # node 3 at (1, 2, 3) in SYS1: 1 (0, 0, -1) + 2 (1, 0, 0) + 3 (0, -1, 0) + (1, 0, 0)
+    np.testing.assert_allclose(g.xyz[2], [3.0, -3.0, -1.0], atol=1e-12)
+    d = resolve_dofs(g, ["1+1", "1+2", "1+3", "2+3", "3+3"])
+    np.testing.assert_allclose([x.direction for x in d],
+                               [[0, 0, -1], [1, 0, 0], [0, -1, 0], [0, 0, -1], [0, 0, 1]],
+                               atol=1e-15)  # fmt: skip
+
+
 def _geometry_with_frames():
     c, s = np.cos(0.3), np.sin(0.3)
     R = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])

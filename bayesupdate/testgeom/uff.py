@@ -1,8 +1,10 @@
 """Test geometry in and out of universal files (UFF) through pyuff.
 
 Datasets read: 164 (units), 2420 (coordinate systems: rectangular, cylindrical, spherical;
-``frames``), 15 and 2411 (nodes: label, definition frame, displacement frame, colour,
-coordinates in the definition frame, as SDynPy's ``Geometry`` reads both), 82 (trace lines).
+``frames``), 18 (the older coordinate systems Test.Lab writes: an origin, a point on the +x
+axis and a point in the +xz plane, in a reference frame), 15 and 2411 (nodes: label,
+definition frame, displacement frame, colour, coordinates in the definition frame, as SDynPy's
+``Geometry`` reads both), 82 (trace lines; the zeros padding a Test.Lab record dropped).
 Every other dataset (55, 58, ...) is skipped.  Written: 164, 2420 (when frames are named),
 15 or 2411 (coordinates in the global frame, definition frame 0), one 82 per trace line.
 
@@ -58,8 +60,37 @@ def _unit(sets, path, given) -> tuple[str, float]:
     return name, METRES_PER[name]
 
 
+def _frame_of_points(label, kind, origin, x_point, xz_point, where) -> np.ndarray:
+    """(4, 3) 2420-style matrix of a dataset 18 frame: x along origin -> x_point, z normal to
+    the plane through xz_point, y = z x x."""
+    x = np.asarray(x_point, float) - origin
+    z = np.cross(x, np.asarray(xz_point, float) - origin)
+    if np.linalg.norm(x) < 1e-12 or np.linalg.norm(z) < 1e-12 * np.linalg.norm(x) ** 2:
+        raise BayesUpdateError(f"{where}: frame {label}: its three UFF 18 points are collinear")
+    x, z = x / np.linalg.norm(x), z / np.linalg.norm(z)
+    return np.vstack([x, np.cross(z, x), z, origin])
+
+
+def _frames18(sets, path, metres) -> list:
+    """Frames of the dataset 18 records (reference frames defined before use)."""
+    frames = {0: GLOBAL}
+    for s in (s for s in sets if s["type"] == 18):
+        for k, label in enumerate(s["cs_num"]):
+            kind, ref = int(s["cs_type"][k]), int(s["ref_cs_num"][k])
+            if kind not in (0, 1, 2) or ref not in frames:
+                raise BayesUpdateError(
+                    f"{path}: UFF 18 frame {int(label)}: type {kind} (0, 1, 2) in reference "
+                    f"frame {ref} (defined before it)"
+                )
+            points = [to_global(frames[ref], np.asarray(s[key][k], float) * metres)[0]
+                      for key in ("ref_o", "x_point", "xz_point")]  # fmt: skip
+            matrix = _frame_of_points(int(label), KINDS[kind], *points, str(path))
+            frames[int(label)] = checked_frame(int(label), KINDS[kind], matrix, str(path))
+    return [f for i, f in frames.items() if i != 0]
+
+
 def _frames(sets, path, metres) -> tuple:
-    frames = []
+    frames = _frames18(sets, path, metres)
     for s in (s for s in sets if s["type"] == 2420):
         for label, kind, matrix in zip(s["CS_sys_labels"], s["CS_types"], s["CS_matrices"],
                                        strict=True):  # fmt: skip
@@ -92,6 +123,14 @@ def _nodes(sets, path, metres, frames) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return col["node_nums"].astype(np.int64), xyz, col["disp_cs"].astype(np.int64)
 
 
+def _trace(nodes) -> tuple[int, ...]:
+    """A trace line's node ids without the zeros that pad its last record (Test.Lab)."""
+    out = [int(n) for n in nodes]
+    while out and out[-1] == 0:
+        out.pop()
+    return tuple(out)
+
+
 def read_uff_geometry(path, length_unit=None) -> TestGeometry:
     """``TestGeometry`` of a universal file (module docstring).  length_unit : the file's
     length unit when it has no UFF 164 record (default metres); with one, it must agree."""
@@ -99,7 +138,7 @@ def read_uff_geometry(path, length_unit=None) -> TestGeometry:
     unit, metres = _unit(sets, path, length_unit)
     frames = _frames(sets, path, metres)
     ids, xyz, disp = _nodes(sets, path, metres, frames)
-    lines = tuple(tuple(int(n) for n in s["nodes"]) for s in sets if s["type"] == 82)
+    lines = tuple(_trace(s["nodes"]) for s in sets if s["type"] == 82)
     return make_geometry(ids, xyz, disp, frames, lines, (), unit, str(path))
 
 

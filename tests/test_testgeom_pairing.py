@@ -174,3 +174,12 @@ def test_pairing_record_to_dict():
     assert point["model_node"] is None and point["element"] == "line 0"
     assert point["nearest_node"] in (10, 11) and point["model_xyz"] == [0.5, 0.0, 0.0]
     assert record["dofs"] == [{"label": "1V", "direction": [0.0, 0.0, 1.0]}]
+
+
+def test_two_test_points_on_one_model_node_are_reported():
+    mesh = _mesh()
+    g = make_geometry([1, 2, 3], [[1.0, 0.0, 0.001], [1.0, 0.0, -0.001], [2.0, 1.0, 0.0]])
+    dofs = resolve_dofs(g, ["1V", "2V", "3V"])
+    pairing = pair_test(g, dofs, mesh, PairingSettings(align="none", on_elements=False))
+    assert pairing.shared == ((1, 2),)
+    assert [p.model_node for p in pairing.points] == [11, 11, 13]

@@ -117,6 +117,13 @@ def paired_study_model(study, test_labels=()):
     pairing = pair_structure(
         model.structure, geometry, test_labels, cfg.settings(), cfg.model_length_unit
     )
+    if pairing.shared:  # allowed (two sensors on one spot), never silent
+        import warnings
+
+        groups = "; ".join(", ".join(map(str, g)) for g in pairing.shared)
+        warnings.warn(
+            f"[test] {cfg.geometry}: test points {groups} sit on one model point", stacklevel=2
+        )
     return model.with_structure(with_pairing(model.structure, pairing)), pairing
 
 

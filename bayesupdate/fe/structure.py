@@ -81,6 +81,9 @@ class Structure:
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
     dampers : ``dampers.Dampers`` or None: viscous dampers as data (normal modes ignore them).
     scalar_masses : ``scalar_mass.ScalarMasses`` or None (Nastran CMASS1/CMASS2).
+    sensor_read : None (each sensor reads its node's translations along its direction) or
+    (DOFs (n_s, K), weights (n_s, K)): sensor s reads sum_k weights[s, k] * shape[DOFs[s, k]]
+    (a test point between nodes, interpolated with a rigid arm: ``testgeom.observation``).
     """
 
     nodes: np.ndarray
@@ -122,6 +125,7 @@ class Structure:
     dampers: "Dampers | None" = None
     spring_offset: np.ndarray | None = None
     scalar_masses: "ScalarMasses | None" = None
+    sensor_read: tuple[np.ndarray, np.ndarray] | None = None
 
     def spring_offsets(self) -> np.ndarray:
         """(S, 2, 3) offsets [m] from each spring's nodes to its location (zeros: at the
@@ -161,7 +165,10 @@ class Structure:
         return self.parts.index(name)
 
     def sensor_dofs(self) -> tuple[np.ndarray, np.ndarray]:
-        """Translational DOF indices (n_s, 3) of each sensor's node and its direction (n_s, 3)."""
+        """DOF indices (n_s, K) each sensor reads and their weights (n_s, K): its node's
+        translations (K = 3) and its direction, or ``sensor_read``."""
+        if self.sensor_read is not None:
+            return self.sensor_read
         dofs = 6 * self.sensor_node[:, None] + np.arange(3)[None, :]
         return dofs, self.sensor_direction
 

@@ -517,6 +517,24 @@ def _refined_and_cut(frfs, settings, selected, residual_poles, ends, pruned=()) 
     return refined, cut, np.concatenate([cut[1], residual_poles, cut[0]]), revived
 
 
+def _refit(frfs, settings, first, residual_poles, ranges):
+    """The first fit's poles refined and cut (``_refined_and_cut``) and, where that changed
+    them, fitted and pruned again: ((selected, fit, significance, dropped), cut, the residual
+    poles).  first : ``_fit_and_prune``'s result plus the dropped poles; ranges : (the band's,
+    the fit's) (lo, hi) line indices."""
+    selected, fit, significance, dropped = first
+    refined, cut, residual_poles, revived = _refined_and_cut(
+        frfs, settings, selected, residual_poles, ranges[0], dropped
+    )
+    changed = [id(p) for p in refined] != [id(p) for p in selected]
+    if changed or cut[0].size or cut[1].size:
+        selected, fit, significance, more = _fit_and_prune(
+            frfs, refined, residual_poles, *ranges[1]
+        )
+        dropped = [p for p in dropped if all(p is not r for r in revived)] + more
+    return (selected, fit, significance, dropped), cut, residual_poles
+
+
 def identify(
     frfs: FrfSet,
     band_hz: tuple[float, float] | None = None,
@@ -546,15 +564,10 @@ def identify(
     selected, fit, significance, dropped = _fit_and_prune(
         frfs, selected, residual_poles, fit_lo, fit_hi
     )
-    refined, cut, residual_poles, revived = _refined_and_cut(
-        frfs, settings, selected, residual_poles, (lo_i, hi_i), dropped
-    )
-    changed = [id(p) for p in refined] != [id(p) for p in selected]
-    if changed or cut[0].size or cut[1].size:  # refit
-        selected, fit, significance, more = _fit_and_prune(
-            frfs, refined, residual_poles, fit_lo, fit_hi
-        )
-        dropped = [p for p in dropped if all(p is not r for r in revived)] + more
+    (selected, fit, significance, dropped), cut, residual_poles = _refit(
+        frfs, settings, (selected, fit, significance, dropped), residual_poles,
+        ((lo_i, hi_i), (fit_lo, fit_hi)),
+    )  # fmt: skip
     poles = np.array([p.pole for p in selected])
     lines = slice(fit_lo, fit_hi + 1)
     synth, frac = _synthesis(frfs, fit, np.concatenate([poles, residual_poles]), lines)

@@ -80,20 +80,45 @@ def study_inputs(args, with_model: bool = True):
     if not with_model:
         return study, data
     labels = data.dof_labels if data.shapes is not None else ()
-    return study, study_model_any(study, labels), data
+    return study, *study_model_any(study, labels), data
 
 
 def study_model_any(study, labels):
-    """The study's model; a Nastran deck also without bound parameters (correlation needs
-    none; ``nastran.load_nastran_model``)."""
+    """(model, mapping): the study's model, a Nastran deck also without bound parameters
+    (correlation needs none; ``nastran.load_nastran_model``); with a ``[test]`` geometry the
+    model's sensors are the test DOFs paired by it and mapping says how (else None)."""
     from bayesupdate.nastran import is_nastran_path, load_nastran_model
     from bayesupdate.pipelines.model_source import study_model
 
+    if study.test is not None:
+        return _paired(study, labels)
     if is_nastran_path(study.model.source):
-        return load_nastran_model(
+        model = load_nastran_model(
             study.model.source, study.parameters, tuple(labels), dict(study.model.test_points)
         )
-    return study_model(study, labels)
+        return model, None
+    return study_model(study, labels), None
+
+
+def _paired(study, labels):
+    """The ``[test]`` table's pairing of the test DOFs ``labels`` with the study's model."""
+    from bayesupdate.nastran import is_nastran_path, load_nastran_model
+    from bayesupdate.pipelines.correlate import geometry_mapping
+    from bayesupdate.pipelines.model_source import paired_study_model
+    from bayesupdate.testgeom import pair_structure, read_geometry, with_pairing
+
+    if not is_nastran_path(study.model.source):
+        model, pairing = paired_study_model(study, labels)
+        return model, None if pairing is None else geometry_mapping(pairing)
+    cfg = study.test
+    model = load_nastran_model(study.model.source, study.parameters)
+    geometry = read_geometry(cfg.geometry, cfg.length_unit)
+    if not labels:
+        return model, None
+    pairing = pair_structure(
+        model.structure, geometry, tuple(labels), cfg.settings(), cfg.model_length_unit
+    )
+    return model.with_structure(with_pairing(model.structure, pairing)), geometry_mapping(pairing)
 
 
 def correlation_json(result) -> dict:
@@ -157,8 +182,8 @@ def run(args) -> int:
     )
     if args.out:
         check_output_path(args.out, args.force)
-    study, model, data = study_inputs(args)
-    result = correlate(model, data, settings, name=str(study.model.source))
+    study, model, mapping, data = study_inputs(args)
+    result = correlate(model, data, settings, name=str(study.model.source), mapping=mapping)
     if args.report:  # made only once the inputs have passed (no folder left by bad input)
         check_report_folder(args.report, args.force)
     if args.out:

@@ -84,7 +84,7 @@ def candidate_model(args, study, data):
         tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(first.bdf, c))
         model = load_nastran_model(source, tables, tuple(labels), dict(study.model.test_points))
     else:
-        model = study_model_any(study, labels)
+        model = study_model_any(study, labels)[0]
     names = tuple(study.parameters) if study.parameters and not args.candidates else ()
     base = model.default_parameters()
     if names:

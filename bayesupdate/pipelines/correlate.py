@@ -196,10 +196,41 @@ def _rows(modes: ModelModes, labels) -> np.ndarray:
     return np.array([index[lab] for lab in labels], dtype=int)
 
 
+def geometry_mapping(pairing) -> SensorMapping:
+    """The ``SensorMapping`` of a ``testgeom.TestPairing`` (the study's ``[test]`` geometry,
+    aligned and paired): its transform and fit residual, and per test DOF its model point
+    (the nearest model node's label; ``model_xyz`` the paired point, on an element where the
+    pairing chose one), its direction in the model frame and its distance."""
+    t = pairing.transform
+    by_node = {p.test_node: p for p in pairing.points}
+    points = []
+    for label, direction in zip(pairing.dof_labels, pairing.directions, strict=True):
+        node = _test_node(label)
+        paired = by_node[int(node)] if node.lstrip("-").isdigit() else None
+        points.append(
+            SensorPoint(
+                str(label),
+                node,
+                None if paired is None else int(paired.model_node),
+                None if paired is None else tuple(float(v) for v in paired.model_xyz),
+                tuple(float(v) for v in direction),
+                None if paired is None else float(paired.distance),
+            )
+        )
+    source = f"[test] geometry ({t.method}; lengths in {pairing.unit})"
+    return SensorMapping(np.asarray(t.matrix, float), tuple(points), source, float(t.rms))
+
+
 def correlate(
-    model, data: ModalData, settings: CorrelateSettings, name: str = "model"
+    model,
+    data: ModalData,
+    settings: CorrelateSettings,
+    name: str = "model",
+    mapping: SensorMapping | None = None,
 ) -> Correlation:
-    """Correlate ``model`` with the test ``data`` (module docstring)."""
+    """Correlate ``model`` with the test ``data`` (module docstring); ``mapping``: the test
+    DOFs on the model when a test geometry paired them (``geometry_mapping``), else the
+    model's own sensors (``sensor_mapping``)."""
     n_model = data.n_modes + settings.extra_modes
     modes = model_modes(model, n_model, settings.parameters)
     if data.shapes is None or modes.shapes is None:
@@ -216,7 +247,7 @@ def correlate(
         test_hz=data.frequencies_hz,
         model_hz=np.asarray(modes.frequencies_hz),
         pairs=pairs,
-        mapping=sensor_mapping(model, data.dof_labels),
+        mapping=mapping or sensor_mapping(model, data.dof_labels),
         mac=mac,
         test_auto_mac=auto_mac(data.shapes),
         comac=comac(data.shapes[:, pairs.test], model_at[:, pairs.model])

@@ -264,15 +264,15 @@ def fitted_geometry(choice: str | int = "best") -> dict:
 
 
 def full_geometry(fitted: dict) -> dict:
-    """All quantities: fixed ones from ``GEOMETRY_QUANTITIES`` overridden by ``fitted``."""
+    """All quantities: fixed ones from ``GEOMETRY_QUANTITIES`` overridden by ``fitted``, which may
+    also set ``OPTIONAL_QUANTITIES`` (absent: that feature is off)."""
     g = {k: v[0] for k, v in GEOMETRY_QUANTITIES.items()}
-    g.update(dict.fromkeys(OPTIONAL_QUANTITIES))
-    unknown = set(fitted) - set(g)
+    unknown = set(fitted) - set(g) - set(OPTIONAL_QUANTITIES)
     if unknown:
         raise BayesUpdateError(f"exhaust geometry: unknown quantities {sorted(unknown)}")
     g.update(fitted)
     g.pop("mm_internal_mass")  # derived from the mass budget, never an input
-    missing = [k for k, v in g.items() if v is None and k not in OPTIONAL_QUANTITIES]
+    missing = [k for k, v in g.items() if v is None]
     if missing:
         raise BayesUpdateError(f"exhaust geometry: quantities {missing} have no value")
     return g

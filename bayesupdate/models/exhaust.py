@@ -15,8 +15,11 @@ horizontal planes.
 
 Every dimension is in ``GEOMETRY_QUANTITIES`` (name -> (value or None, unit, source)).  Quantities
 the paper does not give and that the modes are sensitive to were fixed once by a documented fit
-to seed Table 1 (``bayesupdate.models.exhaust_fit``, ``studies/reproduce_paper_fe.py``); the
-fitted values and the runner-up geometries are stored in ``bayesupdate/data/exhaust_geometry.json``.
+(``bayesupdate.models.exhaust_fit``, ``studies/reproduce_paper_fe.py``), stored with the
+runner-up geometries as package data, one file per fit (``GEOMETRY_FILES``): "table1" (seed
+Table 1, ``bayesupdate/data/exhaust_geometry.json``) and "two_design" (seed Tables 1 and 4, the
+paper's FE model at both of its designs, with joints that follow the wall their compliance lies
+in, ``JOINT_WALL_PART``; ``bayesupdate/data/exhaust_geometry_two_design.json``).
 
 Design variables (seed Table 3, DESIGN.md names), initial values 1.0 mm and 10e-9 t/mm^3:
 
@@ -165,39 +168,106 @@ GEOMETRY_QUANTITIES = {
     "joint_k_torsion": (1.0e5, "N m/rad", _A + ": torsion stiff (weld around the pipe)"),
     "joint_log10_k_v": (None, "log10 N m/rad", _F + " [4, 6]: bending in the vertical plane"),
     "joint_log10_k_h": (None, "log10 N m/rad", _F + " [4, 6]: bending in the horizontal plane"),
+    "joint_stub_length": (
+        0.02,
+        "m",
+        _A + ": reach of the wall-following joint stub (half a pipe diameter into the cap)",
+    ),
     # mesh
     "element_length": (0.15, "m", "mesh: 130 Hz bending wavelength of the pipe is ~2 m"),
 }
 
 
-@lru_cache(maxsize=1)
-def load_geometries() -> dict:
-    """The stored geometry fits: {"best": {...}, "runners_up": [{...}, ...], ...} (JSON data)."""
-    text = resources.files("bayesupdate").joinpath("data/exhaust_geometry.json").read_text()
+#: quantities a geometry may leave out (value None: the feature is off).  joint_wall_log10_k:
+#: bending stiffness EI/L [log10 N m/rad] at the initial 1.0 mm wall of the joint stub that follows
+#: the wall (``JOINT_WALL_PART``); fitted to seed Tables 1 and 4 by the two-design fit [4, 6]
+OPTIONAL_QUANTITIES = {
+    "joint_wall_log10_k": (
+        "log10 N m/rad",
+        "fitted to seed Tables 1 and 4 (exhaust_fit, two-design) [4, 6]: the wall-following "
+        "part of a joint's bending stiffness at the initial 1.0 mm wall",
+    ),
+}
+
+#: Section rule of the two-design geometry: a joint's compliance lies in the more flexible of the
+#: two walls it joins - the thinner sheet, and at equal sheet a muffler's end cap (a plate) rather
+#: than the pipe (a tube) - so its stiffness scales with that wall's thickness.  A stub beam of
+#: that part carries it (thin-walled tube: EI, GJ, EA proportional to t).  The catalyst can
+#: (1.5 mm) is thicker than the pipes (1.0 mm): the pipe's wall; the intermediate muffler's
+#: wrapper (0.8 mm) is thinner: its wall, not a design variable, so those joints keep a constant
+#: spring; the main muffler's 1.0 mm end caps against the 1.0 mm pipes: the cap.
+JOINT_WALL_PART = {
+    "hot_pipe/catalyst": "hot_pipe",
+    "catalyst/cold_pipe": "cold_pipe",
+    "cold_pipe/intermediate_muffler": None,
+    "intermediate_muffler/cold_pipe": None,
+    "cold_pipe/main_muffler": "main_muffler",
+    "main_muffler/tail_pipe": "main_muffler",
+}
+
+#: stored geometry sets: name -> package data file (``geometry=NAME`` or ``NAME:k``)
+GEOMETRY_FILES = {
+    "table1": "data/exhaust_geometry.json",
+    "two_design": "data/exhaust_geometry_two_design.json",
+}
+#: the set ``geometry="best"`` (and an index alone) refers to
+DEFAULT_GEOMETRY = "table1"
+
+
+@lru_cache(maxsize=4)
+def load_geometries(name: str = DEFAULT_GEOMETRY) -> dict:
+    """The stored geometry fits of set ``name`` (``GEOMETRY_FILES``): {"best": {...},
+    "runners_up": [{...}, ...], ...} (JSON data)."""
+    if name not in GEOMETRY_FILES:
+        raise BayesUpdateError(_unknown_geometry(name))
+    text = resources.files("bayesupdate").joinpath(GEOMETRY_FILES[name]).read_text()
     return json.loads(text)
 
 
+def _unknown_geometry(choice) -> str:
+    return (
+        f"exhaust geometry {choice!r}: known geometries are 'best' (= {DEFAULT_GEOMETRY!r}), "
+        + ", ".join(repr(n) for n in GEOMETRY_FILES)
+        + ", each with ':k' for its k-th runner-up (e.g. 'table1:2'), or an index k alone"
+    )
+
+
+def parse_geometry(choice: str | int) -> tuple[str, int]:
+    """``choice`` -> (geometry set, index): "best" or an index k (default set), a set name
+    ("two_design"), or "NAME:k" (its k-th runner-up).  Raises BayesUpdateError otherwise."""
+    if isinstance(choice, int) and not isinstance(choice, bool):
+        return DEFAULT_GEOMETRY, choice
+    if not isinstance(choice, str):
+        raise BayesUpdateError(_unknown_geometry(choice))
+    name, _, index = choice.partition(":")
+    if name.isdigit() and not index:
+        return DEFAULT_GEOMETRY, int(name)
+    name = DEFAULT_GEOMETRY if name == "best" else name
+    if name not in GEOMETRY_FILES or not (index == "" or index.isdigit()):
+        raise BayesUpdateError(_unknown_geometry(choice))
+    return name, int(index or 0)
+
+
 def fitted_geometry(choice: str | int = "best") -> dict:
-    """Fitted quantities of geometry ``choice``: "best" or 0 = the best fit, k >= 1 = the k-th
-    runner-up.  Returns name -> value (SI)."""
-    data = load_geometries()
+    """Fitted quantities of geometry ``choice`` (``parse_geometry``): "best" or 0 = the default
+    set's best fit, k >= 1 = its k-th runner-up; "two_design", "table1:2", ....  Returns
+    name -> value (SI)."""
+    name, k = parse_geometry(choice)
+    data = load_geometries(name)
     fits = [data["best"], *data["runners_up"]]
-    if choice == "best":
-        choice = 0
-    if isinstance(choice, str) and choice.isdigit():
-        choice = int(choice)
-    if not isinstance(choice, int) or not 0 <= choice < len(fits):
+    if not 0 <= k < len(fits):
         raise BayesUpdateError(
-            f"exhaust geometry {choice!r}: use 'best' or an index 0..{len(fits) - 1} "
-            "(0 = best fit, 1.. = runner-up fits in bayesupdate/data/exhaust_geometry.json)"
+            f"exhaust geometry {choice!r}: set {name!r} has fits 0..{len(fits) - 1} "
+            f"(0 = best fit, 1.. = runner-up fits in bayesupdate/{GEOMETRY_FILES[name]})"
         )
-    return dict(fits[choice]["values"])
+    return dict(fits[k]["values"])
 
 
 def full_geometry(fitted: dict) -> dict:
-    """All quantities: fixed ones from ``GEOMETRY_QUANTITIES`` overridden by ``fitted``."""
+    """All quantities: fixed ones from ``GEOMETRY_QUANTITIES`` overridden by ``fitted``, which may
+    also set ``OPTIONAL_QUANTITIES`` (absent: that feature is off)."""
     g = {k: v[0] for k, v in GEOMETRY_QUANTITIES.items()}
-    unknown = set(fitted) - set(g)
+    unknown = set(fitted) - set(g) - set(OPTIONAL_QUANTITIES)
     if unknown:
         raise BayesUpdateError(f"exhaust geometry: unknown quantities {sorted(unknown)}")
     g.update(fitted)
@@ -233,7 +303,24 @@ def _joint(b: StructureBuilder, node, axis, g, name):
     ka, kt = g["joint_k_axial"], g["joint_k_torsion"]
     kv, kh = 10.0 ** g["joint_log10_k_v"], 10.0 ** g["joint_log10_k_h"]
     b.add_spring(node, new, [ka, ka, ka, kt, kv, kh], name, frame=np.array([axis, n_h, n_v]))
-    return new
+    wall_part = JOINT_WALL_PART[name]
+    if g.get("joint_wall_log10_k") is None or wall_part is None:
+        return new
+    return _wall_stub(b, new, axis, g, wall_part)
+
+
+def _wall_stub(b: StructureBuilder, node, axis, g: dict, part: str):
+    """The wall-following part of a joint (``JOINT_WALL_PART``), in series with its spring: a
+    massless stub of the pipe's tube section in ``part``, so the part's thickness binding reaches
+    it; its modulus makes EI/L = 10**joint_wall_log10_k at the initial 1.0 mm wall.  Returns the
+    stub's far node (``joint_stub_length`` along ``axis``)."""
+    length = g["joint_stub_length"]
+    section = circular_tube(g["pipe_od"], g["pipe_wall"])
+    modulus = 10.0 ** g["joint_wall_log10_k"] * length / section.properties(STEEL.poisson)["Iy"]
+    material = Material(modulus, STEEL.poisson, 1.0e-3, "joint wall (massless)")
+    end = b.add_node(b.node_xyz(node) + length * axis)
+    b.add_beam(node, end, section, material, part, up=(0, 0, 1))
+    return end
 
 
 def _component(b, start_node, length, section, part, n_el, material=STEEL):
@@ -430,8 +517,10 @@ def build_exhaust_model(
 ) -> FEModel:
     """The exhaust ``FEModel`` with the five design variables of seed Table 3.
 
-    geometry : "best" (the stored best fit), an index (0 = best, 1.. = runner-up fits) or a dict
-    of fitted quantities (see ``GEOMETRY_QUANTITIES``).  elbow_flexibility : apply the ASME B31.3
+    geometry : "best" (the default set's best fit, ``DEFAULT_GEOMETRY``), an index (0 = best,
+    1.. = its runner-up fits), a stored set's name ("table1", "two_design"; ``GEOMETRY_FILES``)
+    with an optional ":k" for its k-th runner-up, or a dict of fitted quantities (see
+    ``GEOMETRY_QUANTITIES``).  elbow_flexibility : apply the ASME B31.3
     flexibility factor to the bends.  joint_nuisance : also bind each joint spring part "A/B"
     (``JOINTS``) to a parameter ``k_A__B`` (property stiffness_factor, default 1, bounds
     ``JOINT_FACTOR_BOUNDS``), so the connection stiffnesses can be sampled as nuisance

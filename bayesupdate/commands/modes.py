@@ -44,7 +44,9 @@ def add_arguments(parser):
         "--modes", type=int, default=None, help="number of elastic modes (12; a deck: its EIGRL)"
     )
     parser.add_argument(
-        "--geometry", default=None, help="exhaust only: 'best' or the index of a runner-up geometry"
+        "--geometry",
+        default=None,
+        help="exhaust only: table1 (default), two_design, NAME:k (k-th runner-up), or an index",
     )
     parser.add_argument(
         "--sed-map",

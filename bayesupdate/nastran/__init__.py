@@ -1,7 +1,7 @@
 """Nastran bulk data in: a user's deck (.bdf, .dat, .nas, .blk) as an FE model.
 
-``load_nastran_model(path)`` reads the deck with pyNastran (optional extra:
-``pip install bayesupdate[nastran]``), converts it to a ``Structure`` (``reader``) and returns an
+``load_nastran_model(path)`` reads the deck with the package's own bulk-data reader (``deck``,
+``bulk``: no extra needed), converts it to a ``Structure`` (``reader``) and returns an
 ``FEModel`` whose ``structure.metadata["nastran"]`` records the units, PARAMs and notes.
 """
 
@@ -24,20 +24,20 @@ def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, 
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info, bdf = read_structure(path)
+    structure, info, deck = read_structure(path)
     if not _has_mass(structure):
         raise BayesUpdateError(
             f"Nastran model {path}: the deck has no mass (MAT1 RHO, NSM, CONM2 all zero)"
         )
     if test_labels:
         structure = with_test_points(structure, test_labels, test_points, info["deck"])
-    if not parameters and bdf.desvars:
+    if not parameters and deck.of("DESVAR"):
         from bayesupdate.nastran.desvar import desvar_parameters
 
-        parameters = desvar_parameters(bdf)
-    bindings, defaults, bounds = deck_bindings(parameters or {}, bdf, structure)
+        parameters = desvar_parameters(deck)
+    bindings, defaults, bounds = deck_bindings(parameters or {}, deck, structure)
     return NastranModel(
-        structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=bdf
+        structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=deck
     )
 
 

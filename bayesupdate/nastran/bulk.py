@@ -120,13 +120,13 @@ ALIASES = {"G0": "X1"}
 class Card:
     """One bulk-data card: ``name`` (upper case, no '*'), ``raw`` its data fields as text (field
     2 on, eight per physical line, continuation markers dropped), ``file`` and ``line`` of its
-    first line; ``lines`` how many physical lines it spans (``writer``)."""
+    first line; ``end`` the line number of its last line (``writer``)."""
 
     name: str
     raw: tuple[str, ...]
     file: str
     line: int
-    lines: int = 1
+    end: int = 0
 
     @property
     def where(self) -> str:
@@ -205,7 +205,8 @@ def _field_number(i: int) -> str:
 def split_line(text: str) -> tuple[str, list[str], bool]:
     """(first field, data fields, large) of one physical line (comment and tabs removed).
 
-    Free field (a comma in the first 10 columns): up to 8 data fields after the first (a ninth is the continuation marker);
+    Free field (a comma in the first 10 columns): up to 8 data fields after the first (a ninth
+    is the continuation marker);
     small field: 8 of 8 characters; large field: 4 of 16 characters (first field ending '*')."""
     if "," in text[:10]:
         parts = text.split(",")
@@ -229,3 +230,41 @@ def card_name(head: str) -> str:
     if not head or head[0] in "+*":
         return ""
     return head.rstrip("*").upper()
+
+
+def real16(value: float) -> str:
+    """A real in at most 16 characters with as many digits as fit (Python's shortest repr when
+    it fits, else Nastran's exponent form without 'E', e.g. '-1.234567890123-5')."""
+    v = float(value)
+    text = repr(v)
+    if len(text) <= 16 and ("." in text or "e" in text):
+        return text
+    for digits in range(15, 0, -1):
+        mantissa, exponent = f"{v:.{digits}e}".split("e")
+        text = f"{mantissa}{int(exponent):+d}"
+        if len(text) <= 16:
+            return text
+    raise ValueError(f"{value!r} does not fit a large field")
+
+
+def with_fields(card: Card, changes: dict[int, object]) -> Card:
+    """A copy of ``card`` with raw fields ``{index: value}`` replaced (reals written by
+    ``real16``; the copy keeps the card's file and lines)."""
+    raw = list(card.raw)
+    raw += [""] * (max(changes, default=-1) + 1 - len(raw))
+    for i, v in changes.items():
+        raw[i] = real16(v) if isinstance(v, float) else ("" if v is None else str(v))
+    return Card(card.name, tuple(raw), card.file, card.line, card.end)
+
+
+def large_field_text(card: Card) -> str:
+    """The card as large-field lines ('NAME*' then '*' continuations, 4 fields of 16)."""
+    raw = [r.strip() for r in card.raw]
+    # a free-field value longer than a large field (a full repr) is written in 16 characters
+    raw = [real16(parse_number(r)) if len(r) > 16 else r for r in raw]
+    raw += [""] * ((-len(raw) % 4) if raw else 4)
+    lines = []
+    for k in range(0, len(raw), 4):
+        head = f"{card.name}*" if k == 0 else "*"
+        lines.append(head.ljust(8) + "".join(f.ljust(16) for f in raw[k : k + 4]).rstrip())
+    return "\n".join(lines) + "\n"

@@ -37,7 +37,8 @@ PROPERTIES = ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PE
 
 @dataclass
 class Context:
-    """What the card converters share: element, property and material tables ({id: Card}),
+    """What the card converters share: elements {(card name, id): Card} (elements, masses and
+    rigid elements have id spaces of their own), property and material tables ({id: Card}),
     the grids, the structure node of each grid row (-1: not in the structure), WTMASS, lumped
     line mass, the builder, the deck's refusals, notes for the user."""
 
@@ -56,7 +57,7 @@ class Context:
     def each(self, names, convert) -> None:
         """``convert(self, card)`` for each element named ``names``, in id order; a refused
         card is recorded and the next one converted."""
-        for _, card in sorted(self.elements.items()):
+        for _, card in sorted(self.elements.items(), key=_by_id):
             if card.name in names:
                 try:
                     convert(self, card)
@@ -72,6 +73,12 @@ class Context:
         if p is None or p.name not in kinds:
             card.fail(f"property {pid} is not a {' / '.join(kinds)}")
         return p
+
+
+def _by_id(item) -> tuple:
+    """Sort key of an ``elements`` item: its id (a bad id first), then its card name."""
+    (name, i), _ = item
+    return (i if isinstance(i, int) else -1, name)
 
 
 def _invariant(mask) -> bool:
@@ -137,8 +144,9 @@ def _lumped_mass(ctx: Context, nodes, mass_per_length, length, part, inertia=Non
 #: their number of dimensions
 L_SECTIONS = {"ROD": 1, "TUBE": 2, "TUBE2": 2, "BAR": 2, "BOX": 4, "I": 6}
 #: number of dimensions of the other PBARL shapes (to find NSM after them)
-L_DIMS = {**L_SECTIONS, "CHAN": 4, "T": 4, "L": 4, "H": 4, "T1": 4, "I1": 4, "CHAN1": 4, "Z": 4,
-          "CHAN2": 4, "T2": 4, "BOX1": 6, "HEXA": 3, "HAT": 4, "HAT1": 5, "DBOX": 10, "CROSS": 4}  # fmt: skip
+L_DIMS = {**L_SECTIONS, "CHAN": 4, "T": 4, "L": 4, "H": 4, "T1": 4, "I1": 4, "CHAN1": 4,
+          "Z": 4, "CHAN2": 4, "T2": 4, "BOX1": 6, "HEXA": 3, "HAT": 4, "HAT1": 5, "DBOX": 10,
+          "CROSS": 4}  # fmt: skip
 #: PBEAM fields of one station (after SO, X/XB) and of end A
 _STATION = ("A", "I1", "I2", "I12", "J", "NSM")
 #: PBEAM's last two lines: shear factors, shear relief, warping, mass and neutral-axis offsets
@@ -212,7 +220,9 @@ def library_dims(prop, card) -> tuple[str, np.ndarray, float]:
         i = 9 + n
         while i < len(prop.raw):
             vals = [prop.value(i + 2 + k) for k in range(n)]
-            other = np.array([d if v is None else float(v) for d, v in zip(dims, vals, strict=True)])
+            other = np.array(
+                [d if v is None else float(v) for d, v in zip(dims, vals, strict=True)]
+            )
             if np.any(other != dims):
                 card.fail(f"PBEAML {prop.id()} is tapered; only constant sections")
             i += 3 + n

@@ -1,4 +1,4 @@
-"""A Nastran deck's files read into cards: executive and case control, ``BEGIN BULK`` .. ``ENDDATA``.
+"""A Nastran deck's files read into cards: executive, case control, ``BEGIN BULK`` .. ``ENDDATA``.
 
 ``read_deck(path)`` follows ``INCLUDE`` (quoted or not, continued over lines, relative to the
 including file; a name missing in its exact letter case is found in another, with a note),
@@ -52,7 +52,7 @@ IGNORED_PARAMS = {
     "PRTGPDT", "PRTCSTM", "PRTBGPDT", "PRTGPTT", "PRTMGG", "PRTPG", "EPZERO", "DBALL", "DBUP",
     "DBDICT", "DBCCONV", "OPPHIPA", "ALTRED", "OUNIT1", "OUNIT2", "ITAPE", "POSTOUT", "NASPRT",
     "SNORM", "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
-    "FLUIDSE", "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "PRTMAXIM", "LGDISP",
+    "FLUIDSE", "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
 }  # fmt: skip
 #: PARAMs that would change the normal modes and are not modelled: refused, named
@@ -152,7 +152,9 @@ class Deck:
 #: id families: two cards of one family may not share an id
 FAMILIES = {
     "element": ("CQUAD4", "CTRIA3", "CBAR", "CBEAM", "CROD", "CONROD", "CBUSH", "CELAS1",
-                "CELAS2", "CONM2", "CONM1", "CMASS1", "CMASS2", "RBE2", "RBE3", "RBAR"),
+                "CELAS2"),
+    "mass element": ("CONM2", "CONM1", "CMASS1", "CMASS2"),
+    "rigid element": ("RBE2", "RBE3", "RBAR"),
     "property": ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS"),
     "material": ("MAT1",),
     "grid": ("GRID",),
@@ -204,6 +206,17 @@ def _include_name(first: str, lines: list[str], i: int) -> tuple[str, int]:
     return name.split("'", 1)[0], i
 
 
+def include_at(path: Path, lines: list[str], i: int, notes=None) -> tuple[Path | None, int]:
+    """(the file an INCLUDE at line ``i`` of ``path`` names, or None when line ``i`` is no
+    INCLUDE or the file is missing in every letter case; index of the INCLUDE's last line)."""
+    m = _INCLUDE.match(lines[i]) if lines[i][:1] in "iI " else None
+    if m is None:
+        return None, i
+    name, last = _include_name(m.group(1), lines, i)
+    target = _find(path.parent / name, [] if notes is None else notes) if name else None
+    return target, last
+
+
 def _lines(path: Path, refusals: Refusals, notes: list, files: list, stack=()):
     """(file, line number, text) of ``path`` with its INCLUDEs expanded, in reading order."""
     if path in stack:
@@ -218,15 +231,14 @@ def _lines(path: Path, refusals: Refusals, notes: list, files: list, stack=()):
             yield str(path), i + 1, lines[i]
             i += 1
             continue
-        start = i
-        name, i = _include_name(m.group(1), lines, i)
-        target = _find((path.parent / name) if name else path.parent / "?", notes)
+        target, last = include_at(path, lines, i, notes)
         if target is None:
-            refusals.add(f"{path.name}:{start + 1} INCLUDE {name!r}: no such file "
+            name = _include_name(m.group(1), lines, i)[0]
+            refusals.add(f"{path.name}:{i + 1} INCLUDE {name!r}: no such file "
                          f"in {path.parent} (in any letter case)")  # fmt: skip
         else:
             yield from _lines(target, refusals, notes, files, (*stack, path))
-        i += 1
+        i = last + 1
 
 
 # -- executive and case control -----------------------------------------------------------------
@@ -319,7 +331,7 @@ def _trimmed(card: Card) -> Card:
     raw = list(card.raw)
     while raw and not raw[-1].strip():
         raw.pop()
-    return Card(card.name, tuple(raw), card.file, card.line, card.lines)
+    return Card(card.name, tuple(raw), card.file, card.line, card.end)
 
 
 def _split(all_lines) -> tuple[list, list, list]:

@@ -20,44 +20,62 @@ _FIELD_NUMBER = {
 _NO_BOUND = 1e19
 
 
-def desvar_parameters(bdf) -> dict:
+def _relation(rel) -> tuple[str, object, float, list[tuple[int, float]]]:
+    """(TYPE, PNAME or field number, C0, [(DVID, COEF)]) of a DVPREL1."""
+    pairs, values = [], rel.values(8)
+    for k in range(0, len(values) - 1, 2):
+        if values[k] is not None:
+            pairs.append((int(values[k]), float(values[k + 1] or 0.0)))
+    return str(rel["TYPE"]), rel["PNAME"], rel.real("C0"), pairs
+
+
+def desvar_parameters(deck) -> dict:
     """{label: {"binds", "bounds" (optional), "coefficient", "desvar"}} from DESVAR/DVPREL1."""
     by_desvar = {}
-    for oid, rel in sorted(bdf.dvprels.items()):
-        if rel.type != "DVPREL1":
-            raise BayesUpdateError(f"{rel.type} {oid}: only DVPREL1 design relations are read")
-        dvids = [int(d) for d in rel.desvar_ids]
-        if len(dvids) != 1 or abs(float(rel.c0 or 0.0)) > 0:
+    for rel in deck.of("DVPREL1"):
+        oid = rel.id()
+        ptype, pname, c0, pairs = _relation(rel)
+        if len(pairs) != 1 or abs(c0) > 0:
             raise BayesUpdateError(
-                f"DVPREL1 {oid}: only one DESVAR with C0 = 0 is supported (field = COEF x)"
+                f"{rel.where} DVPREL1 {oid}: only one DESVAR with C0 = 0 is supported "
+                "(field = COEF x)"
             )
-        field = rel.pname_fid
+        field = pname
         if not isinstance(field, str):
-            field = _FIELD_NUMBER.get((rel.prop_type, int(field)))
+            field = _FIELD_NUMBER.get((ptype, int(field or 0)))
             if field is None:
                 raise BayesUpdateError(
-                    f"DVPREL1 {oid}: {rel.prop_type} field {rel.pname_fid} cannot be bound"
+                    f"{rel.where} DVPREL1 {oid}: {ptype} field {pname} cannot be bound"
                 )
-        key = (rel.prop_type, field.upper(), float(rel.coeffs[0]))
-        entry = by_desvar.setdefault(dvids[0], [key, []])
+        dvid, coef = pairs[0]
+        key = (ptype, field.upper(), coef)
+        entry = by_desvar.setdefault(dvid, [key, []])
         if entry[0] != key:
             raise BayesUpdateError(
-                f"DVPREL1 {oid}: DESVAR {dvids[0]} sets {entry[0][:2]} with COEF {entry[0][2]} "
-                "elsewhere; one DESVAR must set one field type with one COEF"
+                f"{rel.where} DVPREL1 {oid}: DESVAR {dvid} sets {entry[0][:2]} with COEF "
+                f"{entry[0][2]} elsewhere; one DESVAR must set one field type with one COEF"
             )
-        entry[1].append(int(rel.pid))
-    return {_name(bdf, d, by_desvar): _entry(bdf, d, *v) for d, v in sorted(by_desvar.items())}
+        entry[1].append(int(rel["PID"]))
+    desvars = deck.table("DESVAR")
+    return {_name(desvars, d, by_desvar): _entry(desvars, d, *v)
+            for d, v in sorted(by_desvar.items())}  # fmt: skip
 
 
-def _name(bdf, desvar_id, taken) -> str:
-    label = str(bdf.desvars[desvar_id].label).strip() or f"desvar_{desvar_id}"
-    labels = [str(bdf.desvars[d].label).strip() for d in taken]
+def _label(desvars, d) -> str:
+    card = desvars.get(d)
+    label = "" if card is None else str(card["LABEL"] or "").strip()
+    return label or f"desvar_{d}"
+
+
+def _name(desvars, desvar_id, taken) -> str:
+    label = _label(desvars, desvar_id)
+    labels = [_label(desvars, d) for d in taken]
     return label if labels.count(label) == 1 else f"{label}_{desvar_id}"
 
 
-def _entry(bdf, desvar_id, key, pids) -> dict:
+def _entry(desvars, desvar_id, key, pids) -> dict:
     card, field, coefficient = key
-    dv = bdf.desvars.get(desvar_id)
+    dv = desvars.get(desvar_id)
     if dv is None:
         raise BayesUpdateError(f"DVPREL1 on {card} {pids[0]}: no DESVAR {desvar_id}")
     out = {
@@ -65,7 +83,7 @@ def _entry(bdf, desvar_id, key, pids) -> dict:
         "coefficient": coefficient,
         "desvar": desvar_id,
     }
-    low, high = float(dv.xlb), float(dv.xub)
+    low, high = dv.real("XLB"), dv.real("XUB")
     if low > 0 and high < _NO_BOUND and low < high:
         out["bounds"] = [low, high]
     return out

@@ -50,7 +50,8 @@ def deck_settings(deck) -> dict:
 def _shell_cards(ctx):
     """(eids, pids, node ids (n, 4) with -1 for triangles, zoffs, corner thickness (n, 4) nan
     where blank, tflag) of all CQUAD4/CTRIA3, quads first."""
-    shells = [c for _, c in sorted(ctx.elements.items()) if c.name in SHELL_TYPES]
+    shells = [c for _, c in sorted(ctx.elements.items(), key=cards._by_id)
+              if c.name in SHELL_TYPES]  # fmt: skip
     shells.sort(key=lambda e: e.name != "CQUAD4")
     n = len(shells)
     nodes = -np.ones((n, 4), np.int64)
@@ -243,8 +244,9 @@ def _autospc(ctx, structure):
 
 def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     """The converters' ``cards.Context`` of a read deck."""
+    elements = {(c.name, c.value(0)): c for c in deck.of(*cards.ELEMENTS)}
     return cards.Context(
-        deck.table(*cards.ELEMENTS), deck.table(*cards.PROPERTIES), deck.table("MAT1"), grids,
+        elements, deck.table(*cards.PROPERTIES), deck.table("MAT1"), grids,
         node, settings["wtmass"], settings["coupmass"] < 1, builder, refusals,
     )  # fmt: skip
 

@@ -32,9 +32,12 @@ def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, 
     if test_labels:
         structure = with_test_points(structure, test_labels, test_points, info["deck"])
     if not parameters and deck.of("DESVAR"):
-        from bayesupdate.nastran.desvar import desvar_parameters
+        from bayesupdate.nastran.desvar import desvar_parameters, unbound_note
 
         parameters = desvar_parameters(deck)
+        note = unbound_note(deck, parameters)
+        if note:
+            info["notes"].append(note)
     bindings, defaults, bounds = deck_bindings(parameters or {}, deck, structure)
     return NastranModel(
         structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=deck

@@ -87,3 +87,22 @@ def _entry(desvars, desvar_id, key, pids) -> dict:
     if low > 0 and high < _NO_BOUND and low < high:
         out["bounds"] = [low, high]
     return out
+
+
+def unbound_note(deck, parameters: dict) -> str | None:
+    """A note naming the DESVARs that did not become parameters (those acting through DVMREL1 /
+    DVCREL1 only, or through no relation), with their XINIT and bounds; None when all did."""
+    used = {int(e["desvar"]) for e in parameters.values() if "desvar" in e}
+    rest = [c for i, c in sorted(deck.table("DESVAR").items()) if i not in used]
+    if not rest:
+        return None
+    via = sorted({c.name for c in deck.of("DVMREL1", "DVCREL1")})
+    items = ", ".join(
+        f"{c['LABEL']} ({c.id()}: {c.real('XINIT'):g} in [{c.real('XLB'):g}, {c.real('XUB'):g}])"
+        for c in rest
+    )
+    return (
+        f"{len(rest)} DESVAR(s) not made parameters (only DVPREL1 relations are bound"
+        + (f"; the deck relates them through {', '.join(via)}" if via else "")
+        + f"): {items}"
+    )

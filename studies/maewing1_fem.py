@@ -46,12 +46,24 @@ def compare(name: str, deck: str, f06: str) -> float:
 
 
 def sol200() -> None:
+    """The SOL 200 deck: its DESVAR parameters, and the model at the cards' values, at the
+    DESVARs' XINIT (through the relations) and v4.2's."""
+    from bayesupdate.nastran.deck import read_deck
+    from bayesupdate.nastran.desvar import xinit_values
+
     model = load_nastran_model(str(FEM / SOL200))
-    r = model.solve(n_modes=10)
+    xinit = xinit_values(read_deck(FEM / SOL200), model)
     print(f"\nSOL 200 deck: {SOL200}")
-    print(f"  parameters (DVPREL1): {model.default_parameters()}")
-    print(f"  bounds: {model.default_bounds()}")
-    print(f"  10 elastic modes at the card values [Hz]: {np.round(r.frequencies_hz, 5).tolist()}")
+    print(f"  {len(xinit)} DESVAR parameters: name  card value  XINIT  [XLB, XUB]")
+    bounds = model.default_bounds()
+    for name, value in model.default_parameters().items():
+        print(f"    {name:10s} {value:<12.6g} {xinit[name]:<12.6g} {list(bounds[name])}")
+    cards = model.solve(n_modes=10).frequencies_hz
+    start = model.solve(xinit, n_modes=10).frequencies_hz
+    v42 = load_nastran_model(str(FEM / DECKS["v4.2"][0])).solve(n_modes=10).frequencies_hz
+    print("  mode  cards [Hz]   XINIT [Hz]  (diff)     v4.2 [Hz]  (cards - v4.2)")
+    for k, (a, b, c) in enumerate(zip(cards, start, v42, strict=True), start=7):
+        print(f"  {k:4d} {a:11.5f} {b:11.5f} ({b / a - 1:+.2e}) {c:11.5f} ({a / c - 1:+.2e})")
     for note in model.structure.metadata["nastran"]["notes"]:
         if "DESVAR" in note or "objective" in note:
             print(f"  note: {note[:300]}{'...' if len(note) > 300 else ''}")

@@ -275,9 +275,8 @@ def read_structure(path) -> tuple:
         refusals.add("the deck has no elements")
     for row in other_rows:
         ctx.node[row] = ctx.builder.add_node(grids.xyz[row])
-    for add in (cards.add_beams, cards.add_rods, cards.add_masses, cards.add_springs,
-                cards.add_rigid):  # fmt: skip
-        add(ctx)
+    for family in cards.FAMILIES:
+        family.add(ctx)
     _add_spcs(ctx, deck, settings)
     refusals.raise_all()
     structure = _finish(ctx, eids, pids, props)

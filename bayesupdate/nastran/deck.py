@@ -45,7 +45,9 @@ MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
 #: PARAMs with no effect on real eigenvalues and shapes (MSC QRG, Parameters): output requests
 #: and formats (POST, POSTEXT, OGEOM, OUGCORD, PATVER, ...), printing (PRTMAXIM, PRGPST, ...),
 #: the weight summary's reference point (GRDPNT), aeroelastic velocity units (VREF, AUNITS),
-#: checks that only print or stop (MAXRATIO, BAILOUT, EPZERO), restart and database control
+#: checks that only print or stop (MAXRATIO, BAILOUT, EPZERO), restart and database control,
+#: SOL 200 print and punch control, residual vectors (RESVEC: responses, not eigenpairs),
+#: LGDISP (nonlinear solutions only)
 IGNORED_PARAMS = {
     "POST", "POSTEXT", "OGEOM", "GRDPNT", "RESCOMP", "OUGCORD", "PRGPST", "NOCOMPS", "PATVER",
     "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT", "PRTMAXIM", "VREF", "AUNITS", "PRTGPL", "PRTEQXIN",
@@ -56,7 +58,7 @@ IGNORED_PARAMS = {
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
 }  # fmt: skip
 #: PARAMs that would change the normal modes and are not modelled: refused, named
-REFUSED_PARAMS = "any other PARAM (e.g. G, W3, W4: damping; GRDPNT is ignored)"
+REFUSED_PARAMS = "any other PARAM (e.g. G, W3, W4: damping; SNORM: shell normals)"
 
 
 def is_nastran_path(text) -> bool:

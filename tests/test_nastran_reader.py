@@ -168,3 +168,17 @@ def test_every_refusal_of_a_deck_in_one_message(tmp_path, capsys):
     for where in ("bad.bdf:11 CDAMP2 20", "bad.bdf:5 PARAM G", "more.dat:2 CBAR 7: GRID 99"):
         assert where in err, err
     assert "POST" not in err
+
+
+def test_units_from_wtmass_or_named(tmp_path):
+    """WTMASS 1/386.09 is inch-lbf-s whatever the moduli; a study may name the system."""
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = tmp_path / "rotor.bdf"
+    deck.write_text(ROTOR.replace("PARAM,WTMASS,0.5", "PARAM,WTMASS,.00259"))
+    units = load_nastran_model(deck).structure.metadata["nastran"]["units"]
+    assert (units["length"], units["mass"]) == ("in", "lbf s^2/in")
+    named = load_nastran_model(deck, units="SI").structure.metadata["nastran"]["units"]
+    assert (named["length"], named["mass"]) == ("m", "kg")
+    with pytest.raises(BayesUpdateError, match="units = 'furlong'"):
+        load_nastran_model(deck, units="furlong")

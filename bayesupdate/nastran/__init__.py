@@ -10,13 +10,17 @@ from bayesupdate.nastran.deck import SUFFIXES, is_nastran_path
 __all__ = ["SUFFIXES", "is_nastran_path", "load_nastran_model"]
 
 
-def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, **options):
+def load_nastran_model(
+    path, parameters=None, test_labels=(), test_points=None, units=None, **options
+):
     """``NastranModel`` of the deck at ``path``.
 
     parameters : the study's ``{name: {binds, bounds, ...}}`` tables (``nastran.bindings``); none:
     the deck's DESVARs (``nastran.desvar``) if it has any, else no parameters.
     test_labels : test DOF labels the model reads shapes at (``nastran.test_points``);
-    test_points : ``[model.test_points]`` {test node: GRID id}."""
+    test_points : ``[model.test_points]`` {test node: GRID id}; units : the deck's unit system
+    by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognised from WTMASS
+    and the MAT1 moduli."""
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.nastran.model import NastranModel, deck_bindings
     from bayesupdate.nastran.reader import read_structure
@@ -25,6 +29,10 @@ def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
     structure, info, deck = read_structure(path)
+    if units is not None:
+        from bayesupdate.nastran.units import named_system
+
+        info["units"] = named_system(units, info["wtmass"])
     if not _has_mass(structure):
         raise BayesUpdateError(
             f"Nastran model {path}: the deck has no mass (MAT1 RHO, NSM, CONM2 all zero)"

@@ -52,3 +52,24 @@ def unit_system(moduli, wtmass: float) -> dict:
         wtmass=wtmass,
         basis="MAT1 moduli match no common system; values are the deck's own",
     )
+
+
+#: unit systems a study may name (``[model] units``): (system, length, force, mass unit)
+NAMED = {
+    "si": ("SI (m, N, kg, s)", "m", "N", "kg"),
+    "mm-n-t-s": ("mm, N, t, s", "mm", "N", "t (1000 kg)"),
+    "in-lbf-s": ("in, lbf, s", "in", "lbf", "lbf s^2/in"),
+    "ft-lbf-s": ("ft, lbf, s", "ft", "lbf", "lbf s^2/ft"),
+}
+
+
+def named_system(name: str, wtmass: float) -> dict:
+    """The record of a unit system the user names (``NAMED``), instead of the recognised one."""
+    from bayesupdate.errors import BayesUpdateError
+
+    key = str(name).strip().lower()
+    if key not in NAMED:
+        raise BayesUpdateError(f"model units = {name!r}: give one of {', '.join(NAMED)}")
+    system, length, force, mass = NAMED[key]
+    return dict(system=system, length=length, force=force, mass=mass, time="s", wtmass=wtmass,
+                basis="named by the study ([model] units); values are the deck's own")  # fmt: skip

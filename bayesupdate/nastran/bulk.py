@@ -129,6 +129,11 @@ class Card:
     end: int = 0
 
     @property
+    def type(self) -> str:
+        """The card's name (as ``name``)."""
+        return self.name
+
+    @property
     def where(self) -> str:
         """'file:line' (the file's name) of the card's first line."""
         return f"{self.file.rsplit('/', 1)[-1]}:{self.line}"

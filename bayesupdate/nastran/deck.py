@@ -144,6 +144,23 @@ class Deck:
         value = card.value(1)
         return default if value is None else value
 
+    @property
+    def elements(self) -> dict[int, Card]:
+        """{id: card} of the elements (lines, shells, springs; ``FAMILIES``)."""
+        return self.table(*FAMILIES["element"])
+
+    @property
+    def masses(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["mass element"])
+
+    @property
+    def properties(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["property"])
+
+    @property
+    def materials(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["material"])
+
     def count(self) -> dict[str, int]:
         out = {}
         for c in self.cards:

@@ -29,3 +29,5 @@ _.c3
 _.c4
 _.init_k_KC0
 _.init_k_M
+split_z  # ema.run_groups.RunGroups: the z-scores of the cuts between run groups, a result field
+_.writeable  # fe.assembly: numpy's ndarray.flags.writeable, set to make memoised arrays read-only

@@ -57,6 +57,17 @@ def build_parser() -> argparse.ArgumentParser:
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         module.add_arguments(p)
+        if module.NAME != "cache":
+            p.add_argument(
+                "--no-cache",
+                action="store_true",
+                help="neither read nor write the on-disk cache of reduced bases (see: cache)",
+            )
+        p.add_argument(
+            "--quiet",
+            action="store_true",
+            help="no progress on stderr (default: bars on a terminal, a line per phase else)",
+        )
         p.set_defaults(_run=module.run)
     return parser
 
@@ -68,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "_run", None) is None:
             parser.print_help()
             return 2
-        return int(args._run(args) or 0)
+        return _run(args)
     except BayesUpdateError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -84,6 +95,31 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _run(args) -> int:
+    """The command, its long phases shown on stderr (``compute.progress``: bars on a terminal,
+    a line per phase otherwise, nothing with ``--quiet``), with ``--no-cache`` in force for its
+    duration (``compute.cache`` reads the environment; restored after, so an in-process caller
+    keeps its own)."""
+    from bayesupdate.compute.progress import mode_for, reporting
+
+    with reporting(mode_for(getattr(args, "quiet", False))):
+        if not getattr(args, "no_cache", False):
+            return int(args._run(args) or 0)
+        return _without_cache(args)
+
+
+def _without_cache(args) -> int:
+    before = os.environ.get("BAYESUPDATE_NO_CACHE")
+    os.environ["BAYESUPDATE_NO_CACHE"] = "1"
+    try:
+        return int(args._run(args) or 0)
+    finally:
+        if before is None:
+            del os.environ["BAYESUPDATE_NO_CACHE"]
+        else:
+            os.environ["BAYESUPDATE_NO_CACHE"] = before
 
 
 if __name__ == "__main__":

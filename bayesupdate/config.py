@@ -18,6 +18,15 @@ Example (issue 4 item 9)::
                                     # "MAT1 2 E scale" (a factor); bayesupdate.nastran.bindings
     prior = { kind = "uniform" }    # lognormal {mu, sigma} | normal {mean, sd} | halfnormal {scale}
     start = 1.0e-3
+    [test]                          # the test's geometry: pairs the data's DOFs with the model
+    geometry = "test.unv"           # UFF 15/2411 (+ 2420 frames, 164 units) or CSV (testgeom)
+    align = "auto"                  # "none", or [[r11, r12, r13, tx], [...], [...]] (3x4)
+    pairs = [[1, 1012], [5, 1050], [9, 1090]]   # auto: test node -> model node (else ICP)
+    scale = false                   # allow one uniform scale in the alignment
+    pair_tolerance = "5 mm"         # farthest a test point may sit from the model (m or unit)
+    length_unit = "mm"              # the geometry file's (a UFF 164 record must agree)
+    model_length_unit = "in"        # only for a deck whose units are not recognised
+    pair_to = "element"             # or "node": nearest node only
     [pairing]
     method = "auto"                 # auto | order | tracked | mac
     extra_modes = 2
@@ -113,6 +122,31 @@ class DataConfig:
 
 
 @dataclass(frozen=True)
+class TestConfig:
+    """The ``[test]`` table: the test geometry and how it is aligned and paired with the model
+    (``testgeom``).  align: "auto", "none" or a 3x4 matrix (tuple of 3 rows of 4); pairs:
+    ((test node, model node), ...); pair_tolerance [m]."""
+
+    __test__ = False  # not a pytest class
+
+    geometry: str = ""
+    align: str | tuple = "auto"
+    pairs: tuple = ()
+    scale: bool = False
+    pair_tolerance: float = 0.01
+    length_unit: str | None = None
+    model_length_unit: str | None = None
+    pair_to: str = "element"
+
+    def settings(self):
+        """The ``testgeom.PairingSettings`` of this table."""
+        from bayesupdate.testgeom import PairingSettings
+
+        return PairingSettings(self.align, self.pairs, self.scale, self.pair_tolerance,
+                               self.pair_to == "element")  # fmt: skip
+
+
+@dataclass(frozen=True)
 class PairingConfig:
     method: str = "auto"
     extra_modes: int = 2
@@ -175,6 +209,7 @@ class StudyConfig:
     optimizer: OptimizerConfig = field(default_factory=OptimizerConfig)
     likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
     sampler: SamplerConfig = field(default_factory=SamplerConfig)
+    test: TestConfig | None = None
     extensions: dict = field(default_factory=dict)
     path: str = ""
 
@@ -354,6 +389,64 @@ def _parse_discovery_table(table: Mapping, where: str) -> DiscoverySettings:
     return DiscoverySettings.from_flat(**values)
 
 
+def _numbers_matrix(value, where: str) -> tuple:
+    ok = (
+        isinstance(value, list)
+        and len(value) == 3
+        and all(isinstance(r, list) and len(r) == 4 for r in value)
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for r in value for x in r)
+    )
+    if not ok:
+        raise BayesUpdateError(
+            f'{where}: give "auto", "none" or a 3x4 matrix [[r11, r12, r13, tx], ...]'
+        )
+    return tuple(tuple(float(x) for x in r) for r in value)
+
+
+def _test_pairs(value, where: str) -> tuple:
+    ok = isinstance(value, list) and all(
+        isinstance(p, list)
+        and len(p) == 2
+        and all(isinstance(n, int) and not isinstance(n, bool) for n in p)
+        for p in value
+    )
+    if not ok:
+        raise BayesUpdateError(f"{where}: give [[test node, model node], ...] (integers)")
+    return tuple((int(a), int(b)) for a, b in value)
+
+
+def _parse_test_table(table: Mapping, where: str) -> TestConfig:
+    """``[test]`` -> TestConfig (strict keys; lengths and units checked here)."""
+    from bayesupdate.testgeom.units import length_unit, parse_length
+
+    if not isinstance(table, Mapping):
+        raise BayesUpdateError(f"{where}: must be a table [test]")
+    values = dict(table)
+    if not isinstance(values.get("geometry"), str) or not values["geometry"]:
+        raise BayesUpdateError(f'{where}.geometry: give the test geometry file, e.g. "test.unv"')
+    align = values.get("align", "auto")
+    if isinstance(align, str):
+        if align not in ("auto", "none"):
+            raise BayesUpdateError(
+                f"{where}.align = {align!r}: give 'auto', 'none' or a 3x4 matrix"
+            )
+    else:
+        values["align"] = _numbers_matrix(align, f"{where}.align")
+    if "pairs" in values:
+        values["pairs"] = _test_pairs(values["pairs"], f"{where}.pairs")
+    if "pair_tolerance" in values:
+        values["pair_tolerance"] = parse_length(values["pair_tolerance"], f"{where}.pair_tolerance")
+    for key in ("length_unit", "model_length_unit"):
+        if key in values:
+            values[key] = length_unit(values[key], f"{where}.{key}")
+    if values.get("pair_to", "element") not in ("element", "node"):
+        raise BayesUpdateError(f"{where}.pair_to: give 'element' or 'node'")
+    checked = {k: v for k, v in values.items() if k not in ("align", "pairs", "pair_tolerance")}
+    parsed = _parse_section(TestConfig, checked, where)
+    return dataclasses.replace(parsed, **{k: values[k] for k in ("align", "pairs",
+                               "pair_tolerance") if k in values})  # fmt: skip
+
+
 #: the discovery tables: the study file knows discovery's settings record directly
 _EXTENSION_TABLES: dict[str, Callable[[Mapping, str], Any]] = {
     "effects": _parse_effects_table,
@@ -371,10 +464,12 @@ def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
             kwargs[key] = _parse_section(_SECTIONS[key], table, f"{where}: {key}")
         elif key == "parameters":
             kwargs[key] = _parse_parameters(table, f"{where}: parameters")
+        elif key == "test":
+            kwargs[key] = _parse_test_table(table, f"{where}: test")
         elif key in _EXTENSION_TABLES:
             extensions[key] = _EXTENSION_TABLES[key](table, f"{where}: {key}")
         else:
-            valid = sorted([*_SECTIONS, "parameters", *_EXTENSION_TABLES])
+            valid = sorted([*_SECTIONS, "parameters", "test", *_EXTENSION_TABLES])
             raise BayesUpdateError(f"{where}: unknown table [{key}]; valid tables are {valid}")
     likelihood = document.get("likelihood", {})
     if "sigma_prior" in likelihood and "sigma" not in likelihood:
@@ -387,6 +482,12 @@ def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
         kwargs["data"] = dataclasses.replace(data, source=None)
     if data is not None and "source" in document["data"] and data.frequencies_hz is not None:
         raise BayesUpdateError(f"{where}: data: give source or frequencies_hz, not both")
+    model = kwargs.get("model")
+    if "test" in kwargs and model is not None and model.test_points:
+        raise BayesUpdateError(
+            f"{where}: give [test] geometry or [model.test_points], not both (the geometry "
+            "pairs the test points with the model by position)"
+        )
     return StudyConfig(**kwargs, extensions=extensions, path=where)
 
 

@@ -16,7 +16,10 @@ def test_import_layer_contracts_are_kept(capsys):
     code = lint_imports(config_filename=str(ROOT / "pyproject.toml"), no_cache=True, no_logo=True)
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "0 broken" in out and "6 kept" in out
+    import tomllib
+
+    contracts = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]
+    assert "0 broken" in out and f"{len(contracts['contracts'])} kept" in out
 
 
 def test_no_dead_code():

@@ -23,7 +23,9 @@ segments, hits or repetitions; none from a single spectrum) is written beside ea
 58, function type 6).  Units are converted to SI from --force-unit / --response-unit and the
 sensitivities; the lines written are those the force excites (its autospectrum envelope
 within 30 dB of its in-band level; for a sweep, not above its fundamental: the lines above
-hold the shaker's harmonics) unless --band.
+hold the shaker's harmonics) unless --band.  Lines lie on the record's grid k/T (T the
+record length), so runs of one test share them even where each run's force excites from a
+different lowest line; identify uses the lines all its files share.
 
 example (one GVT run, volts, 0.4684 V/lbf, 1.028 V/g):
   bayesupdate frf run_Run1.mat --force-channel Force --response Accel1=1V --response Accel2=2V \\
@@ -112,7 +114,8 @@ def _check_numbers(args) -> None:
         ("--tau", args.tau),
     ):
         if value is not None and not (np.isfinite(value) and value > 0):
-            raise BayesUpdateError(f"{flag} {value}: must be a positive number")
+            runs = ", ".join(str(p) for p in args.time_file)
+            raise BayesUpdateError(f"{runs}: {flag} {value:g} must be a positive number")
 
 
 def run(args) -> int:

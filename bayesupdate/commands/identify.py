@@ -12,7 +12,11 @@ DESCRIPTION = """Identify natural frequencies, damping ratios and mode shapes fr
 
 Poles come from global LSCE (default) or pLSCF/PolyMAX (--method plscf) over all FRFs with
 orders swept up to --max-order; stable poles are clustered across orders and chosen
-automatically.  Several FRF files are one test (e.g. the runs of a roving accelerometer).
+automatically.  Several FRF files are one test (e.g. the runs of a roving accelerometer):
+their common lines are used (starts a whole number of lines apart within UFF's 6-digit
+rounding), and the runs are grouped where a mode's pole shifts between them by more than
+its sd and its half-power half-width (or by --groups); each group's poles and residues are
+estimated apart, the shapes assembled, and the spread and per-group MPC reported.
 The range (all lines, or --band) is analysed as consecutive narrow bands with limits at
 sum-FRF minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
 unscaled and the output says so); each mode's shape_sd_rel estimates its shape error
@@ -61,6 +65,11 @@ def add_arguments(parser) -> None:
         default="lsce",
         choices=("lsce", "plscf"),
         help="pole estimator: LSCE (time domain) or pLSCF/PolyMAX (frequency domain)",
+    )
+    parser.add_argument(
+        "--groups",
+        metavar="G",
+        help="run groups by file position, e.g. 1-5,6-10 (default: found where poles shift)",
     )
     parser.add_argument("--out", required=True, metavar="modes.h5", help="output HDF5 file")
     parser.add_argument("--plots", metavar="DIR", help="write PNG plots to this folder")
@@ -119,8 +128,11 @@ def run(args) -> int:
     )
 
     out = check_output_path(args.out, args.force)
+    from bayesupdate.ema.run_groups import parse_groups
+
+    groups = parse_groups(args.groups, len(args.frf_file))
     request = IdentifyRequest(
-        tuple(args.frf_file), _parse_band(args.band), args.max_order, args.method
+        tuple(args.frf_file), _parse_band(args.band), args.max_order, args.method, groups
     )
     if args.report:
         check_report_folder(args.report, args.force)
@@ -184,9 +196,11 @@ def _summary(result, out, notes, report) -> dict:
                 "shape_sd_rel": float(modes.shape_sd_rel[r]),
                 "mass_normalised": bool(modes.extra["mass_normalised"][r]),
                 "stable_orders": int(modes.extra["stable_orders"][r]),
+                **_group_keys(modes.extra, r),
             }
             for r in range(modes.n_modes)
         ],
+        "groups": _groups(result),
         "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
         # resonances an end of the range cuts: fitted, not reported as modes (ema.identify)
         "cut": [
@@ -199,3 +213,48 @@ def _summary(result, out, notes, report) -> dict:
     if report is not None:
         summary["report"] = str(report)
     return summary
+
+
+def _group_keys(extra: dict, r: int) -> dict:
+    """Per-mode run-group values (absent with one group): the frequency spread [Hz], whether
+    the pole shifts, the MPC and frequency with one pole over all runs, and per group the
+    frequency [Hz], damping, sd [Hz], MPC and whether the group sees the mode."""
+    if "group_frequencies_hz" not in extra:
+        return {}
+    return {
+        "frequency_spread_hz": float(extra["frequency_spread_hz"][r]),
+        "pole_shift": bool(extra["pole_shift"][r]),
+        "group_poles_used": bool(extra["group_poles_used"][r]),
+        "mpc_one_pole": float(extra["mpc_one_pole"][r]),
+        "frequency_one_pole_hz": float(extra["frequency_one_pole_hz"][r]),
+        "per_group": [
+            {
+                "frequency_hz": float(f),
+                "damping_ratio": float(z),
+                "sd_hz": float(s),
+                "mpc": float(m),
+                "sees": bool(k),
+            }
+            for f, z, s, m, k in zip(
+                *(
+                    extra[key][r]
+                    for key in (
+                        "group_frequencies_hz",
+                        "group_damping_ratio",
+                        "group_sd_hz",
+                        "group_mpc",
+                        "group_sees",
+                    )
+                ),
+                strict=True,
+            )
+        ],
+    }
+
+
+def _groups(result) -> list[dict]:
+    """Run groups: file positions (from 1) and whether they were found automatically."""
+    rg = result.extra.get("run_groups")
+    if rg is None:
+        return []
+    return [{"files": [j + 1 for j in g.files], "automatic": rg.automatic} for g in rg.groups]

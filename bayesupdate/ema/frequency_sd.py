@@ -44,7 +44,7 @@ MIN_LINES = 5
 LAG_LINES = 3
 
 
-def _window(f: np.ndarray, everything: np.ndarray, r: int, lo: int, hi: int) -> tuple:
+def mode_window(f: np.ndarray, everything: np.ndarray, r: int, lo: int, hi: int) -> tuple:
     """(line indices (n,), free poles (q,) with pole r first, fixed poles (k,)) of the window
     of pole r of ``everything`` [rad/s] within lines lo..hi (module docstring)."""
     pole = everything[r]
@@ -132,7 +132,7 @@ def frequency_sd(
     lo, hi = (first, f.size - 1) if lines is None else (max(lines[0], first), lines[1])
     out = np.full(poles.size, np.nan)
     for r in range(poles.size):  # one small window per mode
-        idx, free, fixed = _window(f, everything, r, lo, hi)
+        idx, free, fixed = mode_window(f, everything, r, lo, hi)
         unknowns = 2 * (free.size + fixed.size) + 2 + 2 * free.size
         if 2 * idx.size > unknowns:
             out[r] = np.sqrt(_mode_variance(f[idx], h[:, idx], free, fixed, kind))

@@ -135,44 +135,77 @@ class FrfSet:
         return out
 
 
+#: relative rounding of a UFF 58 abscissa start and step: written with 6 significant digits
+#: (format E13.5), so each is within 5e-6 of itself
+UFF_REL_ROUNDING = 5e-6
+
+
+def line_offset_tolerance(f0_a: float, f0_b: float, df_hz: float, n_lines: float) -> float:
+    """Largest deviation [lines] from a whole number of lines that two axes on one grid show
+    after UFF's 6-digit rounding (:data:`UFF_REL_ROUNDING`), with a safety factor 2: the two
+    starts' rounding, |f0_a| + |f0_b|, and the step's over the n_lines between them.
+
+    mAEWing1 GVT runs 1 and 7 (starts 2.41665 and 1.73332 Hz, step 0.0166665 Hz): 0.0029
+    lines; their offset reads 41.0002 lines.
+    """
+    bound = UFF_REL_ROUNDING * (abs(f0_a) + abs(f0_b) + abs(n_lines) * df_hz) / df_hz
+    return 2.0 * bound + 1e-9
+
+
+def _grid_offset(first: FrfSet, other: FrfSet) -> int | None:
+    """Whole number of lines between the starts of two axes on one grid, or None."""
+    df = first.df_hz
+    if abs(other.df_hz - df) > 2 * UFF_REL_ROUNDING * df:
+        return None
+    offset = (other.frequencies_hz[0] - first.frequencies_hz[0]) / df
+    n = round(offset)
+    tol = line_offset_tolerance(first.frequencies_hz[0], other.frequencies_hz[0], df, n)
+    return int(n) if abs(offset - n) <= tol else None
+
+
 def merge_frf_sets(sets: list[FrfSet]) -> tuple[FrfSet, list[str]]:
     """One FrfSet from several files of one test (e.g. a roving accelerometer measured run by
-    run), and notes.  The FRF kind and line spacing must agree; axes on the same grid but of
-    different extent (each run's excited band) are cut to their common lines, which is noted;
-    coherence is kept only if every set has it."""
+    run), and notes.  The FRF kind and line spacing must agree; axes whose starts differ by a
+    whole number of lines within UFF's 6-digit rounding (:func:`line_offset_tolerance`) are on
+    one grid, and are cut to their common lines (noted) on the first file's axis; coherence is
+    kept only if every set has it."""
     if len(sets) == 1:
         return sets[0], []
     first = sets[0]
-    lo = max(s.frequencies_hz[0] for s in sets)
-    hi = min(s.frequencies_hz[-1] for s in sets)
+    starts = [0]
     for other in sets[1:]:
-        f1, df = other.frequencies_hz, first.df_hz
-        same_grid = abs(other.df_hz - df) <= 1e-9 * df and (
-            abs(
-                (f1[0] - first.frequencies_hz[0]) / df
-                - round((f1[0] - first.frequencies_hz[0]) / df)
-            )
-            < 1e-6
-        )
-        if not same_grid or hi - lo < 3 * df:
+        offset = _grid_offset(first, other)
+        if offset is None:
+            f1, f0, df = other.frequencies_hz, first.frequencies_hz, first.df_hz
             raise BayesUpdateError(
                 f"{other.source}: frequency axis {f1[0]:g}..{f1[-1]:g} Hz step {other.df_hz:g} "
-                f"does not share lines with {first.source}'s ({first.frequencies_hz[0]:g}.."
-                f"{first.frequencies_hz[-1]:g} Hz step {df:g}); estimate all FRFs alike"
+                f"does not share lines with {first.source}'s ({f0[0]:g}..{f0[-1]:g} Hz step "
+                f"{df:g}): starts {abs(f1[0] - f0[0]) / df:.4f} lines apart, not a whole number; "
+                "estimate all FRFs alike"
             )
         if other.kind != first.kind:
             raise BayesUpdateError(
                 f"{other.source}: FRF kind {other.kind} differs from {first.source}'s "
                 f"{first.kind}; convert them to one kind"
             )
-    tol = 1e-6 * first.df_hz
-    cuts = [(s.frequencies_hz >= lo - tol) & (s.frequencies_hz <= hi + tol) for s in sets]
+        starts.append(offset)
+    lo = max(starts)  # common lines, in lines of the first axis
+    hi = min(k + s.frequencies_hz.size for k, s in zip(starts, sets, strict=True))
+    if hi - lo < 4:
+        raise BayesUpdateError(
+            f"{first.source} and {sets[1].source}...: fewer than 4 common FRF lines; "
+            "estimate all FRFs over one band"
+        )
+    cuts = [slice(lo - k, hi - k) for k in starts]
     notes = []
-    if any(not np.all(c) for c in cuts):
-        notes.append(f"FRF files cover different ranges: their common {lo:g}..{hi:g} Hz is used")
+    if any(s.frequencies_hz.size != hi - lo for s in sets):
+        f = first.frequencies_hz[0] + np.array([lo, hi - 1]) * first.df_hz
+        notes.append(
+            f"FRF files cover different ranges: their common lines {f[0]:g}..{f[1]:g} Hz are used"
+        )
     coh = [s.coherence for s in sets]
     merged = FrfSet(
-        frequencies_hz=first.frequencies_hz[cuts[0]],
+        frequencies_hz=first.frequencies_hz[0] + np.arange(lo, hi) * first.df_hz,
         frf=np.vstack([s.frf[:, c] for s, c in zip(sets, cuts, strict=True)]),
         response_labels=tuple(lab for s in sets for lab in s.response_labels),
         reference_labels=tuple(lab for s in sets for lab in s.reference_labels),

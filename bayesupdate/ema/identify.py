@@ -81,8 +81,32 @@ MIN_SIGNIFICANCE = 0.3
 MIN_PEAK_TO_RESIDUAL = 10.0
 #: ... or, whatever its share, when its peak does not rise above the local fit residual: the
 #: share of a pole at an antiresonance is large, as the measured level there is tiny (beam,
-#: pLSCF: a pole at 3666 Hz, |H| 1/50 of the median, share 1.3, peak 0.3 x the residual)
+#: pLSCF: a pole at 3666 Hz, |H| 1/50 of the median, share 1.3, peak 0.3 x the residual),
+#: unless the measured FRFs peak there (:func:`measured_peak`): then the residual is large
+#: because a neighbour is missing from the basis, not because the pole fits nothing (mAEWing1
+#: GVT, pLSCF: the broad 30.9 Hz hump not stable, the 31.72 Hz mode beside it at 0.9 x)
 MIN_PEAK_ABOVE_RESIDUAL = 1.0
+
+
+def measured_peak(frfs: FrfSet, poles: np.ndarray) -> np.ndarray:
+    """Whether the measured sum-FRF (:func:`~bayesupdate.ema.bands.sum_frf`) peaks at each
+    pole (m,) bool: its largest value within 3 half-power half-widths |Re s| (at least 3
+    lines) of the damped frequency lies within one half-width (at least 1 line) of it, away
+    from the window's ends.  An antiresonance, where spurious high-share poles sit, fails."""
+    from bayesupdate.ema.bands import sum_frf
+
+    f, s = frfs.frequencies_hz, sum_frf(frfs.frf)
+    out = np.zeros(poles.size, bool)
+    for r, p in enumerate(poles):
+        fd, hw = p.imag / (2 * np.pi), max(abs(p.real) / (2 * np.pi), frfs.df_hz)
+        idx = np.flatnonzero(np.abs(f - fd) <= 3 * hw)
+        if idx.size < 3:
+            continue
+        k = idx[np.argmax(s[idx])]
+        out[r] = k not in (idx[0], idx[-1]) and abs(f[k] - fd) <= hw
+    return out
+
+
 #: shape_sd_rel is capped here: a shape cannot be less known than its own size
 MAX_SHAPE_SD = 1.0
 
@@ -239,7 +263,7 @@ def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):
         )
         share, peak = modal_significance(frfs, poles, fit)
         weak = (share < MIN_SIGNIFICANCE) & (peak < MIN_PEAK_TO_RESIDUAL)
-        weak |= peak < MIN_PEAK_ABOVE_RESIDUAL
+        weak |= (peak < MIN_PEAK_ABOVE_RESIDUAL) & ~measured_peak(frfs, poles)
         if not np.any(weak) or len(kept) == 1:
             return kept, fit, np.stack([share, peak]), dropped
         worst = int(np.flatnonzero(weak)[np.argmin(share[weak])])
@@ -493,6 +517,24 @@ def _refined_and_cut(frfs, settings, selected, residual_poles, ends, pruned=()) 
     return refined, cut, np.concatenate([cut[1], residual_poles, cut[0]]), revived
 
 
+def _refit(frfs, settings, first, residual_poles, ranges):
+    """The first fit's poles refined and cut (``_refined_and_cut``) and, where that changed
+    them, fitted and pruned again: ((selected, fit, significance, dropped), cut, the residual
+    poles).  first : ``_fit_and_prune``'s result plus the dropped poles; ranges : (the band's,
+    the fit's) (lo, hi) line indices."""
+    selected, fit, significance, dropped = first
+    refined, cut, residual_poles, revived = _refined_and_cut(
+        frfs, settings, selected, residual_poles, ranges[0], dropped
+    )
+    changed = [id(p) for p in refined] != [id(p) for p in selected]
+    if changed or cut[0].size or cut[1].size:
+        selected, fit, significance, more = _fit_and_prune(
+            frfs, refined, residual_poles, *ranges[1]
+        )
+        dropped = [p for p in dropped if all(p is not r for r in revived)] + more
+    return (selected, fit, significance, dropped), cut, residual_poles
+
+
 def identify(
     frfs: FrfSet,
     band_hz: tuple[float, float] | None = None,
@@ -522,15 +564,10 @@ def identify(
     selected, fit, significance, dropped = _fit_and_prune(
         frfs, selected, residual_poles, fit_lo, fit_hi
     )
-    refined, cut, residual_poles, revived = _refined_and_cut(
-        frfs, settings, selected, residual_poles, (lo_i, hi_i), dropped
-    )
-    changed = [id(p) for p in refined] != [id(p) for p in selected]
-    if changed or cut[0].size or cut[1].size:  # refit
-        selected, fit, significance, more = _fit_and_prune(
-            frfs, refined, residual_poles, fit_lo, fit_hi
-        )
-        dropped = [p for p in dropped if all(p is not r for r in revived)] + more
+    (selected, fit, significance, dropped), cut, residual_poles = _refit(
+        frfs, settings, (selected, fit, significance, dropped), residual_poles,
+        ((lo_i, hi_i), (fit_lo, fit_hi)),
+    )  # fmt: skip
     poles = np.array([p.pole for p in selected])
     lines = slice(fit_lo, fit_hi + 1)
     synth, frac = _synthesis(frfs, fit, np.concatenate([poles, residual_poles]), lines)
@@ -550,6 +587,9 @@ def identify(
         mass_normalised=modes.extra["mass_normalised"],
         extra={
             "dropped_hz": np.array([p.frequency_hz for p in dropped]),
+            # the fit's other poles (residual poles, cut resonances) [rad/s]: a re-fit of the
+            # residues on part of the FRFs (ema.run_groups) needs the same basis
+            "basis_poles": residual_poles,
             **_cut_summary(cut),
         },
     )

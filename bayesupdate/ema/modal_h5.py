@@ -6,6 +6,15 @@ Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (
 ``extra`` arrays under ``/modes/extra``; attributes ``source`` and, when measured, ``mass_kg``
 and ``mass_sd_kg`` (the structure's weighed mass, test data like the frequencies).  Written
 atomically.
+
+``identify`` on several files with more than one run group (:mod:`bayesupdate.ema.run_groups`)
+adds under ``/modes/extra``: ``group_frequencies_hz``, ``group_damping_ratio``,
+``group_sd_hz``, ``group_mpc``, ``group_sees`` (m, G) per mode and group;
+``frequency_spread_hz``, ``pole_shift``, ``group_poles_used`` (residues at each group's own
+pole), ``mpc_one_pole``, ``frequency_one_pole_hz`` (one pole over all runs) (m,); and
+``group_of_file`` (n_files,), each file's group (from 0).  The modes' ``frequencies_hz``,
+``damping_ratio``, ``identification_sd_hz`` (spread included), ``shapes`` and ``mpc`` are then
+the groups' combined values and assembled shapes.
 """
 
 import os

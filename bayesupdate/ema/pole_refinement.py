@@ -151,13 +151,15 @@ def refine_poles(
     kind: str = "accelerance",
     max_iter: int = 30,
     cut: int = 0,
+    max_move: float = MAX_MOVE,
 ) -> PoleRefinement:
     """Refine poles (q,) and extra out-of-band poles (e,) [rad/s], Im > 0, by variable projection
     (module doc) on frf (n_frf, n_f) at frequencies_hz (n_f,) [Hz] > 0, with the poles ``fixed``
     (k,) in the basis unchanged.  The first ``cut`` extra poles stand for resonances that the
     window's end cuts: free like the others, but allowed on the lines.
 
-    Accepted only if every refined pole moves by less than ``MAX_MOVE`` of its half-power
+    Accepted only if every refined pole moves by less than ``max_move`` (default
+    ``MAX_MOVE``) of its half-power
     half-width |Re s| with Re s < 0, and every extra pole stays stable and, except the ``cut``
     ones, outside the lines' range (it stands for a mode beyond them); else the start is
     returned.
@@ -172,7 +174,7 @@ def refine_poles(
     theta, cost0, cost1 = _levenberg_marquardt(theta0, fixed, f, y, kind, q, max_iter)
     new = theta[: start.size] + 1j * theta[start.size :]
     moved = np.abs(new[:q] - start[:q]) / np.abs(start[:q].real)
-    near = np.all(moved < MAX_MOVE) and np.all(new.real < 0)
+    near = np.all(moved < max_move) and np.all(new.real < 0)
     w_lo, w_hi = 2 * np.pi * f[0], 2 * np.pi * f[-1]
     beyond = new[q + cut :]
     outside = np.all((beyond.imag < w_lo) | (beyond.imag > w_hi))

@@ -82,11 +82,16 @@ UNIT_OF_KIND = {"receptance": "m", "mobility": "m/s", "accelerance": "m/s^2"}
 
 
 def write_uff58(
-    path: str | os.PathLike, frfs: FrfSet, channel_names: list[str] | None = None
+    path: str | os.PathLike,
+    frfs: FrfSet,
+    channel_names: list[str] | None = None,
+    single: bool = False,
 ) -> None:
     """Write every FRF of ``frfs`` as a dataset 58 (complex, even abscissa) atomically, with
     its coherence (function type 6) when the set has one.  channel_names (n_frf,) go to the
-    id3 line (e.g. ``"Accel1/Force"``); units are SI, named in the axis labels."""
+    id3 line (e.g. ``"Accel1/Force"``); units are SI, named in the axis labels.  single:
+    single precision (ordinate data type 5, 6 significant digits, half the size of the
+    default double precision, type 6)."""
     import pyuff
 
     if not np.all(np.isfinite(frfs.frf)):  # pyuff would write NaN as 0 without a word
@@ -112,6 +117,7 @@ def write_uff58(
                 orddenom_axis_units_lab="N" if func == 4 else "-",
                 abscissa_axis_units_lab="Hz",
                 data=np.asarray(values[k], dtype=complex if func == 4 else float),
+                ord_data_type=(5 if func == 4 else 2) if single else None,
                 x=np.asarray(frfs.frequencies_hz, dtype=float),
                 abscissa_spacing=1,
                 abscissa_min=float(frfs.frequencies_hz[0]),
@@ -124,7 +130,7 @@ def write_uff58(
         )
     with atomic_path(path, suffix=".uff") as tmp:
         tmp.unlink()  # pyuff appends to an existing file
-        pyuff.UFF(str(tmp)).write_sets(datasets, mode="add")
+        pyuff.UFF(str(tmp)).write_sets(datasets, mode="add", force_double=not single)
 
 
 def read_uff58(path: str | os.PathLike) -> FrfSet:

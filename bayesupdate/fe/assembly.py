@@ -17,6 +17,7 @@ import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
+from bayesupdate.fe.bush import two_node_matrices
 from bayesupdate.fe.rotations import skew
 from bayesupdate.fe.sections import section_areas, section_properties
 from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
@@ -72,12 +73,16 @@ class Assembler:
             [6 * s.spring_nodes[:, :1] + np.arange(6), 6 * b_nodes[:, None] + np.arange(6)], axis=1
         )
         self.spring_grounded = grounded
+        self._spring_offset = s.spring_offsets()
+        sm = s.scalar_masses
+        self.scalar_dofs = np.zeros((0, 12), int) if sm is None else sm.dofs()
+        self._scalar_M = np.zeros((0, 12, 12)) if sm is None else sm.matrices()
         self._build_pattern()
 
     # -- sparse pattern ------------------------------------------------------------------------
     def _build_pattern(self):
         n = self.n_dof
-        blocks = [self.beam_dofs, self.mass_dofs, self.spring_dofs]
+        blocks = [self.beam_dofs, self.mass_dofs, self.spring_dofs, self.scalar_dofs]
         rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks])
         cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in blocks])
         # every node gets its diagonal so the pattern is never structurally singular
@@ -93,6 +98,7 @@ class Assembler:
         self._pos_beam = inverse[: splits[0]]
         self._pos_mass = inverse[splits[0] : splits[1]]
         self._pos_spring = inverse[splits[1] : splits[2]]
+        self._pos_scalar = inverse[splits[2] : splits[3]]
         indptr = np.zeros(n + 1, dtype=np.int32)
         np.add.at(indptr, self.pattern_rows + 1, 1)
         self.indptr = np.cumsum(indptr).astype(np.int32)
@@ -160,35 +166,49 @@ class Assembler:
         return np.einsum("pji,pjk,pkl->pil", T, D, T)
 
     def spring_matrices(self, props: ElementProperties) -> np.ndarray:
-        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs]; grounded springs have zero
-        blocks on their (dummy) second node."""
+        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs] (``fe.bush``: acting at
+        each spring's location); grounded springs have zero blocks on their (dummy) second
+        node."""
         s = self.structure
-        Rb = np.zeros((len(s.spring_part), 6, 6))
-        Rb[:, :3, :3] = s.spring_frame
-        Rb[:, 3:, 3:] = s.spring_frame
         k = s.spring_k * props.spring_scale[:, None]
-        kg = np.einsum("sji,sj,sjl->sil", Rb, k, Rb)
-        out = np.zeros((len(s.spring_part), 12, 12))
-        out[:, :6, :6] = kg
-        free = ~self.spring_grounded
-        out[free, 6:, 6:] = kg[free]
-        out[free, :6, 6:] = -kg[free]
-        out[free, 6:, :6] = -kg[free]
-        return out
+        return two_node_matrices(k, s.spring_frame, self.spring_grounded, self._spring_offset)
+
+    def scalar_mass_matrices(self) -> np.ndarray:
+        """(n, 12, 12) scalar-mass matrices (``fe.scalar_mass``; no parameters act on them)."""
+        return self._scalar_M
 
     def assemble(self, props: ElementProperties | None = None):
         """Global K and M as CSR matrices, plus the element matrices used (for energies).
 
-        Returns (K, M, parts) where parts = dict(beam_K, beam_M, mass_M, spring_K).
+        Returns (K, M, parts) where parts = dict(beam_K, beam_M, mass_M, spring_K, scalar_M).
         """
         props = self.default_properties() if props is None else props
         check_properties(self.structure, props)
         bK, bM = self._beam_matrices_reusing(props)
-        mM = self.mass_matrices(props)
-        sK = self.spring_matrices(props)
-        K = self._scatter(self._pos_beam, bK) + self._scatter(self._pos_spring, sK)
-        M = self._scatter(self._pos_beam, bM) + self._scatter(self._pos_mass, mM)
-        return self.to_csr(K), self.to_csr(M), dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK)
+        mM, M_mass = self._reusing("mass", props.mass_scale, self.mass_matrices, self._pos_mass)
+        sK, K_spring = self._reusing(
+            "spring", props.spring_scale, self.spring_matrices, self._pos_spring
+        )
+        K = self._scatter(self._pos_beam, bK) + K_spring
+        M = self._scatter(self._pos_beam, bM) + M_mass
+        if len(self._scalar_M):
+            M += self._scatter(self._pos_scalar, self._scalar_M)
+        elem = dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK, scalar_M=self._scalar_M)
+        return self.to_csr(K), self.to_csr(M), elem
+
+    def _reusing(self, name: str, scale: np.ndarray, matrices, positions):
+        """(element matrices, their (nnz,) scatter) of the point masses or springs at factors
+        ``scale``, from the previous call when the factors are the same (no parameter on them:
+        always).  ``matrices(props)`` needs only the factors; the arrays are read-only."""
+        memos = self.__dict__.setdefault("_memos", {})
+        memo = memos.get(name)
+        if memo is None or not np.array_equal(memo[0], scale):
+            kw = {"mass_scale": scale} if name == "mass" else {"spring_scale": scale}
+            mats = matrices(_Factors(**kw))
+            data = self._scatter(positions, mats)
+            mats.flags.writeable = data.flags.writeable = False
+            memo = memos[name] = (scale.copy(), mats, data)
+        return memo[1], memo[2]
 
     def _beam_matrices_reusing(self, props: ElementProperties):
         """Beam matrices at ``props``, recomputing only the beams whose properties differ from
@@ -219,7 +239,8 @@ class Assembler:
         return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)
 
     def total_mass(self, props: ElementProperties | None = None):
-        """Total mass [kg] and centre of gravity (3,) [m] from the beams and point masses."""
+        """Total mass [kg] and centre of gravity (3,) [m] from the beams, point masses and the
+        translational scalar masses (``scalar_mass.ScalarMasses.rigid_mass``)."""
         props = self.default_properties() if props is None else props
         s = self.structure
         memo = getattr(self, "_area_memo", None)  # areas change only with the wall thickness
@@ -231,8 +252,25 @@ class Assembler:
         m_point = s.mass_value * props.mass_scale
         pos_point = s.nodes[s.mass_node] + s.mass_offset
         total = m_beam.sum() + m_point.sum()
-        cog = (m_beam @ mid + m_point @ pos_point) / total
+        moment = m_beam @ mid + m_point @ pos_point
+        if s.scalar_masses is not None:
+            # the rigid-body functional of ``general.GeneralAssembler.total_mass``: trace / 3
+            # of the translational block, the first moments from the translation-rotation
+            # coupling
+            Mr = s.scalar_masses.rigid_mass(s.nodes)
+            total = total + np.trace(Mr[:3, :3]) / 3.0
+            moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
+        cog = moment / total
         return float(total), cog
+
+
+@dataclass(frozen=True)
+class _Factors:
+    """The point-mass or spring factors alone (what ``mass_matrices`` / ``spring_matrices``
+    read of ``ElementProperties``)."""
+
+    mass_scale: np.ndarray | None = None
+    spring_scale: np.ndarray | None = None
 
 
 def check_properties(structure: Structure, props: ElementProperties) -> None:

@@ -7,8 +7,9 @@ user can form the viscous damping matrix C for FRF synthesis or complex modes,
 
 with c in N s/m (translations) and N m s/rad (rotations) along the rows of the damper's frame R
 (3x3, rows = its axes in global coordinates), T = blockdiag(R, R) per node (the same element form
-as a zero-length spring, ``fe.assembly.spring_matrices``); a grounded damper keeps only the
-[[c]] block on its first node.
+as a spring, ``fe.bush``, including its location: a damper whose ends are apart acts at a point
+rigidly linked to both, as Nastran's CBUSH B); a grounded damper keeps only the [[c]] block on its
+first node.
 """
 
 from dataclasses import dataclass
@@ -16,30 +17,25 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from bayesupdate.fe.bush import two_node_matrices
+
 
 @dataclass(frozen=True)
 class Dampers:
     """n dampers: nodes (n, 2) (second -1 = ground), damping (n, 6) [N s/m, N m s/rad] along the
-    rows of frame (n, 3, 3), part (n,) part indices."""
+    rows of frame (n, 3, 3), part (n,) part indices; offset None (at the nodes) or (n, 2, 3) [m]
+    from node A and node B to the damper's location."""
 
     nodes: np.ndarray
     damping: np.ndarray
     frame: np.ndarray
     part: np.ndarray
+    offset: np.ndarray | None = None
 
     def element_matrices(self) -> np.ndarray:
-        """(n, 12, 12) damper matrices on [node_a DOFs, node_b DOFs] in global axes."""
-        T = np.zeros((len(self.part), 6, 6))
-        T[:, :3, :3] = self.frame
-        T[:, 3:, 3:] = self.frame
-        cg = np.einsum("dji,dj,djl->dil", T, self.damping, T)
-        out = np.zeros((len(self.part), 12, 12))
-        out[:, :6, :6] = cg
-        free = self.nodes[:, 1] >= 0
-        out[free, 6:, 6:] = cg[free]
-        out[free, :6, 6:] = -cg[free]
-        out[free, 6:, :6] = -cg[free]
-        return out
+        """(n, 12, 12) damper matrices on [node_a DOFs, node_b DOFs] in global axes, acting at
+        each damper's location (``offset`` (n, 2, 3) [m] from its nodes, ``fe.bush``)."""
+        return two_node_matrices(self.damping, self.frame, self.nodes[:, 1] < 0, self.offset)
 
 
 def damping_matrix(dampers: Dampers | None, n_nodes: int) -> sp.csr_matrix:

@@ -42,6 +42,15 @@ def _quadratic_forms(mats, dofs, shapes):
     return np.einsum("ekm,ekl,elm->em", local, mats, local, optimize=True)
 
 
+def _scalar_kinetic(kinetic, assembler, element_matrices: dict, shapes) -> None:
+    """Add the scalar masses' kinetic energies (``fe.scalar_mass``) to ``kinetic`` (n_parts, m)
+    by part, in place."""
+    sm = assembler.structure.scalar_masses
+    if sm is not None:
+        t = 0.5 * _quadratic_forms(element_matrices["scalar_M"], assembler.scalar_dofs, shapes)
+        np.add.at(kinetic, sm.part, t)
+
+
 def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> ModalEnergies:
     """Energy shares of modes ``shapes`` (n_dof, m).
 
@@ -60,6 +69,7 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
     np.add.at(strain, s.spring_part, us)
     np.add.at(kinetic, s.beam_part, tb)
     np.add.at(kinetic, s.mass_part, tm)
+    _scalar_kinetic(kinetic, assembler, element_matrices, shapes)
     total_u = np.maximum(strain.sum(axis=0), 1e-300)
     total_t = np.maximum(kinetic.sum(axis=0), 1e-300)
     return ModalEnergies(
@@ -90,6 +100,7 @@ def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEner
     )
     np.add.at(kinetic, s.beam_part, 0.5 * quad(element_matrices["beam_M"], b.beam_dofs, shapes))
     np.add.at(kinetic, s.mass_part, 0.5 * quad(element_matrices["mass_M"], b.mass_dofs, shapes))
+    _scalar_kinetic(kinetic, b, element_matrices, shapes)
     line_parts = [x.part for x in (s.general_beams, s.rods) if x is not None]
     for (dofs, K, M), part in zip(g.lines, line_parts, strict=True):
         np.add.at(strain, part, 0.5 * quad(K, dofs, shapes))

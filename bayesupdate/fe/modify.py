@@ -35,12 +35,24 @@ def with_point_mass(
 
 
 def with_spring(
-    structure: Structure, node_a: int, node_b: int | None, stiffness, part: str, frame=None
+    structure: Structure,
+    node_a: int,
+    node_b: int | None,
+    stiffness,
+    part: str,
+    frame=None,
+    offset=None,
 ) -> Structure:
-    """Copy with a 6-DOF spring (``node_b`` None = to ground); stiffness 6 values in ``frame``."""
+    """Copy with a 6-DOF spring (``node_b`` None = to ground); stiffness 6 values in ``frame``;
+    offset (2, 3) [m] from node A and node B to the spring's location (``fe.bush``; None: at the
+    nodes)."""
     parts, pid = _part_ids(structure, part)
     R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
     nodes = np.array([[node_a, -1 if node_b is None else node_b]])
+    off = np.zeros((2, 3)) if offset is None else np.asarray(offset, float).reshape(2, 3)
+    offsets = None
+    if structure.spring_offset is not None or np.any(off):
+        offsets = np.concatenate([structure.spring_offsets(), off[None]])
     return replace(
         structure,
         parts=parts,
@@ -48,6 +60,7 @@ def with_spring(
         spring_k=np.concatenate([structure.spring_k, np.asarray(stiffness, float)[None]]),
         spring_frame=np.concatenate([structure.spring_frame, R[None]]),
         spring_part=np.append(structure.spring_part, pid),
+        spring_offset=offsets,
     )
 
 
@@ -74,5 +87,6 @@ def split_joint_bending(structure: Structure, joint_part: str, new_part: str) ->
             [0, 0, 0, 0, 1.0, 1.0],
             new_part,
             structure.spring_frame[i],
+            structure.spring_offsets()[i],
         )
     return out

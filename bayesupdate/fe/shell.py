@@ -19,9 +19,10 @@ Quadrilateral (24 DOFs):
   the membrane field (Hughes & Brezzi, CMAME 72 (1989) 105), 2x2 Gauss, alpha = DRILL_ALPHA.
   It vanishes for rigid motions, so a free element keeps exactly six zero modes.
 
-Triangle (18 DOFs): MITC3 transverse shear (Lee & Bathe, Comput. Struct. 82 (2004) 945,
-eqs 12-14, with the tying point on the hypotenuse), linear rotations (constant curvature), CST
-membrane and the same drilling penalty.
+Triangle (18 DOFs): bending of the Discrete Kirchhoff Triangle (Batoz, Bathe & Ho, IJNME 15
+(1980) 1771; ``shell_tria``), which is shear rigid (Kirchhoff) and so free of shear locking with
+its stiffness a t^3 term; CST membrane and the same drilling penalty (linear fields, mid-edge
+rule).  The MITC3 triangle it replaces locked on uniform meshes of thin plates (``shell_tria``).
 
 Mass per unit area: (rho t + nsm) on translations and rho t^3 / 12 on the two bending rotations
 (rotary inertia), none on the drilling rotation; consistent (shape functions, exact quadrature) or
@@ -41,6 +42,8 @@ offset_ratio), see ``power_matrices``.  Units: m, Pa, kg/m^3, kg/m^2.
 from dataclasses import dataclass, replace
 
 import numpy as np
+
+from bayesupdate.fe import shell_tria
 
 #: drilling penalty as a fraction of the in-plane shear modulus (Hughes & Brezzi 1989 allow
 #: any gamma > 0).  Measured on the free cylinder (48 x 60 quads): alpha 1e-5 -> 1e-3 moves the
@@ -234,7 +237,9 @@ def _incompatible_modes(xy, det):
 
 
 def tria_operators(xy: np.ndarray) -> _Operators:
-    """MITC3 / CST operators at the three mid-edge points, xy (n, 3, 2) [m]."""
+    """DKT / CST operators at the three mid-edge points, xy (n, 3, 2) [m]: the curvatures of the
+    discrete Kirchhoff triangle (``shell_tria.dkt_curvature``), no transverse shear rows (the
+    element is shear rigid), linear membrane and drilling fields."""
     n = xy.shape[0]
     r, s = _TRI_PTS[:, 0], _TRI_PTS[:, 1]
     N = np.stack([1 - r - s, r, s], axis=1)  # (q, 3)
@@ -245,22 +250,10 @@ def tria_operators(xy: np.ndarray) -> _Operators:
     dN = np.einsum("nab,bk->nak", Jinv, dnat)
     dNx = np.broadcast_to(dN[:, None, 0], (n, 3, 3))
     dNy = np.broadcast_to(dN[:, None, 1], (n, 3, 3))
-    Bm, Bb, Bd = _fill_common(n, 3, 3, N, dNx, dNy)
-
-    def cov(pt, direction):
-        Np = np.array([1 - pt[0] - pt[1], pt[0], pt[1]])
-        return _covariant_shear(xy, Np, dnat[direction], 3)
-
-    e1 = cov((0.5, 0.0), 0)  # e_rt at (1/2, 0)
-    e2 = cov((0.0, 0.5), 1)  # e_st at (0, 1/2)
-    e3r, e3s = cov((0.5, 0.5), 0), cov((0.5, 0.5), 1)
-    # the assumed field reproduces the tangential strain e_st - e_rt at the hypotenuse point
-    c = (e3r - e3s) - e1 + e2
-    e_r = e1[:, None] + s[None, :, None] * c[:, None]
-    e_s = e2[:, None] - r[None, :, None] * c[:, None]
-    Bs = np.einsum("nab,nqbj->nqaj", Jinv, np.stack([e_r, e_s], axis=2))
+    Bm, _, Bd = _fill_common(n, 3, 3, N, dNx, dNy)
+    Bb = shell_tria.dkt_curvature(xy, Jinv, _TRI_PTS)
     wdet = det[:, None] * _TRI_W[None, :]
-    return _Operators(Bm, Bb, Bs, Bd, N, wdet, None)
+    return _Operators(Bm, Bb, np.zeros((n, 3, 0, 18)), Bd, N, wdet, None)
 
 
 def _quadrature_form(B, D, wdet, C=None):
@@ -269,8 +262,8 @@ def _quadrature_form(B, D, wdet, C=None):
     C = B if C is None else C
     n, q, r, _ = B.shape
     DC = C if D is None else np.matmul(D[:, None], C)
-    Bw = (B * wdet[:, :, None, None]).reshape(n, q * r, -1)
-    return np.matmul(Bw.transpose(0, 2, 1), DC.reshape(n, q * r, -1))
+    Bw = (B * wdet[:, :, None, None]).reshape(n, q * r, B.shape[3])
+    return np.matmul(Bw.transpose(0, 2, 1), DC.reshape(n, q * r, C.shape[3]))
 
 
 @dataclass(frozen=True)
@@ -342,7 +335,7 @@ class PieceSource:
     quads of a 1e6-DOF plate), the source 0.1 kB.  Pieces are computed when asked for, ``CHUNK``
     elements at a time (each chunk vectorised), with the same values every time.
 
-    xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: MITC3 triangles);
+    xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it).
     """

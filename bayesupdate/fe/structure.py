@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from bayesupdate.fe.dampers import Dampers
     from bayesupdate.fe.general_beam import GeneralBeams
     from bayesupdate.fe.rod import Rods
+    from bayesupdate.fe.scalar_mass import ScalarMasses
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,9 @@ class Structure:
     Point masses (P): mass_node, mass_value [kg], mass_inertia (P, 3, 3) about their own centre
     [kg m^2], mass_offset (P, 3) from the node [m], mass_part.
     Springs (S): spring_nodes (S, 2) with -1 for ground, spring_k (S, 6) in the spring frame,
-    spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part.
+    spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part;
+    spring_offset None (every spring acts on its nodes' own DOFs) or (S, 2, 3) [m] from node A
+    and node B to the spring's location (``fe.bush``: Nastran CBUSH with separated ends).
     Sensors: sensor_labels, sensor_node, sensor_direction (n_s, 3) unit vectors.
     parts, bends : names.
     beam_shear_factor : None (each section's own shear areas) or (E,) shear area / area imposed
@@ -77,6 +80,10 @@ class Structure:
     general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
     dampers : ``dampers.Dampers`` or None: viscous dampers as data (normal modes ignore them).
+    scalar_masses : ``scalar_mass.ScalarMasses`` or None (Nastran CMASS1/CMASS2).
+    sensor_read : None (each sensor reads its node's translations along its direction) or
+    (DOFs (n_s, K), weights (n_s, K)): sensor s reads sum_k weights[s, k] * shape[DOFs[s, k]]
+    (a test point between nodes, interpolated with a rigid arm: ``testgeom.observation``).
     """
 
     nodes: np.ndarray
@@ -116,6 +123,22 @@ class Structure:
     general_beams: "GeneralBeams | None" = None
     rods: "Rods | None" = None
     dampers: "Dampers | None" = None
+    spring_offset: np.ndarray | None = None
+    scalar_masses: "ScalarMasses | None" = None
+    sensor_read: tuple[np.ndarray, np.ndarray] | None = None
+
+    def spring_offsets(self) -> np.ndarray:
+        """(S, 2, 3) offsets [m] from each spring's nodes to its location (zeros: at the
+        nodes)."""
+        n = len(self.spring_part)
+        if self.spring_offset is None:
+            return np.zeros((n, 2, 3))
+        if self.spring_offset.shape != (n, 2, 3):
+            raise BayesUpdateError(
+                f"structure: spring_offset has shape {self.spring_offset.shape}, needs "
+                f"({n}, 2, 3) (one per spring; fe.modify.with_spring keeps them in step)"
+            )
+        return self.spring_offset
 
     @property
     def is_general(self) -> bool:
@@ -142,7 +165,10 @@ class Structure:
         return self.parts.index(name)
 
     def sensor_dofs(self) -> tuple[np.ndarray, np.ndarray]:
-        """Translational DOF indices (n_s, 3) of each sensor's node and its direction (n_s, 3)."""
+        """DOF indices (n_s, K) each sensor reads and their weights (n_s, K): its node's
+        translations (K = 3) and its direction, or ``sensor_read``."""
+        if self.sensor_read is not None:
+            return self.sensor_read
         dofs = 6 * self.sensor_node[:, None] + np.arange(3)[None, :]
         return dofs, self.sensor_direction
 
@@ -185,6 +211,7 @@ class StructureBuilder:
         self._rods: list = []
         self._frames: dict[int, np.ndarray] = {}
         self._dampers: list[dict] = []
+        self._scalar_masses: list[dict] = []
 
     # -- nodes and parts ------------------------------------------------------------------
     def add_node(self, xyz) -> int:
@@ -350,27 +377,77 @@ class StructureBuilder:
         )
         return len(self._masses) - 1
 
-    def add_spring(self, node_a, node_b, stiffness, part: str, frame=None) -> int:
+    def add_spring(self, node_a, node_b, stiffness, part: str, frame=None, location=None) -> int:
         """6-DOF spring between ``node_a`` and ``node_b`` (None = ground).
 
         stiffness : 6 values (kx, ky, kz [N/m], krx, kry, krz [N m/rad]) along the rows of
-        ``frame`` (3x3, default global axes).  Nodes should coincide (zero-length spring)."""
+        ``frame`` (3x3, default global axes).  location : None (the spring acts on the nodes' own
+        DOFs: meant for coincident nodes) or the point p (3,) [m] where it acts, rigidly linked to
+        both nodes (``fe.bush``, Nastran CBUSH: a point on GA-GB at S, or an OCID offset): the
+        springs see the relative motion at p, so separated ends keep moment equilibrium."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
         k, R = _six_along_frame(stiffness, frame, f"spring in part {part!r}: stiffness")
-        self._springs.append(dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part)))
+        offset = self._location(node_a, node_b, location, f"spring in part {part!r}")
+        self._springs.append(
+            dict(nodes=(node_a, node_b), k=k, frame=R, part=self._part(part), offset=offset)
+        )
         return len(self._springs) - 1
 
-    def add_damper(self, node_a, node_b, damping, part: str, frame=None) -> int:
+    def _location(self, node_a: int, node_b: int, location, what: str) -> np.ndarray:
+        """(2, 3) offsets [m] from the nodes to ``location`` (zeros for None)."""
+        if location is None:
+            return np.zeros((2, 3))
+        p = np.asarray(location, dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise BayesUpdateError(f"{what}: location must be 3 finite coordinates [m]")
+        from bayesupdate.fe.bush import location_offsets
+
+        xb = None if node_b < 0 else self.node_xyz(node_b)
+        return location_offsets(self.node_xyz(node_a), xb, p)
+
+    def add_scalar_mass(
+        self, node_a, component_a, mass: float, part: str, node_b=None, component_b=None,
+        frame_a=None, frame_b=None,
+    ) -> int:  # fmt: skip
+        """Scalar mass between one DOF of ``node_a`` and one of ``node_b`` (None = ground):
+        Nastran CMASS1/CMASS2 (``fe.scalar_mass``), M = [[m, -m], [-m, m]] on the two DOFs.
+
+        component_a, component_b : 1-6 or a name ('ux' ... 'rz'): a translation or rotation of
+        the node's displacement frame ``frame_a`` / ``frame_b`` (3x3, rows = its axes in global
+        coordinates; default global axes).  mass : >= 0, in kg on a translation and kg m^2 on a
+        rotation (a rotary inertia about that axis).  Returns the element index."""
+        what = f"scalar mass in part {part!r}"
+        node_a = self._check_node(node_a)
+        node_b = -1 if node_b is None else self._check_node(node_b)
+        if not (np.isfinite(mass) and mass >= 0):
+            raise BayesUpdateError(f"{what}: mass must be finite and >= 0, got {mass}")
+        if (node_b >= 0) != (component_b is not None):
+            raise BayesUpdateError(f"{what}: give node_b and component_b together (or neither)")
+        dirs = np.zeros((2, 6))
+        ends = [(node_a, component_a, frame_a)]
+        if node_b >= 0:
+            ends.append((node_b, component_b, frame_b))
+        for end, (node, comp, frame) in enumerate(ends):
+            dirs[end] = _scalar_direction(comp, frame, f"{what}: node {node}")
+        self._scalar_masses.append(
+            dict(nodes=(node_a, node_b), direction=dirs, mass=float(mass), part=self._part(part))
+        )
+        return len(self._scalar_masses) - 1
+
+    def add_damper(self, node_a, node_b, damping, part: str, frame=None, location=None) -> int:
         """6-component viscous damper between ``node_a`` and ``node_b`` (None = ground), kept as
         data (``fe.dampers``: normal modes ignore it; ``damping_matrix`` gives C).
 
         damping : 6 values (cx, cy, cz [N s/m], crx, cry, crz [N m s/rad]) along the rows of
-        ``frame`` (3x3, default global axes)."""
+        ``frame`` (3x3, default global axes); location : as ``add_spring``."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
         c, R = _six_along_frame(damping, frame, f"damper in part {part!r}: damping")
-        self._dampers.append(dict(nodes=(node_a, node_b), c=c, frame=R, part=self._part(part)))
+        offset = self._location(node_a, node_b, location, f"damper in part {part!r}")
+        self._dampers.append(
+            dict(nodes=(node_a, node_b), c=c, frame=R, part=self._part(part), offset=offset)
+        )
         return len(self._dampers) - 1
 
     # -- shells, supports and rigid elements (``fe.builder_general``) --------------------------
@@ -496,6 +573,7 @@ class StructureBuilder:
             spring_k=np.array([s["k"] for s in self._springs]).reshape(-1, 6),
             spring_frame=np.array([s["frame"] for s in self._springs]).reshape(-1, 3, 3),
             spring_part=np.array([s["part"] for s in self._springs], dtype=int),
+            spring_offset=_spring_offsets(self._springs),
             sensor_labels=tuple(s[0] for s in self._sensors),
             sensor_node=np.array([s[1] for s in self._sensors], dtype=int),
             sensor_direction=np.array([s[2] for s in self._sensors], dtype=float).reshape(-1, 3),
@@ -507,6 +585,8 @@ class StructureBuilder:
         )
         if self._dampers:
             structure = replace(structure, dampers=_dampers(self._dampers))
+        if self._scalar_masses:
+            structure = replace(structure, scalar_masses=_scalar_masses(self._scalar_masses))
         general = (self._general_beams, self._rods, self._frames)
         if self._shell_blocks or self._supports or self._rbe2 or self._rbe3 or any(general):
             from bayesupdate.fe.builder_general import general_parts
@@ -528,6 +608,37 @@ def _six_along_frame(values, frame, what: str) -> tuple[np.ndarray, np.ndarray]:
     return v, R
 
 
+def _spring_offsets(records: list[dict]) -> np.ndarray | None:
+    """(S, 2, 3) spring (or damper) offsets, or None when every one acts at its nodes."""
+    if not any(np.any(r["offset"]) for r in records):
+        return None
+    return np.array([r["offset"] for r in records], dtype=float)
+
+
+def _scalar_direction(component, frame, what: str) -> np.ndarray:
+    from bayesupdate.fe.constraints import parse_components
+    from bayesupdate.fe.scalar_mass import component_direction
+
+    mask = parse_components(component, what)
+    if mask.sum() != 1:
+        raise BayesUpdateError(f"{what}: needs exactly one component (1-6), got {component!r}")
+    R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+        raise BayesUpdateError(f"{what}: frame must be a 3x3 rotation")
+    return component_direction(int(np.flatnonzero(mask)[0]), R)
+
+
+def _scalar_masses(records: list[dict]) -> "ScalarMasses":
+    from bayesupdate.fe.scalar_mass import ScalarMasses
+
+    return ScalarMasses(
+        nodes=np.array([r["nodes"] for r in records], dtype=int),
+        direction=np.array([r["direction"] for r in records], dtype=float),
+        mass=np.array([r["mass"] for r in records], dtype=float),
+        part=np.array([r["part"] for r in records], dtype=int),
+    )
+
+
 def _dampers(records: list[dict]) -> "Dampers":
     from bayesupdate.fe.dampers import Dampers
 
@@ -536,6 +647,7 @@ def _dampers(records: list[dict]) -> "Dampers":
         damping=np.array([d["c"] for d in records]),
         frame=np.array([d["frame"] for d in records]),
         part=np.array([d["part"] for d in records], dtype=int),
+        offset=_spring_offsets(records),
     )
 
 
@@ -555,6 +667,9 @@ def check_connected(structure: Structure) -> None:
     for lines in (structure.general_beams, structure.rods):
         if lines is not None:
             pairs.append(lines.nodes)
+    sm = structure.scalar_masses
+    if sm is not None:
+        pairs.append(sm.nodes[~sm.grounded])
     edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)
@@ -562,6 +677,8 @@ def check_connected(structure: Structure) -> None:
     used[edges.ravel()] = True
     used[structure.mass_node] = True
     used[structure.spring_nodes[:, 0]] = True
+    if sm is not None:
+        used[sm.nodes[:, 0]] = True
     if structure.is_general and not np.all(used):
         raise BayesUpdateError(
             f"node {int(np.flatnonzero(~used)[0])} is used by no element; remove it or connect it"

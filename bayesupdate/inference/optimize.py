@@ -33,6 +33,7 @@ from functools import partial
 import numpy as np
 from scipy import optimize, stats
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood import mass_function
 from bayesupdate.inference.pairing import ResidualTable, pair_batch
@@ -352,13 +353,17 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple[np.ndarray, f
     return end, value, count.evaluations, count.failed
 
 
-def _run_fits(job: _Fits, items: list, counter: EvaluationCount, executor) -> tuple[list, list]:
-    """``_fit_start`` of every item on ``executor`` (results in item order): (ends, objectives);
-    the tasks' evaluations and failures are added to ``counter``."""
+def _run_fits(
+    job: _Fits, items: list, counter: EvaluationCount, executor, what: str = "calibration: starts"
+) -> tuple[list, list]:
+    """``_fit_start`` of every item on ``executor`` (results in item order), shown as the
+    progress phase ``what``: (ends, objectives); the tasks' evaluations and failures are added
+    to ``counter``."""
     stop = job.stop
     if getattr(executor, "kind", "serial") != "serial":
         job = replace(job, stop=StopRequest())  # a signal reaches this process, not the workers
-    out = executor_or_serial(executor).map(_fit_start, items, job)
+    with phase(what, len(items), "fits") as running:
+        out = executor_or_serial(executor).map(_fit_start, items, job, running.progress_callback())
     stop.check()
     counter.evaluations += sum(o[2] for o in out)
     counter.failed += sum(o[3] for o in out)
@@ -394,7 +399,7 @@ def _refined(
     near_best = np.asarray(objectives) <= 1.05 * min(objectives)
     job = _Fits(refine, _residual_count(refine), None, 60, least_squares=False)
     items = [(end, bool(near)) for end, near in zip(ends, near_best, strict=True)]
-    return _run_fits(job, items, counter, executor)
+    return _run_fits(job, items, counter, executor, "calibration: exact check of the ends")
 
 
 def _best_evaluation(

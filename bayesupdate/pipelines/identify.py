@@ -3,10 +3,13 @@ stabilization, automatic selection, LSFD shapes), as ``bayesupdate identify`` ru
 
 Several files are one test (the runs of a roving accelerometer); ``IdentifyRequest`` is
 validated once; the result is the frozen ``IdentifyRun`` (the merged FRFs, the
-identification and the notes a user must read with the modes).
+identification and the notes a user must read with the modes).  With several files the runs
+are grouped where poles shift between them (:mod:`bayesupdate.ema.run_groups`): each group's
+poles and residues are estimated apart, and the modes reported are the groups' combined
+(frequency, damping, sd with the spread) with the shapes assembled over the groups.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,12 +23,14 @@ from bayesupdate.errors import BayesUpdateError
 class IdentifyRequest:
     """files : UFF 58 FRF files (one test); band_hz : (lo, hi) [Hz] to analyse or None (all
     lines); max_order : highest polynomial order per band (None: the default); method :
-    ``"lsce"`` or ``"plscf"``."""
+    ``"lsce"`` or ``"plscf"``; groups : file indices (from 0) per run group, or None to find
+    them (:func:`~bayesupdate.ema.run_groups.group_poles`)."""
 
     files: tuple[str, ...]
     band_hz: tuple[float, float] | None = None
     max_order: int | None = None
     method: str = "lsce"
+    groups: tuple[tuple[int, ...], ...] | None = None
 
     def __post_init__(self):
         if not self.files:
@@ -64,9 +69,70 @@ def read_frf_files(files) -> FrfFiles:
 
 
 def identify_frfs(data: FrfFiles, request: IdentifyRequest) -> IdentifyRun:
-    """The modes of the merged FRFs with the request's band, order and estimator."""
+    """The modes of the merged FRFs with the request's band, order and estimator; with
+    several files, per run group (:func:`_grouped`)."""
     settings = IdentifySettings(max_order=request.max_order, method=request.method)
-    return IdentifyRun(data, identify(data.frfs, band_hz=request.band_hz, settings=settings))
+    result = identify(data.frfs, band_hz=request.band_hz, settings=settings)
+    if len(data.files) > 1 or request.groups is not None:
+        result = _grouped(data, result, request.groups)
+    return IdentifyRun(data, result)
+
+
+def _grouped(data: FrfFiles, result: Identification, groups=None) -> Identification:
+    """The identification with its modes re-estimated per run group
+    (:func:`~bayesupdate.ema.run_groups.group_poles`) when there is more than one group;
+    ``extra["run_groups"]`` holds the groups either way, and the modes' ``extra`` the
+    per-group values (``group_*`` arrays (m, G), ``frequency_spread_hz``, ``pole_shift``,
+    ``mpc_one_pole``: the MPC with one pole per mode over all runs)."""
+    from bayesupdate.ema.run_groups import group_poles
+
+    f = data.frfs.frequencies_hz
+    lines = tuple(int(np.argmin(np.abs(f - x))) for x in result.fit_range_hz)
+    rg = group_poles(
+        data.frfs, data.file_sets, result.poles, result.extra["basis_poles"], lines, groups
+    )
+    extra = {**result.extra, "run_groups": rg}
+    if len(rg.groups) == 1:
+        return replace(result, extra=extra)
+    return replace(result, modes=_grouped_modes(result.modes, rg, len(data.files)), extra=extra)
+
+
+def _grouped_modes(modes, rg, n_files: int):
+    """ModalData of the combined groups (:class:`~bayesupdate.ema.run_groups.RunGroups`)."""
+    power = np.sum(np.abs(rg.shapes) ** 2, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sd_rel = np.sqrt(np.sum(rg.shape_error_var, axis=0) / power)
+    fallback = ~np.isfinite(sd_rel) | (sd_rel <= 0) | (sd_rel > MAX_SHAPE_SD)
+    group_of_file = np.zeros(n_files, int)
+    for k, g in enumerate(rg.groups):
+        group_of_file[list(g.files)] = k
+    extra = {
+        **modes.extra,
+        "mass_normalised": rg.mass_normalised,
+        "shape_sd_fallback": fallback,
+        "mpc_one_pole": modes.mpc,
+        "frequency_one_pole_hz": modes.frequencies_hz,
+        "frequency_spread_hz": rg.spread_hz,
+        "pole_shift": rg.shifted,
+        "group_poles_used": rg.own_poles,
+        "group_frequencies_hz": np.array([g.frequencies_hz for g in rg.groups]).T,
+        "group_damping_ratio": np.array([g.damping_ratio for g in rg.groups]).T,
+        "group_sd_hz": np.array([g.sd_hz for g in rg.groups]).T,
+        "group_mpc": np.array([g.mpc for g in rg.groups]).T,
+        "group_sees": np.array([g.seen for g in rg.groups]).T,
+        "group_of_file": group_of_file,
+    }
+    return replace(
+        modes,
+        frequencies_hz=rg.frequencies_hz,
+        damping_ratio=rg.damping_ratio,
+        shapes=rg.shapes,
+        dof_labels=rg.labels,
+        mpc=rg.mpc,
+        shape_sd_rel=np.where(fallback, MAX_SHAPE_SD, sd_rel),
+        identification_sd_hz=rg.sd_hz,
+        extra=extra,
+    )
 
 
 def identification_notes(result: Identification, merge_notes=()) -> tuple[str, ...]:
@@ -75,6 +141,7 @@ def identification_notes(result: Identification, merge_notes=()) -> tuple[str, .
     poles, resonances cut by the range's ends."""
     modes = result.modes
     notes = list(merge_notes)
+    notes += _group_notes(result)
     if len(modes.dof_labels) < 2:
         notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
     if not np.all(modes.extra.get("mass_normalised", result.mass_normalised)):
@@ -98,3 +165,46 @@ def identification_notes(result: Identification, merge_notes=()) -> tuple[str, .
             + " Hz; widen the band to identify them"
         )
     return tuple(notes)
+
+
+def _files_text(files) -> str:
+    """Run positions (from 1) as ranges: (0, 1, 2, 5) -> "1-3, 6"."""
+    runs, out = [j + 1 for j in files], []
+    start = prev = runs[0]
+    for j in [*runs[1:], None]:
+        if j is not None and j == prev + 1:
+            prev = j
+            continue
+        out.append(f"{start}" if start == prev else f"{start}-{prev}")
+        if j is not None:
+            start = prev = j
+    return ", ".join(out)
+
+
+def _group_notes(result: Identification) -> list[str]:
+    """The note naming the run groups and the modes whose poles shift between them."""
+    rg = result.extra.get("run_groups")
+    if rg is None or len(rg.groups) == 1:
+        return []
+    how = "found from the poles' shifts" if rg.automatic else "as given"
+    names = "; ".join(f"files {_files_text(g.files)}" for g in rg.groups)
+    text = f"{len(rg.groups)} run groups ({how}): {names}"
+    extra = result.modes.extra
+    shifted = np.flatnonzero(extra["group_poles_used"])
+    small = np.flatnonzero(extra["pole_shift"] & ~extra["group_poles_used"])
+    if shifted.size:
+        parts = []
+        for r in shifted:
+            fg = extra["group_frequencies_hz"][r]
+            parts.append(
+                f"mode {r + 1} " + " / ".join(f"{x:.3f}" for x in fg) + " Hz "
+                f"(MPC {extra['mpc_one_pole'][r]:.2f} with one pole, "
+                f"{result.modes.mpc[r]:.2f} assembled from the groups)"
+            )
+        text += "; poles shift between them (roving sensors' mass, shaker attachment or "
+        text += "drift between runs), residues fitted at each group's pole: " + "; ".join(parts)
+    if small.size:
+        text += "; shifted by less than a half-power half-width, one pole kept: mode " + ", ".join(
+            str(r + 1) for r in small
+        )
+    return [text]

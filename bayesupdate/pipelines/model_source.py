@@ -81,7 +81,11 @@ def _points_given(deck) -> bool:
 
 def study_model(study, test_labels=()):
     """The model of a ``config.StudyConfig`` (its ``[model]`` table and parameter tables);
-    a Nastran deck reads shapes at ``test_labels`` (the test data's DOF labels)."""
+    a Nastran deck reads shapes at ``test_labels`` (the test data's DOF labels), mapped by
+    ``[model.test_points]``, or by position through the study's ``[test]`` geometry
+    (``paired_study_model``), which any FE model takes."""
+    if study.test is not None:
+        return paired_study_model(study, test_labels)[0]
     return resolve_model(
         study.model.source,
         study.parameters,
@@ -89,6 +93,38 @@ def study_model(study, test_labels=()):
         study.model.options,
         deck=(tuple(test_labels), dict(study.model.test_points)),
     )
+
+
+def paired_study_model(study, test_labels=()):
+    """(model, ``testgeom.TestPairing`` or None): the study's FE model whose sensors are the
+    test DOFs ``test_labels``, paired with it by the ``[test]`` table (read the geometry, align
+    it, pair each point with the nearest node or element point: ``testgeom``).  Without labels
+    (frequencies only) the geometry is read and checked, and the model keeps its sensors."""
+    from bayesupdate.testgeom import pair_structure, read_geometry, with_pairing
+
+    cfg = study.test
+    model = resolve_model(
+        study.model.source, study.parameters, study.model.sensors, study.model.options
+    )
+    geometry = read_geometry(cfg.geometry, cfg.length_unit)
+    if not test_labels:
+        return model, None
+    if not (hasattr(model, "structure") and hasattr(model, "with_structure")):
+        raise BayesUpdateError(
+            f"[test] geometry: model {study.model.source!r} has no FE structure to pair the test "
+            "with; use a built-in model or a Nastran deck"
+        )
+    pairing = pair_structure(
+        model.structure, geometry, test_labels, cfg.settings(), cfg.model_length_unit
+    )
+    if pairing.shared:  # allowed (two sensors on one spot), never silent
+        import warnings
+
+        groups = "; ".join(", ".join(map(str, g)) for g in pairing.shared)
+        warnings.warn(
+            f"[test] {cfg.geometry}: test points {groups} sit on one model point", stacklevel=2
+        )
+    return model.with_structure(with_pairing(model.structure, pairing)), pairing
 
 
 def problem_parameters(parameters: Mapping) -> dict:

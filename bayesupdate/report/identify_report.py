@@ -280,6 +280,54 @@ def _figure(figures: dict, name: str) -> tuple:
     return (Figure(figures[name], FIGURES[name][1]),) if name in figures else ()
 
 
+def run_groups_section(result: Identification) -> Section | None:
+    """The run groups (:mod:`bayesupdate.ema.run_groups`) and per mode each group's frequency,
+    damping and MPC, the spread, and the MPC with one pole over all runs; None with one
+    group."""
+    rg = result.extra.get("run_groups")
+    extra = result.modes.extra
+    if rg is None or "group_frequencies_hz" not in extra:
+        return None
+    n_groups = len(rg.groups)
+    heads = ["mode", "frequency [Hz]", "sd [Hz]"]
+    for k in range(n_groups):
+        heads += [f"group {k + 1} [Hz]", f"group {k + 1} damping [%]", f"group {k + 1} MPC"]
+    heads += ["spread [Hz]", "MPC one pole", "MPC assembled", "own poles"]
+    rows = []
+    for r in range(result.modes.n_modes):
+        row = [r + 1, _freq(result.modes.frequencies_hz[r]),
+               f"{float(result.modes.identification_sd_hz[r]):.2g}"]  # fmt: skip
+        for k in range(n_groups):
+            mark = "" if extra["group_sees"][r, k] else " (not seen)"
+            row += [
+                f"{float(extra['group_frequencies_hz'][r, k]):.4f}{mark}",
+                f"{100 * float(extra['group_damping_ratio'][r, k]):.3g}",
+                f"{float(extra['group_mpc'][r, k]):.3f}",
+            ]
+        row += [
+            f"{float(extra['frequency_spread_hz'][r]):.3g}",
+            f"{float(extra['mpc_one_pole'][r]):.3f}",
+            f"{float(result.modes.mpc[r]):.3f}",
+            "yes" if extra["group_poles_used"][r] else "no",
+        ]
+        rows.append(tuple(row))
+    how = "found where poles shift between runs" if rg.automatic else "given with --groups"
+    files = "; ".join(
+        f"group {k + 1}: files " + ", ".join(str(j + 1) for j in g.files)
+        for k, g in enumerate(rg.groups)
+    )
+    text = (
+        f"{n_groups} run groups ({how}): {files}. Each group's poles are refined on its own "
+        "FRFs; where a mode's group frequencies spread by a half-power half-width or more "
+        "('own poles'), each group's residues are fitted at its own pole, and the shapes "
+        "assembled over the groups. The frequency reported is the groups' random-effects mean, "
+        "its sd holds the spread between groups. Consistency: the MPC of each group's part "
+        "of the shape and of the assembly, beside the MPC with one pole over all runs."
+    )
+    table = Table(tuple(heads), tuple(rows), caption="Modes per run group")
+    return Section("Run groups", (text, table))
+
+
 def identify_document(
     inp: IdentifyInput,
     result: Identification | None,
@@ -309,6 +357,7 @@ def identify_document(
             ((f"Written to {inp.out}.",) if inp.out else ())
             + (modes_table(modes), *_figure(figures, "automac")),
         ),
+        *((grp,) if (grp := run_groups_section(result)) is not None else ()),
         Section(
             "Mode shapes",
             (

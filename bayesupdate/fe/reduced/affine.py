@@ -193,7 +193,8 @@ def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
 
 
 def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
-    """The constant term (beams without parameters at the defaults, unbound masses and springs)
+    """The constant term (beams without parameters at the defaults, unbound masses and springs,
+    the scalar masses)
     and one linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
     m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``."""
     s, a = fe.structure, fe.beam_assembler
@@ -213,7 +214,13 @@ def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
         else (np.zeros((0, 12, 12)),) * 2
     )
     k_stacks = [[(a.beam_dofs[free_beams], bK0), (a.spring_dofs[free_springs], sK[free_springs])]]
-    m_stacks = [[(a.beam_dofs[free_beams], bM0), (a.mass_dofs[free_masses], mM[free_masses])]]
+    m_stacks = [
+        [
+            (a.beam_dofs[free_beams], bM0),
+            (a.mass_dofs[free_masses], mM[free_masses]),
+            (a.scalar_dofs, a.scalar_mass_matrices()),  # no parameter acts on scalar masses
+        ]
+    ]
     k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
     for j, t in point:
         m_stacks.append([(a.mass_dofs[t.elements], mM_unit[t.elements])])

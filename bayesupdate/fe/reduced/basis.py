@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
@@ -96,12 +97,21 @@ def _solve_point(shared: tuple, row: np.ndarray):
 
 
 def full_solves(
-    fe: FEModel, names: tuple[str, ...], theta: np.ndarray, n_modes: int, executor=None
+    fe: FEModel,
+    names: tuple[str, ...],
+    theta: np.ndarray,
+    n_modes: int,
+    executor=None,
+    what: str = "full solves",
 ):
     """Full solves at theta (B, len(names)) (SI), one task per point on ``executor``
-    (``parallel_executor``; None: in this process): (B, n_modes) frequencies [Hz] (NaN rows on
-    failure) and the (n_dof, k) mode shapes of the points that solved, side by side."""
-    solved = executor_or_serial(executor).map(_solve_point, list(theta), (fe, names, n_modes))
+    (``parallel_executor``; None: in this process), shown as the progress phase ``what``
+    (``compute.progress``): (B, n_modes) frequencies [Hz] (NaN rows on failure) and the
+    (n_dof, k) mode shapes of the points that solved, side by side."""
+    with phase(what, theta.shape[0], "solves") as running:
+        solved = executor_or_serial(executor).map(
+            _solve_point, list(theta), (fe, names, n_modes), running.progress_callback()
+        )
     freqs = np.full((theta.shape[0], n_modes), np.nan)
     shapes = []
     for i, point in enumerate(solved):

@@ -17,9 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.stats import qmc
 
+from bayesupdate import __version__
+from bayesupdate.compute.cache import ArrayStore, content_key
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.reduced.affine import decompose
-from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis
+from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis, projected_basis
 
 if TYPE_CHECKING:
     from bayesupdate.fe.reduced.model import ReducedFEModel
@@ -77,17 +79,34 @@ def compare(basis: ReducedBasis, theta: np.ndarray, f_full: np.ndarray, n_modes:
     return Certificate(float(np.max(np.abs(signed))), float(np.min(signed)), int(ok.sum()))
 
 
-def build(model: "ReducedFEModel", executor=None) -> Certification:
+def build(model: "ReducedFEModel", executor=None, store: ArrayStore | None = None) -> Certification:
     """Decompose, snapshot, compress, certify, enrich (module docstring) over ``model``'s box
     with its settings; warns and returns an uncertified result when ``max_size`` is reached.
-    The snapshot and validation solves run on ``executor`` (None: in this process)."""
-    fe, st, names = model.fe, model.settings, model.parameter_names
+    The snapshot and validation solves run on ``executor`` (None: in this process).  A certified
+    basis is kept in ``store`` (``compute.cache``; None: the environment's) under the content of
+    the model's terms, box and settings, and a later build of the same content loads it and
+    re-certifies it at ``RECHECK_POINTS`` fresh points instead of building it again."""
+    fe, st = model.fe, model.settings
     centre = model.mapping(model.centre())
     _check_free_free(fe, centre)
     decomposition = decompose(fe, model.bounds, st.interp_tol)
+    store = ArrayStore.from_environment() if store is None else store
+    key = _cache_key(model, decomposition, centre) if store.enabled else ""
+    cached = _load(model, decomposition, store.load(key), executor) if key else None
+    if cached is not None:
+        return cached
+    result = _build(model, decomposition, centre, executor)
+    if key and result.certified:
+        store.save(key, _arrays(result))
+    return result
+
+
+def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certification:
+    fe, st, names = model.fe, model.settings, model.parameter_names
     dim = len(names)
     snap_theta = model.scale(qmc.Sobol(dim, scramble=True, seed=st.seed).random(st.n_snapshots))
-    snaps = full_solves(fe, names, snap_theta, st.n_modes + st.extra_modes, executor)[1]
+    n_snap = st.n_modes + st.extra_modes
+    snaps = full_solves(fe, names, snap_theta, n_snap, executor, "reduced basis: snapshots")[1]
     pod_tol = 0.5 * st.tol
     history = []
     certificate = UNBUILT.certificate
@@ -97,7 +116,8 @@ def build(model: "ReducedFEModel", executor=None) -> Certification:
             break
         sobol = qmc.Sobol(dim, scramble=True, seed=st.seed + 1000 + rnd)
         theta_v = model.scale(sobol.random(st.n_validation))
-        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes, executor)
+        what = f"reduced basis: certification (round {rnd + 1})"
+        f_full, shapes_v = full_solves(fe, names, theta_v, st.n_modes, executor, what)
         certificate = compare(basis, theta_v, f_full, st.n_modes)
         history.append(BuildRound(rnd, basis.size, certificate.max_rel_error, pod_tol))
         _check_upper_bound(certificate, st.tol)
@@ -109,8 +129,79 @@ def build(model: "ReducedFEModel", executor=None) -> Certification:
         pod_tol *= 0.25
     err = certificate.max_rel_error
     failed = Certification(basis, certificate, False, err, tuple(history))
-    _warn_failed(model, failed, stacklevel=4)  # the caller of ReducedFEModel.build
+    _warn_failed(model, failed, stacklevel=5)  # the caller of ReducedFEModel.build
     return failed
+
+
+#: fresh points a basis loaded from the cache is checked at before use (full solves)
+RECHECK_POINTS = 4
+#: the seed offset of those points (the build's validation sets use seed + 1000 + round)
+_RECHECK_SEED = 7919
+#: format of a cached basis; bump when the stored arrays change meaning
+_CACHE_FORMAT = "reduced-basis-1"
+
+
+def _cache_key(model: "ReducedFEModel", decomposition, centre) -> str:
+    """Everything the basis depends on: the affine terms (hence K(theta), M(theta)), the matrices
+    and rigid motions at the centre, the box, the settings, the sensors and the package."""
+    fe = model.fe
+    K0, M0 = fe.matrices(centre)
+    return content_key(
+        _CACHE_FORMAT, __version__, model.parameter_names, model.bounds, model.settings,
+        decomposition, K0, M0, fe.rigid_motions(), tuple(fe.structure.sensor_labels),
+    )  # fmt: skip
+
+
+def _arrays(c: Certification) -> dict[str, np.ndarray]:
+    cert = c.certificate
+    history = [(h.round, h.size, h.max_rel_error, h.pod_tol) for h in c.history]
+    arrays = {
+        "V": c.basis.V,
+        "n_rigid": np.array(c.basis.n_rigid),
+        "certificate": np.array([cert.max_rel_error, cert.min_signed_error, cert.n_points]),
+        "history": np.array(history, float).reshape(-1, 4),
+    }
+    for i, (theta, f) in enumerate(c.checked):
+        arrays[f"checked_theta_{i}"], arrays[f"checked_f_{i}"] = theta, f
+    return arrays
+
+
+def _load(model: "ReducedFEModel", decomposition, arrays, executor) -> Certification | None:
+    """The stored certification rebuilt on ``decomposition`` and checked at fresh points; None
+    (with a note when the check fails) when there is nothing usable."""
+    if arrays is None:
+        return None
+    st = model.settings
+    try:
+        basis = projected_basis(model.fe, decomposition, arrays["V"], int(arrays["n_rigid"]))
+        e, s, n = arrays["certificate"]
+        history = tuple(BuildRound(int(r), int(z), float(x), float(p)) for r, z, x, p in
+                        arrays["history"])  # fmt: skip
+        checked = tuple(
+            (arrays[f"checked_theta_{i}"], arrays[f"checked_f_{i}"])
+            for i in range(sum(k.startswith("checked_theta_") for k in arrays))
+        )
+    except (KeyError, ValueError) as exc:
+        warnings.warn(f"cached reduced basis unreadable ({exc}); rebuilding", RuntimeWarning,
+                      stacklevel=4)  # fmt: skip
+        return None
+    sobol = qmc.Sobol(len(model.parameter_names), scramble=True, seed=st.seed + _RECHECK_SEED)
+    theta = model.scale(sobol.random(RECHECK_POINTS))
+    what = "reduced basis: cached, checked"
+    f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes, executor, what)[0]
+    recheck = compare(basis, theta, f_full, st.n_modes)
+    if recheck.max_rel_error > st.tol or recheck.min_signed_error < -0.1 * st.tol:
+        warnings.warn(
+            f"cached reduced basis of {model.fe.name} misses its tolerance at fresh points "
+            f"({recheck.max_rel_error:.1e} > {st.tol:g}); rebuilding",
+            RuntimeWarning,
+            stacklevel=4,
+        )
+        return None
+    worst = max(float(e), recheck.max_rel_error)
+    certificate = Certificate(worst, min(float(s), recheck.min_signed_error),
+                              int(n) + recheck.n_points)  # fmt: skip
+    return Certification(basis, certificate, True, worst, history, (*checked, (theta, f_full)))
 
 
 def _check_free_free(fe, centre) -> None:

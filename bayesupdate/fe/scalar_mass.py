@@ -1,0 +1,76 @@
+"""Scalar masses: a mass on one DOF of a node, or between one DOF of each of two nodes (Nastran
+CMASS1/CMASS2, MSC Nastran Quick Reference Guide: "scalar mass element ... between component C1
+of G1 and C2 of G2"; G2 blank grounds it).
+
+The element's two scalar coordinates are w_A = d_A . q_A and w_B = d_B . q_B, with d_X (6,) the
+unit vector of the chosen component in the node's six DOFs (a translation or rotation axis of
+the node's displacement frame, in global axes), and its mass matrix on (w_A, w_B) is
+
+    [[m, -m], [-m, m]]   (MSC QRG CMASS2),
+
+so on the node DOFs q = (q_A, q_B): M_e = m v v^T with v = (d_A, -d_B) (12,).  A grounded element
+keeps v = (d_A, 0): M_e = m d_A d_A^T.  On a translation m is a mass [kg]; on a rotation it is a
+rotary inertia [kg m^2] about that axis (a grounded one equals a point mass whose inertia tensor
+is m n n^T, n the axis).  Under a rigid translation t the element's kinetic energy is
+1/2 m ((d_A - d_B) . t)^2: an element between two nodes on the same axis carries no rigid-body
+mass, a grounded one carries m along its axis only.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bayesupdate.fe.assembly import rigid_body_basis
+from bayesupdate.fe.rod import line_dofs
+
+
+@dataclass(frozen=True)
+class ScalarMasses:
+    """n scalar masses: nodes (n, 2) (second -1 = ground); direction (n, 2, 6) unit DOF vectors
+    d_A, d_B in the nodes' six global DOFs (d_B zero when grounded); mass (n,) [kg on a
+    translation, kg m^2 on a rotation]; part (n,) part indices."""
+
+    nodes: np.ndarray
+    direction: np.ndarray
+    mass: np.ndarray
+    part: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        return int(self.nodes.shape[0])
+
+    @property
+    def grounded(self) -> np.ndarray:
+        return self.nodes[:, 1] < 0
+
+    def dofs(self) -> np.ndarray:
+        """(n, 12) global DOF numbers; a grounded element repeats node A (its B block is 0)."""
+        nodes = np.where(self.nodes >= 0, self.nodes, self.nodes[:, :1])
+        return line_dofs(nodes)
+
+    def matrices(self, scale=None) -> np.ndarray:
+        """(n, 12, 12) M_e = m v v^T, v = (d_A, -d_B); ``scale`` (n,) factors on m (default 1)."""
+        v = self._v()
+        m = self.mass if scale is None else self.mass * scale
+        return m[:, None, None] * v[:, :, None] * v[:, None, :]
+
+    def rigid_mass(self, nodes: np.ndarray) -> np.ndarray:
+        """(6, 6) R^T M R of the elements on the rigid motions R about the origin (3
+        translations, 3 rotations) of nodes (N, 3) [m]: their share of the structure's rigid-body
+        mass matrix (translational block: mass [kg])."""
+        R = rigid_body_basis(nodes, centre=np.zeros(3))
+        Rv = np.einsum("eki,ek->ei", R[self.dofs()], self._v())  # (n, 6) = R_e^T v
+        return np.einsum("e,ei,ej->ij", self.mass, Rv, Rv)
+
+    def _v(self) -> np.ndarray:
+        """(n, 12) v = (d_A, -d_B)."""
+        return np.concatenate([self.direction[:, 0], -self.direction[:, 1]], axis=1)
+
+
+def component_direction(component: int, frame) -> np.ndarray:
+    """(6,) unit DOF vector of ``component`` (0-5: ux uy uz rx ry rz of the node's displacement
+    frame) where ``frame`` (3, 3) has the frame's axes as rows in global coordinates."""
+    d = np.zeros(6)
+    block = 3 * (component // 3)
+    d[block : block + 3] = np.asarray(frame, float)[component % 3]
+    return d

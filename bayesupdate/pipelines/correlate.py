@@ -1,0 +1,380 @@
+"""The correlate pipeline: a model, test modes and the sensor mapping between them -> how far
+the model is from the test before any parameter moves.
+
+Inputs are three: the model (any ``ParametricModel``; an FE model also gives its shapes at all
+DOFs for SEREP), the test's ``ModalData``, and a ``SensorMapping`` (per test DOF the model node
+and direction it reads, and the rigid transform from the test's frame to the model's).  Today
+the mapping is the one ``calibrate`` and ``sample`` use (a built-in model's sensors, a Nastran
+deck's ``[model.test_points]``: ``nastran.test_points``) and the transform is the identity; a
+test-geometry pairing fills the same record (test coordinates, distances, the fitted transform).
+
+``correlate(model, data, mapping, settings)`` returns the frozen ``Correlation``: the paired
+modes (MAC and the Hungarian assignment with a threshold, or in order for frequencies only),
+the MAC matrix and the test's AutoMAC, COMAC per test DOF, and, for an FE model, the SEREP TAM
+of the model at the test DOFs (``correlation.serep_*``): the model's pseudo-orthogonality, the
+cross-orthogonality where the test's shapes are mass-normalised, and the test shapes expanded to
+every model DOF.  ``write_correlation_h5`` writes it (layout in its docstring).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bayesupdate.correlation import (
+    DEFAULT_MAC_THRESHOLD,
+    ModePairs,
+    auto_mac,
+    comac,
+    cross_orthogonality,
+    mac_matrix,
+    pair_in_order,
+    pair_modes,
+    pseudo_orthogonality,
+    serep_expand,
+    serep_mass,
+    serep_transformation,
+)
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.modal_data import ModalData
+
+
+@dataclass(frozen=True)
+class CorrelateSettings:
+    """mac_threshold : MAC below which a pair is refused, in (0, 1].  extra_modes : model modes
+    computed beyond the test's (so a test mode can pair past a swap), >= 0.  parameters : the
+    model's parameter point (SI, or a deck's units; empty: its defaults)."""
+
+    mac_threshold: float = DEFAULT_MAC_THRESHOLD
+    extra_modes: int = 4
+    parameters: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not 0.0 < self.mac_threshold <= 1.0:
+            raise BayesUpdateError(f"--mac-threshold {self.mac_threshold}: give a value in (0, 1]")
+        if self.extra_modes < 0:
+            raise BayesUpdateError(f"--extra-modes {self.extra_modes}: must be >= 0")
+
+
+@dataclass(frozen=True)
+class SensorPoint:
+    """One test DOF on the model.  dof : its label (``"7V"``); test_node : the test's node
+    (the label's number); model_node : the model node it reads (a deck's GRID id, a built-in
+    model's node index; None when the model has no nodes); model_xyz : that node's coordinates
+    in the model's frame (its units) or None; direction : (3,) unit vector in the model's frame
+    or None; distance : test point to model point after the transform (None: no test
+    geometry)."""
+
+    dof: str
+    test_node: str
+    model_node: int | None
+    model_xyz: tuple[float, float, float] | None
+    direction: tuple[float, float, float] | None
+    distance: float | None = None
+
+
+@dataclass(frozen=True)
+class SensorMapping:
+    """Test DOFs on the model: transform (4, 4) test frame -> model frame (the identity without
+    test geometry), rms_residual of its fit (None: not fitted), points one per test DOF, source
+    (where the mapping came from)."""
+
+    transform: np.ndarray
+    points: tuple[SensorPoint, ...]
+    source: str
+    rms_residual: float | None = None
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """What ``correlate`` found (indices 0-based; arrays in the order of the test's DOFs and
+    modes and the model's modes).
+
+    model, data : names.  dof_labels (n_a,).  test_hz (m_t,), model_hz (m_m,) [Hz].
+    pairs : ``correlation.ModePairs``.  mac (m_t, m_m), test_auto_mac (m_t, m_t), comac (n_a,)
+    over the paired modes: None without test shapes.  mapping : ``SensorMapping``.
+    test_shapes (n_a, m_t) real (realised) test shapes, model_shapes (n_a, m_m) model shapes at
+    the test DOFs: None without test shapes.  pseudo_orthogonality (k, k) of the paired model
+    modes through the SEREP TAM, cross_orthogonality (k, k) test vs model (mass-normalised test
+    shapes only), expanded (n_dof, k) the paired test shapes expanded by SEREP: None where not
+    computed.  notes : what a reader must know (why something is missing).
+    """
+
+    model: str
+    data: str
+    dof_labels: tuple[str, ...]
+    test_hz: np.ndarray
+    model_hz: np.ndarray
+    pairs: ModePairs
+    mapping: SensorMapping
+    mac: np.ndarray | None = None
+    test_auto_mac: np.ndarray | None = None
+    comac: np.ndarray | None = None
+    test_shapes: np.ndarray | None = None
+    model_shapes: np.ndarray | None = None
+    pseudo_orthogonality: np.ndarray | None = None
+    cross_orthogonality: np.ndarray | None = None
+    expanded: np.ndarray | None = None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def error_pct(self) -> np.ndarray:
+        """(k,) model minus test frequency of each pair, in % of the test's."""
+        f_t = self.test_hz[self.pairs.test]
+        return 100.0 * (self.model_hz[self.pairs.model] - f_t) / f_t
+
+    def worst_points(self, n: int) -> tuple[tuple[str, float], ...]:
+        """The ``n`` test DOFs of lowest COMAC, lowest first: ((label, COMAC), ...)."""
+        if self.comac is None:
+            return ()
+        order = np.argsort(self.comac, kind="stable")[:n]
+        return tuple((self.dof_labels[i], float(self.comac[i])) for i in order)
+
+
+def sensor_mapping(model, labels) -> SensorMapping:
+    """The mapping ``calibrate`` uses: an FE model's sensors at ``labels`` (their nodes,
+    directions and coordinates; a deck's GRID ids), else the labels alone."""
+    structure = getattr(model, "structure", None)
+    if structure is None or not structure.sensor_labels:
+        points = tuple(SensorPoint(str(x), _test_node(x), None, None, None) for x in labels)
+        return SensorMapping(np.eye(4), points, "the model's shape labels")
+    index = {lab: i for i, lab in enumerate(structure.sensor_labels)}
+    deck = structure.metadata.get("nastran")
+    ids = np.asarray(deck["grid_ids"]) if deck else np.arange(len(structure.nodes))
+    points = []
+    for label in labels:
+        i = index[label]
+        node = int(structure.sensor_node[i])
+        points.append(
+            SensorPoint(
+                str(label),
+                _test_node(label),
+                int(ids[node]),
+                tuple(float(v) for v in structure.nodes[node]),
+                tuple(float(v) for v in structure.sensor_direction[i]),
+            )
+        )
+    source = "[model.test_points] (test node = GRID id by default)" if deck else "built-in sensors"
+    return SensorMapping(np.eye(4), tuple(points), source)
+
+
+def _test_node(label) -> str:
+    text = str(label)
+    digits = len(text) - len(text.lstrip("0123456789"))
+    return text[:digits] or text
+
+
+@dataclass(frozen=True)
+class ModelModes:
+    """The model's modes: frequencies_hz (m,), shapes (n_labels, m) at ``labels`` (None: no
+    shapes), full (n_dof, m) mass-normalised shapes at every DOF (FE models only, else None)."""
+
+    frequencies_hz: np.ndarray
+    labels: tuple[str, ...]
+    shapes: np.ndarray | None
+    full: np.ndarray | None
+
+
+def model_modes(model, n_modes: int, parameters=None) -> ModelModes:
+    """Solve ``model`` at ``parameters`` for ``n_modes`` modes (an FE model: also its shapes at
+    every DOF, through ``solve``)."""
+    if hasattr(model, "solve") and hasattr(model, "structure"):
+        r = model.solve(parameters or None, n_modes)
+        return ModelModes(r.frequencies_hz, tuple(r.sensor_labels), r.sensor_shapes, r.modes.shapes)
+    p = model.predict(parameters or {}, n_modes)
+    shapes = None if p.shapes is None else np.asarray(p.shapes)
+    return ModelModes(np.asarray(p.frequencies_hz), tuple(p.dof_labels), shapes, None)
+
+
+def _rows(modes: ModelModes, labels) -> np.ndarray:
+    index = {lab: i for i, lab in enumerate(modes.labels)}
+    missing = [lab for lab in labels if lab not in index]
+    if missing:
+        raise BayesUpdateError(
+            f"correlate: test DOFs {missing[:5]} are not model sensor DOFs (the model has "
+            f"{list(modes.labels)[:6]}...); map them in [model.test_points] or rename them"
+        )
+    return np.array([index[lab] for lab in labels], dtype=int)
+
+
+def geometry_mapping(pairing) -> SensorMapping:
+    """The ``SensorMapping`` of a ``testgeom.TestPairing`` (the study's ``[test]`` geometry,
+    aligned and paired): its transform and fit residual, and per test DOF its model point
+    (the nearest model node's label; ``model_xyz`` the paired point, on an element where the
+    pairing chose one), its direction in the model frame and its distance."""
+    t = pairing.transform
+    by_node = {p.test_node: p for p in pairing.points}
+    points = []
+    for label, direction in zip(pairing.dof_labels, pairing.directions, strict=True):
+        node = _test_node(label)
+        paired = by_node[int(node)] if node.lstrip("-").isdigit() else None
+        points.append(
+            SensorPoint(
+                str(label),
+                node,
+                None if paired is None else int(paired.model_node),
+                None if paired is None else tuple(float(v) for v in paired.model_xyz),
+                tuple(float(v) for v in direction),
+                None if paired is None else float(paired.distance),
+            )
+        )
+    source = f"[test] geometry ({t.method}; lengths in {pairing.unit})"
+    return SensorMapping(np.asarray(t.matrix, float), tuple(points), source, float(t.rms))
+
+
+def correlate(
+    model,
+    data: ModalData,
+    settings: CorrelateSettings,
+    name: str = "model",
+    mapping: SensorMapping | None = None,
+) -> Correlation:
+    """Correlate ``model`` with the test ``data`` (module docstring); ``mapping``: the test
+    DOFs on the model when a test geometry paired them (``geometry_mapping``), else the
+    model's own sensors (``sensor_mapping``)."""
+    n_model = data.n_modes + settings.extra_modes
+    modes = model_modes(model, n_model, settings.parameters)
+    if data.shapes is None or modes.shapes is None:
+        return _frequencies_only(model, data, modes, name)
+    rows = _rows(modes, data.dof_labels)
+    model_at = modes.shapes[rows]
+    mac = mac_matrix(data.shapes, model_at)
+    pairs = pair_modes(mac, settings.mac_threshold)
+    notes = _pair_notes(pairs, settings.mac_threshold)
+    base = Correlation(
+        model=name,
+        data=data.source,
+        dof_labels=data.dof_labels,
+        test_hz=data.frequencies_hz,
+        model_hz=np.asarray(modes.frequencies_hz),
+        pairs=pairs,
+        mapping=mapping or sensor_mapping(model, data.dof_labels),
+        mac=mac,
+        test_auto_mac=auto_mac(data.shapes),
+        comac=comac(data.shapes[:, pairs.test], model_at[:, pairs.model])
+        if pairs.test.size
+        else None,
+        test_shapes=_realise(data.shapes),
+        model_shapes=model_at,
+    )
+    return _with_serep(base, modes, rows, data, notes)
+
+
+def _frequencies_only(model, data: ModalData, modes: ModelModes, name: str) -> Correlation:
+    why = "the test has no shapes" if data.shapes is None else "the model gives no shapes"
+    labels = data.dof_labels if modes.shapes is not None else ()
+    return Correlation(
+        model=name,
+        data=data.source,
+        dof_labels=tuple(labels),
+        test_hz=data.frequencies_hz,
+        model_hz=np.asarray(modes.frequencies_hz),
+        pairs=pair_in_order(data.n_modes, modes.frequencies_hz.size),
+        mapping=sensor_mapping(model, labels),
+        notes=(f"{why}: modes are paired in order (no MAC, COMAC or orthogonality)",),
+    )
+
+
+def _realise(shapes: np.ndarray) -> np.ndarray:
+    from bayesupdate.ema.lsfd import realise
+
+    return realise(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
+
+
+def _pair_notes(pairs: ModePairs, threshold: float) -> list[str]:
+    notes = [
+        f"test mode {t + 1} refused: its best model mode {m + 1} has MAC {v:.3f} < {threshold:g}"
+        for t, m, v in pairs.refused
+    ]
+    if pairs.swapped:
+        named = ", ".join(f"test {t + 1} - model {m + 1}" for t, m in pairs.swapped)
+        notes.append(f"swapped (model modes out of the test's order): {named}")
+    return notes
+
+
+def _with_serep(
+    base: Correlation, modes: ModelModes, rows: np.ndarray, data: ModalData, notes: list
+) -> Correlation:
+    """``base`` with the SEREP TAM results of the paired modes (FE models)."""
+    from dataclasses import replace
+
+    pairs = base.pairs
+    k, n_a = pairs.test.size, rows.size
+    if modes.full is None or k == 0:
+        why = "no pairs" if k == 0 else "the model gives no shapes at all DOFs (not an FE model)"
+        notes.append(f"no SEREP TAM: {why}")
+        return replace(base, notes=tuple(notes))
+    phi_a = base.model_shapes[:, pairs.model]
+    if k > n_a or np.linalg.matrix_rank(phi_a) < k:
+        notes.append(
+            f"the {n_a} test DOFs do not tell the {k} paired model modes apart (rank "
+            f"{np.linalg.matrix_rank(phi_a)}): the SEREP TAM is not exact"
+        )
+    transform = serep_transformation(modes.full[:, pairs.model], phi_a)
+    mass_a = serep_mass(phi_a)
+    test_real = base.test_shapes[:, pairs.test]
+    # a realised shape's sign is arbitrary: turn each towards its paired model shape
+    test_real = test_real * np.where(np.sum(test_real * phi_a, axis=0) < 0, -1.0, 1.0)
+    xor = None
+    scaled = np.asarray(data.extra.get("mass_normalised", np.zeros(data.n_modes)), dtype=bool)
+    if scaled.size == data.n_modes and scaled[pairs.test].all():
+        xor = cross_orthogonality(test_real, phi_a, mass_a)
+    else:
+        notes.append("no cross-orthogonality: the test's shapes are not all mass-normalised")
+    return replace(
+        base,
+        pseudo_orthogonality=pseudo_orthogonality(phi_a, mass_a),
+        cross_orthogonality=xor,
+        expanded=serep_expand(transform, test_real),
+        notes=tuple(notes),
+    )
+
+
+def write_correlation_h5(path, result: Correlation) -> None:
+    """Write ``result`` to HDF5 atomically.  Layout (group ``/correlation``, attributes
+    ``model``, ``data``, ``pairing`` (mac | order), ``mapping_source``):
+
+    - ``test_hz`` (m_t,), ``model_hz`` (m_m,) [Hz]; ``dof_labels`` (n_a,) strings;
+    - ``pairs/test``, ``pairs/model`` (k,) 0-based, ``pairs/mac`` (k,), ``pairs/error_pct`` (k,);
+    - ``transform`` (4, 4) test -> model; ``points/model_node`` (n_a,) (-1: none),
+      ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3) (NaN: none);
+    - where computed: ``mac`` (m_t, m_m), ``test_auto_mac`` (m_t, m_t), ``comac`` (n_a,),
+      ``test_shapes`` (n_a, m_t) realised, ``model_shapes`` (n_a, m_m),
+      ``pseudo_orthogonality`` (k, k), ``cross_orthogonality`` (k, k), ``expanded`` (n_dof, k);
+    - ``notes`` strings.
+    """
+    import h5py
+
+    from bayesupdate.atomic import atomic_path
+
+    pts = result.mapping.points
+    with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
+        g = fh.create_group("correlation")
+        g.attrs.update(model=result.model, data=result.data, pairing=result.pairs.method,
+                       mapping_source=result.mapping.source)  # fmt: skip
+        g["test_hz"], g["model_hz"] = result.test_hz, result.model_hz
+        g["dof_labels"] = np.array(result.dof_labels, dtype=h5py.string_dtype())
+        g["notes"] = np.array(result.notes, dtype=h5py.string_dtype())
+        pairs = g.create_group("pairs")
+        pairs["test"], pairs["model"] = result.pairs.test, result.pairs.model
+        pairs["mac"], pairs["error_pct"] = result.pairs.mac, result.error_pct
+        g["transform"] = result.mapping.transform
+        points = g.create_group("points")
+        points["model_node"] = np.array([-1 if p.model_node is None else p.model_node for p in pts])
+        points["model_xyz"] = np.array([p.model_xyz or (np.nan,) * 3 for p in pts]).reshape(-1, 3)
+        points["direction"] = np.array([p.direction or (np.nan,) * 3 for p in pts]).reshape(-1, 3)
+        for name in _OPTIONAL_ARRAYS:
+            value = getattr(result, name)
+            if value is not None:
+                g[name] = value
+
+
+_OPTIONAL_ARRAYS = (
+    "mac",
+    "test_auto_mac",
+    "comac",
+    "test_shapes",
+    "model_shapes",
+    "pseudo_orthogonality",
+    "cross_orthogonality",
+    "expanded",
+)

@@ -122,13 +122,19 @@ ENDDATA
 
 def test_cmass2_is_a_rotary_inertia_about_its_component(tmp_path):
     """Rotation 5 of GRID 1 on a 400 spring with CMASS2 8 x WTMASS 0.5: f = sqrt(400 / 4)/2 pi
-    (the CONM2's translations are held; it has no inertia)."""
+    (the CONM2's translations are held; it has no inertia); on translation 3 instead, with the
+    CONM2's 0.5: f = sqrt(400 / (4 + 0.5))/2 pi."""
     from bayesupdate.nastran import load_nastran_model
 
     deck = tmp_path / "rotor.bdf"
     deck.write_text(ROTOR)
     r = load_nastran_model(deck).solve(n_modes=1)
     assert r.frequencies_hz[0] == pytest.approx(np.sqrt(400.0 / 4.0) / (2 * np.pi), rel=1e-10)
+    deck.write_text(ROTOR.replace("CMASS2,3,8.,1,5", "CMASS2,3,8.,1,3")
+                    .replace("CELAS2,4,400.,1,5", "CELAS2,4,400.,1,3")
+                    .replace("SPC1,1,12346,1", "SPC1,1,12456,1"))  # fmt: skip
+    r = load_nastran_model(deck).solve(n_modes=1)
+    assert r.frequencies_hz[0] == pytest.approx(np.sqrt(400.0 / 4.5) / (2 * np.pi), rel=1e-10)
 
 
 @pytest.mark.parametrize(

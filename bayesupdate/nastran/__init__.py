@@ -58,4 +58,6 @@ def _has_mass(structure) -> bool:
         (s.shells.rho > 1e-200).any() or (s.shells.nsm > 0).any()
     )
     lines = any(x is not None and x.has_mass() for x in (s.general_beams, s.rods))
-    return bool(shells or lines or (s.beam_rho > 1e-200).any() or (s.mass_value > 0).any())
+    scalar = s.scalar_masses is not None and bool((s.scalar_masses.mass > 0).any())
+    points = bool((s.mass_value > 0).any() or (s.mass_inertia != 0).any())
+    return bool(shells or lines or scalar or points or (s.beam_rho > 1e-200).any())

@@ -69,20 +69,26 @@ def _add_conm1(ctx: Context, m) -> None:
 
 
 def _add_cmass(ctx: Context, m) -> None:
-    """A scalar mass on one grid's rotation component: the inertia m e e^T about the CD axis e
-    (a point inertia; a translation component or two grids are refused)."""
-    if m.name == "CMASS1":
-        value = ctx.prop(m, ("PMASS",)).real("M")
-    else:
-        value = m.real("M")
-    if m["G2"] or m["C2"]:
-        m.fail("a scalar mass between two grids is not supported (one grid only)")
-    comp = m.int("C1")
-    if comp not in (4, 5, 6):
-        m.fail(f"component {comp}: only a rotation (4, 5, 6) of one grid is supported")
-    row = ctx.rows(m, ("G1",))[0]
-    e = ctx.grids.frame[row][comp - 4]
-    J = value * ctx.wtmass * np.outer(e, e)
+    """A scalar mass (``fe.scalar_mass``) on component C1 of G1 (and C2 of G2, or ground), in
+    the grids' CD frames: a rotation component makes it a rotary inertia about that axis."""
+    value = ctx.prop(m, ("PMASS",)).real("M") if m.name == "CMASS1" else m.real("M")
     if value < 0:
         m.fail("a negative mass is not supported")
-    ctx.builder.add_point_mass(ctx.node[row], 0.0, f"{m.name} {m.id()}", J)
+    ends = [(g, c) for g, c in ((m["G1"], m["C1"]), (m["G2"], m["C2"])) if g]
+    if not ends:
+        m.fail("needs a grid (scalar points are not supported)")
+    rows = ctx.grids.index([g for g, _ in ends], m)
+    comps = [int(c or 0) for _, c in ends]
+    if not all(1 <= c <= 6 for c in comps):
+        m.fail("components must be 1-6 (scalar points are not supported)")
+    frames = [ctx.grids.frame[r] for r in rows]
+    b = (
+        dict(node_b=ctx.node[rows[1]], component_b=comps[1], frame_b=frames[1])
+        if len(ends) == 2
+        else {}
+    )
+    try:
+        ctx.builder.add_scalar_mass(ctx.node[rows[0]], comps[0], value * ctx.wtmass,
+                                    f"{m.name} {m.id()}", frame_a=frames[0], **b)  # fmt: skip
+    except BayesUpdateError as exc:
+        m.fail(_builder_message(exc))

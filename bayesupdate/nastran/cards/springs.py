@@ -1,8 +1,8 @@
 """CELAS1/CELAS2 and CBUSH + PBUSH as springs (MSC Nastran QRG).
 
 A CBUSH whose ends are apart acts at its location (S along GA-GB, or S1-S3 in OCID) through
-rigid arms from both grids: two structure nodes at that point, each tied to its grid by an RBE2,
-with the spring between them, so moments balance as in MSC's CBUSH.
+rigid arms from both grids (``StructureBuilder.add_spring(location=...)``, ``fe.bush``), so
+moments balance as in MSC's CBUSH.
 """
 
 import numpy as np
@@ -59,8 +59,7 @@ def pbush_k(p) -> np.ndarray:
 
 def _add_cbush(ctx: Context, e) -> None:
     """A CBUSH: K1-K6 along its element axes (CID's axes; else x from GA to GB and y in the plane
-    of x and v), at its location P; ends apart get rigid arms from GA and GB to P (two nodes at
-    P tied by RBE2s, the spring between them), so moments balance as in MSC's CBUSH."""
+    of x and v), at its location P; ends apart act at P through rigid arms from GA and GB."""
     prop = ctx.prop(e, ("PBUSH",))
     k = pbush_k(prop)
     gb = e["GB"]
@@ -83,13 +82,10 @@ def _add_cbush(ctx: Context, e) -> None:
     part = f"PBUSH {prop.id()}"
     a = ctx.node[rows[0]]
     b = ctx.node[rows[1]] if len(ids) == 2 else None
+    p = None
     if len(ids) == 2 and np.linalg.norm(x[1] - x[0]) > 0:
         p = _cbush_point(ctx, e, x)
-        arms = [ctx.builder.add_node(p) for _ in range(2)]
-        ctx.builder.add_rbe2(a, [arms[0]], "123456")
-        ctx.builder.add_rbe2(b, [arms[1]], "123456")
-        a, b = arms
-    ctx.builder.add_spring(a, b, k, part, frame=frame)
+    ctx.builder.add_spring(a, b, k, part, frame=frame, location=p)
 
 
 def _cbush_point(ctx: Context, e, x) -> np.ndarray:

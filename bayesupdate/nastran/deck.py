@@ -19,17 +19,17 @@ from pathlib import Path
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.nastran.bulk import Card, CardError, card_name, split_line
+from bayesupdate.nastran.cards import FAMILIES as FAMILIES_OF_CARDS
 
 #: file suffixes read as Nastran bulk data
 SUFFIXES = (".bdf", ".dat", ".nas", ".blk")
 
-#: cards turned into the FE model (``reader``, ``cards``)
+#: cards turned into the FE model (``reader``; the elements of each ``cards`` family)
 ELEMENT_CARDS = {
     "GRID", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CQUAD4", "CTRIA3",
-    "PSHELL", "MAT1", "CBAR", "CBEAM", "PBAR", "PBARL", "PBEAM", "PBEAML", "CROD", "CONROD",
-    "PROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "PMASS", "CELAS1", "CELAS2", "PELAS", "CBUSH",
-    "PBUSH", "RBE2", "RBE3", "RBAR", "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM",
-}  # fmt: skip
+    "PSHELL", "MAT1", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PMASS", "PELAS", "PBUSH",
+    "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM",
+} | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
 #: design variables and relations: parameters when the study names none (``desvar``)
 DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1"}
 #: the deck's own optimisation problem (SOL 200): read and listed, not used
@@ -57,8 +57,8 @@ IGNORED_PARAMS = {
     "FLUIDSE", "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
 }  # fmt: skip
-#: PARAMs that would change the normal modes and are not modelled: refused, named
-REFUSED_PARAMS = "any other PARAM (e.g. G, W3, W4: damping; SNORM: shell normals)"
+# any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,
+# W4: damping; SNORM: shell normals)
 
 
 def is_nastran_path(text) -> bool:

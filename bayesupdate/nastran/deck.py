@@ -9,7 +9,7 @@ decks that reuse one marker on every card (``+cb1``) read as MSC reads them.
 
 ``check_cards`` sorts every card into read (``SUPPORTED``), listed with no effect on the normal
 modes (``NO_EFFECT_CARDS``, the design model ``DESIGN_CARDS``, ``IGNORED_PARAMS``) and refused
-(any other card, ``REFUSED_PARAMS``).  Refusals are collected over the whole deck (``Refusals``)
+(any other card; any PARAM outside ``MODEL_PARAMS`` and ``IGNORED_PARAMS``).  Refusals are collected over the whole deck (``Refusals``)
 and raised together as one ``BayesUpdateError``, each with its file:line.
 """
 
@@ -52,9 +52,9 @@ IGNORED_PARAMS = {
     "POST", "POSTEXT", "OGEOM", "GRDPNT", "RESCOMP", "OUGCORD", "PRGPST", "NOCOMPS", "PATVER",
     "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT", "PRTMAXIM", "VREF", "AUNITS", "PRTGPL", "PRTEQXIN",
     "PRTGPDT", "PRTCSTM", "PRTBGPDT", "PRTGPTT", "PRTMGG", "PRTPG", "EPZERO", "DBALL", "DBUP",
-    "DBDICT", "DBCCONV", "OPPHIPA", "ALTRED", "OUNIT1", "OUNIT2", "ITAPE", "POSTOUT", "NASPRT",
-    "SNORM", "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
-    "FLUIDSE", "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
+    "DBDICT", "DBCCONV", "OPPHIPA", "OUNIT1", "OUNIT2", "ITAPE", "POSTOUT", "NASPRT",
+    "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
+    "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
 }  # fmt: skip
 # any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,

@@ -9,8 +9,9 @@ decks that reuse one marker on every card (``+cb1``) read as MSC reads them.
 
 ``check_cards`` sorts every card into read (``SUPPORTED``), listed with no effect on the normal
 modes (``NO_EFFECT_CARDS``, the design model ``DESIGN_CARDS``, ``IGNORED_PARAMS``) and refused
-(any other card; any PARAM outside ``MODEL_PARAMS`` and ``IGNORED_PARAMS``).  Refusals are collected over the whole deck (``Refusals``)
-and raised together as one ``BayesUpdateError``, each with its file:line.
+(any other card; any PARAM outside ``MODEL_PARAMS`` and ``IGNORED_PARAMS``).  Refusals are
+collected over the whole deck (``Refusals``) and raised together as one ``BayesUpdateError``,
+each with its file:line.
 """
 
 import re

@@ -11,8 +11,8 @@ leading and trailing edge lines of ``ForwardAccel`` / ``AftAccel`` as UFF 82 tra
 Run: .venv/bin/python studies/maewing1_test_geometry.py OUT.unv|OUT.csv
 (a .unv is written as UFF 164 + 15 + 82 in inches; a .csv in inches), or with ``--table`` to
 print the pairing tables of docs/guide/test-geometry.md: the accelerometers on v4.2's GRIDs
-1-20 (nodes) and on v3.3's beams (points on elements; the v3.3 deck is read with pyNastran
-directly while ``load_nastran_model`` stops at its PARAM PRTMAXIM).
+1-20 (nodes) and on v3.3's beams (points on elements; the v3.3 deck's GRIDs and CBEAM/CBAR
+cards read by ``bayesupdate.nastran.deck``).
 """
 
 import re
@@ -77,19 +77,20 @@ def v42_grids():
 
 
 def v33_beams():
-    """``ModelMesh`` of v3.3's GRIDs and line elements (CBEAM, CBAR), read with pyNastran."""
-    from bayesupdate.nastran.deck import _pynastran_read_bdf  # pyNastran with its NumPy shim
+    """``ModelMesh`` of v3.3's GRIDs and line elements (CBEAM, CBAR), read by
+    ``bayesupdate.nastran``'s own reader."""
+    from bayesupdate.nastran.deck import Refusals, read_deck
+    from bayesupdate.nastran.frames import read_grids
     from bayesupdate.testgeom import ModelMesh
 
-    deck = GVT_INFO.parents[1] / "fem/v3.3_hati/sol103_mAEWing1_Hati_FEMv3p3.bdf"
-    bdf = _pynastran_read_bdf()(str(deck), xref=True, debug=None)
-    ids = np.array(sorted(bdf.nodes))
-    row = {g: i for i, g in enumerate(ids)}
-    lines = [[row[n] for n in e.node_ids[:2]] for e in bdf.elements.values()
-             if e.type in ("CBEAM", "CBAR")]  # fmt: skip
-    xyz = np.array([bdf.nodes[g].get_position() for g in ids])
+    path = GVT_INFO.parents[1] / "fem/v3.3_hati/sol103_mAEWing1_Hati_FEMv3p3.bdf"
+    deck = read_deck(path)
+    grids = read_grids(deck, Refusals(str(path)))
+    ids = grids.ids
+    row = {int(g): i for i, g in enumerate(ids)}
+    lines = [[row[c["GA"]], row[c["GB"]]] for c in deck.of("CBEAM", "CBAR")]
     none = [np.zeros((0, k), int) for k in (4, 3)]
-    return ModelMesh(xyz, ids, np.array(lines), *none, "in", 0.0254)
+    return ModelMesh(grids.xyz, ids, np.array(lines), *none, "in", 0.0254)
 
 
 def print_tables() -> None:

@@ -17,7 +17,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 
 import correlate_femap  # noqa: E402

@@ -227,7 +227,6 @@ def test_ctria3_deck_of_the_plate_through_modes(tmp_path, capsys):
     """The same plate as a Nastran deck (CTRIA3, PSHELL, MAT1, SPC1) through ``bayesupdate modes
     --model`` (the reader keeps consistent shell mass): modes 1-8 within 1 % of Kirchhoff at
     a/t = 100 (measured +0.11 ... +0.93 %, as the mesh built directly)."""
-    pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
     import json
 
     from bayesupdate.cli import main

@@ -6,7 +6,7 @@ point's GRID; its test is simulated (``simulate --model true.bdf --test-points``
 identified.  ``discover`` on the study (the deck without that CONM2, one bound thickness) must
 name an added mass at that point, with the CONM2's mass.  With PSHELL 2 given its own MAT1 at
 0.8 x E instead, it must name a stiffness change of PSHELL 2 by 0.8.  On a test of the deck
-itself it must name nothing.  Skipped without pyNastran (``pip install bayesupdate[nastran]``).
+itself it must name nothing.
 """
 
 import json
@@ -14,8 +14,6 @@ import json
 import pytest
 
 from bayesupdate.cli import main
-
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
 
 NX, NY = 6, 3
 #: test point -> GRID (id = 1 + i + 7 j): the corners and two inner GRIDs

@@ -14,7 +14,7 @@ the posterior converged; each thickness's posterior mean lies within one posteri
 of the truth (the issue's criterion); the re-read deck gives the frequencies of the deck solved
 at the posterior mean to 1e-6 (``--write-bdf`` writes full precision; ``modes --json`` rounds to
 1e-6 Hz).  About 200 s of CPU, most of it the reduced basis's 96 full solves of 26,832 DOFs, so
-it runs with BAYESUPDATE_LONG_TESTS=1.  Skipped without pyNastran or without the shared data.
+it runs with BAYESUPDATE_LONG_TESTS=1.  Skipped without the shared data.
 """
 
 import json
@@ -25,8 +25,6 @@ import numpy as np
 import pytest
 
 from bayesupdate.cli import main
-
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
 
 DECK = Path(__file__).resolve().parents[2] / "shared/data/nastran/femap_exhaust/exhaust.bdf"
 needs_deck = pytest.mark.skipif(not DECK.exists(), reason=f"shared data not found: {DECK}")

@@ -3,7 +3,7 @@ deck.bdf`` with the points from ``--test-points`` or a study's ``[model.test_poi
 too), and measured directions in a GRID's output (CD) frame, on the free-free steel plate deck
 of ``test_nastran_params`` (two PSHELLs, one CONM2).  GRID 5 has a rectangular CD rotated 30 deg
 about z, GRID 12 a cylindrical CD about the z axis through the origin: a direction given in
-either maps to basic analytically.  Skipped without pyNastran (``bayesupdate[nastran]``).
+either maps to basic analytically.
 """
 
 import json
@@ -14,8 +14,6 @@ import pytest
 from test_nastran_params import _plate
 
 from bayesupdate.cli import main
-
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
 
 ANGLE = np.radians(30.0)
 

@@ -7,16 +7,13 @@ PROD A, J, NSM enter K and M linearly.  The affine sum must equal the deck's ful
 match full solves within the certified tolerance, and bound them from above (Rayleigh-Ritz).
 Fields that do not enter linearly (a PBARL dimension, a shear-flexible PBEAM's I1, E and A
 together) are named in a one-line error, and the reduced model falls back to full solves with
-that reason.  Skipped without pyNastran or the shared data.
+that reason.  Skipped without the shared data.
 """
 
 import warnings
 
 import numpy as np
 import pytest
-
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
-
 from test_nastran_lines import BEAM, _deck, _load, _variant  # noqa: E402
 
 from bayesupdate.errors import BayesUpdateError  # noqa: E402

@@ -18,8 +18,6 @@ import pytest
 from bayesupdate.cli import main
 from bayesupdate.pipelines.sensitivity import confounded_groups, identifiability
 
-pytest.importorskip("pyNastran", reason="pip install bayesupdate[nastran] (pyNastran)")
-
 SHARED = next(
     (p / "shared" for p in Path(__file__).resolve().parents if (p / "shared" / "data").is_dir()),
     Path(__file__).resolve().parents[2] / "shared",

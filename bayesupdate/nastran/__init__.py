@@ -1,7 +1,7 @@
 """Nastran bulk data in: a user's deck (.bdf, .dat, .nas, .blk) as an FE model.
 
-``load_nastran_model(path)`` reads the deck with pyNastran (optional extra:
-``pip install bayesupdate[nastran]``), converts it to a ``Structure`` (``reader``) and returns an
+``load_nastran_model(path)`` reads the deck with the package's own bulk-data reader (``deck``,
+``bulk``: no extra needed), converts it to a ``Structure`` (``reader``) and returns an
 ``FEModel`` whose ``structure.metadata["nastran"]`` records the units, PARAMs and notes.
 """
 
@@ -10,13 +10,17 @@ from bayesupdate.nastran.deck import SUFFIXES, is_nastran_path
 __all__ = ["SUFFIXES", "is_nastran_path", "load_nastran_model"]
 
 
-def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, **options):
+def load_nastran_model(
+    path, parameters=None, test_labels=(), test_points=None, units=None, **options
+):
     """``NastranModel`` of the deck at ``path``.
 
     parameters : the study's ``{name: {binds, bounds, ...}}`` tables (``nastran.bindings``); none:
     the deck's DESVARs (``nastran.desvar``) if it has any, else no parameters.
     test_labels : test DOF labels the model reads shapes at (``nastran.test_points``);
-    test_points : ``[model.test_points]`` {test node: GRID id}."""
+    test_points : ``[model.test_points]`` {test node: GRID id}; units : the deck's unit system
+    by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognised from WTMASS
+    and the MAT1 moduli."""
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.nastran.model import NastranModel, deck_bindings
     from bayesupdate.nastran.reader import read_structure
@@ -24,20 +28,27 @@ def load_nastran_model(path, parameters=None, test_labels=(), test_points=None, 
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info, bdf = read_structure(path)
+    structure, info, deck = read_structure(path)
+    if units is not None:
+        from bayesupdate.nastran.units import named_system
+
+        info["units"] = named_system(units, info["wtmass"])
     if not _has_mass(structure):
         raise BayesUpdateError(
             f"Nastran model {path}: the deck has no mass (MAT1 RHO, NSM, CONM2 all zero)"
         )
     if test_labels:
         structure = with_test_points(structure, test_labels, test_points, info["deck"])
-    if not parameters and bdf.desvars:
-        from bayesupdate.nastran.desvar import desvar_parameters
+    if not parameters and deck.of("DESVAR"):
+        from bayesupdate.nastran.desvar import desvar_parameters, unbound_note
 
-        parameters = desvar_parameters(bdf)
-    bindings, defaults, bounds = deck_bindings(parameters or {}, bdf, structure)
+        parameters = desvar_parameters(deck)
+        note = unbound_note(deck, parameters)
+        if note:
+            info["notes"].append(note)
+    bindings, defaults, bounds = deck_bindings(parameters or {}, deck, structure)
     return NastranModel(
-        structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=bdf
+        structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=deck
     )
 
 
@@ -47,4 +58,6 @@ def _has_mass(structure) -> bool:
         (s.shells.rho > 1e-200).any() or (s.shells.nsm > 0).any()
     )
     lines = any(x is not None and x.has_mass() for x in (s.general_beams, s.rods))
-    return bool(shells or lines or (s.beam_rho > 1e-200).any() or (s.mass_value > 0).any())
+    scalar = s.scalar_masses is not None and bool((s.scalar_masses.mass > 0).any())
+    points = bool((s.mass_value > 0).any() or (s.mass_inertia != 0).any())
+    return bool(shells or lines or scalar or points or (s.beam_rho > 1e-200).any())

@@ -38,25 +38,26 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.nastran.bulk import CardError, with_fields
 
-_BAR = (("A", "A"), ("I1", "i1"), ("I2", "i2"), ("J", "j"), ("NSM", "nsm"))
-_DIMS = {f"DIM{k}": ("line", f"dim{k}", "line") for k in range(1, 11)}
-#: card -> {field: (FE property, pyNastran attribute, structure family)}
+_BAR = ("A", "I1", "I2", "J", "NSM")
+_DIMS = {f"DIM{k}": ("line", "line") for k in range(1, 11)}
+#: card -> {field: (FE property, structure family)}
 FIELDS = {
-    "PSHELL": {"T": ("thickness", "t", "shell")},
-    "MAT1": {"E": ("youngs_modulus", "e", "shell"), "RHO": ("density", "rho", "shell")},
-    "CONM2": {"M": ("mass_factor", "mass", "mass")},
-    "CELAS2": {"K": ("stiffness_factor", "k", "spring")},
-    "PELAS": {"K": ("stiffness_factor", "k", "spring")},
+    "PSHELL": {"T": ("thickness", "shell")},
+    "MAT1": {"E": ("youngs_modulus", "shell"), "RHO": ("density", "shell")},
+    "CONM2": {"M": ("mass_factor", "mass")},
+    "CELAS2": {"K": ("stiffness_factor", "spring")},
+    "PELAS": {"K": ("stiffness_factor", "spring")},
     "PBUSH": {
-        **{f"K{i}": ("stiffness_factor", f"Ki{i - 1}", "spring") for i in range(1, 7)},
-        "K": ("stiffness_factor", "Ki", "spring"),
+        **{f"K{i}": ("stiffness_factor", "spring") for i in range(1, 7)},
+        "K": ("stiffness_factor", "spring"),
     },
-    "PBAR": {f: ("line", a, "line") for f, a in _BAR},
-    "PBEAM": {f: ("line", a, "line") for f, a in _BAR},
-    "PROD": {f: ("line", a, "line") for f, a in (("A", "A"), ("J", "j"), ("NSM", "nsm"))},
-    "PBARL": {**_DIMS, "NSM": ("line", "nsm", "line")},
-    "PBEAML": {**_DIMS, "NSM": ("line", "nsm", "line")},
+    "PBAR": {f: ("line", "line") for f in _BAR},
+    "PBEAM": {f: ("line", "line") for f in _BAR},
+    "PROD": {f: ("line", "line") for f in ("A", "J", "NSM")},
+    "PBARL": {**_DIMS, "NSM": ("line", "line")},
+    "PBEAML": {**_DIMS, "NSM": ("line", "line")},
 }
 #: line properties (their elements are re-built: ``lines``)
 LINE_PROPERTIES = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD")
@@ -124,81 +125,98 @@ def _bindable() -> str:
     )
 
 
-def _card(bdf, f: DeckField, i: int):
-    table = {
-        **{c: bdf.properties for c in ("PSHELL", "PELAS", "PBUSH", *LINE_PROPERTIES)},
-        "MAT1": bdf.materials,
-        "CONM2": bdf.masses,
-        "CELAS2": bdf.elements,
-    }[f.card]
-    card = table.get(i)
-    if card is None or card.type != f.card:
+def _card(deck, f: DeckField, i: int):
+    """The deck's card ``f.card`` with id ``i``; a one-line error when there is none."""
+    card = deck.table(f.card).get(i)
+    if card is None or card.name != f.card:
         raise BayesUpdateError(f"parameter binds {f.spec!r}: the deck has no {f.card} {i}")
     return card
 
 
-def field_value(card, f: DeckField) -> float:
-    """The deck's value of field ``f`` on pyNastran ``card`` (PBUSH K scale: the largest K; a
-    PBEAM(L): its first station)."""
-    _, attr, _ = FIELDS[f.card][f.field]
-    if attr.startswith("Ki"):
-        k = [float(v or 0.0) for v in card.Ki]
-        return max(k) if attr == "Ki" else k[int(attr[2:])]
-    if attr.startswith("dim"):
-        dims = np.atleast_2d(np.asarray(card.dim, dtype=float))
-        k = int(attr[3:]) - 1
-        if k >= dims.shape[1]:
+def _where(card, f: DeckField) -> list[int]:
+    """Raw field indices of field ``f`` on ``card`` (a PBEAM(L): end A and every station)."""
+    from bayesupdate.nastran.cards import L_DIMS, pbeam_layout
+
+    if f.field.startswith("DIM") or (f.card in ("PBARL", "PBEAML") and f.field == "NSM"):
+        kind = str(card["TYPE"])
+        n = L_DIMS.get(kind, 0)
+        k = n if f.field == "NSM" else int(f.field[3:]) - 1
+        if f.field != "NSM" and k >= n:
             raise BayesUpdateError(
-                f"parameter binds {f.spec!r}: {f.card} {card.pid} ({card.Type}) has "
-                f"{dims.shape[1]} dimensions"
+                f"parameter binds {f.spec!r}: {f.card} {card.id()} ({kind}) has {n} dimensions"
             )
-        return float(dims[0, k])
-    value = getattr(card, attr)
-    return float(np.atleast_1d(np.asarray(value if value is not None else 0.0, float))[0])
+        out, i = [8 + k], 9 + n
+        while f.card == "PBEAML" and i < len(card.raw):  # stations: SO, X/XB, DIMs, NSM
+            out.append(i + 2 + k)
+            i += 3 + n
+        return out
+    if f.card == "PBEAM":
+        k = ("A", "I1", "I2", "I12", "J", "NSM").index(f.field)
+        stations, _ = pbeam_layout(card)
+        return [start + k for start, _, _ in stations]
+    return [card.position(f.field)]
 
 
-def set_field(card, f: DeckField, value: float, nominal: float) -> None:
-    """Write ``value`` (an absolute value, or a factor on ``nominal`` for a scale) into ``card``
-    (a PBEAM(L): at every station; a MAT1 E whose G was blank: G follows, as Nastran derives
-    it)."""
-    _, attr, _ = FIELDS[f.card][f.field]
-    if attr == "Ki":
-        card.Ki = [None if v is None else float(v) * value for v in card.Ki]
-        return
+def field_value(card, f: DeckField) -> float:
+    """The deck's value of field ``f`` on ``card`` (PBUSH K scale: the largest K; a PBEAM(L):
+    end A)."""
+    from bayesupdate.nastran.cards import pbush_k
+
+    try:
+        if f.card == "PBUSH":
+            k = pbush_k(card)
+            return float(k.max() if f.field == "K" else k[int(f.field[1:]) - 1])
+        i = _where(card, f)[0]
+        v = card.value(i)
+        if v is None:
+            v = dict(card_defaults(card)).get(i, 0.0)
+        return float(v)
+    except CardError as exc:
+        raise BayesUpdateError(f"parameter binds {f.spec!r}: {exc}") from None
+
+
+def card_defaults(card) -> dict[int, object]:
+    from bayesupdate.nastran.bulk import FIELDS as TABLE
+
+    return {i: d for i, (_, d) in enumerate(TABLE.get(card.name, ())) if d is not None}
+
+
+def set_field(card, f: DeckField, value: float, nominal: float):
+    """``card`` with ``value`` written in (an absolute value, or a factor on ``nominal`` for a
+    scale; a PBEAM(L): at every station where it is given; a MAT1 E whose G was blank: G stays
+    blank and follows E, as Nastran derives it)."""
+    if f.card == "PBUSH":
+        starts = [s for s in range(0, len(card.raw), 8) if card.value(s + 1) == "K"]
+        if not starts:
+            return card
+        s = starts[0] + 2
+        if f.field == "K":
+            given = [k for k in range(6) if card.value(s + k) is not None]
+            return with_fields(card, {s + k: float(card.value(s + k)) * value for k in given})
+        new = value * nominal if f.scale else value
+        return with_fields(card, {s + int(f.field[1:]) - 1: float(new)})
     new = value * nominal if f.scale else value
-    if attr.startswith("Ki"):
-        k = list(card.Ki)
-        k[int(attr[2:])] = new
-        card.Ki = k
-    elif attr.startswith("dim"):
-        dims = np.array(card.dim, dtype=float)  # a copy; (stations, n) for a PBEAML
-        dims[..., int(attr[3:]) - 1] = new
-        card.dim = dims if isinstance(card.dim, np.ndarray) else dims.tolist()
-    elif np.ndim(getattr(card, attr)):  # a PBEAM(L)'s value at each station
-        old = getattr(card, attr)
-        values = np.full(np.shape(old), new, dtype=float)
-        setattr(card, attr, values if isinstance(old, np.ndarray) else values.tolist())
-    elif f.card == "MAT1" and attr == "e" and card.repr_fields()[3] is None:
-        card.e = new
-        card.g = new / (2.0 * (1.0 + (card.nu or 0.0)))
-    else:
-        setattr(card, attr, new)
+    where = _where(card, f)
+    changes = {where[0]: float(new)}
+    # a later PBEAM(L) station given explicitly gets the value too (blank: end A's, QRG)
+    changes.update({i: float(new) for i in where[1:] if card.value(i) is not None})
+    out = with_fields(card, changes)
     if f.card == "PSHELL" and f.field == "T":
-        # blank Z1/Z2 mean -+T/2 (pyNastran fills them in): they follow the new T
-        for z, sign in (("z1", -0.5), ("z2", 0.5)):
-            if getattr(card, z, None) is not None and abs(getattr(card, z) - sign * nominal) < (
-                1e-12 * abs(nominal)
-            ):
-                setattr(card, z, sign * new)
+        # Z1/Z2 written as -+T/2 follow the new T (blank ones do so by themselves)
+        for z, sign in (("Z1", -0.5), ("Z2", 0.5)):
+            old = card[z]
+            if isinstance(old, float) and abs(old - sign * nominal) < 1e-12 * abs(nominal):
+                out = with_fields(out, {card.position(z): sign * float(new)})
+    return out
 
 
-def resolve(f: DeckField, bdf, structure, name: str) -> DeckBinding:
-    """The masks, factor and default of field ``f`` on the structure built from ``bdf``."""
-    cards = [_card(bdf, f, i) for i in f.ids]
+def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
+    """The masks, factor and default of field ``f`` on the structure built from ``deck``."""
+    cards = [_card(deck, f, i) for i in f.ids]
     nominal = np.array([field_value(c, f) for c in cards])
-    prop, _, family = FIELDS[f.card][f.field]
-    masks = _masks(f, bdf, structure, cards)
-    lines = line_elements(bdf, f)
+    prop, family = FIELDS[f.card][f.field]
+    masks = _masks(f, deck, structure, cards)
+    lines = line_elements(deck, f)
     if not any(m.any() for m in masks.values()) and not lines:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
     wtmass = float(structure.metadata["nastran"]["wtmass"])
@@ -225,24 +243,23 @@ def resolve(f: DeckField, bdf, structure, name: str) -> DeckBinding:
     )  # fmt: skip
 
 
-def line_elements(bdf, f: DeckField) -> tuple[int, ...]:
+def line_elements(deck, f: DeckField) -> tuple[int, ...]:
     """Ids of the CBAR/CBEAM/CROD/CONROD elements a binding re-builds: those of its line
     properties, or (MAT1) of every line property or CONROD with that MID."""
     if f.card in LINE_PROPERTIES:
         pids = set(f.ids)
     elif f.card == "MAT1":
-        pids = {p.pid for p in bdf.properties.values()
-                if p.type in LINE_PROPERTIES and int(p.mid) in f.ids}  # fmt: skip
+        pids = {i for i, p in deck.table(*LINE_PROPERTIES).items() if p["MID"] in f.ids}
     else:
         return ()
     return tuple(sorted(
-        e.eid for e in bdf.elements.values()
-        if (e.type in LINE_ELEMENTS and e.pid in pids)
-        or (f.card == "MAT1" and e.type == "CONROD" and int(e.mid) in f.ids)
+        e.id() for e in deck.of(*LINE_ELEMENTS, "CONROD")
+        if (e.name in LINE_ELEMENTS and e["PID"] in pids)
+        or (f.card == "MAT1" and e.name == "CONROD" and e["MID"] in f.ids)
     ))  # fmt: skip
 
 
-def _masks(f: DeckField, bdf, structure, cards) -> dict:
+def _masks(f: DeckField, deck, structure, cards) -> dict:
     s = structure
     parts = list(s.parts)
     n_shell = 0 if s.shells is None else s.shells.n_elements
@@ -254,7 +271,7 @@ def _masks(f: DeckField, bdf, structure, cards) -> dict:
     if f.card in LINE_PROPERTIES:
         return out
     if f.card in ("PSHELL", "MAT1"):
-        pids = f.ids if f.card == "PSHELL" else _pshells_of(bdf, f)
+        pids = f.ids if f.card == "PSHELL" else _pshells_of(deck, f)
         names = [parts.index(f"PSHELL {p}") for p in pids if f"PSHELL {p}" in parts]
         if n_shell:
             out["shell"] = np.isin(s.shells.part, names)
@@ -266,8 +283,7 @@ def _masks(f: DeckField, bdf, structure, cards) -> dict:
         if f.card == "CELAS2":
             names = [f"CELAS2 {i}" for i in f.ids]
         elif f.card == "PELAS":
-            names = [f"CELAS1 {e.eid}" for e in bdf.elements.values()
-                     if e.type == "CELAS1" and e.pid in f.ids]  # fmt: skip
+            names = [f"CELAS1 {e.id()}" for e in deck.of("CELAS1") if e["PID"] in f.ids]
         else:
             names = [f"PBUSH {i}" for i in f.ids]
             _check_pbush(f, cards)
@@ -280,13 +296,13 @@ def _part_mask(part_of, parts, names) -> np.ndarray:
     return np.isin(part_of, idx)
 
 
-def _pshells_of(bdf, f: DeckField) -> list[int]:
+def _pshells_of(deck, f: DeckField) -> list[int]:
     """PSHELL ids whose MID1 is one of ``f.ids`` (line properties: ``line_elements``)."""
-    return [p.pid for p in bdf.properties.values() if p.type == "PSHELL" and p.mid1 in f.ids]
+    return [i for i, p in deck.table("PSHELL").items() if p["MID1"] in f.ids]
 
 
 def _check_uniform_thickness(f: DeckField, s, mask, cards) -> None:
-    t = np.array([c.t for c in cards], float)
+    t = np.array([c.real("T") for c in cards], float)
     pid_t = dict(zip(f.ids, t, strict=True))
     parts = np.array([pid_t.get(int(s.parts[p].split()[1]), np.nan) for p in s.shells.part[mask]])
     if not np.allclose(s.shells.thickness[mask], parts, rtol=1e-9):
@@ -300,10 +316,12 @@ def _check_pbush(f: DeckField, cards) -> None:
     if f.field == "K":
         return
     j = int(f.field[1:]) - 1
+    from bayesupdate.nastran.cards import pbush_k
+
     for c in cards:
-        k = [float(v or 0.0) for v in c.Ki]
+        k = pbush_k(c)
         if any(v != 0 for i, v in enumerate(k) if i != j):
             raise BayesUpdateError(
-                f"parameter binds {f.spec!r}: PBUSH {c.pid} has other non-zero K; "
-                f"bind 'PBUSH {c.pid} K scale' (all six)"
+                f"parameter binds {f.spec!r}: PBUSH {c.id()} has other non-zero K; "
+                f"bind 'PBUSH {c.id()} K scale' (all six)"
             )

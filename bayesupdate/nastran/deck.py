@@ -1,42 +1,65 @@
-"""Reading a Nastran bulk-data deck with pyNastran (an optional extra) and checking its cards.
+"""A Nastran deck's files read into cards: executive, case control, ``BEGIN BULK`` .. ``ENDDATA``.
 
-``read_deck(path)`` returns the cross-referenced pyNastran ``BDF`` (``INCLUDE`` files followed);
-every failure is one ``BayesUpdateError`` line.  ``check_cards`` refuses any card outside
-``SUPPORTED`` and names it with its file and line: nothing is skipped silently.
+``read_deck(path)`` follows ``INCLUDE`` (quoted or not, continued over lines, relative to the
+including file; a name missing in its exact letter case is found in another, with a note),
+reads SOL and the case control's METHOD, SPC and SET selections (the first subcase over the
+global ones), and joins each card's continuation lines (``bulk``): a line whose first field is
+blank or starts with ``+`` / ``*`` continues the card above it, whatever its marker says, so
+decks that reuse one marker on every card (``+cb1``) read as MSC reads them.
+
+``check_cards`` sorts every card into read (``SUPPORTED``), listed with no effect on the normal
+modes (``NO_EFFECT_CARDS``, the design model ``DESIGN_CARDS``, ``IGNORED_PARAMS``) and refused
+(any other card; any PARAM outside ``MODEL_PARAMS`` and ``IGNORED_PARAMS``).  Refusals are
+collected over the whole deck (``Refusals``) and raised together as one ``BayesUpdateError``,
+each with its file:line.
 """
 
-import io
 import re
-import warnings
-from contextlib import redirect_stderr, redirect_stdout
+from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.nastran.bulk import Card, CardError, card_name, split_line
+from bayesupdate.nastran.cards import FAMILIES as FAMILIES_OF_CARDS
 
 #: file suffixes read as Nastran bulk data
 SUFFIXES = (".bdf", ".dat", ".nas", ".blk")
 
-#: cards turned into the FE model (``reader``)
+#: cards turned into the FE model (``reader``; the elements of each ``cards`` family)
 ELEMENT_CARDS = {
-    "GRID", "CORD2R", "CORD2C", "CORD2S", "CQUAD4", "CTRIA3", "PSHELL", "MAT1", "CBAR", "CBEAM",
-    "PBAR", "PBARL", "PBEAM", "PBEAML", "CROD", "CONROD", "PROD", "CONM2", "CONM1", "CELAS1",
-    "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2", "RBE3", "RBAR", "SPC", "SPC1", "SPCADD",
-    "EIGRL", "EIGR", "PARAM",
-}  # fmt: skip
-#: design variables: parameters when the study names none (``desvar``)
-DESIGN_CARDS = {"DESVAR", "DVPREL1"}
+    "GRID", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CQUAD4", "CTRIA3",
+    "PSHELL", "MAT1", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PMASS", "PELAS", "PBUSH",
+    "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM",
+} | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
+#: design variables and relations: parameters when the study names none (``desvar``)
+DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1"}
+#: the deck's own optimisation problem (SOL 200): read and listed, not used
+OBJECTIVE_CARDS = {"DRESP1", "DRESP2", "DRESP3", "DCONSTR", "DCONADD", "DEQATN", "DOPTPRM",
+                   "DTABLE", "DLINK", "DSCREEN"}  # fmt: skip
 #: cards with no effect on the normal modes: output sets (SET1: test points, ``test_points``),
-#: rigid-body reference DOFs (the solver finds the rigid-body modes itself), the end marker
+#: rigid-body reference DOFs (SUPORT: the solver finds the rigid-body modes of a free body
+#: itself), the end marker
 NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "SET1", "ENDDATA"}
-SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS
-#: PARAMs that change the model (``reader``) and PARAMs that only select output
+SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS
+#: PARAMs that shape the model (``reader``)
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
-OUTPUT_PARAMS = {
+#: PARAMs with no effect on real eigenvalues and shapes (MSC QRG, Parameters): output requests
+#: and formats (POST, POSTEXT, OGEOM, OUGCORD, PATVER, ...), printing (PRTMAXIM, PRGPST, ...),
+#: the weight summary's reference point (GRDPNT), aeroelastic velocity units (VREF, AUNITS),
+#: checks that only print or stop (MAXRATIO, BAILOUT, EPZERO), restart and database control,
+#: SOL 200 print and punch control, residual vectors (RESVEC: responses, not eigenpairs),
+#: LGDISP (nonlinear solutions only)
+IGNORED_PARAMS = {
     "POST", "POSTEXT", "OGEOM", "GRDPNT", "RESCOMP", "OUGCORD", "PRGPST", "NOCOMPS", "PATVER",
-    "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT",
+    "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT", "PRTMAXIM", "VREF", "AUNITS", "PRTGPL", "PRTEQXIN",
+    "PRTGPDT", "PRTCSTM", "PRTBGPDT", "PRTGPTT", "PRTMGG", "PRTPG", "EPZERO", "DBALL", "DBUP",
+    "DBDICT", "DBCCONV", "OPPHIPA", "OUNIT1", "OUNIT2", "ITAPE", "POSTOUT", "NASPRT",
+    "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
+    "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
+    "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
 }  # fmt: skip
+# any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,
+# W4: damping; SNORM: shell normals)
 
 
 def is_nastran_path(text) -> bool:
@@ -44,88 +67,363 @@ def is_nastran_path(text) -> bool:
     return isinstance(text, str | Path) and Path(str(text)).suffix.lower() in SUFFIXES
 
 
-def _pynastran_read_bdf():
-    """pyNastran's ``read_bdf``, or a one-line error saying how to install it."""
-    # pyNastran 1.4.1 (the latest release) still calls np.in1d, removed in NumPy 2.4; np.isin on
-    # the flattened input is the same function (NumPy's own deprecation note)
-    if not hasattr(np, "in1d"):
-        np.in1d = lambda a, b, assume_unique=False, invert=False: np.isin(  # noqa: NPY201
-            np.ravel(a), b, assume_unique=assume_unique, invert=invert
-        )
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            from pyNastran.bdf.bdf import read_bdf
-    except ImportError as exc:
-        raise BayesUpdateError(
-            "a Nastran model (.bdf) needs pyNastran: pip install bayesupdate[nastran]"
-        ) from exc
-    return read_bdf
+@dataclass
+class Refusals:
+    """Every refusal of a deck, collected over the whole read and raised once (``raise_all``)."""
+
+    path: str
+    items: list = field(default_factory=list)
+
+    def add(self, message: str) -> None:
+        if message not in self.items:
+            self.items.append(message)
+
+    def card(self, card: Card, message: str) -> None:
+        self.add(f"{card.where} {card.label}: {message}")
+
+    def guard(self, function, *args):
+        """``function(*args)``; a ``CardError`` is recorded and None returned."""
+        try:
+            return function(*args)
+        except CardError as exc:
+            self.add(str(exc))
+            return None
+
+    def raise_all(self) -> None:
+        if self.items:
+            n = len(self.items)
+            raise BayesUpdateError(
+                f"Nastran model {self.path}: {n} card(s) refused: " + "; ".join(self.items)
+            )
 
 
-def read_deck(path):
-    """The cross-referenced pyNastran ``BDF`` of the deck at ``path`` (case control included)."""
+@dataclass(frozen=True)
+class Deck:
+    """A read deck: ``cards`` in reading order, ``sol``, the case control's ``case``
+    selections ({'METHOD': 101, 'SPC': 1}) and ``case_sets`` ({SET id: ids}), ``notes`` for the
+    user, ``files`` read (main file first)."""
+
+    path: str
+    sol: str | None
+    case: dict
+    case_sets: dict
+    cards: tuple[Card, ...]
+    notes: tuple[str, ...]
+    files: tuple[str, ...]
+    _index: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def of(self, *names: str) -> list[Card]:
+        """Cards named ``names``, in reading order."""
+        return [c for c in self.cards if c.name in names]
+
+    def table(self, *names: str) -> dict[int, Card]:
+        """{id: card} of the cards named ``names`` (one id space: elements, properties, ...);
+        a second card with an id refuses it (``duplicates``)."""
+        key = tuple(sorted(names))
+        if key not in self._index:
+            out = {}
+            for c in self.of(*names):
+                try:
+                    i = c.id()
+                except CardError:
+                    continue
+                out.setdefault(i, c)
+            self._index[key] = out
+        return self._index[key]
+
+    def params(self) -> dict[str, Card]:
+        """{PARAM name: its card} (the first card of each name)."""
+        out = {}
+        for c in self.of("PARAM"):
+            out.setdefault(str(c.value(0)).upper(), c)
+        return out
+
+    def param(self, name: str, default):
+        card = self.params().get(name)
+        if card is None:
+            return default
+        value = card.value(1)
+        return default if value is None else value
+
+    @property
+    def elements(self) -> dict[int, Card]:
+        """{id: card} of the elements (lines, shells, springs; ``FAMILIES``)."""
+        return self.table(*FAMILIES["element"])
+
+    @property
+    def masses(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["mass element"])
+
+    @property
+    def properties(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["property"])
+
+    @property
+    def materials(self) -> dict[int, Card]:
+        return self.table(*FAMILIES["material"])
+
+    def count(self) -> dict[str, int]:
+        out = {}
+        for c in self.cards:
+            out[c.name] = out.get(c.name, 0) + 1
+        return dict(sorted(out.items()))
+
+
+#: id families: two cards of one family may not share an id
+FAMILIES = {
+    "element": ("CQUAD4", "CTRIA3", "CBAR", "CBEAM", "CROD", "CONROD", "CBUSH", "CELAS1",
+                "CELAS2"),
+    "mass element": ("CONM2", "CONM1", "CMASS1", "CMASS2"),
+    "rigid element": ("RBE2", "RBE3", "RBAR"),
+    "property": ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS"),
+    "material": ("MAT1",),
+    "grid": ("GRID",),
+    "coordinate system": ("CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S"),
+    "design variable": ("DESVAR",),
+}  # fmt: skip
+
+
+# -- files and INCLUDE --------------------------------------------------------------------------
+_INCLUDE = re.compile(r"^\s*INCLUDE\s*(.*)$", re.IGNORECASE)
+
+
+def _find(path: Path, notes: list) -> Path | None:
+    """``path``, or the file whose name matches it in another letter case (a note)."""
+    if path.is_file():
+        return path
+    parent = path.parent if path.parent.is_dir() else _find_dir(path.parent)
+    if parent is None:
+        return None
+    for entry in sorted(parent.iterdir()):
+        if entry.name.lower() == path.name.lower() and entry.is_file():
+            notes.append(f"INCLUDE {path.name}: read {entry.name} (the name in another case)")
+            return entry
+    return None
+
+
+def _find_dir(path: Path) -> Path | None:
+    if path.is_dir():
+        return path
+    parent = _find_dir(path.parent) if path.parent != path else None
+    if parent is None:
+        return None
+    for entry in parent.iterdir():
+        if entry.name.lower() == path.name.lower() and entry.is_dir():
+            return entry
+    return None
+
+
+def _include_name(first: str, lines: list[str], i: int) -> tuple[str, int]:
+    """(file name, index of the INCLUDE's last line): a quoted name may run over lines (each
+    line's blanks at its ends dropped), an unquoted one is the first word."""
+    text = first.split("$", 1)[0].strip() if not first.lstrip().startswith("'") else first.strip()
+    if not text.startswith("'"):
+        return text.split()[0] if text else "", i
+    name = text[1:]
+    while "'" not in name and i + 1 < len(lines):
+        i += 1
+        name += lines[i].strip()
+    return name.split("'", 1)[0], i
+
+
+def include_at(path: Path, lines: list[str], i: int, notes=None) -> tuple[Path | None, int]:
+    """(the file an INCLUDE at line ``i`` of ``path`` names, or None when line ``i`` is no
+    INCLUDE or the file is missing in every letter case; index of the INCLUDE's last line)."""
+    m = _INCLUDE.match(lines[i]) if lines[i][:1] in "iI " else None
+    if m is None:
+        return None, i
+    name, last = _include_name(m.group(1), lines, i)
+    target = _find(path.parent / name, [] if notes is None else notes) if name else None
+    return target, last
+
+
+def _lines(path: Path, refusals: Refusals, notes: list, files: list, stack=()):
+    """(file, line number, text) of ``path`` with its INCLUDEs expanded, in reading order."""
+    if path in stack:
+        refusals.add(f"{path.name}: INCLUDEs itself (through {', '.join(p.name for p in stack)})")
+        return
+    files.append(str(path))
+    lines = path.read_text(errors="replace").splitlines()
+    i = 0
+    while i < len(lines):
+        m = _INCLUDE.match(lines[i]) if lines[i][:1] in "iI " else None
+        if m is None:
+            yield str(path), i + 1, lines[i]
+            i += 1
+            continue
+        target, last = include_at(path, lines, i, notes)
+        if target is None:
+            name = _include_name(m.group(1), lines, i)[0]
+            refusals.add(f"{path.name}:{i + 1} INCLUDE {name!r}: no such file "
+                         f"in {path.parent} (in any letter case)")  # fmt: skip
+        else:
+            yield from _lines(target, refusals, notes, files, (*stack, path))
+        i = last + 1
+
+
+# -- executive and case control -----------------------------------------------------------------
+def _words(text: str) -> str:
+    return text.split("$", 1)[0].strip().upper()
+
+
+def _case_control(lines) -> tuple[dict, dict]:
+    """(selections of the first subcase over the global ones, {SET id: ints}) of case control
+    lines (file, line, text)."""
+    scopes, current = {0: {}}, 0
+    sets, pending = {}, None
+    for _, _, text in lines:
+        words = _words(text)
+        if not words:
+            continue
+        if pending is not None:  # a SET list continued after a trailing comma
+            sets[pending] += _ints(words)
+            pending = pending if words.endswith(",") else None
+            continue
+        m = re.match(r"^SUBCASE\s+(\d+)", words)
+        if m:
+            current = int(m.group(1))
+            scopes.setdefault(current, {})
+            continue
+        m = re.match(r"^SET\s+(\d+)\s*=\s*(.*)$", words)
+        if m:
+            sid = int(m.group(1))
+            sets[sid] = _ints(m.group(2))
+            pending = sid if m.group(2).endswith(",") else None
+            continue
+        m = re.match(r"^([A-Z0-9]+)(?:\([^)]*\))?\s*=\s*(\S+)", words)
+        if m:
+            scopes[current][m.group(1)[:4]] = m.group(2)
+    first = min((k for k in scopes if k > 0), default=0)
+    chosen = {**scopes[0], **scopes[first]}
+    case = {}
+    for key, name in (("METH", "METHOD"), ("SPC", "SPC")):
+        if key in chosen and chosen[key].isdigit():
+            case[name] = int(chosen[key])
+    return case, {k: tuple(v) for k, v in sets.items()}
+
+
+def _ints(text: str) -> list[int]:
+    """Integers of a SET list ('1, 2, 10 THRU 14', EXCEPT not expanded)."""
+    out, tokens = [], [t for t in re.split(r"[,\s]+", text) if t]
+    k = 0
+    while k < len(tokens):
+        if k + 2 < len(tokens) and tokens[k + 1] == "THRU" and tokens[k].isdigit():
+            out += range(int(tokens[k]), int(tokens[k + 2]) + 1)
+            k += 3
+        else:
+            out += [int(tokens[k])] if tokens[k].isdigit() else []
+            k += 1
+    return out
+
+
+# -- bulk data ----------------------------------------------------------------------------------
+def _cards(lines, refusals: Refusals) -> list[Card]:
+    """The bulk-data cards of lines (file, line, text), continuations joined (module doc)."""
+    cards, current = [], None  # current: [name, raw fields, file, line, last line]
+    for file, number, text in lines:
+        body = text.split("$", 1)[0].expandtabs(8).rstrip()
+        if not body.strip():
+            continue
+        if body.strip().upper().startswith("ENDDATA"):
+            break
+        try:
+            head, data, _ = split_line(body)
+        except ValueError as exc:
+            refusals.add(f"{Path(file).name}:{number}: {exc}")
+            continue
+        name = card_name(head)
+        if name:
+            if current is not None:
+                cards.append(Card(current[0], tuple(current[1]), current[2], current[3],
+                                  current[4]))  # fmt: skip
+            current = [name, list(data), file, number, number]
+        elif current is None or current[2] != file:
+            refusals.add(f"{Path(file).name}:{number}: a continuation line with no card above it")
+        else:
+            current[1] += data
+            current[4] = number
+    if current is not None:
+        cards.append(Card(current[0], tuple(current[1]), current[2], current[3], current[4]))
+    return [_trimmed(c) for c in cards]
+
+
+def _trimmed(card: Card) -> Card:
+    raw = list(card.raw)
+    while raw and not raw[-1].strip():
+        raw.pop()
+    return Card(card.name, tuple(raw), card.file, card.line, card.end)
+
+
+def _split(all_lines) -> tuple[list, list, list]:
+    """(executive, case control, bulk) lines: CEND ends the executive, BEGIN BULK the case
+    control; a file with neither is all bulk data."""
+    upper = [_words(t) for _, _, t in all_lines]
+    cend = next((k for k, w in enumerate(upper) if w == "CEND"), None)
+    begin = next((k for k, w in enumerate(upper) if w.startswith("BEGIN") and "BULK" in w), None)
+    if begin is None:
+        if cend is not None:
+            return all_lines[:cend], all_lines[cend + 1 :], []
+        return [], [], all_lines
+    if cend is None or cend > begin:
+        return [], all_lines[:begin], all_lines[begin + 1 :]
+    return all_lines[:cend], all_lines[cend + 1 : begin], all_lines[begin + 1 :]
+
+
+def read_deck(path, refusals: Refusals | None = None) -> Deck:
+    """The ``Deck`` of the file at ``path``; its refusals go into ``refusals`` (raised here
+    when none is given)."""
     path = Path(path)
     if not path.is_file():
         raise BayesUpdateError(f"Nastran model {path}: no such file")
-    read_bdf = _pynastran_read_bdf()
-    sink = io.StringIO()
-    try:
-        with warnings.catch_warnings(), redirect_stdout(sink), redirect_stderr(sink):
-            warnings.simplefilter("ignore")
-            model = read_bdf(str(path), xref=True, punch=_bulk_only(path), debug=None)
-    except Exception as exc:  # pyNastran raises many types: name the file and its message
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-        raise BayesUpdateError(
-            f"Nastran model {path}: pyNastran cannot read it ({type(exc).__name__}: {first[:200]})"
-        ) from exc
-    check_cards(model, path)
-    return model
+    own = refusals is None
+    refusals = Refusals(str(path)) if own else refusals
+    notes, files = [], []
+    all_lines = list(_lines(path.resolve(), refusals, notes, files))
+    executive, case_lines, bulk = _split(all_lines)
+    sol = next((w.split()[1] for w in map(_words, (t for _, _, t in executive))
+                if w.startswith("SOL ") and len(w.split()) > 1), None)  # fmt: skip
+    case, sets = _case_control(case_lines)
+    cards = _cards(bulk, refusals)
+    deck = Deck(str(path), sol, case, sets, tuple(cards), tuple(notes), tuple(files))
+    _check_duplicates(deck, refusals)
+    if own:
+        refusals.raise_all()
+    return deck
 
 
-def _bulk_only(path: Path) -> bool:
-    """True for a deck with no executive and case control (no CEND line)."""
-    with open(path, errors="replace") as f:
-        return not any(line.upper().strip() == "CEND" for line in f)
+def _check_duplicates(deck: Deck, refusals: Refusals) -> None:
+    for family, names in FAMILIES.items():
+        seen = {}
+        for c in deck.of(*names):
+            try:
+                i = c.id()
+            except CardError as exc:
+                refusals.add(str(exc))
+                continue
+            first = seen.setdefault(i, c)
+            if first is not c and (first.name, first.raw) != (c.name, c.raw):
+                refusals.card(c, f"{family} id {i} is also {first.label} at {first.where}")
 
 
-def check_cards(model, path) -> None:
-    """BayesUpdateError naming the first card (and its file:line) that is not supported."""
-    names = set(model.card_count) | set(getattr(model, "reject_count", {}))
-    unsupported = sorted(n for n in names if n.upper() not in SUPPORTED)
-    for name in model.params:
-        if name not in MODEL_PARAMS | OUTPUT_PARAMS:
-            where = card_location(path, "PARAM", name)
-            raise BayesUpdateError(f"{where}: PARAM {name} is not supported")
-    if unsupported:
-        name = unsupported[0]
-        raise BayesUpdateError(
-            f"{card_location(path, name)}: card {name} is not supported "
-            f"({len(unsupported)} unsupported card type(s): {', '.join(unsupported[:6])})"
-        )
-
-
-_INCLUDE = re.compile(r"^\s*INCLUDE\s+'?([^'\s]+)'?", re.IGNORECASE)
-
-
-def _deck_lines(path: Path, seen=None):
-    """(file, line number, text) of the deck and its INCLUDEd files, in reading order."""
-    seen = set() if seen is None else seen
-    if path in seen or not path.is_file():
-        return
-    seen.add(path)
-    with open(path, errors="replace") as f:
-        for number, line in enumerate(f, start=1):
-            yield path, number, line
-            m = _INCLUDE.match(line)
-            if m:
-                yield from _deck_lines((path.parent / m.group(1)).resolve(), seen)
-
-
-def card_location(path, card: str, field: str | None = None) -> str:
-    """'file:line' of the first line that starts with ``card`` (and holds ``field``)."""
-    pattern = re.compile(rf"^{re.escape(card)}[\s,*]", re.IGNORECASE)
-    for file, number, line in _deck_lines(Path(path).resolve()):
-        if pattern.match(line) and (field is None or field.upper() in line.upper()):
-            return f"{file.name}:{number}"
-    return f"{Path(path).name}"
+def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
+    """Refuse unsupported cards and PARAMs (into ``refusals``); returns the notes listing
+    what is read but ignored (once each)."""
+    notes = []
+    unsupported = [c for c in deck.cards if c.name not in SUPPORTED]
+    for c in unsupported:
+        refusals.card(c, f"card {c.name} is not supported (it would change the model)")
+    ignored = []
+    for name, c in deck.params().items():
+        if name in IGNORED_PARAMS:
+            ignored.append(name)
+        elif name not in MODEL_PARAMS:
+            refusals.card(c, f"PARAM {name} is not supported (it may change the normal modes)")
+    if ignored:
+        notes.append(f"PARAM {', '.join(sorted(ignored))} ignored (no effect on normal modes)")
+    objective = sorted({c.name for c in deck.cards if c.name in OBJECTIVE_CARDS})
+    if objective:
+        n = sum(1 for c in deck.cards if c.name in OBJECTIVE_CARDS)
+        notes.append(f"the deck's own objective (not used): {n} cards {', '.join(objective)}")
+    if deck.of("SUPORT", "SUPORT1"):
+        notes.append("SUPORT: rigid-body reference DOFs only; the rigid modes are found free-free")
+    return notes

@@ -18,9 +18,7 @@ points of the box, so a non-linear field (a PBARL/PBEAML DIM, a shear-flexible P
 E and A of the same elements: a product) is found and named, never approximated.
 """
 
-import copy
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -29,28 +27,33 @@ from bayesupdate.fe.general import GeneralAssembler
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bindings import _card, set_field
+from bayesupdate.nastran.deck import Refusals
 from bayesupdate.nastran.frames import read_grids
 
 
 class LineRebuild:
     """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on.
 
-    bdf : the deck's pyNastran model; structure : the structure read from it; bindings :
+    deck : the read deck (``deck.Deck``); structure : the structure read from it; bindings :
     {parameter: DeckBinding}, those with ``lines``; keys : (nnz,) row x n_dof + col of the
     assembled pattern the differences are added into (sorted)."""
 
-    def __init__(self, bdf, structure, bindings, keys, path):
-        self.bdf, self.structure, self.path = bdf, structure, str(path)
+    def __init__(self, deck, structure, bindings, keys, path):
+        self.deck, self.structure, self.path = deck, structure, str(path)
         self.bindings = {k: b for k, b in bindings.items() if b.lines}
         eids = sorted({e for b in self.bindings.values() for e in b.lines})
-        self.elements = {e: bdf.elements[e] for e in eids}
-        self.grids = read_grids(bdf)
+        self.elements = {(c.name, c.id()): c for c in deck.of("CBAR", "CBEAM", "CROD", "CONROD")
+                         if c.id() in eids}  # fmt: skip
+        refusals = Refusals(self.path)
+        self.grids = read_grids(deck, refusals)
+        refusals.raise_all()
         grid_of_node = np.asarray(structure.metadata["nastran"]["grid_ids"])
-        pos = np.searchsorted(self.grids.ids, grid_of_node)
         self.node = -np.ones(len(self.grids.ids), np.int64)
-        self.node[pos] = np.arange(grid_of_node.size)
+        known = grid_of_node > 0  # a CBUSH's arm ends are nodes of no GRID
+        pos = np.searchsorted(self.grids.ids, grid_of_node[known])
+        self.node[pos] = np.flatnonzero(known)
         self.keys, self.n = keys, keys.size
-        rows = [self.grids.index(e.node_ids, f"{e.type} {e.eid}") for e in self.elements.values()]
+        rows = [self.grids.index(cards.element_grids(e), e.label) for e in self.elements.values()]
         self._used = np.unique(self.node[np.concatenate(rows)])
         self._base = self._data(None)
 
@@ -59,24 +62,25 @@ class LineRebuild:
         K, M = self._data(values)
         return K - self._base[0], M - self._base[1]
 
-    def _cards(self, values):
-        """Proxy model: the bound elements with copies of their property / material cards, the
-        parameters' values written in."""
-        bdf = self.bdf
-        props = {e.pid: copy.copy(bdf.properties[e.pid])
-                 for e in self.elements.values() if e.type != "CONROD"}  # fmt: skip
-        mids = {int(p.mid) for p in props.values()} | {
-            int(e.mid) for e in self.elements.values() if e.type == "CONROD"
+    def _tables(self, values):
+        """(properties, materials) {id: card} of the bound elements, the parameters' values
+        written in."""
+        deck = self.deck
+        all_props, all_mats = deck.table(*cards.PROPERTIES), deck.table("MAT1")
+        props = {e["PID"]: all_props[e["PID"]]
+                 for e in self.elements.values() if e.name != "CONROD"}  # fmt: skip
+        mids = {p["MID"] for p in props.values()} | {
+            e["MID"] for e in self.elements.values() if e.name == "CONROD"
         }
-        mats = {m: copy.copy(bdf.materials[m]) for m in mids}
+        mats = {m: all_mats[m] for m in mids if m in all_mats}
         for name, b in self.bindings.items():
             if values is None:
                 continue
             table = mats if b.field.card == "MAT1" else props
             for i, nominal in zip(b.field.ids, b.nominal, strict=True):
-                card = table.get(i) or _card(bdf, b.field, i)
-                set_field(card, b.field, float(values[name]) * b.coefficient, nominal)
-        return SimpleNamespace(elements=self.elements, properties=props, materials=mats)
+                card = table.get(i) or _card(deck, b.field, i)
+                table[i] = set_field(card, b.field, float(values[name]) * b.coefficient, nominal)
+        return props, mats
 
     def _data(self, values) -> tuple[np.ndarray, np.ndarray]:
         s = self.structure
@@ -85,10 +89,13 @@ class LineRebuild:
             builder.add_node(xyz)
         meta = s.metadata["nastran"]
         lumped = meta["coupmass"] < 1
-        ctx = cards.Context(self._cards(values), self.path, self.grids, self.node,
-                            meta["wtmass"], lumped, builder)  # fmt: skip
+        props, mats = self._tables(values)
+        refusals = Refusals(self.path)
+        ctx = cards.Context(self.elements, props, mats, self.grids, self.node, meta["wtmass"],
+                            lumped, builder, refusals)  # fmt: skip
         cards.add_beams(ctx)
         cards.add_rods(ctx)
+        refusals.raise_all()
         # a structure uses and connects all its nodes: tie the others on by springs of 0
         for n in np.setdiff1d(np.arange(s.n_nodes), self._used):
             builder.add_spring(int(n), int(self._used[0]), np.zeros(6), "(not re-built)")
@@ -170,10 +177,10 @@ class LineAssembler(GeneralAssembler):
     model before each assembly) go through ``LineRebuild``; the K returned is the very object
     ``solve`` matches its ground springs by."""
 
-    def __init__(self, structure, shell_keys, bdf, bindings, path):
+    def __init__(self, structure, shell_keys, deck, bindings, path):
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
-        self.lines = LineRebuild(bdf, structure, bindings, keys, path)
+        self.lines = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
 
     def assemble(self, props, shell_props=None):

@@ -25,7 +25,8 @@ _COLUMN = dict(thickness=0, youngs_modulus=1, modulus_factor=1, density=2)
 
 class NastranModel(FEModel):
     """``FEModel`` with ``DeckBinding`` parameters (deck units); ``deck`` is the deck's path;
-    ``bdf`` its pyNastran model (needed when a binding acts on line elements: ``lines``)."""
+    ``bdf`` its read cards (``deck.Deck``; needed when a binding acts on line elements:
+    ``lines``)."""
 
     def __init__(self, structure, bindings, defaults, bounds, name="deck", deck="", bdf=None):
         self.deck, self.bdf = str(deck), bdf

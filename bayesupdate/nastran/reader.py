@@ -16,111 +16,108 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.shell import SHEAR_FACTOR
 from bayesupdate.fe.structure import Material, StructureBuilder
 from bayesupdate.nastran import cards
-from bayesupdate.nastran.deck import read_deck
+from bayesupdate.nastran.bulk import CardError
+from bayesupdate.nastran.deck import Refusals, check_cards, read_deck
 from bayesupdate.nastran.frames import read_grids
 from bayesupdate.nastran.units import unit_system
 
 SHELL_TYPES = ("CQUAD4", "CTRIA3")
 
 
-def _param(model, name, default):
-    card = model.params.get(name)
-    if card is None:
-        return default
-    value = card.values[0]
-    return value if value is not None else default
-
-
-def _case_value(subcase, name):
-    """An integer case-control selection, or None (pyNastran's has_parameter can say yes for a
-    name its get_parameter then refuses: the global subcase 0 of a deck without subcases)."""
-    if subcase is None or not subcase.has_parameter(name):
-        return None
-    try:
-        return int(subcase.get_parameter(name)[0])
-    except KeyError:
-        return None
-
-
-def deck_settings(model) -> dict:
+def deck_settings(deck) -> dict:
     """PARAMs and case-control selections that shape the model (module docstring)."""
-    cc = model.case_control_deck
-    spc_id = method_id = None
-    if cc is not None:
-        sub = cc.subcases.get(1) or cc.subcases.get(0)
-        spc_id, method_id = _case_value(sub, "SPC"), _case_value(sub, "METHOD")
+    method_id = deck.case.get("METHOD")
     n_modes = None
-    if method_id is not None and method_id in model.methods:
-        n_modes = model.methods[method_id].nd
-    autospc = str(_param(model, "AUTOSPC", "YES")).upper().startswith("Y")
+    if method_id is not None:
+        method = deck.table("EIGRL", "EIGR").get(method_id)
+        if method is not None:
+            n_modes = method.value(3 if method.name == "EIGRL" else 5)
+    autospc = str(deck.param("AUTOSPC", "YES")).upper().startswith("Y")
     return dict(
-        wtmass=float(_param(model, "WTMASS", 1.0)),
-        k6rot=float(_param(model, "K6ROT", 100.0)),
-        coupmass=int(_param(model, "COUPMASS", -1)),
+        wtmass=float(deck.param("WTMASS", 1.0)),
+        k6rot=float(deck.param("K6ROT", 100.0)),
+        coupmass=int(deck.param("COUPMASS", -1)),
         autospc=autospc,
-        spc_id=spc_id,
+        spc_id=deck.case.get("SPC"),
         method_id=method_id,
-        n_modes=None if n_modes is None else int(n_modes),
+        n_modes=int(n_modes) if isinstance(n_modes, int) else None,
     )
 
 
-def _shell_cards(model):
+def _shell_cards(ctx):
     """(eids, pids, node ids (n, 4) with -1 for triangles, zoffs, corner thickness (n, 4) nan
-    where blank, tflag) of all CQUAD4/CTRIA3, quads first (pyNastran objects -> arrays)."""
-    shells = [e for _, e in sorted(model.elements.items()) if e.type in SHELL_TYPES]
-    shells.sort(key=lambda e: e.type != "CQUAD4")
+    where blank, tflag) of all CQUAD4/CTRIA3, quads first."""
+    shells = [c for _, c in sorted(ctx.elements.items(), key=cards._by_id)
+              if c.name in SHELL_TYPES]  # fmt: skip
+    shells.sort(key=lambda e: e.name != "CQUAD4")
     n = len(shells)
     nodes = -np.ones((n, 4), np.int64)
     corner = np.full((n, 4), np.nan)
-    for i, e in enumerate(shells):  # reading pyNastran's objects; the maths below is vectorised
-        ids = e.node_ids
-        nodes[i, : len(ids)] = ids
-        corner[i, : len(ids)] = [
-            np.nan if t is None else t for t in (e.T1, e.T2, e.T3, getattr(e, "T4", None))
-        ][: len(ids)]
-    eids = np.array([e.eid for e in shells], np.int64)
-    pids = np.array([e.pid for e in shells], np.int64)
-    zoffs = np.array([e.zoffset or 0.0 for e in shells], float)
-    tflag = np.array([e.tflag for e in shells], np.int64)
-    return eids, pids, nodes, zoffs, corner, tflag
+    zoffs, tflag = np.zeros(n), np.zeros(n, np.int64)
+    for i, e in enumerate(shells):  # reading the cards; the maths below is vectorised
+        k = 4 if e.name == "CQUAD4" else 3
+        try:
+            nodes[i, :k] = [e.int(f"G{j + 1}", positive=True) for j in range(k)]
+            corner[i, :k] = [np.nan if e.is_blank(f"T{j + 1}") else e.real(f"T{j + 1}")
+                             for j in range(k)]  # fmt: skip
+            zoffs[i], tflag[i] = e.real("ZOFFS"), e.int("TFLAG")
+        except CardError as exc:
+            ctx.refusals.add(str(exc))
+            nodes[i, :k] = nodes[0, :k] if i else -1
+    eids = np.array([e.id() for e in shells], np.int64)
+    pids = np.array([int(e["PID"] or 0) for e in shells], np.int64)
+    return eids, pids, nodes, zoffs, corner, tflag, shells
 
 
-def _pshell_table(ctx, pids):
-    """Per property id: (T, MAT1 id, NSM); errors for features the shell element lacks."""
+def _pshell_table(ctx, pids, shells):
+    """Per property id: (T, MID1, NSM); refusals for features the shell element lacks (named
+    at the PSHELL, or at the first shell whose PID is no PSHELL)."""
     table = {}
     for pid in np.unique(pids):
-        p = ctx.model.properties.get(int(pid))
-        if p is None or p.type != "PSHELL":
-            raise BayesUpdateError(f"shell property {pid}: not a PSHELL (only PSHELL is supported)")
-        if p.mid2 not in (None, p.mid1) or p.mid3 not in (None, p.mid1) or p.mid4:
-            ctx.fail("PSHELL", pid, "MID2/MID3 must equal MID1 (or be blank) and MID4 blank")
-        if p.mid2 is None:
-            ctx.fail("PSHELL", pid, "a membrane-only shell (MID2 blank) is not supported")
-        if abs((p.twelveIt3 or 1.0) - 1.0) > 1e-6:
-            ctx.fail("PSHELL", pid, f"12I/T**3 = {p.twelveIt3} is not supported (only 1.0)")
-        if p.mid3 is not None and abs((p.tst or SHEAR_FACTOR) - SHEAR_FACTOR) > 1e-4:
-            ctx.fail("PSHELL", pid, f"TS/T = {p.tst} is not supported (only 5/6)")
-        if p.mid3 is None:
-            ctx.notes.append(f"PSHELL {pid}: MID3 blank (no shear flexibility) is modelled as a "
-                             "Mindlin shell with TS/T = 5/6")  # fmt: skip
-        table[int(pid)] = (float(p.t), int(p.mid1), float(p.nsm or 0.0))
+        p = ctx.props.get(int(pid))
+        try:
+            if p is None or p.name != "PSHELL":
+                user = next(e for e in shells if e["PID"] == pid)
+                user.fail(f"shell property {pid}: not a PSHELL (only PSHELL is supported)")
+            table[int(pid)] = _pshell(ctx, p)
+        except CardError as exc:
+            ctx.refusals.add(str(exc))
     return table
 
 
-def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs):
+def _pshell(ctx, p):
+    mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
+    if mid2 not in (None, mid1) or mid3 not in (None, mid1) or p["MID4"]:
+        p.fail("MID2/MID3 must equal MID1 (or be blank) and MID4 blank")
+    if mid2 is None:
+        p.fail("a membrane-only shell (MID2 blank) is not supported")
+    if abs(p.real("12IT3") - 1.0) > 1e-6:
+        p.fail(f"12I/T**3 = {p['12IT3']} is not supported (only 1.0)")
+    if mid3 is not None and abs(p.real("TST") - SHEAR_FACTOR) > 1e-4:
+        p.fail(f"TS/T = {p['TST']} is not supported (only 5/6)")
+    if mid3 is None:
+        ctx.notes.append(f"PSHELL {p.id()}: MID3 blank (no shear flexibility) is modelled as a "
+                         "Mindlin shell with TS/T = 5/6")  # fmt: skip
+    m = cards.mat1(ctx, mid1, p)
+    if not -1 < m.NU < 0.5:
+        p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    return p.real("T"), int(mid1), p.real("NSM")
+
+
+def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     """Per-element thickness (mean of the corner thicknesses; blank corners take PSHELL T,
-    TFLAG 1 makes them factors of T), E, nu, rho, nsm (WTMASS applied) and offset arrays."""
-    table = _pshell_table(ctx, pids)
+    TFLAG 1 makes them factors of T), E, nu, rho, nsm (WTMASS applied) and offset arrays; None
+    when a PSHELL is refused."""
+    table = _pshell_table(ctx, pids, shells)
     uniq, inv = np.unique(pids, return_inverse=True)
+    if any(int(p) not in table for p in uniq):
+        return None
     t_p, mid, nsm = (np.array([table[int(p)][k] for p in uniq]) for k in range(3))
-    mats = {
-        int(m): cards.material(ctx, int(m), "PSHELL", int(p))
-        for p, m in zip(uniq, mid, strict=True)
-    }
+    mats = {int(m): cards.material(ctx, int(m), ctx.props[int(p)])
+            for p, m in zip(uniq, mid, strict=True)}  # fmt: skip
     E, nu, rho = (np.array([getattr(mats[int(m)], a) for m in mid]) for a in
                   ("youngs_modulus", "poisson", "density"))  # fmt: skip
     t = t_p[inv][:, None]
@@ -133,16 +130,20 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs):
 
 
 def _used_rows(ctx, shell_nodes):
-    """Grid rows of shell nodes (sorted) and of the other GRIDs some element uses."""
+    """Grid rows of shell nodes (sorted) and of the other GRIDs some element uses (an element
+    naming a missing GRID is refused here)."""
     g = ctx.grids
-    shell_rows = np.unique(g.index(shell_nodes[shell_nodes >= 0], "shell element"))
-    other = []
-    for e in ctx.model.elements.values():
-        if e.type not in SHELL_TYPES:
-            other += [n for n in e.node_ids if n]
-    other += [m.nid for m in ctx.model.masses.values()]
-    for r in ctx.model.rigid_elements.values():
-        other += list(r.independent_nodes) + list(r.dependent_nodes)
+    ok = shell_nodes[shell_nodes >= 0]
+    ok = ok[np.isin(ok, g.ids)] if len(g.ids) else ok[:0]
+    for e in ctx.elements.values():  # shells naming a missing GRID
+        if e.name in SHELL_TYPES:
+            ctx.refusals.guard(lambda e=e: g.index(cards.element_grids(e), e))
+    shell_rows = np.unique(g.index(ok, "shell element")) if ok.size else np.zeros(0, np.int64)
+    other, known = [], set(g.ids.tolist())
+    for e in ctx.elements.values():
+        if e.name not in SHELL_TYPES:
+            ids = ctx.refusals.guard(cards.element_grids, e) or []
+            other += [i for i in ids if i in known]
     rows = np.unique(g.index(np.array(other, np.int64), "element")) if other else np.zeros(0, int)
     return shell_rows, np.setdiff1d(rows, shell_rows)
 
@@ -174,32 +175,45 @@ def _patch_shells(structure, pids, props):
     return replace(structure, shells=shells, parts=parts)
 
 
-def _add_spcs(ctx, settings):
+def _spc_sets(deck, sid, seen=()) -> list:
+    """SPC/SPC1 cards of set ``sid`` (SPCADD resolved)."""
+    out = [c for c in deck.of("SPC", "SPC1") if c.value(0) == sid]
+    for add in deck.of("SPCADD"):
+        if add.value(0) == sid and sid not in seen:
+            for s in cards.id_list(add, 1):
+                out += _spc_sets(deck, s, (*seen, sid))
+    return out
+
+
+def _add_spcs(ctx, deck, settings):
     """SPC/SPC1 of the case control's SPC set (SPCADD resolved) and GRID PS fields."""
-    items = []
-    if settings["spc_id"] is not None:
-        try:
-            spcs = ctx.model.get_reduced_spcs(settings["spc_id"], consider_spcadd=True)
-        except Exception:  # a missing set: pyNastran raises KeyError/RuntimeError
-            raise BayesUpdateError(
-                f"case control SPC = {settings['spc_id']}: no SPC/SPC1/SPCADD with that id"
-            ) from None
-        for spc in spcs:
-            if spc.type == "SPC1":
-                items += [(n, str(spc.components), "SPC1", spc.conid) for n in spc.node_ids]
+    items = []  # (grid, components, card)
+    sid = settings["spc_id"]
+    if sid is not None:
+        spcs = _spc_sets(deck, sid)
+        if not spcs:
+            ctx.refusals.add(f"case control SPC = {sid}: no SPC/SPC1/SPCADD with that id")
+        for c in spcs:
+            if c.name == "SPC1":
+                ids = ctx.refusals.guard(cards.id_list, c, 2) or []
+                items += [(g, str(c["C"]), c) for g in ids]
             else:
-                items += [
-                    (n, str(c), "SPC", spc.conid)
-                    for n, c in zip(spc.node_ids, spc.components, strict=True)
-                ]
+                for k in (1, 4):
+                    if c.value(k) is not None:
+                        items.append((c.value(k), str(c.value(k + 1)), c))
+                        if c.value(k + 2):
+                            ctx.refusals.card(c, "an enforced displacement D is not supported")
     for gid, ps in zip(ctx.grids.ids, ctx.grids.ps, strict=True):
         if ps:
-            items.append((int(gid), ps, "GRID", int(gid)))
-    for gid, comps, card, sid in items:
-        row = ctx.grids.index([gid], f"{card} {sid}")[0]
-        if ctx.node[row] >= 0:
-            digits = cards.components(ctx, comps, [row], card, sid)
-            ctx.builder.add_support(int(ctx.node[row]), digits)
+            items.append((int(gid), ps, deck.table("GRID")[int(gid)]))
+    for gid, comps, card in items:
+        try:
+            row = ctx.grids.index([gid], card)[0]
+            if ctx.node[row] >= 0:
+                digits = cards.components(ctx, comps, [row], card)
+                ctx.builder.add_support(int(ctx.node[row]), digits)
+        except CardError as exc:
+            ctx.refusals.add(str(exc))
 
 
 def _autospc(ctx, structure):
@@ -228,46 +242,62 @@ def _autospc(ctx, structure):
     return zero.size
 
 
+def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
+    """The converters' ``cards.Context`` of a read deck."""
+    elements = {(c.name, c.value(0)): c for c in deck.of(*cards.ELEMENTS)}
+    return cards.Context(
+        elements, deck.table(*cards.PROPERTIES), deck.table("MAT1"), grids,
+        node, settings["wtmass"], settings["coupmass"] < 1, builder, refusals,
+    )  # fmt: skip
+
+
 def read_structure(path) -> tuple:
-    """(Structure, info, pyNastran BDF) of the Nastran deck at ``path``; info records units,
-    PARAMs, counts and notes (also in ``structure.metadata["nastran"]``)."""
-    model = read_deck(path)
-    settings = deck_settings(model)
-    grids = read_grids(model)
-    lumped = settings["coupmass"] < 1
-    ctx = cards.Context(model, str(path), grids, -np.ones(len(grids.ids), np.int64),
-                        settings["wtmass"], lumped, StructureBuilder())  # fmt: skip
-    eids, pids, nodes, zoffs, corner, tflag = _shell_cards(model)
+    """(Structure, info, Deck) of the Nastran deck at ``path``; info records units, PARAMs,
+    counts and notes (also in ``structure.metadata["nastran"]``).  Every refusal of the deck is
+    raised together, as one ``BayesUpdateError`` (``deck.Refusals``)."""
+    refusals = Refusals(str(path))
+    deck = read_deck(path, refusals)
+    notes = check_cards(deck, refusals)
+    settings = deck_settings(deck)
+    grids = read_grids(deck, refusals)
+    ctx = context(deck, grids, -np.ones(len(grids.ids), np.int64), settings, StructureBuilder(),
+                  refusals)  # fmt: skip
+    ctx.notes += list(deck.notes) + notes
+    eids, pids, nodes, zoffs, corner, tflag, shells = _shell_cards(ctx)
     shell_rows, other_rows = _used_rows(ctx, nodes)
     ctx.node[shell_rows] = np.arange(shell_rows.size)
+    props = None
     if eids.size:
-        props = _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs)
-        _add_shells(ctx, shell_rows, pids, nodes, props)
+        props = _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells)
+        if props is not None and not refusals.items:
+            _add_shells(ctx, shell_rows, pids, nodes, props)
+    if not shell_rows.size and not other_rows.size:
+        refusals.add("the deck has no elements")
     for row in other_rows:
         ctx.node[row] = ctx.builder.add_node(grids.xyz[row])
-    for add in (cards.add_beams, cards.add_rods, cards.add_masses, cards.add_springs,
-                cards.add_rigid):  # fmt: skip
-        add(ctx)
-    _add_spcs(ctx, settings)
-    structure = _finish(ctx, eids, pids, props if eids.size else None)
+    for family in cards.FAMILIES:
+        family.add(ctx)
+    _add_spcs(ctx, deck, settings)
+    refusals.raise_all()
+    structure = _finish(ctx, eids, pids, props)
     n_auto = 0
     if settings["autospc"]:
         n_auto = _autospc(ctx, structure)
         if n_auto:
-            structure = _finish(ctx, eids, pids, props if eids.size else None)
-    info = _info(ctx, settings, model, grids, structure, n_auto)
-    return replace(structure, metadata={**structure.metadata, "nastran": info}), info, model
+            structure = _finish(ctx, eids, pids, props)
+    info = _info(ctx, settings, deck, grids, structure, n_auto)
+    return replace(structure, metadata={**structure.metadata, "nastran": info}), info, deck
 
 
 def _finish(ctx, eids, pids, props):
     structure = ctx.builder.build()
-    if props is not None:
+    if props is not None and eids.size:
         structure = _patch_shells(structure, pids, props)
     return structure
 
 
-def _info(ctx, settings, model, grids, structure, n_auto) -> dict:
-    moduli = [m.e for m in model.materials.values() if m.type == "MAT1"]
+def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
+    moduli = [cards.mat1(ctx, m, c).E for m, c in ctx.mats.items()]
     dropped = int(np.sum(ctx.node < 0))
     notes = list(ctx.notes)
     if dropped:
@@ -278,32 +308,32 @@ def _info(ctx, settings, model, grids, structure, n_auto) -> dict:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
                      "penalty is fixed (fe.shell.DRILL_ALPHA)")  # fmt: skip
         notes.append("shell mass is consistent (Nastran's default is lumped, COUPMASS -1)")
+    n_nodes = structure.n_nodes
     used = ctx.node >= 0
-    grid_of_node = np.zeros(structure.n_nodes, np.int64)
+    grid_of_node = np.zeros(n_nodes, np.int64)  # 0: a node of no GRID (a CBUSH's arm ends)
     grid_of_node[ctx.node[used]] = grids.ids[used]
     # each node's output (CD) frame, rows = its axes in basic: test directions given in it
-    frame_of_node = np.broadcast_to(np.eye(3), (structure.n_nodes, 3, 3)).copy()
+    frame_of_node = np.broadcast_to(np.eye(3), (n_nodes, 3, 3)).copy()
     frame_of_node[ctx.node[used]] = grids.frame[used]
     return dict(
-        deck=str(Path(ctx.path).name),
+        deck=str(Path(deck.path).name),
         units=unit_system(moduli, settings["wtmass"]),
         **settings,
-        card_count={k: int(v) for k, v in sorted(model.card_count.items())},
+        card_count=deck.count(),
         grid_ids=grid_of_node,
         grid_frames=frame_of_node,
-        grid_sets=_grid_sets(model),
+        grid_sets=_grid_sets(deck),
         notes=notes,
     )
 
 
-def _grid_sets(model) -> dict[int, tuple[int, ...]]:
+def _grid_sets(deck) -> dict[int, tuple[int, ...]]:
     """{set id: GRID ids} of the bulk SET1 cards and the case control's SET lines (test points
     'all GRIDs of a set', ``test_points``)."""
-    sets = {int(sid): tuple(int(i) for i in s.ids) for sid, s in model.sets.items()}
-    deck = getattr(model, "case_control_deck", None)
-    for subcase in deck.subcases.values() if deck is not None else ():
-        for key, value in subcase.params.items():
-            if key.startswith("SET ") and isinstance(value[0], list):
-                ids = [i for i in value[0] if isinstance(i, int)]
-                sets.setdefault(int(key.split()[1]), tuple(ids))
+    sets = {}
+    for c in deck.of("SET1"):
+        ids = [i for i in (cards.id_list(c, 1) if c.value(1) != "ALL" else [])]
+        sets.setdefault(c.id(), tuple(ids))
+    for sid, ids in deck.case_sets.items():
+        sets.setdefault(int(sid), tuple(ids))
     return sets

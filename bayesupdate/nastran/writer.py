@@ -1,12 +1,13 @@
 """The user's deck written back with calibrated values in its bound fields (``--write-bdf``).
 
-The deck is read again with pyNastran and each bound card gets the parameter's value (or, for a
-``scale`` binding, the factor times the card's own value; for a DESVAR, COEF x its value, and
-the DESVAR's XINIT the value).  The deck's own text is then copied line for line with only those
-cards replaced, each by pyNastran's large-field (16-character, full precision) text of it:
-comments, card order and every other card stay as they were.  When a bound card is not in the
-deck's main file (an INCLUDEd file) or shares its line with another (PELAS), pyNastran's writer
-writes the whole deck instead (one file, INCLUDEs merged, cards grouped by type).
+The deck is read again and each bound card gets the parameter's value (or, for a ``scale``
+binding, the factor times the card's own value; for a DESVAR, COEF x its value, and the
+DESVAR's XINIT the value).  The deck's own text is then copied line for line with only those
+cards replaced, each by a large-field card (16-character fields, ``bulk.real16``: the shortest
+repr or 11-15 digits) of all its fields: comments, card order and every other card stay as they
+were.  A bound card in an ``INCLUDE``d file is replaced in that file's text, which is written
+in place of its ``INCLUDE`` line (the output is one file); the other ``INCLUDE`` lines stay, with
+the file's absolute path when the output is written in another folder.
 """
 
 from pathlib import Path
@@ -14,80 +15,76 @@ from pathlib import Path
 from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.nastran.bindings import DeckBinding, _card, set_field
-from bayesupdate.nastran.deck import read_deck
+from bayesupdate.nastran.bulk import large_field_text, with_fields
+from bayesupdate.nastran.deck import include_at, read_deck
 
 
 def write_updated_deck(model, values, out) -> Path:
     """Write ``model.deck`` with ``values`` ({parameter: value, deck units}) to ``out``."""
-    deck = getattr(model, "deck", None)
-    if not deck:
+    path = getattr(model, "deck", None)
+    if not path:
         raise BayesUpdateError("--write-bdf: the model is not a Nastran deck (model.source)")
-    bdf = read_deck(deck)
-    changed = []  # (card name, id, pyNastran card)
+    deck = read_deck(path)
+    changed = {}  # (card name, id) -> the card with its new values
     for name, binding in model.bindings.items():
         if not isinstance(binding, DeckBinding) or name not in values:
             continue
         value = float(values[name])
         for i, nominal in zip(binding.field.ids, binding.nominal, strict=True):
-            card = _card(bdf, binding.field, i)
-            set_field(card, binding.field, value * binding.coefficient, nominal)
-            changed.append((binding.field.card, i, card))
+            key = (binding.field.card, i)
+            card = changed.get(key) or _card(deck, binding.field, i)
+            changed[key] = set_field(card, binding.field, value * binding.coefficient, nominal)
         if binding.desvar is not None:  # the design variable's start, as Nastran reads it
-            bdf.desvars[binding.desvar].xinit = value
-            changed.append(("DESVAR", binding.desvar, bdf.desvars[binding.desvar]))
+            dv = deck.table("DESVAR")[binding.desvar]
+            changed[("DESVAR", binding.desvar)] = with_fields(dv, {dv.position("XINIT"): value})
     out = Path(out)
-    text = _patched_text(Path(deck), changed)
+    by_file = {}
+    for card in changed.values():
+        by_file.setdefault(card.file, []).append(card)
+    text = _text(Path(deck.files[0]), by_file, out.resolve().parent)
     try:
         with atomic_path(out) as tmp:
-            if text is None:
-                bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
-            else:
-                Path(tmp).write_text(text)
+            Path(tmp).write_text(text)
     except OSError as exc:
         raise BayesUpdateError(f"--write-bdf {out}: cannot write ({exc.strerror})") from exc
     return out
 
 
-def _patched_text(path: Path, changed) -> str | None:
-    """The main file's text with each changed card replaced; None if one cannot be found."""
-    with open(path, errors="replace") as f:
-        lines = f.readlines()
-    spans = []
-    for name, cid, card in changed:
-        if name == "PELAS":
-            return None
-        span = _card_span(lines, name, cid)
-        if span is None:
-            return None
-        spans.append((*span, card.write_card(size=16)))
-    for start, stop, new in sorted(spans, reverse=True):
-        lines[start:stop] = [new if new.endswith("\n") else new + "\n"]
-    return "".join(lines)
+def _text(path: Path, by_file: dict, folder: Path) -> str:
+    """``path``'s text with its changed cards replaced and the INCLUDEs holding changed cards
+    written in (module docstring)."""
+    lines = path.read_text(errors="replace").splitlines(keepends=True)
+    replace = {c.line - 1: c for c in by_file.get(str(path), [])}
+    out, i = [], 0
+    while i < len(lines):
+        if i in replace:
+            card = replace[i]
+            out.append(large_field_text(card))
+            i = card.end
+            continue
+        target, last = include_at(path, lines, i)
+        if target is not None and _holds_changes(target, by_file):
+            out.append(_text(target, by_file, folder))
+        elif target is not None and path.parent.resolve() != folder:
+            out.append(f"INCLUDE '{target.resolve()}'\n")
+        else:
+            out += lines[i : last + 1]
+        i = last + 1
+    text = "".join(out)
+    return text if text.endswith("\n") or not text else text + "\n"
 
 
-def _head(line: str) -> tuple[str, str]:
-    """(card name, first field) of a small-field, large-field or free-field line."""
-    text = line.rstrip("\r\n")
-    if "," in text[:10]:
-        parts = text.split(",")
-        return parts[0].strip().upper().rstrip("*"), parts[1].strip() if len(parts) > 1 else ""
-    name = text[:8].strip().upper()
-    width = 16 if name.endswith("*") else 8
-    return name.rstrip("*"), text[8 : 8 + width].strip()
-
-
-def _is_continuation(line: str) -> bool:
-    text = line.rstrip("\r\n")
-    return bool(text.strip()) and (text[0] in "+*," or not text[:8].strip())
-
-
-def _card_span(lines, name: str, cid: int):
-    """(first line, line after the last continuation) of card ``name`` ``cid``, or None."""
-    for i, line in enumerate(lines):
-        card, first = _head(line)
-        if card == name and first.isdigit() and int(first) == int(cid):
-            j = i + 1
-            while j < len(lines) and _is_continuation(lines[j]):
-                j += 1
-            return i, j
-    return None
+def _holds_changes(path: Path, by_file: dict, stack=()) -> bool:
+    """True if ``path`` or a file it INCLUDEs holds a changed card."""
+    if str(path) in by_file:
+        return True
+    if path in stack:
+        return False
+    lines = path.read_text(errors="replace").splitlines(keepends=True)
+    i = 0
+    while i < len(lines):
+        target, last = include_at(path, lines, i)
+        if target is not None and _holds_changes(target, by_file, (*stack, path)):
+            return True
+        i = last + 1
+    return False

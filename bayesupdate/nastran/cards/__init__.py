@@ -1,0 +1,59 @@
+"""Nastran line, point, spring and rigid cards -> ``StructureBuilder`` calls: one file per card
+family, one registry.
+
+Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``) names its ``CARDS``
+and has ``add(ctx)``, which converts them card by card (``common.Context.each``: a refused card
+is recorded and the next converted).  ``FAMILIES`` is the registry, in the order the reader adds
+them; a new card family is one new file here and one entry in ``FAMILIES`` (and its names in
+``deck.ELEMENT_CARDS``).  Shells (thousands) are converted as arrays in ``reader``.
+"""
+
+from bayesupdate.nastran.cards import beams, masses, rigid, rods, springs
+from bayesupdate.nastran.cards.beams import L_DIMS, L_SECTIONS, library_dims, pbeam_layout
+from bayesupdate.nastran.cards.common import (
+    ELEMENTS,
+    PROPERTIES,
+    Context,
+    Mat1,
+    _by_id,
+    components,
+    id_list,
+    mat1,
+    material,
+)
+from bayesupdate.nastran.cards.rigid import rbe3_groups
+from bayesupdate.nastran.cards.rods import rod_values
+from bayesupdate.nastran.cards.springs import pbush_k, pbush_lines
+
+#: the card families, in the order the reader adds them
+FAMILIES = (beams, rods, masses, springs, rigid)
+
+add_beams, add_rods, add_masses = beams.add, rods.add, masses.add
+add_springs, add_rigid = springs.add, rigid.add
+
+#: the grid fields of each element card (RBE2 / RBE3 lists: ``element_grids``)
+GRID_FIELDS = {
+    "CBAR": ("GA", "GB"), "CBEAM": ("GA", "GB"), "CROD": ("G1", "G2"), "CONROD": ("G1", "G2"),
+    "CBUSH": ("GA", "GB"), "CELAS1": ("G1", "G2"), "CELAS2": ("G1", "G2"), "CONM2": ("G",),
+    "CONM1": ("G",), "CMASS1": ("G1", "G2"), "CMASS2": ("G1", "G2"), "RBAR": ("GA", "GB"),
+    "RBE2": ("GN",), "RBE3": ("REFGRID",), "CQUAD4": ("G1", "G2", "G3", "G4"),
+    "CTRIA3": ("G1", "G2", "G3"),
+}  # fmt: skip
+
+
+def element_grids(card) -> list[int]:
+    """GRID ids an element card connects (blank fields skipped)."""
+    ids = [card[f] for f in GRID_FIELDS[card.name]]
+    if card.name == "RBE2":
+        ids += id_list(card, 3)
+    elif card.name == "RBE3":
+        ids += [g for _, _, gs in rbe3_groups(card) for g in gs]
+    return [int(i) for i in ids if isinstance(i, int) and i > 0]
+
+
+__all__ = [
+    "ELEMENTS", "FAMILIES", "GRID_FIELDS", "L_DIMS", "L_SECTIONS", "PROPERTIES", "Context",
+    "Mat1", "_by_id", "add_beams", "add_masses", "add_rigid", "add_rods", "add_springs",
+    "components", "element_grids", "id_list", "library_dims", "mat1", "material",
+    "pbeam_layout", "pbush_k", "pbush_lines", "rbe3_groups", "rod_values",
+]  # fmt: skip

@@ -1,0 +1,224 @@
+"""CBAR and CBEAM with PBAR, PBARL, PBEAM (constant) and PBEAML (MSC Nastran QRG).
+
+A CBAR/CBEAM orientation vector v lies in the element's x-y plane, its section has I1 about z
+(plane 1, x-y) and I2 about y, and its offsets WA, WB run from the grids to the element's ends
+(OFFT G: the end grid's CD frame, B: basic); pin flags PA/PB release element-axis components.
+The elements are ``fe.general_beam`` elements; lumped mass (COUPMASS < 1) at their ends.
+"""
+
+from dataclasses import replace
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe import standard_sections as ss
+from bayesupdate.fe.standard_sections import general_section
+from bayesupdate.nastran.cards.common import (
+    Context,
+    _builder_message,
+    _lumped_mass,
+    mat1,
+    material,
+)
+
+#: the cards this file converts (``cards.FAMILIES``)
+CARDS = ("CBAR", "CBEAM")
+
+#: PBARL/PBEAML shapes read (Nastran DIM order; ``standard_sections`` for the formulas) and
+#: their number of dimensions
+L_SECTIONS = {"ROD": 1, "TUBE": 2, "TUBE2": 2, "BAR": 2, "BOX": 4, "I": 6}
+#: number of dimensions of the other PBARL shapes (to find NSM after them)
+L_DIMS = {**L_SECTIONS, "CHAN": 4, "T": 4, "L": 4, "H": 4, "T1": 4, "I1": 4, "CHAN1": 4,
+          "Z": 4, "CHAN2": 4, "T2": 4, "BOX1": 6, "HEXA": 3, "HAT": 4, "HAT1": 5, "DBOX": 10,
+          "CROSS": 4}  # fmt: skip
+#: PBEAM fields of one station (after SO, X/XB) and of end A
+_STATION = ("A", "I1", "I2", "I12", "J", "NSM")
+#: PBEAM's last two lines: shear factors, shear relief, warping, mass and neutral-axis offsets
+_PBEAM_TAIL = ("K1", "K2", "S1", "S2", "NSIA", "NSIB", "CWA", "CWB", "M1A", "M2A", "M1B", "M2B",
+               "N1A", "N2A", "N1B", "N2B")  # fmt: skip
+_TAIL_DEFAULT = dict(K1=1.0, K2=1.0)
+
+
+def pbeam_layout(p) -> tuple[list, dict]:
+    """(stations, tail) of a PBEAM: stations = [(raw index of A, SO, X/XB)] (end A first), tail =
+    {K1: value, ...} with the QRG defaults (K1 = K2 = 1, others 0)."""
+    stations, i, n = [(2, None, 0.0)], 16, len(p.raw)
+    while i < n:
+        so = p.value(i)
+        if so not in ("YES", "YESA", "NO"):
+            break
+        stations.append((i + 2, so, p.value(i + 1)))
+        i += 16 if so == "YES" else 8
+    tail = {}
+    for k, name in enumerate(_PBEAM_TAIL):
+        v = p.value(i + k)
+        tail[name] = _TAIL_DEFAULT.get(name, 0.0) if v is None else v
+    return stations, tail
+
+
+def _pbeam_values(p, card) -> np.ndarray:
+    """(6,) A, I1, I2, I12, J, NSM of a constant PBEAM; refuses a tapered one (a station whose
+    fields differ from end A's; a blank station field is end A's, QRG PBEAM)."""
+    stations, _ = pbeam_layout(p)
+    a = np.array([p.real(k) for k in _STATION])
+    for start, _, _ in stations[1:]:
+        vals = [p.value(start + k) for k in range(6)]
+        v = np.array([a[k] if x is None else float(x) for k, x in enumerate(vals)])
+        if np.any(np.abs(v - a) > 1e-12 * np.maximum(np.abs(a), 1e-300)):
+            card.fail(f"PBEAM {p.id()} is tapered; only constant sections")
+    return a
+
+
+def _general_section(ctx: Context, prop, card):
+    """(``BeamSection``, nsm) of a PBAR or a single-station PBEAM (I1 -> iz, I2 -> iy)."""
+    pid = prop.id()
+    if prop.name == "PBAR":
+        a, i1, i2, i12, j, nsm = (prop.real(k) for k in ("A", "I1", "I2", "I12", "J", "NSM"))
+        # K1, K2 blank (or ignored because I12 != 0) mean rigid in shear (MSC QRG, PBAR)
+        k = [0.0 if (prop.is_blank(n) or i12) else prop.real(n) for n in ("K1", "K2")]
+    else:
+        a, i1, i2, i12, j, nsm = _pbeam_values(prop, card)
+        _, tail = pbeam_layout(prop)
+        used = [n for n in _PBEAM_TAIL[2:] if tail[n]]
+        if used:
+            card.fail(f"PBEAM {pid}: {', '.join(used)} not supported (shear relief, warping, "
+                      "mass and neutral-axis offsets)")  # fmt: skip
+        # PBEAM K1, K2 default 1.0; 0.0 means rigid in shear (MSC QRG, PBEAM)
+        k = [float(tail["K1"]), float(tail["K2"])]
+    try:
+        sec = general_section(a, i2, i1, j, i12, k[0], k[1], name=f"{prop.name} {pid}")
+    except BayesUpdateError as exc:
+        card.fail(str(exc))
+    return sec, nsm
+
+
+def library_dims(prop, card) -> tuple[str, np.ndarray, float]:
+    """(TYPE, DIM (n,), NSM) of a PBARL or a constant PBEAML (refused when tapered)."""
+    kind = str(prop["TYPE"])
+    if kind not in L_DIMS:
+        card.fail(f"{prop.name} {prop.id()} type {kind}: only {', '.join(L_SECTIONS)}")
+    n = L_DIMS[kind]
+    dims = np.array([float(prop.value(8 + k) or 0.0) for k in range(n)])
+    nsm = float(prop.value(8 + n) or 0.0)
+    if prop.name == "PBEAML":  # stations: SO, X/XB, DIMs, NSM each; blank = end A's
+        i = 9 + n
+        while i < len(prop.raw):
+            vals = [prop.value(i + 2 + k) for k in range(n)]
+            other = np.array(
+                [d if v is None else float(v) for d, v in zip(dims, vals, strict=True)]
+            )
+            if np.any(other != dims):
+                card.fail(f"PBEAML {prop.id()} is tapered; only constant sections")
+            i += 3 + n
+    return kind, dims, nsm
+
+
+def _library_section(ctx: Context, prop, card, nu):
+    """(``BeamSection``, nsm) of a PBARL/PBEAML of a shape in ``L_SECTIONS``.  Nastran's
+    figures have y_elem vertical: the shapes are built with their height along z and turned.
+    MSC's ROD uses the shear factor 0.9 (with it the beam_modes deck matches MSC to 2e-4 %;
+    Cowper's 0.886 is 0.3 % low on the 4th bending pair); the others use Cowper's (a note)."""
+    kind, d, nsm = library_dims(prop, card)
+    pid = prop.id()
+    if kind not in L_SECTIONS:
+        card.fail(f"{prop.name} {pid} type {kind}: only {', '.join(L_SECTIONS)}")
+    if kind == "I" and (d[1] != d[2] or d[4] != d[5]):
+        card.fail(f"{prop.name} {pid}: an I with unequal flanges is not supported")
+    try:
+        if kind == "ROD":
+            return replace(ss.rod_section(2 * d[0], nu), shear_y=0.9, shear_z=0.9), nsm
+        if kind in ("TUBE", "TUBE2"):
+            wall = d[0] - d[1] if kind == "TUBE" else d[1]
+            return ss.tube_section(2 * d[0], wall, nu), nsm
+        note = f"{prop.name} {pid} {kind}: shear factors of Cowper (1966); Nastran's own may differ"
+        if note not in ctx.notes:
+            ctx.notes.append(note)
+        if kind == "BAR":
+            return ss.bar_section(d[0], d[1], nu).swap_yz(), nsm
+        if kind == "BOX":
+            return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz(), nsm
+        return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz(), nsm
+    except BayesUpdateError as exc:
+        card.fail(f"{prop.name} {pid}: {exc}")
+
+
+def _orientation(ctx: Context, e, ga_row, offt: str = "GGG"):
+    """Orientation vector v (3,) in basic coordinates of a CBAR/CBEAM/CBUSH (X1-X3 in GA's CD
+    frame, or in basic for OFFT 'B..'; or from GA to G0)."""
+    g = ctx.grids
+    x1 = e["X1"]
+    if isinstance(x1, int):
+        return g.xyz[g.index([x1], e)[0]] - g.xyz[ga_row]
+    v = np.array([e.real(k) for k in ("X1", "X2", "X3")])
+    return v if offt[0] == "B" else g.frame[ga_row].T @ v
+
+
+def _offt(e) -> str:
+    """OFFT of a CBAR/CBEAM ('GGG' when blank); refuses CBEAM's BIT (a real) and bad flags."""
+    offt = e["OFFT"]
+    if not isinstance(offt, str):
+        e.fail("BIT / a numeric OFFT is not supported (OFFT GGG, BGG, ... only)")
+    return offt
+
+
+def _offsets(ctx: Context, e, rows, offt: str) -> np.ndarray:
+    """(2, 3) end offsets WA, WB in basic axes: OFFT 'G' = the end grid's CD frame, 'B' =
+    basic (MSC QRG, CBAR/CBEAM); 'O' (element axes) is not supported."""
+    w = np.array([[e.real(f"W{k}{end}") for k in (1, 2, 3)] for end in "AB"])
+    if not np.any(w):
+        return w
+    for end in (0, 1):
+        if len(offt) != 3 or offt[1 + end] not in "GB":
+            e.fail(f"OFFT {offt}: offsets in element axes ('O') are not supported")
+        if offt[1 + end] == "G":
+            w[end] = ctx.grids.frame[rows[end]].T @ w[end]
+    return w
+
+
+def _pins(e):
+    return tuple("" if not e[p] else str(e.int(p)) for p in ("PA", "PB"))
+
+
+def add(ctx: Context) -> None:
+    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM (one station), PBARL or PBEAML
+    (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
+    (COUPMASS < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each,
+    and for CBEAM also half the torsional inertia rho (I1 + I2) L about the axis (MSC lumps none
+    for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with against MSC's 3554.923)."""
+    ctx.each(("CBAR", "CBEAM"), _add_beam)
+
+
+def _add_beam(ctx: Context, e) -> None:
+    if e.name == "CBEAM" and (e["SA"] or e["SB"]):
+        e.fail("warping scalar points SA, SB are not supported")
+    rows = ctx.rows(e, ("GA", "GB"))
+    kinds = ("PBAR", "PBARL") if e.name == "CBAR" else ("PBEAM", "PBEAML")
+    prop = ctx.prop(e, kinds)
+    mid = prop.int("MID", positive=True)
+    mat = material(ctx, mid, e)
+    if prop.name in ("PBAR", "PBEAM"):
+        section, nsm = _general_section(ctx, prop, e)
+    else:
+        section, nsm = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
+    offt = _offt(e)
+    off = _offsets(ctx, e, rows, offt)
+    x = ctx.grids.xyz[rows] + off
+    length = np.linalg.norm(x[1] - x[0])
+    axis = (x[1] - x[0]) / max(length, 1e-300)
+    up = np.cross(axis, _orientation(ctx, e, rows[0], offt))  # local z = x cross v
+    a, b = ctx.node[rows]
+    part = f"{prop.name} {prop.id()}"
+    try:
+        ctx.builder.add_beams(
+            [[a, b]], section, mat, part, up=up, offsets=off, pins=_pins(e),
+            mass="none" if ctx.lumped else "consistent", nsm=nsm * ctx.wtmass,
+            shear_modulus=mat1(ctx, mid, e).G,
+        )  # fmt: skip
+    except BayesUpdateError as exc:
+        e.fail(_builder_message(exc))
+    if ctx.lumped:
+        line = mat.density * section.area + nsm * ctx.wtmass
+        twist = None
+        if e.name == "CBEAM":
+            twist = mat.density * (section.iy + section.iz) * length * np.outer(axis, axis)
+        _lumped_mass(ctx, (a, b), line, length, part, twist, off)

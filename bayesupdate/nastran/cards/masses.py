@@ -1,0 +1,94 @@
+"""CONM2, CONM1 and CMASS1/CMASS2 as point masses (MSC Nastran QRG).
+
+CONM2 inertia is [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]] in its CID frame; a
+CMASS on one grid's rotation is an inertia about that CD axis.  Masses are x WTMASS.
+"""
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.nastran.cards.common import Context, _builder_message
+from bayesupdate.nastran.frames import coordinate
+
+#: the cards this file converts (``cards.FAMILIES``)
+CARDS = ("CONM2", "CONM1", "CMASS1", "CMASS2")
+
+
+def add(ctx: Context) -> None:
+    """CONM2 (offset and inertia; CID -1, 0 or rectangular), CONM1 (a rigid-body 6x6) and
+    CMASS1/CMASS2 on one grid's rotation (4, 5, 6: an inertia about that CD axis)."""
+    ctx.each(("CONM2",), _add_conm2)
+    ctx.each(("CONM1",), _add_conm1)
+    ctx.each(("CMASS1", "CMASS2"), _add_cmass)
+
+
+def _mass_frame(ctx: Context, m):
+    cid = m.int("CID")
+    if cid in (-1, 0):
+        return np.eye(3)
+    coord = coordinate(ctx.grids, cid, m)
+    if coord.kind != "rectangular":
+        m.fail(f"CID {cid} is not rectangular")
+    return coord.axes
+
+
+def _add_conm2(ctx: Context, m) -> None:
+    row = ctx.rows(m, ("G",))[0]
+    R = _mass_frame(ctx, m)
+    offset = np.array([m.real(k) for k in ("X1", "X2", "X3")])
+    offset = offset - ctx.grids.xyz[row] if m.int("CID") == -1 else R.T @ offset
+    i11, i21, i22, i31, i32, i33 = (m.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33"))
+    J = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    J = R.T @ J @ R * ctx.wtmass
+    try:
+        ctx.builder.add_point_mass(ctx.node[row], m.real("M") * ctx.wtmass, f"CONM2 {m.id()}",
+                                   J, offset)  # fmt: skip
+    except BayesUpdateError as exc:
+        m.fail(_builder_message(exc))
+
+
+def _add_conm1(ctx: Context, m) -> None:
+    """CONM1 as a point mass: needs M_tt = m I; its offset c from M_tr = -m skew(c)."""
+    from bayesupdate.fe.rotations import skew
+
+    row = ctx.rows(m, ("G",))[0]
+    R = _mass_frame(ctx, m)
+    lower = [m.real(f"M{i}{j}") for i in range(1, 7) for j in range(1, i + 1)]
+    M = np.zeros((6, 6))
+    M[np.tril_indices(6)] = lower
+    M = (M + np.tril(M, -1).T) * ctx.wtmass
+    T = np.kron(np.eye(2), R)
+    M = T.T @ M @ T
+    mass = M[0, 0]
+    if mass <= 0 or not np.allclose(M[:3, :3], mass * np.eye(3), rtol=1e-6, atol=0):
+        m.fail("only a rigid-body mass (M11 = M22 = M33, no coupling) is supported")
+    S = -M[:3, 3:] / mass  # = skew(c)
+    c = np.array([S[2, 1], S[0, 2], S[1, 0]])
+    J = M[3:, 3:] - mass * skew(c[None])[0].T @ skew(c[None])[0]
+    ctx.builder.add_point_mass(ctx.node[row], mass, f"CONM1 {m.id()}", J, c)
+
+
+def _add_cmass(ctx: Context, m) -> None:
+    """A scalar mass (``fe.scalar_mass``) on component C1 of G1 (and C2 of G2, or ground), in
+    the grids' CD frames: a rotation component makes it a rotary inertia about that axis."""
+    value = ctx.prop(m, ("PMASS",)).real("M") if m.name == "CMASS1" else m.real("M")
+    if value < 0:
+        m.fail("a negative mass is not supported")
+    ends = [(g, c) for g, c in ((m["G1"], m["C1"]), (m["G2"], m["C2"])) if g]
+    if not ends:
+        m.fail("needs a grid (scalar points are not supported)")
+    rows = ctx.grids.index([g for g, _ in ends], m)
+    comps = [int(c or 0) for _, c in ends]
+    if not all(1 <= c <= 6 for c in comps):
+        m.fail("components must be 1-6 (scalar points are not supported)")
+    frames = [ctx.grids.frame[r] for r in rows]
+    b = (
+        dict(node_b=ctx.node[rows[1]], component_b=comps[1], frame_b=frames[1])
+        if len(ends) == 2
+        else {}
+    )
+    try:
+        ctx.builder.add_scalar_mass(ctx.node[rows[0]], comps[0], value * ctx.wtmass,
+                                    f"{m.name} {m.id()}", frame_a=frames[0], **b)  # fmt: skip
+    except BayesUpdateError as exc:
+        m.fail(_builder_message(exc))

@@ -1,0 +1,79 @@
+"""The mAEWing1 aircraft's own MSC Nastran decks, read as published, against their ``.f06``.
+
+``../shared/data/gvt_maewing1/fem`` (README there) holds the pre-update model (v3.3) and the
+authors' updated models (v4.2, v4.2.1), each with MSC Nastran's SOL 103 output.  Each deck is
+read unmodified by ``bayesupdate.nastran`` (its own bulk-data reader) and its 20 lowest elastic
+modes are solved; printed per deck: MSC's frequency, ours and the relative difference, the
+rigid-body modes, and the mass / WTMASS against the f06's grid point weight generator [lbf].
+The authors' SOL 200 deck (same structure, 34 DESVARs) is solved too and its parameters listed.
+
+Run:  .venv/bin/python studies/maewing1_fem.py
+"""
+
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+import numpy as np  # noqa: E402
+from test_nastran_maewing1 import DECKS, FEM, f06_table  # noqa: E402
+
+from bayesupdate.nastran import load_nastran_model  # noqa: E402
+
+N_MODES = 20
+SOL200 = "sol200_full_model/sol200_mAEWing1_FEMv4p2.bdf"
+
+
+def compare(name: str, deck: str, f06: str) -> float:
+    """Print one deck's table; returns the largest |relative difference|."""
+    msc, weight = f06_table(FEM / Path(deck).parent / f06)
+    model = load_nastran_model(str(FEM / deck))
+    r = model.solve(n_modes=N_MODES)
+    info = model.structure.metadata["nastran"]
+    ref = msc[6 : 6 + N_MODES]
+    rel = r.frequencies_hz / ref - 1
+    print(f"\n{name}: {deck}  ({info['units']['system']}, {model.structure.n_dof} DOFs)")
+    print(f"  rigid-body modes: {r.modes.n_rigid} (MSC: {int(np.sum(msc[:6] == 0))} at 0 Hz)")
+    w = r.mass_kg / info["wtmass"]
+    print(f"  weight: {w:.6f} lbf (f06 {weight:.6f}; {w / weight - 1:+.1e})")
+    print("  mode   MSC [Hz]     ours [Hz]    rel. diff")
+    for k, (a, b, d) in enumerate(zip(ref, r.frequencies_hz, rel, strict=True), start=7):
+        print(f"  {k:4d} {a:11.5f} {b:13.6f}   {d:+.2e}")
+    print(f"  largest |rel. diff| {np.abs(rel).max():.2e}")
+    return float(np.abs(rel).max())
+
+
+def sol200() -> None:
+    """The SOL 200 deck: its DESVAR parameters, and the model at the cards' values, at the
+    DESVARs' XINIT (through the relations) and v4.2's."""
+    from bayesupdate.nastran.deck import read_deck
+    from bayesupdate.nastran.desvar import xinit_values
+
+    model = load_nastran_model(str(FEM / SOL200))
+    xinit = xinit_values(read_deck(FEM / SOL200), model)
+    print(f"\nSOL 200 deck: {SOL200}")
+    print(f"  {len(xinit)} DESVAR parameters: name  card value  XINIT  [XLB, XUB]")
+    bounds = model.default_bounds()
+    for name, value in model.default_parameters().items():
+        print(f"    {name:10s} {value:<12.6g} {xinit[name]:<12.6g} {list(bounds[name])}")
+    cards = model.solve(n_modes=10).frequencies_hz
+    start = model.solve(xinit, n_modes=10).frequencies_hz
+    v42 = load_nastran_model(str(FEM / DECKS["v4.2"][0])).solve(n_modes=10).frequencies_hz
+    print("  mode  cards [Hz]   XINIT [Hz]  (diff)     v4.2 [Hz]  (cards - v4.2)")
+    for k, (a, b, c) in enumerate(zip(cards, start, v42, strict=True), start=7):
+        print(f"  {k:4d} {a:11.5f} {b:11.5f} ({b / a - 1:+.2e}) {c:11.5f} ({a / c - 1:+.2e})")
+    for note in model.structure.metadata["nastran"]["notes"]:
+        if "DESVAR" in note or "objective" in note:
+            print(f"  note: {note[:300]}{'...' if len(note) > 300 else ''}")
+
+
+def main() -> None:
+    worst = max(compare(name, *files) for name, files in DECKS.items())
+    print(f"\nall three decks: largest |rel. diff| {worst:.2e} (target 1e-4)")
+    sol200()
+
+
+if __name__ == "__main__":
+    main()

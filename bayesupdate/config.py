@@ -94,10 +94,14 @@ from bayesupdate.parallel_executor import parse_compute_table
 
 @dataclass(frozen=True)
 class ModelConfig:
+    """The ``[model]`` table.  units: a Nastran deck's own unit system by name ("in-lbf-s",
+    "si", ...: ``nastran.units``) where its WTMASS and moduli do not say it (None: recognised)."""
+
     source: str = "exhaust"
     options: dict = field(default_factory=dict)
     sensors: tuple = ()
     test_points: dict = field(default_factory=dict)
+    units: str | None = None
 
 
 @dataclass(frozen=True)

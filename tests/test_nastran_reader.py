@@ -188,3 +188,19 @@ def test_units_from_wtmass_or_named(tmp_path):
     assert (named["length"], named["mass"]) == ("m", "kg")
     with pytest.raises(BayesUpdateError, match="units = 'furlong'"):
         load_nastran_model(deck, units="furlong")
+
+
+def test_a_study_names_the_decks_units_in_its_model_table(tmp_path):
+    """``[model] units = "si"`` reaches the deck through the study path (``study_model``); a
+    built-in model refuses it in one line."""
+    from bayesupdate.config import parse_study
+    from bayesupdate.pipelines.model_source import study_model
+
+    deck = tmp_path / "rotor.bdf"
+    deck.write_text(ROTOR.replace("PARAM,WTMASS,0.5", "PARAM,WTMASS,.00259"))
+    table = {"model": {"source": str(deck), "units": "si"},
+             "parameters": {"k": {"binds": "CELAS2 4 K", "bounds": [1.0, 1e9]}}}  # fmt: skip
+    model = study_model(parse_study(table))
+    assert model.structure.metadata["nastran"]["units"]["length"] == "m"
+    with pytest.raises(BayesUpdateError, match="model.units: only a Nastran deck"):
+        study_model(parse_study({"model": {"source": "exhaust", "units": "si"}}))

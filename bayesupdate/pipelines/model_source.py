@@ -11,15 +11,17 @@ from bayesupdate.errors import BayesUpdateError
 
 
 def resolve_model(
-    source: str, parameters: Mapping | None = None, sensors=(), options=None, deck=None
-):
+    source: str, parameters: Mapping | None = None, sensors=(), options=None, deck=None,
+    units=None,
+):  # fmt: skip
     """A built-in model name (``bayesupdate.models.get_model``), a Nastran deck path, or a
     ``module:function`` spec (``inference.user_model.load_user_model``: its parameters and
     bounds come from ``parameters``, the study's ``{name: {bounds, start}}`` tables; ``sensors``
     labels its shape rows).  ``options`` are the built-in model factory's keyword arguments.
 
     A Nastran deck (``nastran.load_nastran_model``) takes its parameters from the tables'
-    ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``."""
+    ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``, in its
+    own ``units`` (a name, ``nastran.units``; None: recognised from the deck)."""
     from bayesupdate.inference.user_model import load_user_model
     from bayesupdate.models import BUILTIN_MODELS, get_model
     from bayesupdate.nastran import is_nastran_path, load_nastran_model
@@ -28,7 +30,7 @@ def resolve_model(
         if options:
             raise BayesUpdateError(f"model.options: a Nastran deck takes none ({source})")
         labels, points = deck if deck is not None else ((), None)
-        model = load_nastran_model(str(source), parameters, labels, points)
+        model = load_nastran_model(str(source), parameters, labels, points, units=units)
         if not model.parameter_names:
             raise BayesUpdateError(
                 f"model {source}: a Nastran deck's parameters are deck fields; give them in a "
@@ -37,6 +39,8 @@ def resolve_model(
         return model
     if _points_given(deck):
         raise BayesUpdateError("model.test_points: only a Nastran deck (model.source) maps them")
+    if units is not None:
+        raise BayesUpdateError("model.units: only a Nastran deck has its own units (SI here)")
     bound = [name for name, entry in (parameters or {}).items() if "binds" in entry]
     if bound:
         raise BayesUpdateError(
@@ -92,6 +96,7 @@ def study_model(study, test_labels=()):
         study.model.sensors,
         study.model.options,
         deck=(tuple(test_labels), dict(study.model.test_points)),
+        units=study.model.units,
     )
 
 
@@ -104,8 +109,9 @@ def paired_study_model(study, test_labels=()):
 
     cfg = study.test
     model = resolve_model(
-        study.model.source, study.parameters, study.model.sensors, study.model.options
-    )
+        study.model.source, study.parameters, study.model.sensors, study.model.options,
+        units=study.model.units,
+    )  # fmt: skip
     geometry = read_geometry(cfg.geometry, cfg.length_unit)
     if not test_labels:
         return model, None

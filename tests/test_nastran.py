@@ -54,8 +54,10 @@ def test_msc_beam_deck_matches_msc_within_4e_4_percent(capsys):
     assert out["rigid_modes"] == 0
     assert out["n_dof"] == 66  # 11 GRIDs in use (GRID 12 has no element: AUTOSPC)
     # CONM2 0.00259 + rod rho pi r^2 L = 7.4851e-4 x pi x 10 (lbf s^2/in, no WTMASS)
-    assert out["mass_kg"] == pytest.approx(0.00259 + 7.4851e-4 * np.pi * 10, rel=1e-9)
+    assert out["mass"] == pytest.approx(0.00259 + 7.4851e-4 * np.pi * 10, rel=1e-9)
     assert out["units"]["system"] == "in, lbf, s"
+    # the deck's own mass unit, never called kg
+    assert out["mass_unit"] == "lbf s^2/in" and "mass_kg" not in out
 
 
 @needs_data
@@ -143,7 +145,7 @@ def test_rod_rbar_bush_conm1_deck_matches_closed_form(capsys, tmp_path):
     k_x = 1 / (1 / 5e5 + 1 / 1e4)
     expected = np.sqrt([k_x / 2, 1e4 / 2, 1e4 / 2, 1e6, 1e6, 1e6]) / (2 * np.pi)
     assert out["frequencies_hz"] == pytest.approx(expected, rel=1e-6)
-    assert out["mass_kg"] == pytest.approx(2.0)
+    assert out["mass"] == pytest.approx(2.0)
 
 
 def test_cbush_with_ends_apart_acts_at_its_midpoint_through_rigid_arms(capsys, tmp_path):

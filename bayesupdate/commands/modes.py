@@ -9,7 +9,7 @@ from bayesupdate.units import parse_assignments
 NAME = "modes"
 HELP = "FE normal modes of a built-in model or a Nastran deck (frequencies, mass, energies)"
 DESCRIPTION = """Free-free modal analysis (seed section 3, eqs 1-2) of a built-in model, or of a
-Nastran deck (.bdf, .dat, .nas, .blk; needs pip install bayesupdate[nastran]).
+Nastran deck (.bdf, .dat, .nas, .blk), read by bayesupdate's own bulk-data reader.
 
 Examples:
   bayesupdate modes --model exhaust
@@ -18,8 +18,8 @@ Examples:
   bayesupdate modes --model exhaust.bdf --set "PSHELL 3 T=0.0595" --json
   bayesupdate modes --model exhaust_shell --sed-map sed/
 
-A Nastran deck is solved in its own units (mass_kg is then in the deck's mass unit; the JSON's
-"units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count; its
+A Nastran deck is solved in its own units (the JSON's "mass" is in its "mass_unit", and a deck
+whose PARAM WTMASS is 1/g also gives its "weight"; "units" says which system was recognised) with its SPC set, PARAM WTMASS and EIGRL count; its
 --set names are deck fields ("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the
 deck's units.
 
@@ -76,7 +76,7 @@ def run(args) -> int:
         out = {
             "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
             "rigid_modes": int(result.modes.n_rigid),
-            "mass_kg": float(result.mass_kg),
+            **mass_record(result.mass_kg, deck.get("units")),
             "n_dof": int(model.structure.n_dof),
             "parameters": {k: float(v) for k, v in result.parameters.items()},
         }
@@ -84,8 +84,21 @@ def run(args) -> int:
             out.update(units=deck["units"], notes=deck["notes"])
         print(json.dumps(out))
         return 0
-    print(format_modes_table(result))
+    print(format_modes_table(result, deck.get("units")))
     return 0
+
+
+def mass_record(mass: float, units: dict | None) -> dict:
+    """The JSON's mass in the model's own units: ``mass`` and ``mass_unit`` always;
+    ``mass_kg`` only where that unit is kg (a built-in model, an SI deck); ``weight`` and
+    ``weight_unit`` for a deck whose mass input is weight (PARAM WTMASS = 1/g)."""
+    unit = "kg" if units is None else units["mass"]
+    out = {"mass": float(mass), "mass_unit": unit}
+    if unit == "kg":
+        out["mass_kg"] = float(mass)
+    if units is not None and units.get("weight"):
+        out.update(weight=float(mass) / units["wtmass"], weight_unit=units["weight"])
+    return out
 
 
 def _model_and_values(args):
@@ -140,16 +153,21 @@ def _geometry(text):
     return int(text) if text.lstrip("-").isdigit() else text
 
 
-def format_modes_table(result) -> str:
-    """Readable table: mode, frequency, and strain-energy share per part (% of the mode)."""
+def format_modes_table(result, units: dict | None = None) -> str:
+    """Readable table: mode, frequency, and strain-energy share per part (% of the mode);
+    the mass and centre of gravity in the model's units (a deck's ``units`` record; SI)."""
     energies = result.energies
     parts = list(energies.parts)
     shares = energies.strain_by_part * 100.0
     keep = np.flatnonzero(shares.max(axis=1) >= 1.0)  # parts that carry >= 1 % in some mode
     short = [p if len(p) <= 12 else p[:11] + "." for p in (parts[i] for i in keep)]
+    mass_unit, length = ("kg", "m") if units is None else (units["mass"], units["length"])
+    weight = ""
+    if units is not None and units.get("weight"):
+        weight = f" (weight {result.mass_kg / units['wtmass']:.4f} {units['weight']})"
     lines = [
-        f"mass {result.mass_kg:.3f} kg, centre of gravity "
-        f"({', '.join(f'{c:.3f}' for c in result.centre_of_gravity)}) m",
+        f"mass {result.mass_kg:.6g} {mass_unit}{weight}, centre of gravity "
+        f"({', '.join(f'{c:.3f}' for c in result.centre_of_gravity)}) {length}",
         "strain-energy share of each part [% of the mode]",
         f"{'mode':>4} {'f [Hz]':>9}  " + " ".join(f"{s:>12}" for s in short),
     ]

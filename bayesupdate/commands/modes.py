@@ -20,8 +20,8 @@ Examples:
 
 A Nastran deck is solved in its own units (the JSON's "mass" is in its "mass_unit", and a deck
 whose PARAM WTMASS is 1/g also gives its "weight"; "units" says which system was recognised)
-with its SPC set, PARAM WTMASS and EIGRL count; its --set names are deck fields ("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the
-deck's units.
+with its SPC set, PARAM WTMASS and EIGRL count; its --set names are deck fields
+("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the deck's units.
 
 Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
 each mode's frequency and the share of its strain energy in each part (seed section 3.2).

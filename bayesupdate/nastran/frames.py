@@ -16,7 +16,6 @@ import numpy as np
 
 from bayesupdate.fe import frames
 from bayesupdate.fe.frames import CoordinateFrame
-from bayesupdate.nastran.bulk import CardError
 
 _KIND = {"R": "rectangular", "C": "cylindrical", "S": "spherical"}
 CORDS = ("CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S")
@@ -176,6 +175,3 @@ def coordinate(grids: Grids, cid: int, card) -> Coord:
     if cid not in grids.coords:
         card.fail(f"coordinate system {cid} does not exist")
     return grids.coords[cid]
-
-
-__all__ = ["BASIC", "CORDS", "CardError", "Coord", "Grids", "coordinate", "read_grids"]

@@ -49,11 +49,3 @@ def element_grids(card) -> list[int]:
     elif card.name == "RBE3":
         ids += [g for _, _, gs in rbe3_groups(card) for g in gs]
     return [int(i) for i in ids if isinstance(i, int) and i > 0]
-
-
-__all__ = [
-    "ELEMENTS", "FAMILIES", "GRID_FIELDS", "L_DIMS", "L_SECTIONS", "PROPERTIES", "Context",
-    "Mat1", "_by_id", "add_beams", "add_masses", "add_rigid", "add_rods", "add_springs",
-    "components", "element_grids", "id_list", "library_dims", "mat1", "material",
-    "pbeam_layout", "pbush_k", "pbush_lines", "rbe3_groups", "rod_values",
-]  # fmt: skip

@@ -280,17 +280,6 @@ def _ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ess.astype(float), ess_tau
 
 
-def convergence(chain: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(r_hat (d,), ess_bulk (d,)) of a chain (n_steps, n_walkers, d) after ``burn_in``;
-    ess_bulk is the smaller of ArviZ's and emcee's ESS (walkers of an ensemble are not
-    independent), 0 where tau is not finite yet."""
-    post = chain[burn_in(chain.shape[0], tau) :]
-    if post.shape[0] < 4:
-        return np.full(chain.shape[-1], np.inf), np.zeros(chain.shape[-1])
-    rhat, ess, ess_tau = rhat_and_ess(post, tau)
-    return rhat, np.minimum(ess, np.nan_to_num(ess_tau, nan=0.0))
-
-
 @dataclass(frozen=True)
 class SamplerSettings:
     """How a sampling run goes (module docstring), validated once when made.
@@ -571,8 +560,9 @@ def check_schedule(done: int, check_every: int, steps: int) -> int:
 
 def _stop_rule(chain: np.ndarray, done: int, settings: SamplerSettings):
     """(tau (d,) [steps], converged): steps >= min_autocorr_times * max(tau) and the
-    convergence targets of ``settings`` hold for the chain (n_steps, n_walkers, d), as
-    ``convergence`` computes them (R-hat first: the ESS only where R-hat holds)."""
+    convergence targets of ``settings`` hold for the chain (n_steps, n_walkers, d) after its
+    ``burn_in``: R-hat first, then the bulk ESS (the smaller of ArviZ's and emcee's: walkers of
+    an ensemble are not independent) only where R-hat holds."""
     tau = _autocorr(chain)
     converged = bool(np.all(np.isfinite(tau)) and done >= settings.min_autocorr_times * np.max(tau))
     target_rhat, target_ess = settings.target_rhat, settings.target_ess

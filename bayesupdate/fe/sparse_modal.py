@@ -21,8 +21,8 @@ low modes.  They are *suspension* modes and, as on the beam path (``fe.eigensolv
 modes numbered with the others: only the zero-energy combinations are rigid (a frame on vertical
 bungees has four rigid modes and its bounce and pitch as elastic modes 1-2).  "Zero" is the
 sparse path's ``zero_tol`` test against the diagonal energy: a spring so soft that its mode's
-energy is below 1e-10 of sum_i K_ii x_i^2 counts as free (a 0.1 lbf in/rad rotational spring on a
-40 in aluminium frame (E = 1e7 psi): 2.4e-11, at 0.04 Hz under a first bending mode of 54 Hz).  MSC Nastran's
+energy is below 1e-10 of sum_i K_ii x_i^2 counts as free (a 0.1 lbf in/rad rotational spring on
+a 40 in aluminium frame: 2.4e-11, at 0.04 Hz under a first bending mode of 54 Hz).  MSC Nastran's
 SUPORT makes the rigid-body motions of its reference DOFs the rigid set instead, whatever the
 springs store (Quick Reference Guide, SUPORT; the eigenvalue table prints them as 0.0):
 ``ModalSettings.rigid_set = "rigid_motions"`` takes every allowed rigid motion as a rigid mode

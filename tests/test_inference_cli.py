@@ -10,6 +10,7 @@ from bayesupdate.cli import main
 from bayesupdate.inference import load_modal_data, read_result, to_datatree
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS
+from bayesupdate.inference.sampling import check_schedule
 from bayesupdate.paper import TABLE2_EMA_HZ
 
 STUDY = """
@@ -239,7 +240,7 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
 
 def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, capsys):
     # the built-in exhaust: certified reduced basis, proposals screened on a coarser basis
-    # (delayed acceptance); the R-hat / ESS targets are checked every block
+    # (delayed acceptance); the R-hat / ESS targets are checked as the chain grows
     study = tmp_path / "exhaust.toml"
     study.write_text(
         '[model]\nsource = "exhaust"\n[data]\nsource = "paper:ema"\n'
@@ -259,8 +260,12 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     proposals = result["steps"] * result["walkers"]
     assert result["screen"]["evaluations"] >= proposals > 2 * result["evaluations"]
     assert result["moves"] == {"kind": "de", "requested": "de", "fallback": None}
-    # loose targets: met at a block boundary before the budget, and they hold in the summary
-    assert result["converged"] and result["steps"] in (100, 200, 300, 400, 500)
+    # loose targets: met at a check (sampling.check_schedule) before the budget, and they hold
+    # in the summary
+    checks, done = [], 0
+    while done < 600:
+        checks.append(done := check_schedule(done, 100, 600))
+    assert result["converged"] and result["steps"] in checks[:-1]
     assert max(p["r_hat"] for p in result["parameters"].values()) <= 1.5
     assert min(p["ess_bulk"] for p in result["parameters"].values()) >= 20
 

@@ -4,16 +4,14 @@ writes all three as PNG into a folder."""
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from bayesupdate import plotting
 
 
 def plot_residuals(result):
     """Relative error [%] per mode, baseline vs re-calibrated, with the +-2 noise band."""
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig, ax = plotting.subplots(figsize=(7, 3.5))
     m = result.baseline.residual_rel.size
     x = np.arange(1, m + 1)
     ax.bar(x - 0.2, 100 * result.baseline.residual_rel, 0.4, label="baseline")
@@ -35,7 +33,7 @@ def plot_localization(result, structure=None):
     """Score-test chi^2 drop of the best effect at each location, drawn at its position on the
     structure (x: along the car, y: lateral), over the beam elements."""
     loc = result.localization
-    fig, ax = plt.subplots(figsize=(8, 3.5))
+    fig, ax = plotting.subplots(figsize=(8, 3.5))
     if structure is not None:
         segs = structure.nodes[structure.beam_nodes]
         for seg in segs:
@@ -69,7 +67,7 @@ def plot_ranking(result, top: int = 12):
     """ln Bayes factor vs the baseline of the refitted candidates, with the threshold
     (``threshold_log_odds`` minus the prior log odds of one candidate)."""
     fits = result.fits[:top]
-    fig, ax = plt.subplots(figsize=(7, 0.35 * max(len(fits), 3) + 1.2))
+    fig, ax = plotting.subplots(figsize=(7, 0.35 * max(len(fits), 3) + 1.2))
     values = [result.log_bayes_factor(f) for f in fits]
     y = np.arange(len(fits))[::-1]
     colors = ["C2" if result.named is f else "C0" for f in fits]
@@ -96,8 +94,5 @@ def save_plots(result, folder, structure=None) -> list[Path]:
         ("localization", plot_localization(result, structure)),
         ("ranking", plot_ranking(result)),
     ):
-        path = folder / f"{name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        out.append(path)
+        out.append(plotting.save(fig, folder / f"{name}.png"))
     return out

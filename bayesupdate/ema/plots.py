@@ -8,24 +8,21 @@ Each function writes one PNG file and returns its path; nothing is shown on scre
 import os
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from bayesupdate.correlation import mac_matrix  # noqa: E402
-from bayesupdate.ema.frf_set import FrfSet  # noqa: E402
-from bayesupdate.ema.identify import Identification  # noqa: E402
-from bayesupdate.ema.indicators import cmif  # noqa: E402
-from bayesupdate.ema.uff_io import parse_label  # noqa: E402
+from bayesupdate import plotting
+from bayesupdate.correlation import mac_matrix
+from bayesupdate.ema.frf_set import FrfSet
+from bayesupdate.ema.identify import Identification
+from bayesupdate.ema.indicators import cmif
+from bayesupdate.ema.uff_io import parse_label
 
 
 def plot_stabilization(result: Identification, frfs: FrfSet, path) -> Path:
     """Stabilization diagram of every band (poles: o new, x partly stable, + stable) over
     the CMIF (right axis, log), selected modes as red lines, band starts dotted;
     drawn over the analysed bands (lines outside them hold no poles)."""
-    fig, ax = plt.subplots(figsize=(11, 6))
+    fig, ax = plotting.subplots(figsize=(11, 6))
     for d in result.diagrams:
         partly = ~d.stable & (d.stable_frequency | d.stable_damping | d.stable_vector)
         new = ~(d.stable | partly)
@@ -61,7 +58,7 @@ def _plot_cmif(ax, frfs: FrfSet, span_hz) -> None:
 def plot_cmif(frfs: FrfSet, path, band_hz=None) -> Path:
     """CMIF of the FRF set over band_hz (default: all lines); the band, when given, shaded."""
     f = frfs.frequencies_hz
-    fig, ax = plt.subplots(figsize=(11, 4))
+    fig, ax = plotting.subplots(figsize=(11, 4))
     _plot_cmif(ax, frfs, (f[0], f[-1]))
     if band_hz is not None:
         ax.axvspan(band_hz[0], band_hz[1], color="tab:blue", alpha=0.08, label="band")
@@ -80,7 +77,7 @@ def plot_shape_bars(labels, shapes: np.ndarray, frequencies_hz, path) -> Path:
     ncol = min(2, max(m, 1))
     nrow = max(int(np.ceil(m / ncol)), 1)
     width = min(max(4.0, 0.35 * n_dof + 1.5), 9.0)
-    fig, axes = plt.subplots(
+    fig, axes = plotting.subplots(
         nrow, ncol, figsize=(width * ncol, 2.3 * nrow), squeeze=False, sharey=True
     )
     x = np.arange(n_dof)
@@ -105,7 +102,7 @@ def plot_frf_fit(result: Identification, frfs: FrfSet, path, rows=None) -> Path:
     sel = (frfs.frequencies_hz >= lo - 1e-9) & (frfs.frequencies_hz <= hi + 1e-9)
     if rows is None:
         rows = np.argsort(result.frf_correlation)[:6]
-    fig, axes = plt.subplots(len(rows), 1, figsize=(10, 2.2 * len(rows)), squeeze=False)
+    fig, axes = plotting.subplots(len(rows), 1, figsize=(10, 2.2 * len(rows)), squeeze=False)
     for ax, k in zip(axes[:, 0], rows, strict=True):
         ax.semilogy(frfs.frequencies_hz[sel], np.abs(frfs.frf[k, sel]), label="measured")
         ax.semilogy(
@@ -121,7 +118,7 @@ def plot_frf_fit(result: Identification, frfs: FrfSet, path, rows=None) -> Path:
 def plot_mac(shapes_a: np.ndarray, shapes_b: np.ndarray, path, title: str = "MAC") -> Path:
     """MAC matrix of two shape sets as an image with values."""
     mac = mac_matrix(shapes_a, shapes_b)
-    fig, ax = plt.subplots(figsize=(6, 5))
+    fig, ax = plotting.subplots(figsize=(6, 5))
     im = ax.imshow(mac, vmin=0, vmax=1, cmap="viridis", origin="lower")
     for (i, j), v in np.ndenumerate(mac):
         ax.text(
@@ -147,7 +144,7 @@ def plot_mode_shapes(modes, path, coordinates: dict | None = None) -> Path:
     m = modes.n_modes
     ncol = min(4, m)
     nrow = int(np.ceil(m / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.4 * nrow), squeeze=False)
+    fig, axes = plotting.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.4 * nrow), squeeze=False)
     for r in range(m):
         ax = axes.flat[r]
         for d, name in ((3, "V"), (2, "H"), (1, "L")):
@@ -170,6 +167,4 @@ def _save(fig, path) -> Path:
     path = Path(path)
     os.makedirs(path.parent, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return plotting.save(fig, path)

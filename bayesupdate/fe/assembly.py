@@ -226,14 +226,6 @@ class Assembler:
         self._beam_memo = (key, bK.copy(), bM.copy())
         return bK, bM
 
-    def ground_stiffness(self, element_matrices: dict):
-        """CSR stiffness of the springs to ground alone (None if there are none)."""
-        if not np.any(self.spring_grounded):
-            return None
-        pos = self._pos_spring.reshape(len(self.spring_grounded), -1)[self.spring_grounded]
-        sK = element_matrices["spring_K"][self.spring_grounded]
-        return self.to_csr(self._scatter(pos.ravel(), sK))
-
     def _scatter(self, positions, element_matrices):
         """Sum element entries into the (nnz,) CSR data (float even for no elements)."""
         return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)

@@ -15,10 +15,9 @@ beam ``Assembler``, unchanged) together with shells, supports and rigid elements
   by ``sparse_modal.solve_reduced_modes`` (shift-invert Lanczos with a negative shift, the
   rigid-body modes the supports allow found exactly, mechanisms reported with their DOFs;
   dense LAPACK below ``ModalSettings.dense_below`` DOFs).
-* Springs to ground: rigid-shaped modes with most of their strain energy in those springs are
-  suspension modes, reported with the rigid ones (``n_rigid``, ``rigid_frequencies_hz``) and not
-  among the elastic modes, as on the beam path (``fe.eigensolve``).  ``solve`` takes the ground
-  springs' stiffness of the K it is given from the ``assemble`` call that made that K.
+* Springs to ground: their suspension modes are elastic modes, as on the beam path
+  (``fe.eigensolve``); with ``ModalSettings.rigid_set = "rigid_motions"`` (MSC Nastran's SUPORT)
+  every allowed rigid motion is a rigid mode (``n_rigid``, ``rigid_frequencies_hz``) instead.
 """
 
 from dataclasses import replace
@@ -84,7 +83,6 @@ class GeneralAssembler:
         self.transform = constraint_transform(s.nodes, c)
         self.rigid = allowed_rigid(s.nodes, self.transform)
         self._rigid_origin = rigid_body_basis(s.nodes, centre=np.zeros(3))
-        self._ground = (None, None)  # (the last assembled K, its ground-spring stiffness)
 
     # -- shells ----------------------------------------------------------------------------------
     def _groups(self, shell_keys):
@@ -163,30 +161,23 @@ class GeneralAssembler:
             K += Ks
             M += Ms
         K = self.csr(K)
-        self._ground = (K, self.beams.ground_stiffness(elem))
         return K, self.csr(M), elem
 
-    def solve(
-        self, K, M, n_modes: int, dense: bool = False, ground=None, settings=None
-    ) -> ModalSolution:
+    def solve(self, K, M, n_modes: int, dense: bool = False, settings=None) -> ModalSolution:
         """First ``n_modes`` elastic modes of the constrained structure (full-DOF shapes).
 
-        ground : (n_dof, n_dof) stiffness of the springs to ground in K; default: the one
-        ``assemble`` computed with this very K (None for another K: no suspension modes then).
-        settings : ``ModalSettings`` (its n_modes is replaced by ``n_modes``)."""
+        settings : ``ModalSettings`` (its n_modes is replaced by ``n_modes``; its rigid_set
+        "rigid_motions" for a Nastran SUPORT)."""
         tr = self.transform
         settings = replace(settings or ModalSettings(), n_modes=n_modes)
         if dense:
             settings = replace(settings, dense_below=tr.independent.size + 1)
-        if ground is None and self._ground[0] is K:
-            ground = self._ground[1]
         lam, phi, Rm, lam_r = solve_reduced_modes(
             tr.reduce(K),
             tr.reduce(M),
             self.rigid,
             settings,
             tr.independent,
-            None if ground is None else tr.reduce(ground),
         )
         return ModalSolution(
             frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),

@@ -419,7 +419,6 @@ class FEModel:
             self.rigid_basis,
             self.banded,
             method=method,
-            ground_stiffness=self.assembler.ground_stiffness(elem),
         )
         mass, cog = self.assembler.total_mass(props)
         en = modal_energies(self.assembler, elem, modes.shapes) if energies else None

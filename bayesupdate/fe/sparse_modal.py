@@ -16,19 +16,27 @@ eigenvalue would have without any cancellation between DOFs) is a mechanism and 
 the DOFs
 that move.  Small models use dense LAPACK on the same complement.
 
-Springs to ground (``ground``: their stiffness alone): the allowed rigid motions then carry
-energy and come out of the iteration as low modes.  As on the beam path (``fe.eigensolve``) a mode
-is a *suspension* mode, reported with the rigid ones and not among the elastic modes, when it is
-rigid-shaped (more than half of its M-norm in the span of the allowed rigid motions) and most of
-its strain energy (> lambda / 2) is in the ground springs.  A model with fewer elastic modes than
-asked besides them (a rigid body on springs, e.g. a point mass) keeps them as its modes.
+Springs to ground: the allowed rigid motions then carry energy and come out of the iteration as
+low modes.  They are *suspension* modes and, as on the beam path (``fe.eigensolve``), elastic
+modes numbered with the others: only the zero-energy combinations are rigid (a frame on vertical
+bungees has four rigid modes and its bounce and pitch as elastic modes 1-2).  "Zero" is the
+sparse path's ``zero_tol`` test against the diagonal energy: a spring so soft that its mode's
+energy is below 1e-10 of sum_i K_ii x_i^2 counts as free (a 0.1 lbf in/rad rotational spring on
+a 40 in aluminium frame: 2.4e-11, at 0.04 Hz under a first bending mode of 54 Hz).  MSC Nastran's
+SUPORT makes the rigid-body motions of its reference DOFs the rigid set instead, whatever the
+springs store (Quick Reference Guide, SUPORT; the eigenvalue table prints them as 0.0):
+``ModalSettings.rigid_set = "rigid_motions"`` takes every allowed rigid motion as a rigid mode
+(reported with its Rayleigh quotient) and solves the elastic modes on their M-orthogonal
+complement, exactly: the Lanczos operator is then the constrained inverse
+x = (K - sigma M)^-1 (b - M Rm mu), Rm^T M x = 0, i.e. the inverse of the compressed pencil
+(a bordered solve; P (K - sigma M)^-1 alone is exact only when Rm are eigenvectors).
 
 Factorisation of K - sigma M: CHOLMOD (supernodal Cholesky, Chen et al., ACM TOMS 35 (2008) 22,
 through scikit-sparse, the optional extra ``bayesupdate[fast]``) where it is installed, else
 SuperLU (``ModalSettings.factorization``).
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sl
@@ -40,6 +48,8 @@ from bayesupdate.fe.node_pattern import NODE_DOF, node_blocks, node_pattern
 
 COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
 FACTORIZATIONS = ("auto", "cholmod", "superlu")
+#: which modes are rigid: the zero-energy ones, or every allowed rigid motion (SUPORT)
+RIGID_SETS = ("zero_energy", "rigid_motions")
 
 
 def sorted_unique(keys: np.ndarray) -> np.ndarray:
@@ -148,7 +158,9 @@ class ModalSettings:
     to ~1e-7 of its diagonal energy.  dense_below :
     free-DOF count under which dense LAPACK is used; tol : ARPACK relative tolerance; seed : start
     vector; factorization : "auto" (CHOLMOD if scikit-sparse is installed, else SuperLU),
-    "cholmod" (an error without scikit-sparse) or "superlu".
+    "cholmod" (an error without scikit-sparse) or "superlu"; rigid_set : "zero_energy" (the
+    default: suspension modes on springs to ground are elastic modes) or "rigid_motions" (every
+    allowed rigid motion is a rigid mode, as MSC Nastran's SUPORT makes it; module docstring).
     """
 
     n_modes: int = 20
@@ -158,6 +170,7 @@ class ModalSettings:
     tol: float = 1e-12
     seed: int = 0
     factorization: str = "auto"
+    rigid_set: str = "zero_energy"
 
     def __post_init__(self):
         if not (self.shift < 0 and np.isfinite(self.shift)):
@@ -169,6 +182,10 @@ class ModalSettings:
                 f"modal settings: factorization must be one of {FACTORIZATIONS}, "
                 f"got {self.factorization!r}"
             )
+        if self.rigid_set not in RIGID_SETS:
+            raise BayesUpdateError(
+                f"modal settings: rigid_set must be one of {RIGID_SETS}, got {self.rigid_set!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -177,8 +194,8 @@ class SparseModes:
 
     frequencies_hz, eigenvalues (m,) [Hz, rad^2/s^2]; shapes (n_dof, m) mass-normalised, zero on
     constrained DOFs; rigid_shapes (n_dof, r) mass-normalised rigid-body modes allowed by the
-    constraints, then any suspension modes on springs to ground; rigid_eigenvalues (r,) their
-    eigenvalues (round-off ~0 for the exact rigid modes).
+    constraints (``ModalSettings.rigid_set``); rigid_eigenvalues (r,) their eigenvalues (round-off
+    ~0 for zero-energy rigid modes, the Rayleigh quotient for a SUPORT's rigid motions).
     """
 
     frequencies_hz: np.ndarray
@@ -202,13 +219,16 @@ def _diagonal_energy(kd, x):
     return np.einsum("i,im->m", kd, x**2)
 
 
-def _rigid_modes(K, M, R, zero_tol):
-    """M-orthonormal zero-energy combinations of the allowed rigid motions R (n, 6)."""
+def _rigid_modes(K, M, R, zero_tol, rigid_set="zero_energy"):
+    """M-orthonormal zero-energy combinations of the allowed rigid motions R (n, 6), or all of
+    them for ``rigid_set`` "rigid_motions", with their Rayleigh quotients."""
     if R.shape[1] == 0:
         return R, np.zeros(0)
     KR, MR = K @ R, M @ R
     lam, C = sl.eigh(R.T @ KR, R.T @ MR)
     keep = np.abs(lam) < zero_tol * _diagonal_energy(K.diagonal(), R @ C)
+    if rigid_set == "rigid_motions":
+        keep[:] = True
     return R @ C[:, keep], lam[keep]
 
 
@@ -224,14 +244,11 @@ def _allowed_rigid(nodes, n_dof, fixed):
     return R @ v[rank:].T
 
 
-def solve_sparse_modes(
-    K, M, nodes, settings: ModalSettings, fixed_dofs=(), ground=None
-) -> SparseModes:
+def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> SparseModes:
     """First ``settings.n_modes`` elastic modes of K u = lambda M u, constraints eliminated.
 
     K, M : (n_dof, n_dof) sparse, 6 DOFs per node; nodes : (N, 3) [m] (for the rigid motions);
-    fixed_dofs : global DOF numbers held at zero; ground : (n_dof, n_dof) sparse stiffness of
-    the springs to ground alone (part of K), for telling suspension modes apart.  Raises
+    fixed_dofs : global DOF numbers held at zero.  Raises
     BayesUpdateError for a mechanism (naming the moving DOFs) or a singular K - sigma M.
     """
     n_dof = K.shape[0]
@@ -239,9 +256,8 @@ def solve_sparse_modes(
     free = np.setdiff1d(np.arange(n_dof), fixed)
     Kf = sp.csr_matrix(K)[free][:, free]
     Mf = sp.csr_matrix(M)[free][:, free]
-    Gf = None if ground is None else sp.csr_matrix(ground)[free][:, free]
     R = _allowed_rigid(nodes, n_dof, fixed)[free]
-    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, free, Gf)
+    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, free)
     shapes = np.zeros((n_dof, phi.shape[1]))
     shapes[free] = phi
     rigid = np.zeros((n_dof, Rm.shape[1]))
@@ -249,48 +265,28 @@ def solve_sparse_modes(
     return SparseModes(np.sqrt(np.maximum(lam, 0)) / (2 * np.pi), lam, shapes, rigid, lam_r)
 
 
-def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, ground=None):
+def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
     """Elastic and rigid modes of a reduced pencil (Kf, Mf) (n, n) sparse whose allowed rigid
     motions are the columns of R (n, r); dof_ids (n,) global DOF number of each coordinate (for
-    mechanism messages); ground (n, n) sparse or None: stiffness of the springs to ground alone.
-    Returns (lam (m,), phi (n, m), rigid modes (n, r') - the exact rigid modes, then any
-    suspension modes - and their eigenvalues), all mass-normalised; raises BayesUpdateError for a
-    mechanism."""
-    Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol)
+    mechanism messages).  Returns (lam (m,), phi (n, m), rigid modes (n, r') and their
+    eigenvalues (r',)), all mass-normalised; raises BayesUpdateError for a mechanism."""
+    Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol, settings.rigid_set)
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
     n_el = Kf.shape[0] - Rm.shape[1]
     if settings.n_modes > n_el:
         raise BayesUpdateError(
             f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
         )
-    # room for the suspension modes: at most the allowed rigid motions that are not exact zeros
-    n_extra = R.shape[1] - Rm.shape[1] if ground is not None and ground.nnz else 0
-    n_want = min(settings.n_modes + n_extra, n_el)
     if Kf.shape[0] < settings.dense_below:
-        lam, phi = _dense_modes(Kf, Mf, Rm, n_want, settings.shift)
+        lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
     else:
-        lam, phi = _lanczos_modes(Kf, Mf, Rm, replace(settings, n_modes=n_want))
+        bordered = settings.rigid_set == "rigid_motions"
+        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings, bordered)
     zero = settings.zero_tol * _diagonal_energy(Kf.diagonal(), phi)
     _check_mechanism(lam, phi, zero, np.asarray(dof_ids))
     idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
     phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
-    susp = _suspension(lam, phi, Mf, R, ground) if n_extra else np.zeros(lam.size, bool)
-    if np.sum(~susp) < settings.n_modes:  # a rigid body on springs: those are its modes
-        susp[:] = False
-    elastic = np.flatnonzero(~susp)[: settings.n_modes]
-    Rm = np.hstack([Rm, phi[:, susp]])
-    lam_r = np.concatenate([lam_r, lam[susp]])
-    return lam[elastic], phi[:, elastic], Rm, lam_r
-
-
-def _suspension(lam, phi, M, R, ground) -> np.ndarray:
-    """(m,) bool: rigid-shaped modes (share of the M-norm in span(R) > 0.5) whose strain energy
-    is mostly (> lambda / 2) in the springs to ground (``fe.eigensolve._rigid_modes``)."""
-    MR = M @ R
-    c = MR.T @ phi
-    share = np.einsum("im,im->m", c, np.linalg.pinv(R.T @ MR, hermitian=True) @ c)
-    u_ground = np.einsum("im,im->m", phi, ground @ phi)
-    return (share > 0.5) & (u_ground > 0.5 * np.maximum(lam, 1e-300))
+    return lam, phi, Rm, lam_r
 
 
 def _check_mechanism(lam, phi, zero, free):
@@ -393,8 +389,11 @@ def factorize(A, kind: str = "auto"):
     return lu.solve
 
 
-def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings):
-    """Shift-invert Lanczos on the complement of the rigid modes Rm (M-orthonormal)."""
+def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings, bordered: bool = False):
+    """Shift-invert Lanczos on the complement of the rigid modes Rm (M-orthonormal).
+
+    bordered : Rm need not be eigenvectors (a SUPORT's rigid motions on springs): the operator is
+    the constrained inverse (module docstring), from Z = A^-1 M Rm and S = Rm^T M Z made once."""
     n = Kf.shape[0]
     sigma = settings.shift
     solve = factorize((Kf - sigma * Mf).tocsc(), settings.factorization)
@@ -403,8 +402,17 @@ def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings):
     def project(x):
         return x - Rm @ (MR.T @ x)
 
-    def op(b):
-        return project(solve(np.asarray(b, dtype=float).ravel()))
+    if bordered and Rm.shape[1]:
+        Z = np.column_stack([solve(np.ascontiguousarray(c)) for c in MR.T])
+        S = MR.T @ Z
+
+        def op(b):
+            y = solve(np.asarray(b, dtype=float).ravel())
+            return y - Z @ np.linalg.solve(S, MR.T @ y)
+    else:
+
+        def op(b):
+            return project(solve(np.asarray(b, dtype=float).ravel()))
 
     OPinv = spla.LinearOperator((n, n), matvec=op, dtype=float)
     v0 = project(np.random.default_rng(settings.seed).standard_normal(n))

@@ -6,13 +6,10 @@ All functions take the dict returned by ``results.read_result`` and return a mat
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from bayesupdate.paper import TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI  # noqa: E402
+from bayesupdate import plotting
+from bayesupdate.paper import TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI
 
 
 def _posterior(result: dict):
@@ -24,7 +21,7 @@ def _posterior(result: dict):
 def plot_trace(result: dict):
     """Every walker's path per parameter; the warm-up is shaded."""
     names, chain, burn = _posterior(result)
-    fig, axes = plt.subplots(
+    fig, axes = plotting.subplots(
         len(names), 1, figsize=(8, 1.8 * len(names)), sharex=True, squeeze=False
     )
     for j, (ax, name) in enumerate(zip(axes[:, 0], names, strict=True)):
@@ -43,7 +40,7 @@ def plot_pair(result: dict, max_points: int = 4000, seed: int = 0):
     rng = np.random.default_rng(seed)
     pick = flat[rng.choice(flat.shape[0], size=min(max_points, flat.shape[0]), replace=False)]
     d = len(names)
-    fig, axes = plt.subplots(d, d, figsize=(2.2 * d, 2.2 * d), squeeze=False)
+    fig, axes = plotting.subplots(d, d, figsize=(2.2 * d, 2.2 * d), squeeze=False)
     for i in range(d):
         for j in range(d):
             ax = axes[i, j]
@@ -66,7 +63,7 @@ def plot_predictive(result: dict, prob: float = 0.9):
     as relative error [%] so all modes share one axis."""
     test = result["inputs"]["frequencies_hz"]
     pred = result["posterior"]["predictions"]
-    fig, ax = plt.subplots(figsize=(8, 3.5))
+    fig, ax = plotting.subplots(figsize=(8, 3.5))
     modes = np.arange(1, test.size + 1)
     lo, hi = 50 * (1 - prob), 100 - 50 * (1 - prob)
     for key, colour, label, shift in (
@@ -99,7 +96,7 @@ def plot_residuals(result: dict):
     table = result["optimum"]["residuals"]
     modes = np.arange(1, table["test_hz"].size + 1)
     swapped = table["model_mode"] != modes
-    fig, ax = plt.subplots(figsize=(8, 3.5))
+    fig, ax = plotting.subplots(figsize=(8, 3.5))
     ax.bar(modes, table["error_pct"], color=np.where(swapped, "C3", "C0"))
     for m, err, mac in zip(modes, table["error_pct"], table["mac"], strict=True):
         if np.isfinite(mac):
@@ -120,7 +117,7 @@ def plot_design_vs_table3(result: dict):
     if not shared:
         return None
     flat = chain[burn:].reshape(-1, chain.shape[-1])
-    fig, ax = plt.subplots(figsize=(8, 3.5))
+    fig, ax = plotting.subplots(figsize=(8, 3.5))
     data = [flat[:, names.index(n)] / TABLE3_INITIAL_SI[n] for n in shared]
     ax.violinplot(data, showmedians=True)
     x = np.arange(1, len(shared) + 1)
@@ -156,8 +153,5 @@ def save_all(result: dict, folder: str | Path) -> list[Path]:
         fig = maker(result)
         if fig is None:
             continue
-        path = folder / f"{name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(plotting.save(fig, folder / f"{name}.png"))
     return paths

@@ -11,15 +11,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
+import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import LogNorm
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
-
-from bayesupdate.errors import BayesUpdateError  # noqa: E402
-from bayesupdate.fe.shell import quad_frames, tria_frames  # noqa: E402
+from bayesupdate import plotting
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.shell import quad_frames, tria_frames
 
 #: the colour scale spans this many decades below each mode's peak density
 DECADES = 3.0
@@ -119,8 +118,8 @@ def plot_energy_density_map(emap: ShellEnergyMap, mode: int, path) -> Path:
     shares = emap.part_shares()[:, mode]
     peak = max(float(share.max()), 1e-300)
     norm = LogNorm(vmin=peak * 10.0**-DECADES, vmax=peak, clip=True)
-    cmap = plt.get_cmap("inferno")
-    fig = plt.figure(figsize=(4.2 * len(parts) + 1.0, 7.0))
+    cmap = matplotlib.colormaps["inferno"]
+    fig = plotting.figure(figsize=(4.2 * len(parts) + 1.0, 7.0))
     for row, azim in enumerate(VIEWS):
         for i, p in enumerate(parts):
             ax = fig.add_subplot(2, len(parts), row * len(parts) + i + 1, projection="3d")
@@ -129,19 +128,14 @@ def plot_energy_density_map(emap: ShellEnergyMap, mode: int, path) -> Path:
             _body_panel(ax, emap.polygons[mine], values, norm, cmap, azim)
             if row == 0:
                 ax.set_title(f"{emap.part_names[p]}: {100 * shares[p]:.1f} %", fontsize=9)
-    bar = fig.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, pad=0.02
-    )
+    bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, pad=0.02)
     bar.set_label("strain energy [% of the mode per m^2]")
     fig.suptitle(
         f"Mode {mode + 1}, {emap.frequencies_hz[mode]:.2f} Hz: strain-energy density on the "
         f"shells ({100 * shares.sum():.1f} % of the mode's strain energy)",
         fontsize=10,
     )
-    path = Path(path)
-    fig.savefig(path, dpi=100, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return plotting.save(fig, path, dpi=100, tight=True)
 
 
 def write_energy_density_maps(structure, result, folder, n_show: int | None = None) -> list:

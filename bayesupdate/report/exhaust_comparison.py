@@ -74,12 +74,9 @@ def plot_fronts(records, path) -> Path | None:
               r.calibrated.front]  # fmt: skip
     if not fronts:
         return None
-    import matplotlib
+    from bayesupdate import plotting
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    fig, ax = plotting.subplots(figsize=(6.5, 4))
     for name, front in fronts:
         x, y = np.array(front).T
         ax.plot(x, y, "o-", label=name)
@@ -89,10 +86,7 @@ def plot_fronts(records, path) -> Path | None:
     ax.set_ylabel("Expr (seed eq. 19) vs Table 2")
     ax.grid(alpha=0.3)
     ax.legend()
-    path = Path(path)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return plotting.save(fig, path, tight=True)
 
 
 def comparison_section(records: dict[str, ExhaustRecord], out, folder=None) -> Section:

@@ -4,17 +4,13 @@ energy per part.  Each function draws one PNG (matplotlib, Agg) and returns its 
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from bayesupdate import plotting
 
 
 def _save(fig, path) -> Path:
-    path = Path(path)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return plotting.save(fig, path, tight=True)
 
 
 def _draw_beams(ax, xy, beam_nodes, **style):
@@ -25,7 +21,7 @@ def _draw_beams(ax, xy, beam_nodes, **style):
 
 def plot_layout(structure, path) -> Path:
     """Plan (x-y) and elevation (x-z) of the structure with the sensor points numbered."""
-    fig, axes = plt.subplots(2, 1, figsize=(9, 5.2), sharex=True)
+    fig, axes = plotting.subplots(2, 1, figsize=(9, 5.2), sharex=True)
     nodes = structure.nodes
     points = {}
     for label, node in zip(structure.sensor_labels, structure.sensor_node, strict=True):
@@ -60,7 +56,7 @@ def plot_fe_mode_shapes(structure, result, path, n_show: int = 6) -> Path:
     n_show = min(n_show, shapes.shape[1])
     cols = 2
     rows = int(np.ceil(n_show / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(11, 2.3 * rows), squeeze=False)
+    fig, axes = plotting.subplots(rows, cols, figsize=(11, 2.3 * rows), squeeze=False)
     span = np.ptp(nodes[:, 0])
     for k in range(n_show):
         ax = axes.flat[k]
@@ -92,10 +88,10 @@ def plot_strain_energy(result, path) -> Path:
     e = result.energies
     shares = e.strain_by_part
     keep = np.flatnonzero(shares.max(axis=1) >= 0.02)
-    fig, ax = plt.subplots(figsize=(9, 3.8))
+    fig, ax = plotting.subplots(figsize=(9, 3.8))
     bottom = np.zeros(shares.shape[1])
     modes = np.arange(1, shares.shape[1] + 1)
-    cmap = plt.get_cmap("tab20")
+    cmap = matplotlib.colormaps["tab20"]
     for c, k in enumerate(keep):
         ax.bar(modes, shares[k], bottom=bottom, label=e.parts[k], color=cmap(c % 20))
         bottom += shares[k]

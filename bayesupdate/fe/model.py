@@ -37,6 +37,7 @@ from bayesupdate.fe.assembly import Assembler, ElementProperties, rigid_body_bas
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
 from bayesupdate.fe.general import GeneralAssembler
+from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction
 
@@ -432,7 +433,10 @@ class FEModel:
         g = self._general
         shell_props = self.shell_properties(p) if self.structure.shells is not None else None
         K, M, elem = g.assemble(props, shell_props)
-        modes = g.solve(K, M, n_modes, dense=method == "dense")
+        # a structure may ask for MSC's SUPORT convention (metadata "rigid_set": the Nastran
+        # reader sets it for a deck with SUPORT; ``fe.sparse_modal.ModalSettings``)
+        settings = ModalSettings(rigid_set=self.structure.metadata.get("rigid_set", "zero_energy"))
+        modes = g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
         mass, cog = g.total_mass(M)
         en = general_energies(g, elem, shell_props, modes) if energies else None
         return FEResult(

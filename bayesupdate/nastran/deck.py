@@ -36,9 +36,8 @@ DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1"}
 #: the deck's own optimisation problem (SOL 200): read and listed, not used
 OBJECTIVE_CARDS = {"DRESP1", "DRESP2", "DRESP3", "DCONSTR", "DCONADD", "DEQATN", "DOPTPRM",
                    "DTABLE", "DLINK", "DSCREEN"}  # fmt: skip
-#: cards with no effect on the normal modes: output sets (SET1: test points, ``test_points``),
-#: rigid-body reference DOFs (SUPORT: the solver finds the rigid-body modes of a free body
-#: itself), the end marker
+#: cards that add no element: output sets (SET1: test points, ``test_points``), rigid-body
+#: reference DOFs (SUPORT: the reader then asks for MSC's rigid set, ``reader``), the end marker
 NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "SET1", "ENDDATA"}
 SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS
 #: PARAMs that shape the model (``reader``)
@@ -425,5 +424,9 @@ def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
         n = sum(1 for c in deck.cards if c.name in OBJECTIVE_CARDS)
         notes.append(f"the deck's own objective (not used): {n} cards {', '.join(objective)}")
     if deck.of("SUPORT", "SUPORT1"):
-        notes.append("SUPORT: rigid-body reference DOFs only; the rigid modes are found free-free")
+        notes.append(
+            "SUPORT: every rigid motion the structure allows is a rigid mode (as MSC's SUPORT "
+            "makes it, also where soft springs to ground strain it); the elastic modes are "
+            "solved on the rest"
+        )
     return notes

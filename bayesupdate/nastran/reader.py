@@ -286,7 +286,12 @@ def read_structure(path) -> tuple:
         if n_auto:
             structure = _finish(ctx, eids, pids, props)
     info = _info(ctx, settings, deck, grids, structure, n_auto)
-    return replace(structure, metadata={**structure.metadata, "nastran": info}), info, deck
+    meta = {**structure.metadata, "nastran": info}
+    if deck.of("SUPORT", "SUPORT1"):
+        # MSC's SUPORT makes every allowed rigid motion a rigid mode, also where soft springs to
+        # ground give them a little energy (``fe.sparse_modal``, ``ModalSettings.rigid_set``)
+        meta["rigid_set"] = "rigid_motions"
+    return replace(structure, metadata=meta), info, deck
 
 
 def _finish(ctx, eids, pids, props):

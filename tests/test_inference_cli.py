@@ -245,7 +245,10 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     study.write_text(
         '[model]\nsource = "exhaust"\n[data]\nsource = "paper:ema"\n'
         "[optimizer]\nstarts = 2\n[likelihood]\nsigma = 0.1\n"
-        "[sampler]\nwalkers = 12\nsteps = 600\ncheck_every = 100\nmin_autocorr_times = 1\n"
+        # the budget is well above where these 12 DE walkers meet the loose targets (500 steps
+        # on one machine, 700 on another: the chain's bits follow the BLAS), so the test asks
+        # that the run stops at a check before it, not at a given step
+        "[sampler]\nwalkers = 12\nsteps = 1500\ncheck_every = 100\nmin_autocorr_times = 1\n"
         "target_rhat = 1.5\ntarget_ess = 20\npredictive_draws = 20\n"
         # DE: its proposals mostly fail the screen; the mixture's mostly pass it (the
         # mixture with screening is checked against the reference, test_posterior_reference)
@@ -263,8 +266,8 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     # loose targets: met at a check (sampling.check_schedule) before the budget, and they hold
     # in the summary
     checks, done = [], 0
-    while done < 600:
-        checks.append(done := check_schedule(done, 100, 600))
+    while done < 1500:
+        checks.append(done := check_schedule(done, 100, 1500))
     assert result["converged"] and result["steps"] in checks[:-1]
     assert max(p["r_hat"] for p in result["parameters"].values()) <= 1.5
     assert min(p["ess_bulk"] for p in result["parameters"].values()) >= 20

@@ -103,23 +103,20 @@ def test_icp_sees_the_symmetry_and_named_pairs_resolve_it(test_file):
 
 def test_v33_beams():
     """Points on elements: each accelerometer on the v3.3 wing's beams, 3-4 in off the spar
-    (leading and trailing edge), read through the beam's rotations (the rigid arm).
-    COORDINATOR: skipped while load_nastran_model does not read the v3.3 deck as published."""
+    (leading and trailing edge), read through the beam's rotations (the rigid arm); the deck
+    as published, read by the package's own reader."""
     deck = FEM / "v3.3_hati/sol103_mAEWing1_Hati_FEMv3p3.bdf"
     if not deck.exists():
         pytest.skip(f"shared data not found: {deck}")
     from bayesupdate.nastran import load_nastran_model
 
-    try:
-        structure = load_nastran_model(str(deck)).structure
-    except (BayesUpdateError, ImportError) as exc:
-        pytest.skip(f"COORDINATOR: the v3.3 deck does not read yet ({exc})")
+    structure = load_nastran_model(str(deck)).structure
     g = gvt_geometry()
     settings = PairingSettings(align=TO_FE, tolerance=4 * 0.0254)
     # its MAT1 moduli (2.01e9, 6.66e6, 6.66e10) match no unit system: inches, as the README says
     pairing = pair_structure(structure, g, LABELS, settings, model_length_unit="in")
     assert all(p.element is not None and p.element.startswith("line") for p in pairing.points)
-    # 3.47 in (leading edge) and 1.53 in (trailing edge) off the spar, as read with pyNastran
+    # 3.47 in (leading edge) and 1.53 in (trailing edge) off the spar
     # (docs/guide/test-geometry.md)
     assert all(0.5 < p.distance < 4.0 for p in pairing.points)
     rotations = pairing.sensor_weights[:, [3, 4, 9, 10]]  # rx, ry of the element's two nodes

@@ -111,7 +111,7 @@ def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certific
     n_snap = st.n_modes + st.extra_modes
     what = "reduced basis: snapshots"
     sens = decomposition if st.sensitivities else None
-    snaps = full_solves(fe, names, snap_theta, n_snap, executor, what, sens)[1]
+    snaps = _snapshots(fe, names, snap_theta, n_snap, (executor, what, sens))[1]
     pod_tol = 0.5 * st.tol
     if st.greedy_train:
         snaps, pod_tol = _greedy(model, st, decomposition, (centre, snaps, pod_tol), executor)
@@ -138,6 +138,15 @@ def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certific
     failed = Certification(basis, certificate, False, err, tuple(history))
     _warn_failed(model, failed, stacklevel=5)  # the caller of ReducedFEModel.build
     return failed
+
+
+def _snapshots(fe, names, theta, n_modes: int, how):
+    """``full_solves`` at snapshot points; how: (executor, progress name, decomposition for
+    sensitivities or None).  Without sensitivities the call is the plain one."""
+    executor, what, sens = how
+    if sens is None:
+        return full_solves(fe, names, theta, n_modes, executor, what)
+    return full_solves(fe, names, theta, n_modes, executor, what, sensitivities=sens)
 
 
 #: points full-solved per greedy step (where the residual indicator is largest)
@@ -167,9 +176,8 @@ def _greedy(model: "ReducedFEModel", st, decomposition, start, executor):
             eta = indicator(basis, train, names, st.n_modes)
         worst = np.argsort(eta)[::-1][:GREEDY_BATCH]
         what = f"reduced basis: greedy snapshots (step {step + 1})"
-        f_full, shapes = full_solves(
-            fe, names, train[worst], st.n_modes + st.extra_modes, executor, what, sens
-        )
+        n_snap = st.n_modes + st.extra_modes
+        f_full, shapes = _snapshots(fe, names, train[worst], n_snap, (executor, what, sens))
         err = compare(basis, train[worst], f_full[:, : st.n_modes], st.n_modes).max_rel_error
         snaps = np.concatenate([snaps, shapes], axis=1)
         train = np.delete(train, worst, axis=0)

@@ -4,14 +4,15 @@ For a reduced eigenpair (lambda_h, u_h = V y) at theta the residual in the full 
 r = (K(theta) - lambda_h M(theta)) u_h.  Its dual norm in the energy of the box centre,
 ||r||_*^2 = r^T A0^-1 r with A0 = K(theta_c) - sigma M(theta_c) (sigma < 0: the free body's K is
 singular), bounds the eigenvalue error up to the spectral gap: lambda_h - lambda <~ ||r||_*^2 /
-gap (Quarteroni, Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, sec. 6.6 and ch. 11;
-Pau, *Reduced basis method for quantum models of crystalline solids*, PhD thesis, MIT, 2007,
-ch. 3: the eigenvalue error is quadratic in the residual).  The indicator is
+gap (Quarteroni, Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, on residual-based a
+posteriori estimates; Pau, *Reduced basis method for quantum models of crystalline solids*, PhD
+thesis, MIT, 2007: for eigenproblems the eigenvalue error is quadratic in the residual).  The
+indicator is
 
     eta(theta) = max_i ||r_i||_*^2 / lambda_h,i         (dimensionless, mode i of n_modes)
 
-and it only ranks points: the build full-solves where it is largest (a weak greedy, QMN 2016
-sec. 7.1), and the certificate still rests on full solves at fresh points
+and it only ranks points: the build full-solves where it is largest (a weak greedy, QMN 2016),
+and the certificate still rests on full solves at fresh points
 (``reduced.certification``).  Its cost per point: an assembly of K and M, the reduced eigen-solve
 with vectors, two sparse products and one back-substitution of n_modes right-hand sides with the
 one factorisation at the centre; no eigen-solve of the full model.

@@ -1,7 +1,7 @@
 """Design-sensitivity vectors of a snapshot's modes, from one factorisation at the snapshot.
 
 Differentiating (K - lambda_i M) phi_i = 0 in a parameter theta_j gives (Nelson, AIAA J. 14,
-1976, eq. 5)
+1976)
 
     (K - lambda_i M) dphi_i/dtheta_j = -(dK_j - lambda_i dM_j) phi_i + (dlambda_i/dtheta_j) M phi_i,
 

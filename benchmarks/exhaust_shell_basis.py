@@ -23,6 +23,16 @@ basis over the whole bounds box (``pipelines.surrogates.sampling_problem``:
       acceptance on a coarser basis, emcee (mixture moves, logit coordinates) for a fixed budget
       of ``--steps`` x ``--walkers`` (stopping earlier only if R-hat <= 1.01 and ESS >= 1000 are
       met); wall and CPU time of each stage, exact and screening evaluations, R-hat and ESS.
+
+Build comparison (``--compare-build``; no posterior): the same basis (the bounds box and model
+modes of (a), cache off) built in one process with the strategies of ``fe.reduced`` side by side:
+"plain" (32 snapshots, no sensitivities, no greedy: the build before design sensitivities),
+"default" (the settings a large model gets: 8 snapshots with sensitivities, the residual
+greedy), and "default, 2 workers" (the same on the executor seam, ``--workers 2``).  Printed per
+build: full solves (snapshots, greedy, validation), wall and CPU time, size, certified error and
+the ratios to "plain".
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --compare-build
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --compare-build --mesh-density 16
 """
 
 import os
@@ -167,6 +177,61 @@ def one_model(name: str, options: dict, args) -> dict:
     return out
 
 
+def compare_builds(args) -> dict:
+    """The build comparison of the module docstring: {label: numbers}."""
+    from bayesupdate.fe.reduced import certification, reduced_model_for
+    from bayesupdate.parallel_executor import ProcessExecutor
+
+    os.environ["BAYESUPDATE_NO_CACHE"] = "1"
+    fe = get_model("exhaust_shell", mesh_density=args.mesh_density)
+    objective = ObjectiveSpec(mass_target_kg=MEASURED_MASS_KG, mass_weight=10.0)
+    problem = build_problem(fe, paper_ema(), objective=objective)
+    bounds = {p.name: p.bounds for p in problem.parameters}
+    counted = {"solves": 0}
+    solves = certification.full_solves
+
+    def counting(fe_, names, theta, *a, **k):
+        counted["solves"] += theta.shape[0]
+        return solves(fe_, names, theta, *a, **k)
+
+    certification.full_solves = counting
+    builds = {
+        "plain": ({"n_snapshots": 32, "sensitivities": False, "greedy_train": 0}, 0),
+        "default": ({}, 0),
+        f"default, {args.workers} workers": ({}, args.workers),
+    }
+    rows = {}
+    try:
+        for label, (options, workers) in builds.items():
+            if label.endswith("workers") and not workers:
+                continue  # --workers 0: serial builds only
+            counted["solves"] = 0
+            executor = ProcessExecutor(workers) if workers else None
+            clock = Clock()
+            rom = reduced_model_for(fe, bounds, n_modes=problem.pairing.n_model,
+                                    executor=executor, **options)  # fmt: skip
+            wall, cpu = clock.lap()
+            if executor is not None:
+                executor.close()
+            rows[label] = dict(
+                solves=counted["solves"], wall_s=wall, cpu_s=cpu, size=rom.size,
+                max_rel_error=rom.max_rel_error, certified=rom.certified,
+                history=[(h.size, h.max_rel_error) for h in rom.certification.history],
+            )  # fmt: skip
+            print(f"[build {label}] {json.dumps(rows[label])}", flush=True)
+    finally:
+        certification.full_solves = solves
+    base = rows["plain"]
+    for label, row in rows.items():
+        print(
+            f"[build {label}] solves {row['solves']} ({row['solves'] / base['solves']:.2f} of "
+            f"plain), wall {row['wall_s']:.1f} s ({row['wall_s'] / base['wall_s']:.2f}), CPU "
+            f"{row['cpu_s']:.1f} s, size {row['size']}, certified {row['max_rel_error']:.2e}",
+            flush=True,
+        )
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh-density", type=int, default=32, help="shell mesh density (32)")
@@ -178,9 +243,18 @@ def main() -> None:
     ap.add_argument("--starts", type=int, default=2, help="optimizer starts")
     ap.add_argument("--max-nfev", type=int, default=150, help="evaluations per start")
     ap.add_argument("--save", help="write the numbers to this JSON file")
+    ap.add_argument("--compare-build", action="store_true", help="the build comparison only")
+    ap.add_argument("--workers", type=int, default=2, help="local workers of the comparison")
     args = ap.parse_args()
     warnings.simplefilter("default")
     print(f"load average at start: {os.getloadavg()}", flush=True)
+    if args.compare_build:
+        rows = compare_builds(args)
+        print(f"load average at end: {os.getloadavg()}", flush=True)
+        if args.save:
+            with open(args.save, "w") as fh:
+                json.dump(rows, fh, indent=1, default=float)
+        return
     rows = {
         "exhaust_shell": one_model("exhaust_shell", {"mesh_density": args.mesh_density}, args),
         "exhaust": one_model("exhaust", {}, args),

@@ -22,6 +22,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced.affine import AffineDecomposition
+from bayesupdate.fe.reduced.sensitivity import static_corrections
 from bayesupdate.parallel_executor import executor_or_serial
 
 
@@ -86,14 +87,20 @@ class ReducedBasis:
 
 
 def _solve_point(shared: tuple, row: np.ndarray):
-    """(frequencies (n_modes,) [Hz], shapes (n_dof, n_modes)) of one full solve, None where it
-    fails (an executor task; shared: (fe, names, n_modes))."""
-    fe, names, n_modes = shared
+    """(frequencies (n_modes,) [Hz], shapes (n_dof, k)) of one full solve, None where it fails
+    (an executor task; shared: (fe, names, n_modes, decomposition)).  The shapes are the
+    n_modes modes, followed, when ``decomposition`` is not None, by their design-sensitivity
+    vectors (``reduced.sensitivity``)."""
+    fe, names, n_modes, decomposition = shared
+    params = dict(zip(names, map(float, row), strict=True))
     try:
-        sol = fe.solve(dict(zip(names, map(float, row), strict=True)), n_modes).modes
+        sol = fe.solve(params, n_modes).modes
+        if decomposition is None:
+            return sol.frequencies_hz, sol.shapes
+        extra = static_corrections(fe, decomposition, params, sol.eigenvalues, sol.shapes)
     except (BayesUpdateError, np.linalg.LinAlgError):
         return None
-    return sol.frequencies_hz, sol.shapes
+    return sol.frequencies_hz, np.concatenate([sol.shapes, extra], axis=1)
 
 
 def full_solves(
@@ -103,14 +110,18 @@ def full_solves(
     n_modes: int,
     executor=None,
     what: str = "full solves",
+    sensitivities: AffineDecomposition | None = None,
 ):
     """Full solves at theta (B, len(names)) (SI), one task per point on ``executor``
     (``parallel_executor``; None: in this process), shown as the progress phase ``what``
     (``compute.progress``): (B, n_modes) frequencies [Hz] (NaN rows on failure) and the
-    (n_dof, k) mode shapes of the points that solved, side by side."""
+    (n_dof, k) mode shapes of the points that solved, side by side, each point's modes followed
+    by their design-sensitivity vectors when ``sensitivities`` (the model's decomposition) is
+    given (``reduced.sensitivity``)."""
+    shared = (fe, names, n_modes, sensitivities)
     with phase(what, theta.shape[0], "solves") as running:
         solved = executor_or_serial(executor).map(
-            _solve_point, list(theta), (fe, names, n_modes), running.progress_callback()
+            _solve_point, list(theta), shared, running.progress_callback()
         )
     freqs = np.full((theta.shape[0], n_modes), np.nan)
     shapes = []

@@ -1,7 +1,6 @@
 """``bayesupdate correlate``: the model against the test before any parameter moves."""
 
-import json
-
+from bayesupdate.commands._output import emit
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "correlate"
@@ -189,16 +188,8 @@ def run(args) -> int:
     if args.out:
         write_correlation_h5(args.out, result)
     report = write_correlate_report(args.report, result)[0] if args.report else None
-    if args.json:
-        out = correlation_json(result)
-        out.update(out=args.out, report=None if report is None else str(report))
-        print(json.dumps(out))
-        return 0
-    print(format_correlation(result))
-    for path in (args.out, report):
-        if path:
-            print(f"wrote {path}")
-    return 0
+    text = "" if args.json else format_correlation(result)
+    return emit(args, correlation_json(result) if args.json else {}, text, report)
 
 
 def format_correlation(result) -> str:

@@ -1,7 +1,6 @@
 """``bayesupdate sensitivity``: which parameters the measured modes can inform, before updating."""
 
-import json
-
+from bayesupdate.commands._output import emit
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sensitivity"
@@ -131,16 +130,8 @@ def run(args) -> int:
     if args.out:
         write_sensitivity_h5(args.out, result)
     report = write_sensitivity_report(args.report, result)[0] if args.report else None
-    if args.json:
-        out = sensitivity_json(result)
-        out.update(out=args.out, report=None if report is None else str(report))
-        print(json.dumps(out))
-        return 0
-    print(format_sensitivity(result))
-    for path in (args.out, report):
-        if path:
-            print(f"wrote {path}")
-    return 0
+    text = "" if args.json else format_sensitivity(result)
+    return emit(args, sensitivity_json(result) if args.json else {}, text, report)
 
 
 def sensitivity_json(result) -> dict:

@@ -96,8 +96,9 @@ class LineRebuild:
         cards.add_beams(ctx)
         cards.add_rods(ctx)
         refusals.raise_all()
-        # a structure uses and connects all its nodes: tie the others on by springs of 0
-        for n in np.setdiff1d(np.arange(s.n_nodes), self._used):
+        # a structure uses and connects all its nodes: tie every other node to the first bound
+        # one by a spring of 0 (the bound elements may lie in several pieces, both wings)
+        for n in np.setdiff1d(np.arange(s.n_nodes), self._used[:1]):
             builder.add_spring(int(n), int(self._used[0]), np.zeros(6), "(not re-built)")
         g = GeneralAssembler(builder.build())
         K, M, _ = g.assemble(g.beams.default_properties())

@@ -419,7 +419,7 @@ def _test_pairs(value, where: str) -> tuple:
     return tuple((int(a), int(b)) for a, b in value)
 
 
-def _parse_test_table(table: Mapping, where: str) -> TestConfig:
+def parse_test_table(table: Mapping, where: str = "test") -> TestConfig:
     """``[test]`` -> TestConfig (strict keys; lengths and units checked here)."""
     from bayesupdate.testgeom.units import length_unit, parse_length
 
@@ -469,7 +469,7 @@ def parse_study(document: Mapping, where: str = "study") -> StudyConfig:
         elif key == "parameters":
             kwargs[key] = _parse_parameters(table, f"{where}: parameters")
         elif key == "test":
-            kwargs[key] = _parse_test_table(table, f"{where}: test")
+            kwargs[key] = parse_test_table(table, f"{where}: test")
         elif key in _EXTENSION_TABLES:
             extensions[key] = _EXTENSION_TABLES[key](table, f"{where}: {key}")
         else:

@@ -203,3 +203,46 @@ def test_correlate_with_a_test_geometry_in_another_frame(virtual, tmp_path, caps
     np.testing.assert_allclose(by_dof["7V"]["direction"], [0.0, 0.0, 1.0], atol=1e-9)
     assert [(m["test"], m["model"]) for m in out["modes"]] == [(i, i) for i in range(1, 13)]
     assert min(m["mac"] for m in out["modes"]) >= 0.999
+
+
+def test_correlate_geometry_flags_write_the_pairing_to_the_file_and_the_report(
+    virtual, tmp_path, capsys
+):
+    """``--geometry FILE --length-unit mm`` (no study file): the exhaust's sensor points as a
+    CSV in the model's frame (millimetres), aligned automatically (ICP: the identity back) and
+    paired; the HDF5 file holds each point's distance and the fit's residual, the report's
+    point table names the geometry and the transform."""
+    from bayesupdate.testgeom import make_geometry, write_csv_geometry
+    from bayesupdate.testgeom.frames import CoordinateFrame
+
+    folder, data = virtual
+    s = get_model("exhaust").structure
+    labels = s.sensor_labels
+    points = {int(k[:-1]): s.nodes[n] for k, n in zip(labels, s.sensor_node, strict=True)}
+    ids = sorted(points)
+    csv = tmp_path / "geometry.csv"
+    frame = CoordinateFrame(1, "rectangular", np.eye(3), np.zeros(3))
+    geometry = make_geometry(ids, np.array([points[i] for i in ids]), np.ones(len(ids), int),
+                             (frame,), source="t")  # fmt: skip
+    write_csv_geometry(csv, geometry, unit="mm")
+    h5, report = tmp_path / "corr.h5", tmp_path / "report"
+    out = _json(capsys, ["correlate", "--model", "exhaust", "--data", str(folder / "virtual.h5"),
+                         "--geometry", str(csv), "--length-unit", "mm", "--pair-tolerance",
+                         "1 mm", "--out", str(h5), "--report", str(report), "--json"])  # fmt: skip
+    assert out["transform"]["source"].startswith("[test] geometry")
+    assert out["transform"]["rms_residual"] < 1e-6
+    np.testing.assert_allclose(np.asarray(out["transform"]["matrix"]), np.eye(4), atol=1e-6)
+    assert min(m["mac"] for m in out["modes"]) >= 0.999
+    with h5py.File(h5, "r") as fh:
+        g = fh["correlation"]
+        distance = g["points/distance"][()]
+        assert distance.shape == (len(data.dof_labels),) and np.all(distance < 1e-6)
+        assert g.attrs["rms_residual"] < 1e-6
+    md = (report / "report.md").read_text()
+    assert "Test DOFs on the model ([test] geometry (" in md and "transform: identity" in md
+
+
+def test_geometry_options_without_a_geometry_are_refused(capsys):
+    code = main(["correlate", "--model", "exhaust", "--data", "paper:ema", "--length-unit", "mm"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--length-unit and --pair-tolerance need --geometry" in err

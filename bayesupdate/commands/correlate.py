@@ -37,6 +37,22 @@ def add_arguments(parser) -> None:
         help="Nastran deck: test node -> GRID table (CSV 'point,grid[,frame]' or TOML)",
     )
     parser.add_argument(
+        "--geometry",
+        metavar="FILE",
+        help="test geometry (UFF 15/2411/2420/82 .unv/.uff or CSV): aligned (auto) and paired "
+        "with the model instead of the study's [test] table",
+    )
+    parser.add_argument(
+        "--length-unit",
+        metavar="UNIT",
+        help="--geometry's length unit where the file has no UFF 164 record (mm, m, in, ft)",
+    )
+    parser.add_argument(
+        "--pair-tolerance",
+        metavar="LENGTH",
+        help="--geometry: farthest a test point may lie from the model (e.g. '5 mm'; 0.01 m)",
+    )
+    parser.add_argument(
         "--mac-threshold",
         type=float,
         default=None,
@@ -70,6 +86,7 @@ def study_inputs(args, with_model: bool = True):
     study = with_overrides(study, model__source=args.model, data__source=args.data)
     if args.data is not None and study.data.frequencies_hz is not None:
         study = replace(study, data=replace(study.data, frequencies_hz=None))
+    study = _with_geometry(study, args)
     if args.test_points:
         from bayesupdate.nastran.test_points import read_test_points
 
@@ -80,6 +97,24 @@ def study_inputs(args, with_model: bool = True):
         return study, data
     labels = data.dof_labels if data.shapes is not None else ()
     return study, *study_model_any(study, labels), data
+
+
+def _with_geometry(study, args):
+    """The study with ``--geometry`` (and its unit and tolerance) as its ``[test]`` table."""
+    from dataclasses import replace
+
+    from bayesupdate.config import parse_test_table
+
+    geometry = getattr(args, "geometry", None)
+    unit, tol = getattr(args, "length_unit", None), getattr(args, "pair_tolerance", None)
+    if not geometry:
+        if unit or tol:
+            raise BayesUpdateError(f"{args.command}: --length-unit and --pair-tolerance need "
+                                   "--geometry")  # fmt: skip
+        return study
+    table = {"geometry": geometry, "length_unit": unit, "pair_tolerance": tol}
+    table = {k: v for k, v in table.items() if v is not None}
+    return replace(study, test=parse_test_table(table, "--geometry"))
 
 
 def study_model_any(study, labels):

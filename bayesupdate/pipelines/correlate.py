@@ -331,12 +331,14 @@ def _with_serep(
 
 def write_correlation_h5(path, result: Correlation) -> None:
     """Write ``result`` to HDF5 atomically.  Layout (group ``/correlation``, attributes
-    ``model``, ``data``, ``pairing`` (mac | order), ``mapping_source``):
+    ``model``, ``data``, ``pairing`` (mac | order), ``mapping_source``, ``rms_residual`` of the
+    alignment (NaN: none fitted)):
 
     - ``test_hz`` (m_t,), ``model_hz`` (m_m,) [Hz]; ``dof_labels`` (n_a,) strings;
     - ``pairs/test``, ``pairs/model`` (k,) 0-based, ``pairs/mac`` (k,), ``pairs/error_pct`` (k,);
     - ``transform`` (4, 4) test -> model; ``points/model_node`` (n_a,) (-1: none),
-      ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3) (NaN: none);
+      ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3), ``points/distance`` (n_a,)
+      test point to its model point after the transform (NaN: none);
     - where computed: ``mac`` (m_t, m_m), ``test_auto_mac`` (m_t, m_t), ``comac`` (n_a,),
       ``test_shapes`` (n_a, m_t) realised, ``model_shapes`` (n_a, m_m),
       ``pseudo_orthogonality`` (k, k), ``cross_orthogonality`` (k, k), ``expanded`` (n_dof, k);
@@ -349,8 +351,10 @@ def write_correlation_h5(path, result: Correlation) -> None:
     pts = result.mapping.points
     with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
         g = fh.create_group("correlation")
+        rms = result.mapping.rms_residual
         g.attrs.update(model=result.model, data=result.data, pairing=result.pairs.method,
-                       mapping_source=result.mapping.source)  # fmt: skip
+                       mapping_source=result.mapping.source,
+                       rms_residual=np.nan if rms is None else rms)  # fmt: skip
         g["test_hz"], g["model_hz"] = result.test_hz, result.model_hz
         g["dof_labels"] = np.array(result.dof_labels, dtype=h5py.string_dtype())
         g["notes"] = np.array(result.notes, dtype=h5py.string_dtype())
@@ -362,6 +366,7 @@ def write_correlation_h5(path, result: Correlation) -> None:
         points["model_node"] = np.array([-1 if p.model_node is None else p.model_node for p in pts])
         points["model_xyz"] = np.array([p.model_xyz or (np.nan,) * 3 for p in pts]).reshape(-1, 3)
         points["direction"] = np.array([p.direction or (np.nan,) * 3 for p in pts]).reshape(-1, 3)
+        points["distance"] = np.array([np.nan if p.distance is None else p.distance for p in pts])
         for name in _OPTIONAL_ARRAYS:
             value = getattr(result, name)
             if value is not None:

@@ -63,6 +63,17 @@ def _pairs_text(result) -> tuple:
     return tuple(parts) or ("Every test mode is paired, none out of order.",)
 
 
+def _transform_text(result) -> str:
+    """The test-to-model transform in words: identity, or its rotation and shift rows and fit."""
+    T = np.asarray(result.mapping.transform, float)
+    if np.allclose(T, np.eye(4)):
+        return "transform: identity"
+    rows = "; ".join(" ".join(f"{v:.4g}" for v in row) for row in T[:3])
+    rms = result.mapping.rms_residual
+    fit = "" if rms is None else f", rms residual {rms:.3g}"
+    return f"transform test -> model [{rows}]{fit}"
+
+
 def _points_table(result) -> Table:
     rows = tuple(
         (p.dof, p.test_node, "-" if p.model_node is None else p.model_node,
@@ -74,7 +85,7 @@ def _points_table(result) -> Table:
     return Table(
         ("test DOF", "test node", "model node", "model xyz", "direction", "distance"),
         rows,
-        caption=f"Test DOFs on the model ({result.mapping.source}; transform: identity)",
+        caption=f"Test DOFs on the model ({result.mapping.source}; {_transform_text(result)})",
     )
 
 

@@ -81,6 +81,9 @@ def test_correlate_against_a_virtual_test_of_the_unchanged_model(virtual, tmp_pa
         np.testing.assert_allclose(expanded * scale, full, atol=1e-6 * np.abs(full).max())
     assert (report / "report.html").stat().st_size > 10_000
     assert (report / "figures" / "mac.png").exists()
+    # the test points on the model: 20 sensor points over the exhaust's nodes
+    assert (report / "figures" / "points.png").stat().st_size > 10_000
+    assert "figures/points.png" in (report / "report.md").read_text()
 
 
 def test_two_exchanged_test_shapes_are_paired_back_and_named_as_a_swap(virtual, tmp_path, capsys):

@@ -96,7 +96,9 @@ class Correlation:
     the test DOFs: None without test shapes.  pseudo_orthogonality (k, k) of the paired model
     modes through the SEREP TAM, cross_orthogonality (k, k) test vs model (mass-normalised test
     shapes only), expanded (n_dof, k) the paired test shapes expanded by SEREP: None where not
-    computed.  notes : what a reader must know (why something is missing).
+    computed.  notes : what a reader must know (why something is missing).  model_nodes
+    (n_nodes, 3) the model's node coordinates (its own units) for the report's picture of the
+    test points on the model; None for a model without a structure.
     """
 
     model: str
@@ -115,6 +117,7 @@ class Correlation:
     cross_orthogonality: np.ndarray | None = None
     expanded: np.ndarray | None = None
     notes: tuple[str, ...] = ()
+    model_nodes: np.ndarray | None = None
 
     @property
     def error_pct(self) -> np.ndarray:
@@ -255,8 +258,14 @@ def correlate(
         else None,
         test_shapes=_realise(data.shapes),
         model_shapes=model_at,
+        model_nodes=_nodes(model),
     )
     return _with_serep(base, modes, rows, data, notes)
+
+
+def _nodes(model) -> np.ndarray | None:
+    structure = getattr(model, "structure", None)
+    return None if structure is None else np.asarray(structure.nodes, float)
 
 
 def _frequencies_only(model, data: ModalData, modes: ModelModes, name: str) -> Correlation:

@@ -26,6 +26,9 @@ FIGURES = {
                "onto the model shape by the modal scale factor) and model (dots)."),
     "comac": ("comac.png", "COMAC per test DOF over the paired modes (1 = test and model agree "
               "at that DOF over all pairs)."),
+    "points": ("points.png", "The test points on the model (plan and side view, the model's "
+               "frame and units): model nodes grey, each test point at its paired model point, "
+               "coloured by its lowest COMAC, labelled by its test node."),
     "sensitivity": ("sensitivity.png", "Normalised sensitivities (d f / f) / (d p / p) of the "
                     "paired frequencies (rows) to the candidate parameters (columns)."),
 }  # fmt: skip
@@ -132,7 +135,7 @@ def correlate_document(result, figures: dict | None = None) -> Document:
         Section("MAC and pairs", (*_figure("mac", drawn), *_pairs_text(result))),
         Section("Paired shapes", _figure("shapes", drawn) or ("The test has no shapes.",)),
         Section("COMAC", (*((f"Lowest COMAC: {worst}.",) if worst else ()),
-                          *_figure("comac", drawn))),
+                          *_figure("comac", drawn), *_figure("points", drawn))),
         Section("Orthogonality (SEREP TAM)", _orthogonality_blocks(result)),
         Section("Notes", tuple(Alert(n) for n in result.notes) or ("No notes.",)),
     )  # fmt: skip
@@ -211,11 +214,47 @@ def _draw_comac(result, path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
+def _point_comac(result) -> dict:
+    """{test node: its lowest COMAC over its DOFs} (1 where no COMAC was computed)."""
+    out: dict = {}
+    values = result.comac if result.comac is not None else np.ones(len(result.dof_labels))
+    for p in result.mapping.points:
+        c = float(values[result.dof_labels.index(p.dof)]) if p.dof in result.dof_labels else 1.0
+        out[p.test_node] = min(out.get(p.test_node, 1.0), c)
+    return out
+
+
+def _draw_points(result, path: Path) -> None:
+    nodes = result.model_nodes
+    placed = {p.test_node: p.model_xyz for p in result.mapping.points if p.model_xyz is not None}
+    comac = _point_comac(result)
+    xyz = np.array(list(placed.values()))
+    colour = [comac[k] for k in placed]
+    fig = _new_figure(9.0, 4.2)
+    for k, (a, b, name) in enumerate(((0, 1, "plan (x, y)"), (0, 2, "side (x, z)"))):
+        ax = fig.add_subplot(1, 2, k + 1)
+        ax.scatter(nodes[:, a], nodes[:, b], s=3, c="0.75", label="model nodes")
+        sc = ax.scatter(xyz[:, a], xyz[:, b], s=28, c=colour, cmap="RdYlGn", vmin=0, vmax=1,
+                        edgecolors="k", linewidths=0.4, label="test points")  # fmt: skip
+        for label, (x, y) in zip(placed, xyz[:, [a, b]], strict=True):
+            ax.annotate(str(label), (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points")
+        ax.set_title(name, fontsize=9)
+        ax.set_aspect("equal", adjustable="datalim")
+    fig.colorbar(sc, ax=fig.axes, label="lowest COMAC of the point")
+    fig.savefig(path, dpi=110)
+
+
+def _has_points(result) -> bool:
+    placed = any(p.model_xyz is not None for p in result.mapping.points)
+    return result.model_nodes is not None and placed
+
+
 def _draw_correlation(folder: Path, result) -> dict:
     drawn = {}
     steps = {"mac": (_draw_mac, result.mac is not None),
              "shapes": (_draw_shapes, result.test_shapes is not None and result.pairs.test.size),
-             "comac": (_draw_comac, result.comac is not None)}  # fmt: skip
+             "comac": (_draw_comac, result.comac is not None),
+             "points": (_draw_points, _has_points(result))}  # fmt: skip
     for name, (draw, wanted) in steps.items():
         if wanted:
             path = folder / "figures" / FIGURES[name][0]

@@ -166,11 +166,20 @@ class ObjectiveConfig:
 
 @dataclass(frozen=True)
 class OptimizerConfig:
+    """The ``[optimizer]`` table (``inference.optimize.CalibrationSettings``), checked when the
+    study is read, so a bad value stops a run before any model is solved."""
+
     starts: int = 16
     method: str = "least_squares"
     design: str = "sobol"
     seed: int = 0
     polish: bool = True
+
+    def __post_init__(self):
+        from bayesupdate.inference.optimize import CalibrationSettings
+
+        CalibrationSettings(starts=self.starts, seed=self.seed, method=self.method,
+                            design=self.design, polish=self.polish)  # fmt: skip
 
 
 @dataclass(frozen=True)

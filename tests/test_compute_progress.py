@@ -4,9 +4,15 @@ a bar at the CLI, nothing with --quiet, wall times recorded in every mode."""
 import io
 
 from bayesupdate.cli import main
+from bayesupdate.compute import progress
 from bayesupdate.compute.progress import mode_for, phase, reporting
 from bayesupdate.fe.reduced import reduced_model_for
 from bayesupdate.models import get_model
+
+
+def _show_every_phase(monkeypatch):
+    """Show phases of any length (the tests' phases take microseconds)."""
+    monkeypatch.setattr(progress, "SHOWN_FROM_S", 0.0)
 
 
 def test_phases_are_silent_outside_a_reporting_context(capsys):
@@ -17,7 +23,8 @@ def test_phases_are_silent_outside_a_reporting_context(capsys):
     assert capsys.readouterr() == ("", "")
 
 
-def test_lines_mode_prints_one_line_per_phase_with_its_count_and_records_it():
+def test_lines_mode_prints_one_line_per_phase_with_its_count_and_records_it(monkeypatch):
+    _show_every_phase(monkeypatch)
     stream = io.StringIO()
     with reporting("lines", stream) as rec:
         with phase("first", 2, "solves") as p:
@@ -50,7 +57,16 @@ def test_mode_for_a_terminal_a_pipe_and_quiet():
     assert mode_for(True, Tty()) == "off"
 
 
-def test_a_reduced_basis_build_reports_its_solves():
+def test_a_short_phase_is_timed_but_not_shown():
+    stream = io.StringIO()
+    with reporting("lines", stream) as rec:
+        with phase("quick", 1) as p:
+            p.advance()
+    assert stream.getvalue() == "" and rec.phases[0].count == 1
+
+
+def test_a_reduced_basis_build_reports_its_solves(monkeypatch):
+    _show_every_phase(monkeypatch)
     stream = io.StringIO()
     with reporting("lines", stream) as rec:
         rom = reduced_model_for(get_model("exhaust"), None, n_modes=6, n_snapshots=8,
@@ -64,6 +80,8 @@ def test_a_reduced_basis_build_reports_its_solves():
 
 
 def test_the_cli_reports_on_stderr_and_quiet_silences_it(monkeypatch, capsys):
+    _show_every_phase(monkeypatch)
+
     def fake_run(args):
         with phase("a phase", 1) as p:
             p.advance()

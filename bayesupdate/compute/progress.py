@@ -9,7 +9,7 @@ scripts and tests, and the CLI shows
 
 - ``"bar"``: a tqdm bar per phase on stderr (a terminal);
 - ``"lines"``: one line per phase on stderr when it ends, with its count and wall time (a log,
-  a pipe, CI);
+  a pipe, CI), for phases of ``SHOWN_FROM_S`` seconds or more;
 - ``"off"``: nothing (``--quiet``); the phases' wall times are recorded in every mode.
 
 Worker processes of an executor have no reporting context: their phases are silent, and the
@@ -24,6 +24,9 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field
 
 MODES = ("bar", "lines", "off")
+#: a phase shorter than this [s] is timed but not shown (short work needs no progress, and a
+#: user error found before any long work stays the one line on stderr)
+SHOWN_FROM_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -118,6 +121,6 @@ def phase(name: str, total: int | None = None, unit: str = "it") -> Iterator[Pha
         if recorder is not None:
             wall = time.perf_counter() - t0
             recorder.phases.append(PhaseTime(name, running.count, wall))
-            if recorder.mode in ("bar", "lines"):
+            if recorder.mode in ("bar", "lines") and wall >= SHOWN_FROM_S:
                 done = f"{running.count} {unit}" if running.count else "done"
                 print(f"{name}: {done} in {wall:.1f} s", file=recorder.stream, flush=True)

@@ -28,8 +28,8 @@ from bayesupdate.nastran.cards.springs import pbush_k, pbush_lines
 #: the card families, in the order the reader adds them
 FAMILIES = (beams, rods, masses, springs, rigid)
 
-add_beams, add_rods, add_masses = beams.add, rods.add, masses.add
-add_springs, add_rigid = springs.add, rigid.add
+# the line families, re-built alone where a binding changes them (``nastran.lines``)
+add_beams, add_rods = beams.add, rods.add
 
 #: the grid fields of each element card (RBE2 / RBE3 lists: ``element_grids``)
 GRID_FIELDS = {

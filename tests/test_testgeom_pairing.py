@@ -162,6 +162,21 @@ def test_a_study_with_a_test_table_prepares_without_a_test_point_table(tmp_path)
     evaluation = problem.evaluate(problem.start)
     np.testing.assert_allclose(evaluation.frequencies_hz, truth.frequencies_hz, rtol=1e-10)
     np.testing.assert_allclose(evaluation.paired.mac, 1.0, atol=1e-10)
+    # the result file of a run on it records the pairing (calibrate, sample: inference.results)
+    import json
+
+    import h5py
+
+    from bayesupdate.inference.optimize import CalibrationSettings, calibrate
+    from bayesupdate.inference.results import write_result
+
+    optimum = calibrate(problem, CalibrationSettings(starts=1, seed=0, max_nfev=5))
+    out = write_result(tmp_path / "run.h5", problem, optimum, study.to_dict(), command="test")
+    with h5py.File(out) as h5:
+        record = json.loads(h5["inputs"].attrs["test_pairing_json"])
+    assert [p["nearest_node"] for p in record["points"]] == node
+    np.testing.assert_allclose(np.asarray(record["transform"]["matrix"])[:3, :3], R, atol=1e-9)
+    assert max(p["distance"] for p in record["points"]) < 1e-9
 
 
 def test_pairing_record_to_dict():

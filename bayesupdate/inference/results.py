@@ -9,7 +9,9 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 /inputs                frequencies_hz (m,), weights (m,), [sd_hz (m,)], attrs: source,
                        [measured_mass_kg, measured_mass_sd_kg],
                        parameter_names, bounds (d, 2) dataset, priors_json, pairing_method,
-                       fixed_json, model
+                       fixed_json, model, [test_pairing_json: the study's [test] geometry
+                       paired with the model: transform, per point its model node, element,
+                       xyz and distance (``testgeom.TestPairing.to_dict``)]
 /optimum               theta (d,), attrs: parameter_names, objective, expr, mass_kg, swapped,
                        starts, converged_starts, failed_evaluations, evaluations, method, wall_s;
                        frequencies_hz (m,), start_points (n, d), end_points (n, d),
@@ -88,6 +90,16 @@ def _write_state(group: h5py.Group, state: SamplerState) -> None:
         group.attrs["moves_json"] = json.dumps(state.moves)
 
 
+def _test_pairing(model) -> dict | None:
+    """The ``[test]`` pairing a model's structure carries (``metadata["test_pairing"]``; a
+    reduced model's through its FE model), or None."""
+    for holder in (model, getattr(model, "fe", None)):
+        metadata = getattr(getattr(holder, "structure", None), "metadata", None)
+        if isinstance(metadata, dict) and "test_pairing" in metadata:
+            return metadata["test_pairing"]
+    return None
+
+
 def write_result(
     path: str | Path,
     problem: CalibrationProblem,
@@ -144,7 +156,11 @@ def write_result(
 
 
 def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:
-    """The data and the problem: test frequencies, weights, sd, bounds, priors, measured mass."""
+    """The data and the problem: test frequencies, weights, sd, bounds, priors, measured mass,
+    and the test geometry's pairing where the model's sensors came from one."""
+    pairing = _test_pairing(problem.model)
+    if pairing is not None:
+        inputs.attrs["test_pairing_json"] = json.dumps(pairing)
     data = problem.data
     inputs["frequencies_hz"] = data.frequencies_hz
     inputs["weights"] = problem.weights

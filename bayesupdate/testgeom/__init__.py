@@ -69,11 +69,14 @@ def pair_structure(structure, geometry: TestGeometry, labels, settings: PairingS
 
 def with_pairing(structure, pairing: TestPairing):
     """``structure`` whose sensors are the paired test DOFs: labels, nearest model nodes,
-    directions (model frame) and the interpolated read-out (``Structure.sensor_read``)."""
+    directions (model frame) and the interpolated read-out (``Structure.sensor_read``); the
+    pairing's record (``TestPairing.to_dict``) is kept in ``metadata["test_pairing"]`` for the
+    result files."""
     return replace(
         structure,
         sensor_labels=pairing.dof_labels,
         sensor_node=pairing.sensor_nodes,
         sensor_direction=pairing.directions,
         sensor_read=(pairing.sensor_dofs, pairing.sensor_weights),
+        metadata={**structure.metadata, "test_pairing": pairing.to_dict()},
     )

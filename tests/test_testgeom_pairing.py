@@ -198,3 +198,23 @@ def test_two_test_points_on_one_model_node_are_reported():
     pairing = pair_test(g, dofs, mesh, PairingSettings(align="none", on_elements=False))
     assert pairing.shared == ((1, 2),)
     assert [p.model_node for p in pairing.points] == [11, 11, 13]
+
+
+def test_the_pairing_record_is_found_on_a_model_and_on_a_reduced_model_of_it():
+    """``inference.results.test_pairing_record``: what calibrate, sample and discover write
+    (``inputs`` attrs ``test_pairing_json``), from the model's structure or, for a reduced
+    model, its FE model's; None for a model without one."""
+    from types import SimpleNamespace
+
+    from bayesupdate.inference.results import test_pairing_record
+    from bayesupdate.testgeom import with_pairing
+
+    mesh = _mesh()
+    g = make_geometry([1], [[0.5, 0.0, 0.0]])
+    pairing = pair_test(g, resolve_dofs(g, ["1V"]), mesh, PairingSettings(align="none"))
+    base = get_model("exhaust")
+    assert test_pairing_record(base) is None
+    paired = SimpleNamespace(structure=with_pairing(base.structure, pairing))
+    record = test_pairing_record(paired)
+    assert record == pairing.to_dict() and record["points"][0]["test_node"] == 1
+    assert test_pairing_record(SimpleNamespace(fe=paired)) == record

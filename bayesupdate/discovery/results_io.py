@@ -8,7 +8,8 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
                     summary_json (``discovery_summary``: also the ``discover --json`` object),
                     settings_json (``DiscoverySettings.flat``), config_json
 /versions           attrs: package versions
-/inputs             frequencies_hz (m,), [weights (m,)], [sd_hz (m,)], attrs: source
+/inputs             frequencies_hz (m,), [weights (m,)], [sd_hz (m,)], attrs: source,
+                    [test_pairing_json: the study's [test] geometry's pairing]
 /baseline           theta (d,), residual_rel (m,), frequencies_hz (m,), attrs: names,
                     log_evidence, expr, loo_json
 /final              the re-calibrated model (baseline when nothing was named): same datasets,
@@ -153,7 +154,7 @@ def write_discovery(
 ):
     """Write ``result`` (workflow.DiscoveryResult) to ``path`` atomically (schema above).
     posterior : optional (PosteriorResult, summary dict) of the final model."""
-    from bayesupdate.inference.results import package_versions
+    from bayesupdate.inference.results import package_versions, test_pairing_record
 
     summary = discovery_summary(result)
     problem = result.baseline.space.problem
@@ -176,6 +177,9 @@ def write_discovery(
         )
         h5.create_group("versions").attrs.update(package_versions())
         _write_inputs(h5.create_group("inputs"), data)
+        pairing = test_pairing_record(problem.model)
+        if pairing is not None:  # the study's [test] geometry, as calibrate and sample keep it
+            h5["inputs"].attrs["test_pairing_json"] = json.dumps(pairing)
         _write_fit(h5.create_group("baseline"), result.baseline)
         final = h5.create_group("final")
         _write_fit(final, result.final)

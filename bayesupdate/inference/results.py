@@ -90,7 +90,7 @@ def _write_state(group: h5py.Group, state: SamplerState) -> None:
         group.attrs["moves_json"] = json.dumps(state.moves)
 
 
-def _test_pairing(model) -> dict | None:
+def test_pairing_record(model) -> dict | None:
     """The ``[test]`` pairing a model's structure carries (``metadata["test_pairing"]``; a
     reduced model's through its FE model), or None."""
     for holder in (model, getattr(model, "fe", None)):
@@ -158,7 +158,7 @@ def write_result(
 def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:
     """The data and the problem: test frequencies, weights, sd, bounds, priors, measured mass,
     and the test geometry's pairing where the model's sensors came from one."""
-    pairing = _test_pairing(problem.model)
+    pairing = test_pairing_record(problem.model)
     if pairing is not None:
         inputs.attrs["test_pairing_json"] = json.dumps(pairing)
     data = problem.data

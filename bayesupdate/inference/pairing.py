@@ -57,18 +57,25 @@ class PairedModes:
     shapes: np.ndarray | None = None
 
 
-def shapes_at(prediction: Prediction, labels: tuple[str, ...], where: str) -> np.ndarray:
-    """Rows of ``prediction.shapes`` at ``labels`` (n_labels, n_modes)."""
-    if prediction.shapes is None:
-        raise BayesUpdateError(f"{where}: the model gives no mode shapes; use pairing 'order'")
-    index = {label: i for i, label in enumerate(prediction.dof_labels)}
+def label_rows(available, labels, where: str, fix: str = "rename the test DOFs") -> np.ndarray:
+    """(n_labels,) row of each of ``labels`` among the model's DOF labels ``available``; one
+    line naming the missing ones (and ``fix``) when a label is not there."""
+    index = {label: i for i, label in enumerate(available)}
     missing = [label for label in labels if label not in index]
     if missing:
         raise BayesUpdateError(
             f"{where}: sensor labels {missing[:5]} are not model DOFs "
-            f"(model has {list(prediction.dof_labels)[:6]}...); rename the test DOFs"
+            f"(model has {list(available)[:6]}...); {fix}"
         )
-    return np.asarray(prediction.shapes)[[index[label] for label in labels], :]
+    return np.array([index[label] for label in labels], dtype=int)
+
+
+def shapes_at(prediction: Prediction, labels: tuple[str, ...], where: str) -> np.ndarray:
+    """Rows of ``prediction.shapes`` at ``labels`` (n_labels, n_modes)."""
+    if prediction.shapes is None:
+        raise BayesUpdateError(f"{where}: the model gives no mode shapes; use pairing 'order'")
+    rows = label_rows(prediction.dof_labels, labels, where)
+    return np.asarray(prediction.shapes)[rows, :]
 
 
 def pair_modes(prediction: Prediction, pairing: ModePairing) -> PairedModes:

@@ -35,6 +35,7 @@ from bayesupdate.correlation import (
     serep_transformation,
 )
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.pairing import label_rows
 from bayesupdate.modal_data import ModalData
 
 
@@ -189,14 +190,8 @@ def model_modes(model, n_modes: int, parameters=None) -> ModelModes:
 
 
 def _rows(modes: ModelModes, labels) -> np.ndarray:
-    index = {lab: i for i, lab in enumerate(modes.labels)}
-    missing = [lab for lab in labels if lab not in index]
-    if missing:
-        raise BayesUpdateError(
-            f"correlate: test DOFs {missing[:5]} are not model sensor DOFs (the model has "
-            f"{list(modes.labels)[:6]}...); map them in [model.test_points] or rename them"
-        )
-    return np.array([index[lab] for lab in labels], dtype=int)
+    return label_rows(modes.labels, labels, "correlate",
+                      "map them in [test], [model.test_points] or rename them")  # fmt: skip
 
 
 def geometry_mapping(pairing) -> SensorMapping:

@@ -106,9 +106,9 @@ def _constraints(builder) -> Constraints | None:
         return None
     legs2 = [(e, ind, d, c) for e, (ind, deps, c) in enumerate(r2) for d in deps]
     legs3 = [
-        (e, n, w, nc)
+        (e, n, w, c)
         for e, (_, _, ns, ws, nc) in enumerate(r3)
-        for n, w in zip(ns, ws, strict=True)
+        for n, w, c in zip(ns, ws, nc, strict=True)
     ]
     return Constraints(
         fixed_node=np.array([n for n, _ in sup], dtype=int),

@@ -415,8 +415,10 @@ class StructureBuilder:
 
         component_a, component_b : 1-6 or a name ('ux' ... 'rz'): a translation or rotation of
         the node's displacement frame ``frame_a`` / ``frame_b`` (3x3, rows = its axes in global
-        coordinates; default global axes).  mass : >= 0, in kg on a translation and kg m^2 on a
-        rotation (a rotary inertia about that axis).  Returns the element index."""
+        coordinates; default global axes); or a unit vector (6,) on the node's six global DOFs
+        (a mode of a 6x6 mass matrix, Nastran CONM1; the frame is then unused).  mass : >= 0,
+        in kg on a translation and kg m^2 on a rotation (a rotary inertia about that axis).
+        Returns the element index."""
         what = f"scalar mass in part {part!r}"
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
@@ -485,8 +487,9 @@ class StructureBuilder:
         self, reference, nodes, weights=None, components="123456", node_components="123"
     ) -> int:
         """Interpolation element: ``components`` of ``reference`` become the weighted
-        least-squares rigid motion of ``nodes`` (their ``node_components``; weights default 1).
-        Adds no stiffness.  Returns the RBE3 number used in error messages."""
+        least-squares rigid motion of ``nodes`` (their ``node_components``: one set for all, or
+        a list of one set per node, as Nastran RBE3's weight groups give them; weights default
+        1).  Adds no stiffness.  Returns the RBE3 number used in error messages."""
         from bayesupdate.fe.constraints import parse_components
 
         i = len(self._rbe3)
@@ -498,7 +501,15 @@ class StructureBuilder:
                 f"rbe3 {i}: needs nodes other than its reference {ref} and one weight > 0 each"
             )
         ref_c = parse_components(components, f"rbe3 {i}")
-        node_c = parse_components(node_components, f"rbe3 {i} node_components")
+        # a list of digit sets is one set per node (a list of names is one set)
+        per_node = isinstance(node_components, list | tuple) and all(
+            isinstance(c, int | np.integer) or (isinstance(c, str) and c.isdigit())
+            for c in node_components
+        )
+        each = list(node_components) if per_node else [node_components] * len(ns)
+        if len(each) != len(ns):
+            raise BayesUpdateError(f"rbe3 {i}: give one node_components set or one per node")
+        node_c = [parse_components(c, f"rbe3 {i} node_components") for c in each]
         self._rbe3.append((ref, ref_c, ns, w, node_c))
         return i
 
@@ -619,6 +630,11 @@ def _scalar_direction(component, frame, what: str) -> np.ndarray:
     from bayesupdate.fe.constraints import parse_components
     from bayesupdate.fe.scalar_mass import component_direction
 
+    if not isinstance(component, str | int | np.integer) and np.size(component) == 6:
+        d = np.asarray(component, dtype=float).reshape(6)
+        if not np.all(np.isfinite(d)) or abs(np.linalg.norm(d) - 1) > 1e-9:
+            raise BayesUpdateError(f"{what}: a direction must be 6 finite values of norm 1")
+        return d
     mask = parse_components(component, what)
     if mask.sum() != 1:
         raise BayesUpdateError(f"{what}: needs exactly one component (1-6), got {component!r}")

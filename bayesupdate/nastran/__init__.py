@@ -28,7 +28,7 @@ def load_nastran_model(
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info, deck = read_structure(path)
+    structure, info, deck = read_structure(path, design=not parameters)
     if units is not None:
         from bayesupdate.nastran.units import named_system
 

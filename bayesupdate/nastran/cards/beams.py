@@ -84,6 +84,12 @@ def pbeam_stations(p, card) -> tuple[np.ndarray, np.ndarray]:
     return np.array(x), np.array(vals)
 
 
+def is_tapered(p) -> bool:
+    """True if the PBEAM ``p``'s A, I1, I2, I12, J or NSM vary along it (``pbeam_stations``)."""
+    _, v = pbeam_stations(p, p)
+    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+
+
 def _pbeam_values(ctx: Context, p, card) -> np.ndarray:
     """(6,) A, I1, I2, I12, J, NSM of a PBEAM's element: a constant PBEAM's own, a tapered
     one's mean over the length of the piecewise-linear variation through its stations
@@ -92,7 +98,7 @@ def _pbeam_values(ctx: Context, p, card) -> np.ndarray:
     element's mass and is exact as the taper goes to 0, so a member meshed in several tapered
     CBEAMs converges to the tapered beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
     x, v = pbeam_stations(p, card)
-    if np.all(np.abs(v - v[0]) <= 1e-12 * np.maximum(np.abs(v[0]), 1e-300)):
+    if not is_tapered(p):
         return v[0]
     if np.any(v[:, :3] < 0) or np.any(v[:, 4] < 0):
         card.fail(f"PBEAM {p.id()}: a station has A, I1, I2 or J < 0")

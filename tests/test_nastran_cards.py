@@ -228,15 +228,44 @@ def test_rbe3_weight_groups_with_their_own_components(tmp_path):
     instead, MSC QRG RBE3) is the same constraint: the same frequencies."""
     k, m = 1e4, 2.0
     expected = np.sort(_hz([k / (m * 20 / 64), k / (m * 0.5), k / (m * 0.5)]))
-    for um, name in (("", "plain.bdf"), ("\n,UM,1,12,2,1", "um.bdf")):
+    for um, name in (
+        ("", "plain.bdf"),
+        ("\n,UM,1,123", "um.bdf"),
+        ("\n,UM,1,2,3,1,2,3", "um2.bdf"),
+    ):
         f = load_nastran_model(_write(tmp_path, _rbe3_deck(um), name)).solve(n_modes=3)
         assert f.frequencies_hz == pytest.approx(expected, rel=1e-10)
 
 
-def test_rbe3_um_with_the_wrong_number_of_dofs_is_refused(capsys, tmp_path):
+def test_rbe3_um_lets_the_reference_be_fixed(tmp_path):
+    """The RBE3 of ``_rbe3_deck`` with its reference grid clamped and UM = grid 1's 123: the
+    constraint is a . u = 0 along each axis (a = (1, 1, 3, 3) along x over grids 1-4, (1, 1) along
+    y and z over grids 1, 2).  Grids 1-4 carry CONM2 masses 1, 2, 3, 4 on springs k: the modes
+    are those of K = k I, M = diag(m) on the null space of a, computed here by projection."""
+    k, m = 1e4, np.array([1.0, 2.0, 3.0, 4.0])
+    deck = _rbe3_deck("\n,UM,1,123").replace(
+        "CONM2,20,9,,2.",
+        "".join(f"CONM2,{20 + g},{g},,{m[g - 1]}\n" for g in (1, 2, 3, 4)).rstrip("\n"),
+    )
+    deck = deck.replace("SPC1,1,456,9", "SPC1,1,123456,9").replace("EIGRL,1,,,3", "EIGRL,1,,,9")
+    f = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=9).frequencies_hz
+    expected = []
+    for a in (np.array([1.0, 1, 3, 3]), np.array([1.0, 1, 0, 0]), np.array([1.0, 1, 0, 0])):
+        Z = scipy.linalg.null_space(a[None])
+        expected += list(scipy.linalg.eigh(k * Z.T @ Z, Z.T @ np.diag(m) @ Z, eigvals_only=True))
+    assert f == pytest.approx(np.sort(_hz(expected)), rel=1e-9)
+
+
+def test_rbe3_um_with_the_wrong_dofs_is_refused(capsys, tmp_path):
+    """Two UM DOFs for three REFC components, and three whose coefficients are dependent (grid
+    3 is in a group with C = 1 only, so its z is in no equation): one line each, naming the
+    card and its file:line."""
     path = _write(tmp_path, _rbe3_deck("\n,UM,1,12"), "bad.bdf")
     line = rejected(capsys, "--model", path)
-    assert "bad.bdf:" in line and "RBE3 30: UM has 2 DOFs; REFC 123 has 3" in line, line
+    assert "bad.bdf:18 RBE3 30: UM has 2 DOFs; REFC 123 has 3" in line, line
+    path = _write(tmp_path, _rbe3_deck("\n,UM,1,12,3,3"), "bad.bdf")
+    line = rejected(capsys, "--model", path)
+    assert "bad.bdf:18 RBE3 30: its UM DOFs do not determine" in line, line
 
 
 # -- bad input: one message, exit 2, every card's file:line ---------------------------------------

@@ -206,7 +206,7 @@ class StructureBuilder:
         self._shell_blocks: list[dict] = []
         self._supports: list[tuple[int, np.ndarray]] = []
         self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
-        self._rbe3: list[tuple[int, np.ndarray, list[int], np.ndarray, np.ndarray]] = []
+        self._rbe3: list[tuple] = []  # (reference, components, nodes, weights, node sets, UM)
         self._general_beams: list = []
         self._rods: list = []
         self._frames: dict[int, np.ndarray] = {}
@@ -484,12 +484,14 @@ class StructureBuilder:
         return i
 
     def add_rbe3(
-        self, reference, nodes, weights=None, components="123456", node_components="123"
+        self, reference, nodes, weights=None, components="123456", node_components="123", um=None
     ) -> int:
         """Interpolation element: ``components`` of ``reference`` become the weighted
         least-squares rigid motion of ``nodes`` (their ``node_components``: one set for all, or
         a list of one set per node, as Nastran RBE3's weight groups give them; weights default
-        1).  Adds no stiffness.  Returns the RBE3 number used in error messages."""
+        1).  um : None, or [(node, components)], the DOFs made dependent instead of the
+        reference's (Nastran RBE3 UM; as many as ``components``, on the element's nodes or
+        reference).  Adds no stiffness.  Returns the RBE3 number used in error messages."""
         from bayesupdate.fe.constraints import parse_components
 
         i = len(self._rbe3)
@@ -510,7 +512,8 @@ class StructureBuilder:
         if len(each) != len(ns):
             raise BayesUpdateError(f"rbe3 {i}: give one node_components set or one per node")
         node_c = [parse_components(c, f"rbe3 {i} node_components") for c in each]
-        self._rbe3.append((ref, ref_c, ns, w, node_c))
+        um_sets = [(self._check_node(n), parse_components(c, f"rbe3 {i} um")) for n, c in um or ()]
+        self._rbe3.append((ref, ref_c, ns, w, node_c, um_sets))
         return i
 
     # -- general beams, rods and node frames (``fe.builder_general``) ---------------------------

@@ -20,7 +20,7 @@ def _add_rbe2(ctx: Context, r) -> None:
     comps = components(ctx, r["CM"], rows, r)
     gn = ctx.rows(r, ("GN",))[0]
     try:
-        ctx.builder.add_rbe2(ctx.node[gn], ctx.node[rows], comps)
+        ctx.rigid[f"rbe2 {ctx.builder.add_rbe2(ctx.node[gn], ctx.node[rows], comps)}"] = r
     except BayesUpdateError as exc:
         r.fail(_builder_message(exc))
 
@@ -29,7 +29,7 @@ def _add_rbar(ctx: Context, r) -> None:
     if str(r["CNA"]) != "123456" or str(r["CMB"]) != "123456" or r["CNB"] or r["CMA"]:
         r.fail("only CNA = 123456, CMB = 123456 is supported")
     ga, gb = ctx.node[ctx.rows(r, ("GA", "GB"))]
-    ctx.builder.add_rbe2(ga, [gb], "123456")
+    ctx.rigid[f"rbe2 {ctx.builder.add_rbe2(ga, [gb], '123456')}"] = r
 
 
 def rbe3_groups(r) -> list[tuple[float, str, list[int]]]:
@@ -74,13 +74,9 @@ def rbe3_um(r) -> list[tuple[int, str]]:
 
 def _add_rbe3(ctx: Context, r) -> None:
     """RBE3: REFGRID's REFC is the weighted mean motion of the groups (WTi, Ci, Gi,j), each grid
-    with its own group's weight and components (a grid in several groups: one leg each).
-
-    A UM set (MSC QRG RBE3: the DOFs made dependent instead of REFC) changes which DOFs are
-    eliminated, not the constraint equations, so the modes are those of REFC dependent; it is
-    checked (UM DOFs on the element's grids, as many as REFC has) and REFC stays dependent.  A
-    deck that needs UM because REFGRID's REFC is also fixed or dependent elsewhere is refused
-    where the structure is built."""
+    with its own group's weight and components (a grid in several groups: one leg each).  A UM
+    set (MSC QRG RBE3: GMi, CMi) makes those DOFs dependent instead of REFC: the same equations,
+    solved for them (``fe.constraints``), so REFC may be fixed or dependent elsewhere."""
     groups = rbe3_groups(r)
     nodes = [g for _, _, gs in groups for g in gs]
     weights = [float(w) for w, _, gs in groups for _ in gs]
@@ -92,9 +88,13 @@ def _add_rbe3(ctx: Context, r) -> None:
             r.fail(f"weight {w}: give WTi > 0")
         node_c += [components(ctx, comp, ctx.grids.index(gs, r), r)] * len(gs)
     ref_c = components(ctx, r["REFC"], ref, r)
-    _check_um(r, rbe3_um(r), ref_c, set(nodes) | {r.int("REFGRID")})
+    um = rbe3_um(r)
+    _check_um(r, um, ref_c, set(nodes) | {r.int("REFGRID")})
+    um_rows = [ctx.grids.index([g], r)[0] for g, _ in um]
+    um = [(ctx.node[k], components(ctx, c, [k], r)) for k, (_, c) in zip(um_rows, um, strict=True)]
     try:
-        ctx.builder.add_rbe3(ctx.node[ref[0]], ctx.node[rows], weights, ref_c, node_c)
+        i = ctx.builder.add_rbe3(ctx.node[ref[0]], ctx.node[rows], weights, ref_c, node_c, um)
+        ctx.rigid[f"rbe3 {i}"] = r
     except BayesUpdateError as exc:
         r.fail(_builder_message(exc))
 

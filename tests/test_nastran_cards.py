@@ -294,16 +294,15 @@ def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(caps
     assert "3 card(s) refused" in line, line
 
 
-def test_a_binding_on_a_tapered_pbeam_is_refused(tmp_path, capsys):
+def test_a_binding_on_a_tapered_pbeam_is_refused(tmp_path):
     """A binding writes one value at every PBEAM station, which would make the taper constant:
-    one line, exit 2, naming the parameter and the card's file:line."""
+    refused, naming the parameter and the card's file:line."""
+    from bayesupdate.errors import BayesUpdateError
+
     bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
             "PBEAM,5,1,2.e-3,4.e-6,1.e-6,,2.e-6\n,NO,1.,4.e-3\nCBEAM,1,5,1,2,0.,0.,1.\n"
             "SPC1,1,123456,1\n")  # fmt: skip
     deck = _write(tmp_path, _deck(bulk), "tapered.bdf")
-    study = tmp_path / "s.toml"
-    study.write_text(f'[model]\nsource = "{deck}"\n[data]\nfrequencies_hz = [70.0, 90.0]\n'
-                     '[parameters.a]\nbinds = "PBEAM 5 A"\n')  # fmt: skip
-    assert main(["calibrate", str(study)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "parameter a: binds 'PBEAM 5 A': PBEAM 5 (tapered.bdf:10)" in err
+    with pytest.raises(BayesUpdateError, match=r"parameter a: binds 'PBEAM 5 A': PBEAM 5 "
+                       r"\(tapered.bdf:10\) is tapered"):  # fmt: skip
+        load_nastran_model(deck, parameters={"a": {"binds": "PBEAM 5 A"}})

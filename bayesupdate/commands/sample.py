@@ -15,8 +15,8 @@ from bayesupdate.commands.calibrate import (
     study_from_args,
     write_bdf,
 )
+from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.interrupts import StopRequest
 
 NAME = "sample"
 HELP = "posterior of the parameters with emcee (mixture or DE moves), diagnostics, predictive bands"

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.evaluators import PointEvaluator
 from bayesupdate.inference.likelihood_blocks import (
     SampledNoise,
     mass_log_likelihood,
@@ -55,7 +56,6 @@ from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import JointPrior, Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
-from bayesupdate.parallel import PointEvaluator
 
 PAIRING_CHOICES = ("auto", "tracked", "problem", "order")
 

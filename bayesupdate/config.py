@@ -1,6 +1,6 @@
 """The TOML study file (``tomllib``): one frozen dataclass per table, strict keys and types.
 
-Example (issue 4 item 9)::
+Example::
 
     [model]
     source = "exhaust"              # built-in name, or "package.module:function"

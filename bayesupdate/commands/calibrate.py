@@ -154,7 +154,7 @@ def add_arguments(parser) -> None:
 
 
 def calibration_json(result, problem) -> dict:
-    """The ``calibrate --json`` object (issue 4 item 10) of a ``CalibrationResult`` of
+    """The ``calibrate --json`` object of a ``CalibrationResult`` of
     ``problem``."""
     return {
         "parameters": result.parameters,

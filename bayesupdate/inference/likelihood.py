@@ -2,7 +2,7 @@
 ``likelihood_blocks`` with a sampled or fixed level sigma, times the parameter priors, vectorised
 over walkers.
 
-For paired frequencies f_i(theta) and test values f_Ti (issue 4 item 5):
+For paired frequencies f_i(theta) and test values f_Ti:
 
     e_i = (f_i - f_Ti) / f_Ti,   e_i ~ N(0, s_i^2),   s_i^2 = sigma^2 / w_i + (sd_i / f_Ti)^2,
 

@@ -3,11 +3,12 @@ resume.
 
 Moves (``SamplerSettings.moves``).  "mixture" (default): a frozen defensive Gaussian-mixture
 independence proposal (0.8) with DE (0.2), fitted in stages before the kept run
-(``inference.moves.staged``, which says why the kept chain is valid); issue 21 found the DE moves
-alone under-estimate the exhaust posterior's sds by 4-10 %.  When the mixture cannot be fitted
-(too few distinct points) or covers the posterior poorly (the coverage check before the kept
-run, ``moves.coverage``) and its refits do too (below ``moves.staged.LOW_COVERAGE`` or with
-walkers stuck) the run uses the DE moves and says so (``diagnostics["moves"]``).
+(``inference.moves.staged``, which says why the kept chain is valid): the DE moves alone
+under-estimate the exhaust posterior's sds by 4-10 % (docs/validation/posterior.md).  When the
+mixture cannot be fitted (too few distinct points) or covers the posterior poorly (the coverage
+check before the kept run, ``moves.coverage``) and its refits do too (below
+``moves.staged.LOW_COVERAGE`` or with walkers stuck) the run uses the DE moves and says so
+(``diagnostics["moves"]``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not

@@ -462,6 +462,8 @@ def parse_test_table(table: Mapping, where: str = "test") -> TestConfig:
 
 
 # -- the [compute] table and the command's executor (compute.settings) --
+#: the environment variable that names a Dask scheduler when neither the command line nor the
+#: study file says where to run (``compute_settings``)
 SCHEDULER_VARIABLE = "BAYESUPDATE_SCHEDULER"
 # tcp://host:port, tls://host:port, or host:port (Dask's default protocol is tcp)
 _ADDRESS = re.compile(r"^(?:(tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d+)$")

@@ -11,10 +11,13 @@ Set ``BAYESUPDATE_DEBUG=1`` to see the traceback of an internal error.
 
 import os
 
+from bayesupdate.compute.blas import BLAS_THREAD_VARIABLES
+
 # The linear algebra here is small (n <= ~1000, batches of such): BLAS threads only add contention,
 # badly so on a 2-core machine (measured: a modal solve 5 ms single-threaded, 50 ms with two
-# threads on a busy machine).  Set before numpy loads; a user's own setting wins.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+# threads on a busy machine).  Set before numpy loads (compute.blas imports nothing); a user's
+# own setting wins.
+for _var in BLAS_THREAD_VARIABLES:
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402

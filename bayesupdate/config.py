@@ -1,6 +1,6 @@
 """The TOML study file (``tomllib``): one frozen dataclass per table, strict keys and types.
 
-Example (issue 4 item 9)::
+Example::
 
     [model]
     source = "exhaust"              # built-in name, or "package.module:function"
@@ -75,21 +75,22 @@ Example (issue 4 item 9)::
 Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`` naming
 ``file: table.key``.  The parsed ``[effects]`` (a tuple of spec strings) and ``[discovery]`` (a
 ``DiscoverySettings``) land in ``StudyConfig.extensions``, and so does ``[compute]``
-(``workers = N`` or ``scheduler = "tcp://head:8786"``: a ``parallel_executor.ComputeSettings``).
+(``workers = N`` or ``scheduler = "tcp://head:8786"``: a ``compute.settings.ComputeSettings``).
 """
 
 import dataclasses
 import os
+import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bayesupdate.compute.settings import SERIAL, ComputeSettings
 from bayesupdate.discovery.effects import parse_effect_spec
 from bayesupdate.discovery.settings import DiscoverySettings, flat_names
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.parallel_executor import parse_compute_table
 
 
 @dataclass(frozen=True)
@@ -458,6 +459,79 @@ def parse_test_table(table: Mapping, where: str = "test") -> TestConfig:
     parsed = _parse_section(TestConfig, checked, where)
     return dataclasses.replace(parsed, **{k: values[k] for k in ("align", "pairs",
                                "pair_tolerance") if k in values})  # fmt: skip
+
+
+# -- the [compute] table and the command's executor (compute.settings) --
+#: the environment variable that names a Dask scheduler when neither the command line nor the
+#: study file says where to run (``compute_settings``)
+SCHEDULER_VARIABLE = "BAYESUPDATE_SCHEDULER"
+# tcp://host:port, tls://host:port, or host:port (Dask's default protocol is tcp)
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d+)$")
+
+
+def check_address(address: str, where: str = "--scheduler") -> str:
+    """The Dask scheduler ``address`` if well formed (``[tcp://]host:port``), else a one-line
+    error naming ``where`` it came from."""
+    text = str(address).strip()
+    match = _ADDRESS.match(text)
+    if match is None or not 0 < int(match.group(3)) < 65536:
+        raise BayesUpdateError(
+            f"{where}: {address!r} is not a Dask scheduler address; give tcp://HOST:PORT "
+            "(e.g. tcp://head:8786)"
+        )
+    return text if match.group(1) else f"tcp://{text}"
+
+
+def parse_compute_table(table, where: str) -> ComputeSettings:
+    """The study file's ``[compute]`` table: ``workers = N`` or ``scheduler = "tcp://..."``
+    (not both), optional ``retries``.
+
+    Parameters: table, the parsed TOML table; where, the prefix of error messages (file name and
+    table).  Returns: the ``compute.settings.ComputeSettings`` it asks for."""
+    unknown = sorted(set(table) - {"workers", "scheduler", "retries"})
+    if unknown:
+        raise BayesUpdateError(
+            f"{where}.{unknown[0]}: unknown key; valid keys are ['retries', 'scheduler', 'workers']"
+        )
+    for key in ("workers", "retries"):
+        if key in table and (isinstance(table[key], bool) or not isinstance(table[key], int)):
+            raise BayesUpdateError(f"{where}.{key}: must be an integer, got {table[key]!r}")
+    if "workers" in table and "scheduler" in table:
+        raise BayesUpdateError(f"{where}: give workers or scheduler, not both")
+    scheduler = table.get("scheduler")
+    if scheduler is not None:
+        scheduler = check_address(scheduler, f"{where}.scheduler")
+    return ComputeSettings(table.get("workers", 1), scheduler, table.get("retries", 2))
+
+
+def compute_settings(
+    workers: int | None = None,
+    scheduler: str | None = None,
+    study: ComputeSettings | None = None,
+    environ=None,
+) -> ComputeSettings:
+    """The executor settings of a command: ``--workers``/``--scheduler`` (not both), else the
+    study file's ``[compute]``, else ``BAYESUPDATE_SCHEDULER``, else serial.
+
+    Parameters: workers, ``--workers`` (local processes, >= 1) or None; scheduler,
+    ``--scheduler`` (a Dask scheduler address) or None; study, the study file's ``[compute]``
+    (``parse_compute_table``) or None; environ, the environment to read
+    ``BAYESUPDATE_SCHEDULER`` from (None: ``os.environ``).  Returns: a ``ComputeSettings``."""
+    if workers is not None and scheduler is not None:
+        raise BayesUpdateError("give --workers (local processes) or --scheduler (Dask), not both")
+    retries = (study or SERIAL).retries
+    if workers is not None:
+        if workers < 1:
+            raise BayesUpdateError(f"--workers: must be >= 1, got {workers}")
+        return ComputeSettings(workers, None, retries)
+    if scheduler is not None:
+        return ComputeSettings(1, check_address(scheduler), retries)
+    if study is not None and study != SERIAL:
+        return study
+    env = (os.environ if environ is None else environ).get(SCHEDULER_VARIABLE, "").strip()
+    if env:
+        return ComputeSettings(1, check_address(env, SCHEDULER_VARIABLE), retries)
+    return SERIAL
 
 
 #: the discovery tables: the study file knows discovery's settings record directly

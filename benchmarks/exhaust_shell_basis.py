@@ -179,8 +179,8 @@ def one_model(name: str, options: dict, args) -> dict:
 
 def compare_builds(args) -> dict:
     """The build comparison of the module docstring: {label: numbers}."""
+    from bayesupdate.compute.executors import ProcessExecutor
     from bayesupdate.fe.reduced import certification, reduced_model_for
-    from bayesupdate.parallel_executor import ProcessExecutor
 
     os.environ["BAYESUPDATE_NO_CACHE"] = "1"
     fe = get_model("exhaust_shell", mesh_density=args.mesh_density)

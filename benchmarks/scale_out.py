@@ -164,8 +164,8 @@ class DaskProcesses:
 
 
 def run_all(phases, dask: DaskProcesses) -> list[dict]:
-    from bayesupdate.parallel_dask import DaskExecutor
-    from bayesupdate.parallel_executor import ProcessExecutor, SerialExecutor
+    from bayesupdate.compute.dask import DaskExecutor
+    from bayesupdate.compute.executors import ProcessExecutor, SerialExecutor
 
     rows, reference = [], {}
     setups = [("serial", 1, SerialExecutor), ("local", 1, lambda: ProcessExecutor(1)),

@@ -33,7 +33,7 @@ confusion table (true kind vs named kind), location accuracy, and the gap shrink
     .venv/bin/python studies/hidden_effect_study.py --quick          # a 10-case subset
     .venv/bin/python studies/hidden_effect_study.py --scheduler tcp://head:8786   # on Dask
 
-The cases are independent tasks on the project's executor (``bayesupdate.parallel_executor``:
+The cases are independent tasks on the project's executor (``bayesupdate.compute``:
 ``--workers N`` local processes, ``--scheduler ADDRESS`` a Dask scheduler, else
 ``BAYESUPDATE_SCHEDULER``, else serial); each case is a pure function of its (case, seed), so
 the rows (less their wall times) are the same whichever executor ran them, in case order.
@@ -602,7 +602,8 @@ def _case_task(fn, item):
 def _run_all(fn, work, args, summary) -> int:
     """Run ``fn`` over ``work`` on the executor of ``--workers``/``--scheduler``, print a line
     as each case finishes and ``summary(rows)`` (rows in case order)."""
-    from bayesupdate.parallel_executor import compute_settings, open_executor
+    from bayesupdate.compute.settings import open_executor
+    from bayesupdate.config import compute_settings
 
     t0 = time.perf_counter()
     done = []

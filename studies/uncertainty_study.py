@@ -170,7 +170,8 @@ def _case_task(shared: tuple, item: tuple) -> dict:
 def _run_cases(plan: list, args, out: Path) -> list[dict]:
     """The cases of ``plan`` on the executor of ``--workers``/``--scheduler`` (independent,
     each seeded by ``--seed``: the same results serial or parallel), in plan order."""
-    from bayesupdate.parallel_executor import compute_settings, open_executor
+    from bayesupdate.compute.settings import open_executor
+    from bayesupdate.config import compute_settings
 
     def progress(i, case):
         print(f"{case['label']}: {case['steps']} steps, {case['wall_s']:.0f} s, "

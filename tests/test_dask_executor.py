@@ -1,4 +1,4 @@
-"""``discover`` and ``calibrate`` on Dask (bayesupdate.parallel_dask), needs ``distributed``
+"""``discover`` and ``calibrate`` on Dask (bayesupdate.compute.dask), needs ``distributed``
 (the ``dask`` extra, also in ``test``).
 
 A ``dask scheduler`` and two ``dask worker`` processes (each with a nanny, one thread) are started
@@ -186,7 +186,7 @@ def _cube(offset, x):
 
 
 def test_dask_map_is_in_submission_order_with_progress_in_arrival_order(scheduler):
-    from bayesupdate.parallel_dask import DaskExecutor
+    from bayesupdate.compute.dask import DaskExecutor
 
     arrived = []
     with DaskExecutor(scheduler) as ex:
@@ -196,7 +196,7 @@ def test_dask_map_is_in_submission_order_with_progress_in_arrival_order(schedule
 
 
 def test_other_bayesupdate_version_on_the_workers_is_refused(study, scheduler, monkeypatch, capsys):
-    import bayesupdate.parallel_dask as pd
+    import bayesupdate.compute.dask as pd
 
     monkeypatch.setattr(pd, "client_version", lambda: "0.0.0-other")
     assert main(["discover", study, "--json", "--scheduler", scheduler]) == 2
@@ -205,7 +205,7 @@ def test_other_bayesupdate_version_on_the_workers_is_refused(study, scheduler, m
 
 
 def test_no_scheduler_at_the_address_is_a_one_line_error(study, monkeypatch, capsys):
-    import bayesupdate.parallel_dask as pd
+    import bayesupdate.compute.dask as pd
 
     monkeypatch.setattr(pd, "CONNECT_TIMEOUT_S", 2)
     address = f"tcp://127.0.0.1:{_free_port()}"
@@ -218,9 +218,9 @@ def test_pool_evaluator_on_dask_is_the_per_point_model_bit_for_bit(scheduler):
     """The sampler's batch wrapper of a model that cannot batch, on the Dask workers."""
     import numpy as np
 
+    from bayesupdate.compute.dask import DaskExecutor
+    from bayesupdate.inference.evaluators import PoolEvaluator
     from bayesupdate.models import get_model
-    from bayesupdate.parallel import PoolEvaluator
-    from bayesupdate.parallel_dask import DaskExecutor
 
     fe = get_model("exhaust")
     names = fe.parameter_names

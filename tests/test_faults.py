@@ -349,7 +349,7 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
 
 
 def test_deferred_stop_is_recorded_not_raised():
-    from bayesupdate.interrupts import StopRequest
+    from bayesupdate.compute.stop import StopRequest
 
     stop = StopRequest()
     with stop.deferred():
@@ -390,7 +390,7 @@ def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
     import gc
     import sys
 
-    from bayesupdate.interrupts import StopRequest
+    from bayesupdate.compute.stop import StopRequest
 
     class RaisesOnDelete:  # an exception Python can only report as "Exception ignored"
         def __init__(self, exc):
@@ -416,7 +416,7 @@ def test_swallowed_stop_request_is_not_reported_but_other_errors_are(capsys):
 def test_swallowed_stop_traceback_printed_by_an_extension_is_silenced(capsys):
     """Cython prints a swallowed exception with sys.excepthook (PyErr_PrintEx) before the
     unraisable hook: a recorded stop request's traceback is dropped, anything else is shown."""
-    from bayesupdate.interrupts import StopRequest
+    from bayesupdate.compute.stop import StopRequest
 
     stop = StopRequest()
 

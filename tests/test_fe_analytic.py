@@ -5,7 +5,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from bayesupdate.fe import STEEL, FEModel, StructureBuilder, circular_tube, solve_modes
-from bayesupdate.fe.assembly import Assembler, rigid_body_basis
+from bayesupdate.fe.assembly import Assembler
+from bayesupdate.fe.rotations import rigid_body_basis
 
 D, T, LENGTH = 0.045, 1.5e-3, 2.0
 BETA_L = np.array([4.7300408, 7.8532046, 10.9956078])  # free-free beam roots

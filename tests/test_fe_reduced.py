@@ -1,7 +1,7 @@
-"""Certified reduced basis (bayesupdate.fe.reduced) and the process pool (bayesupdate.parallel),
-checked against full FE solves on a small free frame with every kind of parameter: a wall
-thickness and a bend factor on the same elbow (tensor-product interpolation), a density of an oval
-shell, a point-mass factor and a joint-spring factor."""
+"""Certified reduced basis (bayesupdate.fe.reduced) and the process pool
+(bayesupdate.inference.evaluators), checked against full FE solves on a small free frame with
+every kind of parameter: a wall thickness and a bend factor on the same elbow (tensor-product
+interpolation), a density of an oval shell, a point-mass factor and a joint-spring factor."""
 
 import warnings
 
@@ -19,7 +19,7 @@ from bayesupdate.fe.reduced import (
 )
 from bayesupdate.fe.reduced.affine import b31_kinks
 from bayesupdate.fe.structure import _bend_flexibility_factor
-from bayesupdate.parallel import PoolEvaluator
+from bayesupdate.inference.evaluators import PoolEvaluator
 
 N_MODES = 8
 

@@ -6,9 +6,10 @@ import pytest
 import scipy.linalg as sla
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.assembly import Assembler, rigid_body_basis
+from bayesupdate.fe.assembly import Assembler
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.modify import with_spring
+from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.structure import StructureBuilder
 
 

@@ -96,7 +96,7 @@ def test_resume_after_interruption_gives_the_identical_chain(setup, tmp_path, mo
 
 
 def test_a_signal_landing_in_the_step_bookkeeping_still_resumes_identically(setup, monkeypatch):
-    """A SIGTERM's handler raises where it lands (``interrupts.StopRequest.handler``).  Landing
+    """A SIGTERM's handler raises where it lands (``compute.stop.StopRequest.handler``).  Landing
     between a step's record in the chain and the run's state (made here at the 200th state
     ``_run_block`` records: the 50th kept step after three adaptation stages of 50) used to
     leave the step recorded but the state one step behind, so the resume drew that step twice;
@@ -105,8 +105,8 @@ def test_a_signal_landing_in_the_step_bookkeeping_still_resumes_identically(setu
 
     import emcee
 
+    from bayesupdate.compute.stop import StopRequest
     from bayesupdate.inference import sampling
-    from bayesupdate.interrupts import StopRequest
 
     problem, optimum = setup
     full = _run(problem, optimum)

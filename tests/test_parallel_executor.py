@@ -1,4 +1,4 @@
-"""The executor seam (bayesupdate.parallel_executor) without Dask: which executor the options
+"""The executor seam (bayesupdate.compute) without Dask: which executor the options
 choose, one-line errors for bad input, results in submission order on local processes whatever
 order the tasks finish in, a killed local worker's tasks run again, and a discovery on two local
 processes is the serial discovery bit for bit, and so is a calibration of a user's model (its
@@ -17,15 +17,12 @@ import numpy as np
 import pytest
 
 # kept light: spawned workers import this module for its task functions
+from bayesupdate.compute.executors import ProcessExecutor
+from bayesupdate.compute.settings import SERIAL, ComputeSettings
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.parallel_executor import (
-    SCHEDULER_VARIABLE,
-    SERIAL,
-    ComputeSettings,
-    ProcessExecutor,
-    check_address,
-    compute_settings,
-)
+
+#: ``config.SCHEDULER_VARIABLE``, spelled out: config (the study file) is not imported here
+SCHEDULER_VARIABLE = "BAYESUPDATE_SCHEDULER"
 
 # the smallest discovery through the CLI: the exhaust against the paper's test, added masses
 # only, one baseline start, three quick refits, one full refit
@@ -134,8 +131,10 @@ def _die_once(marker: str, x: int) -> int:
 
 
 def test_options_choose_the_executor():
-    from bayesupdate.config import parse_study
+    from bayesupdate import config
+    from bayesupdate.config import compute_settings, parse_study
 
+    assert config.SCHEDULER_VARIABLE == SCHEDULER_VARIABLE
     env = {SCHEDULER_VARIABLE: "head:8786"}
     assert compute_settings(environ={}) == SERIAL and SERIAL.kind == "serial"
     assert compute_settings(workers=3, environ=env) == ComputeSettings(workers=3)
@@ -163,6 +162,8 @@ def test_options_choose_the_executor():
     ],
 )
 def test_bad_compute_options_are_one_line_errors(kwargs, words):
+    from bayesupdate.config import compute_settings
+
     with pytest.raises(BayesUpdateError, match=words) as err:
         compute_settings(**kwargs)
     assert "\n" not in str(err.value)
@@ -202,6 +203,8 @@ def test_cli_bad_compute_input_exits_2_with_one_line(capsys, argv, words):
 
 
 def test_address_forms():
+    from bayesupdate.config import check_address
+
     assert check_address("head:8786") == "tcp://head:8786"
     assert check_address("tcp://[::1]:8786") == "tcp://[::1]:8786"
     assert check_address(" tls://node-3.cluster:1 ") == "tls://node-3.cluster:1"

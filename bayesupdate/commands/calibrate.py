@@ -58,7 +58,7 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
 
 
 def add_compute_arguments(parser) -> None:
-    """--workers / --scheduler: where independent tasks run (``parallel_executor``)."""
+    """--workers / --scheduler: where independent tasks run (``compute.executors``)."""
     parser.add_argument(
         "--workers",
         type=int,
@@ -76,8 +76,8 @@ def add_compute_arguments(parser) -> None:
 
 def compute_from_args(args, study):
     """``ComputeSettings`` from --workers/--scheduler, the study's [compute] table and
-    $BAYESUPDATE_SCHEDULER (``parallel_executor.compute_settings``)."""
-    from bayesupdate.parallel_executor import compute_settings
+    $BAYESUPDATE_SCHEDULER (``config.compute_settings``)."""
+    from bayesupdate.config import compute_settings
 
     return compute_settings(
         getattr(args, "workers", None),
@@ -154,7 +154,7 @@ def add_arguments(parser) -> None:
 
 
 def calibration_json(result, problem) -> dict:
-    """The ``calibrate --json`` object (issue 4 item 10) of a ``CalibrationResult`` of
+    """The ``calibrate --json`` object of a ``CalibrationResult`` of
     ``problem``."""
     return {
         "parameters": result.parameters,
@@ -171,8 +171,8 @@ def calibration_json(result, problem) -> dict:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+    from bayesupdate.compute.settings import open_executor
     from bayesupdate.inference.results import write_result
-    from bayesupdate.parallel_executor import open_executor
     from bayesupdate.pipelines.calibrate import run_calibration
     from bayesupdate.pipelines.study import prepare
 

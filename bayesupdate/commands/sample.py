@@ -15,8 +15,8 @@ from bayesupdate.commands.calibrate import (
     study_from_args,
     write_bdf,
 )
+from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.interrupts import StopRequest
 
 NAME = "sample"
 HELP = "posterior of the parameters with emcee (mixture or DE moves), diagnostics, predictive bands"
@@ -187,7 +187,7 @@ def _criteria(sampler) -> str:
 
 
 def sample_json(posterior, summary: dict, likelihood, predictions: dict | None = None) -> dict:
-    """The ``sample --json`` object (issue 4 item 10) of a ``PosteriorResult``, its summary, the
+    """The ``sample --json`` object of a ``PosteriorResult``, its summary, the
     ``LikelihoodSpec`` and the posterior predictive, plus failed_evaluations, steps, walkers,
     converged, convergence ({"converged", "reason" (null when converged), "max_r_hat",
     "min_ess_bulk", "target_rhat", "target_ess", "steps"}), swap_fraction (share of checked

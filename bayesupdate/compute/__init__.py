@@ -1,6 +1,14 @@
-"""Where and how work runs, below every layer that models anything: the on-disk cache of
-computed arrays (``cache``).  Imports nothing above the core."""
+"""Where and how work runs, below every layer that models anything; imports nothing above the
+core (``errors``).
 
-from bayesupdate.compute.cache import ArrayStore, CacheInfo, content_key, default_directory
+- ``executors``: the executor seam, serial and local processes (``SerialExecutor``,
+  ``ProcessExecutor``, ``executor_or_serial``);
+- ``dask``: the Dask executor (the optional extra ``bayesupdate[dask]``);
+- ``settings``: which executor a run uses (``ComputeSettings``) and ``open_executor``;
+- ``stop``: a run's stop request (``StopRequest``);
+- ``blas``: the BLAS thread variables (``BLAS_THREAD_VARIABLES``);
+- ``cache``: the on-disk cache of computed arrays; ``progress``: progress lines and bars.
 
-__all__ = ["ArrayStore", "CacheInfo", "content_key", "default_directory"]
+Nothing is imported here, so reading ``compute.blas`` (the CLI does, before numpy loads) loads
+nothing else.
+"""

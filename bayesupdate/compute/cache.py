@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+__all__ = ["ArrayStore", "CacheInfo", "content_key", "default_directory"]
+
 #: suffix of an entry; temporary files end in ``.tmp``
 SUFFIX = ".npz"
 #: a temporary file older than this [s] belongs to a killed writer

@@ -14,7 +14,8 @@ design), and each shape level is fixed the same way (``shape_evidence``).  A lev
 at every point instead (a log-uniform prior on sigma, as this module once did) makes the frequency
 block scale-invariant: moving all twelve identified frequencies 0.08 % off, 8 times their robust
 level, then cost only m/2 ln 64 = 25 nats, less than a few shape blocks could gain, and the
-baseline of an identified null test was dragged that far (issue 15).
+baseline of an identified null test was dragged that far (``tests/test_discovery_cli.py``,
+``test_user_path_null_case_names_nothing``).
 
 Evidence by the Laplace approximation (MacKay 2003 ch. 27; Kass & Raftery 1995 eq. 4) in the fit
 coordinates z (the axis coordinates of ``inference.parameter_space``):

@@ -25,12 +25,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.correlation import comac
 from bayesupdate.discovery.candidates import Candidate
 from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.problem import build_problem
-from bayesupdate.parallel_executor import executor_or_serial
 
 #: probe step as a fraction of the effect parameter's z range
 PROBE_FRACTION = 0.02
@@ -285,7 +285,7 @@ def localize(
 ) -> Localization:
     """All three views (module docstring).  residuals_fn and design_jac are in noise units
     (``score_candidate``), so the chi^2 drops are too.  The score tests run on ``executor``
-    (``parallel_executor``; None: serially); residuals_fn must then be picklable.  scored : the
+    (``compute.executors``; None: serially); residuals_fn must then be picklable.  scored : the
     candidates' ``CandidateScore`` made by the caller (then ``candidates`` is not scored)."""
     shared = (baseline_problem, design_theta, design_jac, residuals_fn)
     if scored is None:

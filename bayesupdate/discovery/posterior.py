@@ -1,4 +1,4 @@
-"""Optional posterior of the re-calibrated model (issue 6 item 5): emcee over the design
+"""Optional posterior of the re-calibrated model: emcee over the design
 variables and the named effect's parameters, walkers started from the Laplace Gaussian.
 
 The likelihood is the calibration layer's (``inference.LogPosterior``: the frequency block of
@@ -39,7 +39,7 @@ def sample_final(
     """(PosteriorResult, LogPosterior) of ``result.final`` (module docstring).
 
     moves : ``SamplerSettings.moves``: "mixture" (default) or "de" (no adaptation stages: the
-    cheaper choice for a short look, with DE's narrower tails, issue 21)."""
+    cheaper choice for a short look, with DE's narrower tails: docs/validation/posterior.md)."""
     fit = result.final
     space = fit.space
     problem = space.problem

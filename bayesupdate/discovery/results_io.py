@@ -100,7 +100,7 @@ def _shape_noise_summary(fit) -> dict | None:
 
 
 def discovery_summary(result) -> dict:
-    """The summary of a ``workflow.DiscoveryResult`` (issue 6 item 7, plus documented extras):
+    """The summary of a ``workflow.DiscoveryResult``:
     stored as the result file's ``summary_json`` and printed by ``discover --json``."""
     scores = {s.label: s.delta_chi2 for s in result.localization.scores}
     probability = np.exp(result.log_posterior_probabilities())

@@ -18,7 +18,8 @@ its level is held fixed:
   accelerometers) and the FE discretisation of a shape leave no test-model difference below it
   that is physics.  Without it a near-perfect mode (1 - MAC ~ 1e-6 on the virtual test) gets a
   level so small that a 0.04 % frequency shift of all modes buys a better shape fit of it: that is
-  how the former per-mode integrated level dragged the baseline on identified data (issue 15);
+  how the former per-mode integrated level dragged the baseline on identified data (the null case
+  of ``tests/test_discovery_cli.py``);
 * R_i = |d_i|^2 at the frequency-only baseline calibration (the eq. 19 optimum, which shapes have
   not touched): a mode whose misfit there rejects its stated level carries identification bias the
   stated sd does not cover (on the virtual roving-hammer test, modes whose reference accelerometer

@@ -68,6 +68,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import logsumexp
 
+from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
@@ -94,7 +95,6 @@ from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
-from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass
@@ -682,7 +682,7 @@ def discover(
     posterior is available (widens the flagging z-scores).
     progress : optional callable(str) for progress messages.
     executor : where the baseline's starts, the score tests and the refits run
-    (``parallel_executor``; None: in this process); the result is the same bits on every executor.
+    (``compute.executors``; None: in this process); the result is the same bits on every executor.
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
     frequencies against the model's sorted ones: the honest likelihood without shapes; shape
     tracking against the reference design, the calibration default, puts a wall in the objective

@@ -1,4 +1,4 @@
-"""End-to-end modal identification: FRFs -> LSCE per band -> stabilization -> automatic poles ->
+"""End-to-end modal identification: FRFs -> LSCE per band -> stabilisation -> automatic poles ->
 LSFD shapes -> :class:`~bayesupdate.modal_data.ModalData` plus diagnostics.
 
 The range (the whole axis, or the band given) is split into consecutive narrow bands
@@ -185,7 +185,7 @@ class IdentifySettings:
     per band minus one (None: :func:`~bayesupdate.ema.bands.automatic_bands`; at least the
     range's lines for one band).  min_count : stable orders a pole needs (None: the
     selection's default, :func:`~bayesupdate.ema.stabilization.select_poles`).
-    tol_frequency, tol_damping [-], min_mac : stabilization tolerances between orders.
+    tol_frequency, tol_damping [-], min_mac : stabilisation tolerances between orders.
     tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 %
     between orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that
     pass are removed by :func:`modal_significance`.  method : a key of ``ESTIMATORS``.

@@ -1,4 +1,4 @@
-"""Identification plots (matplotlib, Agg backend): stabilization diagram with CMIF overlay,
+"""Identification plots (matplotlib, Agg backend): stabilisation diagram with CMIF overlay,
 CMIF alone, measured vs synthesized FRFs, MAC matrix, mode shapes on the sensor geometry or as
 bars over the DOF labels.
 

@@ -12,7 +12,7 @@ equations M alpha = 0, M = sum_o (T_o - S_o^T R^-1 S_o) (Peeters et al. eq. 9), 
 alpha_p = 1.  The poles are the roots z_r of A: s_r = ln(z_r) / dt.  With one reference (the
 FRF rows of a roving or SIMO test) the poly-reference right matrix-fraction model reduces to
 this scalar denominator; its participation factors are then 1, and the pole vector (one value
-per FRF, for the stabilization MAC) is the residue B_o(z_r) / A'(z_r).
+per FRF, for the stabilisation MAC) is the residue B_o(z_r) / A'(z_r).
 
 Band handling as in :mod:`bayesupdate.ema.lsce`: the band's lines are a base-band spectrum
 (w - w_lo), dt = 1 / (2 (f_hi - f_lo)), poles shifted back by j w_lo.  Orders are nested: the
@@ -94,7 +94,7 @@ def plscf(
 
     frequencies_hz (n_f,) uniform [Hz]; frf (n_frf, n_f) complex, any kind.  Returns an
     :class:`~bayesupdate.ema.lsce.LsceResult` (poles [rad/s] with Im > 0 inside the band,
-    pole vectors B_o(z_r) / A'(z_r) per FRF), so stabilization and selection are shared.
+    pole vectors B_o(z_r) / A'(z_r) per FRF), so stabilisation and selection are shared.
     """
     f = np.asarray(frequencies_hz, dtype=float)
     h_all = np.atleast_2d(np.asarray(frf))

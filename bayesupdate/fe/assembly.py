@@ -39,17 +39,6 @@ class ElementProperties:
     spring_scale: np.ndarray
 
 
-def rigid_body_basis(nodes: np.ndarray, centre=None) -> np.ndarray:
-    """(6N, 6) rigid-body motions of all nodes: 3 translations and 3 rotations about ``centre``."""
-    n = nodes.shape[0]
-    c = nodes.mean(axis=0) if centre is None else np.asarray(centre, dtype=float)
-    R = np.zeros((n, 6, 6))
-    R[:, :3, :3] = np.eye(3)
-    R[:, 3:, 3:] = np.eye(3)
-    R[:, :3, 3:] = -skew(nodes - c)
-    return R.reshape(6 * n, 6)
-
-
 class Assembler:
     """Geometry-dependent precomputation for fast repeated assembly of one ``Structure``."""
 

@@ -1,4 +1,4 @@
-"""Free-free generalized eigenproblem K u = lambda M u (seed eqs 1-2), first elastic modes.
+"""Free-free generalised eigenproblem K u = lambda M u (seed eqs 1-2), first elastic modes.
 
 Default method ("krylov"): shift-invert block Krylov with Rayleigh-Ritz (Ericsson & Ruhe 1980;
 Bathe, *Finite Element Procedures*, 2014, sec. 11.5-11.6), using a banded Cholesky factor of

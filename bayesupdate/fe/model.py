@@ -33,10 +33,11 @@ from types import MappingProxyType
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.assembly import Assembler, ElementProperties, rigid_body_basis
+from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
 from bayesupdate.fe.general import GeneralAssembler
+from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.assembly import rigid_body_basis
 from bayesupdate.fe.rod import line_dofs
+from bayesupdate.fe.rotations import rigid_body_basis
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 ``likelihood_blocks`` with a sampled or fixed level sigma, times the parameter priors, vectorised
 over walkers.
 
-For paired frequencies f_i(theta) and test values f_Ti (issue 4 item 5):
+For paired frequencies f_i(theta) and test values f_Ti:
 
     e_i = (f_i - f_Ti) / f_Ti,   e_i ~ N(0, s_i^2),   s_i^2 = sigma^2 / w_i + (sd_i / f_Ti)^2,
 
@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.evaluators import PointEvaluator
 from bayesupdate.inference.likelihood_blocks import (
     SampledNoise,
     mass_log_likelihood,
@@ -55,7 +56,6 @@ from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import JointPrior, Prior
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.model_protocol import BatchParametricModel
-from bayesupdate.parallel import PointEvaluator
 
 PAIRING_CHOICES = ("auto", "tracked", "problem", "order")
 

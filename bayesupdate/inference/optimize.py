@@ -22,7 +22,7 @@ model's tracked pairing of modes 6 and 7 flips (Expr 0.067 -> 0.078); 60 d exact
 evaluations from each end bring it back to the surrogate's value within 1 %.
 
 The starts are independent: each (least squares and polish), and each end's polish on
-``refine``, is one task on an executor (``parallel_executor``: serial, local processes or Dask),
+``refine``, is one task on an executor (``compute``: serial, local processes or Dask),
 a pure function of the problem and its start, so the result is the same bits on any executor.
 """
 
@@ -33,7 +33,9 @@ from functools import partial
 import numpy as np
 from scipy import optimize, stats
 
+from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
+from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood import mass_function
 from bayesupdate.inference.pairing import ResidualTable, pair_batch
@@ -44,8 +46,6 @@ from bayesupdate.inference.parameter_space import (
     unit_box_residuals,
 )
 from bayesupdate.inference.problem import CalibrationProblem
-from bayesupdate.interrupts import StopRequest
-from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass(frozen=True)
@@ -327,7 +327,7 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple[np.ndarray, f
     evaluations, failures).  A pure function of ``job`` and ``item``: the same bits wherever it
     runs."""
     u0, polish = item
-    job.stop.check()  # a stop request a compiled extension swallowed (bayesupdate.interrupts)
+    job.stop.check()  # a stop request a compiled extension swallowed (bayesupdate.compute.stop)
     count = EvaluationCount()
     batch = _unit_box_batch(job.problem, count, job.n_res)
     residuals = _residual_function(job.problem, count, job.n_res, batch)
@@ -375,7 +375,7 @@ def _local_fits(
 ) -> tuple[list, list]:
     """Bounded trust-region least squares from each start (n, d), each end Nelder-Mead polished
     (``job.polish_per_dim`` d evaluations); one task per start on ``executor``
-    (``parallel_executor``; None: here): (end points u (d,) each, objectives each)."""
+    (``compute.executors``; None: here): (end points u (d,) each, objectives each)."""
     return _run_fits(job, [(u0, True) for u0 in u_starts], counter, executor)
 
 
@@ -451,9 +451,9 @@ def calibrate(
     data and pairing): each end point within 5 % of the best is polished on it (Nelder-Mead,
     60 d evaluations), every end is re-evaluated on it, and the result (objectives, table) is that
     of ``refine``; ``evaluations`` counts both models' evaluations.
-    stop : the run's ``interrupts.StopRequest``, checked before each start (None: none).
+    stop : the run's ``compute.stop.StopRequest``, checked before each start (None: none).
     executor : where the starts (and the refine polishes) run, one task each
-    (``parallel_executor``; None: in this process); the result is the same bits on any.
+    (``compute.executors``; None: in this process); the result is the same bits on any.
     Returns CalibrationResult.  Model failures are counted in ``failed_evaluations``.
     """
     t0 = time.perf_counter()

@@ -1,4 +1,4 @@
-"""A posterior's draws against a stored reference of the same posterior (issue 21).
+"""A posterior's draws against a stored reference of the same posterior.
 
 R-hat and the ESS only compare a chain with itself: on the demo's shell seed case a run that
 never reached one end of the posterior's mass ridge converged by both and still had
@@ -27,7 +27,8 @@ __all__ = [
     "within_tolerance",
 ]
 
-#: the accuracy criterion of issue 21: means within 0.05 reference sd, sds within 5 %
+#: the accuracy criterion (docs/validation/posterior.md): means within 0.05 reference sd, sds
+#: within 5 %
 MEAN_TOLERANCE_SD = 0.05
 SD_TOLERANCE = 0.05
 #: largest |log p - stored log p| at the check points for the reference to apply [nats]; a full

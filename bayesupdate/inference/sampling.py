@@ -3,11 +3,12 @@ resume.
 
 Moves (``SamplerSettings.moves``).  "mixture" (default): a frozen defensive Gaussian-mixture
 independence proposal (0.8) with DE (0.2), fitted in stages before the kept run
-(``inference.moves.staged``, which says why the kept chain is valid); issue 21 found the DE moves
-alone under-estimate the exhaust posterior's sds by 4-10 %.  When the mixture cannot be fitted
-(too few distinct points) or covers the posterior poorly (the coverage check before the kept
-run, ``moves.coverage``) and its refits do too (below ``moves.staged.LOW_COVERAGE`` or with
-walkers stuck) the run uses the DE moves and says so (``diagnostics["moves"]``).
+(``inference.moves.staged``, which says why the kept chain is valid): the DE moves alone
+under-estimate the exhaust posterior's sds by 4-10 % (docs/validation/posterior.md).  When the
+mixture cannot be fitted (too few distinct points) or covers the posterior poorly (the coverage
+check before the kept run, ``moves.coverage``) and its refits do too (below
+``moves.staged.LOW_COVERAGE`` or with walkers stuck) the run uses the DE moves and says so
+(``diagnostics["moves"]``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not
@@ -47,6 +48,7 @@ from functools import partial
 import emcee
 import numpy as np
 
+from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference import walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
@@ -56,7 +58,6 @@ from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.parameter_space import ParameterSpace, ParameterSpec
 from bayesupdate.inference.walker_start import axis_sd, uncounted
-from bayesupdate.interrupts import StopRequest
 
 #: the move schemes ``SamplerSettings.moves`` names (module docstring)
 MOVE_KINDS = ("mixture", "de")
@@ -344,28 +345,28 @@ def _log_jacobian(space: ParameterSpace | None, x: np.ndarray) -> np.ndarray:
 def _guard(
     density: LogPosterior,
     space: ParameterSpace | None,
-    stop: dict,
+    request: StopRequest,
     clock: dict | None = None,
     key: str = "exact_s",
 ) -> Callable[[np.ndarray], np.ndarray]:
     """The log-density emcee sees, (n_walkers, d) sampler coordinates -> (n_walkers,): in y
-    with the log-Jacobian added when ``space`` is given; after a Ctrl-C (``stop``) -inf, and
-    after a BayesUpdateError (kept in ``stop["error"]``, raised by ``_raise_failure``).  The
+    with the log-Jacobian added when ``space`` is given; after a stop request (a Ctrl-C)
+    -inf, and after a BayesUpdateError (``request.fail``, raised by ``_raise_failure``).  The
     wall time of each call is added to ``clock[key]`` [s] when ``clock`` is given."""
 
     def guarded(x: np.ndarray) -> np.ndarray:
         # Ctrl-C inside the model: finish the step without evaluating (it is discarded
         # below); raising through emcee would print every walker's parameters and a traceback
-        if not stop["requested"]:
+        if not request.requested():
             t0 = time.perf_counter()
             try:
                 if space is None:
                     return density(x)
                 return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
             except KeyboardInterrupt:
-                stop["requested"] = True
+                request.request()
             except BayesUpdateError as exc:  # e.g. the Dask scheduler lost: stop, then say it
-                stop["requested"], stop["error"] = True, exc
+                request.fail(exc)
             finally:
                 if clock is not None:
                     clock[key] += time.perf_counter() - t0
@@ -476,7 +477,7 @@ def _fresh_run(
     if space is not None:
         # walkers clipped onto a bound would coincide in y: spread them a little
         y = space.y_from_theta(initial)
-        density = partial(_guard, space=space, stop={"requested": False})(log_posterior)
+        density = partial(_guard, space=space, request=StopRequest())(log_posterior)
         with uncounted(log_posterior):
             spread = axis_sd(density, y[0], np.full(d, 0.01))
         initial = y + spread * rng.standard_normal(initial.shape)
@@ -485,10 +486,12 @@ def _fresh_run(
     return _Run(state, chain_parts, lp_parts, np.zeros(walkers), 0.0)
 
 
-def _raise_failure(stop: dict, run: _Run | None = None, checkpoint=None, density=None) -> None:
+def _raise_failure(
+    request: StopRequest, run: _Run | None = None, checkpoint=None, density=None
+) -> None:
     """Raise the BayesUpdateError a density call met (``_guard``), if any, after a checkpoint of
     ``run``'s complete steps when ``checkpoint`` is given: ``resume`` continues from them."""
-    error = stop.get("error")
+    error = request.error
     if error is None:
         return
     if checkpoint is not None and run is not None and run.done:
@@ -496,19 +499,19 @@ def _raise_failure(stop: dict, run: _Run | None = None, checkpoint=None, density
     raise error
 
 
-def _start(run: _Run, guarded, stop: dict) -> None:
+def _start(run: _Run, guarded, request: StopRequest) -> None:
     """Fill in the initial log-density, check it and start the clock."""
     if run.state.log_prob is None:
         # what emcee would compute first; done here so a checkpoint always has it (no RNG use)
         run.state.log_prob = guarded(run.state.coords)
-        _raise_failure(stop)
+        _raise_failure(request)
     if not np.all(np.isfinite(run.state.log_prob)):
         raise BayesUpdateError("sampler: some initial walkers have zero posterior density")
     run.t0 = time.perf_counter()
 
 
 def _run_block(
-    sampler, run: _Run, block: int, stop: dict, request: StopRequest, bar
+    sampler, run: _Run, block: int, request: StopRequest, bar
 ) -> tuple[list, list, bool]:
     """``block`` emcee steps from ``run.state``: (coords (n_walkers, d) per completed step,
     log-densities (n_walkers,) per step, interrupted).  ``run.state`` follows each step."""
@@ -518,7 +521,7 @@ def _run_block(
         if request.requested():  # arrived during the previous block's bookkeeping
             raise KeyboardInterrupt
         for step in sampler.sample(run.state, iterations=block, store=True):
-            if stop["requested"] or request.requested():
+            if request.requested():
                 raise KeyboardInterrupt
             # emcee updates its state object in place during the next step, so a Ctrl-C
             # there would leave it half-updated: keep copies of each completed step.  The three
@@ -584,7 +587,6 @@ def _sample_blocks(
     run: _Run,
     log_posterior: LogPosterior,
     settings: SamplerSettings,
-    stop: dict,
     checkpoint: Callable[[SamplerState], None] | None,
     space: ParameterSpace | None,
     request: StopRequest,
@@ -603,7 +605,7 @@ def _sample_blocks(
     while run.done < steps:
         done = run.done
         block = check_schedule(done, check_every, steps) - done
-        coords, lps, interrupted = _run_block(sampler, run, block, stop, request, bar)
+        coords, lps, interrupted = _run_block(sampler, run, block, request, bar)
         # bookkeeping and the checkpoint run to the end; a stop request arriving meanwhile is
         # recorded by the CLI's handler and acted on at the next block (StopRequest.deferred)
         with request.deferred():
@@ -735,7 +737,6 @@ def _adaptation_stage(
     d: int,
     guarded,
     screened,
-    stop: dict,
     step_moves: list,
     n: int,
     request: StopRequest,
@@ -745,12 +746,12 @@ def _adaptation_stage(
     coordinates, None when stopped.  Timed in ``run.clock``."""
     t0 = time.perf_counter()
     stage = _ensemble(walkers, d, guarded, step_moves, screened)
-    coords, lps, interrupted = _run_block(stage, run, n, stop, request, _NoBar())
+    coords, lps, interrupted = _run_block(stage, run, n, request, _NoBar())
     run.clock["adapt_s"] += time.perf_counter() - t0
     return None if interrupted else (np.array(coords), np.array(lps))
 
 
-def _checked(density, stop: dict, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
+def _checked(density, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
     """The log-density (n,) at points x (n, d) off the chain (the coverage check,
     ``moves.coverage``, and the repair's 4000 draws), in batches of ``CHECK_BATCH`` points: in
     one batch of 4000 the exhaust's reduced solves (74 x 74 pencils, ~175 MB per stacked array,
@@ -765,7 +766,7 @@ def _checked(density, stop: dict, request: StopRequest, x: np.ndarray) -> np.nda
     parts = []
     for start in range(0, x.shape[0], CHECK_BATCH):
         parts.append(density(x[start : start + CHECK_BATCH]))
-        if stop["requested"] or request.requested():
+        if request.requested():
             return None
     return np.concatenate(parts) if parts else np.empty(0)
 
@@ -809,33 +810,32 @@ def sample_posterior(
     ``screen_evaluations`` the surrogate's.  moves : emcee moves for the whole run (no
     adaptation; default: ``settings.moves``, see the module docstring); the scheme used is in
     ``diagnostics["moves"]``.
-    stop_request : the run's ``interrupts.StopRequest`` (a signal handler sets it; checked between
+    stop_request : the run's ``compute.stop.StopRequest`` (a signal handler sets it; checked between
     steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
     """
     settings.check_walkers(log_posterior.ndim)
-    stop = {"requested": False}
+    # the run's one stop record: a signal (the command's handler), a Ctrl-C met inside the
+    # model, or an error a density call met (``_guard``)
+    request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
 
     run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
     # a density -> its guarded batch function, timed in run.clock
-    guard = partial(_guard, space=space, stop=stop, clock=run.clock)
+    guard = partial(_guard, space=space, request=request, clock=run.clock)
     guarded = guard(log_posterior)
     d = log_posterior.ndim
     screened = _screened(screen, d, guarded, guard)
-    _start(run, guarded, stop)
-    request = stop_request or StopRequest()
-    stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, stop)
-    checked = partial(_checked, guarded if screened is None else screened, stop, request)
+    _start(run, guarded, request)
+    stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened)
+    checked = partial(_checked, guarded if screened is None else screened, request)
     kept = _kept_moves(
         moves, settings, run, log_posterior, partial(stage, request=request), checked
     )
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
-        _raise_failure(stop)
+        _raise_failure(request)
         outcome = (True, False, np.full(d, np.inf))
         return _posterior_result(run, log_posterior, outcome, settings.seed, screened)
     sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
-    outcome = _sample_blocks(
-        sampler, run, log_posterior, settings, stop, checkpoint, space, request
-    )
-    _raise_failure(stop, run, checkpoint, log_posterior)
+    outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
+    _raise_failure(request, run, checkpoint, log_posterior)
     return _posterior_result(run, log_posterior, outcome, settings.seed, screened)

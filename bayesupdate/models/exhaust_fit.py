@@ -140,7 +140,7 @@ class FitResult:
 
     @property
     def acceptable(self) -> bool:
-        """Within the issue's floor: RMS <= 5 %, every mode within 10 %, modes 1-3 in H, V, H."""
+        """Within the acceptance floor: RMS <= 5 %, every mode within 10 %, modes 1-3 in H, V, H."""
         return self.rms_table1 <= 0.05 and self.max_table1 <= 0.10 and self.planes_ok
 
 

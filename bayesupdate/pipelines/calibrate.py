@@ -10,7 +10,7 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     polish every end point on the full model (``calibrate(..., refine=...)``), so the result is
     the full model's; ``sampler.reduced = false`` (``--full``) searches on full solves.  The
     reduced basis's full solves, the starts and the polishes run on ``executor``
-    (``parallel_executor``; None: here)."""
+    (``compute.executors``; None: here)."""
     opt = prepared.study.optimizer
     cfg = prepared.study.sampler
     search, rom = sampling_problem(

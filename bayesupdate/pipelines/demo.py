@@ -1,6 +1,6 @@
 """The demo pipeline: the seed's whole story on the embedded default, end to end.
 
-(a) The seed's case on the shell exhaust ``exhaust_shell`` (issue 20: the model that reproduces
+(a) The seed's case on the shell exhaust ``exhaust_shell`` (the model that reproduces
     the paper better by the numbers, ``pipelines.exhaust_comparison.better_exhaust``): against
     seed Table 1, then calibrated against the measured frequencies of seed Table 2 with the mass
     kept (optimum and front on its certified reduced basis, then the posterior); beside it the
@@ -272,7 +272,7 @@ def _study(settings: DemoSettings, data_source, model: dict = BEAM_MODEL) -> Stu
 
 def seed_study(settings: DemoSettings) -> StudyConfig:
     """The demo's seed case: the shell exhaust (``SHELL_MODEL``) against seed Table 2, the
-    measured mass kept, the demo's optimizer and sampler settings."""
+    measured mass kept, the demo's optimiser and sampler settings."""
     return _study(settings, "paper:ema", SHELL_MODEL)
 
 

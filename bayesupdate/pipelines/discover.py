@@ -8,13 +8,13 @@ posterior is sampled too (``discovery.posterior.sample_final``).
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
 from bayesupdate.config import StudyConfig
 from bayesupdate.discovery.results_io import extend_with_specs
 from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.discovery.workflow import DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data
-from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
 
@@ -23,7 +23,7 @@ class DiscoveryRequest:
     """settings : the discovery knobs.  effects : checked effect specs the model is extended by
     first (``pipelines.study.study_effects``).  posterior_steps : > 0 also samples the final
     model's posterior for that many steps (seed ``settings.seed + 1``; 0: not sampled).
-    compute : where the scan and refits run (``parallel_executor``; the result is the same)."""
+    compute : where the scan and refits run (``compute.executors``; the result is the same)."""
 
     settings: DiscoverySettings = field(default_factory=DiscoverySettings)
     effects: tuple[str, ...] = ()

@@ -1,10 +1,10 @@
-"""The two exhausts side by side (issue 20): the beam model ``exhaust`` and the shell model
+"""The two exhausts side by side: the beam model ``exhaust`` and the shell model
 ``exhaust_shell`` on seed Table 1 (each solved here), their solve time (measured here), and
 the calibrated optimum against Table 2 and the front of Expr against the mass error, either
 read from a file (``compare_exhausts``: a calibration at the default mesh takes minutes to
 hours) or computed in the run (``demo_comparison``: the demo's own optima and fronts).
 
-``better_exhaust`` applies the issue's rule, "whichever reproduces the paper better, by the
+``better_exhaust`` applies one rule, "whichever reproduces the paper better, by the
 numbers", to these records (the model a demo should use); ``report.exhaust_comparison`` draws
 them.
 """
@@ -114,10 +114,11 @@ def read_calibrated(path) -> Calibrated:
 
 
 def better_exhaust(records: dict[str, ExhaustRecord]) -> tuple[str, str]:
-    """The issue's rule, by the numbers: each model scores one point for each of the paper's
-    numbers it reproduces better than the other (Table 1 RMS error, Table 1 largest error and,
-    when both were calibrated, Expr against Table 2 at the mass-kept optimum); more points wins,
-    a tie goes to the smaller Table 1 RMS.  Returns (the model's name, the reason in words)."""
+    """Which exhaust reproduces the paper better, by the numbers: each model scores one point for
+    each of the paper's numbers it reproduces better than the other (Table 1 RMS error, Table 1
+    largest error and, when both were calibrated, Expr against Table 2 at the mass-kept
+    optimum); more points wins, a tie goes to the smaller Table 1 RMS.  Returns (the model's
+    name, the reason in words)."""
     a, b = (records[m] for m in MODELS)
     numbers = [
         ("Table 1 RMS error [%]", a.table1_rms_pct, b.table1_rms_pct),
@@ -178,7 +179,7 @@ def calibrated_in_run(optimum, what: str) -> Calibrated:
 def demo_comparison(
     calibrated: dict[str, Calibrated], options: dict | None = None, solves: int = 3
 ) -> dict[str, ExhaustRecord]:
-    """The demo's side by side (issue 20 item 4): both exhausts measured here (``options``:
+    """The demo's side by side: both exhausts measured here (``options``:
     {model name: ``get_model`` options}, the demo's shell mesh), each with its optimum and
     front against Table 2 with the mass kept as the demo computed them (``calibrated``: {model
     name: ``calibrated_in_run``}); ``solves``: as ``measure``."""

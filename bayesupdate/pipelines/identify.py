@@ -1,5 +1,5 @@
 """The identify pipeline: FRF files (UFF 58) -> modes (seed eqs 7-17: LSCE or pLSCF poles,
-stabilization, automatic selection, LSFD shapes), as ``bayesupdate identify`` runs it.
+stabilisation, automatic selection, LSFD shapes), as ``bayesupdate identify`` runs it.
 
 Several files are one test (the runs of a roving accelerometer); ``IdentifyRequest`` is
 validated once; the result is the frozen ``IdentifyRun`` (the merged FRFs, the

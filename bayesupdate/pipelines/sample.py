@@ -9,6 +9,8 @@ import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
+from bayesupdate.compute.stop import StopRequest
 from bayesupdate.config import SamplerConfig
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.diagnostics import (
@@ -26,8 +28,6 @@ from bayesupdate.inference.sampling import (
     SamplerState,
     sample_posterior,
 )
-from bayesupdate.interrupts import StopRequest
-from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import (
     basis_error_allowed,
@@ -45,9 +45,9 @@ class SamplingOptions:
     out : result file (HDF5), checkpointed while sampling; None: nothing is written.
     resume : continue the partial result in ``out`` (written by the same study).
     progress : show a progress bar.
-    stop : the run's ``interrupts.StopRequest`` (the command's signal handler sets it); None:
+    stop : the run's ``compute.stop.StopRequest`` (the command's signal handler sets it); None:
     the run cannot be stopped but by an exception.
-    compute : where the independent work runs (``parallel_executor``; ``run_sampling``).
+    compute : where the independent work runs (``compute.executors``; ``run_sampling``).
     reference : a stored reference of this posterior (``inference.reference_check``: "mean",
     "sd", "names", "check_points", "check_log_p"); given, the draws are judged by it when the
     posterior is the one it was made for (diagnostics "reference").

@@ -32,7 +32,7 @@ def sampling_problem(
     Fixed parameters keep a narrow box (+-0.1 %) around their value.  Returns (problem, rom);
     rom is None with ``reduced=False``, for other models, or when no certified basis exists
     (then a RuntimeWarning says full solves are used).  The basis's full solves run on
-    ``executor`` (``parallel_executor``; None: in this process)."""
+    ``executor`` (``compute.executors``; None: in this process)."""
     from bayesupdate.fe.model import FEModel
     from bayesupdate.fe.reduced import ReducedFEModel, reduced_model_for
 

@@ -79,8 +79,9 @@ def _model_words(model) -> str:
 
 
 def _swap_note(table) -> str:
-    """Which model modes trade places at the optimum: a swap is reported, never hidden (issue 4:
-    each test mode keeps the model mode whose shape matches its reference shape)."""
+    """Which model modes trade places at the optimum: a swap is reported, never hidden (the pairing
+    rule, ``inference.pairing``: each test mode keeps the model mode whose shape matches its
+    reference shape)."""
     moved = [f"test {i + 1} -> model {m}" for i, m in enumerate(table.model_mode) if m != i + 1]
     return (
         "; MODE SWAP: model modes trade order (" + ", ".join(moved) + "), each test mode paired "

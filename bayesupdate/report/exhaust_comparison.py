@@ -1,4 +1,4 @@
-"""The report section comparing the two exhausts (issue 20): the choice by the issue's rule,
+"""The report section comparing the two exhausts : the choice (``better_exhaust``'s rule),
 Table 1, the speed, the calibrated optima and the fronts, from the records of
 ``pipelines.exhaust_comparison``."""
 

@@ -1,5 +1,5 @@
 """The report of ``bayesupdate identify --report DIR``: the data, the modes and how well they are
-known, their shapes over the response DOFs, the stabilization diagram, the FRF synthesis and the
+known, their shapes over the response DOFs, the stabilisation diagram, the FRF synthesis and the
 AutoMAC.
 
 :func:`identify_document` builds the content from an identification (pure);

@@ -26,7 +26,7 @@ Offline (``ReducedFEModel.build``), one module per step:
 Online (``ReducedFEModel.predict_frequencies_batch``, ``model``): reduced K and M for all points by
 one matrix product each, rigid coordinates eliminated exactly, stacked Cholesky + ``eigvalsh``
 (``fe.batched_eigen``).  ``coarsening``: a coarser basis inside a certified one (screening) and
-a model localized on a sub-box.  ``enrichment``: a basis enriched for a local change of the
+a model localised on a sub-box.  ``enrichment``: a basis enriched for a local change of the
 structure (an added effect) by attachment vectors.  ``settings``: the validated build settings.
 
 Models are immutable: ``build``, ``certify_at``, ``coarsened`` and ``localized`` return new ones.

@@ -17,13 +17,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced.affine import AffineDecomposition
 from bayesupdate.fe.reduced.sensitivity import static_corrections
-from bayesupdate.parallel_executor import executor_or_serial
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,7 +113,7 @@ def full_solves(
     sensitivities: AffineDecomposition | None = None,
 ):
     """Full solves at theta (B, len(names)) (SI), one task per point on ``executor``
-    (``parallel_executor``; None: in this process), shown as the progress phase ``what``
+    (``compute.executors``; None: in this process), shown as the progress phase ``what``
     (``compute.progress``): (B, n_modes) frequencies [Hz] (NaN rows on failure) and the
     (n_dof, k) mode shapes of the points that solved, side by side, each point's modes followed
     by their design-sensitivity vectors when ``sensitivities`` (the model's decomposition) is

@@ -12,7 +12,6 @@ way (``certify_points``); a miss there enriches the basis with their shapes.
 
 import warnings
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.stats import qmc
@@ -25,8 +24,8 @@ from bayesupdate.fe.reduced.affine import decompose
 from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis, projected_basis
 from bayesupdate.fe.reduced.estimator import ResidualIndicator
 
-if TYPE_CHECKING:
-    from bayesupdate.fe.reduced.model import ReducedFEModel
+# ``model`` below is a ``fe.reduced.model.ReducedFEModel``: not imported, not even for type
+# checking, since that module imports this one (tests/test_no_import_cycle.py)
 
 
 @dataclass(frozen=True)
@@ -81,7 +80,7 @@ def compare(basis: ReducedBasis, theta: np.ndarray, f_full: np.ndarray, n_modes:
     return Certificate(float(np.max(np.abs(signed))), float(np.min(signed)), int(ok.sum()))
 
 
-def build(model: "ReducedFEModel", executor=None, store: ArrayStore | None = None) -> Certification:
+def build(model, executor=None, store: ArrayStore | None = None) -> Certification:
     """Decompose, snapshot, compress, certify, enrich (module docstring) over ``model``'s box
     with its settings; warns and returns an uncertified result when ``max_size`` is reached.
     The snapshot and validation solves run on ``executor`` (None: in this process).  A certified
@@ -103,7 +102,7 @@ def build(model: "ReducedFEModel", executor=None, store: ArrayStore | None = Non
     return result
 
 
-def _build(model: "ReducedFEModel", decomposition, centre, executor) -> Certification:
+def _build(model, decomposition, centre, executor) -> Certification:
     fe, names = model.fe, model.parameter_names
     st = model.settings.resolved(fe.structure.n_dof)
     dim = len(names)
@@ -163,7 +162,7 @@ GREEDY_BATCH = 4
 GREEDY_MARGIN = 0.5
 
 
-def _greedy(model: "ReducedFEModel", st, decomposition, start, executor):
+def _greedy(model, st, decomposition, start, executor):
     """Enrich the snapshots where the residual indicator (``reduced.estimator``) is largest on
     ``greedy_train`` seeded training points, ``GREEDY_BATCH`` full solves (with sensitivities)
     per step, until the error at the chosen points is below ``GREEDY_MARGIN`` x tol (at most
@@ -203,7 +202,7 @@ _RECHECK_SEED = 7919
 _CACHE_FORMAT = "reduced-basis-1"
 
 
-def _cache_key(model: "ReducedFEModel", decomposition, centre) -> str:
+def _cache_key(model, decomposition, centre) -> str:
     """Everything the basis depends on: the affine terms (hence K(theta), M(theta)), the matrices
     and rigid motions at the centre, the box, the settings, the sensors and the package."""
     fe = model.fe
@@ -228,7 +227,7 @@ def _arrays(c: Certification) -> dict[str, np.ndarray]:
     return arrays
 
 
-def _load(model: "ReducedFEModel", decomposition, arrays, executor) -> Certification | None:
+def _load(model, decomposition, arrays, executor) -> Certification | None:
     """The stored certification rebuilt on ``decomposition`` and checked at fresh points; None
     (with a note when the check fails) when there is nothing usable."""
     if arrays is None:
@@ -286,7 +285,7 @@ def _check_upper_bound(certificate: Certificate, tol: float) -> None:
         )
 
 
-def _warn_failed(model: "ReducedFEModel", failed: Certification, stacklevel: int) -> None:
+def _warn_failed(model, failed: Certification, stacklevel: int) -> None:
     st = model.settings
     warnings.warn(
         f"reduced model of {model.fe.name}: tolerance {st.tol:g} not reached within size "
@@ -298,7 +297,7 @@ def _warn_failed(model: "ReducedFEModel", failed: Certification, stacklevel: int
 
 
 def certify_points(
-    model: "ReducedFEModel", theta: np.ndarray, enrich: bool = True, enrich_above=None
+    model, theta: np.ndarray, enrich: bool = True, enrich_above=None
 ) -> tuple[Certification, float]:
     """``model``'s certification checked at theta (k, n_params) inside its box (all parameters,
     SI): (new certification, largest relative frequency error at the points).  A miss (error >
@@ -315,7 +314,7 @@ def certify_points(
     return _with_checked(c, c.basis, max_err, cert, (theta, f_full)), cert.max_rel_error
 
 
-def _enriched(model: "ReducedFEModel", theta: np.ndarray, f_full: np.ndarray):
+def _enriched(model, theta: np.ndarray, f_full: np.ndarray):
     c, st, fe = model.certification, model.settings, model.fe
     extra = full_solves(fe, model.parameter_names, theta, st.n_modes + st.extra_modes)[1]
     snaps = np.concatenate([c.basis.V[:, c.basis.n_rigid :], extra], axis=1)

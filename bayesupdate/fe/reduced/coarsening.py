@@ -1,9 +1,8 @@
 """Smaller reduced models made from a certified one: a coarser basis inside it (for screening
-proposals in delayed-acceptance sampling) and a model localized on a sub-box (e.g. a pilot
+proposals in delayed-acceptance sampling) and a model localised on a sub-box (e.g. a pilot
 chain's)."""
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.stats import qmc
@@ -13,17 +12,17 @@ from bayesupdate.fe.reduced.basis import ReducedBasis
 from bayesupdate.fe.reduced.certification import UNBUILT
 from bayesupdate.fe.reduced.settings import ReducedSettings
 
-if TYPE_CHECKING:
-    from bayesupdate.fe.reduced.model import ReducedFEModel
+# ``model`` below is a ``fe.reduced.model.ReducedFEModel``: not imported, not even for type
+# checking, since that module imports this one (tests/test_no_import_cycle.py)
 
 
 def coarsened(
-    model: "ReducedFEModel",
+    model,
     tol: float = 5e-3,
     n_train: int = 128,
     n_check: int = 64,
     min_size: int | None = None,
-) -> "ReducedFEModel":
+):
     """A smaller reduced model for screening proposals (delayed-acceptance sampling), built
     without any full solve: a second Rayleigh-Ritz level inside ``model``'s basis.
 
@@ -85,12 +84,12 @@ def _smallest_rank(basis: ReducedBasis, G, U, check_set, start: int, tol: float,
 
 
 def localized(
-    model: "ReducedFEModel",
+    model,
     samples: np.ndarray,
     names: tuple[str, ...] | None = None,
     widen: float = 0.5,
     **settings,
-) -> "ReducedFEModel":
+):
     """A smaller, faster certified model on the box of ``samples`` (k, len(names)) (e.g. a
     pilot chain), widened by ``widen`` times its width on each side and clipped to ``model``'s
     box; points outside it are predicted by ``model`` (``outer``).  Parameters not in ``names``

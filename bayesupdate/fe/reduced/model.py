@@ -159,7 +159,7 @@ class ReducedFEModel:
     def build(self, executor=None) -> "ReducedFEModel":
         """The built model: decomposed, snapshots compressed, certified (``reduced.certification``;
         an uncertified one, with a warning, when the size limit is reached first).  The full
-        solves run on ``executor`` (``parallel_executor``; None: in this process)."""
+        solves run on ``executor`` (``compute.executors``; None: in this process)."""
         return replace(self, certification=certification.build(self, executor))
 
     def certify_at(
@@ -299,7 +299,7 @@ def reduced_model_for(
     when it is not an ``FEModel`` or has no reduced form (not free-free, overlapping bindings).
     An uncertified reduced model (size limit) is returned too: it falls back to full solves.
     ``options``: other ``ReducedSettings`` fields, or ``outer``.  executor : where the
-    snapshot and certification solves run (``parallel_executor``; None: in this process)."""
+    snapshot and certification solves run (``compute.executors``; None: in this process)."""
     if not isinstance(fe_model, FEModel):
         return fe_model
     outer = options.pop("outer", None)

@@ -69,8 +69,8 @@ up to 24,000 kept steps and missed the reference on 2 of 5 seeds.  In the unit b
 straight and the Gaussians' mass beyond the bound is only rejected draws.  On the benchmark's
 exhaust posterior the walkers' own coordinates keep winning (its chains are unchanged).
 
-(Issue 21: tau fell from ~56 steps with DE to 7-23 with a two-fit scheme on the exhaust
-posterior, and DE alone under-estimates its sds by 4-10 %.)
+(docs/validation/posterior.md: tau fell from ~56 steps with DE to 7-23 with a two-fit scheme
+on the exhaust posterior, and DE alone under-estimates its sds by 4-10 %.)
 """
 
 from collections.abc import Callable

@@ -1,7 +1,8 @@
-"""Batch evaluation on an executor for models without batch support (e.g. a user's own model).
+"""Point evaluators: batch evaluation on an executor for models without batch support (e.g. a
+user's own model).
 
 ``PoolEvaluator(model, n_workers)`` runs on ``n_workers`` spawned local processes
-(``parallel_executor.ProcessExecutor``: BLAS pinned to one thread in every worker, set before the
+(``compute.executors.ProcessExecutor``: BLAS pinned to one thread in every worker, set before the
 worker imports numpy, since with n_workers processes on n cores threaded BLAS would only
 oversubscribe); ``PoolEvaluator(model, executor=...)`` on any executor (Dask included).  The
 model is shared once (``executor.share``), not sent per call.  ``predict_frequencies_batch`` maps
@@ -21,15 +22,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from bayesupdate.compute.executors import ProcessExecutor
 from bayesupdate.model_protocol import Prediction
-
-BLAS_THREAD_VARIABLES = (
-    "OPENBLAS_NUM_THREADS",
-    "OMP_NUM_THREADS",
-    "MKL_NUM_THREADS",
-    "VECLIB_MAXIMUM_THREADS",
-    "NUMEXPR_NUM_THREADS",
-)
 
 
 def _frequencies(result, n_modes: int) -> np.ndarray:
@@ -67,8 +61,6 @@ class PoolEvaluator:
     """
 
     def __init__(self, model, n_workers: int | None = None, executor=None):
-        from bayesupdate.parallel_executor import ProcessExecutor
-
         self.model = model
         self.parameter_names = tuple(model.parameter_names)
         if executor is None:

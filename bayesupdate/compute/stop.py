@@ -20,11 +20,16 @@ from contextlib import contextmanager
 class StopRequest:
     """One run's stop request: the command installs ``handler`` for SIGTERM/SIGINT and passes
     the object down (``calibrate``, ``sample_posterior``); long loops ``check()`` it at safe
-    points.  Nothing is global: a run nobody can signal gets a fresh one."""
+    points.  Nothing is global: a run nobody can signal gets a fresh one.
+
+    A run can also stop itself on an error met where raising would cut a step in half (the
+    sampler's log-density inside emcee, e.g. a lost Dask scheduler): ``fail(error)`` records
+    the error and requests the stop; the run raises ``error`` once its state is safe."""
 
     def __init__(self):
         self._requested = False
         self._deferred = False
+        self._error: Exception | None = None
 
     def request(self) -> None:
         """Record a stop request (called from the signal handler)."""
@@ -32,6 +37,16 @@ class StopRequest:
 
     def requested(self) -> bool:
         return self._requested
+
+    def fail(self, error: Exception) -> None:
+        """Record ``error`` (raised later by the run, ``error``) and request the stop."""
+        self._error = error
+        self._requested = True
+
+    @property
+    def error(self) -> Exception | None:
+        """The error recorded by ``fail``, or None."""
+        return self._error
 
     def check(self) -> None:
         """Raise ``KeyboardInterrupt`` if a stop was requested."""

@@ -1,7 +1,7 @@
 """The Dask executor: tasks on the workers of an existing Dask scheduler (``dask[distributed]``,
 the optional extra ``bayesupdate[dask]``).
 
-Same contract as ``parallel_executor.SerialExecutor.map``: results in submission order
+Same contract as ``compute.executors.SerialExecutor.map``: results in submission order
 (``Client.gather`` of the futures list), so arrival order cannot change a bit.  The shared
 payload is replicated to every worker once per ``map`` (``Client.scatter(broadcast=True)``) and
 passed to the tasks as a future, so it is not re-sent per task.  A worker lost mid-run (killed,
@@ -13,8 +13,9 @@ client's: a different version could compute different numbers, so nothing runs.
 import logging
 from concurrent.futures import CancelledError
 
+import bayesupdate
+from bayesupdate.compute.executors import SerialExecutor
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.parallel_executor import SerialExecutor
 
 CONNECT_TIMEOUT_S = 10
 WORKER_TIMEOUT_S = 60
@@ -22,8 +23,7 @@ INSTALL = "install it with: pip install 'bayesupdate[dask]'"
 
 
 def _worker_version() -> str:
-    import bayesupdate
-
+    """The bayesupdate version of the process this runs in (on a worker: ``Client.run``)."""
     return bayesupdate.__version__
 
 

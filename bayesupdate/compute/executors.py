@@ -1,4 +1,5 @@
-"""Where independent tasks run: this process, local worker processes, or a Dask cluster.
+"""Where independent tasks run: this process or local worker processes (a Dask cluster:
+``compute.dask``, same contract).
 
 One seam for every embarrassingly parallel loop (discovery's scan and refits, reduced-basis
 snapshots): ``executor.map(fn, items, shared)`` returns ``[fn(shared, item) for item in items]``
@@ -11,22 +12,21 @@ arrival order: for progress lines only, never for the result).
 ``shared`` (e.g. the FE model and the calibration problem) is sent to each worker once per
 ``map``, not once per task: local processes read it from one pickle file and keep it in a
 per-process cache keyed by a token; Dask replicates it to every worker (``scatter(broadcast=
-True)``, ``parallel_dask``).
+True)``, ``compute.dask``).
 
-Which executor (``ComputeSettings``, ``compute_settings``): ``--workers N`` (N local processes,
-N = 1 serial), ``--scheduler ADDRESS`` (an existing Dask scheduler), else the study file's
-``[compute]`` table (``workers`` or ``scheduler``), else the ``BAYESUPDATE_SCHEDULER`` environment
-variable, else serial.
+Which executor a run uses: ``compute.settings`` (``ComputeSettings``, ``open_executor``); how a
+command chooses it from its options, study file and environment: ``config.compute_settings``.
 
 Local workers are spawned (not forked: the parent may hold BLAS and solver threads) with BLAS
-pinned to one thread (``parallel.BLAS_THREAD_VARIABLES``): n processes on n cores with threaded
-BLAS would only oversubscribe.  A worker process that dies (killed, out of memory) breaks the
-pool; the pool is restarted and the unfinished tasks are run again, up to ``retries`` times.
+pinned to one thread (``compute.blas.BLAS_THREAD_VARIABLES``): n processes on n cores with
+threaded BLAS would only oversubscribe.  A worker process that dies (killed, out of memory)
+breaks the pool; the pool is restarted and the unfinished tasks are run again, up to ``retries``
+times.
 """
 
+import multiprocessing
 import os
 import pickle
-import re
 import tempfile
 import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -34,96 +34,8 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 
+from bayesupdate.compute.blas import BLAS_THREAD_VARIABLES
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.parallel import BLAS_THREAD_VARIABLES
-
-SCHEDULER_VARIABLE = "BAYESUPDATE_SCHEDULER"
-# tcp://host:port, tls://host:port, or host:port (Dask's default protocol is tcp)
-_ADDRESS = re.compile(r"^(?:(tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d+)$")
-
-
-def check_address(address: str, where: str = "--scheduler") -> str:
-    """The Dask scheduler ``address`` if well formed (``[tcp://]host:port``), else a one-line
-    error naming ``where`` it came from."""
-    text = str(address).strip()
-    match = _ADDRESS.match(text)
-    if match is None or not 0 < int(match.group(3)) < 65536:
-        raise BayesUpdateError(
-            f"{where}: {address!r} is not a Dask scheduler address; give tcp://HOST:PORT "
-            "(e.g. tcp://head:8786)"
-        )
-    return text if match.group(1) else f"tcp://{text}"
-
-
-@dataclass(frozen=True)
-class ComputeSettings:
-    """workers : local worker processes (1: serial, in this process).  scheduler : address of a
-    Dask scheduler (then ``workers`` is ignored: the cluster has its own).  retries : times a
-    task lost with its worker (or, on Dask, a task that raised) is run again."""
-
-    workers: int = 1
-    scheduler: str | None = None
-    retries: int = 2
-
-    def __post_init__(self):
-        if int(self.workers) < 1:
-            raise BayesUpdateError(f"--workers / compute.workers: must be >= 1, got {self.workers}")
-        if int(self.retries) < 0:
-            raise BayesUpdateError(f"compute.retries: must be >= 0, got {self.retries}")
-
-    @property
-    def kind(self) -> str:
-        """ "serial", "processes" or "dask"."""
-        if self.scheduler is not None:
-            return "dask"
-        return "processes" if self.workers > 1 else "serial"
-
-
-SERIAL = ComputeSettings()
-
-
-def parse_compute_table(table, where: str) -> ComputeSettings:
-    """The study file's ``[compute]`` table: ``workers = N`` or ``scheduler = "tcp://..."``
-    (not both), optional ``retries``."""
-    unknown = sorted(set(table) - {"workers", "scheduler", "retries"})
-    if unknown:
-        raise BayesUpdateError(
-            f"{where}.{unknown[0]}: unknown key; valid keys are ['retries', 'scheduler', 'workers']"
-        )
-    for key in ("workers", "retries"):
-        if key in table and (isinstance(table[key], bool) or not isinstance(table[key], int)):
-            raise BayesUpdateError(f"{where}.{key}: must be an integer, got {table[key]!r}")
-    if "workers" in table and "scheduler" in table:
-        raise BayesUpdateError(f"{where}: give workers or scheduler, not both")
-    scheduler = table.get("scheduler")
-    if scheduler is not None:
-        scheduler = check_address(scheduler, f"{where}.scheduler")
-    return ComputeSettings(table.get("workers", 1), scheduler, table.get("retries", 2))
-
-
-def compute_settings(
-    workers: int | None = None,
-    scheduler: str | None = None,
-    study: ComputeSettings | None = None,
-    environ=None,
-) -> ComputeSettings:
-    """The executor settings of a command: ``--workers``/``--scheduler`` (not both), else the
-    study file's ``[compute]``, else ``BAYESUPDATE_SCHEDULER``, else serial."""
-    if workers is not None and scheduler is not None:
-        raise BayesUpdateError("give --workers (local processes) or --scheduler (Dask), not both")
-    retries = (study or SERIAL).retries
-    if workers is not None:
-        if workers < 1:
-            raise BayesUpdateError(f"--workers: must be >= 1, got {workers}")
-        return ComputeSettings(workers, None, retries)
-    if scheduler is not None:
-        return ComputeSettings(1, check_address(scheduler), retries)
-    if study is not None and study != SERIAL:
-        return study
-    env = (os.environ if environ is None else environ).get(SCHEDULER_VARIABLE, "").strip()
-    if env:
-        return ComputeSettings(1, check_address(env, SCHEDULER_VARIABLE), retries)
-    return SERIAL
 
 
 class SerialExecutor:
@@ -187,10 +99,8 @@ class ProcessExecutor(SerialExecutor):
     kind = "processes"
 
     def __init__(self, workers: int, retries: int = 2):
-        import multiprocessing as mp
-
         self.workers, self.retries = int(workers), int(retries)
-        self._context = mp.get_context("spawn")
+        self._context = multiprocessing.get_context("spawn")
         self._folder = tempfile.TemporaryDirectory(prefix="bayesupdate-shared-")
         self._saved = {k: os.environ.get(k) for k in BLAS_THREAD_VARIABLES}
         # spawned workers inherit the environment at start, before they import numpy; workers
@@ -257,18 +167,6 @@ class ProcessExecutor(SerialExecutor):
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
-
-
-def open_executor(settings: ComputeSettings = SERIAL):
-    """The executor of ``settings`` (a context manager; ``close`` it when done).  Dask: connects
-    to the scheduler and checks the workers' bayesupdate version (``parallel_dask``)."""
-    if settings.kind == "dask":
-        from bayesupdate.parallel_dask import DaskExecutor
-
-        return DaskExecutor(settings.scheduler, settings.retries)
-    if settings.kind == "processes":
-        return ProcessExecutor(settings.workers, settings.retries)
-    return SerialExecutor()
 
 
 def executor_or_serial(executor):

@@ -1,0 +1,212 @@
+"""Walks: how often a ``discover`` and a ``sample`` run cross from one room of the package into
+another, and how often such a crossing climbs back up the layers.
+
+A room is a top-level directory of ``bayesupdate/`` (``fe``, ``inference``, ``compute``, ...) or a
+top-level module (``config``, ``cli``, the core's ``errors``, ``correlation``, ...).  The rooms'
+layers, bottom to top, are pyproject.toml's (``[tool.importlinter]``): core, compute, fe/ema/
+testgeom, models/nastran/inference, discovery, config, pipelines, edge (commands, cli, report).
+
+The tracer is ``sys.setprofile``: on every Python function call the callee's room is that of its
+source file; the caller's room is that of the innermost calling frame in ``bayesupdate/``
+(frames of numpy, scipy or emcee in between are skipped: emcee calling our log-density is a
+call from the sampler's room).  Calls of compiled functions are not seen.  A call from one room
+into another is a crossing; the crossing *enters* the callee's room, and *climbs back up* when
+the callee's layer is above the caller's (a lower room calling a higher one: a callback, e.g.
+an executor running a task function).  A module body run at its import (``<module>``), and
+what it calls, is not a crossing: where a module is first imported says nothing of the walk.
+Each crossing is counted twice: as events (every call; a loop of 500 sampler steps calling the
+model is 500 events) and as call sites (distinct pairs of calling function and called function:
+the same loop is one site).  The walk's shape is the call sites; the events say how hot each
+site is.
+
+Runs, through the CLI in this process (the user's path):
+- ``discover`` of the exhaust against the paper's test frequencies (``paper:ema``), added masses
+  only, one baseline start, three quick refits, one full refit (``tests/test_parallel_executor``'s
+  small discovery);
+- ``sample`` of the exhaust against the same data, 16 walkers, 60 steps, DE moves, 2 starts.
+
+Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every crossing site)
+"""
+
+import argparse
+import contextlib
+import io
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+import bayesupdate
+from bayesupdate.cli import main as cli
+
+PACKAGE = Path(bayesupdate.__file__).resolve().parent
+CORE = ("errors", "units", "atomic", "modal_data", "model_protocol", "correlation", "paper")
+#: layer of each room, bottom (0) to top (pyproject.toml's [tool.importlinter] comment)
+LAYERS = {
+    **dict.fromkeys(("bayesupdate", *CORE), 0),
+    "compute": 1,
+    **dict.fromkeys(("fe", "ema", "testgeom"), 2),
+    **dict.fromkeys(("models", "nastran", "inference"), 3),
+    "discovery": 4,
+    "config": 5,
+    "pipelines": 6,
+    **dict.fromkeys(("commands", "cli", "report", "plotting", "__main__"), 7),
+}
+
+DISCOVERY_STUDY = """
+[model]
+source = "exhaust"
+[data]
+source = "paper:ema"
+[discovery]
+kinds = ["added_mass"]
+baseline_starts = 1
+quick_refits = 3
+per_kind = 1
+max_refits = 1
+max_nfev = 8
+loo_top = 1
+loo_draws = 100
+"""
+
+SAMPLE_STUDY = """
+[model]
+source = "exhaust"
+[data]
+source = "paper:ema"
+[optimizer]
+starts = 2
+[sampler]
+walkers = 16
+steps = 60
+check_every = 30
+min_autocorr_times = 1e9
+moves = "de"
+predictive_draws = 20
+"""
+
+
+def room_of(filename: str) -> str | None:
+    """The room of a source file, None outside the package."""
+    try:
+        parts = Path(filename).resolve().relative_to(PACKAGE).parts
+    except ValueError:
+        return None
+    if len(parts) == 1:
+        return "bayesupdate" if parts[0] == "__init__.py" else parts[0].removesuffix(".py")
+    return parts[0]
+
+
+class WalkTracer:
+    """A ``sys.setprofile`` function that records every crossing between rooms (module
+    docstring): ``events[(from, to)]`` and ``sites[(from, to)]`` = {(caller, callee)}."""
+
+    def __init__(self):
+        self._rooms: dict = {}
+        self.events: Counter = Counter()
+        self.sites: dict[tuple[str, str], set] = {}
+
+    def _room(self, code) -> str | None:
+        room = self._rooms.get(code, False)
+        if room is False:
+            room = self._rooms[code] = room_of(code.co_filename)
+        return room
+
+    def __call__(self, frame, event, _arg) -> None:
+        if event != "call":
+            return
+        room = self._room(frame.f_code)
+        if room is None or frame.f_code.co_name == "<module>":
+            return
+        caller = frame.f_back
+        while caller is not None and self._room(caller.f_code) is None:
+            caller = caller.f_back
+        if caller is None or caller.f_code.co_name == "<module>":
+            return  # called from outside the package (this script), or at an import
+        source = self._room(caller.f_code)
+        if source != room:
+            key = (source, room)
+            self.events[key] += 1
+            site = (_name(caller.f_code), _name(frame.f_code))
+            self.sites.setdefault(key, set()).add(site)
+
+
+def _name(code) -> str:
+    module = Path(code.co_filename).resolve().relative_to(PACKAGE).with_suffix("")
+    return f"{'.'.join(module.parts)}:{code.co_qualname}"
+
+
+def traced(argv: list[str]) -> WalkTracer:
+    """Run ``bayesupdate ARGV`` in this process under a ``WalkTracer``."""
+    tracer = WalkTracer()
+    out = io.StringIO()
+    sys.setprofile(tracer)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+            code = cli(argv)
+    finally:
+        sys.setprofile(None)
+    if code != 0:
+        raise SystemExit(f"bayesupdate {' '.join(argv)} failed ({code})")
+    return tracer
+
+
+def climbs(key: tuple[str, str]) -> bool:
+    """Whether a crossing from key[0] into key[1] goes up the layers."""
+    return LAYERS.get(key[1], 8) > LAYERS.get(key[0], 8)
+
+
+def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int]]:
+    """Per room entered: (room, entering sites, entering events, climbing sites, climbing
+    events), rooms by layer."""
+    rooms = sorted({to for _, to in tracer.events}, key=lambda r: (LAYERS.get(r, 8), r))
+    rows = []
+    for room in rooms:
+        keys = [k for k in tracer.events if k[1] == room]
+        up = [k for k in keys if climbs(k)]
+        rows.append((
+            room,
+            sum(len(tracer.sites[k]) for k in keys),
+            sum(tracer.events[k] for k in keys),
+            sum(len(tracer.sites[k]) for k in up),
+            sum(tracer.events[k] for k in up),
+        ))  # fmt: skip
+    return rows
+
+
+def report(name: str, tracer: WalkTracer, sites: bool) -> None:
+    rows = table(tracer)
+    print(f"\n{name}: rooms entered {len(rows)}")
+    print(f"{'room':<12} {'enter sites':>11} {'enter events':>13} {'climb sites':>11} "
+          f"{'climb events':>13}")  # fmt: skip
+    for room, n_sites, n_events, up_sites, up_events in rows:
+        print(f"{room:<12} {n_sites:>11} {n_events:>13} {up_sites:>11} {up_events:>13}")
+    totals = [sum(r[i] for r in rows) for i in range(1, 5)]
+    print(f"{'all':<12} {totals[0]:>11} {totals[1]:>13} {totals[2]:>11} {totals[3]:>13}")
+    listed = sorted(k for k in tracer.sites if sites or climbs(k))
+    print("crossing sites" if sites else "climbing sites (a lower room calls a higher one)")
+    for key in listed:
+        arrow = "UP" if climbs(key) else "  "
+        for caller, callee in sorted(tracer.sites[key]):
+            print(f"  {arrow} {key[0]} -> {key[1]}: {caller} -> {callee}")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sites", action="store_true", help="list every crossing site")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "discover.toml").write_text(DISCOVERY_STUDY)
+        (folder / "sample.toml").write_text(SAMPLE_STUDY)
+        runs = {
+            "discover": ["discover", str(folder / "discover.toml"), "--json", "--quiet"],
+            "sample": ["sample", str(folder / "sample.toml"), "--json", "--quiet"],
+        }
+        for name, argv in runs.items():
+            report(name, traced(argv), args.sites)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

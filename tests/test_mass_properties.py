@@ -37,7 +37,10 @@ def test_point_masses_and_a_rotary_inertia_give_the_closed_form():
     props = from_rigid_mass(rigid_body_mass_matrix(M, x))
     c = m @ x / m.sum()
     r = x - c
-    J = sum(mi * (ri @ ri * np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r)) + own
+    J = (
+        sum(mi * (ri @ ri * np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r, strict=True))
+        + own
+    )
     assert props.mass == pytest.approx(m.sum(), rel=1e-12)
     np.testing.assert_allclose(props.cg, c, rtol=0, atol=1e-12)
     np.testing.assert_allclose(props.inertia, J, rtol=0, atol=1e-10 * np.abs(J).max())
@@ -46,7 +49,10 @@ def test_point_masses_and_a_rotary_inertia_give_the_closed_form():
     # about another point: the parallel-axis theorem against the direct sum
     p = np.array([1.0, -0.5, 2.0])
     d = x - p
-    Jp = sum(mi * (di @ di * np.eye(3) - np.outer(di, di)) for mi, di in zip(m, d)) + own
+    Jp = (
+        sum(mi * (di @ di * np.eye(3) - np.outer(di, di)) for mi, di in zip(m, d, strict=True))
+        + own
+    )
     np.testing.assert_allclose(props.inertia_about(p), Jp, rtol=0, atol=1e-10 * np.abs(Jp).max())
 
 

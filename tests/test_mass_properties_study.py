@@ -25,7 +25,8 @@ TRUE = {"rho": 1.2, "E": 1.2, "tip": 1.6}
 
 def write_bar(folder):
     lines = ["SOL 103", "CEND", "BEGIN BULK", "PARAM,WTMASS,0.00259", "EIGRL,1,,,6"]
-    lines += [f"GRID,{i + 1 + 100 * j},,{10.0 * i},{10.0 * j},0." for j in (0, 1) for i in range(11)]
+    grids = [(i + 1 + 100 * j, 10.0 * i, 10.0 * j) for j in (0, 1) for i in range(11)]
+    lines += [f"GRID,{n},,{x},{y},0." for n, x, y in grids]
     lines += [f"CQUAD4,{i + 1},1,{i + 1},{i + 2},{i + 102},{i + 101}" for i in range(10)]
     lines += ["PSHELL,1,1,0.1,1,,1", "MAT1,1,1.0e7,,0.3,0.1", "CONM2,100,111,,1.0,0.,0.,2."]
     path = folder / "bar.bdf"
@@ -50,13 +51,12 @@ def study_text(deck, freqs, data: str, extra: str = "") -> str:
     )
     return (
         f'[model]\nsource = "{deck}"\n[data]\nfrequencies_hz = {list(map(float, freqs))}\n'
-        f'{data}\n{params}[pairing]\nmethod = "order"\n[optimizer]\nstarts = 2\npolish = false\n{extra}'
+        f'{data}\n{params}[pairing]\nmethod = "order"\n'
+        f"[optimizer]\nstarts = 2\npolish = false\n{extra}"
     )
 
 
-def test_the_measured_mass_fixes_the_density_the_frequencies_leave_free(
-    bar, tmp_path, capsys
-):
+def test_the_measured_mass_fixes_the_density_the_frequencies_leave_free(bar, tmp_path, capsys):
     deck, freqs, true = bar
     mass_lb = float(true.mass * LBF_S2_IN / LB)  # the measured mass in pound-mass
     cg = [float(c) for c in true.cg]
@@ -101,7 +101,7 @@ def test_the_likelihood_adds_the_cg_and_inertia_blocks_with_their_sds(bar, tmp_p
     inertia = true.inertia_about([0.0, 0.0, 0.0])
     measured = {"cg": (float(true.cg[0]) + 0.3, 0.2), "izz": (float(inertia[2, 2]) * 1.01, 0.02)}
     with_props = (
-        f'cg = {{ x = {measured["cg"][0]!r}, sd = {measured["cg"][1]} }}\n'
+        f"cg = {{ x = {measured['cg'][0]!r}, sd = {measured['cg'][1]} }}\n"
         f'inertia = {{ izz = {measured["izz"][0]!r}, sd = "2 %", about = [0, 0, "0 in"] }}'
     )
     posteriors = []
@@ -134,9 +134,9 @@ def test_the_likelihood_adds_the_cg_and_inertia_blocks_with_their_sds(bar, tmp_p
         ('mass = "5.5 lbf"', "a weight; give the mass"),
         ('mass = "5.5 lb"\nmass_kg = 2.0', "data: give mass or mass_kg, not both"),
         ('cg = { x = "54 in" }', "data.cg.sd: give the sd of x"),
-        ('cg = { x = [54, 0], sd = 1 }', "data.cg.x: give a number or a string"),
+        ("cg = { x = [54, 0], sd = 1 }", "data.cg.x: give a number or a string"),
         ('inertia = { izz = "5 lb in", sd = 1 }', "is not a inertia unit"),
-        ('inertia = { izz = 5, sd = 1, about = [0, 0] }', 'data.inertia.about: give "cg"'),
+        ("inertia = { izz = 5, sd = 1, about = [0, 0] }", 'data.inertia.about: give "cg"'),
     ],
 )
 def test_bad_units_and_shapes_exit_2_with_one_line(bar, tmp_path, capsys, data, words):

@@ -57,7 +57,7 @@ def measured_mass(study: StudyConfig, data: ModalData) -> ModalData:
     return replace(data, mass_kg=mass, mass_sd_kg=sd)
 
 
-def study_units(model) -> ModelUnits:
+def _study_units(model) -> ModelUnits:
     """The model's own units: a Nastran deck's (``structure.metadata["nastran"]["units"]``),
     else SI (built-in and user models)."""
     structure = getattr(model, "structure", None)
@@ -72,7 +72,7 @@ def _mass_value(value, units: ModelUnits, what: str) -> float:
     return in_model_units(*mass_property_value(value, "mass", what), "mass", units, what)
 
 
-def mass_with_units(study: StudyConfig, data: ModalData, units: ModelUnits) -> ModalData:
+def _mass_with_units(study: StudyConfig, data: ModalData, units: ModelUnits) -> ModalData:
     """``data`` with the study's ``[data] mass / mass_sd`` (with units, or numbers in the
     model's own mass unit; ``mass_sd`` also as "N %") applied in the model's units."""
     cfg = study.data
@@ -89,7 +89,7 @@ def mass_with_units(study: StudyConfig, data: ModalData, units: ModelUnits) -> M
     return replace(data, mass_kg=mass, mass_sd_kg=sd)
 
 
-def mass_property_targets(study: StudyConfig, model, units: ModelUnits):
+def _mass_property_targets(study: StudyConfig, model, units: ModelUnits):
     """The measured CG / inertia of ``[data] cg / inertia`` in the model's units
     (``MassPropertyTargets``), None when none are given or ``use_measured_mass = false``."""
     raw, about = parse_tables(study.data.cg, study.data.inertia, "data")
@@ -170,15 +170,15 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     data = measured_mass(study, load_modal_data(study.data.as_source()))
     # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
-    units = study_units(model)
-    data = mass_with_units(study, data, units)
+    units = _study_units(model)
+    data = _mass_with_units(study, data, units)
     if specs:
         from bayesupdate.discovery.results_io import extend_with_specs
 
         model = extend_with_specs(model, specs)
     objective = replace(
         objective_spec(study, data, units),
-        mass_properties=mass_property_targets(study, model, units),
+        mass_properties=_mass_property_targets(study, model, units),
     )
     problem = build_problem(
         model,

@@ -132,6 +132,8 @@ def mass_property_value(value, kind: str, what: str) -> tuple[float, bool]:
     if isinstance(value, bool) or not isinstance(value, int | float | str):
         raise BayesUpdateError(f"{what}: give a number or a string like {_first_example(kind)}")
     if not isinstance(value, str):
+        if not np.isfinite(value):
+            raise BayesUpdateError(f"{what}: must be a finite number, got {value!r}")
         return float(value), False
     match = _VALUE.match(value)
     if not match:

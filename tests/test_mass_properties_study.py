@@ -146,3 +146,21 @@ def test_bad_units_and_shapes_exit_2_with_one_line(bar, tmp_path, capsys, data, 
     assert main(["calibrate", str(study), "--full", "--json"]) == 2
     err = capsys.readouterr().err.strip()
     assert words in err and "\n" not in err, err
+
+
+def test_affine_mass_terms_are_exact_and_refused_where_the_mass_is_not_affine(bar):
+    # densities, moduli and point masses: M_r(theta) is an exact affine sum (no assembly);
+    # a shell thickness enters M as t and t^3 (rotary inertia): refused, the assembly is used
+    from bayesupdate.fe.mass_properties import rigid_mass_terms
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = str(bar[0])
+    model = load_nastran_model(deck, {k: {"binds": v} for k, v in PARAMETERS.items()})
+    terms = rigid_mass_terms(model)
+    point = {"rho": 2.7, "E": 0.6, "tip": 0.3}
+    exact = model.mass_properties(point).vector()
+    np.testing.assert_allclose(terms(point).vector(), exact, rtol=0, atol=1e-12 * abs(exact).max())
+    assert model.mass_properties_function() is not model.mass_properties
+    thick = load_nastran_model(deck, {"t": {"binds": "PSHELL 1 T"}})
+    assert rigid_mass_terms(thick) is None
+    assert thick.mass_properties_function() == thick.mass_properties

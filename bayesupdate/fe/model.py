@@ -302,6 +302,17 @@ class FEModel:
 
         return model_mass_properties(self, params)
 
+    def mass_properties_function(self):
+        """params -> ``mass_properties(params)``: a 6 x 6 affine sum where the mass matrix is
+        affine in each parameter and additive over them (``fe.mass_properties.rigid_mass_terms``,
+        checked once, then kept), else the assembly of ``mass_properties``."""
+        terms = self.__dict__.get("_rigid_mass_terms")
+        if terms is None:
+            from bayesupdate.fe.mass_properties import rigid_mass_terms
+
+            terms = self._rigid_mass_terms = rigid_mass_terms(self) or False
+        return terms or self.mass_properties
+
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)
 

@@ -261,10 +261,14 @@ def build_targets(raw, about, units: ModelUnits, reference, weights: Mapping[str
 
 
 def mass_properties_function(model) -> Callable[[dict], object] | None:
-    """params -> the model's rigid-body mass properties: its own ``mass_properties`` (FE
-    models), else that of the full model a reduced model wraps (``outer`` / ``fe``); None
-    for models that cannot give them."""
+    """params -> the model's rigid-body mass properties: its own (FE models:
+    ``mass_properties_function()``, a cheap affine sum where the model certifies one, else
+    ``mass_properties``), else those of the full model a reduced model wraps (``outer`` /
+    ``fe``); None for models that cannot give them."""
     for candidate in (model, getattr(model, "outer", None), getattr(model, "fe", None)):
+        factory = getattr(candidate, "mass_properties_function", None)
+        if callable(factory):
+            return factory()
         function = getattr(candidate, "mass_properties", None)
         if callable(function):
             return function

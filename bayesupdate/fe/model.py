@@ -199,6 +199,7 @@ class FEModel:
             a = self._assembler = Assembler(structure)
             self.banded = BandedShiftInvert(a.n_dof, a.pattern_rows, a.pattern_cols, a.indptr)
         self.rigid_basis = rigid_body_basis(structure.nodes)
+        self._rigid_mass_terms = None  # ``mass_properties_function``: built on first use
         self._base = a.default_properties()
         dofs, directions = structure.sensor_dofs()
         self._sensor_dofs = dofs
@@ -306,7 +307,7 @@ class FEModel:
         """params -> ``mass_properties(params)``: a 6 x 6 affine sum where the mass matrix is
         affine in each parameter and additive over them (``fe.mass_properties.rigid_mass_terms``,
         checked once, then kept), else the assembly of ``mass_properties``."""
-        terms = self.__dict__.get("_rigid_mass_terms")
+        terms = self._rigid_mass_terms
         if terms is None:
             from bayesupdate.fe.mass_properties import rigid_mass_terms
 

@@ -256,6 +256,7 @@ def _finite_or_none(value) -> float | None:
 
 def _run_tmcmc(prepared, args) -> int:
     """``--sampler tmcmc``: ``pipelines.sample_tmcmc``; the JSON or a short table."""
+    from bayesupdate.inference.mass_properties import mass_property_report
     from bayesupdate.inference.tmcmc import TMCMCSettings
     from bayesupdate.pipelines.sample_tmcmc import sample_tmcmc, tmcmc_json
 
@@ -264,6 +265,10 @@ def _run_tmcmc(prepared, args) -> int:
     cfg = prepared.study.sampler
     settings = TMCMCSettings(particles=args.particles, seed=cfg.seed)
     out = tmcmc_json(sample_tmcmc(prepared, settings), cfg.hdi_prob)
+    means = {k: v["mean"] for k, v in out["parameters"].items() if k != "sigma"}
+    out["mass_properties"] = mass_property_report(
+        prepared.problem, {**prepared.problem.fixed, **means}
+    )
     if args.json:
         print(json.dumps(out))
         return 0

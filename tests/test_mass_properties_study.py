@@ -164,3 +164,29 @@ def test_affine_mass_terms_are_exact_and_refused_where_the_mass_is_not_affine(ba
     thick = load_nastran_model(deck, {"t": {"binds": "PSHELL 1 T"}})
     assert rigid_mass_terms(thick) is None
     assert thick.mass_properties_function() == thick.mass_properties
+
+
+def test_sample_reports_the_mass_properties_at_the_posterior_mean(bar, tmp_path, capsys):
+    deck, freqs, true = bar
+    data = f"cg = {{ x = {float(true.cg[0])!r}, sd = 0.05 }}\nmass = {float(true.mass)!r}"
+    sampler = "[sampler]\nwalkers = 8\nsteps = 12\ncheck_every = 6\npredictive_draws = 4\n"
+    sampler += 'moves = "de"\n'
+    study = tmp_path / "study.toml"
+    study.write_text(study_text(deck, freqs, data, sampler))
+    out = tmp_path / "post.h5"
+    assert main(["sample", str(study), "--full", "--json", "--out", str(out)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    rows = {r["name"]: r for r in result["mass_properties"]}
+    means = {k: v["mean"] for k, v in result["parameters"].items()}
+    from bayesupdate.nastran import load_nastran_model
+
+    model = load_nastran_model(str(deck), {k: {"binds": v} for k, v in PARAMETERS.items()})
+    at_mean = model.mass_properties(means)
+    assert rows["cg_x"]["predicted"] == pytest.approx(at_mean.cg[0], rel=1e-12)
+    assert rows["mass"]["predicted"] == pytest.approx(at_mean.mass, rel=1e-12)
+    assert rows["mass"]["sd"] is None and rows["cg_x"]["sd"] == 0.05
+    with h5py.File(out) as h5:
+        assert [r["name"] for r in json.loads(h5["optimum"].attrs["mass_properties_json"])] == [
+            "mass",
+            "cg_x",
+        ]

@@ -61,10 +61,12 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "converged_starts",
         "measured_mass_kg",
         "mass_weight",
+        "mass_properties",
         "compute",
     }
     assert result["compute"] == {"kind": "serial", "workers": 1}
     assert result["measured_mass_kg"] is None and result["mass_weight"] == 0.0  # none measured
+    assert result["mass_properties"] == []
     assert result["targets_hz"] == [4.30, 10.80]
     assert result["objective"] < 1e-14  # two frequencies, two stiffnesses: an exact fit
     assert result["starts"] == 9 and result["converged_starts"] == 9

@@ -172,9 +172,9 @@ def test_lsfd_recovers_residues_and_residuals_exactly(seed, n_modes, kind):
 # -- study files with random junk ---------------------------------------------------------------
 SECTIONS = {
     "model": ["source", "options", "sensors"],
-    "data": ["source", "frequencies_hz", "weights", "sd_hz"],
+    "data": ["source", "frequencies_hz", "weights", "sd_hz", "mass", "mass_sd", "cg", "inertia"],
     "pairing": ["method", "extra_modes"],
-    "objective": ["mass_kg", "mass_weight", "mac_weight"],
+    "objective": ["mass_kg", "mass_weight", "mac_weight", "mass", "cg_weight", "inertia_weight"],
     "optimizer": ["starts", "method", "design", "seed"],
     "likelihood": ["sigma", "sigma_prior", "mass_sd", "pairing"],
     "sampler": ["walkers", "steps", "seed", "min_autocorr_times", "check_every", "hdi_prob"],

@@ -22,6 +22,9 @@ A Nastran deck is solved in its own units (the JSON's "mass" is in its "mass_uni
 whose PARAM WTMASS is 1/g also gives its "weight"; "units" says which system was recognised)
 with its SPC set, PARAM WTMASS and EIGRL count; its --set names are deck fields
 ("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the deck's units.
+The JSON also gives the centre of gravity "cg" ("cg_unit") and the inertia about it ("inertia":
+ixx, iyy, izz, ixy, ixz, iyz in "inertia_unit"; products with Nastran's CONM2 sign; a WTMASS
+deck also gives "inertia_weight" as MSC's grid point weight generator prints it).
 
 Values are SI unless a unit is given (mm, t/mm3, kg/m3, GPa, ...).  Without --json a table shows
 each mode's frequency and the share of its strain energy in each part (seed section 3.2).
@@ -77,6 +80,7 @@ def run(args) -> int:
             "frequencies_hz": [round(float(f), 6) for f in result.frequencies_hz],
             "rigid_modes": int(result.modes.n_rigid),
             **mass_record(result.mass_kg, deck.get("units")),
+            **inertia_record(model.mass_properties(params), deck.get("units")),
             "n_dof": int(model.structure.n_dof),
             "parameters": {k: float(v) for k, v in result.parameters.items()},
         }
@@ -84,7 +88,7 @@ def run(args) -> int:
             out.update(units=deck["units"], notes=deck["notes"])
         print(json.dumps(out))
         return 0
-    print(format_modes_table(result, deck.get("units")))
+    print(format_modes_table(result, deck.get("units"), model.mass_properties(params)))
     return 0
 
 
@@ -98,6 +102,31 @@ def mass_record(mass: float, units: dict | None) -> dict:
         out["mass_kg"] = float(mass)
     if units is not None and units.get("weight"):
         out.update(weight=float(mass) / units["wtmass"], weight_unit=units["weight"])
+    return out
+
+
+def inertia_record(props, units: dict | None) -> dict:
+    """The JSON's centre of gravity and inertia about it (``fe.mass_properties``) in the
+    model's own units: ``cg`` (3,) with ``cg_unit``, ``inertia`` {ixx, iyy, izz, ixy, ixz,
+    iyz} (products as Nastran's CONM2 / weight generator I(S): Ixy = integral of x y dm) with
+    ``inertia_unit``; a deck whose mass input is weight (PARAM WTMASS) also gives
+    ``inertia_weight`` (inertia / WTMASS, as MSC's grid point weight generator prints it) in
+    ``inertia_weight_unit``."""
+    from bayesupdate.inference.mass_properties import model_units
+
+    names = model_units(units)
+    values = props.as_dict()
+    # + 0.0: a product that is -0.0 prints as 0.0
+    inertia = {k: values[k] + 0.0 for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")}
+    out = {
+        "cg": [float(c) + 0.0 for c in props.cg],
+        "cg_unit": names.length,
+        "inertia": inertia,
+        "inertia_unit": names.inertia,
+    }
+    if units is not None and units.get("weight"):
+        out["inertia_weight"] = {k: v / units["wtmass"] for k, v in inertia.items()}
+        out["inertia_weight_unit"] = f"{units['weight']} {units['length']}^2"
     return out
 
 
@@ -153,9 +182,10 @@ def _geometry(text):
     return int(text) if text.lstrip("-").isdigit() else text
 
 
-def format_modes_table(result, units: dict | None = None) -> str:
+def format_modes_table(result, units: dict | None = None, props=None) -> str:
     """Readable table: mode, frequency, and strain-energy share per part (% of the mode);
-    the mass and centre of gravity in the model's units (a deck's ``units`` record; SI)."""
+    the mass and centre of gravity in the model's units (a deck's ``units`` record; SI), and
+    the inertia about the centre of gravity where ``props`` (``fe.mass_properties``) is given."""
     energies = result.energies
     parts = list(energies.parts)
     shares = energies.strain_by_part * 100.0
@@ -168,6 +198,7 @@ def format_modes_table(result, units: dict | None = None) -> str:
     lines = [
         f"mass {result.mass_kg:.6g} {mass_unit}{weight}, centre of gravity "
         f"({', '.join(f'{c:.3f}' for c in result.centre_of_gravity)}) {length}",
+        *([] if props is None else [_inertia_line(props, units)]),
         "strain-energy share of each part [% of the mode]",
         f"{'mode':>4} {'f [Hz]':>9}  " + " ".join(f"{s:>12}" for s in short),
     ]
@@ -175,3 +206,10 @@ def format_modes_table(result, units: dict | None = None) -> str:
         lines.append(f"{i + 1:>4} {f:>9.3f}  " + " ".join(f"{shares[k, i]:>12.1f}" for k in keep))
     lines.append("parameters: " + ", ".join(f"{k}={v:.6g}" for k, v in result.parameters.items()))
     return "\n".join(lines)
+
+
+def _inertia_line(props, units: dict | None) -> str:
+    """One line: the inertia about the centre of gravity in the model's units."""
+    record = inertia_record(props, units)
+    values = ", ".join(f"{k} {v:.6g}" for k, v in record["inertia"].items())
+    return f"inertia about the centre of gravity: {values} {record['inertia_unit']}"

@@ -200,6 +200,7 @@ class FEModel:
             a = self._assembler = Assembler(structure)
             self.banded = BandedShiftInvert(a.n_dof, a.pattern_rows, a.pattern_cols, a.indptr)
         self.rigid_basis = rigid_body_basis(structure.nodes)
+        self._rigid_mass_terms = None  # ``mass_properties_function``: built on first use
         self._base = a.default_properties()
         dofs, directions = structure.sensor_dofs()
         self._sensor_dofs = dofs
@@ -295,6 +296,24 @@ class FEModel:
         if self._general is None:
             return self._assembler.total_mass(self.element_properties(params))
         return self._general.total_mass(self.matrices(params)[1])
+
+    def mass_properties(self, params: Mapping[str, float] | None = None):
+        """Rigid-body mass properties (``fe.mass_properties.MassProperties``: mass, centre of
+        gravity, inertia about it) at ``params``, from the assembled mass matrix."""
+        from bayesupdate.fe.mass_properties import model_mass_properties
+
+        return model_mass_properties(self, params)
+
+    def mass_properties_function(self):
+        """params -> ``mass_properties(params)``: a 6 x 6 affine sum where the mass matrix is
+        affine in each parameter and additive over them (``fe.mass_properties.rigid_mass_terms``,
+        checked once, then kept), else the assembly of ``mass_properties``."""
+        terms = self._rigid_mass_terms
+        if terms is None:
+            from bayesupdate.fe.mass_properties import rigid_mass_terms
+
+            terms = self._rigid_mass_terms = rigid_mass_terms(self) or False
+        return terms or self.mass_properties
 
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)

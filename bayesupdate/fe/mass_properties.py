@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.assembly import rigid_body_basis
+from bayesupdate.fe.rotations import rigid_body_basis
 
 #: component names of a ``MassProperties``, in ``MassProperties.vector`` order
 COMPONENTS = ("mass", "cg_x", "cg_y", "cg_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz")

@@ -12,6 +12,8 @@ from bayesupdate.commands.calibrate import (
     add_study_arguments,
     add_write_bdf_argument,
     compute_from_args,
+    report_refused,
+    report_warnings,
     study_from_args,
     write_bdf,
 )
@@ -51,7 +53,10 @@ error there exceeds enrich_above, a tenth of the likelihood's smallest relative 
 screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
-"compute": {"kind", "workers"}, ...}."""
+"compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
+"pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
+at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC
+below the threshold at the optimum; also on stderr and in --out), ...}."""
 
 
 def add_arguments(parser) -> None:
@@ -88,6 +93,7 @@ def run(args) -> int:
         check_output_path(args.write_bdf, force=args.force)
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
+    report_refused(prepared.problem)
     if args.sampler == "tmcmc":
         return _run_tmcmc(prepared, args)
     run = _sample_with_stop_handlers(prepared, args, compute)
@@ -98,6 +104,10 @@ def run(args) -> int:
         raise KeyboardInterrupt
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
     out["compute"] = run.compute
+    out["test_modes"] = [int(n) for n in prepared.problem.mode_numbers]
+    out["pairing_rules"] = prepared.problem.pairing.to_dict()
+    out["warnings"] = list(run.warnings)
+    report_warnings(run.warnings)
     means = {k: v["mean"] for k, v in out["parameters"].items()}
     write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table

@@ -154,6 +154,18 @@ def test_a_planted_wrong_mode_is_refused_and_named(planted, tmp_path, capsys):
         assert json.loads(h5.attrs["warnings_json"]) == []
 
 
+def test_discovery_leaves_the_refused_mode_out_too(planted):
+    from bayesupdate.inference.data import load_modal_data
+    from bayesupdate.pipelines.discover import paired_data
+    from bayesupdate.pipelines.model_source import study_model
+
+    study = _study(planted)
+    data = load_modal_data(planted)
+    kept, record = paired_data(study, study_model(study, data.dof_labels), data)
+    np.testing.assert_array_equal(kept.frequencies_hz, np.delete(data.frequencies_hz, 5))
+    assert [r["test_mode"] for r in record["refused"]] == [6]
+
+
 def test_screening_names_each_reason_with_its_mac():
     # three model modes on three DOFs (unit shapes), at 10, 20, 30 Hz
     model_hz = np.array([10.0, 20.0, 30.0])

@@ -36,7 +36,9 @@ class DiscoveryRequest:
 class DiscoveryRun:
     """model : the (extended) FE model discovery ran on.  effects : the specs it was extended
     by.  result : what discovery found.  posterior : (PosteriorResult, summary dict) of the final
-    model, or None.  compute : where the work ran ({"kind", "workers", ...})."""
+    model, or None.  compute : where the work ran ({"kind", "workers", ...}).  pairing : the
+    MAC pairing's record (``paired_data``: method, rules, refused test modes; {} without test
+    shapes)."""
 
     model: object
     effects: tuple[str, ...]
@@ -46,7 +48,7 @@ class DiscoveryRun:
     pairing: dict = field(default_factory=dict)
 
 
-def _paired_data(study: StudyConfig, model, data):
+def paired_data(study: StudyConfig, model, data):
     """(data, pairing record): the test modes whose MAC pair meets the study's ``[pairing]``
     rules at the reference design (``inference.problem.build_problem``), with the refused
     ones in ``pairing["refused"]``; data without shapes are returned as they are."""
@@ -78,7 +80,7 @@ def discover_study(
             "use a built-in FE model such as 'exhaust'"
         )
     model = extend_with_specs(model, request.effects)
-    data, pairing = _paired_data(study, model, data)
+    data, pairing = paired_data(study, model, data)
     with open_executor(request.compute) as executor:
         compute = executor.describe()
         result = discover(

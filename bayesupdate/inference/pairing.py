@@ -11,15 +11,16 @@ Three methods (``PAIRING_METHODS``):
 * ``order``: the i-th test mode with the i-th model mode; MAC against the reference shapes is still
   reported when the model gives shapes, so a swap is visible.
 
-Rules of a MAC pairing (``PairingRules``), as a test engineer correlates before updating (Ewins,
-*Modal Testing*, 2nd ed. 2000, section 8.2; Friswell & Mottershead, *Finite Element Model
-Updating in Structural Dynamics*, 1995, section 3.5): at the reference design a test mode is
-paired only with a model mode whose frequency lies within a relative window of its own
-(|f_model / f_test - 1| <= ``frequency_window``) and whose MAC reaches ``mac_threshold``; a test
-mode with no such partner is refused (``screen_test_modes``), named with its best MAC partner,
-and left out of the objective.  At other parameter points the pairing is redone with the same
-window preferred (``window_scores``): a model mode inside it always wins over one outside, but a
-pair with no partner inside the window still counts, and is reported at the optimum.
+Rules of a MAC pairing (``PairingRules``), as a test engineer correlates before updating (paired
+modes by MAC and frequency: Ewins, *Modal Testing: Theory, Practice and Application*, 2nd ed.
+2000; Friswell & Mottershead, *Finite Element Model Updating in Structural Dynamics*, 1995): at
+the reference design a test mode is paired only with a model mode whose frequency lies within a
+relative window of its own (|f_model / f_test - 1| <= ``frequency_window``) and whose MAC
+reaches ``mac_threshold``; a test mode with no such partner is refused (``screen_test_modes``),
+named with its best MAC partner, and left out of the objective.  At other parameter points the
+pairing is redone with the same window preferred (``window_scores``): a model mode inside it
+always wins over one outside, but a pair with no partner inside the window still counts, and is
+reported at the optimum.
 """
 
 from dataclasses import dataclass
@@ -56,8 +57,6 @@ class PairingRules:
     frequency_window: float = DEFAULT_FREQUENCY_WINDOW
 
     def __post_init__(self):
-        from bayesupdate.errors import BayesUpdateError
-
         if not 0.0 <= self.mac_threshold <= 1.0:
             raise BayesUpdateError(
                 f"pairing.mac_threshold: {self.mac_threshold}; give a MAC in [0, 1] (default "

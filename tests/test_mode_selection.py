@@ -234,15 +234,21 @@ starts = 4
 """
 
 
-def test_an_optimum_on_a_bound_is_warned(tmp_path, capsys):
+def _stiff_study(tmp_path, extra: str = ""):
+    """The shear building against a test whose storeys are twice the nominal stiffness: out of
+    reach of bounds up to 1.5."""
     from bayesupdate.models.shear_building import shear_building_frequencies
 
-    # the test's storeys are twice the nominal stiffness: out of reach of bounds up to 1.5
     f = shear_building_frequencies(np.array([2.0, 2.0]))
     csv = tmp_path / "freqs.csv"
     csv.write_text(f"frequency_hz\n{float(f[0])!r}\n{float(f[1])!r}\n")
     study = tmp_path / "study.toml"
-    study.write_text(SHEAR.format(csv=csv))
+    study.write_text(SHEAR.format(csv=csv) + extra)
+    return study
+
+
+def test_an_optimum_on_a_bound_is_warned(tmp_path, capsys):
+    study = _stiff_study(tmp_path)
     assert main(["calibrate", str(study), "--json"]) == 0
     captured = capsys.readouterr()
     result = json.loads(captured.out)
@@ -252,6 +258,27 @@ def test_an_optimum_on_a_bound_is_warned(tmp_path, capsys):
         "the range or check the parameter"
         for name in ("theta_1", "theta_2")
     ]
+    assert captured.err.count("warning: theta_") == 2
+
+
+def test_a_posterior_piled_at_its_bounds_is_warned(tmp_path, capsys):
+    sampler = (
+        "[sampler]\nwalkers = 4\nsteps = 100\ncheck_every = 100\nmin_autocorr_times = 1e9\n"
+        'predictive_draws = 10\nmoves = "de"\nscreen = false\n'
+    )
+    study = _stiff_study(tmp_path, sampler)
+    out = tmp_path / "post.h5"
+    assert main(["sample", str(study), "--json", "--no-progress", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    warnings = json.loads(captured.out)["warnings"]
+    assert [w.split(":")[0] for w in warnings] == ["theta_1", "theta_2"]
+    # both storeys want 2.0: the posterior presses on the upper bounds, far above the 2 % a
+    # posterior flat over [0.2, 1.5] would put next to them
+    shares = [float(w.split("% of the posterior")[0].split(":")[1]) for w in warnings]
+    assert min(shares) > 20
+    assert all("of its upper bound 1.5" in w for w in warnings)
+    with h5py.File(out) as h5:
+        assert json.loads(h5.attrs["warnings_json"]) == warnings
     assert captured.err.count("warning: theta_") == 2
 
 

@@ -14,7 +14,13 @@ Typical use (a thin script)::
     table = summarise(posterior)
 """
 
-from bayesupdate.inference.data import load_modal_data, register_loader
+from bayesupdate.inference.checks import calibration_warnings, sampling_warnings
+from bayesupdate.inference.data import (
+    ModeSelection,
+    load_modal_data,
+    register_loader,
+    select_modes,
+)
 from bayesupdate.inference.diagnostics import posterior_predictive, summarise
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
 from bayesupdate.inference.optimize import (
@@ -23,7 +29,13 @@ from bayesupdate.inference.optimize import (
     calibrate,
     pareto_front_mass,
 )
-from bayesupdate.inference.pairing import ModePairing, ResidualTable, pair_modes
+from bayesupdate.inference.pairing import (
+    ModePairing,
+    PairingRules,
+    RefusedMode,
+    ResidualTable,
+    pair_modes,
+)
 from bayesupdate.inference.priors import Prior, prior_from_mapping
 from bayesupdate.inference.problem import (
     CalibrationProblem,
@@ -58,10 +70,13 @@ __all__ = [
     "LikelihoodSpec",
     "LogPosterior",
     "ModePairing",
+    "ModeSelection",
     "ObjectiveSpec",
+    "PairingRules",
     "ParameterSpec",
     "PosteriorResult",
     "Prior",
+    "RefusedMode",
     "ResidualTable",
     "SamplerSettings",
     "SamplerState",
@@ -70,6 +85,7 @@ __all__ = [
     "build_parameter_specs",
     "build_problem",
     "calibrate",
+    "calibration_warnings",
     "default_moves",
     "export_netcdf",
     "load_modal_data",
@@ -83,6 +99,8 @@ __all__ = [
     "read_sampler_state",
     "register_loader",
     "sample_posterior",
+    "sampling_warnings",
+    "select_modes",
     "summarise",
     "tmcmc",
     "to_datatree",

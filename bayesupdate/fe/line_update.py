@@ -79,15 +79,22 @@ class LineUpdate:
             s.mass_value[self.mass_index].copy(), s.mass_inertia[self.mass_index].copy()
         )
 
-    def delta(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
-        """(dK, dM) (nnz,) CSR data of the change: ``beams`` (``GeneralBeams`` of the chosen
-        beams, in ``beam_index`` order), ``rods`` (``Rods``), ``masses``
+    def contribution(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
+        """(K, M) (nnz,) CSR data of the chosen elements alone: ``beams`` (``GeneralBeams`` of
+        the chosen beams, in ``beam_index`` order), ``rods`` (``Rods``), ``masses``
         (``PointMassValues``) at their new values; None keeps the structure's."""
-        K, M = self._data(
+        if beams is None and rods is None and masses is None:
+            return self._base[0].copy(), self._base[1].copy()
+        return self._data(
             self.beams if beams is None else beams,
             self.rods if rods is None else rods,
             self.masses() if masses is None else masses,
         )
+
+    def delta(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
+        """(dK, dM) (nnz,) CSR data of the change from the structure's values to ``beams``,
+        ``rods``, ``masses`` (as ``contribution``)."""
+        K, M = self.contribution(beams, rods, masses)
         return K - self._base[0], M - self._base[1]
 
     def _data(self, beams, rods, masses) -> tuple[np.ndarray, np.ndarray]:

@@ -29,7 +29,7 @@ from bayesupdate.fe.reduced.interpolation import (
     piecewise_nodes,
     tensor_weights,
 )
-from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms
+from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms, pattern_part
 
 #: 1-D interpolation degrees tried in turn for each non-linear parameter
 DEGREES = (4, 6, 8, 12, 16, 24, 32)
@@ -152,6 +152,19 @@ def decompose(
             k_entries.append((offset + n, k_col, 1.0))
             m_stacks.append([(dofs, Mn[n])])
             m_entries.append((offset + n, m_col, 1.0))
+        groups.append(group)
+        offset += group.n_nodes
+    # a deck's line-element fields that do not enter K and M linearly (``NastranModel.
+    # line_groups``): their change from the deck's values interpolated in log(theta) on the
+    # same Chebyshev tensor nodes, one sparse term per node
+    for line in getattr(fe, "line_groups", lambda *_: ())(bounds, interp_tol):
+        params = tuple(names.index(n) for n in line.names)
+        group = InterpolatedGroup(np.zeros(0, int), params, line.log_pieces, line.degrees, -1, -1)
+        for n in range(group.n_nodes):
+            k_stacks.append([pattern_part(fe.general, line.dK[n])])
+            k_entries.append((offset + n, 0, 1.0))
+            m_stacks.append([pattern_part(fe.general, line.dM[n])])
+            m_entries.append((offset + n, 0, 1.0))
         groups.append(group)
         offset += group.n_nodes
     return AffineDecomposition(

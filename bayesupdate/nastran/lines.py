@@ -284,8 +284,10 @@ def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields 
     read = dict(beam=s.general_beams, rod=s.rods,
                 mass=PointMassValues(s.mass_value, s.mass_inertia))  # fmt: skip
     for f, r in zip(("beam", "rod", "mass"), rows, strict=True):
-        if f in families and any(not np.array_equal(getattr(_rows(read[f], r), x),
-                                                    getattr(rec0[f], x)) for x in _fields(f)):
+        if f in families and any(
+            not np.array_equal(getattr(_rows(read[f], r), x), getattr(rec0[f], x))
+            for x in _fields(f)
+        ):
             return None, "the re-built elements' values differ from the read ones"
     slopes = {}
     step = np.where(high > theta0, high, low) - theta0

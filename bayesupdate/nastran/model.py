@@ -35,7 +35,12 @@ class NastranModel(FEModel):
             from bayesupdate.nastran.lines import LineAssembler
 
             self._general = LineAssembler(
-                structure, self._shell_keys(), bdf, self.bindings, self.deck, self._defaults,
+                structure,
+                self._shell_keys(),
+                bdf,
+                self.bindings,
+                self.deck,
+                self._defaults,
                 self._bounds,
             )
             self._assembler = self._general.beams

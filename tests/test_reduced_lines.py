@@ -168,9 +168,9 @@ def test_sample_on_line_bindings_uses_the_certified_basis(variant, tmp_path, cap
     assert out["full_solves_reason"] is None
 
 
-def test_sample_json_says_why_a_dimension_binding_gets_full_solves(tmp_path, capsys):
-    # the user's path on the MSC deck: a PBARL dimension does not enter K linearly, so `sample`
-    # solves in full and says why in its JSON (besides its warning)
+def test_sample_on_a_dimension_binding_uses_an_interpolated_basis(tmp_path, capsys):
+    # the user's path on the MSC deck: a PBARL dimension does not enter K linearly (A and I are
+    # powers of it); `sample` now runs on its interpolated, certified basis, not full solves
     import json
 
     from bayesupdate.cli import main
@@ -186,8 +186,7 @@ def test_sample_json_says_why_a_dimension_binding_gets_full_solves(tmp_path, cap
         '[sampler]\nwalkers = 4\nsteps = 10\ncheck_every = 10\nmoves = "de"\n'
     )
     assert main(["sample", str(study), "--json"]) == 0
-    captured = capsys.readouterr()
-    out = json.loads(captured.out.strip().splitlines()[-1])
-    assert out["rom"] is None
-    reason = out["full_solves_reason"]
-    assert "parameter r1 (" in reason and "PBARL" in reason and "\n" not in reason
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert out["full_solves_reason"] is None
+    rom = out["rom"]  # certified at the default tolerance 1e-4, and at the optimum
+    assert rom["size"] > 6 and rom["max_rel_error"] <= 1e-4 and rom["error_at_optimum"] <= 1e-4

@@ -17,10 +17,10 @@ their matrices at new values, both the reading of the deck written with them:
   seeded points of the box against it; then a solve writes the records (a matrix-vector
   product) and recomputes the bound elements in the vectorised kernels (``fe.line_update``):
 
-      K(theta) = K_fixed + sum_e P_e^T K_e(records(theta)) P_e,   M likewise,
+      K(theta) = K(deck) + sum_e P_e^T (K_e(records(theta)) - K_e(records(deck))) P_e,
 
-  K_fixed every other element assembled once, P_e the element's positions in the general CSR
-  pattern.  The elements' matrices stay exact whatever the field: the Timoshenko shear
+  M likewise, P_e the element's positions in the general CSR pattern (exactly K(deck) at the
+  deck's values).  The elements' matrices stay exact whatever the field: the Timoshenko shear
   parameter 12 EI / (k G A L^2) is not affine, its records are.  A field whose records are not
   affine (a PBARL/PBEAML dimension: A, I are polynomials in it; RHO and A of the same
   elements: a product) keeps ``LineRebuild`` at every solve.
@@ -386,10 +386,11 @@ def _check_linear(lines: "LineAssembler", terms, theta, what: str) -> None:
 
 class LineAssembler(GeneralAssembler):
     """``GeneralAssembler`` whose line elements follow the parameters: ``values`` ({name: deck
-    units}, set by the model before each assembly; None: the deck's).  With ``fields``
-    (``LineFields``) the pattern's line data hold every other line element and the bound
-    elements' matrices are added at their records (module docstring); without (records not
-    affine: ``fields_note`` says why) the change ``LineRebuild.delta`` is added to the deck's.
+    units}, set by the model before each assembly; None: the deck's).  The change of the bound
+    elements from the deck's values is added to the deck's assembly: with ``fields``
+    (``LineFields``) their matrices at the new records less those at the deck's (module
+    docstring), without (records not affine: ``fields_note`` says why) ``LineRebuild.delta``.
+    At the deck's values the change is exactly 0, so the bound model is the deck to the bit.
     The K returned is the very object ``solve`` matches its ground springs by.
 
     fast : False keeps ``LineRebuild`` at every solve (the reference, for checks)."""
@@ -399,22 +400,9 @@ class LineAssembler(GeneralAssembler):
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
         self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
-        self._deck_lines = (self._line_K, self._line_M)
         self.fields, self.fields_note = None, "the reference path was asked for"
         if fast:
             self.fields, self.fields_note = line_fields(self, self.rebuild, defaults, bounds)
-        if self.fields is not None:
-            f = self.fields
-            counts = (_count(structure.general_beams), _count(structure.rods))
-            others = [np.setdiff1d(np.arange(n), rows)
-                      for n, rows in zip(counts, (f.beams, f.rods), strict=True)]  # fmt: skip
-            self._line_K, self._line_M = LineUpdate(self, *others).contribution()
-            self._keep_mass = np.ones(len(structure.mass_node))
-            self._keep_mass[f.masses] = 0.0  # the bound lumped masses come with their elements
-
-    def line_data(self) -> tuple[np.ndarray, np.ndarray]:
-        """(K data, M data) (nnz,) of all general beams and rods at the deck's values."""
-        return self._deck_lines
 
     def line_base(self) -> tuple[np.ndarray, np.ndarray]:
         """(K, M) (nnz,) of the bound elements (and lumped masses) at the deck's values."""
@@ -427,27 +415,16 @@ class LineAssembler(GeneralAssembler):
         if self.fields is None:
             return self.rebuild.delta(values)
         K, M = self.fields.contribution(self.fields.theta(values))
-        K0, M0 = self.line_base()
+        K0, M0 = self.fields.update.base
         return K - K0, M - M0
 
     def assemble(self, props, shell_props=None):
-        if self.fields is None:
-            K, M, elem = super().assemble(props, shell_props)
-            if self.values is not None:
-                dK, dM = self.rebuild.delta(self.values)
-                K.data += dK  # same positions: the pattern's data in its sorted order
-                M.data += dM
-            return K, M, elem
-        props = replace(props, mass_scale=props.mass_scale * self._keep_mass)
         K, M, elem = super().assemble(props, shell_props)
-        dK, dM = self.fields.contribution(self.fields.theta(self.values))
-        K.data += dK
-        M.data += dM
+        if self.values is not None:
+            dK, dM = self.line_delta(self.values)
+            K.data += dK  # same positions: the pattern's data in its sorted order
+            M.data += dM
         return K, M, elem
-
-
-def _count(records) -> int:
-    return 0 if records is None else records.n_elements
 
 
 @dataclass(frozen=True, eq=False)

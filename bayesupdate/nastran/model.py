@@ -156,10 +156,12 @@ class NastranModel(FEModel):
         if not getattr(self, "line_nonlinear", ""):
             return 0.0
         for groups in getattr(self, "_line_groups", {}).values():
-            values = [np.array([[params[n] for n in grp.names]]) for grp in groups]
-            if all(grp.holds(v) for v, grp in zip(values, groups, strict=True)):
+            # a group that moves no mass (I, J: rotary inertia only) needs no weights
+            moving = [grp for grp in groups if np.any(grp.dm)]
+            values = [np.array([[params[n] for n in grp.names]]) for grp in moving]
+            if all(grp.holds(v) for v, grp in zip(values, moving, strict=True)):
                 return float(sum((grp.weights(v) @ grp.dm)[0]
-                                 for v, grp in zip(values, groups, strict=True)))  # fmt: skip
+                                 for v, grp in zip(values, moving, strict=True)))  # fmt: skip
         g = self._general
         dM = g.line_delta({n: params[n] for n in g.rebuild.bindings})[1]
         return _translational_mass(g, np.arange(g.nnz), dM)

@@ -175,24 +175,17 @@ class LineFields:
             return self.theta0
         return np.array([float(values[n]) for n in self.names])
 
-    def records(self, theta: np.ndarray, which=None) -> tuple:
-        """(GeneralBeams, Rods, PointMassValues) of the bound elements at ``theta`` (p,);
-        ``which``: (beam rows, rod rows, mass rows) of a subset (None: all)."""
+    def records(self, theta: np.ndarray) -> tuple:
+        """(GeneralBeams | None, Rods | None, PointMassValues) of the bound elements at
+        ``theta`` (p,)."""
         step = theta - self.theta0
         out = []
         for k, family in enumerate(("beam", "rod", "mass")):
             rec = self.records0[k]
-            rows = None if which is None else which[k]
-            if rec is None:
-                out.append(None)
-                continue
-            fields = {}
-            for (fam, f), slope in self.slopes.items():
-                if fam == family:
-                    fields[f] = getattr(rec, f) + slope @ step
-            rec = replace(rec, **fields)
-            if rows is not None:
-                rec = _rows(rec, rows)
+            if rec is not None:
+                fields = {f: getattr(rec, f) + slope @ step
+                          for (fam, f), slope in self.slopes.items() if fam == family}  # fmt: skip
+                rec = replace(rec, **fields)
             out.append(rec)
         return tuple(out)
 
@@ -200,15 +193,6 @@ class LineFields:
         """(K, M) (nnz,) of the bound elements (and their lumped masses) at ``theta``."""
         beams, rods, masses = self.records(theta)
         return self.update.contribution(beams, rods, masses)
-
-    def acting(self) -> list[np.ndarray]:
-        """Per family (beams, rods, masses): (n, p) bool, parameter j changes the record."""
-        sizes = (self.beams.size, self.rods.size, self.masses.size)
-        out = [np.zeros((n, self.theta0.size), bool) for n in sizes]
-        for (family, _), slope in self.slopes.items():
-            k = ("beam", "rod", "mass").index(family)
-            out[k] |= np.abs(slope.reshape(slope.shape[0], -1, slope.shape[-1])).max(axis=1) > 0
-        return out
 
 
 def _rows(rec, rows):

@@ -279,47 +279,54 @@ SPC1,1,123456,1
 """
 
 
-def test_cbar_offsets_equal_rigid_bars_to_the_offset_points(tmp_path):
+@pytest.mark.parametrize("elem, prop", [("CBAR", "PBARL"), ("CBEAM", "PBEAML")])
+def test_cbar_offsets_equal_rigid_bars_to_the_offset_points(tmp_path, elem, prop):
     """WA in GA's CD frame (OFFT G), WB in basic (OFFT B), v in GA's CD frame: the same as the
-    bar between the offset points (basic coordinates written here) joined by RBARs."""
+    bar between the offset points (basic coordinates written here) joined by RBARs; a CBEAM's
+    W1A..W3B likewise (its lumped torsional inertia sits at the offset ends in both)."""
     from bayesupdate.nastran import load_nastran_model
     from bayesupdate.nastran.deck import Refusals, read_deck
     from bayesupdate.nastran.frames import read_grids
 
+    common = OFFSET_COMMON.replace("PBARL", prop)
     wa_cd, wb = np.array([0.05, 0.1, -0.02]), np.array([0.0, -0.08, 0.06])
     offset = tmp_path / "offset.bdf"
-    offset.write_text(_deck(OFFSET_COMMON + "GRID,1,,0.,0.,0.,7\nGRID,2,,2.,0.5,0.\n"
-                            f"CBAR,3,5,1,2,0.,0.,1.,GGB\n,,,{','.join(map(str, wa_cd))},"
+    offset.write_text(_deck(common + "GRID,1,,0.,0.,0.,7\nGRID,2,,2.,0.5,0.\n"
+                            f"{elem},3,5,1,2,0.,0.,1.,GGB\n,,,{','.join(map(str, wa_cd))},"
                             f"{','.join(map(str, wb))}\n"))  # fmt: skip
     model = load_nastran_model(offset)
     beta = read_grids(read_deck(offset), Refusals("")).coords[7].axes  # rows: CD 7 axes in basic
     wa = beta.T @ wa_cd
     ends = tmp_path / "ends.bdf"
-    ends.write_text(_deck(OFFSET_COMMON + "GRID,1,,0.,0.,0.,7\nGRID,2,,2.,0.5,0.\n"
+    ends.write_text(_deck(common + "GRID,1,,0.,0.,0.,7\nGRID,2,,2.,0.5,0.\n"
                           f"GRID,3,,{','.join(map(_num, wa))},7\n"
                           f"GRID,4,,{','.join(map(_num, np.array([2.0, 0.5, 0]) + wb))}\n"
-                          "CBAR,3,5,3,4,0.,0.,1.\nRBAR,4,1,3,123456,,,123456\n"
+                          f"{elem},3,5,3,4,0.,0.,1.\nRBAR,4,1,3,123456,,,123456\n"
                           "RBAR,5,2,4,123456,,,123456\n"))  # fmt: skip
     f1 = model.solve(n_modes=4).frequencies_hz
     f2 = load_nastran_model(ends).solve(n_modes=4).frequencies_hz
     np.testing.assert_allclose(f1, f2, rtol=1e-10)
 
 
-def test_cbar_pin_flag_equals_a_hinge_grid_in_a_cd_frame(tmp_path):
+@pytest.mark.parametrize(
+    "elem, prop",
+    [("CBAR", "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6"), ("CBEAM", "PBEAM,5,1,2.e-3,4.e-6,1.e-6,,2.e-6")],
+)
+def test_cbar_pin_flag_equals_a_hinge_grid_in_a_cd_frame(tmp_path, elem, prop):
     """PB = 6 at a clamped end = the bar ending on a coincident grid tied by an RBE2 in all
     but 6 of that grid's CD frame 7.  The bar's v is basic z, so its local z (the released
     axis) is x cross v = -basic y; frame 7 has its z along basic y and its x, y turned about it
     (so '12345' there is a rotated component set: the grid gets its frame).  Lumped mass: no
-    inertia on the released rotation, so the two are the same model."""
+    inertia on the released rotation, so the two are the same model; a CBEAM's PB likewise."""
     from bayesupdate.nastran import load_nastran_model
 
     common = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,2.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
-              "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,1,5,1,2,0.,0.,1.\nSPC1,1,123456,1,3\n"
+              f"{prop}\n{elem},1,5,1,2,0.,0.,1.\nSPC1,1,123456,1,3\n"
               "CORD2R,7,,0.,0.,0.,0.,1.,0.\n,0.6,0.,0.8\n")  # fmt: skip
     pinned = tmp_path / "pinned.bdf"
-    pinned.write_text(_deck(common + "CBAR,2,5,2,3,0.,0.,1.\n,,6\n"))
+    pinned.write_text(_deck(common + f"{elem},2,5,2,3,0.,0.,1.\n,,6\n"))
     hinge = tmp_path / "hinge.bdf"
-    hinge.write_text(_deck(common + "GRID,4,,2.,0.,0.,7\nCBAR,2,5,2,4,0.,0.,1.\n"
+    hinge.write_text(_deck(common + f"GRID,4,,2.,0.,0.,7\n{elem},2,5,2,4,0.,0.,1.\n"
                            "RBE2,8,3,12345,4\n"))  # fmt: skip
     m = load_nastran_model(hinge)
     assert m.structure.constraints.frame_node.size == 1  # grid 4 has its CD frame

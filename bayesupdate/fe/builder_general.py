@@ -106,10 +106,11 @@ def _constraints(builder) -> Constraints | None:
         return None
     legs2 = [(e, ind, d, c) for e, (ind, deps, c) in enumerate(r2) for d in deps]
     legs3 = [
-        (e, n, w, nc)
-        for e, (_, _, ns, ws, nc) in enumerate(r3)
-        for n, w in zip(ns, ws, strict=True)
+        (e, n, w, c)
+        for e, (_, _, ns, ws, nc, _) in enumerate(r3)
+        for n, w, c in zip(ns, ws, nc, strict=True)
     ]
+    um = [(e, n, c) for e, r in enumerate(r3) for n, c in r[5]]
     return Constraints(
         fixed_node=np.array([n for n, _ in sup], dtype=int),
         fixed_components=np.array([c for _, c in sup], dtype=bool).reshape(-1, 6),
@@ -123,6 +124,9 @@ def _constraints(builder) -> Constraints | None:
         rbe3_node=np.array([leg[1] for leg in legs3], dtype=int),
         rbe3_weight=np.array([leg[2] for leg in legs3], dtype=float),
         rbe3_components=np.array([leg[3] for leg in legs3], dtype=bool).reshape(-1, 6),
+        rbe3_um_element=np.array([u[0] for u in um], dtype=int),
+        rbe3_um_node=np.array([u[1] for u in um], dtype=int),
+        rbe3_um_components=np.array([u[2] for u in um], dtype=bool).reshape(-1, 6),
         frame_node=np.array(list(frames), dtype=int),
         frame_axes=np.array(list(frames.values()), dtype=float).reshape(-1, 3, 3),
     )

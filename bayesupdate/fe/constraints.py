@@ -15,7 +15,11 @@ Rigid elements (6 DOFs per node: ux uy uz rx ry rz, small rotations):
   G_k = [[I, -skew(x_k - x_r)], [0, I]], so (u_r, theta_r) = A^-1 sum_k G_k^T W_k u_k,
   A = sum_k G_k^T W_k G_k.  W_k = w_k on the node's chosen translations and w_k L^2 on its chosen
   rotations, L the mean distance of the nodes from the reference (Nastran RBE3 with its
-  characteristic length).  It reproduces rigid motions exactly and adds no stiffness.
+  characteristic length).  It reproduces rigid motions exactly and adds no stiffness.  A UM
+  set (Nastran RBE3 UM) makes other DOFs of the element dependent instead: the same equations
+  C u = 0 (C = [I, -B] on the reference's components and the nodes' DOFs) solved for the UM
+  DOFs D, u_D = -C_D^-1 C_I u_I, so the reference's components may be fixed or dependent in
+  another element.
 
 A rigid element may depend on DOFs that another rigid element makes dependent (chains); the
 substitution is repeated until T refers to independent DOFs only, and a loop is an error.
@@ -75,6 +79,8 @@ class Constraints:
     RBE3: rbe3_reference (R3,) node, rbe3_ref_components (R3, 6) bool (dependent components);
     legs rbe3_element (L3,) index into rbe3_reference, rbe3_node (L3,), rbe3_weight (L3,),
     rbe3_components (L3, 6) bool (the node's components used in the average).
+    RBE3 UM sets: rbe3_um_element (U,) index into rbe3_reference, rbe3_um_node (U,),
+    rbe3_um_components (U, 6) bool: the DOFs made dependent instead of the reference's.
     Node frames: frame_node (Fn,) distinct nodes, frame_axes (Fn, 3, 3) rows = the node's local
     DOF axes in global coordinates; components of supports and rigid elements on these nodes
     are in those axes.
@@ -92,6 +98,9 @@ class Constraints:
     rbe3_node: np.ndarray = _empty(0, int)
     rbe3_weight: np.ndarray = _empty(0)
     rbe3_components: np.ndarray = _empty((0, 6), bool)
+    rbe3_um_element: np.ndarray = _empty(0, int)
+    rbe3_um_node: np.ndarray = _empty(0, int)
+    rbe3_um_components: np.ndarray = _empty((0, 6), bool)
     frame_node: np.ndarray = _empty(0, int)
     frame_axes: np.ndarray = _empty((0, 3, 3))
 
@@ -194,7 +203,48 @@ def _rbe3_rows(nodes, c: Constraints, L=None):
     cols = (6 * c.rbe3_node[leg][:, None] + np.arange(6)).ravel()
     vals = B[leg, comp].ravel()
     el, comp = np.nonzero(ref_mask)
-    return rows, cols, vals, 6 * c.rbe3_reference[el] + comp, [f"rbe3 {i}" for i in el]
+    out = rows, cols, vals, 6 * c.rbe3_reference[el] + comp, [f"rbe3 {i}" for i in el]
+    row_element = np.repeat(e[leg], 6)
+    for i in np.unique(c.rbe3_um_element):
+        out, row_element = _um_rows(out, row_element, c, int(i))
+    return out
+
+
+def _um_rows(parts, row_element, c: Constraints, i: int):
+    """(``parts`` (rows, cols, vals, dependent DOFs, owners), the element of each entry) with
+    RBE3 ``i``'s equations u_r = B u_n solved for its UM DOFs instead (module docstring)."""
+    rows, cols, vals, dep, owners = parts
+    mine = row_element == i
+    ref = np.unique(rows[mine])  # the reference's dependent DOFs
+    k, comp = np.nonzero(c.rbe3_um_components[c.rbe3_um_element == i])
+    um = 6 * c.rbe3_um_node[c.rbe3_um_element == i][k] + comp
+    dofs = np.unique(np.concatenate([ref, cols[mine]]))
+    if um.size != ref.size or not np.all(np.isin(um, dofs)):
+        raise BayesUpdateError(
+            f"rbe3 {i}: its UM set needs {ref.size} DOFs of the element's nodes or reference "
+            f"(as many as its reference components), got {um.size}"
+        )
+    C = np.zeros((ref.size, dofs.size))  # C u = 0: u_r - B u_n
+    C[np.arange(ref.size), np.searchsorted(dofs, ref)] = 1.0
+    np.add.at(C, (np.searchsorted(ref, rows[mine]), np.searchsorted(dofs, cols[mine])), -vals[mine])
+    d = np.searchsorted(dofs, um)
+    rest = np.setdiff1d(np.arange(dofs.size), d)
+    C_d = C[:, d]
+    if np.linalg.cond(C_d) > 1e12:
+        raise BayesUpdateError(
+            f"rbe3 {i}: its UM DOFs do not determine the element's equations (their coefficients "
+            "are dependent); choose other UM DOFs"
+        )
+    coef = -np.linalg.solve(C_d, C[:, rest])  # (n, n_rest): u_D = coef u_rest
+    keep, other = ~mine, np.array([o != f"rbe3 {i}" for o in owners], bool)
+    parts = (
+        np.concatenate([rows[keep], np.repeat(um, rest.size)]),
+        np.concatenate([cols[keep], np.tile(dofs[rest], um.size)]),
+        np.concatenate([vals[keep], coef.ravel()]),
+        np.concatenate([dep[other], um]),
+        [o for o in owners if o != f"rbe3 {i}"] + [f"rbe3 {i}"] * um.size,
+    )
+    return parts, np.concatenate([row_element[keep], np.full(um.size * rest.size, i)])
 
 
 def _pinv_checked(A, ref_mask, Lr=None):

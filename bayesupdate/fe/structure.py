@@ -209,7 +209,7 @@ class StructureBuilder:
         self._shell_blocks: list[dict] = []
         self._supports: list[tuple[int, np.ndarray]] = []
         self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
-        self._rbe3: list[tuple[int, np.ndarray, list[int], np.ndarray, np.ndarray]] = []
+        self._rbe3: list[tuple] = []  # (reference, components, nodes, weights, node sets, UM)
         self._general_beams: list = []
         self._rods: list = []
         self._frames: dict[int, np.ndarray] = {}
@@ -418,8 +418,10 @@ class StructureBuilder:
 
         component_a, component_b : 1-6 or a name ('ux' ... 'rz'): a translation or rotation of
         the node's displacement frame ``frame_a`` / ``frame_b`` (3x3, rows = its axes in global
-        coordinates; default global axes).  mass : >= 0, in kg on a translation and kg m^2 on a
-        rotation (a rotary inertia about that axis).  Returns the element index."""
+        coordinates; default global axes); or a unit vector (6,) on the node's six global DOFs
+        (a mode of a 6x6 mass matrix, Nastran CONM1; the frame is then unused).  mass : >= 0,
+        in kg on a translation and kg m^2 on a rotation (a rotary inertia about that axis).
+        Returns the element index."""
         what = f"scalar mass in part {part!r}"
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
@@ -485,11 +487,14 @@ class StructureBuilder:
         return i
 
     def add_rbe3(
-        self, reference, nodes, weights=None, components="123456", node_components="123"
+        self, reference, nodes, weights=None, components="123456", node_components="123", um=None
     ) -> int:
         """Interpolation element: ``components`` of ``reference`` become the weighted
-        least-squares rigid motion of ``nodes`` (their ``node_components``; weights default 1).
-        Adds no stiffness.  Returns the RBE3 number used in error messages."""
+        least-squares rigid motion of ``nodes`` (their ``node_components``: one set for all, or
+        a list of one set per node, as Nastran RBE3's weight groups give them; weights default
+        1).  um : None, or [(node, components)], the DOFs made dependent instead of the
+        reference's (Nastran RBE3 UM; as many as ``components``, on the element's nodes or
+        reference).  Adds no stiffness.  Returns the RBE3 number used in error messages."""
         from bayesupdate.fe.constraints import parse_components
 
         i = len(self._rbe3)
@@ -501,8 +506,17 @@ class StructureBuilder:
                 f"rbe3 {i}: needs nodes other than its reference {ref} and one weight > 0 each"
             )
         ref_c = parse_components(components, f"rbe3 {i}")
-        node_c = parse_components(node_components, f"rbe3 {i} node_components")
-        self._rbe3.append((ref, ref_c, ns, w, node_c))
+        # a list of digit sets is one set per node (a list of names is one set)
+        per_node = isinstance(node_components, list | tuple) and all(
+            isinstance(c, int | np.integer) or (isinstance(c, str) and c.isdigit())
+            for c in node_components
+        )
+        each = list(node_components) if per_node else [node_components] * len(ns)
+        if len(each) != len(ns):
+            raise BayesUpdateError(f"rbe3 {i}: give one node_components set or one per node")
+        node_c = [parse_components(c, f"rbe3 {i} node_components") for c in each]
+        um_sets = [(self._check_node(n), parse_components(c, f"rbe3 {i} um")) for n, c in um or ()]
+        self._rbe3.append((ref, ref_c, ns, w, node_c, um_sets))
         return i
 
     # -- general beams, rods and node frames (``fe.builder_general``) ---------------------------
@@ -625,6 +639,11 @@ def _scalar_direction(component, frame, what: str) -> np.ndarray:
     from bayesupdate.fe.constraints import parse_components
     from bayesupdate.fe.scalar_mass import component_direction
 
+    if not isinstance(component, str | int | np.integer) and np.size(component) == 6:
+        d = np.asarray(component, dtype=float).reshape(6)
+        if not np.all(np.isfinite(d)) or abs(np.linalg.norm(d) - 1) > 1e-9:
+            raise BayesUpdateError(f"{what}: a direction must be 6 finite values of norm 1")
+        return d
     mask = parse_components(component, what)
     if mask.sum() != 1:
         raise BayesUpdateError(f"{what}: needs exactly one component (1-6), got {component!r}")

@@ -28,7 +28,7 @@ def load_nastran_model(
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info, deck = read_structure(path)
+    structure, info, deck = read_structure(path, design=not parameters)
     if units is not None:
         from bayesupdate.nastran.units import named_system
 
@@ -47,6 +47,7 @@ def load_nastran_model(
         if note:
             info["notes"].append(note)
     bindings, defaults, bounds = deck_bindings(parameters or {}, deck, structure)
+    _refuse_tapered(bindings, deck)
     return NastranModel(
         structure, bindings, defaults, bounds, name=info["deck"], deck=path, bdf=deck
     )
@@ -61,3 +62,19 @@ def _has_mass(structure) -> bool:
     scalar = s.scalar_masses is not None and bool((s.scalar_masses.mass > 0).any())
     points = bool((s.mass_value > 0).any() or (s.mass_inertia != 0).any())
     return bool(shells or lines or scalar or points or (s.beam_rho > 1e-200).any())
+
+
+def _refuse_tapered(bindings, deck) -> None:
+    """A binding writes one value at every PBEAM station (``bindings.set_field``), which would
+    make a tapered PBEAM constant: refused, naming the parameter and the card."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.nastran.cards.beams import is_tapered
+
+    for name, b in bindings.items():
+        for i in b.field.ids if b.field.card == "PBEAM" else ():
+            card = deck.table("PBEAM").get(i)
+            if card is not None and is_tapered(card):
+                raise BayesUpdateError(
+                    f"parameter {name}: binds {b.target!r}: PBEAM {i} ({card.where}) is tapered "
+                    "and a binding sets one value at every station; bind a constant PBEAM"
+                )

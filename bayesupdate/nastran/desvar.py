@@ -41,24 +41,33 @@ def _field(rel, ptype, name):
     return name.upper() if name and name.upper() in FIELDS.get(ptype, {}) else None
 
 
+def design_refusals(deck) -> list[str]:
+    """'file:line DVPREL1 id: ...' of each DVPREL1 to a field that cannot be bound (the reader
+    adds them to the deck's other refusals when the DESVARs are to be the parameters)."""
+    out = []
+    for rel in deck.of("DVPREL1"):
+        ptype, name, _, _ = _relation(rel)
+        if _field(rel, ptype, name) is None:
+            out.append(f"{rel.where} DVPREL1 {rel.value(0)}: {ptype} field {name} cannot be bound")
+    return out
+
+
 def desvar_parameters(deck) -> dict:
     """{label: {"binds", "bounds" (optional), "coefficient", "desvar"}} of the DESVARs whose every
     relation (DVPREL1, DVMREL1, DVCREL1) sets one bindable field as COEF x (C0 = 0, one DESVAR):
     one binding over their ids.  A DVPREL1 to a field that cannot be bound is refused (all of
     them in one message); the other DESVARs are listed by ``unbound_note``."""
-    relations, refused = {}, []
+    refused = design_refusals(deck)
+    if refused:
+        raise BayesUpdateError(f"{len(refused)} design relation(s) refused: " + "; ".join(refused))
+    relations = {}
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         field = _field(rel, ptype, name)
-        if field is None and rel.name == "DVPREL1":
-            refused.append(f"{rel.where} DVPREL1 {rel.value(0)}: {ptype} field {name} cannot "
-                           "be bound")  # fmt: skip
         for dvid, _ in pairs:
             ok = field is not None and len(pairs) == 1 and c0 == 0
             key = (ptype, field, pairs[0][1]) if ok else None
             relations.setdefault(dvid, []).append((key, int(rel.value(2))))
-    if refused:
-        raise BayesUpdateError(f"{len(refused)} design relation(s) refused: " + "; ".join(refused))
     by_desvar = {}
     for dvid, rels in sorted(relations.items()):
         keys = {k for k, _ in rels}

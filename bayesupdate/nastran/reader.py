@@ -9,6 +9,7 @@ multiplies every mass and density.  GRIDs that no element uses are dropped and D
 stiffness are held, as Nastran's AUTOSPC does.
 """
 
+import re
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -16,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.shell import SHEAR_FACTOR
 from bayesupdate.fe.structure import Material, StructureBuilder
 from bayesupdate.nastran import cards
@@ -251,13 +253,19 @@ def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     )  # fmt: skip
 
 
-def read_structure(path) -> tuple:
+def read_structure(path, design: bool = False) -> tuple:
     """(Structure, info, Deck) of the Nastran deck at ``path``; info records units, PARAMs,
     counts and notes (also in ``structure.metadata["nastran"]``).  Every refusal of the deck is
-    raised together, as one ``BayesUpdateError`` (``deck.Refusals``)."""
+    raised together, as one ``BayesUpdateError`` (``deck.Refusals``); with ``design`` (the
+    DESVARs are to be the parameters) also each DVPREL1 to a field that cannot be bound."""
+    from bayesupdate.nastran.desvar import design_refusals
+
     refusals = Refusals(str(path))
     deck = read_deck(path, refusals)
     notes = check_cards(deck, refusals)
+    if design and deck.of("DESVAR"):
+        for message in design_refusals(deck):
+            refusals.add(message)
     settings = deck_settings(deck)
     grids = read_grids(deck, refusals)
     ctx = context(deck, grids, -np.ones(len(grids.ids), np.int64), settings, StructureBuilder(),
@@ -279,12 +287,15 @@ def read_structure(path) -> tuple:
         family.add(ctx)
     _add_spcs(ctx, deck, settings)
     refusals.raise_all()
-    structure = _finish(ctx, eids, pids, props)
-    n_auto = 0
-    if settings["autospc"]:
-        n_auto = _autospc(ctx, structure)
-        if n_auto:
-            structure = _finish(ctx, eids, pids, props)
+    try:
+        structure = _finish(ctx, eids, pids, props)
+        n_auto = 0
+        if settings["autospc"]:
+            n_auto = _autospc(ctx, structure)
+            if n_auto:
+                structure = _finish(ctx, eids, pids, props)
+    except BayesUpdateError as exc:
+        raise _named(ctx, exc) from None
     info = _info(ctx, settings, deck, grids, structure, n_auto)
     meta = {**structure.metadata, "nastran": info}
     if deck.of("SUPORT", "SUPORT1"):
@@ -292,6 +303,18 @@ def read_structure(path) -> tuple:
         # ground give them a little energy (``fe.sparse_modal``, ``ModalSettings.rigid_set``)
         meta["rigid_set"] = "rigid_motions"
     return replace(structure, metadata=meta), info, deck
+
+
+def _named(ctx, exc) -> BayesUpdateError:
+    """The structure's error with its rigid elements ('rbe3 0', the builder's index) named by
+    their cards' file:line and label."""
+
+    def card(m):
+        c = ctx.rigid.get(m.group(0))
+        return m.group(0) if c is None else f"{c.where} {c.label}"
+
+    text = re.sub(r"\brbe[23] \d+", card, str(exc))
+    return BayesUpdateError(f"Nastran model {ctx.refusals.path}: {text}")
 
 
 def _finish(ctx, eids, pids, props):

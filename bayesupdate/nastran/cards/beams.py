@@ -1,4 +1,4 @@
-"""CBAR and CBEAM with PBAR, PBARL, PBEAM (constant) and PBEAML (MSC Nastran QRG).
+"""CBAR and CBEAM with PBAR, PBARL, PBEAM (constant or tapered) and PBEAML (MSC Nastran QRG).
 
 A CBAR/CBEAM orientation vector v lies in the element's x-y plane, its section has I1 about z
 (plane 1, x-y) and I2 about y, and its offsets WA, WB run from the grids to the element's ends
@@ -41,8 +41,10 @@ _TAIL_DEFAULT = dict(K1=1.0, K2=1.0)
 
 def pbeam_layout(p) -> tuple[list, dict]:
     """(stations, tail) of a PBEAM: stations = [(raw index of A, SO, X/XB)] (end A first), tail =
-    {K1: value, ...} with the QRG defaults (K1 = K2 = 1, others 0)."""
-    stations, i, n = [(2, None, 0.0)], 16, len(p.raw)
+    {K1: value, ...} with the QRG defaults (K1 = K2 = 1, others 0).  End A's stress points
+    (C1(A) ... F2(A)) may be left out: a first continuation that starts with SO is a station."""
+    n = len(p.raw)
+    stations, i = [(2, None, 0.0)], 8 if p.value(8) in ("YES", "YESA", "NO") else 16
     while i < n:
         so = p.value(i)
         if so not in ("YES", "YESA", "NO"):
@@ -56,28 +58,67 @@ def pbeam_layout(p) -> tuple[list, dict]:
     return stations, tail
 
 
-def _pbeam_values(p, card) -> np.ndarray:
-    """(6,) A, I1, I2, I12, J, NSM of a constant PBEAM; refuses a tapered one (a station whose
-    fields differ from end A's; a blank station field is end A's, QRG PBEAM)."""
+def pbeam_stations(p, card) -> tuple[np.ndarray, np.ndarray]:
+    """(x (k,), values (k, 6)) of a PBEAM: x / L of end A, each intermediate station and end B
+    (0 ... 1), values A, I1, I2, I12, J, NSM there.  Blank fields as the QRG's PBEAM remark
+    gives them: at end B (X/XB = 1) end A's value, at an intermediate station the linear
+    interpolation between end A and end B; no end B station: end B is end A."""
     stations, _ = pbeam_layout(p)
+    rows = [[p.value(start + k) for k in range(6)] for start, _, _ in stations]
+    x = [0.0]
     a = np.array([p.real(k) for k in _STATION])
-    for start, _, _ in stations[1:]:
-        vals = [p.value(start + k) for k in range(6)]
-        v = np.array([a[k] if x is None else float(x) for k, x in enumerate(vals)])
-        if np.any(np.abs(v - a) > 1e-12 * np.maximum(np.abs(a), 1e-300)):
-            card.fail(f"PBEAM {p.id()} is tapered; only constant sections")
-    return a
+    for _, _, xb in stations[1:]:
+        if not isinstance(xb, int | float) or not 0 < xb <= 1 or xb <= x[-1]:
+            card.fail(f"PBEAM {p.id()}: station X/XB = {xb!r}; give increasing values in (0, 1]")
+        x.append(float(xb))
+    end_b = next((r for xb, r in zip(x, rows, strict=True) if xb == 1.0), None)
+    b = a if end_b is None else np.array([a[k] if v is None else float(v)
+                                          for k, v in enumerate(end_b)])  # fmt: skip
+    vals = [
+        np.array([a[k] + xb * (b[k] - a[k]) if v is None else float(v) for k, v in enumerate(r)])
+        for xb, r in zip(x, rows, strict=True)
+    ]
+    if x[-1] < 1.0:
+        x.append(1.0)
+        vals.append(b)
+    return np.array(x), np.array(vals)
+
+
+def is_tapered(p) -> bool:
+    """True if the PBEAM ``p``'s A, I1, I2, I12, J or NSM vary along it (``pbeam_stations``)."""
+    _, v = pbeam_stations(p, p)
+    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+
+
+def _pbeam_values(ctx: Context, p, card) -> np.ndarray:
+    """(6,) A, I1, I2, I12, J, NSM of a PBEAM's element: a constant PBEAM's own, a tapered
+    one's mean over the length of the piecewise-linear variation through its stations
+    (``pbeam_stations``; trapezoid rule, exact for that variation), with a note.  MSC
+    integrates a tapered CBEAM's properties along the element; the mean section keeps the
+    element's mass and is exact as the taper goes to 0, so a member meshed in several tapered
+    CBEAMs converges to the tapered beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
+    x, v = pbeam_stations(p, card)
+    if not is_tapered(p):
+        return v[0]
+    if np.any(v[:, :3] < 0) or np.any(v[:, 4] < 0):
+        card.fail(f"PBEAM {p.id()}: a station has A, I1, I2 or J < 0")
+    note = (f"PBEAM {p.id()} is tapered: each of its CBEAMs uses the section averaged over its "
+            "length (mesh a tapered member in several elements)")  # fmt: skip
+    if note not in ctx.notes:
+        ctx.notes.append(note)
+    return np.trapezoid(v, x, axis=0)
 
 
 def _general_section(ctx: Context, prop, card):
-    """(``BeamSection``, nsm) of a PBAR or a single-station PBEAM (I1 -> iz, I2 -> iy)."""
+    """(``BeamSection``, nsm) of a PBAR or a PBEAM (tapered: its mean section; I1 -> iz, I2 ->
+    iy)."""
     pid = prop.id()
     if prop.name == "PBAR":
         a, i1, i2, i12, j, nsm = (prop.real(k) for k in ("A", "I1", "I2", "I12", "J", "NSM"))
         # K1, K2 blank (or ignored because I12 != 0) mean rigid in shear (MSC QRG, PBAR)
         k = [0.0 if (prop.is_blank(n) or i12) else prop.real(n) for n in ("K1", "K2")]
     else:
-        a, i1, i2, i12, j, nsm = _pbeam_values(prop, card)
+        a, i1, i2, i12, j, nsm = _pbeam_values(ctx, prop, card)
         _, tail = pbeam_layout(prop)
         used = [n for n in _PBEAM_TAIL[2:] if tail[n]]
         if used:
@@ -180,8 +221,8 @@ def _pins(e):
 
 
 def add(ctx: Context) -> None:
-    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM (one station), PBARL or PBEAML
-    (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
+    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM (tapered: its mean section), PBARL
+    or PBEAML (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
     (COUPMASS < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each,
     and for CBEAM also half the torsional inertia rho (I1 + I2) L about the axis (MSC lumps none
     for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with against MSC's 3554.923)."""

@@ -31,7 +31,7 @@ class Context:
     """What the card converters share: elements {(card name, id): Card} (elements, masses and
     rigid elements have id spaces of their own), property and material tables ({id: Card}),
     the grids, the structure node of each grid row (-1: not in the structure), WTMASS, lumped
-    line mass, the builder, the deck's refusals, notes for the user."""
+    line mass, the builder, the deck's refusals, notes for the user, the rigid elements' cards."""
 
     elements: dict
     props: dict
@@ -44,6 +44,8 @@ class Context:
     refusals: object
     notes: list = field(default_factory=list)
     framed: set = field(default_factory=set)
+    #: {"rbe2 i" / "rbe3 i" (the builder's names): the card}, to name cards in its errors
+    rigid: dict = field(default_factory=dict)
 
     def each(self, names, convert) -> None:
         """``convert(self, card)`` for each element named ``names``, in id order; a refused

@@ -15,7 +15,7 @@ CARDS = ("CONM2", "CONM1", "CMASS1", "CMASS2")
 
 
 def add(ctx: Context) -> None:
-    """CONM2 (offset and inertia; CID -1, 0 or rectangular), CONM1 (a rigid-body 6x6) and
+    """CONM2 (offset and inertia; CID -1, 0 or rectangular), CONM1 (any symmetric PSD 6x6) and
     CMASS1/CMASS2 on one grid's rotation (4, 5, 6: an inertia about that CD axis)."""
     ctx.each(("CONM2",), _add_conm2)
     ctx.each(("CONM1",), _add_conm1)
@@ -48,7 +48,11 @@ def _add_conm2(ctx: Context, m) -> None:
 
 
 def _add_conm1(ctx: Context, m) -> None:
-    """CONM1 as a point mass: needs M_tt = m I; its offset c from M_tr = -m skew(c)."""
+    """CONM1 (MSC QRG: a 6x6 symmetric mass matrix at a grid, in CID; lower triangle Mij).  A
+    rigid-body matrix (M_tt = m I, M_tr = -m skew(c), c the offset of the centre of mass) is a
+    point mass with its inertia about that centre; any other positive semi-definite matrix is
+    the sum of its eigen-terms lambda_k v_k v_k^T, each a grounded scalar mass on the direction
+    v_k (6,) of the grid's six DOFs (``fe.scalar_mass``), which is the matrix itself."""
     from bayesupdate.fe.rotations import skew
 
     row = ctx.rows(m, ("G",))[0]
@@ -59,13 +63,22 @@ def _add_conm1(ctx: Context, m) -> None:
     M = (M + np.tril(M, -1).T) * ctx.wtmass
     T = np.kron(np.eye(2), R)
     M = T.T @ M @ T
-    mass = M[0, 0]
-    if mass <= 0 or not np.allclose(M[:3, :3], mass * np.eye(3), rtol=1e-6, atol=0):
-        m.fail("only a rigid-body mass (M11 = M22 = M33, no coupling) is supported")
-    S = -M[:3, 3:] / mass  # = skew(c)
-    c = np.array([S[2, 1], S[0, 2], S[1, 0]])
-    J = M[3:, 3:] - mass * skew(c[None])[0].T @ skew(c[None])[0]
-    ctx.builder.add_point_mass(ctx.node[row], mass, f"CONM1 {m.id()}", J, c)
+    mass, node = M[0, 0], ctx.node[row]
+    if mass > 0 and np.allclose(M[:3, :3], mass * np.eye(3), rtol=1e-12, atol=0):
+        S = -M[:3, 3:] / mass  # = skew(c) when M is a rigid body's
+        c = np.array([S[2, 1], S[0, 2], S[1, 0]])
+        if np.allclose(S, skew(c[None])[0], rtol=1e-12, atol=1e-12 * np.abs(S).max()):
+            J = M[3:, 3:] - mass * skew(c[None])[0].T @ skew(c[None])[0]
+            try:
+                ctx.builder.add_point_mass(node, mass, f"CONM1 {m.id()}", J, c)
+                return
+            except BayesUpdateError:
+                pass  # an inertia that is not PSD about the centre: the general matrix below
+    lam, V = np.linalg.eigh(M)
+    if lam.min() < -1e-12 * max(lam.max(), 1e-300):
+        m.fail(f"the mass matrix is not positive semi-definite (eigenvalue {lam.min():.3g})")
+    for k in np.flatnonzero(lam > 1e-14 * lam.max()):
+        ctx.builder.add_scalar_mass(node, V[:, k], float(lam[k]), f"CONM1 {m.id()}")
 
 
 def _add_cmass(ctx: Context, m) -> None:

@@ -8,7 +8,7 @@ CARDS = ("RBE2", "RBAR", "RBE3")
 
 
 def add(ctx: Context) -> None:
-    """RBE2, RBE3 (no UM set) and RBAR (CNA = CMB = 123456)."""
+    """RBE2, RBE3 (weight groups with their own components; UM) and RBAR (CNA = CMB = 123456)."""
     ctx.each(("RBE2",), _add_rbe2)
     ctx.each(("RBAR",), _add_rbar)
     ctx.each(("RBE3",), _add_rbe3)
@@ -20,7 +20,7 @@ def _add_rbe2(ctx: Context, r) -> None:
     comps = components(ctx, r["CM"], rows, r)
     gn = ctx.rows(r, ("GN",))[0]
     try:
-        ctx.builder.add_rbe2(ctx.node[gn], ctx.node[rows], comps)
+        ctx.rigid[f"rbe2 {ctx.builder.add_rbe2(ctx.node[gn], ctx.node[rows], comps)}"] = r
     except BayesUpdateError as exc:
         r.fail(_builder_message(exc))
 
@@ -29,11 +29,11 @@ def _add_rbar(ctx: Context, r) -> None:
     if str(r["CNA"]) != "123456" or str(r["CMB"]) != "123456" or r["CNB"] or r["CMA"]:
         r.fail("only CNA = 123456, CMB = 123456 is supported")
     ga, gb = ctx.node[ctx.rows(r, ("GA", "GB"))]
-    ctx.builder.add_rbe2(ga, [gb], "123456")
+    ctx.rigid[f"rbe2 {ctx.builder.add_rbe2(ga, [gb], '123456')}"] = r
 
 
 def rbe3_groups(r) -> list[tuple[float, str, list[int]]]:
-    """[(WTi, Ci, grids)] of an RBE3 (refused with a UM set)."""
+    """[(WTi, Ci, grids)] of an RBE3's weight groups (up to its UM, ALPHA or TREF)."""
     values = r.values(4)
     groups, k = [], 0
     while k < len(values):
@@ -42,8 +42,6 @@ def rbe3_groups(r) -> list[tuple[float, str, list[int]]]:
             k += 1
             continue
         if v in ("UM", "ALPHA", "TREF"):
-            if v == "UM":
-                r.fail("UM (user-chosen dependent DOFs) is not supported")
             break
         if not isinstance(v, float) or k + 1 >= len(values):
             r.fail(f"field {v!r}: give WTi (a real), Ci, then grids")
@@ -57,16 +55,57 @@ def rbe3_groups(r) -> list[tuple[float, str, list[int]]]:
     return groups
 
 
+def rbe3_um(r) -> list[tuple[int, str]]:
+    """[(GMi, CMi)] of an RBE3's UM set (empty without one)."""
+    values = r.values(4)
+    if "UM" not in values:
+        return []
+    out, k = [], values.index("UM") + 1
+    while k < len(values) and values[k] not in ("ALPHA", "TREF"):
+        if values[k] is None:
+            k += 1
+            continue
+        if not isinstance(values[k], int) or k + 1 >= len(values) or values[k + 1] is None:
+            r.fail(f"UM field {values[k]!r}: give GMi, CMi pairs")
+        out.append((values[k], str(values[k + 1])))
+        k += 2
+    return out
+
+
 def _add_rbe3(ctx: Context, r) -> None:
-    """RBE3: REFGRID's REFC is the weighted mean motion of the groups (WTi, Ci, Gi,j)."""
+    """RBE3: REFGRID's REFC is the weighted mean motion of the groups (WTi, Ci, Gi,j), each grid
+    with its own group's weight and components (a grid in several groups: one leg each).  A UM
+    set (MSC QRG RBE3: GMi, CMi) makes those DOFs dependent instead of REFC: the same equations,
+    solved for them (``fe.constraints``), so REFC may be fixed or dependent elsewhere."""
     groups = rbe3_groups(r)
-    comps = {c for _, c, _ in groups}
-    if len(comps) != 1:
-        r.fail("all weight groups need the same components")
     nodes = [g for _, _, gs in groups for g in gs]
     weights = [float(w) for w, _, gs in groups for _ in gs]
     rows = ctx.grids.index(nodes, r)
     ref = ctx.rows(r, ("REFGRID",))
-    node_c = components(ctx, comps.pop(), rows, r)
+    node_c = []
+    for w, comp, gs in groups:
+        if not w > 0:
+            r.fail(f"weight {w}: give WTi > 0")
+        node_c += [components(ctx, comp, ctx.grids.index(gs, r), r)] * len(gs)
     ref_c = components(ctx, r["REFC"], ref, r)
-    ctx.builder.add_rbe3(ctx.node[ref[0]], ctx.node[rows], weights, ref_c, node_c)
+    um = rbe3_um(r)
+    _check_um(r, um, ref_c, set(nodes) | {r.int("REFGRID")})
+    um_rows = [ctx.grids.index([g], r)[0] for g, _ in um]
+    um = [(ctx.node[k], components(ctx, c, [k], r)) for k, (_, c) in zip(um_rows, um, strict=True)]
+    try:
+        i = ctx.builder.add_rbe3(ctx.node[ref[0]], ctx.node[rows], weights, ref_c, node_c, um)
+        ctx.rigid[f"rbe3 {i}"] = r
+    except BayesUpdateError as exc:
+        r.fail(_builder_message(exc))
+
+
+def _check_um(r, um, ref_c: str, grids: set) -> None:
+    n = 0
+    for g, comp in um:
+        if g not in grids:
+            r.fail(f"UM grid {g} is not one of the element's grids")
+        if not comp.isdigit() or set(comp) - set("123456"):
+            r.fail(f"UM components {comp!r}: give digits 1-6")
+        n += len(set(comp))
+    if um and n != len(ref_c):
+        r.fail(f"UM has {n} DOFs; REFC {ref_c} has {len(ref_c)} (MSC QRG RBE3: as many)")

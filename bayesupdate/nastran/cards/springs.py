@@ -1,5 +1,10 @@
 """CELAS1/CELAS2 and CBUSH + PBUSH as springs (MSC Nastran QRG).
 
+A PBUSH's K line gives the six stiffnesses along the element axes (CID's, or x from GA to GB);
+its M line (MSC: one MASS, the lumped mass of the CBUSH) is translational mass, (1 - S) MASS
+at GA and S MASS at GB (QRG PBUSH remark 13); its B and GE lines (damping) do not change real normal
+modes and are listed once as ignored.
+
 A CBUSH whose ends are apart acts at its location (S along GA-GB, or S1-S3 in OCID) through
 rigid arms from both grids (``StructureBuilder.add_spring(location=...)``, ``fe.bush``), so
 moments balance as in MSC's CBUSH.
@@ -50,18 +55,40 @@ def pbush_lines(p) -> dict[str, list]:
 
 
 def pbush_k(p) -> np.ndarray:
-    """(6,) K1-K6 of a PBUSH (blank = 0); refuses a mass (M) it cannot place."""
+    """(6,) K1-K6 of a PBUSH (blank = 0)."""
+    return np.array([float(v or 0.0) for v in pbush_lines(p).get("K", [None] * 6)])
+
+
+def pbush_mass(p) -> float:
+    """MASS of a PBUSH's M line (MSC QRG PBUSH: one value, the lumped mass of the CBUSH; blank
+    or no M line: 0).  Six directional masses (another code's PBUSH) are refused."""
+    values = pbush_lines(p).get("M", [None] * 6)
+    if any(values[1:]):
+        p.fail("M line with more than one mass: MSC's PBUSH M has one MASS field")
+    mass = float(values[0] or 0.0)
+    if mass < 0:
+        p.fail(f"MASS = {mass}: give a mass >= 0")
+    return mass
+
+
+def _pbush_note(ctx: Context, p) -> None:
+    """A note for the PBUSH lines that do not change real normal modes (B: viscous damping,
+    GE: structural damping, RCV: stress recovery)."""
     lines = pbush_lines(p)
-    if any(v for v in lines.get("M", [])):
-        p.fail("PBUSH M (mass) is not supported")
-    return np.array([float(v or 0.0) for v in lines.get("K", [None] * 6)])
+    unused = [k for k in ("B", "GE") if any(lines.get(k, []))]
+    if unused:
+        note = (f"PBUSH {p.id()}: {' and '.join(unused)} (damping) ignored: no effect on real "
+                "normal modes")  # fmt: skip
+        if note not in ctx.notes:
+            ctx.notes.append(note)
 
 
 def _add_cbush(ctx: Context, e) -> None:
     """A CBUSH: K1-K6 along its element axes (CID's axes; else x from GA to GB and y in the plane
     of x and v), at its location P; ends apart act at P through rigid arms from GA and GB."""
     prop = ctx.prop(e, ("PBUSH",))
-    k = pbush_k(prop)
+    k, mass = pbush_k(prop), pbush_mass(prop)
+    _pbush_note(ctx, prop)
     gb = e["GB"]
     ids = [e.int("GA", positive=True)] + ([int(gb)] if gb else [])
     rows = ctx.grids.index(ids, e)
@@ -86,6 +113,23 @@ def _add_cbush(ctx: Context, e) -> None:
     if len(ids) == 2 and np.linalg.norm(x[1] - x[0]) > 0:
         p = _cbush_point(ctx, e, x)
     ctx.builder.add_spring(a, b, k, part, frame=frame, location=p)
+    if mass > 0:
+        _add_bush_mass(ctx, e, mass * ctx.wtmass, a, b, part)
+
+
+def _add_bush_mass(ctx: Context, e, mass: float, a, b, part: str) -> None:
+    """PBUSH MASS as MSC places it (QRG PBUSH remark 13): translational, (1 - S) MASS at GA and
+    S MASS at GB.  A grounded CBUSH and an OCID offset (MSC splits by distances given as
+    formulas we have not checked) are refused rather than guessed."""
+    if b is None:
+        e.fail("PBUSH M on a grounded CBUSH is not supported (give the mass as a CONM2)")
+    if e.int("OCID") != -1:
+        e.fail("PBUSH M with an OCID offset is not supported (give the mass as a CONM2)")
+    s = e.real("S")
+    if not 0 <= s <= 1:
+        e.fail(f"S = {s}: give 0 <= S <= 1")
+    ctx.builder.add_point_mass(a, (1 - s) * mass, part)
+    ctx.builder.add_point_mass(b, s * mass, part)
 
 
 def _cbush_point(ctx: Context, e, x) -> np.ndarray:

@@ -1,0 +1,308 @@
+"""Nastran cards against closed forms (MSC Nastran Quick Reference Guide semantics): tapered PBEAM
+stations, CBUSH CID / OCID / PBUSH M, CONM1 6x6, CELAS1 + PELAS, CMASS1 + PMASS, RBE3 weight
+groups with their own components and a UM set; bad input in one message with file:line."""
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from bayesupdate.cli import main
+from bayesupdate.nastran import load_nastran_model
+
+
+def _deck(bulk: str, n_modes: int = 4, case: str = "") -> str:
+    return (f"SOL 103\nCEND\nSPC = 1\nMETHOD = 1\n{case}BEGIN BULK\nEIGRL,1,,,{n_modes}\n{bulk}"
+            "ENDDATA\n")  # fmt: skip
+
+
+def _write(tmp_path, text: str, name: str = "deck.bdf"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _hz(omega2) -> np.ndarray:
+    return np.sqrt(np.asarray(omega2, float)) / (2 * np.pi)
+
+
+def rejected(capsys, *argv) -> str:
+    code = main(["modes", *map(str, argv)])
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+# -- PBEAM tapered stations -----------------------------------------------------------------------
+def _pbeam_area(tmp_path, pbeam: str) -> float:
+    bulk = (f"GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n{pbeam}"
+            "CBEAM,1,5,1,2,0.,0.,1.\nSPC1,1,123456,1\n")  # fmt: skip
+    return float(load_nastran_model(_write(tmp_path, _deck(bulk))).structure.general_beams.area[0])
+
+
+@pytest.mark.parametrize(
+    "stations, area",
+    [
+        (",NO,1.,4.e-3\n", 3e-3),  # ends A 2, B 4: the mean 3
+        (",NO,0.5\n,NO,1.,4.e-3\n", 3e-3),  # blank station: linear between A and B
+        (",NO,0.5,5.e-3\n,NO,1.,4.e-3\n", 4e-3),  # (2 + 5) / 4 + (5 + 4) / 4
+        (",NO,1.\n", 2e-3),  # end B blank: end A's (a constant beam)
+        (",,,,,,,,\n,YESA,0.25,6.e-3\n", 4e-3),  # with C1(A)..F2(A); no end B: end A's
+    ],
+)  # fmt: skip
+def test_pbeam_stations_follow_the_qrg_blank_rules(tmp_path, stations, area):
+    """QRG PBEAM: blank fields at end B are end A's, at an intermediate station the linear
+    interpolation between A and B; the element uses the mean over its length of the
+    piecewise-linear variation (trapezoid rule over the stations)."""
+    pbeam = f"PBEAM,5,1,2.e-3,4.e-6,1.e-6,,2.e-6\n{stations}"
+    assert _pbeam_area(tmp_path, pbeam) == pytest.approx(area, rel=1e-12)
+
+
+def _wedge(n: int) -> str:
+    """A cantilever of depth h0 (1 - x/L) (a wedge: A ~ h, I1 ~ h^3), n tapered CBEAMs, each
+    PBEAM with end A and end B from the exact law (no C/D/E/F line), shear-rigid (K1 = K2 = 0),
+    consistent mass."""
+    L, b, h0 = 1.0, 0.02, 0.01
+
+    def sec(s):
+        h = h0 * (1 - s)
+        return ",".join(repr(v) for v in (b * h, b * h**3 / 12, h * b**3 / 12, 0.0, h * b**3 / 3))
+
+    lines = ["PARAM,COUPMASS,1", "MAT1,1,2.e11,,0.3,7800.", "SPC1,1,123456,1"]
+    lines += [f"GRID,{k + 1},,{k * L / n!r},0.,0." for k in range(n + 1)]
+    for k in range(n):
+        lines += [f"PBEAM,{k + 1},1,{sec(k / n)}", f",NO,1.,{sec((k + 1) / n)}", ",0.,0.",
+                  f"CBEAM,{k + 1},{k + 1},{k + 1},{k + 2},0.,0.,1."]  # fmt: skip
+    return _deck("\n".join(lines) + "\n", n_modes=1)
+
+
+def test_tapered_pbeams_converge_to_kirchhoffs_wedge(tmp_path):
+    """Kirchhoff's wedge cantilever (depth tapering linearly to 0 at the free end, constant
+    width): omega_1 = 5.315 sqrt(E I0 / (m0 L^4)) (Timoshenko, Young & Weaver, *Vibration
+    Problems in Engineering*, 4th ed., 1974, sec. 5.11).  Each element's mean section converges
+    at second order: 20 elements within 0.5 %, 40 within 0.15 %, the error / 4 or so."""
+    E, rho, b, h0 = 2e11, 7800.0, 0.02, 0.01
+    exact = 5.315 * np.sqrt(E * b * h0**3 / 12 / (rho * b * h0)) / (2 * np.pi)
+    err = {}
+    for n in (20, 40):
+        model = load_nastran_model(_write(tmp_path, _wedge(n), f"wedge{n}.bdf"))
+        err[n] = model.solve(n_modes=1).frequencies_hz[0] / exact - 1
+        assert any("PBEAM 1 is tapered" in s for s in model.structure.metadata["nastran"]["notes"])
+    assert abs(err[20]) < 5e-3 and abs(err[40]) < 1.5e-3, err
+    assert 3.5 < err[20] / err[40] < 4.5, err
+
+
+# -- CBUSH CID, OCID and PBUSH M -----------------------------------------------------------------
+CORD7 = "CORD2R,7,,0.,0.,0.,0.3,0.4,0.866\n,1.,0.2,0.\n"
+
+
+def test_grounded_cbush_springs_act_along_its_cid_axes(tmp_path):
+    """A 2 (x WTMASS 0.5 = 1) CONM2 on a grounded CBUSH with CID 7 (a rotated CORD2R), K1-K3 =
+    100, 400, 900, rotations held: f_i = sqrt(K_i / 1) / 2 pi, mode i along axis i of CID 7."""
+    from bayesupdate.nastran.deck import Refusals, read_deck
+    from bayesupdate.nastran.frames import read_grids
+
+    bulk = (f"PARAM,WTMASS,0.5\n{CORD7}GRID,1,,0.,0.,0.\nCONM2,9,1,,2.\n"
+            "CBUSH,3,8,1,,,,,7\nPBUSH,8,K,100.,400.,900.\nSPC1,1,456,1\n")  # fmt: skip
+    path = _write(tmp_path, _deck(bulk, 3))
+    r = load_nastran_model(path).solve(n_modes=3)
+    assert r.frequencies_hz == pytest.approx(_hz([100.0, 400.0, 900.0]), rel=1e-10)
+    axes = read_grids(read_deck(path), Refusals("")).coords[7].axes  # rows: CID 7 axes
+    for i in range(3):
+        u = r.modes.shapes[:3, i]
+        assert abs(axes[i] @ u) / np.linalg.norm(u) == pytest.approx(1.0, abs=1e-9)
+
+
+MIXED = """GRID,1,,0.,0.,0.
+GRID,2,,10.,0.,0.
+GRID,3,,10.,0.,0.
+GRID,4,,20.,0.,0.
+CROD,1,5,1,2
+PROD,5,7,0.5
+MAT1,7,1.e7,,.3
+RBAR,2,2,3,123456,,,123456
+CONM1,10,4,0,2.,0.,2.,0.,0.
+,2.,0.,0.,0.,1.,0.,0.,0.
+,0.,1.,0.,0.,0.,0.,0.,1.
+SPC1,1,123456,1
+SPC1,1,23456,2
+PBUSH,8,K,1.e4,1.e4,1.e4,1.e6,1.e6,1.e6
+"""
+
+
+def _bush_apart_hz() -> np.ndarray:
+    """The MIXED deck's closed form with the bush acting at x = 15, 5 from the mass (as
+    ``test_nastran.test_cbush_with_ends_apart_acts_at_its_midpoint_through_rigid_arms``)."""
+    ky, kr = 1e4, 1e6
+    K = np.array([[ky, -5 * ky], [-5 * ky, kr + 25 * ky]])
+    bend = scipy.linalg.eigh(K, np.diag([2.0, 1.0]), eigvals_only=True)
+    k_x = 1 / (1 / 5e5 + 1 / 1e4)
+    return np.sort(_hz(np.r_[k_x / 2, bend, bend, kr]))
+
+
+@pytest.mark.parametrize(
+    "cbush",
+    [
+        "CBUSH,3,8,3,4,,,,0\n,,0,5.,0.,0.\n",  # OCID 0 (basic): S1-S3 from GA
+        # OCID 9: x' = basic y, y' = -basic x, so S2 = -5 is basic +5 x
+        "CBUSH,3,8,3,4,,,,0\n,,9,0.,-5.,0.\nCORD2R,9,,0.,0.,0.,0.,0.,1.\n,0.,1.,0.\n",
+        "CBUSH,3,8,3,4,,,,0\n,0.5\n",  # S = 0.5 on GA-GB, OCID -1 (blank)
+    ],
+)  # fmt: skip
+def test_cbush_offset_in_ocid_equals_the_same_point_by_s(tmp_path, cbush):
+    """The bush point GA + (5, 0, 0) given by OCID 0 and S1-S3, by a rotated OCID or by S on
+    GA-GB: the same closed form (rigid arms from both grids, MSC QRG CBUSH)."""
+    path = _write(tmp_path, _deck(MIXED + cbush, 6))
+    f = load_nastran_model(path).solve(n_modes=6).frequencies_hz
+    assert f == pytest.approx(_bush_apart_hz(), rel=1e-6)
+
+
+def test_pbush_mass_is_split_by_s_and_damping_is_noted(tmp_path):
+    """PBUSH M = 2 on a CBUSH at S = 0.25 (MSC QRG PBUSH remark 13): 1.5 at GA (clamped), 0.5 at
+    GB, which carries a 1 CONM2 with inertia 1: translations sqrt(k / 1.5), rotations
+    sqrt(kr / 1); the total mass counts all 3; B and GE are noted as ignored."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,0.,0.,0.\nCONM2,9,2,,1.,,,,\n,1.,,1.,,,1.\n"
+            "CBUSH,3,8,1,2,,,,0\n,0.25\nPBUSH,8,K,1.e4,1.e4,1.e4,1.e6,1.e6,1.e6\n"
+            ",,M,2.\n,,GE,0.02\n,,B,3.\nSPC1,1,123456,1\n")  # fmt: skip
+    model = load_nastran_model(_write(tmp_path, _deck(bulk, 6)))
+    f = model.solve(n_modes=6).frequencies_hz
+    assert f == pytest.approx(_hz([1e4 / 1.5] * 3 + [1e6] * 3), rel=1e-9)
+    assert model.solve(n_modes=1).mass_kg == pytest.approx(3.0, rel=1e-12)
+    notes = model.structure.metadata["nastran"]["notes"]
+    assert any("PBUSH 8: B and GE (damping) ignored" in n for n in notes), notes
+
+
+# -- CONM1, CELAS1 + PELAS, CMASS1 + PMASS ------------------------------------------------------
+def test_conm1_general_6x6_mass_matrix(tmp_path):
+    """CONM1 with M11 = 2, M22 = 3, M33 = 5 (no rigid body has that) and M51 = 0.5 coupling x
+    with the rotation about y (inertia M55 = 1): on grounded springs kx, ky, kz, kry (CELAS2)
+    and rx, rz held, the frequencies are sqrt(ky / 3), sqrt(kz / 5) and those of the 2x2
+    problem (x, ry): K = diag(kx, kry), M = [[2, 0.5], [0.5, 1]]."""
+    kx, ky, kz, kr = 100.0, 600.0, 2000.0, 50.0
+    bulk = ("GRID,1,,0.,0.,0.\nCONM1,10,1,,2.,0.,3.,0.,0.\n,5.,0.,0.,0.,0.,0.5,0.,0.\n"
+            ",0.,1.,0.,0.,0.,0.,0.,0.\n"
+            f"CELAS2,1,{kx},1,1\nCELAS2,2,{ky},1,2\nCELAS2,3,{kz},1,3\nCELAS2,5,{kr},1,5\n"
+            "SPC1,1,46,1\n")  # fmt: skip
+    model = load_nastran_model(_write(tmp_path, _deck(bulk, 4)))
+    f = model.solve(n_modes=4).frequencies_hz
+    pair = scipy.linalg.eigh(np.diag([kx, kr]), np.array([[2.0, 0.5], [0.5, 1.0]]),
+                             eigvals_only=True)  # fmt: skip
+    assert f == pytest.approx(np.sort(_hz([ky / 3, kz / 5, *pair])), rel=1e-9)
+
+
+def test_celas1_pelas_and_cmass1_pmass(tmp_path):
+    """CELAS1 -> PELAS K = 400 and CMASS1 -> PMASS M = 4 on component 2 of a grid, the rest
+    held: f = sqrt(400 / 4) / 2 pi; between two grids (C1 of 1, C1 of 2, grid 2 held) the
+    same (grid 2 held, with a CONM2 so that the model has rigid-body mass)."""
+    one = ("GRID,1,,0.,0.,0.\nCELAS1,1,5,1,2\nPELAS,5,400.\nCMASS1,2,6,1,2\nPMASS,6,4.\n"
+           "SPC1,1,13456,1\n")  # fmt: skip
+    r = load_nastran_model(_write(tmp_path, _deck(one, 1))).solve(n_modes=1)
+    assert r.frequencies_hz[0] == pytest.approx(_hz(100.0), rel=1e-12)
+    two = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCELAS1,1,5,1,1,2,1\nPELAS,5,400.\n"
+           "CMASS1,2,6,1,1,2,1\nPMASS,6,4.\nCONM2,7,2,,1.\nSPC1,1,23456,1\n"
+           "SPC1,1,123456,2\n")  # fmt: skip
+    r = load_nastran_model(_write(tmp_path, _deck(two, 1), "two.bdf")).solve(n_modes=1)
+    assert r.frequencies_hz[0] == pytest.approx(_hz(100.0), rel=1e-12)
+
+
+# -- RBE3 weight groups and UM -------------------------------------------------------------------
+def _rbe3_deck(um: str = "") -> str:
+    """Reference grid 9 at the origin with a 2 CONM2 (its rotations held); four grids, each on
+    grounded 6-DOF springs k = 1e4: group 1 (WT 1, C 123) at (+-1, 0, 0), group 2 (WT 3, C 1) at
+    (0, +-1, 0)."""
+    return _deck(
+        "GRID,9,,0.,0.,0.\nGRID,1,,1.,0.,0.\nGRID,2,,-1.,0.,0.\nGRID,3,,0.,1.,0.\n"
+        "GRID,4,,0.,-1.,0.\nCONM2,20,9,,2.\nPBUSH,8,K,1.e4,1.e4,1.e4,1.e4,1.e4,1.e4\n"
+        + "".join(f"CBUSH,{g},8,{g},,,,,0\n" for g in (1, 2, 3, 4))
+        + f"RBE3,30,,9,123,1.,123,1,2\n,3.,1,3,4{um}\nSPC1,1,456,9\n",
+        n_modes=3,
+    )
+
+
+def test_rbe3_weight_groups_with_their_own_components(tmp_path):
+    """With the nodes symmetric about the reference, the reference translation along i is the
+    weighted mean of the nodes that use component i: u_x = (u1 + u2 + 3 u3 + 3 u4) / 8,
+    u_y = (u1 + u2) / 2, u_z likewise (a hand computation of the QRG RBE3 mean).  The nodes' own
+    springs k and the mass m on the reference give omega^2 = k / (m |a|^2) for u_r = a . u:
+    |a|^2 = 20 / 64 along x and 1 / 2 along y and z.  A UM set (the node DOFs made dependent
+    instead, MSC QRG RBE3) is the same constraint: the same frequencies."""
+    k, m = 1e4, 2.0
+    expected = np.sort(_hz([k / (m * 20 / 64), k / (m * 0.5), k / (m * 0.5)]))
+    for um, name in (
+        ("", "plain.bdf"),
+        ("\n,UM,1,123", "um.bdf"),
+        ("\n,UM,1,2,3,1,2,3", "um2.bdf"),
+    ):
+        f = load_nastran_model(_write(tmp_path, _rbe3_deck(um), name)).solve(n_modes=3)
+        assert f.frequencies_hz == pytest.approx(expected, rel=1e-10)
+
+
+def test_rbe3_um_lets_the_reference_be_fixed(tmp_path):
+    """The RBE3 of ``_rbe3_deck`` with its reference grid clamped and UM = grid 1's 123: the
+    constraint is a . u = 0 along each axis (a = (1, 1, 3, 3) along x over grids 1-4, (1, 1) along
+    y and z over grids 1, 2).  Grids 1-4 carry CONM2 masses 1, 2, 3, 4 on springs k: the modes
+    are those of K = k I, M = diag(m) on the null space of a, computed here by projection."""
+    k, m = 1e4, np.array([1.0, 2.0, 3.0, 4.0])
+    deck = _rbe3_deck("\n,UM,1,123").replace(
+        "CONM2,20,9,,2.",
+        "".join(f"CONM2,{20 + g},{g},,{m[g - 1]}\n" for g in (1, 2, 3, 4)).rstrip("\n"),
+    )
+    deck = deck.replace("SPC1,1,456,9", "SPC1,1,123456,9").replace("EIGRL,1,,,3", "EIGRL,1,,,9")
+    f = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=9).frequencies_hz
+    expected = []
+    for a in (np.array([1.0, 1, 3, 3]), np.array([1.0, 1, 0, 0]), np.array([1.0, 1, 0, 0])):
+        Z = scipy.linalg.null_space(a[None])
+        expected += list(scipy.linalg.eigh(k * Z.T @ Z, Z.T @ np.diag(m) @ Z, eigvals_only=True))
+    assert f == pytest.approx(np.sort(_hz(expected)), rel=1e-9)
+
+
+def test_rbe3_um_with_the_wrong_dofs_is_refused(capsys, tmp_path):
+    """Two UM DOFs for three REFC components, and three whose coefficients are dependent (grid
+    3 is in a group with C = 1 only, so its z is in no equation): one line each, naming the
+    card and its file:line."""
+    path = _write(tmp_path, _rbe3_deck("\n,UM,1,12"), "bad.bdf")
+    line = rejected(capsys, "--model", path)
+    assert "bad.bdf:18 RBE3 30: UM has 2 DOFs; REFC 123 has 3" in line, line
+    path = _write(tmp_path, _rbe3_deck("\n,UM,1,12,3,3"), "bad.bdf")
+    line = rejected(capsys, "--model", path)
+    assert "bad.bdf:18 RBE3 30: its UM DOFs do not determine" in line, line
+
+
+# -- bad input: one message, exit 2, every card's file:line ---------------------------------------
+def test_scalar_point_cards_are_refused_with_their_lines(capsys, tmp_path):
+    """SPOINT, CELAS3 and CELAS4 (scalar points: not supported) and a CELAS2 on a scalar point
+    id (no GRID of that id): one message, each with its file:line."""
+    bulk = ("GRID,1,,0.,0.,0.\nCONM2,9,1,,1.\nCELAS2,1,100.,1,1\nSPOINT,101\n"
+            "CELAS3,2,5,101\nPELAS,5,10.\nCELAS4,3,20.,101\nCELAS2,4,5.,101,0\n")  # fmt: skip
+    line = rejected(capsys, "--model", _write(tmp_path, _deck(bulk), "scalar.bdf"))
+    for where in ("scalar.bdf:10 SPOINT", "scalar.bdf:11 CELAS3 2", "scalar.bdf:13 CELAS4 3",
+                  "scalar.bdf:14 CELAS2 4"):  # fmt: skip
+        assert where in line, line
+
+
+def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(capsys, tmp_path):
+    """A missing INCLUDE (in any letter case), a DVPREL1 on a field that cannot be bound (PBAR
+    I12) and an unsupported card: one message, exit 2, each with its file:line."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+            "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,6,5,1,2,0.,0.,1.\nSPC1,1,123456,1\n"
+            "INCLUDE 'Missing.dat'\nDESVAR,1,AREA,2.e-3,1.e-3,4.e-3\n"
+            "DVPREL1,10,PBAR,5,I12\n,1,1.\nCDAMP2,20,1.,2,1\n")  # fmt: skip
+    line = rejected(capsys, "--model", _write(tmp_path, _deck(bulk), "main.bdf"))
+    for where in ("main.bdf:13 INCLUDE 'Missing.dat': no such file", "main.bdf:15 DVPREL1 10",
+                  "main.bdf:17 CDAMP2 20"):  # fmt: skip
+        assert where in line, line
+    assert "3 card(s) refused" in line, line
+
+
+def test_a_binding_on_a_tapered_pbeam_is_refused(tmp_path):
+    """A binding writes one value at every PBEAM station, which would make the taper constant:
+    refused, naming the parameter and the card's file:line."""
+    from bayesupdate.errors import BayesUpdateError
+
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+            "PBEAM,5,1,2.e-3,4.e-6,1.e-6,,2.e-6\n,NO,1.,4.e-3\nCBEAM,1,5,1,2,0.,0.,1.\n"
+            "SPC1,1,123456,1\n")  # fmt: skip
+    deck = _write(tmp_path, _deck(bulk), "tapered.bdf")
+    with pytest.raises(BayesUpdateError, match=r"parameter a: binds 'PBEAM 5 A': PBEAM 5 "
+                       r"\(tapered.bdf:10\) is tapered"):  # fmt: skip
+        load_nastran_model(deck, parameters={"a": {"binds": "PBEAM 5 A"}})

@@ -377,16 +377,30 @@ class LineAssembler(GeneralAssembler):
     At the deck's values the change is exactly 0, so the bound model is the deck to the bit.
     The K returned is the very object ``solve`` matches its ground springs by.
 
-    fast : False keeps ``LineRebuild`` at every solve (the reference, for checks)."""
+    fast : False keeps ``LineRebuild`` at every solve (the reference, for checks).  The
+    ``LineFields`` are found at the first point away from the deck's values (a ``modes`` run at
+    the deck's values converts nothing again)."""
 
     def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True):
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
         self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
-        self.fields, self.fields_note = None, "the reference path was asked for"
-        if fast:
-            self.fields, self.fields_note = line_fields(self, self.rebuild, defaults, bounds)
+        self._box = (defaults, bounds)
+        self._fields = None if fast else (None, "the reference path was asked for")
+
+    @property
+    def fields(self) -> "LineFields | None":
+        """The bound elements' ``LineFields``; None when their records are not affine in the
+        parameters (``fields_note`` says why) or the reference path was asked for."""
+        if self._fields is None:
+            self._fields = line_fields(self, self.rebuild, *self._box)
+        return self._fields[0]
+
+    @property
+    def fields_note(self) -> str:
+        """Why there are no ``fields`` ("" when there are)."""
+        return "" if self.fields is not None else self._fields[1]
 
     def line_base(self) -> tuple[np.ndarray, np.ndarray]:
         """(K, M) (nnz,) of the bound elements (and lumped masses) at the deck's values."""
@@ -404,7 +418,9 @@ class LineAssembler(GeneralAssembler):
 
     def assemble(self, props, shell_props=None):
         K, M, elem = super().assemble(props, shell_props)
-        if self.values is not None:
+        defaults = self._box[0]
+        if self.values is not None and any(self.values[n] != defaults[n]
+                                           for n in self.rebuild.bindings):  # fmt: skip
             dK, dM = self.line_delta(self.values)
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM

@@ -70,7 +70,8 @@ class LineUpdate:
             dofs = g.beams.mass_dofs[self.mass_index]
             self._pos_mass = _positions(keys, g.n_dof, dofs)
             self._mass_T = g.beams._mass_T[self.mass_index]  # noqa: SLF001 - same element
-        self._base = self._data(self.beams, self.rods, self.masses())
+        #: (K, M) (nnz,) of the chosen elements at the structure's values
+        self.base = self._data(self.beams, self.rods, self.masses())
 
     def masses(self) -> PointMassValues:
         """The chosen point masses' values in the structure."""
@@ -79,16 +80,23 @@ class LineUpdate:
             s.mass_value[self.mass_index].copy(), s.mass_inertia[self.mass_index].copy()
         )
 
-    def delta(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
-        """(dK, dM) (nnz,) CSR data of the change: ``beams`` (``GeneralBeams`` of the chosen
-        beams, in ``beam_index`` order), ``rods`` (``Rods``), ``masses``
+    def contribution(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
+        """(K, M) (nnz,) CSR data of the chosen elements alone: ``beams`` (``GeneralBeams`` of
+        the chosen beams, in ``beam_index`` order), ``rods`` (``Rods``), ``masses``
         (``PointMassValues``) at their new values; None keeps the structure's."""
-        K, M = self._data(
+        if beams is None and rods is None and masses is None:
+            return self.base[0].copy(), self.base[1].copy()
+        return self._data(
             self.beams if beams is None else beams,
             self.rods if rods is None else rods,
             self.masses() if masses is None else masses,
         )
-        return K - self._base[0], M - self._base[1]
+
+    def delta(self, beams=None, rods=None, masses=None) -> tuple[np.ndarray, np.ndarray]:
+        """(dK, dM) (nnz,) CSR data of the change from the structure's values to ``beams``,
+        ``rods``, ``masses`` (as ``contribution``)."""
+        K, M = self.contribution(beams, rods, masses)
+        return K - self.base[0], M - self.base[1]
 
     def _data(self, beams, rods, masses) -> tuple[np.ndarray, np.ndarray]:
         s, n = self.structure, self.nnz

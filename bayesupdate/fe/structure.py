@@ -203,6 +203,9 @@ class StructureBuilder:
         self.shear = shear
         self.rotary_inertia = rotary_inertia
         self.metadata: dict = {}
+        #: how the connectivity check names node k (e.g. a Nastran deck's "GRID 1203"); None:
+        #: "node k"
+        self.node_names = None
         self._shell_blocks: list[dict] = []
         self._supports: list[tuple[int, np.ndarray]] = []
         self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
@@ -554,7 +557,9 @@ class StructureBuilder:
         self._sensors.append((str(label), node, tuple(d)))
 
     # -- build ---------------------------------------------------------------------------------
-    def build(self) -> "Structure":
+    def build(self, check: bool = True) -> "Structure":
+        """The ``Structure``; ``check``: every node used and the structure in one piece
+        (``check_connected``); off for a part of a structure (a deck's re-built elements)."""
         if not self._nodes:
             raise BayesUpdateError("the structure has no nodes")
         beams = self._beams
@@ -606,7 +611,8 @@ class StructureBuilder:
             from bayesupdate.fe.builder_general import general_parts
 
             structure = replace(structure, **general_parts(self))
-        check_connected(structure)
+        if check:
+            check_connected(structure, self.node_names)
         return structure
 
 
@@ -670,10 +676,16 @@ def _dampers(records: list[dict]) -> "Dampers":
     )
 
 
-def check_connected(structure: Structure) -> None:
-    """Raise BayesUpdateError if some nodes are not connected to the rest by any element."""
+def check_connected(structure: Structure, node_names=None) -> None:
+    """Raise BayesUpdateError if some nodes are not connected to the rest by any element.
+
+    node_names : callable node index -> its name in the message (a deck's GRID id); None:
+    "node k"."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
+
+    def name(nodes) -> str:
+        return ", ".join(node_names(int(k)) if node_names else str(int(k)) for k in nodes)
 
     n = structure.n_nodes
     pairs = [structure.beam_nodes]
@@ -700,16 +712,16 @@ def check_connected(structure: Structure) -> None:
         used[sm.nodes[:, 0]] = True
     if structure.is_general and not np.all(used):
         raise BayesUpdateError(
-            f"node {int(np.flatnonzero(~used)[0])} is used by no element; remove it or connect it"
+            f"node {name(np.flatnonzero(~used)[:1])} is used by no element; remove it or connect it"
         )
     if n_comp > 1:
         sizes = np.bincount(labels)
         main = np.argmax(sizes)
         lonely = np.flatnonzero(labels != main)
         raise BayesUpdateError(
-            f"the structure is disconnected: {n_comp} separate pieces; nodes {lonely[:10].tolist()}"
-            f"{' ...' if lonely.size > 10 else ''} are not connected to the main piece "
-            "(add a beam or spring)"
+            f"the structure is disconnected: {n_comp} separate pieces; nodes {name(lonely[:10])}"
+            f"{' ...' if lonely.size > 10 else ''} are not connected to the main piece of "
+            f"{sizes[main]} nodes (add a beam or spring)"
         )
 
 

@@ -26,10 +26,13 @@ PROD A J NSM    line (re-built)        the CRODs of that property
 MAT1 E / RHO    (re-built)             also every line element (CONROD too) with that MID
 ==============  =====================  ==========================================
 
-Line-element fields are applied by re-building the bound elements from copies of their cards
-with the value written in (``lines``): the same conversion as reading the edited deck, so exact
-whatever the field (A, I, J, E, RHO enter the Euler-Bernoulli matrices linearly, but the
-Timoshenko shear parameter 12 EI / (k G A L^2) and a PBARL's A, I in its dimensions do not).
+Line-element fields act on the bound elements as the reading of the edited deck does
+(``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
+these card fields, are written at each solve and only their matrices are computed again, so
+the result is exact whatever the field (A, I, J, E, RHO enter the Euler-Bernoulli matrices
+linearly, but the Timoshenko shear parameter 12 EI / (k G A L^2) does not); a field whose
+records are not affine (a PBARL's dimensions: A, I are powers of them) re-converts the bound
+cards from copies with the value written in.
 """
 
 import re

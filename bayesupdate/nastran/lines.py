@@ -1,29 +1,45 @@
-"""Line-element fields of a Nastran deck as parameters, by re-building the bound elements.
+"""Line-element fields of a Nastran deck as parameters: the bound elements' records follow the
+parameters, and only their matrices are computed again.
 
 A binding to a PBAR/PBARL/PBEAM/PBEAML/PROD field, or to the MAT1 E or RHO of a line property,
-acts on CBAR/CBEAM/CROD/CONROD elements, which ``fe.general`` assembles once.  At each solve,
-copies of the bound cards get the parameters' values (``bindings.set_field``, as ``--write-bdf``
-writes them), the bound elements alone are converted again on the structure's nodes
-(``cards.add_beams``/``add_rods``: sections, offsets, pins, lumped or consistent mass, WTMASS),
-and K_L(theta) - K_L(deck) (and M) is added into the assembled matrices at its place in their
-pattern.  That is the reading of the edited deck, so exact whatever the field: the Timoshenko
-shear parameter 12 EI / (k G A L^2) and a PBARL's section in its dimensions are not affine, and
-even A, I, J, E, RHO enter linearly only without shear flexibility.
+acts on CBAR/CBEAM/CROD/CONROD elements, which ``fe.general`` assembles once.  Two ways give
+their matrices at new values, both the reading of the deck written with them:
 
-For the reduced basis (``fe.reduced``), ``affine_line_terms`` finds the fields that do enter
-linearly: a shear-rigid PBAR's A, I1, I2, J, a PROD's / CONROD's A and J and every NSM give
-K_L(theta) = K_L(deck) + sum_j (theta_j - theta0_j) dK_j (M likewise) exactly, dK_j the
-difference quotient over one step.  The sum is checked against re-built elements at seeded
-points of the box, so a non-linear field (a PBARL/PBEAML DIM, a shear-flexible PBEAM's A or I,
-E and A of the same elements: a product) is found and named, never approximated.
+* ``LineRebuild`` (the reference): copies of the bound cards get the parameters' values
+  (``bindings.set_field``, as ``--write-bdf`` writes them) and the bound elements alone are
+  converted again on the structure's nodes (``cards.add_beams``/``add_rods``: sections,
+  offsets, pins, lumped or consistent mass, WTMASS); about 2 ms of card reading per element.
+* ``LineFields`` (the default): the converted elements' records (``GeneralBeams`` E, G, rho, A,
+  I, J, shear factors, NSM, twist inertia; ``Rods``; the lumped end masses of COUPMASS < 1) are
+  affine in each card field the reader maps them from (A -> area, I1 -> iz and rho (I1 + I2),
+  E -> E and, G blank, G = E / 2(1 + NU), RHO -> rho and the lumped masses, NSM).  The map is
+  found once from ``LineRebuild`` (the deck's records and one step per parameter) and checked at
+  seeded points of the box against it; then a solve writes the records (a matrix-vector
+  product) and recomputes the bound elements in the vectorised kernels (``fe.line_update``):
+
+      K(theta) = K(deck) + sum_e P_e^T (K_e(records(theta)) - K_e(records(deck))) P_e,
+
+  M likewise, P_e the element's positions in the general CSR pattern (exactly K(deck) at the
+  deck's values).  The elements' matrices stay exact whatever the field: the Timoshenko shear
+  parameter 12 EI / (k G A L^2) is not affine, its records are.  A field whose records are not
+  affine (a PBARL/PBEAML dimension: A, I are polynomials in it; RHO and A of the same
+  elements: a product) keeps ``LineRebuild`` at every solve.
+
+For the reduced basis (``fe.reduced``), ``affine_line_terms`` finds the fields that enter K and M
+linearly (a shear-rigid PBAR's A, I1, I2, J, a PROD's A and J, every NSM):
+K_L(theta) = K_L(deck) + sum_j (theta_j - theta0_j) dK_j exactly; the others get
+``interpolated_line_groups``: the bound elements grouped by the parameters acting on them, each
+group's K, M interpolated in log(theta) on Chebyshev points (``fe.reduced.interpolation``) to
+the reduced model's ``interp_tol``, as the built-in models' non-linear beam parameters are.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.general import GeneralAssembler
+from bayesupdate.fe.line_update import LineUpdate, PointMassValues
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bindings import _card, set_field
@@ -32,7 +48,8 @@ from bayesupdate.nastran.frames import read_grids
 
 
 class LineRebuild:
-    """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on.
+    """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on, by
+    converting their cards again (module docstring).
 
     deck : the read deck (``deck.Deck``); structure : the structure read from it; bindings :
     {parameter: DeckBinding}, those with ``lines``; keys : (nnz,) row x n_dof + col of the
@@ -53,14 +70,19 @@ class LineRebuild:
         pos = np.searchsorted(self.grids.ids, grid_of_node[known])
         self.node[pos] = np.flatnonzero(known)
         self.keys, self.n = keys, keys.size
-        rows = [self.grids.index(cards.element_grids(e), e.label) for e in self.elements.values()]
-        self._used = np.unique(self.node[np.concatenate(rows)])
-        self._base = self._data(None)
+        self._base = None
+
+    @property
+    def base(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K, M) (nnz,) of the bound elements at the deck's values."""
+        if self._base is None:
+            self._base = self._data(None)
+        return self._base
 
     def delta(self, values) -> tuple[np.ndarray, np.ndarray]:
         """(dK, dM) (nnz,) at the parameter values {name: deck units}."""
         K, M = self._data(values)
-        return K - self._base[0], M - self._base[1]
+        return K - self.base[0], M - self.base[1]
 
     def _tables(self, values):
         """(properties, materials) {id: card} of the bound elements, the parameters' values
@@ -82,7 +104,11 @@ class LineRebuild:
                 table[i] = set_field(card, b.field, float(values[name]) * b.coefficient, nominal)
         return props, mats
 
-    def _data(self, values) -> tuple[np.ndarray, np.ndarray]:
+    def structure_at(self, values):
+        """The bound elements alone (and their lumped end masses) converted from their cards
+        with ``values`` written in ({name: deck units}; None: the deck's), on all the
+        structure's nodes: a part of a structure, so not checked for connectivity (the whole
+        deck was, when it was read)."""
         s = self.structure
         builder = StructureBuilder()
         for xyz in s.nodes:
@@ -96,11 +122,11 @@ class LineRebuild:
         cards.add_beams(ctx)
         cards.add_rods(ctx)
         refusals.raise_all()
-        # a structure uses and connects all its nodes: tie every other node to the first bound
-        # one by a spring of 0 (the bound elements may lie in several pieces, both wings)
-        for n in np.setdiff1d(np.arange(s.n_nodes), self._used[:1]):
-            builder.add_spring(int(n), int(self._used[0]), np.zeros(6), "(not re-built)")
-        g = GeneralAssembler(builder.build())
+        return builder.build(check=False)
+
+    def _data(self, values) -> tuple[np.ndarray, np.ndarray]:
+        s = self.structure
+        g = GeneralAssembler(self.structure_at(values))
         K, M, _ = g.assemble(g.beams.default_properties())
         keep = (K.data != 0) | (M.data != 0)  # the padding's zeros need no place
         mine = (g.rows.astype(np.int64) * s.n_dof + g.cols)[keep]
@@ -113,9 +139,178 @@ class LineRebuild:
         return np.bincount(pos, K.data[keep], self.n), np.bincount(pos, M.data[keep], self.n)
 
 
+#: ``GeneralBeams`` / ``Rods`` fields a card value sets (the others: nodes, axes, offsets, pins,
+#: mass kind, stay those of the element)
+BEAM_VALUES = ("E", "G", "rho", "area", "iy", "iz", "iyz", "torsion", "shear_y", "shear_z",
+               "nsm", "torsion_inertia")  # fmt: skip
+ROD_VALUES = ("E", "G", "rho", "area", "torsion", "nsm")
+_BEAM_FIXED = ("nodes", "up", "offset", "pins", "mass")
+#: relative miss allowed between the affine records and the converted cards (exact: ~1e-16)
+RECORD_TOL = 1e-12
+
+
+@dataclass(frozen=True, eq=False)
+class LineFields:
+    """The bound line elements' records as affine functions of the parameters (module
+    docstring), and their matrices from them.
+
+    names : the parameters (``theta`` order); theta0 : (p,) their deck values; beams, rods,
+    masses : indices of the bound general beams, rods and lumped point masses in the structure;
+    records0 : (GeneralBeams | None, Rods | None, PointMassValues) at the deck's values;
+    slopes : {(family, field): (n, ..., p) d record / d theta}, the non-zero ones; update :
+    ``LineUpdate`` of those elements on the general pattern."""
+
+    names: tuple[str, ...]
+    theta0: np.ndarray
+    beams: np.ndarray
+    rods: np.ndarray
+    masses: np.ndarray
+    records0: tuple
+    slopes: dict
+    update: LineUpdate
+
+    def theta(self, values) -> np.ndarray:
+        """(p,) the parameters of ``values`` ({name: deck units}; None: the deck's)."""
+        if values is None:
+            return self.theta0
+        return np.array([float(values[n]) for n in self.names])
+
+    def records(self, theta: np.ndarray) -> tuple:
+        """(GeneralBeams | None, Rods | None, PointMassValues) of the bound elements at
+        ``theta`` (p,)."""
+        step = theta - self.theta0
+        out = []
+        for k, family in enumerate(("beam", "rod", "mass")):
+            rec = self.records0[k]
+            if rec is not None:
+                fields = {f: getattr(rec, f) + slope @ step
+                          for (fam, f), slope in self.slopes.items() if fam == family}  # fmt: skip
+                rec = replace(rec, **fields)
+            out.append(rec)
+        return tuple(out)
+
+    def contribution(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(K, M) (nnz,) of the bound elements (and their lumped masses) at ``theta``."""
+        beams, rods, masses = self.records(theta)
+        return self.update.contribution(beams, rods, masses)
+
+
+def _rows(rec, rows):
+    if isinstance(rec, PointMassValues):
+        return PointMassValues(rec.mass[rows], rec.inertia[rows])
+    return type(rec)(**{k: getattr(rec, k)[rows] for k in rec.__dataclass_fields__})
+
+
+def _bound_rows(structure, probe) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Indices of the probe's (``LineRebuild.structure_at``) beams, rods and point masses in
+    the structure (matched by part, in order); None when they do not match one to one."""
+    full, mine = np.asarray(structure.parts), np.asarray(probe.parts)
+    out = []
+    for fam in ("general_beams", "rods", "mass"):
+        if fam == "mass":
+            names_p, names_s = mine[probe.mass_part], full[structure.mass_part]
+        else:
+            rec_p, rec_s = getattr(probe, fam), getattr(structure, fam)
+            names_p = mine[rec_p.part] if rec_p is not None else np.zeros(0, str)
+            names_s = full[rec_s.part] if rec_s is not None else np.zeros(0, str)
+        rows = np.flatnonzero(np.isin(names_s, names_p)) if names_p.size else np.zeros(0, int)
+        if rows.size != names_p.size or np.any(names_s[rows] != names_p):
+            return None
+        out.append(rows)
+    return tuple(out)
+
+
+def _values(probe, family: str):
+    """The record of ``family`` of a probe structure (all its elements)."""
+    if family == "beam":
+        return probe.general_beams
+    if family == "rod":
+        return probe.rods
+    return PointMassValues(probe.mass_value, probe.mass_inertia)
+
+
+def _fields(family: str) -> tuple[str, ...]:
+    return {"beam": BEAM_VALUES, "rod": ROD_VALUES, "mass": ("mass", "inertia")}[family]
+
+
+def _same_layout(structure, probe, rows) -> bool:
+    """The probe's elements are the structure's at ``rows``: same nodes, axes, offsets, pins,
+    mass kind (beams), same nodes and offsets (masses)."""
+    b, r, m = rows
+    if b.size:
+        sb, pb = structure.general_beams, probe.general_beams
+        if any(not np.array_equal(getattr(sb, f)[b], getattr(pb, f)) for f in _BEAM_FIXED):
+            return False
+    if r.size:
+        sr, pr = structure.rods, probe.rods
+        if any(not np.array_equal(getattr(sr, f)[r], getattr(pr, f)) for f in ("nodes", "lumped")):
+            return False
+    return np.array_equal(structure.mass_node[m], probe.mass_node) and np.array_equal(
+        structure.mass_offset[m], probe.mass_offset
+    )
+
+
+def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields | None", str]:
+    """(``LineFields`` of the bound elements, "") or (None, the reason) when their records are
+    not affine in the parameters (then ``LineRebuild`` re-converts the cards at every solve).
+    g : the ``GeneralAssembler`` of the whole structure; defaults, bounds : {name: deck value},
+    {name: (low, high)} (deck units)."""
+    names = tuple(rebuild.bindings)
+    theta0 = np.array([float(defaults[n]) for n in names])
+    low, high = (np.array([float(bounds[n][k]) for n in names]) for k in (0, 1))
+    s = g.structure
+    probe0 = rebuild.structure_at(None)
+    rows = _bound_rows(s, probe0)
+    if rows is None or not _same_layout(s, probe0, rows):
+        return None, "the re-built elements do not match the read ones one to one"
+    families = [f for f, r in zip(("beam", "rod", "mass"), rows, strict=True) if r.size]
+    rec0 = {f: _values(probe0, f) for f in families}
+    read = dict(beam=s.general_beams, rod=s.rods,
+                mass=PointMassValues(s.mass_value, s.mass_inertia))  # fmt: skip
+    for f, r in zip(("beam", "rod", "mass"), rows, strict=True):
+        if f in families and any(
+            not np.array_equal(getattr(_rows(read[f], r), x), getattr(rec0[f], x))
+            for x in _fields(f)
+        ):
+            return None, "the re-built elements' values differ from the read ones"
+    slopes = {}
+    step = np.where(high > theta0, high, low) - theta0
+    for j, name in enumerate(names):
+        theta = theta0 + step[j] * (np.arange(len(names)) == j)
+        probe = rebuild.structure_at(dict(zip(names, theta, strict=True)))
+        if not _same_layout(s, probe, rows):
+            return None, f"{name} changes which elements or masses there are"
+        for f in families:
+            for field in _fields(f):
+                d = (getattr(_values(probe, f), field) - getattr(rec0[f], field)) / step[j]
+                if np.any(d != 0):
+                    slope = slopes.setdefault((f, field), np.zeros((*d.shape, len(names))))
+                    slope[..., j] = d
+    no_mass = PointMassValues(np.zeros(0), np.zeros((0, 3, 3)))
+    records0 = (rec0.get("beam"), rec0.get("rod"), rec0.get("mass", no_mass))
+    update = LineUpdate(g, beams=rows[0], rods=rows[1], masses=rows[2])
+    fields = LineFields(names, theta0, *rows, records0, slopes, update)
+    rng = np.random.default_rng(LINEAR_SEED)
+    for u in rng.uniform(size=(LINEAR_POINTS, len(names))):
+        theta = low + u * (high - low)
+        probe = rebuild.structure_at(dict(zip(names, theta, strict=True)))
+        if not _same_layout(s, probe, rows):
+            return None, "a parameter changes which elements or masses there are"
+        affine = fields.records(theta)
+        for k, f in enumerate(("beam", "rod", "mass")):
+            if f not in families:
+                continue
+            for field in _fields(f):
+                exact, approx = getattr(_values(probe, f), field), getattr(affine[k], field)
+                scale = max(float(np.abs(exact).max()), 1e-300)
+                if np.abs(exact - approx).max() > RECORD_TOL * scale:
+                    return None, f"the elements' {field} is not affine in {', '.join(names)}"
+    return fields, ""
+
+
 #: relative round-off allowed between the affine sum and the re-built elements (exact: ~1e-15)
 LINEAR_TOL = 1e-9
-#: the seeded points of the box where the affine sum is checked
+#: the seeded points of the box where the affine sum (and the affine records) are checked
 LINEAR_SEED, LINEAR_POINTS = 0, 3
 
 
@@ -130,37 +325,37 @@ class LineTerm:
     dM: np.ndarray
 
 
-def affine_line_terms(rebuild: LineRebuild, defaults, bounds) -> tuple[LineTerm, ...]:
-    """The ``LineTerm`` of each parameter of ``rebuild`` ({name: deck value}, {name: (low,
+def affine_line_terms(lines: "LineAssembler", defaults, bounds) -> tuple[LineTerm, ...]:
+    """The ``LineTerm`` of each line parameter of ``lines`` ({name: deck value}, {name: (low,
     high)}, deck units).  Checked at seeded points of the box: each parameter alone (the others
     at the deck's values), then all together.  Raises ``BayesUpdateError`` naming the parameter
     (or the product) when the sum misses the re-built elements by more than ``LINEAR_TOL``."""
-    names = list(rebuild.bindings)
+    names = list(lines.rebuild.bindings)
     theta0 = np.array([defaults[n] for n in names])
     low, high = (np.array([bounds[n][k] for n in names]) for k in (0, 1))
     step = np.where(high > theta0, high, low) - theta0
     terms = []
     for j, name in enumerate(names):
-        dK, dM = rebuild.delta(dict(zip(names, theta0 + step[j] * (np.arange(len(names)) == j),
-                                        strict=True)))  # fmt: skip
+        dK, dM = lines.line_delta(dict(zip(names, theta0 + step[j] * (np.arange(len(names)) == j),
+                                           strict=True)))  # fmt: skip
         terms.append(LineTerm(name, float(theta0[j]), dK / step[j], dM / step[j]))
     rng = np.random.default_rng(LINEAR_SEED)
     u = rng.uniform(size=(LINEAR_POINTS, len(names)))
     where = low + u * (high - low)
     for j, name in enumerate(names):  # each alone, the others at the deck's values
         theta = np.where(np.arange(len(names)) == j, where[0], theta0)
-        what = f"parameter {name} ({rebuild.bindings[name].target!r}) does not enter"
-        _check_linear(rebuild, terms, theta, what)
+        what = f"parameter {name} ({lines.rebuild.bindings[name].target!r}) does not enter"
+        _check_linear(lines, terms, theta, what)
     if len(names) > 1:
         for theta in where:
             what = f"parameters {', '.join(names)} together do not enter"
-            _check_linear(rebuild, terms, theta, what)
+            _check_linear(lines, terms, theta, what)
     return tuple(terms)
 
 
-def _check_linear(rebuild: LineRebuild, terms, theta, what: str) -> None:
-    exact = rebuild.delta({t.name: v for t, v in zip(terms, theta, strict=True)})
-    for which, (x, base) in enumerate(zip(exact, rebuild._base, strict=True)):
+def _check_linear(lines: "LineAssembler", terms, theta, what: str) -> None:
+    exact = lines.line_delta({t.name: v for t, v in zip(terms, theta, strict=True)})
+    for which, (x, base) in enumerate(zip(exact, lines.line_base(), strict=True)):
         affine = sum(
             (v - t.theta0) * (t.dK, t.dM)[which] for t, v in zip(terms, theta, strict=True)
         )
@@ -174,20 +369,202 @@ def _check_linear(rebuild: LineRebuild, terms, theta, what: str) -> None:
 
 
 class LineAssembler(GeneralAssembler):
-    """``GeneralAssembler`` whose line elements follow the parameters: ``values`` (set by the
-    model before each assembly) go through ``LineRebuild``; the K returned is the very object
-    ``solve`` matches its ground springs by."""
+    """``GeneralAssembler`` whose line elements follow the parameters: ``values`` ({name: deck
+    units}, set by the model before each assembly; None: the deck's).  The change of the bound
+    elements from the deck's values is added to the deck's assembly: with ``fields``
+    (``LineFields``) their matrices at the new records less those at the deck's (module
+    docstring), without (records not affine: ``fields_note`` says why) ``LineRebuild.delta``.
+    At the deck's values the change is exactly 0, so the bound model is the deck to the bit.
+    The K returned is the very object ``solve`` matches its ground springs by.
 
-    def __init__(self, structure, shell_keys, deck, bindings, path):
+    fast : False keeps ``LineRebuild`` at every solve (the reference, for checks).  The
+    ``LineFields`` are found at the first point away from the deck's values (a ``modes`` run at
+    the deck's values converts nothing again)."""
+
+    def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True):
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
-        self.lines = LineRebuild(deck, structure, bindings, keys, path)
+        self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
+        self._box = (defaults, bounds)
+        self._fields = None if fast else (None, "the reference path was asked for")
+
+    @property
+    def fields(self) -> "LineFields | None":
+        """The bound elements' ``LineFields``; None when their records are not affine in the
+        parameters (``fields_note`` says why) or the reference path was asked for."""
+        if self._fields is None:
+            self._fields = line_fields(self, self.rebuild, *self._box)
+        return self._fields[0]
+
+    @property
+    def fields_note(self) -> str:
+        """Why there are no ``fields`` ("" when there are)."""
+        return "" if self.fields is not None else self._fields[1]
+
+    def line_base(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K, M) (nnz,) of the bound elements (and lumped masses) at the deck's values."""
+        if self.fields is None:
+            return self.rebuild.base
+        return self.fields.update.contribution()
+
+    def line_delta(self, values) -> tuple[np.ndarray, np.ndarray]:
+        """(dK, dM) (nnz,) of the bound elements from the deck's values to ``values``."""
+        if self.fields is None:
+            return self.rebuild.delta(values)
+        K, M = self.fields.contribution(self.fields.theta(values))
+        K0, M0 = self.fields.update.base
+        return K - K0, M - M0
 
     def assemble(self, props, shell_props=None):
         K, M, elem = super().assemble(props, shell_props)
-        if self.values is not None:
-            dK, dM = self.lines.delta(self.values)
+        defaults = self._box[0]
+        if self.values is not None and any(self.values[n] != defaults[n]
+                                           for n in self.rebuild.bindings):  # fmt: skip
+            dK, dM = self.line_delta(self.values)
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM
         return K, M, elem
+
+
+@dataclass(frozen=True, eq=False)
+class LineGroup:
+    """Line parameters acting on the same elements, their change of K and M interpolated in
+    log(theta) (``interpolated_line_groups``).
+
+    names : the parameters (tensor axes, in this order); log_pieces : per axis (2,) log of the
+    box (low, high); degrees : per axis the Chebyshev degree; dK, dM : (n_nodes, nnz) the
+    change from the deck's values at the tensor nodes (``interpolation.tensor_weights`` order),
+    on the general CSR pattern; dm : (n_nodes,) the total mass change there [deck mass]."""
+
+    names: tuple[str, ...]
+    log_pieces: tuple[np.ndarray, ...]
+    degrees: tuple[int, ...]
+    dK: np.ndarray
+    dM: np.ndarray
+    dm: np.ndarray
+
+    def holds(self, values: np.ndarray) -> bool:
+        """True if every row of ``values`` (B, len(names)) lies in the group's box."""
+        low, high = (np.exp([p[k] for p in self.log_pieces]) for k in (0, 1))
+        slack = 1e-12  # the box's own ends, through exp(log(.))
+        return bool(np.all((values >= low * (1 - slack)) & (values <= high * (1 + slack))))
+
+    def weights(self, values: np.ndarray) -> np.ndarray:
+        """(B, n_nodes) interpolation weights at ``values`` (B, len(names)) > 0."""
+        from bayesupdate.fe.reduced.interpolation import tensor_weights
+
+        return tensor_weights(values, self.log_pieces, self.degrees)
+
+
+def interpolated_line_groups(lines: LineAssembler, defaults, bounds, tol: float):
+    """``LineGroup`` s of the line parameters of ``lines`` over the box ``bounds`` ({name:
+    (low, high)}, deck units; defaults {name: deck value}): the parameters grouped where their
+    elements overlap (a MAT1 and a PBEAM of that MID), so that the groups' changes add up to
+    the whole change exactly; in each group the degree per axis is the smallest of
+    ``reduced.affine.DEGREES`` that reproduces K and M to ``tol`` (relative to the largest
+    entry the group touches) at seeded points, then the tensor product is checked and raised
+    as for the built-in models' interpolated beams (``fe.reduced.affine``).  Raises
+    ``BayesUpdateError`` when no degree reaches ``tol``."""
+    from bayesupdate.fe.reduced.affine import N_TEST, TEST_SEED
+
+    bindings = lines.rebuild.bindings
+    groups, rng = [], np.random.default_rng(TEST_SEED)
+    for names in _overlapping({n: set(b.lines) for n, b in bindings.items()}):
+        search = _GroupSearch(lines, defaults, names, bounds, tol, N_TEST)
+        degrees = [search.axis_degree(i, rng) for i in range(len(names))]
+        groups.append(search.tensor(degrees, rng))
+    return tuple(groups)
+
+
+def _overlapping(elements: dict) -> list[tuple[str, ...]]:
+    """The parameters (keys of ``elements``: {name: element ids}) in groups of overlapping
+    element sets (connected components), each in the given order."""
+    names = list(elements)
+    label = list(range(len(names)))
+    for i in range(len(names)):
+        for j in range(i):
+            if elements[names[i]] & elements[names[j]]:
+                old, new = label[i], label[j]
+                label = [new if x == old else x for x in label]
+    return [tuple(n for n, x in zip(names, label, strict=True) if x == k)
+            for k in dict.fromkeys(label)]  # fmt: skip
+
+
+class _GroupSearch:
+    """The interpolation degrees of one ``LineGroup`` (``interpolated_line_groups``)."""
+
+    def __init__(self, lines, defaults, names, bounds, tol, n_test):
+        from bayesupdate.fe.reduced.mass import _translational_mass
+
+        self.lines, self.defaults, self.names, self.tol, self.n_test = (
+            lines, defaults, names, tol, n_test)  # fmt: skip
+        self.low = np.array([float(bounds[n][0]) for n in names])
+        self.high = np.array([float(bounds[n][1]) for n in names])
+        if np.any(self.low <= 0):
+            raise BayesUpdateError(f"reduced model: the lower bounds of {names} must be > 0")
+        self.log_pieces = tuple(np.log([lo, hi]) for lo, hi in zip(self.low, self.high,
+                                                                    strict=True))  # fmt: skip
+        self.base = lines.line_base()
+        self.mass = lambda dM: _translational_mass(lines, np.arange(lines.nnz), dM)
+
+    def changes(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(dK, dM) (n, nnz) at ``points`` (n, len(names)), the other parameters at the
+        deck's values."""
+        out = [self.lines.line_delta({**self.defaults, **dict(zip(self.names, row, strict=True))})
+               for row in points]  # fmt: skip
+        return np.array([k for k, _ in out]), np.array([m for _, m in out])
+
+    def error(self, weights, nodes, test) -> tuple[float, np.ndarray, np.ndarray]:
+        """(largest relative error at ``test`` (n, len(names)), node dK, node dM) of the
+        interpolant with ``weights`` (n, n_nodes) on ``nodes``; relative to the largest entry
+        of K (M) the group touches."""
+        Kn, Mn = self.changes(nodes)
+        Kt, Mt = self.changes(test)
+        err = 0.0
+        for approx, exact, base in ((weights @ Kn, Kt, self.base[0]),
+                                    (weights @ Mn, Mt, self.base[1])):  # fmt: skip
+            touched = np.abs(exact).max(axis=0) > 0
+            if touched.any():
+                scale = np.abs(base[touched] + exact[:, touched]).max()
+                err = max(err, float(np.abs(approx - exact).max() / max(scale, 1e-300)))
+        return err, Kn, Mn
+
+    def axis_degree(self, i: int, rng) -> int:
+        """Smallest degree reaching ``tol`` along axis ``i``, the others at mid-box."""
+        from bayesupdate.fe.reduced.affine import DEGREES
+        from bayesupdate.fe.reduced.interpolation import barycentric_weights, piecewise_nodes
+
+        mid = np.sqrt(self.low * self.high)
+        test = np.tile(mid, (self.n_test, 1))
+        test[:, i] = np.exp(rng.uniform(*self.log_pieces[i], self.n_test))
+        for degree in DEGREES:
+            nodes = np.tile(mid, (degree + 1, 1))
+            nodes[:, i] = np.exp(piecewise_nodes(self.log_pieces[i], degree))
+            w = barycentric_weights(np.log(test[:, i]), self.log_pieces[i], degree)
+            if self.error(w, nodes, test)[0] < self.tol:
+                return degree
+        raise BayesUpdateError(
+            f"reduced model: interpolation in {self.names[i]} does not reach {self.tol:g} at "
+            f"degree {DEGREES[-1]}; use the full model (--full)"
+        )
+
+    def tensor(self, degrees: list[int], rng) -> LineGroup:
+        """The group on the tensor product of the 1-D degrees (raised by 4 up to 3 times)."""
+        from bayesupdate.fe.reduced.interpolation import piecewise_nodes, tensor_weights
+
+        test = np.exp(np.column_stack([rng.uniform(*p, self.n_test) for p in self.log_pieces]))
+        for _ in range(4):
+            axes = [np.exp(piecewise_nodes(p, d))
+                    for p, d in zip(self.log_pieces, degrees, strict=True)]  # fmt: skip
+            grid = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
+            w = tensor_weights(test, self.log_pieces, degrees)
+            err, Kn, Mn = self.error(w, grid, test)
+            if err < self.tol:
+                dm = np.array([self.mass(d) for d in Mn])
+                return LineGroup(self.names, self.log_pieces, tuple(degrees), Kn, Mn, dm)
+            degrees = [d + 4 for d in degrees]
+        raise BayesUpdateError(
+            f"reduced model: tensor interpolation in {list(self.names)} has error {err:.1e} > "
+            f"{self.tol:g}; use the full model (--full)"
+        )

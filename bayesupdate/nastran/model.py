@@ -35,7 +35,13 @@ class NastranModel(FEModel):
             from bayesupdate.nastran.lines import LineAssembler
 
             self._general = LineAssembler(
-                structure, self._shell_keys(), bdf, self.bindings, self.deck
+                structure,
+                self._shell_keys(),
+                bdf,
+                self.bindings,
+                self.deck,
+                self._defaults,
+                self._bounds,
             )
             self._assembler = self._general.beams
 
@@ -90,9 +96,7 @@ class NastranModel(FEModel):
     def affine_terms(self) -> AffineTerms:
         """``FEModel.affine_terms`` with each deck parameter's factor in its term's scale; a
         line-element parameter is a "line" term (no elements of its own: ``line_terms`` are
-        its matrices), and raises ``BayesUpdateError`` when it does not enter linearly."""
-        if any(getattr(b, "lines", ()) for b in self.bindings.values()):
-            self.line_terms()  # the linearity check: a one-line reason for full solves
+        its matrices where it enters linearly, ``line_groups`` interpolate them otherwise)."""
         # a line binding has no FE property: stand in a modulus factor on no beams (a MAT1
         # binding keeps its shell term; its line elements are in ``line_terms`` too)
         lines = {n for n, b in self.bindings.items() if b.property == "line"}
@@ -111,15 +115,56 @@ class NastranModel(FEModel):
         return replace(terms, parameters=scaled)
 
     def line_terms(self) -> tuple:
-        """The exact affine terms of the line-element parameters (``lines.LineTerm``; empty
-        without them), computed once; raises when one does not enter linearly."""
+        """The exact affine terms of the line-element parameters (``lines.LineTerm``), computed
+        once; empty without them, and empty when one does not enter linearly (``line_groups``
+        then interpolate them; ``line_nonlinear`` says which)."""
         from bayesupdate.nastran.lines import LineAssembler, affine_line_terms
 
         if not isinstance(self._general, LineAssembler):
             return ()
         if getattr(self, "_line_terms", None) is None:
-            self._line_terms = affine_line_terms(self._general.lines, self._defaults, self._bounds)
+            try:
+                self._line_terms = affine_line_terms(self._general, self._defaults, self._bounds)
+            except BayesUpdateError as exc:
+                self._line_terms, self.line_nonlinear = (), str(exc)
         return self._line_terms
+
+    def line_groups(self, bounds, interp_tol: float) -> tuple:
+        """The interpolated ``lines.LineGroup`` s of line-element parameters that do not enter
+        K and M linearly, over the box ``bounds`` ({name: (low, high)}, deck units) to
+        ``interp_tol`` (``reduced.affine``); empty when every line parameter is linear.  Kept
+        per box and tolerance (the reduced basis and its total mass use the same)."""
+        from bayesupdate.nastran.lines import interpolated_line_groups
+
+        self.line_terms()
+        if not getattr(self, "line_nonlinear", ""):
+            return ()
+        names = list(self._general.rebuild.bindings)
+        key = (tuple((n, *map(float, bounds[n])) for n in names), float(interp_tol))
+        cache = self.__dict__.setdefault("_line_groups", {})
+        if key not in cache:
+            box = {n: bounds[n] for n in names}
+            cache[key] = interpolated_line_groups(self._general, self._defaults, box, interp_tol)
+        return cache[key]
+
+    def line_mass_change(self, params) -> float:
+        """Total mass change [deck mass] of the bound line elements from the deck's values to
+        ``params`` (all names), for parameters in ``line_groups``: interpolated where a box
+        built holds the point, else from the elements themselves."""
+        from bayesupdate.fe.reduced.mass import _translational_mass
+
+        if not getattr(self, "line_nonlinear", ""):
+            return 0.0
+        for groups in getattr(self, "_line_groups", {}).values():
+            # a group that moves no mass (I, J: rotary inertia only) needs no weights
+            moving = [grp for grp in groups if np.any(grp.dm)]
+            values = [np.array([[params[n] for n in grp.names]]) for grp in moving]
+            if all(grp.holds(v) for v, grp in zip(values, moving, strict=True)):
+                return float(sum((grp.weights(v) @ grp.dm)[0]
+                                 for v, grp in zip(values, moving, strict=True)))  # fmt: skip
+        g = self._general
+        dM = g.line_delta({n: params[n] for n in g.rebuild.bindings})[1]
+        return _translational_mass(g, np.arange(g.nnz), dM)
 
     def with_structure(self, structure, bindings=None, defaults=None, bounds=None, name=None):
         """A new model on an extended structure (effects append elements: masks are padded)."""

@@ -318,6 +318,15 @@ def _named(ctx, exc) -> BayesUpdateError:
 
 
 def _finish(ctx, eids, pids, props):
+    # the connectivity check runs on the whole deck and names its GRIDs, not node indices
+    grid_of_node = dict(zip(ctx.node[ctx.node >= 0].tolist(), ctx.grids.ids[ctx.node >= 0].tolist(),
+                            strict=True))  # fmt: skip
+
+    def grid_name(node: int) -> str:
+        grid = grid_of_node.get(node)
+        return f"GRID {grid}" if grid is not None else f"(a CBUSH arm end, node {node})"
+
+    ctx.builder.node_names = grid_name
     structure = ctx.builder.build()
     if props is not None and eids.size:
         structure = _patch_shells(structure, pids, props)

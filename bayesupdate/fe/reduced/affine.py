@@ -29,7 +29,7 @@ from bayesupdate.fe.reduced.interpolation import (
     piecewise_nodes,
     tensor_weights,
 )
-from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms
+from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms, pattern_part
 
 #: 1-D interpolation degrees tried in turn for each non-linear parameter
 DEGREES = (4, 6, 8, 12, 16, 24, 32)
@@ -154,6 +154,14 @@ def decompose(
             m_entries.append((offset + n, m_col, 1.0))
         groups.append(group)
         offset += group.n_nodes
+    for group, k_parts, m_parts in _line_groups(fe, bounds, interp_tol):
+        for n, (k_part, m_part) in enumerate(zip(k_parts, m_parts, strict=True)):
+            k_stacks.append([k_part])
+            k_entries.append((offset + n, 0, 1.0))
+            m_stacks.append([m_part])
+            m_entries.append((offset + n, 0, 1.0))
+        groups.append(group)
+        offset += group.n_nodes
     return AffineDecomposition(
         names,
         tuple(groups),
@@ -163,6 +171,20 @@ def decompose(
         _gather(m_entries),
         _one_d_batches(groups),
     )
+
+
+def _line_groups(fe: FEModel, bounds, interp_tol: float) -> list:
+    """[(``InterpolatedGroup``, K parts, M parts)] of a deck's line-element fields that do not
+    enter K and M linearly (``NastranModel.line_groups``): their change from the deck's values
+    interpolated in log(theta) on Chebyshev tensor nodes, one ``SparsePart`` per node."""
+    out = []
+    for line in getattr(fe, "line_groups", lambda *_: ())(bounds, interp_tol):
+        params = tuple(fe.parameter_names.index(n) for n in line.names)
+        group = InterpolatedGroup(np.zeros(0, int), params, line.log_pieces, line.degrees, -1, -1)
+        k_parts = [pattern_part(fe.general, d) for d in line.dK]
+        m_parts = [pattern_part(fe.general, d) for d in line.dM]
+        out.append((group, k_parts, m_parts))
+    return out
 
 
 def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:

@@ -70,6 +70,8 @@ class ShellMassTerms:
             m = g.beams.total_mass(props)[0] + self.lines
         for name, theta0, dm in self.line_terms:
             m += (params[name] - theta0) * dm
+        # a deck's line-element fields that do not enter linearly (``NastranModel``)
+        m += getattr(fe, "line_mass_change", lambda _: 0.0)(params)
         if fe.structure.shells is None:
             return m
         t, _, rho = fe.shell_properties(params)

@@ -42,6 +42,17 @@ class SparsePart:
         return Vd.T @ (self.matrix @ Vd)
 
 
+def pattern_part(g, data: np.ndarray) -> SparsePart:
+    """The ``SparsePart`` of (nnz,) ``data`` on the general CSR pattern of ``g``
+    (``GeneralAssembler``): its non-zero entries on the DOFs they touch."""
+    pos = np.flatnonzero(data)
+    rows, cols = g.rows[pos], g.cols[pos]
+    dofs, inverse = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+    local = inverse.reshape(2, -1)
+    m = dofs.size
+    return SparsePart(dofs, sp.csr_matrix((data[pos], (local[0], local[1])), shape=(m, m)))
+
+
 def power_feature(j: int, p: int, n_params: int) -> int:
     """Column of theta_j^p (p = 1, 2, 3) in the features [1, theta, theta^2, theta^3, ...]."""
     return 1 + (p - 1) * n_params + j

@@ -554,6 +554,14 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--scheduler", metavar="ADDRESS", help="cases on a Dask scheduler")
     parser.add_argument("--quick", action="store_true", help="10-case subset")
+    parser.add_argument(
+        "--cli-index",
+        nargs="+",
+        type=int,
+        metavar="I",
+        help="--path cli: only entries I of CLI_CASES, in the order given, each with the seed it"
+        " has in the whole study (--seed + 17 I), so that pieces run apart add up to the whole",
+    )
     parser.add_argument("--cases", nargs="*", help="explicit cases (effect specs, none#k, ...)")
     parser.add_argument("--json-out", help="write the per-case rows as JSON")
     parser.add_argument(
@@ -577,6 +585,10 @@ def main(argv=None) -> int:
             pairs = [(c.split("@@")[0], float(c.split("@@")[1]) if "@@" in c else 0.01)
                      for c in args.cases]  # fmt: skip
         work = [(c, noise, args.seed + 17 * i) for i, (c, noise) in enumerate(pairs)]
+        if args.cli_index:
+            if args.cases or not all(0 <= i < len(CLI_CASES) for i in args.cli_index):
+                parser.error(f"--cli-index takes 0..{len(CLI_CASES) - 1}, without --cases")
+            work = [work[i] for i in args.cli_index]
         return _run_all(run_cli_case, work, args, report_cli)
     cases = args.cases or (QUICK if args.quick else EFFECT_CASES + NULL_CASES + OUT_OF_LIBRARY)
     work = [
@@ -606,12 +618,14 @@ def _run_all(fn, work, args, summary) -> int:
     from bayesupdate.config import compute_settings
 
     t0 = time.perf_counter()
-    done = []
+    done = {}
 
     def progress(i, row):
-        done.append(i)
+        done[i] = row
         print(f"[{len(done)}/{len(work)}] {row['case']}: {row['verdict']} {row['named']}",
               file=sys.stderr, flush=True)  # fmt: skip
+        if args.json_out:  # the rows so far, so that a study stopped early keeps what it ran
+            _write_rows(args.json_out, [done[k] for k in sorted(done)])
 
     with open_executor(compute_settings(args.workers, args.scheduler)) as executor:
         print(f"cases on {executor.describe()}", file=sys.stderr, flush=True)
@@ -619,9 +633,15 @@ def _run_all(fn, work, args, summary) -> int:
     summary(rows)
     print(f"total wall {time.perf_counter() - t0:.0f} s")
     if args.json_out:
-        with open(args.json_out, "w") as fh:
-            json.dump(rows, fh, indent=1)
+        _write_rows(args.json_out, rows)
     return 0
+
+
+def _write_rows(path: str, rows: list) -> None:
+    from bayesupdate.atomic import atomic_path
+
+    with atomic_path(path) as tmp, open(tmp, "w") as fh:
+        json.dump(rows, fh, indent=1)
 
 
 if __name__ == "__main__":

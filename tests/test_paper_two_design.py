@@ -90,6 +90,19 @@ def test_cli_unknown_geometry_exits_2_with_one_line(capsys):
     assert "table1" in lines[0] and "two_design" in lines[0]
 
 
+def test_study_file_unknown_geometry_exits_2_with_one_line(tmp_path, capsys):
+    """The same refusal where a user names the geometry in a study file's [model] options
+    (the way the guide's two_design.toml does), before any calibration work starts."""
+    study = tmp_path / "bad.toml"
+    study.write_text('[model]\nsource = "exhaust"\noptions = { geometry = "two_desing" }\n')
+    code = main(["calibrate", str(study), "--data", "paper:ema", "--json"])
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1, captured.err
+    assert "'two_desing'" in lines[0] and "'table1'" in lines[0] and "'two_design'" in lines[0]
+    assert captured.out == ""
+
+
 # ---- the two-design fit (studies/reproduce_paper_fe.py --check --fit two_design) -----------------
 
 

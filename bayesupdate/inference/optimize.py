@@ -400,7 +400,32 @@ def _refined(
     near_best = np.asarray(objectives) <= 1.05 * min(objectives)
     job = _Fits(refine, _residual_count(refine), None, 60, least_squares=False)
     items = [(end, bool(near)) for end, near in zip(ends, near_best, strict=True)]
-    return _run_fits(job, items, counter, executor, "calibration: exact check of the ends")
+    # starts that end at one point (a corner of the box, one basin) are checked once: the
+    # check is deterministic, and each costs up to 60 d full solves
+    first, owner = _coinciding(items)
+    unique_ends, unique_objectives = _run_fits(
+        job, [items[i] for i in first], counter, executor, "calibration: exact check of the ends"
+    )
+    return [unique_ends[k] for k in owner], [unique_objectives[k] for k in owner]
+
+
+def _coinciding(items: list, tol: float = 1e-9) -> tuple[list, list]:
+    """Items (u (d,), polish) grouped where their polish flags agree and their u lie within
+    ``tol`` of each other in the unit box: (first, the index of each group's first item;
+    owner, per item the position of its group in ``first``)."""
+    first: list[int] = []
+    owner: list[int] = []
+    for i, (u, polish) in enumerate(items):
+        match = next(
+            (k for k, j in enumerate(first)
+             if items[j][1] == polish and np.max(np.abs(np.asarray(u) - items[j][0])) <= tol),
+            None,
+        )  # fmt: skip
+        if match is None:
+            first.append(i)
+            match = len(first) - 1
+        owner.append(match)
+    return first, owner
 
 
 def _best_evaluation(

@@ -171,6 +171,7 @@ def calibration_json(result, problem) -> dict:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+    from bayesupdate.compute import progress
     from bayesupdate.inference.results import write_result
     from bayesupdate.parallel_executor import open_executor
     from bayesupdate.pipelines.calibrate import run_calibration
@@ -186,11 +187,15 @@ def run(args) -> int:
     with open_executor(compute) as executor:
         result = run_calibration(prepared, executor)
         where = executor.describe()
+    timings = progress.timings()
     if args.out:
-        write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
+        write_result(
+            args.out, prepared.problem, result, study.to_dict(), command=NAME, timings=timings
+        )
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
     if args.json:
-        print(json.dumps({**calibration_json(result, prepared.problem), "compute": where}))
+        found = calibration_json(result, prepared.problem)
+        print(json.dumps({**found, "compute": where, "timings": timings}))
     else:
         print(
             f"objective (seed eq. 19): {result.expr:.5g}   starts: {result.converged_starts}"

@@ -93,6 +93,7 @@ def _settings(study, args):
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.commands.calibrate import compute_from_args
+    from bayesupdate.compute.progress import timings as phase_timings
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
@@ -108,16 +109,19 @@ def run(args) -> int:
     progress = None if args.json else (lambda message: print(message, file=sys.stderr))
     found = discover_study(study, request, progress)
     result, posterior = found.result, found.posterior
+    timings = phase_timings()
     if args.out:
         write_discovery(
-            args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior
-        )
+            args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior,
+            timings=timings,
+        )  # fmt: skip
     if args.plots:
         from bayesupdate.discovery.plots import save_plots
 
         save_plots(result, args.plots, getattr(found.model, "structure", None))
     summary = discovery_summary(result)
     summary["compute"] = found.compute
+    summary["timings"] = timings
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:

@@ -15,6 +15,7 @@ from bayesupdate.commands.calibrate import (
     study_from_args,
     write_bdf,
 )
+from bayesupdate.compute import progress
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.interrupts import StopRequest
 
@@ -98,6 +99,7 @@ def run(args) -> int:
         raise KeyboardInterrupt
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
     out["compute"] = run.compute
+    out["timings"] = progress.timings()
     means = {k: v["mean"] for k, v in out["parameters"].items()}
     write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table
@@ -258,6 +260,7 @@ def _run_tmcmc(prepared, args) -> int:
     cfg = prepared.study.sampler
     settings = TMCMCSettings(particles=args.particles, seed=cfg.seed)
     out = tmcmc_json(sample_tmcmc(prepared, settings), cfg.hdi_prob)
+    out["timings"] = progress.timings()
     if args.json:
         print(json.dumps(out))
         return 0

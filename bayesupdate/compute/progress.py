@@ -57,6 +57,20 @@ class Recorder:
 _ACTIVE: ContextVar[Recorder | None] = ContextVar("bayesupdate_progress", default=None)
 
 
+def active() -> Recorder | None:
+    """The ``Recorder`` of the ``reporting`` context this code runs in, or None (a library
+    caller's script, a worker process)."""
+    return _ACTIVE.get()
+
+
+def timings() -> dict[str, float]:
+    """{phase name: wall time [s]} of the phases finished so far in the active ``reporting``
+    context (``Recorder.timings``), {} outside one: what a command writes into its result file
+    and its --json output."""
+    recorder = _ACTIVE.get()
+    return {} if recorder is None else recorder.timings()
+
+
 def mode_for(quiet: bool, stream=None) -> str:
     """The mode a command uses: "off" with ``--quiet``, "bar" on a terminal, else "lines"."""
     stream = sys.stderr if stream is None else stream

@@ -151,9 +151,12 @@ def write_discovery(
     config: dict | None = None,
     command: str = "discover",
     posterior=None,
+    timings: dict | None = None,
 ):
     """Write ``result`` (workflow.DiscoveryResult) to ``path`` atomically (schema above).
-    posterior : optional (PosteriorResult, summary dict) of the final model."""
+    posterior : optional (PosteriorResult, summary dict) of the final model.  timings :
+    {phase name: wall time [s]} (``compute.progress.timings``), the attributes of the group
+    ``timings``."""
     from bayesupdate.inference.results import package_versions, test_pairing_record
 
     summary = discovery_summary(result)
@@ -176,6 +179,7 @@ def write_discovery(
             config_json=json.dumps(config or {}, default=str),
         )
         h5.create_group("versions").attrs.update(package_versions())
+        h5.create_group("timings").attrs.update(timings or {})
         _write_inputs(h5.create_group("inputs"), data)
         pairing = test_pairing_record(problem.model)
         if pairing is not None:  # the study's [test] geometry, as calibrate and sample keep it

@@ -37,9 +37,13 @@ _OPTIONAL = (
 _MASS = ("mass_kg", "mass_sd_kg")
 
 
-def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:
-    """Write ``modes`` to ``path`` (HDF5) atomically."""
+def write_modal_h5(path: str | os.PathLike, modes: ModalData, timings: dict | None = None) -> None:
+    """Write ``modes`` to ``path`` (HDF5) atomically; ``timings`` ({phase name: wall time [s]}
+    of the run that made them, ``compute.progress.timings``) as the attributes of the group
+    ``/timings`` when given."""
     with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
+        if timings is not None:
+            fh.create_group("timings").attrs.update(timings)
         g = fh.create_group("modes")
         g.attrs["source"] = modes.source
         for name in _MASS:

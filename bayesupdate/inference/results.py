@@ -110,11 +110,14 @@ def write_result(
     diagnostics: dict | None = None,
     predictions: dict | None = None,
     command: str = "",
+    timings: dict | None = None,
 ) -> Path:
     """Write the run to ``path`` atomically (temporary file + rename).
 
     Give ``posterior`` for a finished sampling run, or only ``state`` for a checkpoint
-    (status "partial").  Returns the path.
+    (status "partial").  timings : {phase name: wall time [s]} of the run's phases
+    (``compute.progress.timings``), kept as the attributes of the group ``timings``.
+    Returns the path.
     """
     kind = "posterior" if (posterior is not None or state is not None) else "calibration"
     partial = posterior is None and state is not None
@@ -130,6 +133,7 @@ def write_result(
             command=command,
         )
         h5.create_group("versions").attrs.update(package_versions())
+        h5.create_group("timings").attrs.update(timings or {})
         _write_inputs(h5.create_group("inputs"), problem)
         _write_optimum(h5.create_group("optimum"), calibration)
         if kind == "posterior":

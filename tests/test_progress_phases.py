@@ -54,6 +54,17 @@ def _shown(stream: io.StringIO, name: str) -> list[str]:
     return [line for line in stream.getvalue().splitlines() if line.startswith(f"{name}: ")]
 
 
+def test_silenced_phases_are_timed_but_not_shown(lines):
+    stream, recorder = lines
+    with progress.silenced():
+        with progress.phase("hidden", 2) as p:
+            p.advance(2)
+    with progress.phase("shown", 1) as p:
+        p.advance()
+    assert stream.getvalue().startswith("shown: 1 it in ") and "hidden" not in stream.getvalue()
+    assert [(t.name, t.count) for t in recorder.phases] == [("hidden", 2), ("shown", 1)]
+
+
 def test_the_sampler_shows_its_adaptation_stages_and_its_kept_chain(lines):
     stream, recorder = lines
     data = ModalData(frequencies_hz=shear_building_frequencies(np.array([1.1, 0.9])) * 1.01)

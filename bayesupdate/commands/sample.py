@@ -1,5 +1,6 @@
 """``bayesupdate sample``: posterior of the parameters (and sigma) with emcee."""
 
+import contextlib
 import json
 import signal
 import sys
@@ -141,7 +142,8 @@ def _sample_with_stop_handlers(prepared, args, compute):
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
     previous_int = signal.signal(signal.SIGINT, stop.handler)
     try:
-        return run_sampling(prepared, options)
+        with progress.silenced() if args.no_progress else contextlib.nullcontext():
+            return run_sampling(prepared, options)
     finally:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)

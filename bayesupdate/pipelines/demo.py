@@ -77,13 +77,6 @@ class DemoSettings:
         return 16 if self.quick else 32
 
     @property
-    def moves(self) -> str:
-        """The sampler's moves (``inference.sampling``): a quick run's 300 kept steps cost less
-        than the mixture's adaptation stages before them (3 x 250 steps, 80 % of a quick run's
-        sampling, measured 2026-11-28), so a quick run walks with DE moves alone."""
-        return "de" if self.quick else "mixture"
-
-    @property
     def steps(self) -> int:
         """Step budget; the sampler stops earlier once R-hat, ESS and 50 tau are met.  The
         shell seed case's mixture, fitted in the unit box (``moves.staged``), converges in
@@ -272,7 +265,6 @@ def _study(settings: DemoSettings, data_source, model: dict = BEAM_MODEL) -> Stu
             "seed": settings.seed + 1,
             "check_every": 100 if settings.quick else 500,
             "predictive_draws": 100 if settings.quick else 400,
-            "moves": settings.moves,
         },
     }
     return parse_study(document, where="demo")
@@ -314,11 +306,11 @@ def optimum_part(
     return OptimumPart(name, calibration, polished, tuple(front), basis, search, rom)
 
 
-def basis_optimum(prepared: PreparedStudy, polished: bool) -> tuple:
+def basis_optimum(prepared: PreparedStudy, polished: bool, full_ends: bool = True) -> tuple:
     """The study's optimum on the certified basis ``run_sampling`` builds for it
-    (``optimum_part``; ``polished`` as there): (calibration, search problem, basis or None,
-    the basis's ``summary()`` with its build "wall_s", "cpu_s" and "error_at_optimum", or
-    None)."""
+    (``optimum_part``; ``polished`` as there, its ends polished on the full model too unless
+    ``full_ends`` is false): (calibration, search problem, basis or None, the basis's
+    ``summary()`` with its build "wall_s", "cpu_s" and "error_at_optimum", or None)."""
     import time
 
     from bayesupdate.inference.optimize import CalibrationSettings, calibrate
@@ -332,7 +324,7 @@ def basis_optimum(prepared: PreparedStudy, polished: bool) -> tuple:
         starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design,
         polish=opt.polish if polished else False,
     )  # fmt: skip
-    refine = prepared.problem if polished and rom is not None else None
+    refine = prepared.problem if polished and full_ends and rom is not None else None
     calibration = calibrate(search, fit, refine=refine)
     basis = None
     if rom is not None:
@@ -363,8 +355,8 @@ def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) ->
 
 
 def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
-    """The virtual test on the beam exhaust: its optimum (``run_calibration``; a quick run's as
-    the sampler places its walkers, on the certified basis without the polish on full solves:
+    """The virtual test on the beam exhaust: its optimum (``run_calibration``; a quick run's
+    polished on the certified basis only, its ends not refined on full solves:
     ``basis_optimum``), then the posterior, written to ``path`` and judged by the stored
     reference of the default virtual test (it applies only when ``data_source`` holds that
     test's modes)."""
@@ -373,8 +365,8 @@ def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
     prepared = prepare(_study(settings, data_source))
     reference = demo_reference("virtual")
     options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
-    if settings.quick:  # the optimum as the sampler places its walkers: on the basis, no polish
-        calibration, search, rom = basis_optimum(prepared, polished=False)[:3]
+    if settings.quick:  # polished on the certified basis, its ends not refined on full solves
+        calibration, search, rom = basis_optimum(prepared, polished=True, full_ends=False)[:3]
         run = run_sampling(prepared, options, calibration, (search, rom))
     else:
         run = run_sampling(prepared, options, calibration=run_calibration(prepared))

@@ -62,6 +62,7 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "measured_mass_kg",
         "mass_weight",
         "compute",
+        "timings",
     }
     assert result["compute"] == {"kind": "serial", "workers": 1}
     assert result["measured_mass_kg"] is None and result["mass_weight"] == 0.0  # none measured

@@ -12,8 +12,8 @@ scripts and tests, and the CLI shows
   a pipe, CI), for phases of ``SHOWN_FROM_S`` seconds or more;
 - ``"off"``: nothing (``--quiet``); the phases' wall times are recorded in every mode.
 
-A command writes them (``timings()``: {phase: wall time [s]}) into its result file (the group
-``timings``) and its ``--json`` output; ``silenced()`` hides the phases inside it from the
+A command writes them (``timings()``: {phase: wall time [s]}) into its result file (the attribute
+``timings_json``) and its ``--json`` output; ``silenced()`` hides the phases inside it from the
 display but keeps their times (``sample --no-progress``).
 
 Worker processes of an executor have no reporting context: their phases are silent, and the

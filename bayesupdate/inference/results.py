@@ -4,7 +4,9 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 
 /                      attrs: schema, kind ("calibration" | "posterior"), status ("complete" |
                        "partial" - a checkpoint that ``sample --resume`` continues), created_utc,
-                       config_json (the study as JSON; resume checks it), command
+                       config_json (the study as JSON; resume checks it), command,
+                       timings_json ({phase: wall time [s]} of the command's phases,
+                       ``compute.progress``; like wall_s, not reproducible)
 /versions              attrs: python, bayesupdate, numpy, scipy, emcee, arviz, h5py
 /inputs                frequencies_hz (m,), weights (m,), [sd_hz (m,)], attrs: source,
                        [measured_mass_kg, measured_mass_sd_kg],
@@ -116,7 +118,7 @@ def write_result(
 
     Give ``posterior`` for a finished sampling run, or only ``state`` for a checkpoint
     (status "partial").  timings : {phase name: wall time [s]} of the run's phases
-    (``compute.progress.timings``), kept as the attributes of the group ``timings``.
+    (``compute.progress.timings``), kept as the JSON attribute ``timings_json``.
     Returns the path.
     """
     kind = "posterior" if (posterior is not None or state is not None) else "calibration"
@@ -133,7 +135,7 @@ def write_result(
             command=command,
         )
         h5.create_group("versions").attrs.update(package_versions())
-        h5.create_group("timings").attrs.update(timings or {})
+        h5.attrs["timings_json"] = json.dumps(timings or {})
         _write_inputs(h5.create_group("inputs"), problem)
         _write_optimum(h5.create_group("optimum"), calibration)
         if kind == "posterior":

@@ -21,15 +21,13 @@ Writes into --out: report.html (self-contained), report.md, figures/, HDF5 resul
   bayesupdate demo --out demo_out            # the whole run (about 9 minutes of CPU)
   bayesupdate demo --out demo_out --quick    # a first look (about 3.5 minutes of CPU)
 
---quick: fewer starts, walkers and steps, the virtual test's optimum polished on its certified
-basis (its ends not refined on full solves), no discovery on the seed case; its posteriors are
-not expected to converge and say so."""
+--quick: fewer starts, walkers and steps, no discovery on the seed case; its posteriors are not
+expected to converge and say so."""
 
 
 QUICK_NOTE = (
     "quick run: {s.starts} starts, {s.walkers} walkers x {s.steps} steps (not expected to "
-    "converge), the virtual test's optimum polished on its certified basis (its ends not "
-    "refined on full solves), no discovery on the seed case"
+    "converge), no discovery on the seed case"
 )
 
 

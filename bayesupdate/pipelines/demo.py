@@ -295,25 +295,13 @@ def optimum_part(
     (``pipelines.surrogates.sampling_problem``).  ``polished``: as ``run_calibration`` (ends
     polished on the full model), else as ``run_sampling`` places its walkers (no polish, the
     basis checked at the optimum by a full solve)."""
-    from bayesupdate.inference.optimize import pareto_front_mass
-
-    calibration, search, rom, basis = basis_optimum(prepared, polished)
-    front = pareto_front_mass(
-        search, paper.MEASURED_MASS_KG, tuple(weights), starts=FRONT_STARTS,
-        seed=prepared.study.optimizer.seed, polish=False,
-    )  # fmt: skip
-    name = prepared.study.model.source
-    return OptimumPart(name, calibration, polished, tuple(front), basis, search, rom)
-
-
-def basis_optimum(prepared: PreparedStudy, polished: bool, full_ends: bool = True) -> tuple:
-    """The study's optimum on the certified basis ``run_sampling`` builds for it
-    (``optimum_part``; ``polished`` as there, its ends polished on the full model too unless
-    ``full_ends`` is false): (calibration, search problem, basis or None, the basis's
-    ``summary()`` with its build "wall_s", "cpu_s" and "error_at_optimum", or None)."""
     import time
 
-    from bayesupdate.inference.optimize import CalibrationSettings, calibrate
+    from bayesupdate.inference.optimize import (
+        CalibrationSettings,
+        calibrate,
+        pareto_front_mass,
+    )
     from bayesupdate.pipelines.surrogates import sampling_problem
 
     opt, cfg = prepared.study.optimizer, prepared.study.sampler
@@ -324,13 +312,18 @@ def basis_optimum(prepared: PreparedStudy, polished: bool, full_ends: bool = Tru
         starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design,
         polish=opt.polish if polished else False,
     )  # fmt: skip
-    refine = prepared.problem if polished and full_ends and rom is not None else None
+    refine = prepared.problem if polished and rom is not None else None
     calibration = calibrate(search, fit, refine=refine)
     basis = None
     if rom is not None:
         error = rom.certify_at(calibration.theta[None, :], search.names)[1]
         basis = {**rom.summary(), **build, "error_at_optimum": float(error)}
-    return calibration, search, rom, basis
+    front = pareto_front_mass(
+        search, paper.MEASURED_MASS_KG, tuple(weights), starts=FRONT_STARTS, seed=opt.seed,
+        polish=False,
+    )  # fmt: skip
+    name = prepared.study.model.source
+    return OptimumPart(name, calibration, polished, tuple(front), basis, search, rom)
 
 
 def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) -> ShellCheck:
@@ -355,21 +348,16 @@ def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) ->
 
 
 def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
-    """The virtual test on the beam exhaust: its optimum (``run_calibration``; a quick run's
-    polished on the certified basis only, its ends not refined on full solves:
-    ``basis_optimum``), then the posterior, written to ``path`` and judged by the stored
-    reference of the default virtual test (it applies only when ``data_source`` holds that
-    test's modes)."""
+    """The virtual test on the beam exhaust: its optimum (``run_calibration``), then the
+    posterior, written to ``path`` and judged by the stored reference of the default virtual
+    test (it applies only when ``data_source`` holds that test's modes)."""
     from bayesupdate.pipelines.calibrate import run_calibration
 
     prepared = prepare(_study(settings, data_source))
+    calibration = run_calibration(prepared)
     reference = demo_reference("virtual")
     options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
-    if settings.quick:  # polished on the certified basis, its ends not refined on full solves
-        calibration, search, rom = basis_optimum(prepared, polished=True, full_ends=False)[:3]
-        run = run_sampling(prepared, options, calibration, (search, rom))
-    else:
-        run = run_sampling(prepared, options, calibration=run_calibration(prepared))
+    run = run_sampling(prepared, options, calibration=calibration)
     return CalibrationPart(run, path, prepared.problem)
 
 

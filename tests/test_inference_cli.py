@@ -66,6 +66,7 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "test_modes",
         "pairing",
         "warnings",
+        "timings",
     }
     # frequencies only: paired by tracking the model's shapes, nothing refused or warned
     assert result["pairing"]["method"] == "tracked" and result["pairing"]["refused"] == []

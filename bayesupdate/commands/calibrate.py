@@ -210,6 +210,7 @@ def _g(value) -> str:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+    from bayesupdate.compute import progress
     from bayesupdate.compute.settings import open_executor
     from bayesupdate.inference.checks import calibration_warnings
     from bayesupdate.inference.results import write_result
@@ -228,14 +229,15 @@ def run(args) -> int:
         result = run_calibration(prepared, executor)
         where = executor.describe()
     warnings = calibration_warnings(prepared.problem, result)
+    timings = progress.timings()
     if args.out:
         write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME,
-                     warnings=warnings)  # fmt: skip
+                     warnings=warnings, timings=timings)  # fmt: skip
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
     report_warnings(warnings)
     if args.json:
         out = calibration_json(result, prepared.problem, warnings)
-        print(json.dumps({**out, "compute": where}))
+        print(json.dumps({**out, "compute": where, "timings": timings}))
     else:
         print(
             f"objective (seed eq. 19): {result.expr:.5g}   starts: {result.converged_starts}"

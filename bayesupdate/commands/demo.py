@@ -19,7 +19,16 @@ DESCRIPTION = """Run the embedded default end to end and write a report:
 Writes into --out: report.html (self-contained), report.md, figures/, HDF5 results, the UFF file.
 
   bayesupdate demo --out demo_out            # the whole run (about 9 minutes of CPU)
-  bayesupdate demo --out demo_out --quick    # a first look (about 3.5 minutes of CPU)"""
+  bayesupdate demo --out demo_out --quick    # a first look (about 3.5 minutes of CPU)
+
+--quick: fewer starts, walkers and steps, no discovery on the seed case; its posteriors are not
+expected to converge and say so."""
+
+
+QUICK_NOTE = (
+    "quick run: {s.starts} starts, {s.walkers} walkers x {s.steps} steps (not expected to "
+    "converge), no discovery on the seed case"
+)
 
 
 def add_arguments(parser):
@@ -39,6 +48,8 @@ def run(args) -> int:
     steps = (*demo_steps(settings), "the two exhausts side by side", "report")
     t0 = time.perf_counter()
     counter = iter(range(1, len(steps) + 1))
+    if settings.quick:
+        say(QUICK_NOTE.format(s=settings))
 
     def step(name):
         say(f"[{next(counter)}/{len(steps)}] {name}  ({time.perf_counter() - t0:.0f} s)")

@@ -95,6 +95,7 @@ def _settings(study, args):
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.commands.calibrate import compute_from_args
+    from bayesupdate.compute.progress import timings as phase_timings
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
@@ -112,10 +113,12 @@ def run(args) -> int:
     result, posterior = found.result, found.posterior
     for refused in found.pairing.get("refused", []):
         print(f"pairing: {refused['message']}", file=sys.stderr)
+    timings = phase_timings()
     if args.out:
         write_discovery(
-            args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior
-        )
+            args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior,
+            timings=timings,
+        )  # fmt: skip
     if args.plots:
         from bayesupdate.discovery.plots import save_plots
 
@@ -124,6 +127,7 @@ def run(args) -> int:
     summary["compute"] = found.compute
     if found.pairing:
         summary["pairing"] = found.pairing
+    summary["timings"] = timings
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:

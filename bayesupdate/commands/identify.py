@@ -119,6 +119,7 @@ def _identify(args, request, data, inp):
 
 
 def run(args) -> int:
+    from bayesupdate.compute import progress
     from bayesupdate.ema.modal_h5 import write_modal_h5
     from bayesupdate.pipelines.identify import IdentifyRequest, read_frf_files
     from bayesupdate.report.identify_report import (
@@ -149,11 +150,13 @@ def run(args) -> int:
     )
     run_ = _identify(args, request, data, inp)
     result = run_.identification
-    write_modal_h5(out, result.modes)
+    timings = progress.timings()
+    write_modal_h5(out, result.modes, timings)
     if args.plots:
         _write_plots(args.plots, result, data.frfs)
     report = write_identify_report(args.report, inp, result)[0] if args.report else None
     summary = _summary(result, out, run_.notes, report)
+    summary["timings"] = timings
     if args.json:
         print(json.dumps(summary))
         return 0

@@ -1,5 +1,6 @@
 """``bayesupdate sample``: posterior of the parameters (and sigma) with emcee."""
 
+import contextlib
 import json
 import signal
 import sys
@@ -17,6 +18,7 @@ from bayesupdate.commands.calibrate import (
     study_from_args,
     write_bdf,
 )
+from bayesupdate.compute import progress
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 
@@ -112,6 +114,7 @@ def run(args) -> int:
     out["pairing_rules"] = prepared.problem.pairing.to_dict()
     out["warnings"] = list(run.warnings)
     report_warnings(run.warnings)
+    out["timings"] = progress.timings()
     means = {k: v["mean"] for k, v in out["parameters"].items()}
     out["mass_properties"] = mass_property_report(
         prepared.problem, {**prepared.problem.fixed, **means}
@@ -156,7 +159,8 @@ def _sample_with_stop_handlers(prepared, args, compute):
     # and Python then never raises KeyboardInterrupt: make Ctrl-C/SIGINT always checkpoint
     previous_int = signal.signal(signal.SIGINT, stop.handler)
     try:
-        return run_sampling(prepared, options)
+        with progress.silenced() if args.no_progress else contextlib.nullcontext():
+            return run_sampling(prepared, options)
     finally:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
@@ -280,6 +284,7 @@ def _run_tmcmc(prepared, args) -> int:
     out["mass_properties"] = mass_property_report(
         prepared.problem, {**prepared.problem.fixed, **means}
     )
+    out["timings"] = progress.timings()
     if args.json:
         print(json.dumps(out))
         return 0

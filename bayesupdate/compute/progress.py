@@ -12,6 +12,10 @@ scripts and tests, and the CLI shows
   a pipe, CI), for phases of ``SHOWN_FROM_S`` seconds or more;
 - ``"off"``: nothing (``--quiet``); the phases' wall times are recorded in every mode.
 
+A command writes them (``timings()``: {phase: wall time [s]}) into its result file (the attribute
+``timings_json``) and its ``--json`` output; ``silenced()`` hides the phases inside it from the
+display but keeps their times (``sample --no-progress``).
+
 Worker processes of an executor have no reporting context: their phases are silent, and the
 parent's phase advances as their tasks finish (``executor.map(..., progress=...)``).
 """
@@ -57,6 +61,20 @@ class Recorder:
 _ACTIVE: ContextVar[Recorder | None] = ContextVar("bayesupdate_progress", default=None)
 
 
+def active() -> Recorder | None:
+    """The ``Recorder`` of the ``reporting`` context this code runs in, or None (a library
+    caller's script, a worker process)."""
+    return _ACTIVE.get()
+
+
+def timings() -> dict[str, float]:
+    """{phase name: wall time [s]} of the phases finished so far in the active ``reporting``
+    context (``Recorder.timings``), {} outside one: what a command writes into its result file
+    and its --json output."""
+    recorder = _ACTIVE.get()
+    return {} if recorder is None else recorder.timings()
+
+
 def mode_for(quiet: bool, stream=None) -> str:
     """The mode a command uses: "off" with ``--quiet``, "bar" on a terminal, else "lines"."""
     stream = sys.stderr if stream is None else stream
@@ -75,6 +93,21 @@ def reporting(mode: str, stream=None) -> Iterator[Recorder]:
     token = _ACTIVE.set(recorder)
     try:
         yield recorder
+    finally:
+        _ACTIVE.reset(token)
+
+
+@contextmanager
+def silenced() -> Iterator[None]:
+    """Phases run inside are timed into the active ``reporting`` context but not shown (a
+    command's ``--no-progress``); nothing changes outside one."""
+    outer = _ACTIVE.get()
+    if outer is None:
+        yield
+        return
+    token = _ACTIVE.set(Recorder("off", outer.stream, outer.phases))  # the same list of phases
+    try:
+        yield
     finally:
         _ACTIVE.reset(token)
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bayesupdate.compute.executors import executor_or_serial
+from bayesupdate.compute.progress import phase
 from bayesupdate.correlation import comac
 from bayesupdate.discovery.candidates import Candidate
 from bayesupdate.fe.reduced import ReducedFEModel
@@ -38,6 +39,8 @@ PROBE_FRACTION = 0.02
 SCREEN_FRACTIONS = (0.05, 0.15, 0.3, 0.5, 0.7, 0.85, 1.0)
 #: kinds whose null value reproduces the model without the effect exactly
 EXACT_NULL_KINDS = ("added_mass", "boundary_spring", "bend_flexibility", "stiffness_change")
+#: the progress phase of the score tests, one step per candidate effect (``compute.progress``)
+CANDIDATES_PHASE = "discovery: candidates (score tests)"
 
 
 @dataclass(frozen=True)
@@ -289,7 +292,10 @@ def localize(
     candidates' ``CandidateScore`` made by the caller (then ``candidates`` is not scored)."""
     shared = (baseline_problem, design_theta, design_jac, residuals_fn)
     if scored is None:
-        scored = executor_or_serial(executor).map(_score_task, candidates, shared)
+        with phase(CANDIDATES_PHASE, len(candidates), "candidates") as shown:
+            scored = executor_or_serial(executor).map(
+                _score_task, candidates, shared, shown.progress_callback()
+            )
     scores = list(scored)
     scores.sort(key=lambda s: -s.delta_chi2)
     fe = full_model(baseline_problem.model)

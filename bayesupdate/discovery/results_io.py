@@ -6,7 +6,8 @@ Schema ``bayesupdate-discovery/1`` (relative errors are (f_model - f_test) / f_t
                     model (base model name), base_effects_json (effects the model had before),
                     effects_json (spec list of the extended model: base effects + the named one),
                     summary_json (``discovery_summary``: also the ``discover --json`` object),
-                    settings_json (``DiscoverySettings.flat``), config_json
+                    settings_json (``DiscoverySettings.flat``), config_json, timings_json
+                    ({phase: wall time [s]}, ``compute.progress``; not reproducible)
 /versions           attrs: package versions
 /inputs             frequencies_hz (m,), [weights (m,)], [sd_hz (m,)], attrs: source,
                     [test_pairing_json: the study's [test] geometry's pairing]
@@ -151,9 +152,12 @@ def write_discovery(
     config: dict | None = None,
     command: str = "discover",
     posterior=None,
+    timings: dict | None = None,
 ):
     """Write ``result`` (workflow.DiscoveryResult) to ``path`` atomically (schema above).
-    posterior : optional (PosteriorResult, summary dict) of the final model."""
+    posterior : optional (PosteriorResult, summary dict) of the final model.  timings :
+    {phase name: wall time [s]} (``compute.progress.timings``), the JSON attribute
+    ``timings_json``."""
     from bayesupdate.inference.results import package_versions, test_pairing_record
 
     summary = discovery_summary(result)
@@ -176,6 +180,7 @@ def write_discovery(
             config_json=json.dumps(config or {}, default=str),
         )
         h5.create_group("versions").attrs.update(package_versions())
+        h5.attrs["timings_json"] = json.dumps(timings or {})
         _write_inputs(h5.create_group("inputs"), data)
         pairing = test_pairing_record(problem.model)
         if pairing is not None:  # the study's [test] geometry, as calibrate and sample keep it

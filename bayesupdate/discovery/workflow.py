@@ -69,11 +69,13 @@ from scipy import stats
 from scipy.special import logsumexp
 
 from bayesupdate.compute.executors import executor_or_serial
+from bayesupdate.compute.progress import phase
 from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
 from bayesupdate.discovery.flagging import ModeFlags, ShapeTests, flag_modes
 from bayesupdate.discovery.localization import (
+    CANDIDATES_PHASE,
     Localization,
     candidate_problem,
     localize,
@@ -502,12 +504,14 @@ def _reduced_scores(model, effects: list, args: tuple, settings: DiscoverySettin
     problem, theta = args[0], args[1]
     reducer = CandidateReducer.at(problem.model, problem, theta)
     scores: list = []
-    for effect in effects:
-        candidate = reducer.reduce(make_candidate(model, effect))
-        scores.append(score_candidate(*args, candidate))
-        ranked = sorted(scores, key=lambda s: -s.delta_chi2)
-        keep = {s.label for s in _select(ranked, settings)}
-        scores = [s if s.label in keep else stripped(s) for s in scores]
+    with phase(CANDIDATES_PHASE, len(effects), "candidates") as shown:
+        for effect in effects:
+            candidate = reducer.reduce(make_candidate(model, effect))
+            scores.append(score_candidate(*args, candidate))
+            ranked = sorted(scores, key=lambda s: -s.delta_chi2)
+            keep = {s.label for s in _select(ranked, settings)}
+            scores = [s if s.label in keep else stripped(s) for s in scores]
+            shown.advance()
     return scores
 
 
@@ -550,7 +554,10 @@ def _quick_refits(
     each ``quick_nfev`` iterations from its best ``_candidate_starts`` start, best evidence
     first (fits on ``executor``)."""
     chosen = _select(scores, settings)
-    fits = executor_or_serial(executor).map(_quick_refit, chosen, (base_fit, settings))
+    with phase("discovery: quick refits", len(chosen), "fits") as shown:
+        fits = executor_or_serial(executor).map(
+            _quick_refit, chosen, (base_fit, settings), shown.progress_callback()
+        )
     quick = list(zip(fits, chosen, strict=True))
     quick.sort(key=lambda item: -item[0].log_evidence)
     return quick
@@ -578,7 +585,10 @@ def _full_refits(
     best = [fit for fit, _ in quick[: settings.refit.max_refits]]
     say("full refits: " + ", ".join(fit.label for fit in best))
     fits = [f for f, _ in quick[settings.refit.max_refits :]]
-    fits.extend(executor_or_serial(executor).map(_full_refit, best, shared))
+    with phase("discovery: full refits", len(best), "fits") as shown:
+        fits.extend(
+            executor_or_serial(executor).map(_full_refit, best, shared, shown.progress_callback())
+        )
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
 
@@ -598,10 +608,11 @@ def _with_loo(base_fit: ModelFit, fits: list, settings: DiscoverySettings) -> tu
     (``laplace_loo``, ``loo_draws`` draws; the k-th of them seeded ``seed + k``)."""
     loo, seed = settings.evidence, settings.seed
     top = [base_fit, *fits[: loo.loo_top]]
-    done = [
-        replace(fit, loo=laplace_loo(fit, loo.loo_draws, seed=seed + k))
-        for k, fit in enumerate(top)
-    ]
+    done = []
+    with phase("discovery: LOO", len(top), "fits") as shown:
+        for k, fit in enumerate(top):
+            done.append(replace(fit, loo=laplace_loo(fit, loo.loo_draws, seed=seed + k)))
+            shown.advance()
     return done[0], done[1:] + list(fits[loo.loo_top :])
 
 

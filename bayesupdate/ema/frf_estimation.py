@@ -18,8 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.ema.excitation import sine_sweep_top
 from bayesupdate.errors import BayesUpdateError
+
+#: the progress phase of ``h1_h2_coherence``, one step per response channel
+#: (``compute.progress``)
+FRF_PHASE = "FRF estimation"
 
 
 def impact_windows(
@@ -92,16 +97,39 @@ def h1_h2_coherence(
         wf, wy = fw * ew, ew
     else:
         raise BayesUpdateError(f"FRF estimation: window {window!r} unknown; use hann/rect/impact")
-    fx = np.fft.rfft(_segments(x, segment, step) * wf, axis=-1)
-    fy = np.fft.rfft(_segments(y, segment, step) * wy, axis=-1)
-    gff = np.mean(np.abs(fx) ** 2, axis=-2)
-    gyy = np.mean(np.abs(fy) ** 2, axis=-2)
-    gfy = np.mean(fx.conj() * fy, axis=-2)
+    shape = np.broadcast_shapes(x.shape[:-1], y.shape[:-1])  # (..., n_rep)
+    xs = np.broadcast_to(x, (*shape, n_t)).reshape(-1, shape[-1], n_t)
+    ys = np.broadcast_to(y, (*shape, n_t)).reshape(-1, shape[-1], n_t)
+    # one channel at a time: progress per channel, and the segments of one channel in memory
+    # (a long run's segments of all channels at once are the records' size times 2 / overlap)
+    shared = x.ndim == 2 or all(n == 1 for n in x.shape[:-2])  # one force row for every channel
+    fx_shared = _spectra(xs[0], segment, step, wf) if shared else None
+    parts = []
+    with phase(FRF_PHASE, ys.shape[0], "channels") as shown:
+        for k in range(ys.shape[0]):
+            fx = fx_shared if shared else _spectra(xs[k], segment, step, wf)
+            parts.append(_h1_h2_coherence(fx, _spectra(ys[k], segment, step, wy)))
+            shown.advance()
+    h1, h2, coh = (np.stack([p[i] for p in parts]).reshape(*shape[:-1], -1) for i in range(3))
+    return np.fft.rfftfreq(segment, 1 / sample_rate_hz), h1, h2, coh
+
+
+def _spectra(x: np.ndarray, segment: int, step: int, window: np.ndarray) -> np.ndarray:
+    """Windowed spectra (n_rep * n_seg, segment // 2 + 1) of the segments of x (n_rep, n_t)."""
+    return np.fft.rfft(_segments(x, segment, step) * window, axis=-1)
+
+
+def _h1_h2_coherence(fx: np.ndarray, fy: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(h1, h2, coherence), each (n_f,), of one channel's force and response spectra
+    (n_seg, n_f) averaged over the segments (Bendat & Piersol, Random Data, 4th ed., 9.2)."""
+    gff = np.mean(np.abs(fx) ** 2, axis=0)
+    gyy = np.mean(np.abs(fy) ** 2, axis=0)
+    gfy = np.mean(fx.conj() * fy, axis=0)
     tiny = np.finfo(float).tiny
     h1 = gfy / np.maximum(gff, tiny)
     h2 = gyy / np.where(np.abs(gfy) > 0, gfy.conj(), tiny)
     coh = np.abs(gfy) ** 2 / np.maximum(gff * gyy, tiny)
-    return np.fft.rfftfreq(segment, 1 / sample_rate_hz), h1, h2, np.clip(coh, 0, 1)
+    return h1, h2, np.clip(coh, 0, 1)
 
 
 def correct_exponential_window(

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.ema.bands import automatic_bands, default_band_lines
 from bayesupdate.ema.frequency_sd import frequency_sd
@@ -153,6 +154,8 @@ def shape_sd_rel(scaled: ScaledShapes) -> tuple[np.ndarray, np.ndarray]:
     return np.where(bad, MAX_SHAPE_SD, sd), bad
 
 
+#: the progress phase of the pole estimators: every band's model orders (``compute.progress``)
+ORDERS_PHASE = "identify: stabilisation diagram orders"
 #: pole estimators by name: each returns an LsceResult (poles and pole vectors per order)
 ESTIMATORS = {"lsce": lsce, "plscf": plscf}
 
@@ -215,37 +218,49 @@ def _poles_by_band(frfs, bands, settings: IdentifySettings):
     BayesUpdateError when no band has a stable mode."""
     f = frfs.frequencies_hz
     candidates, diagrams, edge = [], [], []
-    for i, band in enumerate(bands):
-        res = ESTIMATORS[settings.method](
-            f, frfs.frf, (f[band.lo], f[band.hi]), max_order=settings.max_order
-        )
-        diagram = stabilization_diagram(
-            res,
-            settings.tol_frequency,
-            settings.tol_damping,
-            settings.min_mac,
-            resolution_hz=frfs.df_hz,
-        )
-        diagrams.append(diagram)
-        f_own_lo, f_own_hi = _owned_range(f, bands, i, frfs.df_hz)
-        width = f[band.hi] - f[band.lo]
-        margin = _edge_margin(f, band, frfs.df_hz)
-        selected = select_poles(diagram, min_count=settings.min_count, resolution_hz=frfs.df_hz)
-        for pole in selected:
-            # damped frequency decides ownership: it is what sits between the band's lines
-            fd = pole.pole.imag / (2 * np.pi)
-            at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
-            if f_own_lo <= fd <= f_own_hi and not at_edge:
-                centrality = min(fd - f[band.lo], f[band.hi] - fd) / width
-                candidates.append((pole, centrality))
-            elif band is bands[-1] and fd > f[band.hi] - margin:
-                edge.append(pole.pole)
+    # orders 2, 4, ..., max_order rounded up to even (``lsce``, ``plscf``)
+    n_orders = (settings.max_order + 1) // 2
+    with phase(ORDERS_PHASE, len(bands) * n_orders, "orders") as shown:
+        for i, band in enumerate(bands):
+            res = ESTIMATORS[settings.method](
+                f, frfs.frf, (f[band.lo], f[band.hi]), max_order=settings.max_order
+            )
+            shown.advance(len(res.orders))
+            _band_candidates(frfs, bands, i, res, settings, (candidates, diagrams, edge))
     if not candidates:
         raise BayesUpdateError(
             f"{frfs.source or 'FRF set'}: no stable mode found; check the band and the data, "
             "or raise --max-order"
         )
     return _merge(candidates), diagrams, edge
+
+
+def _band_candidates(frfs, bands, i: int, res, settings: IdentifySettings, into: tuple) -> None:
+    """Band ``i``'s stabilization diagram from its estimator result ``res`` and the poles it
+    owns, appended to ``into`` = (candidates [(pole, centrality)], diagrams, edge poles)."""
+    candidates, diagrams, edge = into
+    f, band = frfs.frequencies_hz, bands[i]
+    diagram = stabilization_diagram(
+        res,
+        settings.tol_frequency,
+        settings.tol_damping,
+        settings.min_mac,
+        resolution_hz=frfs.df_hz,
+    )
+    diagrams.append(diagram)
+    f_own_lo, f_own_hi = _owned_range(f, bands, i, frfs.df_hz)
+    width = f[band.hi] - f[band.lo]
+    margin = _edge_margin(f, band, frfs.df_hz)
+    selected = select_poles(diagram, min_count=settings.min_count, resolution_hz=frfs.df_hz)
+    for pole in selected:
+        # damped frequency decides ownership: it is what sits between the band's lines
+        fd = pole.pole.imag / (2 * np.pi)
+        at_edge = fd < f[band.lo] + margin or fd > f[band.hi] - margin
+        if f_own_lo <= fd <= f_own_hi and not at_edge:
+            centrality = min(fd - f[band.lo], f[band.hi] - fd) / width
+            candidates.append((pole, centrality))
+        elif band is bands[-1] and fd > f[band.hi] - margin:
+            edge.append(pole.pole)
 
 
 def _fit_and_prune(frfs, selected, residual_poles, fit_lo, fit_hi):

@@ -4,7 +4,8 @@ Layout (group ``/modes``): datasets ``frequencies_hz`` (m,), ``damping_ratio`` (
 ``shapes_real`` and ``shapes_imag`` (n_dof, m), ``dof_labels`` (n_dof,) strings, optional
 ``mpc``, ``frequency_sd_hz``, ``identification_sd_hz``, ``weights``, ``shape_sd_rel`` (m,), any
 ``extra`` arrays under ``/modes/extra``; attributes ``source`` and, when measured, ``mass_kg``
-and ``mass_sd_kg`` (the structure's weighed mass, test data like the frequencies).  Written
+and ``mass_sd_kg`` (the structure's weighed mass, test data like the frequencies); on the root,
+``timings_json`` ({phase: wall time [s]} of the ``identify`` run that wrote it).  Written
 atomically.
 
 ``identify`` on several files with more than one run group (:mod:`bayesupdate.ema.run_groups`)
@@ -17,6 +18,7 @@ pole), ``mpc_one_pole``, ``frequency_one_pole_hz`` (one pole over all runs) (m,)
 the groups' combined values and assembled shapes.
 """
 
+import json
 import os
 
 import h5py
@@ -37,9 +39,13 @@ _OPTIONAL = (
 _MASS = ("mass_kg", "mass_sd_kg")
 
 
-def write_modal_h5(path: str | os.PathLike, modes: ModalData) -> None:
-    """Write ``modes`` to ``path`` (HDF5) atomically."""
+def write_modal_h5(path: str | os.PathLike, modes: ModalData, timings: dict | None = None) -> None:
+    """Write ``modes`` to ``path`` (HDF5) atomically; ``timings`` ({phase name: wall time [s]}
+    of the run that made them, ``compute.progress.timings``) as the JSON attribute
+    ``timings_json`` when given."""
     with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
+        if timings is not None:
+            fh.attrs["timings_json"] = json.dumps(timings)
         g = fh.create_group("modes")
         g.attrs["source"] = modes.source
         for name in _MASS:

@@ -5,7 +5,9 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 /                      attrs: schema, kind ("calibration" | "posterior"), status ("complete" |
                        "partial" - a checkpoint that ``sample --resume`` continues), created_utc,
                        config_json (the study as JSON; resume checks it), command,
-                       warnings_json (list of one-line warnings, ``inference.checks``)
+                       warnings_json (list of one-line warnings, ``inference.checks``),
+                       timings_json ({phase: wall time [s]} of the command's phases,
+                       ``compute.progress``; like wall_s, not reproducible)
 /versions              attrs: python, bayesupdate, numpy, scipy, emcee, arviz, h5py
 /inputs                frequencies_hz (m,), weights (m,), [sd_hz (m,)], attrs: source,
                        [measured_mass_kg, measured_mass_sd_kg],
@@ -119,11 +121,14 @@ def write_result(
     predictions: dict | None = None,
     command: str = "",
     warnings: tuple[str, ...] | list[str] = (),
+    timings: dict | None = None,
 ) -> Path:
     """Write the run to ``path`` atomically (temporary file + rename).
 
     Give ``posterior`` for a finished sampling run, or only ``state`` for a checkpoint
     (status "partial").  ``warnings``: one-line warnings of the run (``inference.checks``).
+    timings : {phase name: wall time [s]} of the run's phases (``compute.progress.timings``),
+    kept as the JSON attribute ``timings_json``.
     Returns the path.
     """
     kind = "posterior" if (posterior is not None or state is not None) else "calibration"
@@ -141,6 +146,7 @@ def write_result(
             warnings_json=json.dumps(list(warnings)),
         )
         h5.create_group("versions").attrs.update(package_versions())
+        h5.attrs["timings_json"] = json.dumps(timings or {})
         _write_inputs(h5.create_group("inputs"), problem)
         _write_optimum(h5.create_group("optimum"), calibration)
         report = mass_property_report(problem, problem.as_mapping(calibration.theta))

@@ -48,6 +48,7 @@ from functools import partial
 import emcee
 import numpy as np
 
+from bayesupdate.compute import progress
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference import walker_start
@@ -596,10 +597,23 @@ def _sample_blocks(
     every multiple of ``check_every`` and at the end."""
     from tqdm.auto import tqdm
 
+    steps = settings.steps
+    # under a ``reporting`` context (the CLI) the phase below is the bar: one bar, not two
+    own_bar = settings.progress and progress.active() is None
+    bar = tqdm(total=steps, initial=run.done, disable=not own_bar, desc="sampling", unit="step")
+    with progress.phase("sampling: kept chain", steps - run.done, "steps") as shown:
+        outcome = _blocks_until_stop(
+            sampler, run, log_posterior, settings, checkpoint, space, request, _Tee(bar, shown),
+        )  # fmt: skip
+    bar.close()
+    return outcome
+
+
+def _blocks_until_stop(
+    sampler, run, log_posterior, settings, checkpoint, space, request, bar
+) -> tuple[bool, bool, np.ndarray]:
+    """The loop of ``_sample_blocks`` (same arguments; ``bar.update(1)`` per step)."""
     steps, check_every = settings.steps, settings.check_every
-    bar = tqdm(
-        total=steps, initial=run.done, disable=not settings.progress, desc="sampling", unit="step"
-    )
     interrupted = converged = False
     tau = np.full(log_posterior.ndim, np.inf)
     while run.done < steps:
@@ -620,8 +634,18 @@ def _sample_blocks(
                 checkpoint(run.snapshot(log_posterior, finished=finished))
         if converged:
             break
-    bar.close()
     return interrupted, converged, tau
+
+
+class _Tee:
+    """Steps counted on a tqdm bar and a ``compute.progress`` phase at once."""
+
+    def __init__(self, bar, shown: progress.Phase):
+        self.bar, self.shown = bar, shown
+
+    def update(self, n: int) -> None:
+        self.bar.update(n)
+        self.shown.advance(n)
 
 
 def _posterior_result(
@@ -746,7 +770,8 @@ def _adaptation_stage(
     coordinates, None when stopped.  Timed in ``run.clock``."""
     t0 = time.perf_counter()
     stage = _ensemble(walkers, d, guarded, step_moves, screened)
-    coords, lps, interrupted = _run_block(stage, run, n, request, _NoBar())
+    with progress.phase("sampling: adaptation stage", n, "steps") as shown:
+        coords, lps, interrupted = _run_block(stage, run, n, request, _Tee(_NoBar(), shown))
     run.clock["adapt_s"] += time.perf_counter() - t0
     return None if interrupted else (np.array(coords), np.array(lps))
 

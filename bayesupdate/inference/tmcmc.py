@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
+from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
 
 #: acceptance the proposal scale is steered to between stages
@@ -176,7 +177,8 @@ def tmcmc(
 
     prior_sample(rng, n) -> (n, d) prior draws; log_prior (n, d) -> (n,) normalised log prior
     density (-inf outside its support); log_likelihood (n, d) -> (n,) (batched over particles).
-    progress(stage, beta) is called after each stage when given.
+    progress(stage, beta) is called after each stage when given; the stages are also the
+    ``compute.progress`` phase "TMCMC: tempering stages".
     Seeded by ``settings.seed``: the same inputs give bit-identical results."""
     rng = np.random.default_rng(settings.seed)
     x = np.atleast_2d(np.asarray(prior_sample(rng, settings.particles), dtype=float))
@@ -185,35 +187,37 @@ def tmcmc(
     scale = settings.scale if settings.scale is not None else 2.38 / np.sqrt(d)
     beta, log_z = 0.0, 0.0
     betas, ess, acceptance, scales = [0.0], [], [], []
-    while beta < 1.0:
-        if len(ess) >= settings.max_stages:
-            raise BayesUpdateError(
-                f"tmcmc: tempering stalled at beta = {beta:.3g} after {len(ess)} stages; "
-                "raise tmcmc.max_stages or particles, or check the likelihood's scale"
-            )
-        if not np.any(np.isfinite(ll)):
-            raise BayesUpdateError(
-                f"tmcmc: tempering stalled at beta = {beta:.3g}: no particle has a finite "
-                "log-likelihood (effective sample size 0); check the model and the prior bounds"
-            )
-        new_beta = next_beta(beta, ll, settings.target_cov)
-        log_w = np.where(np.isfinite(ll), (new_beta - beta) * ll, -np.inf)
-        log_z += float(logsumexp(log_w) - np.log(n))
-        weights = np.exp(log_w - logsumexp(log_w))
-        ess.append(float(1.0 / np.sum(weights**2)))
-        chol = _proposal_cholesky(x, weights)
-        keep = _systematic(weights, rng)
-        scales.append(scale)
-        x, lp, ll, acc, scale, count = _metropolis(
-            x[keep], lp[keep], ll[keep], new_beta, chol, scale, settings.mcmc_steps, rng,
-            log_prior, log_likelihood,
-        )  # fmt: skip
-        evaluations += count
-        acceptance.append(acc)
-        beta = new_beta
-        betas.append(beta)
-        if progress is not None:
-            progress(len(ess), beta)
+    with phase("TMCMC: tempering stages", None, "stages") as shown:
+        while beta < 1.0:
+            if len(ess) >= settings.max_stages:
+                raise BayesUpdateError(
+                    f"tmcmc: tempering stalled at beta = {beta:.3g} after {len(ess)} stages; "
+                    "raise tmcmc.max_stages or particles, or check the likelihood's scale"
+                )
+            if not np.any(np.isfinite(ll)):
+                raise BayesUpdateError(
+                    f"tmcmc: tempering stalled at beta = {beta:.3g}: no particle has a finite "
+                    "log-likelihood (effective sample size 0); check the model and the prior bounds"
+                )
+            new_beta = next_beta(beta, ll, settings.target_cov)
+            log_w = np.where(np.isfinite(ll), (new_beta - beta) * ll, -np.inf)
+            log_z += float(logsumexp(log_w) - np.log(n))
+            weights = np.exp(log_w - logsumexp(log_w))
+            ess.append(float(1.0 / np.sum(weights**2)))
+            chol = _proposal_cholesky(x, weights)
+            keep = _systematic(weights, rng)
+            scales.append(scale)
+            x, lp, ll, acc, scale, count = _metropolis(
+                x[keep], lp[keep], ll[keep], new_beta, chol, scale, settings.mcmc_steps, rng,
+                log_prior, log_likelihood,
+            )  # fmt: skip
+            evaluations += count
+            acceptance.append(acc)
+            beta = new_beta
+            betas.append(beta)
+            shown.advance()
+            if progress is not None:
+                progress(len(ess), beta)
     return TMCMCResult(
         samples=x,
         log_likelihood=ll,

@@ -9,6 +9,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from bayesupdate.compute import progress
 from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.config import SamplerConfig
@@ -198,7 +199,10 @@ def _writer(out, prepared: PreparedStudy, calibration: CalibrationResult, config
 
     def write(**parts) -> None:
         if out is not None:
-            write_result(out, prepared.problem, calibration, config, command="sample", **parts)
+            write_result(
+                out, prepared.problem, calibration, config, command="sample",
+                timings=progress.timings(), **parts,
+            )  # fmt: skip
 
     return write
 

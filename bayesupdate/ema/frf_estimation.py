@@ -86,17 +86,7 @@ def h1_h2_coherence(
     if not 8 <= segment <= n_t:
         raise BayesUpdateError(f"FRF estimation: segment {segment} must be in 8..{n_t} samples")
     step = max(1, int(round(segment * (1 - overlap))))
-    if window == "hann":
-        wf = wy = np.hanning(segment + 1)[:-1]  # periodic Hann
-    elif window == "rect":
-        wf = wy = np.ones(segment)
-    elif window == "impact":
-        if force_window_s is None or tau_s is None:
-            raise BayesUpdateError("FRF estimation: impact window needs force_window_s and tau_s")
-        fw, ew = impact_windows(segment, sample_rate_hz, force_window_s, tau_s)
-        wf, wy = fw * ew, ew
-    else:
-        raise BayesUpdateError(f"FRF estimation: window {window!r} unknown; use hann/rect/impact")
+    wf, wy = _windows(window, segment, sample_rate_hz, force_window_s, tau_s)
     shape = np.broadcast_shapes(x.shape[:-1], y.shape[:-1])  # (..., n_rep)
     xs = np.broadcast_to(x, (*shape, n_t)).reshape(-1, shape[-1], n_t)
     ys = np.broadcast_to(y, (*shape, n_t)).reshape(-1, shape[-1], n_t)
@@ -112,6 +102,23 @@ def h1_h2_coherence(
             shown.advance()
     h1, h2, coh = (np.stack([p[i] for p in parts]).reshape(*shape[:-1], -1) for i in range(3))
     return np.fft.rfftfreq(segment, 1 / sample_rate_hz), h1, h2, coh
+
+
+def _windows(window: str, segment: int, sample_rate_hz: float, force_window_s, tau_s):
+    """(force window, response window), each (segment,), named as ``h1_h2_coherence`` takes
+    them: "hann" (periodic), "rect" or "impact" (``impact_windows``)."""
+    if window == "hann":
+        wf = wy = np.hanning(segment + 1)[:-1]  # periodic Hann
+    elif window == "rect":
+        wf = wy = np.ones(segment)
+    elif window == "impact":
+        if force_window_s is None or tau_s is None:
+            raise BayesUpdateError("FRF estimation: impact window needs force_window_s and tau_s")
+        fw, ew = impact_windows(segment, sample_rate_hz, force_window_s, tau_s)
+        wf, wy = fw * ew, ew
+    else:
+        raise BayesUpdateError(f"FRF estimation: window {window!r} unknown; use hann/rect/impact")
+    return wf, wy
 
 
 def _spectra(x: np.ndarray, segment: int, step: int, window: np.ndarray) -> np.ndarray:

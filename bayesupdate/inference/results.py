@@ -144,35 +144,41 @@ def write_result(
             config_json=json.dumps(config or {}, default=_json_default, sort_keys=True),
             command=command,
             warnings_json=json.dumps(list(warnings)),
+            timings_json=json.dumps(timings or {}),
         )
         h5.create_group("versions").attrs.update(package_versions())
-        h5.attrs["timings_json"] = json.dumps(timings or {})
         _write_inputs(h5.create_group("inputs"), problem)
         _write_optimum(h5.create_group("optimum"), calibration)
         report = mass_property_report(problem, problem.as_mapping(calibration.theta))
         if report:
             h5["optimum"].attrs["mass_properties_json"] = json.dumps(report)
         if kind == "posterior":
-            post = h5.create_group("posterior")
-            _write_posterior(post, posterior, state)
-            if diagnostics is not None:
-                group = post.create_group("diagnostics")
-                group.attrs["summary_json"] = json.dumps(diagnostics)
-                # the run's clock (wall-time parts) apart, as wall_s: the rest is the seeded
-                # run's and the same bits on every rerun
-                extra = posterior.diagnostics
-                clock = extra.get("timings")
-                extra = {k: v for k, v in extra.items() if k not in ("summary", "timings")}
-                if extra:
-                    group.attrs["sampling_json"] = json.dumps(extra, default=float)
-                if clock:
-                    group.attrs["timings_json"] = json.dumps(clock)
-            if predictions is not None:
-                pred = post.create_group("predictions")
-                for name in ("draw_index", "frequencies_hz", "predictive_hz"):
-                    pred[name] = predictions[name]
-                pred.attrs["swap_fraction"] = predictions["swap_fraction"]
+            _write_posterior_group(h5, posterior, state, diagnostics, predictions)
     return Path(path)
+
+
+def _write_posterior_group(h5, posterior, state, diagnostics, predictions) -> None:
+    """The /posterior group of ``write_result``: chain or checkpoint state, diagnostics and the
+    posterior predictions."""
+    post = h5.create_group("posterior")
+    _write_posterior(post, posterior, state)
+    if diagnostics is not None:
+        group = post.create_group("diagnostics")
+        group.attrs["summary_json"] = json.dumps(diagnostics)
+        # the run's clock (wall-time parts) apart, as wall_s: the rest is the seeded
+        # run's and the same bits on every rerun
+        extra = posterior.diagnostics
+        clock = extra.get("timings")
+        extra = {k: v for k, v in extra.items() if k not in ("summary", "timings")}
+        if extra:
+            group.attrs["sampling_json"] = json.dumps(extra, default=float)
+        if clock:
+            group.attrs["timings_json"] = json.dumps(clock)
+    if predictions is not None:
+        pred = post.create_group("predictions")
+        for name in ("draw_index", "frequencies_hz", "predictive_hz"):
+            pred[name] = predictions[name]
+        pred.attrs["swap_fraction"] = predictions["swap_fraction"]
 
 
 def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:

@@ -189,16 +189,7 @@ def tmcmc(
     betas, ess, acceptance, scales = [0.0], [], [], []
     with phase("TMCMC: tempering stages", None, "stages") as shown:
         while beta < 1.0:
-            if len(ess) >= settings.max_stages:
-                raise BayesUpdateError(
-                    f"tmcmc: tempering stalled at beta = {beta:.3g} after {len(ess)} stages; "
-                    "raise tmcmc.max_stages or particles, or check the likelihood's scale"
-                )
-            if not np.any(np.isfinite(ll)):
-                raise BayesUpdateError(
-                    f"tmcmc: tempering stalled at beta = {beta:.3g}: no particle has a finite "
-                    "log-likelihood (effective sample size 0); check the model and the prior bounds"
-                )
+            _check_stage(beta, ll, len(ess), settings)
             new_beta = next_beta(beta, ll, settings.target_cov)
             log_w = np.where(np.isfinite(ll), (new_beta - beta) * ll, -np.inf)
             log_z += float(logsumexp(log_w) - np.log(n))
@@ -228,3 +219,18 @@ def tmcmc(
         scales=np.array(scales),
         evaluations=evaluations,
     )
+
+
+def _check_stage(beta: float, ll: np.ndarray, stages: int, settings: TMCMCSettings) -> None:
+    """Refuse a tempering that stalls: ``stages`` done at ``beta`` reach ``max_stages``, or no
+    particle's log-likelihood ``ll`` (n,) is finite."""
+    if stages >= settings.max_stages:
+        raise BayesUpdateError(
+            f"tmcmc: tempering stalled at beta = {beta:.3g} after {stages} stages; "
+            "raise tmcmc.max_stages or particles, or check the likelihood's scale"
+        )
+    if not np.any(np.isfinite(ll)):
+        raise BayesUpdateError(
+            f"tmcmc: tempering stalled at beta = {beta:.3g}: no particle has a finite "
+            "log-likelihood (effective sample size 0); check the model and the prior bounds"
+        )

@@ -40,7 +40,8 @@ class LineRebuild:
 
     def __init__(self, deck, structure, bindings, keys, path):
         self.deck, self.structure, self.path = deck, structure, str(path)
-        self.bindings = {k: b for k, b in bindings.items() if b.lines}
+        # an effect's parameters (``fe.model.Binding``: discovery) act on elements of their own
+        self.bindings = {k: b for k, b in bindings.items() if getattr(b, "lines", ())}
         eids = sorted({e for b in self.bindings.values() for e in b.lines})
         self.elements = {(c.name, c.id()): c for c in deck.of("CBAR", "CBEAM", "CROD", "CONROD")
                          if c.id() in eids}  # fmt: skip

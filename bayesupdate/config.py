@@ -12,6 +12,10 @@ Example (issue 4 item 9)::
     # frequencies_hz = [...], weights = [...], sd_hz = [...]
     mass_kg = 12.29                 # measured mass (test data; overrides the source's own)
     mass_sd_kg = 0.12               # its sd
+    # mass = "13.76 lb"             # or with a unit (kg, g, t, lb, slug, "lbf s^2/in"), or a
+    # mass_sd = "1.25 %"            # number in the model's own mass unit; sd also in %
+    # cg = { x = "8.18 in", sd = "0.05 in" }                  # measured CG (any of x, y, z)
+    # inertia = { ixx = "9560 lb in^2", iyy = "1643 lb in^2", sd = "1.25 %" }  # about the CG
     [parameters.t_hot_pipe]         # optional for built-in models (defaults from the model)
     bounds = [0.5e-3, 3.0e-3]
     # binds = "PSHELL 3,5 T"        # Nastran deck: the deck field it sets (deck units), or
@@ -35,6 +39,8 @@ Example (issue 4 item 9)::
     mass_weight = 10.0              # default: 10 when a measured mass is known, else 0
     use_measured_mass = true        # false (--no-mass): the data's measured mass is ignored
     mac_weight = 0.0
+    cg_weight = 10.0                # weights of the measured CG / inertia residuals
+    inertia_weight = 10.0
     [optimizer]
     starts = 16
     method = "least_squares"        # or "global" (differential evolution first)
@@ -112,6 +118,31 @@ class DataConfig:
     sd_hz: tuple | None = None
     mass_kg: float | None = None
     mass_sd_kg: float | None = None
+    mass: str | float | None = None
+    mass_sd: str | float | None = None
+    cg: dict | None = None
+    inertia: dict | None = None
+
+    def __post_init__(self):
+        """The measured mass properties' units, keys and sds checked when the study is read
+        (``inference.mass_properties``); they are converted once the model's units are known."""
+        from bayesupdate.inference.mass_properties import parse_tables
+        from bayesupdate.units import mass_property_value
+
+        if self.mass is not None and self.mass_kg is not None:
+            raise BayesUpdateError("data: give mass or mass_kg, not both")
+        if self.mass_sd is not None and self.mass_sd_kg is not None:
+            raise BayesUpdateError("data: give mass_sd or mass_sd_kg, not both")
+        if self.mass_sd is not None and self.mass is None and self.mass_kg is None:
+            raise BayesUpdateError("data.mass_sd: give the measured mass too (data.mass)")
+        if self.mass is not None:
+            value = mass_property_value(self.mass, "mass", "data.mass")[0]
+            if not value > 0:
+                raise BayesUpdateError(f"data.mass: must be > 0, got {self.mass!r}")
+        if self.mass_sd is not None and not str(self.mass_sd).strip().endswith("%"):
+            if not mass_property_value(self.mass_sd, "mass", "data.mass_sd")[0] > 0:
+                raise BayesUpdateError(f"data.mass_sd: must be > 0, got {self.mass_sd!r}")
+        parse_tables(self.cg, self.inertia, "data")
 
     def as_source(self):
         """What ``inference.data.load_modal_data`` takes (the mass is applied by ``prepare``)."""
@@ -158,10 +189,30 @@ class PairingConfig:
 
 @dataclass(frozen=True)
 class ObjectiveConfig:
+    """The ``[objective]`` table.  mass: the mass term's target with a unit ("13.76 lb") or a
+    number in the model's own mass unit, like mass_kg; cg_weight / inertia_weight: weights of
+    the measured CG / inertia residuals (``inference.mass_properties``; default: the mass
+    term's default weight)."""
+
     mass_kg: float | None = None
     mass_weight: float | None = None
     use_measured_mass: bool = True
     mac_weight: float = 0.0
+    mass: str | float | None = None
+    cg_weight: float | None = None
+    inertia_weight: float | None = None
+
+    def __post_init__(self):
+        from bayesupdate.units import mass_property_value
+
+        if self.mass is not None and self.mass_kg is not None:
+            raise BayesUpdateError("objective: give mass or mass_kg, not both")
+        if self.mass is not None:
+            mass_property_value(self.mass, "mass", "objective.mass")
+        for key in ("cg_weight", "inertia_weight"):
+            value = getattr(self, key)
+            if value is not None and not value >= 0:
+                raise BayesUpdateError(f"objective.{key}: must be >= 0, got {value}")
 
 
 @dataclass(frozen=True)

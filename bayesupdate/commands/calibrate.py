@@ -19,9 +19,14 @@ on full solves throughout.
 A measured mass in the data (paper:ema carries the seed's 12.29 kg) is data too: the objective
 gets a mass term (weight 10, [objective] mass_weight) unless --no-mass.
 
+Measured mass properties ([data] mass = "13.76 lb", cg, inertia, each with its unit and sd) are
+data too: each adds a residual to the objective and a block to the likelihood.
+
 --json prints {"parameters", "objective" (eq. 19 alone), "mass_kg", "measured_mass_kg",
-"frequencies_hz", "targets_hz", "starts", "converged_starts"}.  The residual table (test, model,
-error %, MAC) is printed otherwise, with a warning when modes are swapped."""
+"frequencies_hz", "targets_hz", "starts", "converged_starts", "mass_properties" ([{name,
+measured, predicted, unit, sd}] at the optimum, in the model's own units)}.  The residual
+table (test, model, error %, MAC) is printed otherwise, with a warning when modes are
+swapped."""
 
 
 def add_study_arguments(parser, sampling: bool = False) -> None:
@@ -156,6 +161,8 @@ def add_arguments(parser) -> None:
 def calibration_json(result, problem) -> dict:
     """The ``calibrate --json`` object (issue 4 item 10) of a ``CalibrationResult`` of
     ``problem``."""
+    from bayesupdate.inference.mass_properties import mass_property_report
+
     return {
         "parameters": result.parameters,
         "objective": float(result.expr),
@@ -166,7 +173,12 @@ def calibration_json(result, problem) -> dict:
         "converged_starts": int(result.converged_starts),
         "measured_mass_kg": problem.data.mass_kg,
         "mass_weight": problem.objective.mass_weight,
+        "mass_properties": mass_property_report(problem, {**problem.fixed, **result.parameters}),
     }
+
+
+def _g(value) -> str:
+    return "n/a" if value is None else f"{value:.6g}"
 
 
 def run(args) -> int:
@@ -200,8 +212,13 @@ def run(args) -> int:
             print(f"  {name} = {value:.6g}")
         if result.mass_kg is not None:
             measured = prepared.problem.data.mass_kg
-            seen = "" if measured is None else f" (measured {measured:.4g} kg)"
-            print(f"  mass = {result.mass_kg:.4g} kg{seen}")
+            unit = prepared.problem.objective.mass_unit
+            seen = "" if measured is None else f" (measured {measured:.4g} {unit})"
+            print(f"  mass = {result.mass_kg:.4g} {unit}{seen}")
+        report = calibration_json(result, prepared.problem)["mass_properties"]
+        for row in (r for r in report if r["name"] != "mass"):
+            print(f"  {row['name']} = {_g(row['predicted'])} {row['unit']} (measured "
+                  f"{row['measured']:.6g} +- {row['sd']:.3g})")  # fmt: skip
         print(result.table.format())
         if result.failed_evaluations:
             print(

@@ -51,7 +51,8 @@ error there exceeds enrich_above, a tenth of the likelihood's smallest relative 
 screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
-"compute": {"kind", "workers"}, ...}."""
+"compute": {"kind", "workers"}, "mass_properties": [{name, measured, predicted, unit, sd}] of
+the measured mass, CG and inertia at the posterior mean (model units), ...}."""
 
 
 def add_arguments(parser) -> None:
@@ -86,6 +87,8 @@ def run(args) -> int:
         check_output_path(args.out, force=args.force or args.resume)
     if args.write_bdf:
         check_output_path(args.write_bdf, force=args.force)
+    from bayesupdate.inference.mass_properties import mass_property_report
+
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
     if args.sampler == "tmcmc":
@@ -99,6 +102,9 @@ def run(args) -> int:
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
     out["compute"] = run.compute
     means = {k: v["mean"] for k, v in out["parameters"].items()}
+    out["mass_properties"] = mass_property_report(
+        prepared.problem, {**prepared.problem.fixed, **means}
+    )
     write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table
         reason = (out["convergence"] or {}).get("reason", "")

@@ -295,6 +295,13 @@ class FEModel:
             return self._assembler.total_mass(self.element_properties(params))
         return self._general.total_mass(self.matrices(params)[1])
 
+    def mass_properties(self, params: Mapping[str, float] | None = None):
+        """Rigid-body mass properties (``fe.mass_properties.MassProperties``: mass, centre of
+        gravity, inertia about it) at ``params``, from the assembled mass matrix."""
+        from bayesupdate.fe.mass_properties import model_mass_properties
+
+        return model_mass_properties(self, params)
+
     def default_parameters(self) -> dict[str, float]:
         return dict(self._defaults)
 

@@ -13,6 +13,9 @@ identification's part, ``identify``; ``likelihood_blocks`` module docstring).  S
 -2 log L is sum_i e_i^2 / s_i^2 + const: with equal s_i it is seed eq. 19 divided by sigma^2.
 sigma is fixed or sampled as one more parameter (named ``sigma``) with its own prior (e.g.
 halfnormal).  Optional mass term: (m - m_T)/m_T ~ N(0, mass_sd_rel^2) (``mass_log_likelihood``).
+Measured CG / inertia components (the problem's ``objective.mass_properties``) add their own
+Gaussian block with their stated sds (``mass_properties.MassPropertyTargets.log_likelihood``),
+each point's values from the model's ``mass_properties`` (one mass-matrix assembly, no solve).
 
 ``LogPosterior`` maps walkers (n_walkers, d) to (n_walkers,) log-posterior values.  Three ways
 to get the paired frequencies (``mode``):
@@ -51,6 +54,7 @@ from bayesupdate.inference.likelihood_blocks import (
     mass_log_likelihood,
     relative_errors,
 )
+from bayesupdate.inference.mass_properties import mass_properties_function
 from bayesupdate.inference.pairing import pair_batch
 from bayesupdate.inference.priors import JointPrior, Prior
 from bayesupdate.inference.problem import CalibrationProblem
@@ -138,6 +142,7 @@ class LogPosterior:
         self.failed = 0
         self.last_error = ""
         self._joint_prior = JointPrior.of(self.priors)
+        self.mass_targets = problem.objective.mass_properties
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -224,14 +229,33 @@ class LogPosterior:
         the likelihood does not pair by shape)."""
         return self.pair_differs / self.pair_checked if self.pair_checked else float("nan")
 
-    def log_likelihood(self, freqs: np.ndarray, sigma: np.ndarray, mass: np.ndarray) -> np.ndarray:
-        """freqs (n, n_test) [Hz], sigma (n,), mass (n,) -> (n,) log-likelihood (NaN -> -inf)."""
+    def mass_property_values(self, theta: np.ndarray) -> np.ndarray | None:
+        """(n, k) the model's values of the measured CG / inertia components at theta (n, d)
+        (NaN rows where the model rejects the values); None when none are measured."""
+        if self.mass_targets is None:
+            return None
+        function = mass_properties_function(self.problem.model)
+        out = np.full((theta.shape[0], len(self.mass_targets.names)), np.nan)
+        for k, row in enumerate(theta):
+            try:
+                out[k] = self.mass_targets.predicted(function(self.problem.as_mapping(row)))
+            except BayesUpdateError:
+                continue
+        return out
+
+    def log_likelihood(
+        self, freqs: np.ndarray, sigma: np.ndarray, mass: np.ndarray, props=None
+    ) -> np.ndarray:
+        """freqs (n, n_test) [Hz], sigma (n,), mass (n,), props (n, k) or None (the measured
+        CG / inertia components' model values) -> (n,) log-likelihood (NaN -> -inf)."""
         ll = self.noise.log_likelihood(relative_errors(freqs[:, self.mask], self.f_test), sigma)
         if self.spec.mass_sd_rel is not None:
             target = self.problem.objective.mass_target_kg
             if target is None:
                 raise BayesUpdateError("likelihood.mass_sd needs objective.mass_kg")
             ll = ll + mass_log_likelihood(mass, target, self.spec.mass_sd_rel)
+        if props is not None and self.mass_targets is not None:
+            ll = ll + self.mass_targets.log_likelihood(props)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
     def log_prior(self, theta: np.ndarray) -> np.ndarray:
@@ -252,10 +276,11 @@ class LogPosterior:
         if not np.any(inside):
             return out
         freqs, mass = self.predict_frequencies(theta[inside, :d])
+        props = self.mass_property_values(theta[inside, :d])
         self.evaluations += int(np.sum(inside))
         failed = ~np.all(np.isfinite(freqs), axis=1)
         self.failed += int(np.sum(failed))
-        out[inside] = lp[inside] + self.log_likelihood(freqs, sigma[inside], mass)
+        out[inside] = lp[inside] + self.log_likelihood(freqs, sigma[inside], mass, props)
         return out
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.mass_properties import MassPropertyTargets, mass_properties_function
 from bayesupdate.inference.pairing import (
     PAIRING_METHODS,
     ModePairing,
@@ -33,11 +34,17 @@ class ObjectiveSpec:
 
     mass_target_kg / mass_weight : adds mass_weight * ((m - m_T) / m_T)^2 (the seed's mass check).
     mac_weight : adds mac_weight * sum_i (1 - MAC_i) over paired modes (needs shapes).
+    mass_properties : measured CG / inertia components, each adding its weighted residual
+    (``mass_properties.MassPropertyTargets``; their own weights); None: none measured.
+    The masses are in the model's own mass unit, ``mass_unit`` (kg for built-in models; the
+    names say ``_kg`` for history).
     """
 
     mass_target_kg: float | None = None
     mass_weight: float = 0.0
     mac_weight: float = 0.0
+    mass_properties: MassPropertyTargets | None = None
+    mass_unit: str = "kg"
 
 
 def build_parameter_specs(
@@ -124,6 +131,7 @@ class Evaluation:
     paired: PairedModes | None = None
     mass_kg: float | None = None
     error: str = ""
+    mass_properties: np.ndarray | None = None  # (k,) the measured components' model values
 
 
 @dataclass
@@ -176,9 +184,20 @@ class CalibrationProblem:
             if freqs.size < self.pairing.n_model or not np.all(np.isfinite(freqs)):
                 return Evaluation(False, nan, freqs, error="non-finite or missing frequencies")
             paired = pair_modes(prediction, self.pairing)
+            props = self.mass_property_values(self.as_mapping(theta))
         except Exception as exc:  # a user's model may fail anywhere; count it, do not crash
             return Evaluation(False, nan, nan, error=f"{type(exc).__name__}: {exc}")
-        return Evaluation(True, freqs[paired.model_index], freqs, paired, prediction.mass_kg)
+        return Evaluation(
+            True, freqs[paired.model_index], freqs, paired, prediction.mass_kg, "", props
+        )
+
+    def mass_property_values(self, params: Mapping[str, float]) -> np.ndarray | None:
+        """(k,) the model's values of the measured CG / inertia components at ``params``
+        (None when none are measured)."""
+        targets = self.objective.mass_properties
+        if targets is None:
+            return None
+        return targets.predicted(mass_properties_function(self.model)(params))
 
     def expr(self, frequencies_hz: np.ndarray) -> np.ndarray:
         """Seed eq. 19 with the data's weights; frequencies (..., n_test) -> (...)."""
@@ -194,6 +213,11 @@ class CalibrationProblem:
             parts.append(
                 [np.sqrt(spec.mass_weight) * (mass - spec.mass_target_kg) / spec.mass_target_kg]
             )
+        if spec.mass_properties is not None:
+            values = evaluation.mass_properties
+            parts.append(spec.mass_properties.residuals(
+                np.full(len(spec.mass_properties.names), np.nan) if values is None else values
+            ))  # fmt: skip
         if spec.mac_weight > 0:
             parts.append(np.sqrt(spec.mac_weight * np.clip(1.0 - evaluation.paired.mac, 0, 1)))
         return np.concatenate([np.asarray(p, dtype=float) for p in parts])
@@ -222,6 +246,15 @@ def _checked_objective(
     if data.weights is not None and np.all(data.weights == 0):
         raise BayesUpdateError(f"data {data.source!r}: all weights are zero")
     return objective
+
+
+def _checked_mass_properties(objective: ObjectiveSpec, model: ParametricModel) -> None:
+    """A measured CG or inertia needs a model that gives its mass properties."""
+    if objective.mass_properties is not None and mass_properties_function(model) is None:
+        raise BayesUpdateError(
+            "data.cg / data.inertia: this model cannot give its mass properties (an FE model "
+            "or a Nastran deck can); remove them"
+        )
 
 
 def _reference_parameters(
@@ -321,6 +354,7 @@ def build_problem(
     if not isinstance(parameters, tuple):
         parameters = build_parameter_specs(model, parameters)
     objective = _checked_objective(objective, extra_modes, data)
+    _checked_mass_properties(objective, model)
     reference_params = _reference_parameters(model, parameters, fixed)
     reference, n_model = _reference_prediction(model, reference_params, data.n_modes, extra_modes)
     fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}

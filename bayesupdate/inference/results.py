@@ -13,7 +13,9 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
                        paired with the model: transform, per point its model node, element,
                        xyz and distance (``testgeom.TestPairing.to_dict``)]
 /optimum               theta (d,), attrs: parameter_names, objective, expr, mass_kg, swapped,
-                       starts, converged_starts, failed_evaluations, evaluations, method, wall_s;
+                       starts, converged_starts, failed_evaluations, evaluations, method, wall_s,
+                       [mass_properties_json: [{name, measured, predicted, unit, sd}] of the
+                       measured mass, CG and inertia at the optimum, in the model's units];
                        frequencies_hz (m,), start_points (n, d), end_points (n, d),
                        end_objectives (n,), distinct_optima (k,)
 /optimum/residuals     test_hz, model_hz, error_pct, mac (NaN = no shapes), model_mode (1-based)
@@ -43,6 +45,7 @@ import numpy as np
 
 from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.mass_properties import mass_property_report
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.inference.sampling import PosteriorResult, SamplerState
@@ -132,6 +135,9 @@ def write_result(
         h5.create_group("versions").attrs.update(package_versions())
         _write_inputs(h5.create_group("inputs"), problem)
         _write_optimum(h5.create_group("optimum"), calibration)
+        report = mass_property_report(problem, problem.as_mapping(calibration.theta))
+        if report:
+            h5["optimum"].attrs["mass_properties_json"] = json.dumps(report)
         if kind == "posterior":
             post = h5.create_group("posterior")
             _write_posterior(post, posterior, state)

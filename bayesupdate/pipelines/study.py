@@ -14,6 +14,14 @@ from bayesupdate.config import StudyConfig
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data
 from bayesupdate.inference.likelihood import LikelihoodSpec
+from bayesupdate.inference.mass_properties import (
+    ModelUnits,
+    build_targets,
+    in_model_units,
+    mass_properties_function,
+    model_units,
+    parse_tables,
+)
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, build_problem
 from bayesupdate.modal_data import ModalData
@@ -49,16 +57,77 @@ def measured_mass(study: StudyConfig, data: ModalData) -> ModalData:
     return replace(data, mass_kg=mass, mass_sd_kg=sd)
 
 
-def objective_spec(study: StudyConfig, data: ModalData) -> ObjectiveSpec:
-    """The fit objective's extra terms: the mass term targets ``[objective] mass_kg``, else the
-    data's measured mass, with ``mass_weight`` (default ``DEFAULT_MASS_WEIGHT`` when there is a
-    target, else 0)."""
+def study_units(model) -> ModelUnits:
+    """The model's own units: a Nastran deck's (``structure.metadata["nastran"]["units"]``),
+    else SI (built-in and user models)."""
+    structure = getattr(model, "structure", None)
+    deck = {} if structure is None else structure.metadata.get("nastran", {})
+    return model_units(deck.get("units"))
+
+
+def _mass_value(value, units: ModelUnits, what: str) -> float:
+    """A ``mass`` key's value ("13.76 lb" or a number in the model's unit) in model units."""
+    from bayesupdate.units import mass_property_value
+
+    return in_model_units(*mass_property_value(value, "mass", what), "mass", units, what)
+
+
+def mass_with_units(study: StudyConfig, data: ModalData, units: ModelUnits) -> ModalData:
+    """``data`` with the study's ``[data] mass / mass_sd`` (with units, or numbers in the
+    model's own mass unit; ``mass_sd`` also as "N %") applied in the model's units."""
+    cfg = study.data
+    if not study.objective.use_measured_mass or (cfg.mass is None and cfg.mass_sd is None):
+        return data
+    mass = data.mass_kg if cfg.mass is None else _mass_value(cfg.mass, units, "data.mass")
+    sd = None if cfg.mass is not None else data.mass_sd_kg
+    if cfg.mass_sd is not None:
+        text = str(cfg.mass_sd).strip()
+        if text.endswith("%"):
+            sd = mass * float(text[:-1]) / 100.0
+        else:
+            sd = _mass_value(cfg.mass_sd, units, "data.mass_sd")
+    return replace(data, mass_kg=mass, mass_sd_kg=sd)
+
+
+def mass_property_targets(study: StudyConfig, model, units: ModelUnits):
+    """The measured CG / inertia of ``[data] cg / inertia`` in the model's units
+    (``MassPropertyTargets``), None when none are given or ``use_measured_mass = false``."""
+    raw, about = parse_tables(study.data.cg, study.data.inertia, "data")
+    if not raw or not study.objective.use_measured_mass:
+        return None
+    function = mass_properties_function(model)
+    if function is None:
+        raise BayesUpdateError(
+            "data.cg / data.inertia: this model cannot give its mass properties (an FE model "
+            "or a Nastran deck can); remove them"
+        )
+    cfg = study.objective
+    weights = {
+        "length": DEFAULT_MASS_WEIGHT if cfg.cg_weight is None else cfg.cg_weight,
+        "inertia": DEFAULT_MASS_WEIGHT if cfg.inertia_weight is None else cfg.inertia_weight,
+    }
+    return build_targets(raw, about, units, function({}), weights, "data")
+
+
+def objective_spec(
+    study: StudyConfig, data: ModalData, units: ModelUnits | None = None
+) -> ObjectiveSpec:
+    """The fit objective's extra terms: the mass term targets ``[objective] mass`` (a unit, or
+    the model's ``units``) or ``mass_kg``, else the data's measured mass, with ``mass_weight``
+    (default ``DEFAULT_MASS_WEIGHT`` when there is a target, else 0)."""
     cfg = study.objective
     target = cfg.mass_kg if cfg.mass_kg is not None else data.mass_kg
+    if cfg.mass is not None:
+        target = _mass_value(cfg.mass, units or ModelUnits(), "objective.mass")
     weight = cfg.mass_weight
     if weight is None:
         weight = DEFAULT_MASS_WEIGHT if target is not None else 0.0
-    return ObjectiveSpec(mass_target_kg=target, mass_weight=weight, mac_weight=cfg.mac_weight)
+    return ObjectiveSpec(
+        mass_target_kg=target,
+        mass_weight=weight,
+        mac_weight=cfg.mac_weight,
+        mass_unit=(units or ModelUnits()).mass,
+    )
 
 
 def likelihood_spec(study: StudyConfig, data: ModalData | None = None) -> LikelihoodSpec:
@@ -101,11 +170,16 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     data = measured_mass(study, load_modal_data(study.data.as_source()))
     # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
+    units = study_units(model)
+    data = mass_with_units(study, data, units)
     if specs:
         from bayesupdate.discovery.results_io import extend_with_specs
 
         model = extend_with_specs(model, specs)
-    objective = objective_spec(study, data)
+    objective = replace(
+        objective_spec(study, data, units),
+        mass_properties=mass_property_targets(study, model, units),
+    )
     problem = build_problem(
         model,
         data,
@@ -117,8 +191,7 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     likelihood = likelihood_spec(study, data)
     if likelihood.mass_sd_rel is not None and objective.mass_target_kg is None:
         raise BayesUpdateError(
-            "likelihood.mass_sd: no mass to compare with; "
-            "give [data] mass_kg or [objective] mass_kg"
+            "likelihood.mass_sd: no mass to compare with; give [data] mass or [objective] mass"
         )
     _check_sampler(study, len(problem.parameters) + int(likelihood.infer_sigma))
     return PreparedStudy(study, problem, likelihood)

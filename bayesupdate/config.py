@@ -10,6 +10,9 @@ Example (issue 4 item 9)::
     [data]
     source = "paper:ema"            # or a file (.csv, .h5, .uff), or inline:
     # frequencies_hz = [...], weights = [...], sd_hz = [...]
+    modes = [1, 7, 10]              # the source's test modes that enter (1-based, as identify
+                                    # --json lists them; default: all); weights and sd_hz then
+                                    # give one value per selected mode, for a file source too
     mass_kg = 12.29                 # measured mass (test data; overrides the source's own)
     mass_sd_kg = 0.12               # its sd
     # mass = "13.76 lb"             # or with a unit (kg, g, t, lb, slug, "lbf s^2/in"), or a
@@ -34,6 +37,9 @@ Example (issue 4 item 9)::
     [pairing]
     method = "auto"                 # auto | order | tracked | mac
     extra_modes = 2
+    mac_threshold = 0.6             # MAC pairs (test shapes): lowest MAC kept at the reference
+    frequency_window = 0.5          # and largest |f_model / f_test - 1|; other test modes are
+                                    # refused (named, left out of the objective)
     [objective]
     mass_kg = 12.29                 # target of the mass term (default: the data's measured mass)
     mass_weight = 10.0              # default: 10 when a measured mass is known, else 0
@@ -92,9 +98,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bayesupdate.correlation import DEFAULT_MAC_THRESHOLD
 from bayesupdate.discovery.effects import parse_effect_spec
 from bayesupdate.discovery.settings import DiscoverySettings, flat_names
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.pairing import DEFAULT_FREQUENCY_WINDOW, PairingRules
 from bayesupdate.parallel_executor import parse_compute_table
 
 
@@ -112,6 +120,10 @@ class ModelConfig:
 
 @dataclass(frozen=True)
 class DataConfig:
+    """The ``[data]`` table.  modes : 1-based numbers of the source's modes that enter (None:
+    all); weights / sd_hz : one value per mode that enters, for any source
+    (``inference.data.select_modes``)."""
+
     source: str | None = "paper:ema"
     frequencies_hz: tuple | None = None
     weights: tuple | None = None
@@ -122,13 +134,21 @@ class DataConfig:
     mass_sd: str | float | None = None
     cg: dict | None = None
     inertia: dict | None = None
+    modes: tuple | None = None
 
     def __post_init__(self):
         """The measured mass properties' units, keys and sds checked when the study is read
-        (``inference.mass_properties``); they are converted once the model's units are known."""
+        (``inference.mass_properties``); they are converted once the model's units are known.
+        ``modes``: 1-based mode numbers."""
         from bayesupdate.inference.mass_properties import parse_tables
         from bayesupdate.units import mass_property_value
 
+        if self.modes is not None and not all(
+            isinstance(m, int) and not isinstance(m, bool) for m in self.modes
+        ):
+            raise BayesUpdateError(
+                f"data.modes: give 1-based mode numbers (integers), got {list(self.modes)!r}"
+            )
         if self.mass is not None and self.mass_kg is not None:
             raise BayesUpdateError("data: give mass or mass_kg, not both")
         if self.mass_sd is not None and self.mass_sd_kg is not None:
@@ -145,15 +165,33 @@ class DataConfig:
         parse_tables(self.cg, self.inertia, "data")
 
     def as_source(self):
-        """What ``inference.data.load_modal_data`` takes (the mass is applied by ``prepare``)."""
+        """What ``inference.data.load_modal_data`` takes (the mass is applied by ``prepare``;
+        ``modes``, and ``weights`` / ``sd_hz`` of a file source, by ``selection``)."""
         if self.frequencies_hz is not None:
             table = {"frequencies_hz": self.frequencies_hz}
-            if self.weights is not None:
-                table["weights"] = self.weights
-            if self.sd_hz is not None:
-                table["sd_hz"] = self.sd_hz
+            if self.modes is None:  # without a selection the table's own lengths are checked
+                if self.weights is not None:
+                    table["weights"] = self.weights
+                if self.sd_hz is not None:
+                    table["sd_hz"] = self.sd_hz
             return table
         return self.source
+
+    @property
+    def label(self) -> str:
+        """The source as the study names it (the file, or "[data] frequencies_hz")."""
+        return "[data] frequencies_hz" if self.frequencies_hz is not None else str(self.source)
+
+    def selection(self):
+        """The ``inference.data.ModeSelection`` applied to the loaded source."""
+        from bayesupdate.inference.data import ModeSelection
+
+        inline = self.frequencies_hz is not None and self.modes is None
+        return ModeSelection(
+            modes=self.modes,
+            weights=None if inline else self.weights,
+            sd_hz=None if inline else self.sd_hz,
+        )
 
 
 @dataclass(frozen=True)
@@ -183,8 +221,20 @@ class TestConfig:
 
 @dataclass(frozen=True)
 class PairingConfig:
+    """The ``[pairing]`` table.  mac_threshold / frequency_window : what a MAC pair (test
+    shapes) must meet at the reference design (``inference.pairing.PairingRules``)."""
+
     method: str = "auto"
     extra_modes: int = 2
+    mac_threshold: float = DEFAULT_MAC_THRESHOLD
+    frequency_window: float = DEFAULT_FREQUENCY_WINDOW
+
+    def __post_init__(self):
+        self.rules()  # a bad threshold or window stops the run when the study is read
+
+    def rules(self) -> PairingRules:
+        """The ``inference.pairing.PairingRules`` of this table."""
+        return PairingRules(self.mac_threshold, self.frequency_window)
 
 
 @dataclass(frozen=True)

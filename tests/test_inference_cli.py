@@ -62,7 +62,13 @@ def test_calibrate_json_and_file(study, tmp_path, capsys):
         "measured_mass_kg",
         "mass_weight",
         "compute",
+        "test_modes",
+        "pairing",
+        "warnings",
     }
+    # frequencies only: paired by tracking the model's shapes, nothing refused or warned
+    assert result["pairing"]["method"] == "tracked" and result["pairing"]["refused"] == []
+    assert result["test_modes"] == [1, 2] and result["warnings"] == []
     assert result["compute"] == {"kind": "serial", "workers": 1}
     assert result["measured_mass_kg"] is None and result["mass_weight"] == 0.0  # none measured
     assert result["targets_hz"] == [4.30, 10.80]

@@ -22,11 +22,20 @@ gets a mass term (weight 10, [objective] mass_weight) unless --no-mass.
 Measured mass properties ([data] mass = "13.76 lb", cg, inertia, each with its unit and sd) are
 data too: each adds a residual to the objective and a block to the likelihood.
 
+Test data with shapes pair by MAC: at the reference design a test mode whose best pair has a
+MAC below [pairing] mac_threshold (0.6) or a model frequency outside [pairing]
+frequency_window (+-50 %) is refused, named on stderr and left out.  [data] modes = [1, 7, 10]
+chooses the source's test modes (numbered as identify --json lists them), [data] weights one
+weight per chosen mode.
+
 --json prints {"parameters", "objective" (eq. 19 alone), "mass_kg", "measured_mass_kg",
-"frequencies_hz", "targets_hz", "starts", "converged_starts", "mass_properties" ([{name,
-measured, predicted, unit, sd}] at the optimum, in the model's own units)}.  The residual
-table (test, model, error %, MAC) is printed otherwise, with a warning when modes are
-swapped."""
+"frequencies_hz", "targets_hz", "test_modes", "starts", "converged_starts", "pairing"
+({"method", "mac_threshold", "frequency_window", "refused"}), "warnings", "mass_properties"
+([{name, measured, predicted, unit, sd}] at the optimum, in the model's own units)}.  The
+residual table (test, model, error %, MAC) is printed otherwise, with a warning when modes are
+swapped.  Warnings (stderr, "warnings", the result file): an optimum on a bound, a paired MAC
+below the threshold or a pair outside the window at the optimum, fewer than half the starts at
+the best."""
 
 
 def add_study_arguments(parser, sampling: bool = False) -> None:
@@ -111,12 +120,13 @@ def study_from_args(args):
         "objective__use_measured_mass": False if getattr(args, "no_mass", False) else None,
     }
     study = with_overrides(study, **changes)
-    # --data replaces inline data of the study file entirely
+    # --data replaces inline data of the study file entirely, with its choice of modes
     if args.data is not None and study.data.frequencies_hz is not None:
         from dataclasses import replace
 
         study = replace(
-            study, data=replace(study.data, frequencies_hz=None, weights=None, sd_hz=None)
+            study,
+            data=replace(study.data, frequencies_hz=None, weights=None, sd_hz=None, modes=None),
         )
     return study
 
@@ -158,9 +168,22 @@ def add_arguments(parser) -> None:
     )
 
 
-def calibration_json(result, problem) -> dict:
+def report_refused(problem) -> None:
+    """The test modes the pairing refused at the reference design, one line each on stderr."""
+    pairing = problem.pairing
+    for refused in pairing.refused:
+        print(f"pairing: {refused.message(pairing.rules)}", file=sys.stderr)
+
+
+def report_warnings(warnings) -> None:
+    """One ``warning:`` line per warning on stderr."""
+    for line in warnings:
+        print(f"warning: {line}", file=sys.stderr)
+
+
+def calibration_json(result, problem, warnings=()) -> dict:
     """The ``calibrate --json`` object (issue 4 item 10) of a ``CalibrationResult`` of
-    ``problem``."""
+    ``problem``, with the run's ``warnings`` (``inference.checks``)."""
     from bayesupdate.inference.mass_properties import mass_property_report
 
     return {
@@ -173,6 +196,9 @@ def calibration_json(result, problem) -> dict:
         "converged_starts": int(result.converged_starts),
         "measured_mass_kg": problem.data.mass_kg,
         "mass_weight": problem.objective.mass_weight,
+        "test_modes": [int(n) for n in problem.mode_numbers],
+        "pairing": problem.pairing.to_dict(),
+        "warnings": list(warnings),
         "mass_properties": mass_property_report(problem, {**problem.fixed, **result.parameters}),
     }
 
@@ -183,6 +209,7 @@ def _g(value) -> str:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+    from bayesupdate.inference.checks import calibration_warnings
     from bayesupdate.inference.results import write_result
     from bayesupdate.parallel_executor import open_executor
     from bayesupdate.pipelines.calibrate import run_calibration
@@ -195,14 +222,19 @@ def run(args) -> int:
         check_output_path(args.write_bdf, args.force)
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
+    report_refused(prepared.problem)
     with open_executor(compute) as executor:
         result = run_calibration(prepared, executor)
         where = executor.describe()
+    warnings = calibration_warnings(prepared.problem, result)
     if args.out:
-        write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME)
+        write_result(args.out, prepared.problem, result, study.to_dict(), command=NAME,
+                     warnings=warnings)  # fmt: skip
     write_bdf(args.write_bdf, prepared.problem.model, result.parameters)
+    report_warnings(warnings)
     if args.json:
-        print(json.dumps({**calibration_json(result, prepared.problem), "compute": where}))
+        out = calibration_json(result, prepared.problem, warnings)
+        print(json.dumps({**out, "compute": where}))
     else:
         print(
             f"objective (seed eq. 19): {result.expr:.5g}   starts: {result.converged_starts}"

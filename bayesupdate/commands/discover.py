@@ -69,7 +69,9 @@ def _study(args):
     if args.data is not None and study.data.frequencies_hz is not None:
         study = dataclasses.replace(
             study,
-            data=dataclasses.replace(study.data, frequencies_hz=None, weights=None, sd_hz=None),
+            data=dataclasses.replace(
+                study.data, frequencies_hz=None, weights=None, sd_hz=None, modes=None
+            ),
         )
     return study
 
@@ -108,6 +110,8 @@ def run(args) -> int:
     progress = None if args.json else (lambda message: print(message, file=sys.stderr))
     found = discover_study(study, request, progress)
     result, posterior = found.result, found.posterior
+    for refused in found.pairing.get("refused", []):
+        print(f"pairing: {refused['message']}", file=sys.stderr)
     if args.out:
         write_discovery(
             args.out, result, list(specs), study.to_dict(), command=NAME, posterior=posterior
@@ -118,6 +122,8 @@ def run(args) -> int:
         save_plots(result, args.plots, getattr(found.model, "structure", None))
     summary = discovery_summary(result)
     summary["compute"] = found.compute
+    if found.pairing:
+        summary["pairing"] = found.pairing
     if posterior is not None:
         summary["posterior"] = posterior[1]
     if args.json:

@@ -12,6 +12,8 @@ from bayesupdate.commands.calibrate import (
     add_study_arguments,
     add_write_bdf_argument,
     compute_from_args,
+    report_refused,
+    report_warnings,
     study_from_args,
     write_bdf,
 )
@@ -51,8 +53,12 @@ error there exceeds enrich_above, a tenth of the likelihood's smallest relative 
 screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
-"compute": {"kind", "workers"}, "mass_properties": [{name, measured, predicted, unit, sd}] of
-the measured mass, CG and inertia at the posterior mean (model units), ...}."""
+"compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
+"pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
+at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC
+below the threshold at the optimum; also on stderr and in --out), "mass_properties": [{name,
+measured, predicted, unit, sd}] of the measured mass, CG and inertia at the posterior mean
+(model units), ...}."""
 
 
 def add_arguments(parser) -> None:
@@ -91,6 +97,7 @@ def run(args) -> int:
 
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
+    report_refused(prepared.problem)
     if args.sampler == "tmcmc":
         return _run_tmcmc(prepared, args)
     run = _sample_with_stop_handlers(prepared, args, compute)
@@ -101,6 +108,10 @@ def run(args) -> int:
         raise KeyboardInterrupt
     out = sample_json(posterior, run.summary, prepared.likelihood, run.predictions)
     out["compute"] = run.compute
+    out["test_modes"] = [int(n) for n in prepared.problem.mode_numbers]
+    out["pairing_rules"] = prepared.problem.pairing.to_dict()
+    out["warnings"] = list(run.warnings)
+    report_warnings(run.warnings)
     means = {k: v["mean"] for k, v in out["parameters"].items()}
     out["mass_properties"] = mass_property_report(
         prepared.problem, {**prepared.problem.fixed, **means}

@@ -12,11 +12,16 @@
 
 A measured mass is test data: calibration and the likelihood use it by default
 (``pipelines.study.prepare``).
+
+``select_modes(data, ModeSelection(...))`` keeps the modes a study names (``[data] modes``, 1-based
+in the source's order: the order ``identify --json`` lists them) and gives them the study's
+``weights`` / ``sd_hz``, whatever the source.
 """
 
 import csv
 import os
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -195,3 +200,85 @@ def load_modal_data(source) -> ModalData:
     raise BayesUpdateError(
         f"{path}: unknown data format {suffix!r}; use .csv, .h5, .uff or paper:ema"
     )
+
+
+@dataclass(frozen=True)
+class ModeSelection:
+    """The study's choice among a source's modes (``[data]``).
+
+    modes : 1-based numbers of the source's modes that enter (None: all, in order).
+    weights : (k,) eq. 19 weights of the modes that enter, in the order of ``modes`` (None: the
+    source's own, else unit).  sd_hz : (k,) their frequency sd [Hz] (None: the source's own).
+    """
+
+    modes: tuple[int, ...] | None = None
+    weights: tuple[float, ...] | None = None
+    sd_hz: tuple[float, ...] | None = None
+
+
+def _checked_numbers(modes, n_source: int, source: str) -> list[int]:
+    """The 1-based ``modes`` after checking each against the ``n_source`` modes of ``source``."""
+    numbers = [int(m) for m in modes]
+    if not numbers:
+        raise BayesUpdateError("data.modes: empty; list the test modes that enter, e.g. [1, 2]")
+    for number in numbers:
+        if not 1 <= number <= n_source:
+            raise BayesUpdateError(
+                f"data.modes: test mode {number} is not in {source!r}, which has {n_source} "
+                f"modes (numbered 1 to {n_source}, as identify --json lists them)"
+            )
+    repeated = sorted({m for m in numbers if numbers.count(m) > 1})
+    if repeated:
+        raise BayesUpdateError(f"data.modes: test mode(s) {repeated} listed twice")
+    return numbers
+
+
+def _per_mode(values, name: str, numbers: list[int], chosen: bool) -> np.ndarray | None:
+    """``values`` (one per selected mode) as an array; one line naming both lengths if not
+    (``chosen``: the modes were listed by ``[data] modes``)."""
+    if values is None:
+        return None
+    try:
+        array = np.asarray(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise BayesUpdateError(f"data.{name}: must be a list of numbers") from exc
+    if array.size != len(numbers):
+        modes = (
+            f"{len(numbers)} selected test modes {numbers}; give one per selected mode, in the "
+            "order of [data] modes"
+            if chosen
+            else f"the source's {len(numbers)} test modes; give one per mode, or choose the "
+            "modes with [data] modes = [...]"
+        )
+        raise BayesUpdateError(f"data.{name}: {array.size} values for {modes}")
+    return array
+
+
+def select_modes(
+    data: ModalData, selection: ModeSelection, name: str = ""
+) -> tuple[ModalData, tuple[int, ...]]:
+    """The modes of ``data`` that ``selection`` names, with its weights and sd; ``name``: the
+    source as the user gave it, for messages (default: ``data.source``).
+
+    Returns (data with the selected modes in ascending source order, their 1-based numbers in
+    the source).  A number the source does not have, a repeated number, or weights / sd_hz of
+    another length than the selection: ``BayesUpdateError`` in one line.
+    """
+    modes = selection.modes
+    numbers = (
+        list(range(1, data.n_modes + 1))
+        if modes is None
+        else _checked_numbers(modes, data.n_modes, name or data.source)
+    )
+    weights = _per_mode(selection.weights, "weights", numbers, modes is not None)
+    sd_hz = _per_mode(selection.sd_hz, "sd_hz", numbers, modes is not None)
+    order = np.argsort(numbers, kind="stable")
+    chosen = data if modes is None else data.subset(np.asarray(numbers)[order] - 1)
+    changes = {}
+    if weights is not None:
+        changes["weights"] = weights[order]
+    if sd_hz is not None:
+        changes["frequency_sd_hz"] = sd_hz[order]
+    if changes:
+        chosen = replace(chosen, **changes)  # re-validated (signs, finiteness)
+    return chosen, tuple(int(numbers[i]) for i in order)

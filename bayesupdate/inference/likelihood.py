@@ -166,12 +166,13 @@ class LogPosterior:
                 if self.mode == "shape-batch":
                     freqs = self._shape_paired(full_theta, names)
                 else:
+                    order = self.problem.pairing.expected
                     freqs = np.asarray(
                         self.problem.model.predict_frequencies_batch(
-                            full_theta, names, n_modes=n_test
+                            full_theta, names, n_modes=int(order.max()) + 1
                         ),
                         dtype=float,
-                    )
+                    )[:, order]
             except Exception as exc:  # a failing batch: fall back to points to find the culprits
                 self.last_error = f"{type(exc).__name__}: {exc}"
                 freqs = None
@@ -189,7 +190,9 @@ class LogPosterior:
                 self.last_error = evaluation.error
                 continue
             freqs[k] = (
-                evaluation.all_frequencies_hz[:n_test] if use_order else evaluation.frequencies_hz
+                evaluation.all_frequencies_hz[self.problem.pairing.expected]
+                if use_order
+                else evaluation.frequencies_hz
             )
             if not use_order and self.problem.pairing.method != "order":
                 self.pair_checked += 1
@@ -217,10 +220,11 @@ class LogPosterior:
         freqs, shapes = self.problem.model.predict_batch_with_shapes(
             theta, names, n_modes=pairing.n_model
         )
-        index, _ = pair_batch(self._reference, shapes[:, self._shape_rows, :])
+        window = None if pairing.window is None else (pairing.test_hz, freqs, pairing.window)
+        index, _ = pair_batch(self._reference, shapes[:, self._shape_rows, :], window)
         ok = np.all(np.isfinite(freqs), axis=1)
         self.pair_checked += int(ok.sum())
-        self.pair_differs += int(np.sum(np.any(index != np.arange(pairing.n_test), axis=1) & ok))
+        self.pair_differs += int(np.sum(np.any(index != pairing.expected, axis=1) & ok))
         return np.take_along_axis(freqs, index, axis=1)
 
     @property

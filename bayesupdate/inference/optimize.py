@@ -211,7 +211,8 @@ def _batch_residuals(problem: CalibrationProblem):
     def residuals(theta: np.ndarray) -> np.ndarray:
         full = np.hstack([theta, np.tile(fixed_values, (theta.shape[0], 1))])
         freqs, shapes = model.predict_batch_with_shapes(full, names, n_modes=pairing.n_model)
-        index, mac = pair_batch(reference, shapes[:, rows, :])
+        window = None if pairing.window is None else (pairing.test_hz, freqs, pairing.window)
+        index, mac = pair_batch(reference, shapes[:, rows, :], window)
         parts = [sqrt_w * (np.take_along_axis(freqs, index, axis=1) - f_test) / f_test]
         if with_mass:
             mass = np.array([_mass_or_nan(mass_of, names, row) for row in full])

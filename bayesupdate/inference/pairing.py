@@ -10,17 +10,171 @@ Three methods (``PAIRING_METHODS``):
   the seed made by eye: "the modal shapes for the first and the last iteration are similar").
 * ``order``: the i-th test mode with the i-th model mode; MAC against the reference shapes is still
   reported when the model gives shapes, so a swap is visible.
+
+Rules of a MAC pairing (``PairingRules``), as a test engineer correlates before updating (Ewins,
+*Modal Testing*, 2nd ed. 2000, section 8.2; Friswell & Mottershead, *Finite Element Model
+Updating in Structural Dynamics*, 1995, section 3.5): at the reference design a test mode is
+paired only with a model mode whose frequency lies within a relative window of its own
+(|f_model / f_test - 1| <= ``frequency_window``) and whose MAC reaches ``mac_threshold``; a test
+mode with no such partner is refused (``screen_test_modes``), named with its best MAC partner,
+and left out of the objective.  At other parameter points the pairing is redone with the same
+window preferred (``window_scores``): a model mode inside it always wins over one outside, but a
+pair with no partner inside the window still counts, and is reported at the optimum.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.correlation import mac_matrix, pair_by_mac
+from bayesupdate.correlation import DEFAULT_MAC_THRESHOLD, mac_matrix, pair_by_mac
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.model_protocol import Prediction
 
 PAIRING_METHODS = ("auto", "order", "tracked", "mac")
+
+#: default relative frequency window of a MAC pair, |f_model / f_test - 1| <= 0.5: an
+#: un-updated model is commonly 10-30 % off its test (the mAEWing1's pre-update model: up to
+#: +130 % on its poorest pairs, all at MAC < 0.6), so 50 % keeps every plausible partner of a
+#: pre-update model while refusing a shape match that sits at half or twice (and beyond) the
+#: test's frequency, which is another mode of similar shape (a higher bending order seen on too
+#: few sensors), not the same one
+DEFAULT_FREQUENCY_WINDOW = 0.5
+
+#: score subtracted from the MAC of a pair outside the frequency window when the pairing is
+#: redone: larger than any MAC difference, so a partner inside the window always wins
+_OUTSIDE_WINDOW_PENALTY = 2.0
+
+
+@dataclass(frozen=True)
+class PairingRules:
+    """What a MAC pair must meet (module docstring).
+
+    mac_threshold : lowest MAC of a kept pair at the reference design [-], in [0, 1].
+    frequency_window : largest |f_model / f_test - 1| of a pair [-], > 0 (``inf``: none).
+    """
+
+    mac_threshold: float = DEFAULT_MAC_THRESHOLD
+    frequency_window: float = DEFAULT_FREQUENCY_WINDOW
+
+    def __post_init__(self):
+        from bayesupdate.errors import BayesUpdateError
+
+        if not 0.0 <= self.mac_threshold <= 1.0:
+            raise BayesUpdateError(
+                f"pairing.mac_threshold: {self.mac_threshold}; give a MAC in [0, 1] (default "
+                f"{DEFAULT_MAC_THRESHOLD})"
+            )
+        if not self.frequency_window > 0:
+            raise BayesUpdateError(
+                f"pairing.frequency_window: {self.frequency_window}; give a relative window "
+                f"> 0, e.g. {DEFAULT_FREQUENCY_WINDOW} (model within +-50 % of the test)"
+            )
+
+
+@dataclass(frozen=True)
+class RefusedMode:
+    """A test mode left out at the reference design (``screen_test_modes``).
+
+    number : its 1-based number in the data source.  test_hz : its frequency [Hz].
+    model_mode : 1-based model mode of its highest MAC.  model_hz : that mode's frequency [Hz].
+    mac : that MAC [-].  reason : "mac" (below the threshold), "window" (outside the frequency
+    window) or "taken" (its best partner is paired with another test mode and no other model
+    mode inside the window reaches the threshold).  other : for "taken", the 1-based number of
+    that other test mode.
+    """
+
+    number: int
+    test_hz: float
+    model_mode: int
+    model_hz: float
+    mac: float
+    reason: str
+    other: int = 0
+
+    def message(self, rules: PairingRules) -> str:
+        """One line: "test mode 3 (15.95 Hz): best model mode 12 at 66.4 Hz, MAC 0.31: refused
+        (below 0.6)"."""
+        head = (
+            f"test mode {self.number} ({self.test_hz:.4g} Hz): best model mode "
+            f"{self.model_mode} at {self.model_hz:.4g} Hz, MAC {self.mac:.2f}: refused"
+        )
+        if self.reason == "mac":
+            return f"{head} (below {rules.mac_threshold:g})"
+        if self.reason == "window":
+            off = 100.0 * (self.model_hz / self.test_hz - 1.0)
+            return (
+                f"{head} ({off:+.0f} % off, outside the frequency window "
+                f"+-{100 * rules.frequency_window:g} %)"
+            )
+        return (
+            f"{head} (that mode is paired with test mode {self.other}; no other model mode "
+            f"within +-{100 * rules.frequency_window:g} % reaches MAC {rules.mac_threshold:g})"
+        )
+
+    def to_dict(self, rules: PairingRules) -> dict:
+        return {
+            "test_mode": self.number,
+            "test_hz": self.test_hz,
+            "model_mode": self.model_mode,
+            "model_hz": self.model_hz,
+            "mac": self.mac,
+            "reason": self.reason,
+            "message": self.message(rules),
+        }
+
+
+def window_scores(mac: np.ndarray, test_hz: np.ndarray, model_hz: np.ndarray, window) -> np.ndarray:
+    """Pairing scores: the MAC (..., n_test, n_model), less ``_OUTSIDE_WINDOW_PENALTY`` where
+    |f_model / f_test - 1| > ``window`` (test_hz (n_test,), model_hz (..., n_model) [Hz]);
+    ``window`` None: the MAC itself."""
+    if window is None:
+        return mac
+    ratio = np.asarray(model_hz, dtype=float)[..., None, :] / np.asarray(test_hz)[:, None]
+    with np.errstate(invalid="ignore"):
+        outside = ~(np.abs(ratio - 1.0) <= window)
+    return mac - _OUTSIDE_WINDOW_PENALTY * outside
+
+
+def screen_test_modes(
+    test_hz: np.ndarray,
+    test_shapes: np.ndarray,
+    model_hz: np.ndarray,
+    model_shapes: np.ndarray,
+    rules: PairingRules,
+    numbers: tuple[int, ...],
+) -> tuple[np.ndarray, tuple[RefusedMode, ...]]:
+    """The test modes a MAC pairing keeps at the reference design (module docstring).
+
+    test_hz : (n_test,) [Hz]; test_shapes : (n_dof, n_test); model_hz : (n_model,) [Hz];
+    model_shapes : (n_dof, n_model) on the same DOFs; numbers : (n_test,) 1-based numbers of the
+    test modes in their source.  Pairs are the assignment maximising the total MAC over the
+    pairs inside the frequency window (Hungarian method, Kuhn 1955); a pair is kept when it is
+    inside the window and its MAC reaches the threshold.
+    Returns (kept (k,) 0-based indices of the test modes, refused modes).
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    mac = mac_matrix(test_shapes, model_shapes)
+    score = window_scores(mac, test_hz, model_hz, rules.frequency_window)
+    rows, cols = linear_sum_assignment(-score)
+    partner = np.full(len(test_hz), -1)
+    partner[rows] = cols
+    owner = {int(c): int(r) for r, c in zip(rows, cols, strict=True)}
+    kept, refused = [], []
+    for i, j in enumerate(partner):
+        if j >= 0 and score[i, j] >= rules.mac_threshold:
+            kept.append(i)
+            continue
+        best = int(np.argmax(mac[i]))
+        if mac[i, best] < rules.mac_threshold:
+            reason, other = "mac", 0
+        elif score[i, best] < mac[i, best]:
+            reason, other = "window", 0
+        else:
+            reason, other = "taken", numbers[owner[best]]
+        pair = (best + 1, float(model_hz[best]), float(mac[i, best]))
+        refused.append(RefusedMode(int(numbers[i]), float(test_hz[i]), *pair, reason, int(other)))
+    return np.array(kept, dtype=int), tuple(refused)
 
 
 @dataclass(frozen=True)
@@ -31,6 +185,11 @@ class ModePairing:
     modes computed (>= n_test; extra modes let a tracked mode be found past a swap).
     reference_shapes : (n_dof, n_test) model shapes at the reference design ("tracked"/"order").
     test_shapes : (n_dof, n_test) test shapes on ``dof_labels`` ("mac").
+    rules : the MAC pair's threshold and frequency window ("mac"; None: any pair).
+    test_hz : (n_test,) the test frequencies [Hz] the window is taken around ("mac" with rules).
+    refused : the test modes left out at the reference design (``screen_test_modes``).
+    order : 0-based model mode of each test mode by order (``expected``), for a selection of a
+    source's modes ("order", "tracked"; () : 0..n_test-1).
     """
 
     method: str
@@ -39,6 +198,33 @@ class ModePairing:
     dof_labels: tuple[str, ...] = ()
     reference_shapes: np.ndarray | None = None
     test_shapes: np.ndarray | None = None
+    rules: PairingRules | None = None
+    test_hz: np.ndarray | None = None
+    refused: tuple[RefusedMode, ...] = ()
+    order: tuple[int, ...] = ()
+
+    @property
+    def expected(self) -> np.ndarray:
+        """(n_test,) 0-based model mode each test mode is by its order ("order", "tracked": the
+        source's number of a selected test mode less one; () : 0..n_test-1)."""
+        return np.asarray(self.order, dtype=int) if self.order else np.arange(self.n_test)
+
+    @property
+    def window(self) -> float | None:
+        """The frequency window the pairing is redone with (None: none)."""
+        if self.method != "mac" or self.rules is None or self.test_hz is None:
+            return None
+        return self.rules.frequency_window
+
+    def to_dict(self) -> dict:
+        """JSON-able record: method, rules and the refused test modes."""
+        rules = self.rules
+        return {
+            "method": self.method,
+            "mac_threshold": None if rules is None else rules.mac_threshold,
+            "frequency_window": None if rules is None else rules.frequency_window,
+            "refused": [r.to_dict(rules) for r in self.refused],
+        }
 
 
 @dataclass(frozen=True)
@@ -46,7 +232,8 @@ class PairedModes:
     """Result of pairing at one parameter point.
 
     model_index : (n_test,) 0-based model mode of each test mode.  mac : (n_test,) MAC of the pair
-    (NaN when no shapes).  swapped : a test mode is not paired with the model mode of its order.
+    (NaN when no shapes).  swapped : a test mode is not paired with the model mode of its order
+    ("mac": the paired model modes are not in the test modes' ascending order).
     shapes : (n_labels, n_test) the paired model shapes at the pairing's ``dof_labels`` (the test
     DOFs for "mac"), or None for "order".
     """
@@ -81,28 +268,60 @@ def shapes_at(prediction: Prediction, labels: tuple[str, ...], where: str) -> np
 def pair_modes(prediction: Prediction, pairing: ModePairing) -> PairedModes:
     """Pair test modes with the modes of ``prediction`` (see module docstring)."""
     n_test = pairing.n_test
+    order = pairing.expected
     n_avail = prediction.frequencies_hz.size
-    if n_avail < n_test:
+    if n_avail < max(n_test, int(order.max()) + 1):
         raise BayesUpdateError(
-            f"pairing: {n_test} test modes but the model computed only {n_avail}"
+            f"pairing: {n_test} test modes (up to mode {int(order.max()) + 1}) but the model "
+            f"computed only {n_avail}"
         )
-    order = np.arange(n_test)
     if pairing.method == "order":
         mac = np.full(n_test, np.nan)
         if pairing.reference_shapes is not None and prediction.shapes is not None:
             current = shapes_at(prediction, pairing.dof_labels, "pairing")
-            mac = np.diag(mac_matrix(pairing.reference_shapes, current[:, :n_test])).copy()
+            mac = np.diag(mac_matrix(pairing.reference_shapes, current[:, order])).copy()
         return PairedModes(order, mac, False)
     reference = pairing.test_shapes if pairing.method == "mac" else pairing.reference_shapes
     current = shapes_at(prediction, pairing.dof_labels, "pairing")
-    model_index, mac = pair_by_mac(reference, current)
-    swapped = bool(np.any(model_index != order))
+    if pairing.window is None:
+        model_index, mac = pair_by_mac(reference, current)
+    else:
+        model_index, mac = _pair_in_window(reference, current, prediction, pairing)
+    if pairing.method == "mac":
+        # the test modes (a selection of a source, perhaps) in ascending order: a swap is a
+        # pair out of that order, not a model mode the test did not see
+        swapped = bool(np.any(np.diff(model_index) < 0))
+    else:
+        swapped = bool(np.any(model_index != order))
     return PairedModes(model_index, mac, swapped, current[:, model_index])
+
+
+def _pair_in_window(reference, current, prediction: Prediction, pairing: ModePairing):
+    """(model_index (n_test,), mac (n_test,)): the assignment maximising the total
+    ``window_scores`` (a partner inside the frequency window first)."""
+    from scipy.optimize import linear_sum_assignment
+
+    mac = mac_matrix(reference, current)
+    freqs = np.asarray(prediction.frequencies_hz, dtype=float)[: current.shape[1]]
+    rows, cols = linear_sum_assignment(-window_scores(mac, pairing.test_hz, freqs, pairing.window))
+    order = np.argsort(rows)
+    return cols[order], mac[rows[order], cols[order]]
+
+
+def outside_window(test_hz, model_hz, window) -> np.ndarray:
+    """(n,) bool: the pairs (test_hz (n,), paired model_hz (n,) [Hz]) outside the window."""
+    if window is None:
+        return np.zeros(np.size(test_hz), dtype=bool)
+    with np.errstate(invalid="ignore"):
+        return ~(np.abs(np.asarray(model_hz) / np.asarray(test_hz) - 1.0) <= window)
 
 
 @dataclass(frozen=True)
 class ResidualTable:
-    """Per test mode: test and model frequency [Hz], error [%], MAC, paired model mode (1-based)."""
+    """Per test mode: test and model frequency [Hz], error [%], MAC, paired model mode (1-based).
+
+    test_mode : (n_test,) each test mode's 1-based number in its data source (None: 1..n_test).
+    """
 
     test_hz: np.ndarray
     model_hz: np.ndarray
@@ -111,11 +330,13 @@ class ResidualTable:
     model_mode: np.ndarray
     swapped: bool
     pairing_method: str
+    test_mode: np.ndarray | None = None
 
     def rows(self) -> list[dict]:
+        numbers = np.arange(1, self.test_hz.size + 1) if self.test_mode is None else self.test_mode
         return [
             {
-                "mode": i + 1,
+                "mode": int(numbers[i]),
                 "test_hz": float(self.test_hz[i]),
                 "model_hz": float(self.model_hz[i]),
                 "error_pct": float(self.error_pct[i]),
@@ -142,9 +363,14 @@ class ResidualTable:
 
 
 def residual_table(
-    test_hz: np.ndarray, model_hz_all: np.ndarray, paired: PairedModes, method: str
+    test_hz: np.ndarray,
+    model_hz_all: np.ndarray,
+    paired: PairedModes,
+    method: str,
+    test_mode: np.ndarray | None = None,
 ) -> ResidualTable:
-    """Residual table from all model frequencies (n_model,) and a pairing."""
+    """Residual table from all model frequencies (n_model,) and a pairing; ``test_mode``: the
+    test modes' 1-based numbers in their source (None: 1..n_test)."""
     model_hz = np.asarray(model_hz_all)[paired.model_index]
     return ResidualTable(
         test_hz=np.asarray(test_hz, dtype=float),
@@ -154,12 +380,17 @@ def residual_table(
         model_mode=paired.model_index + 1,
         swapped=paired.swapped,
         pairing_method=method,
+        test_mode=None if test_mode is None else np.asarray(test_mode, dtype=int),
     )
 
 
-def pair_batch(reference: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pair_batch(
+    reference: np.ndarray, shapes: np.ndarray, window: tuple | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Batched MAC pairing: each reference mode takes a distinct current mode maximising the
-    total MAC, for every point of a batch at once (same result as ``pair_by_mac`` per point).
+    total MAC, for every point of a batch at once (same result as ``pair_by_mac`` per point;
+    with ``window`` = (test_hz (n_test,), freqs (B, n_model) [Hz], relative window) the total
+    ``window_scores``, as ``pair_modes`` with a ``ModePairing.window``).
 
     reference : (n_dof, n_test) shapes to find (reference design or test); shapes : (B, n_dof,
     n_model) current shapes, n_model >= n_test, on the same DOFs.  Returns (model_index (B,
@@ -178,11 +409,13 @@ def pair_batch(reference: np.ndarray, shapes: np.ndarray) -> tuple[np.ndarray, n
     with np.errstate(invalid="ignore", divide="ignore"):
         mac = np.clip(np.where(denom > 0, cross / np.where(denom > 0, denom, 1.0), 0.0), 0, 1)
     bad = ~np.all(np.isfinite(mac), axis=(1, 2))
-    index = np.argmax(np.where(np.isfinite(mac), mac, -1.0), axis=2)
+    score = mac if window is None else window_scores(mac, window[0], window[1], window[2])
+    score = np.where(np.isfinite(score), score, -1.0 - _OUTSIDE_WINDOW_PENALTY)
+    index = np.argmax(score, axis=2)
     ordered = np.sort(index, axis=1)
     contested = np.any(ordered[:, 1:] == ordered[:, :-1], axis=1) & ~bad
     for b in np.flatnonzero(contested):
-        rows, cols = linear_sum_assignment(-mac[b])
+        rows, cols = linear_sum_assignment(-score[b])
         index[b, rows] = cols
     index[bad] = np.arange(n_test)
     paired_mac = np.take_along_axis(mac, index[:, :, None], axis=2)[:, :, 0]

@@ -7,7 +7,7 @@ prediction at one parameter point and never raises for a failed model evaluation
 """
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -17,9 +17,11 @@ from bayesupdate.inference.pairing import (
     PAIRING_METHODS,
     ModePairing,
     PairedModes,
+    PairingRules,
     ResidualTable,
     pair_modes,
     residual_table,
+    screen_test_modes,
     shapes_at,
 )
 from bayesupdate.inference.parameter_space import ParameterSpec
@@ -139,7 +141,9 @@ class CalibrationProblem:
     """Everything needed to evaluate the objective or the likelihood at a parameter vector.
 
     parameters : the calibrated parameters (order of theta vectors).  fixed : other model
-    parameters held at these values.  pairing : see ``pairing.ModePairing``.
+    parameters held at these values.  pairing : see ``pairing.ModePairing``.  test_modes :
+    (n_test,) 1-based number of each of ``data``'s modes in the data source (the modes a study
+    selected and the pairing kept; () : 1..n_test).
     """
 
     model: ParametricModel
@@ -149,6 +153,14 @@ class CalibrationProblem:
     objective: ObjectiveSpec = field(default_factory=ObjectiveSpec)
     fixed: dict[str, float] = field(default_factory=dict)
     reference: Prediction | None = None
+    test_modes: tuple[int, ...] = ()
+
+    @property
+    def mode_numbers(self) -> np.ndarray:
+        """(n_test,) 1-based source number of each test mode of the problem."""
+        if self.test_modes:
+            return np.asarray(self.test_modes, dtype=int)
+        return np.arange(1, self.data.n_modes + 1)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -228,6 +240,7 @@ class CalibrationProblem:
             evaluation.all_frequencies_hz,
             evaluation.paired,
             self.pairing.method,
+            self.mode_numbers,
         )
 
 
@@ -280,7 +293,7 @@ def _reference_prediction(
     model: ParametricModel, reference_params: dict[str, float], n_test: int, extra_modes: int
 ) -> tuple[Prediction, int]:
     """(prediction, n_model): the model at the reference design with ``extra_modes`` modes
-    beyond the test's ``n_test`` if it can, else exactly ``n_test``."""
+    beyond ``n_test`` (the test's highest mode number) if it can, else exactly ``n_test``."""
     reference = None
     n_model = n_test
     for n_try in (n_test + max(int(extra_modes), 0), n_test):
@@ -289,7 +302,8 @@ def _reference_prediction(
         except BayesUpdateError as exc:
             if n_try == n_test:
                 raise BayesUpdateError(
-                    f"model: cannot compute the {n_test} modes of the test data ({exc})"
+                    f"model: cannot compute the {n_test} modes the test data reach ({exc}); "
+                    "choose fewer or lower test modes ([data] modes)"
                 ) from exc
             continue
         n_model = n_try
@@ -297,25 +311,30 @@ def _reference_prediction(
     freqs = np.asarray(reference.frequencies_hz)
     if freqs.size < n_test:
         raise BayesUpdateError(
-            f"model: computed {freqs.size} modes but the test data have {n_test}; "
-            "request fewer modes or give a model with more"
+            f"model: computed {freqs.size} modes but the test data reach mode {n_test}; "
+            "choose fewer or lower test modes ([data] modes) or give a model with more"
         )
     return reference, n_model
 
 
+def _resolved_method(pairing: str, data: ModalData, reference: Prediction) -> str:
+    """The pairing method, "auto" resolved: "mac" if the test has shapes, else "tracked" if
+    the model gives shapes, else "order"; any other method as it is."""
+    if pairing != "auto":
+        return pairing
+    if data.shapes is not None:
+        return "mac"
+    return "tracked" if reference.shapes is not None else "order"
+
+
 def _mode_pairing(
-    pairing: str, data: ModalData, reference: Prediction, n_model: int
+    pairing: str, data: ModalData, reference: Prediction, n_model: int, order: tuple = ()
 ) -> ModePairing:
-    """The pairing set up at the reference prediction ("auto" resolved: "mac" if the test has
-    shapes, else "tracked" if the model gives shapes, else "order")."""
+    """The pairing set up at the reference prediction (``_resolved_method``); ``order``: the
+    0-based model mode of each test mode by order (``ModePairing.order``; () : in order)."""
     n_test = data.n_modes
-    method = pairing
-    if method == "auto":
-        method = (
-            "mac"
-            if data.shapes is not None
-            else ("tracked" if reference.shapes is not None else "order")
-        )
+    method = _resolved_method(pairing, data, reference)
+    order = () if method == "mac" or tuple(order) == tuple(range(n_test)) else tuple(order)
     labels: tuple[str, ...] = ()
     ref_shapes = test_shapes = None
     if method == "mac":
@@ -326,10 +345,34 @@ def _mode_pairing(
         shapes_at(reference, labels, f"data {data.source!r}")
     elif reference.shapes is not None:
         labels = tuple(reference.dof_labels)
-        ref_shapes = np.asarray(reference.shapes)[:, :n_test]
+        columns = list(order) if order else slice(0, n_test)
+        ref_shapes = np.asarray(reference.shapes)[:, columns]
     elif method == "tracked":
         raise BayesUpdateError("pairing 'tracked' needs model shapes; use 'order'")
-    return ModePairing(method, n_test, n_model, labels, ref_shapes, test_shapes)
+    return ModePairing(method, n_test, n_model, labels, ref_shapes, test_shapes, order=order)
+
+
+def _screened(
+    data: ModalData,
+    reference: Prediction,
+    rules: PairingRules,
+    numbers: tuple[int, ...],
+) -> tuple[ModalData, tuple[int, ...], tuple]:
+    """(data, numbers, refused): the test modes whose MAC pair at the reference design meets
+    ``rules`` (``pairing.screen_test_modes``); one line when none does."""
+    shapes = shapes_at(reference, data.dof_labels, f"data {data.source!r}")
+    model_hz = np.asarray(reference.frequencies_hz, dtype=float)[: shapes.shape[1]]
+    kept, refused = screen_test_modes(
+        data.frequencies_hz, data.shapes, model_hz, shapes, rules, numbers
+    )
+    if kept.size == 0:
+        raise BayesUpdateError(
+            f"pairing: no test mode of {data.source!r} pairs with the model at its reference "
+            f"design (MAC >= {rules.mac_threshold:g} within +-{100 * rules.frequency_window:g} "
+            f"%: {refused[0].message(rules)}); lower [pairing] mac_threshold, widen "
+            "frequency_window or check the test geometry"
+        )
+    return data.subset(kept), tuple(int(numbers[i]) for i in kept), refused
 
 
 def build_problem(
@@ -340,6 +383,8 @@ def build_problem(
     extra_modes: int = 2,
     objective: ObjectiveSpec | None = None,
     fixed: Mapping[str, float] | None = None,
+    rules: PairingRules | None = None,
+    test_modes: tuple[int, ...] = (),
 ) -> CalibrationProblem:
     """Validate inputs and set up the pairing at the model's reference design.
 
@@ -348,6 +393,11 @@ def build_problem(
     "tracked" if the model gives shapes, else "order".  extra_modes : model modes computed beyond
     the test's, so a tracked mode can be found after a swap (dropped if the model has fewer).
     fixed : values of model parameters that are not calibrated (default: the model's defaults).
+    rules : a MAC pairing's threshold and frequency window (``pairing.PairingRules``): test modes
+    without a pair meeting them at the reference design are refused (left out of the problem,
+    listed in ``pairing.refused``), and the pairing is redone inside the window (None: every
+    test mode is paired, with any model mode).  test_modes : (n_test,) 1-based numbers of
+    ``data``'s modes in their source (() : 1..n_test).
     """
     if pairing not in PAIRING_METHODS:
         raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
@@ -356,16 +406,31 @@ def build_problem(
     objective = _checked_objective(objective, extra_modes, data)
     _checked_mass_properties(objective, model)
     reference_params = _reference_parameters(model, parameters, fixed)
-    reference, n_model = _reference_prediction(model, reference_params, data.n_modes, extra_modes)
+    numbers = tuple(int(n) for n in test_modes) or tuple(range(1, data.n_modes + 1))
+    if len(numbers) != data.n_modes:
+        raise ValueError(f"build_problem: {len(numbers)} test_modes for {data.n_modes} modes")
+    # test mode k of a source is near model mode k: the model computes up to the highest one
+    reference, n_model = _reference_prediction(model, reference_params, max(numbers), extra_modes)
     fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}
+    refused: tuple = ()
+    mac_rules = rules is not None and _resolved_method(pairing, data, reference) == "mac"
+    if mac_rules:
+        _mode_pairing(pairing, data, reference, n_model)  # its checks (shapes at the labels)
+        data, numbers, refused = _screened(data, reference, rules, numbers)
+    mode_pairing = _mode_pairing(pairing, data, reference, n_model, tuple(n - 1 for n in numbers))
+    if mac_rules:
+        mode_pairing = replace(
+            mode_pairing, rules=rules, test_hz=data.frequencies_hz, refused=refused
+        )
     return CalibrationProblem(
         model=model,
         data=data,
         parameters=parameters,
-        pairing=_mode_pairing(pairing, data, reference, n_model),
+        pairing=mode_pairing,
         objective=objective,
         fixed=fixed,
         reference=reference,
+        test_modes=() if numbers == tuple(range(1, data.n_modes + 1)) else numbers,
     )
 
 

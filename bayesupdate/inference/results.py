@@ -4,12 +4,17 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 
 /                      attrs: schema, kind ("calibration" | "posterior"), status ("complete" |
                        "partial" - a checkpoint that ``sample --resume`` continues), created_utc,
-                       config_json (the study as JSON; resume checks it), command
+                       config_json (the study as JSON; resume checks it), command,
+                       warnings_json (list of one-line warnings, ``inference.checks``)
 /versions              attrs: python, bayesupdate, numpy, scipy, emcee, arviz, h5py
 /inputs                frequencies_hz (m,), weights (m,), [sd_hz (m,)], attrs: source,
                        [measured_mass_kg, measured_mass_sd_kg],
                        parameter_names, bounds (d, 2) dataset, priors_json, pairing_method,
-                       fixed_json, model, [test_pairing_json: the study's [test] geometry
+                       fixed_json, model, test_modes (m,) each mode's 1-based number in
+                       the data source, pairing_json (method, mac_threshold,
+                       frequency_window, refused: the test modes left out at the
+                       reference design, ``ModePairing.to_dict``),
+                       [test_pairing_json: the study's [test] geometry
                        paired with the model: transform, per point its model node, element,
                        xyz and distance (``testgeom.TestPairing.to_dict``)]
 /optimum               theta (d,), attrs: parameter_names, objective, expr, mass_kg, swapped,
@@ -113,11 +118,13 @@ def write_result(
     diagnostics: dict | None = None,
     predictions: dict | None = None,
     command: str = "",
+    warnings: tuple[str, ...] | list[str] = (),
 ) -> Path:
     """Write the run to ``path`` atomically (temporary file + rename).
 
     Give ``posterior`` for a finished sampling run, or only ``state`` for a checkpoint
-    (status "partial").  Returns the path.
+    (status "partial").  ``warnings``: one-line warnings of the run (``inference.checks``).
+    Returns the path.
     """
     kind = "posterior" if (posterior is not None or state is not None) else "calibration"
     partial = posterior is None and state is not None
@@ -131,6 +138,7 @@ def write_result(
             created_utc=datetime.now(UTC).isoformat(timespec="seconds"),
             config_json=json.dumps(config or {}, default=_json_default, sort_keys=True),
             command=command,
+            warnings_json=json.dumps(list(warnings)),
         )
         h5.create_group("versions").attrs.update(package_versions())
         _write_inputs(h5.create_group("inputs"), problem)
@@ -169,6 +177,7 @@ def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:
         inputs.attrs["test_pairing_json"] = json.dumps(pairing)
     data = problem.data
     inputs["frequencies_hz"] = data.frequencies_hz
+    inputs["test_modes"] = problem.mode_numbers
     inputs["weights"] = problem.weights
     if data.frequency_sd_hz is not None:
         inputs["sd_hz"] = data.frequency_sd_hz
@@ -178,6 +187,7 @@ def _write_inputs(inputs: h5py.Group, problem: CalibrationProblem) -> None:
         parameter_names=list(problem.names),
         priors_json=json.dumps({p.name: p.prior.to_dict() for p in problem.parameters}),
         pairing_method=problem.pairing.method,
+        pairing_json=json.dumps(problem.pairing.to_dict()),
         fixed_json=json.dumps(problem.fixed, default=_json_default),
         model=type(problem.model).__name__,
     )

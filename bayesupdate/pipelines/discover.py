@@ -13,7 +13,8 @@ from bayesupdate.discovery.results_io import extend_with_specs
 from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.discovery.workflow import DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.data import load_modal_data
+from bayesupdate.inference.data import load_modal_data, select_modes
+from bayesupdate.inference.problem import build_problem
 from bayesupdate.parallel_executor import SERIAL, ComputeSettings, open_executor
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
@@ -42,6 +43,24 @@ class DiscoveryRun:
     result: DiscoveryResult
     posterior: tuple | None = None
     compute: dict = field(default_factory=lambda: {"kind": "serial", "workers": 1})
+    pairing: dict = field(default_factory=dict)
+
+
+def _paired_data(study: StudyConfig, model, data):
+    """(data, pairing record): the test modes whose MAC pair meets the study's ``[pairing]``
+    rules at the reference design (``inference.problem.build_problem``), with the refused
+    ones in ``pairing["refused"]``; data without shapes are returned as they are."""
+    if data.shapes is None or study.pairing.method not in ("auto", "mac"):
+        return data, {}
+    problem = build_problem(
+        model,
+        data,
+        problem_parameters(study.parameters) or None,
+        study.pairing.method,
+        study.pairing.extra_modes,
+        rules=study.pairing.rules(),
+    )
+    return problem.data, problem.pairing.to_dict()
 
 
 def discover_study(
@@ -50,7 +69,8 @@ def discover_study(
     progress: Callable[[str], None] | None = None,
 ) -> DiscoveryRun:
     """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
-    data = load_modal_data(study.data.as_source())
+    cfg = study.data
+    data, _ = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
     if not hasattr(model, "structure"):
         raise BayesUpdateError(
@@ -58,6 +78,7 @@ def discover_study(
             "use a built-in FE model such as 'exhaust'"
         )
     model = extend_with_specs(model, request.effects)
+    data, pairing = _paired_data(study, model, data)
     with open_executor(request.compute) as executor:
         compute = executor.describe()
         result = discover(
@@ -77,4 +98,4 @@ def discover_study(
         seed = request.settings.seed + 1
         chain, _ = sample_final(result, steps=request.posterior_steps, seed=seed)
         posterior = (chain, summarise(chain))
-    return DiscoveryRun(model, tuple(request.effects), result, posterior, compute)
+    return DiscoveryRun(model, tuple(request.effects), result, posterior, compute, pairing)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from bayesupdate.config import SamplerConfig
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.checks import sampling_warnings
 from bayesupdate.inference.diagnostics import (
     convergence_report,
     posterior_predictive,
@@ -70,6 +71,8 @@ class SamplingRun:
     diagnostics (``inference.diagnostics.summarise``), {} when interrupted.  predictions : the
     posterior predictive (``posterior_predictive``), {} when interrupted.  compute : where the
     independent work ran (the executor's ``describe()``: {"kind", "workers"[, "scheduler"]}).
+    warnings : one-line warnings (``inference.checks.sampling_warnings``: a paired MAC below the
+    threshold at the optimum, the posterior piled at a bound).
     """
 
     calibration: CalibrationResult
@@ -77,6 +80,7 @@ class SamplingRun:
     summary: dict
     predictions: dict
     compute: dict | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def run_sampling(
@@ -137,8 +141,9 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     if notes:
         posterior = replace(posterior, diagnostics={**posterior.diagnostics, **notes})
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
-    write(posterior=posterior, diagnostics=summary, predictions=predictions)
-    return SamplingRun(calibration, posterior, summary, predictions)
+    found = tuple(sampling_warnings(prepared.problem, calibration, posterior.samples()))
+    write(posterior=posterior, diagnostics=summary, predictions=predictions, warnings=found)
+    return SamplingRun(calibration, posterior, summary, predictions, warnings=found)
 
 
 def _basis_at_optimum(problem, rom, likelihood, calibration) -> tuple:

@@ -12,7 +12,7 @@ import numpy as np
 
 from bayesupdate.config import StudyConfig
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.data import load_modal_data
+from bayesupdate.inference.data import load_modal_data, select_modes
 from bayesupdate.inference.likelihood import LikelihoodSpec
 from bayesupdate.inference.mass_properties import (
     ModelUnits,
@@ -161,13 +161,22 @@ def study_effects(study: StudyConfig, extra: tuple[str, ...] = ()) -> tuple[str,
     return specs
 
 
+def study_data(study: StudyConfig) -> tuple[ModalData, tuple[int, ...]]:
+    """The study's test data: its source loaded, the ``[data] modes`` selected with their
+    ``weights`` / ``sd_hz`` (``inference.data.select_modes``, for a file source too) and the
+    measured mass applied (``measured_mass``); with the selected modes' 1-based numbers."""
+    cfg = study.data
+    data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
+    return measured_mass(study, data), numbers
+
+
 def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
     """Build model, data and problem from a study; raises BayesUpdateError on any bad input.
 
     effects : effect specs ``KIND@LOCATION[:name=value]`` added to the study's ``[effects]``
     (``study_effects``); the model is extended by all of them."""
     specs = study_effects(study, effects)
-    data = measured_mass(study, load_modal_data(study.data.as_source()))
+    data, numbers = study_data(study)
     # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
     units = study_units(model)
@@ -187,6 +196,8 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
         study.pairing.method,
         study.pairing.extra_modes,
         objective,
+        rules=study.pairing.rules(),
+        test_modes=numbers,
     )
     likelihood = likelihood_spec(study, data)
     if likelihood.mass_sd_rel is not None and objective.mass_target_kg is None:

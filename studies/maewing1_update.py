@@ -52,7 +52,9 @@ class SubprocessChain:
 
     def __call__(self, key: str, *argv) -> dict:
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(ROOT))
-        cmd = [sys.executable, "-m", "bayesupdate", *map(str, argv), "--json", "--quiet"]
+        json_out = argv[0] != "frf"  # frf writes a file and prints a summary
+        cmd = [sys.executable, "-m", "bayesupdate", *map(str, argv), "--quiet"]
+        cmd += ["--json"] if json_out else []
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         out = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -63,7 +65,7 @@ class SubprocessChain:
         print(f"  {key}: {self.times[key]:.1f} s wall, {self.cpu[key]:.1f} s CPU", flush=True)
         if out.returncode != 0:
             raise BayesUpdateError(f"{' '.join(map(str, argv))}: {out.stderr.strip()}")
-        return json.loads(out.stdout)
+        return json.loads(out.stdout) if json_out else {}
 
 
 def frf_argv(k: int, data: Path, out: Path) -> list:

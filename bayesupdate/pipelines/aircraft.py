@@ -44,12 +44,20 @@ N_RUNS = 10
 ALIGN = ((0.0, 1.0, 0.0, -15.55), (-1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0))
 PAIR_TOLERANCE = "5 in"
 CALIBRATE_BELOW_HZ = 20.0
+#: v3.3's pair of the 19.07 Hz GVT mode (its mode 2, 9.47 Hz, MAC 0.65) is 50.3 % low: the
+#: default window (50 %) would refuse the very error the update is to remove
+FREQUENCY_WINDOW = 0.6
 _FOAM = ",".join(f"{side}{k:02d}" for k in range(1, 17) for side in ("1700", "1800"))
 #: name -> (binding, bounds): see the module docstring
 PARAMETERS = {
     "EI_inner": ("PBEAM 1002,1003 I1 scale", (0.25, 16.0)),
     "EI_outer": ("PBEAM 1004,1005,1006,1007,1008,1009 I1 scale", (0.25, 16.0)),
     "m_foam": (f"CONM2 {_FOAM} M scale", (0.05, 2.0)),
+}
+#: discover's design variable: one flap bending scale of the whole wing, so that the few paired
+#: modes can still decide between effects (discover needs more modes than parameters)
+DISCOVER_PARAMETERS = {
+    "EI_wing": ("PBEAM 1002,1003,1004,1005,1006,1007,1008,1009 I1 scale", (0.25, 16.0)),
 }
 #: the authors' measured mass properties: name -> (value, low, high, unit) (module docstring)
 MEASURED = {
@@ -69,10 +77,11 @@ def _toml_str(path) -> str:
 
 
 def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
-               parameters: bool = True, measured: bool = True) -> str:  # fmt: skip
+               parameters: Mapping | None = PARAMETERS, measured: bool = True) -> str:  # fmt: skip
     """A study file (TOML text) on ``deck`` against the identified modes ``modes_h5`` with the
-    packaged geometry, ``PARAMETERS`` bound when ``parameters``, the data restricted to the
-    1-based test modes ``calibration_modes`` when given, and ``MEASURED`` as data."""
+    packaged geometry, ``parameters`` ({name: (binding, bounds)}: ``PARAMETERS`` by default;
+    None: none) bound, the data restricted to the 1-based test modes ``calibration_modes`` when
+    given (with the ``[pairing]`` window ``FREQUENCY_WINDOW``), and ``MEASURED`` as data."""
     lines = ["[model]", f"source = {_toml_str(deck)}", "[data]", f"source = {_toml_str(modes_h5)}"]
     if calibration_modes is not None:
         lines.append(f"modes = {list(map(int, calibration_modes))}")
@@ -88,8 +97,10 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
     align = [list(row) for row in ALIGN]
     lines += ["[test]", f"geometry = {_toml_str(data_folder() / GEOMETRY)}", f"align = {align}",
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
+    if calibration_modes is not None:
+        lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
     if parameters:
-        for name, (binds, (low, high)) in PARAMETERS.items():
+        for name, (binds, (low, high)) in parameters.items():
             lines += [f"[parameters.{name}]", f'binds = "{binds}"', f"bounds = [{low}, {high}]"]
     return "\n".join(lines) + "\n"
 

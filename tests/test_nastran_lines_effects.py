@@ -1,11 +1,12 @@
 """A deck with a bound line-element field, extended by a discovery effect.
 
 ``discover`` adds an effect's elements (``discovery.effects.extend_model``) to a deck model
-through ``NastranModel.with_structure``; the bound line elements must still be re-built at the
-parameter's value (``nastran.lines``).  On the MSC beam deck (``../shared/data/nastran/
-beam_modes``: CBAR with PBARL 1 ROD, lumped mass), PBARL 1 DIM1 bound: the extended model at a
-radius must equal, to 1e-10, the same effect added to the deck edited by hand with that radius
-and read again (no binding).  Without the radius moving, the effect must still move the modes.
+through ``NastranModel.with_structure``; the bound line elements must still be re-built at
+the parameter's value (``nastran.lines``), and its modal energies found.  On the MSC beam
+deck (``../shared/data/nastran/beam_modes``: CBAR with PBARL 1 ROD, lumped mass), PBARL 1
+DIM1 bound: the extended model at a radius must equal, to 1e-10, the same effect added to
+the deck edited by hand with that radius and read again (no binding).  Without the radius
+moving, the effect must still move the modes.
 """
 
 from pathlib import Path
@@ -54,6 +55,11 @@ def test_effect_on_a_deck_with_a_bound_line_field_equals_the_deck_edited_by_hand
     edited = _extended(_deck(tmp_path / "d", 1.173), {}, spec)
     direct = edited.solve({n: values[n] for n in effect}, n_modes=6).frequencies_hz
     np.testing.assert_allclose(moved, direct, rtol=1e-10)
+    # discover localises by modal energies (``fe.energy``): the line elements' matrices are
+    # there too, so every mode's strain and kinetic energy shares sum to 1 over the parts
+    energies = bound.solve(values, n_modes=6, energies=True).energies
+    np.testing.assert_allclose(energies.strain_by_part.sum(axis=0), 1.0, rtol=1e-9)
+    np.testing.assert_allclose(energies.kinetic_by_part.sum(axis=0), 1.0, rtol=1e-9)
     assert np.abs(moved / base - 1).max() > 1e-2  # the radius does move the modes
     plain = _extended(BEAM / "beam_modes.dat", {}, spec)
     values = plain.default_parameters()

@@ -182,13 +182,14 @@ class LineAssembler(GeneralAssembler):
     def __init__(self, structure, shell_keys, deck, bindings, path):
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
-        self.lines = LineRebuild(deck, structure, bindings, keys, path)
+        # not ``lines``: that is the base class's list of line-element matrices (``fe.energy``)
+        self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
 
     def assemble(self, props, shell_props=None):
         K, M, elem = super().assemble(props, shell_props)
         if self.values is not None:
-            dK, dM = self.lines.delta(self.values)
+            dK, dM = self.rebuild.delta(self.values)
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM
         return K, M, elem

@@ -118,7 +118,8 @@ class NastranModel(FEModel):
         if not isinstance(self._general, LineAssembler):
             return ()
         if getattr(self, "_line_terms", None) is None:
-            self._line_terms = affine_line_terms(self._general.lines, self._defaults, self._bounds)
+            rebuild = self._general.rebuild
+            self._line_terms = affine_line_terms(rebuild, self._defaults, self._bounds)
         return self._line_terms
 
     def with_structure(self, structure, bindings=None, defaults=None, bounds=None, name=None):

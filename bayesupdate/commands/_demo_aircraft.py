@@ -128,11 +128,15 @@ def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict
     if not settings.quick:
         paired = sorted(ac.pairs_of(corr["v33"]))
         result["discover_modes"] = paired
-        result["discover"] = {
-            key: _discover(run(f"discover {key}", "discover", _study(
-                out, f"discover_{key}", deck, modes, ac.DISCOVER_PARAMETERS, paired, True), *seed))
-            for key, deck in (("v33", decks["v33"]), ("ours", out / "updated.bdf"))
-        }  # fmt: skip
+        result["discover"] = {}
+        for key, deck in (("v33", decks["v33"]), ("ours", out / "updated.bdf")):
+            study = _study(out, f"discover_{key}", deck, modes, ac.DISCOVER_PARAMETERS, paired,
+                           True)  # fmt: skip
+            try:
+                result["discover"][key] = _discover(run(f"discover {key}", "discover", study,
+                                                        *seed))  # fmt: skip
+            except BayesUpdateError as exc:  # e.g. too few paired modes to decide: said
+                result["discover"][key] = {"error": str(exc)}
     result["times_s"]["total"] = round(sum(v for k, v in run.times.items()), 2)
     (out / "aircraft.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "report.md").write_text(report_markdown(result))
@@ -245,6 +249,9 @@ def report_markdown(result: dict) -> str:
                         for k, v in p["posterior"].items()) + "."]  # fmt: skip
     if result["discover"]:
         for key, d in result["discover"].items():
+            if "error" in d:
+                lines.append(f"\nDiscover on {names[key]}: not run: {d['error']}")
+                continue
             lines.append(f"\nDiscover on {names[key]}: verdict {d['verdict']}; named "
                          f"{d['named_effect']}; top candidates {d['top_candidates']}.")  # fmt: skip
     lines += ["", "Wall time per step [s]: " +

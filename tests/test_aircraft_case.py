@@ -25,11 +25,11 @@ def test_comparison_rows_and_metrics_by_hand():
     test_hz = [10.0, 20.0, 30.0, 40.0]
     corr = {
         "v33": _corr([(1, 8.0, 0.9), (3, 24.0, 0.7)]),
-        "v42": _corr([(1, 10.5, 0.8), (2, 19.0, 0.6), (3, 31.5, 0.9)]),
+        "v42": _corr([(1, 10.5, 0.8), (2, 19.0, 0.6), (3, 31.5, 0.9), (4, 80.0, 0.7)]),
         "ours": _corr([(1, 10.0, 0.95), (3, 30.0, 0.85)]),
     }
     rows = ac.comparison_rows(test_hz, corr, calibrated=[1], predictive={3: (29.0, 28.0, 31.0)})
-    assert [r.test for r in rows] == [1, 2, 3]  # mode 4 is paired by none
+    assert [r.test for r in rows] == [1, 2, 3]  # mode 4: +100 %, outside the 60 % window
     assert [r.held_out for r in rows] == [False, True, True]
     assert rows[1].v33_hz is None and rows[1].v42_hz == 19.0 and rows[1].ours_hz is None
     assert rows[2].ours_band_hz == (28.0, 31.0) and rows[2].ours_mean_hz == 29.0

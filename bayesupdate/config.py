@@ -148,10 +148,17 @@ class DataConfig:
 
     def _check_mass_properties(self):
         """The measured mass properties' units, keys and sds checked when the study is read
-        (``inference.mass_properties``); they are converted once the model's units are known."""
+        (``inference.mass_properties``); they are converted once the model's units are known.
+        ``modes``: 1-based mode numbers."""
         from bayesupdate.inference.mass_properties import parse_tables
         from bayesupdate.units import mass_property_value
 
+        if self.modes is not None and not all(
+            isinstance(m, int) and not isinstance(m, bool) for m in self.modes
+        ):
+            raise BayesUpdateError(
+                f"data.modes: give 1-based mode numbers (integers), got {list(self.modes)!r}"
+            )
         if self.mass is not None and self.mass_kg is not None:
             raise BayesUpdateError("data: give mass or mass_kg, not both")
         if self.mass_sd is not None and self.mass_sd_kg is not None:

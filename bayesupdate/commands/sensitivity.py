@@ -67,6 +67,8 @@ def _deck_card_ids(bdf, card: str) -> list[int]:
 def candidate_model(args, study, data):
     """(model, candidate base values {name: value}): the study's model with its parameters,
     or a deck re-read with the --candidates bound."""
+    from dataclasses import replace
+
     from bayesupdate.commands.correlate import study_model_any
     from bayesupdate.nastran import is_nastran_path, load_nastran_model
     from bayesupdate.pipelines.sensitivity import expand_candidates
@@ -78,7 +80,12 @@ def candidate_model(args, study, data):
             f"--candidates: only for a Nastran deck; {source!r} has parameters "
             "(list them in the study's [parameters] tables)"
         )
-    if args.candidates:
+    if args.candidates and study.test is not None:
+        # the [test] geometry pairs the test DOFs with the deck, as correlate and calibrate do
+        first = load_nastran_model(source, None)
+        tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(first.bdf, c))
+        model = study_model_any(replace(study, parameters=tables), labels)[0]
+    elif args.candidates:
         first = load_nastran_model(source, None, tuple(labels), dict(study.model.test_points))
         tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(first.bdf, c))
         model = load_nastran_model(source, tables, tuple(labels), dict(study.model.test_points))

@@ -57,7 +57,8 @@ class LineRebuild:
 
     def __init__(self, deck, structure, bindings, keys, path):
         self.deck, self.structure, self.path = deck, structure, str(path)
-        self.bindings = {k: b for k, b in bindings.items() if b.lines}
+        # an effect's parameters (``fe.model.Binding``: discovery) act on elements of their own
+        self.bindings = {k: b for k, b in bindings.items() if getattr(b, "lines", ())}
         eids = sorted({e for b in self.bindings.values() for e in b.lines})
         self.elements = {(c.name, c.id()): c for c in deck.of("CBAR", "CBEAM", "CROD", "CONROD")
                          if c.id() in eids}  # fmt: skip
@@ -384,6 +385,7 @@ class LineAssembler(GeneralAssembler):
     def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True):
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
+        # not ``lines``: that is the base class's list of line-element matrices (``fe.energy``)
         self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
         self.values = None
         self._box = (defaults, bounds)

@@ -1,0 +1,272 @@
+"""``bayesupdate demo --case aircraft``: the mAEWing1's own model updated against its own GVT,
+on the data packaged with bayesupdate, through the same commands a user types.
+
+The chain (each step is ``bayesupdate <command>`` run in this process, its ``--json`` read):
+``identify`` on the 10 packaged FRF files -> ``correlate`` of the authors' pre-update deck
+v3.3 and of their updated v4.2 with the test geometry -> ``sensitivity`` of v3.3 to the
+parameters (``pipelines.aircraft.PARAMETERS``) -> ``calibrate`` v3.3 on the GVT modes it pairs
+below 20 Hz and the measured mass properties (``--write-bdf DIR/updated.bdf``) -> ``sample``
+(``--write-bdf DIR/posterior_mean.bdf``) -> ``correlate`` of the updated deck -> the
+posterior predictive band of every paired mode (the deck solved at posterior draws) -> (not
+``--quick``) ``discover`` on v3.3 and on the updated deck.  Writes ``DIR/report.md`` and
+``DIR/aircraft.json`` (the object ``--json`` prints).
+"""
+
+import contextlib
+import io
+import json
+import time
+import warnings
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.pipelines import aircraft as ac
+
+#: posterior draws solved for the predictive band
+BAND_DRAWS = 40
+
+
+@dataclass(frozen=True)
+class AircraftSettings:
+    """out : output folder.  quick : fewer starts, a short chain and no discovery (the test's
+    and a first look's variant).  seed : every random draw derives from it."""
+
+    out: Path
+    quick: bool = False
+    seed: int = 0
+
+    # the bound PBEAM I1 fields of these shear-flexible beams do not enter K linearly, so every
+    # model evaluation is a full solve of the deck: the chain is kept short
+
+    @property
+    def starts(self) -> int:
+        return 2 if self.quick else 4
+
+    @property
+    def walkers(self) -> int:
+        return 8
+
+    @property
+    def steps(self) -> int:
+        return 30 if self.quick else 100
+
+
+class Chain:
+    """Runs ``bayesupdate`` commands in this process, timing each and reading its JSON."""
+
+    def __init__(self, say):
+        self.say, self.times = say, {}
+
+    def __call__(self, key: str, *argv) -> dict:
+        from bayesupdate.cli import main
+
+        self.say(f"bayesupdate {' '.join(map(str, argv))}")
+        out, err = io.StringIO(), io.StringIO()
+        t0 = time.perf_counter()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                code = main([*map(str, argv), "--json", "--quiet"])
+        self.times[key] = round(time.perf_counter() - t0, 2)
+        for w in {str(w.message) for w in caught}:
+            self.say(f"  warning: {w}")
+        if code != 0:
+            raise BayesUpdateError(f"demo aircraft: {argv[0]} failed: {err.getvalue().strip()}")
+        return json.loads(out.getvalue())
+
+
+def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict:
+    """The chain of the module docstring; returns the ``--json`` object.  chain : runs one
+    command (``Chain`` by default: in this process); runs : the FRF files (default: the
+    packaged ones)."""
+    out, data = Path(settings.out), ac.data_folder()
+    run = chain or Chain(say)
+    modes = out / "modes.h5"
+    runs = runs or [data / f"run{k}.uff" for k in range(1, ac.N_RUNS + 1)]
+    identified = run("identify", "identify", *runs, "--out", modes, "--force")
+    test_hz = [m["frequency_hz"] for m in identified["modes"]]
+    decks = {"v33": data / ac.V33_DECK, "v42": data / ac.V42_DECK}
+    corr = {k: run(f"correlate {k}", "correlate", _study(out, k, deck, modes, params=None))
+            for k, deck in decks.items()}  # fmt: skip
+    calibrated = ac.calibration_modes(test_hz, corr["v33"])
+    if not calibrated:
+        raise BayesUpdateError("demo aircraft: v3.3 pairs no GVT mode below 20 Hz")
+    update = _study(out, "update", decks["v33"], modes, modes_list=calibrated, measured=True)
+    sens = run("sensitivity", "sensitivity", _study(out, "v33_params", decks["v33"], modes))
+    seed = ["--seed", settings.seed]
+    # --no-polish: every evaluation is a full solve of the deck (the bound I1 fields of its
+    # shear-flexible beams are not affine), and the Nelder-Mead polish is ~5x the search
+    cal = run("calibrate", "calibrate", update, "--out", out / "calibration.h5", "--force",
+              "--starts", settings.starts, "--no-polish", "--write-bdf", out / "updated.bdf",
+              *seed)  # fmt: skip
+    post = run("sample", "sample", update, "--out", out / "posterior.h5", "--force",
+               "--starts", settings.starts, "--walkers", settings.walkers, "--steps",
+               settings.steps, "--write-bdf", out / "posterior_mean.bdf", *seed)  # fmt: skip
+    corr["ours"] = run("correlate ours", "correlate",
+                       _study(out, "ours", out / "updated.bdf", modes, params=None))  # fmt: skip
+    rows_tests = sorted({m["test"] for c in corr.values() for m in c["modes"]})
+    band = _band(update, out / "posterior.h5", rows_tests, settings.seed, run.times)
+    rows = ac.comparison_rows(test_hz, corr, calibrated, band)
+    result = {
+        "case": "aircraft",
+        "calibrated_modes": calibrated,
+        "comparison": [_row_json(r) for r in rows],
+        "metrics": ac.metrics(rows),
+        "mass_properties": ac.mass_rows(_mass(decks, out / "updated.bdf")),
+        "parameters": {"optimum": cal["parameters"],
+                       "posterior": post["parameters"], "converged": post.get("converged")},
+        "sensitivity": {k: sens[k] for k in ("candidates", "modes", "sensitivity", "suggested")},
+        "identified_hz": test_hz,
+        "discover": None,
+        "times_s": run.times,
+        "files": {k: str(out / v) for k, v in (("updated_bdf", "updated.bdf"),
+                  ("posterior_mean_bdf", "posterior_mean.bdf"), ("report", "report.md"))},
+    }  # fmt: skip
+    if not settings.quick:
+        paired = sorted(ac.pairs_of(corr["v33"]))
+        result["discover_modes"] = paired
+        result["discover"] = {}
+        for key, deck in (("v33", decks["v33"]), ("ours", out / "updated.bdf")):
+            study = _study(out, f"discover_{key}", deck, modes, ac.DISCOVER_PARAMETERS, paired,
+                           True)  # fmt: skip
+            try:
+                result["discover"][key] = _discover(run(f"discover {key}", "discover", study,
+                                                        *seed))  # fmt: skip
+            except BayesUpdateError as exc:  # e.g. too few paired modes to decide: said
+                result["discover"][key] = {"error": str(exc)}
+    result["times_s"]["total"] = round(sum(v for k, v in run.times.items()), 2)
+    (out / "aircraft.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "report.md").write_text(report_markdown(result))
+    return result
+
+
+def _study(out: Path, name, deck, modes, params=ac.PARAMETERS, modes_list=None,
+           measured=False) -> Path:  # fmt: skip
+    path = out / f"{name}.toml"
+    path.write_text(ac.study_text(deck, modes, modes_list, params, measured))
+    return path
+
+
+def _row_json(row) -> dict:
+    d = asdict(row)
+    d["ours_band_hz"] = None if row.ours_band_hz is None else list(row.ours_band_hz)
+    return d
+
+
+def _discover(summary: dict) -> dict:
+    keys = ("verdict", "flagged_modes", "named_effect", "gap_before", "gap_after")
+    top = sorted(summary.get("candidates", []), key=lambda c: -c.get("log_evidence", -np.inf))
+    return {**{k: summary.get(k) for k in keys},
+            "top_candidates": [{k: c.get(k) for k in ("kind", "location", "log_evidence")}
+                               for c in top[:3]]}  # fmt: skip
+
+
+def _band(study_path: Path, posterior: Path, tests, seed: int, times: dict) -> dict:
+    """The posterior predictive band of the test modes ``tests``: the study's deck solved at
+    ``BAND_DRAWS`` draws of the chain (after burn-in), paired by MAC."""
+    from bayesupdate.config import load_study
+    from bayesupdate.inference.data import load_modal_data
+    from bayesupdate.inference.results import read_result
+    from bayesupdate.pipelines.model_source import paired_study_model
+
+    t0 = time.perf_counter()
+    study = load_study(study_path)
+    data = load_modal_data(study.data.as_source())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # shared model points were named by calibrate already
+        model = paired_study_model(study, data.dof_labels)[0]
+    post = read_result(posterior)["posterior"]
+    names = [str(n) for n in post["attrs"]["names"]]
+    chain = post["chain"][int(post["attrs"]["burn"]) :].reshape(-1, len(names))
+    rng = np.random.default_rng(seed)
+    draws = chain[rng.choice(len(chain), min(BAND_DRAWS, len(chain)), replace=False)]
+    n = max(tests) + 4
+    freq, shapes = [], []
+    for x in draws:
+        r = model.solve(dict(zip(names, map(float, x), strict=True)), n_modes=n)
+        freq.append(r.frequencies_hz)
+        shapes.append(np.real(r.sensor_shapes))
+    band = ac.predictive_band(np.array(freq), np.array(shapes), data.shapes, tests)
+    times["predictive band"] = round(time.perf_counter() - t0, 2)
+    return band
+
+
+def _mass(decks: dict, updated: Path) -> dict:
+    """{model: weight and inertias in the authors' units} of v3.3, v4.2 and the updated deck."""
+    from bayesupdate.nastran import load_nastran_model
+
+    out = {}
+    for key, deck in {**decks, "ours": updated}.items():
+        model = load_nastran_model(str(deck))
+        wtmass = model.structure.metadata["nastran"]["wtmass"]
+        out[key] = ac.weight_units(model.mass_properties(), wtmass)
+    return out
+
+
+def _f(x, fmt=".3f") -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def report_markdown(result: dict) -> str:
+    """The demo's report: the comparison, the metrics, the mass properties, the parameters,
+    discovery and the wall time of each command."""
+    lines = ["# mAEWing1: v3.3 updated against its GVT, beside the authors' v4.2", "",
+             f"Calibrated on GVT modes {result['calibrated_modes']} (paired with v3.3 below "
+             f"{ac.CALIBRATE_BELOW_HZ:g} Hz); the other paired modes are held out.", "",
+             "| GVT mode | test [Hz] | v3.3 [Hz] | MAC | v4.2 [Hz] | MAC | ours [Hz] | MAC "
+             "| ours posterior mean [5-95 %] [Hz] | held out |",
+             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in result["comparison"]:
+        band = r["ours_band_hz"]
+        post = "-" if band is None else (f"{r['ours_mean_hz']:.3f} [{band[0]:.3f}, "
+                                         f"{band[1]:.3f}]")  # fmt: skip
+        lines.append(
+            f"| {r['test']} | {r['test_hz']:.3f} | {_f(r['v33_hz'])} | {_f(r['mac_v33'], '.2f')} "
+            f"| {_f(r['v42_hz'])} | {_f(r['mac_v42'], '.2f')} | {_f(r['ours_hz'])} "
+            f"| {_f(r['mac_ours'], '.2f')} | {post} | {'yes' if r['held_out'] else 'no'} |"
+        )
+    lines += ["", "| model | modes | RMS frequency error [%] | mean MAC | paired | unpaired |",
+              "|---|---|---|---|---|---|"]  # fmt: skip
+    names = {"v33": "v3.3", "v42": "v4.2", "ours": "ours"}
+    for model, parts in result["metrics"].items():
+        for part, m in parts.items():
+            lines.append(f"| {names[model]} | {part.replace('_', ' ')} | "
+                         f"{_f(m['rms_error_pct'], '.2f')} | {_f(m['mean_mac'], '.3f')} | "
+                         f"{m['n']} | {m['unpaired']} |")  # fmt: skip
+    lines += ["", "| quantity | measured [range] | v3.3 | v4.2 | ours |", "|---|---|---|---|---|"]
+    for m in result["mass_properties"]:
+        cells = [f"{_f(m[k], '.4g')}{'' if m[k + '_in_range'] else ' (out)'}"
+                 for k in ("v33", "v42", "ours")]  # fmt: skip
+        lines.append(f"| {m['name']} [{m['unit']}] | {m['measured']:g} [{m['range'][0]:g}, "
+                     f"{m['range'][1]:g}] | " + " | ".join(cells) + " |")  # fmt: skip
+    p = result["parameters"]
+    lines += ["", "Parameters (scale factors on v3.3's fields): optimum " +
+              ", ".join(f"{k} = {v:.4g}" for k, v in p["optimum"].items()) + "; posterior " +
+              ", ".join(f"{k} = {v['mean']:.4g} (sd {v['sd']:.2g})"
+                        for k, v in p["posterior"].items()) + "."]  # fmt: skip
+    if result["discover"]:
+        for key, d in result["discover"].items():
+            if "error" in d:
+                lines.append(f"\nDiscover on {names[key]}: not run: {d['error']}")
+                continue
+            lines.append(f"\nDiscover on {names[key]}: verdict {d['verdict']}; named "
+                         f"{d['named_effect']}; top candidates {d['top_candidates']}.")  # fmt: skip
+    lines += ["", "Wall time per step [s]: " +
+              ", ".join(f"{k} {v:.1f}" for k, v in result["times_s"].items()), ""]  # fmt: skip
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """``demo --case aircraft``: the chain, then the summary (or one JSON object)."""
+    from bayesupdate.commands.demo import check_out_folder, say
+
+    out = check_out_folder(Path(args.out), args.force)
+    result = run_aircraft(AircraftSettings(out, args.quick, args.seed), say)
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    print(report_markdown(result))
+    return 0

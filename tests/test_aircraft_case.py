@@ -1,0 +1,112 @@
+"""The mAEWing1 aircraft case (``pipelines.aircraft``, ``demo --case aircraft``).
+
+Fast checks of the comparison's arithmetic on hand-made inputs, of the packaged decks against
+MSC Nastran's own ``.f06`` weights (v3.3 14.0589 lb, v4.2 13.7779 lb, README of
+``../shared/data/gvt_maewing1``), and of the study file the case writes; one slow check runs
+``demo --case aircraft --quick --json`` end to end on the packaged data and checks the numbers
+that have references: the identified first mode against the authors' peak pick (7.797 Hz,
+explog.txt), v3.3's and v4.2's paired frequencies against their ``.f06`` (5.3772, 8.0042 Hz),
+which modes are held out, and that the calibrated modes moved onto the test.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from bayesupdate.pipelines import aircraft as ac
+
+
+def _corr(pairs):
+    return {"modes": [{"test": t, "model": t, "model_hz": f, "mac": m} for t, f, m in pairs]}
+
+
+def test_comparison_rows_and_metrics_by_hand():
+    test_hz = [10.0, 20.0, 30.0, 40.0]
+    corr = {
+        "v33": _corr([(1, 8.0, 0.9), (3, 24.0, 0.7)]),
+        "v42": _corr([(1, 10.5, 0.8), (2, 19.0, 0.6), (3, 31.5, 0.9), (4, 80.0, 0.7)]),
+        "ours": _corr([(1, 10.0, 0.95), (3, 30.0, 0.85)]),
+    }
+    rows = ac.comparison_rows(test_hz, corr, calibrated=[1], predictive={3: (29.0, 28.0, 31.0)})
+    assert [r.test for r in rows] == [1, 2, 3]  # mode 4: +100 %, outside the 60 % window
+    assert [r.held_out for r in rows] == [False, True, True]
+    assert rows[1].v33_hz is None and rows[1].v42_hz == 19.0 and rows[1].ours_hz is None
+    assert rows[2].ours_band_hz == (28.0, 31.0) and rows[2].ours_mean_hz == 29.0
+    m = ac.metrics(rows)
+    assert m["v33"]["calibrated"]["rms_error_pct"] == pytest.approx(20.0)  # 8 Hz vs 10 Hz
+    assert (m["v33"]["calibrated"]["mean_mac"], m["v33"]["calibrated"]["n"]) == (0.9, 1)
+    # v4.2 held out: -5 % and +5 % -> RMS 5 %, MACs 0.6 and 0.9
+    assert m["v42"]["held_out"]["rms_error_pct"] == pytest.approx(5.0)
+    assert m["v42"]["held_out"]["mean_mac"] == pytest.approx(0.75)
+    assert m["ours"]["held_out"] == {"rms_error_pct": 0.0, "mean_mac": 0.85, "n": 1,
+                                     "unpaired": 1}  # fmt: skip
+
+
+def test_calibration_modes_are_the_pre_update_pairs_below_20_hz():
+    before = _corr([(1, 5.4, 0.83), (7, 9.5, 0.65), (10, 19.3, 0.69)])
+    test_hz = [7.8, 9.2, 9.5, 15.7, 15.95, 18.9, 19.07, 19.15, 23.8, 30.7]
+    assert ac.calibration_modes(test_hz, before) == [1, 7]
+
+
+def test_predictive_band_pairs_each_draw_by_mac():
+    rng = np.random.default_rng(3)
+    test = np.eye(4)[:, :2]  # two test shapes on 4 DOFs
+    freq, shapes = [], []
+    for d in range(200):
+        f = np.array([5.0 + 0.1 * rng.standard_normal(), 7.0 + 0.2 * rng.standard_normal(), 9.0])
+        phi = np.eye(4)[:, [0, 1, 2]]
+        if d % 2:  # the model's modes swap order in half the draws: pairing must follow shapes
+            f, phi = f[[1, 0, 2]], phi[:, [1, 0, 2]]
+        freq.append(f)
+        shapes.append(phi)
+    band = ac.predictive_band(np.array(freq), np.array(shapes), test, [1, 2])
+    assert band[1][0] == pytest.approx(5.0, abs=0.03) and band[2][0] == pytest.approx(7.0, abs=0.05)
+    # 5-95 % of a normal: +-1.645 sd
+    assert band[2][2] - band[2][1] == pytest.approx(2 * 1.645 * 0.2, rel=0.25)
+
+
+def test_packaged_decks_weigh_what_msc_printed_and_mass_rows_use_the_authors_ranges():
+    from bayesupdate.commands._demo_aircraft import _mass
+
+    folder = ac.data_folder()
+    decks = {"v33": folder / ac.V33_DECK, "v42": folder / ac.V42_DECK}
+    props = _mass(decks, folder / ac.V42_DECK)
+    assert props["v33"]["mass"] == pytest.approx(14.0589, rel=1e-5)
+    assert props["v42"]["mass"] == pytest.approx(13.7779, rel=1e-5)
+    rows = {r["name"]: r for r in ac.mass_rows(props)}
+    assert rows["mass"]["range"] == [13.4, 14.2] and rows["mass"]["v42_in_range"] is True
+    assert rows["ixx"]["measured"] == 9560.0
+
+
+def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_path):
+    from bayesupdate.config import load_study
+
+    path = tmp_path / "s.toml"
+    path.write_text(ac.study_text(ac.data_folder() / ac.V33_DECK, tmp_path / "m.h5"))
+    study = load_study(path)
+    assert list(study.parameters) == list(ac.PARAMETERS)
+    assert study.data.mass == "13.76 lb" and study.data.inertia["iyy"] == "1643.0 lb in^2"
+    assert study.test.geometry.endswith("gvt_geometry.unv")
+
+
+@pytest.mark.slow
+def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
+    from bayesupdate.cli import main
+
+    code = main(["demo", "--case", "aircraft", "--quick", "--out", str(tmp_path / "o"),
+                 "--json", "--quiet"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and (tmp_path / "o" / "updated.bdf").is_file()
+    assert (tmp_path / "o" / "report.md").read_text().startswith("# mAEWing1")
+    rows = {r["test"]: r for r in out["comparison"]}
+    keys = {"test_hz", "v33_hz", "v42_hz", "ours_hz", "mac_v33", "mac_v42", "mac_ours",
+            "held_out"}  # fmt: skip
+    assert all(keys <= set(r) for r in rows.values())
+    assert rows[1]["test_hz"] == pytest.approx(7.797, rel=3e-3)  # the authors' peak pick
+    assert rows[1]["v33_hz"] == pytest.approx(5.3772, rel=1e-4)  # v3.3's f06
+    assert rows[1]["v42_hz"] == pytest.approx(8.0042, rel=1e-4)  # v4.2's f06
+    assert out["calibrated_modes"] == [t for t, r in rows.items() if not r["held_out"]]
+    assert rows[1]["held_out"] is False and any(r["held_out"] for r in rows.values())
+    for t in out["calibrated_modes"]:  # calibrated: from -31 % / -50 % to within 5 %
+        assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.05

@@ -259,11 +259,9 @@ def report_markdown(result: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args) -> int:
-    """``demo --case aircraft``: the chain, then the summary (or one JSON object)."""
-    from bayesupdate.commands.demo import check_out_folder, say
-
-    out = check_out_folder(Path(args.out), args.force)
+def run(args, out: Path, say) -> int:
+    """``demo --case aircraft``: the chain into the checked folder ``out``, telling its steps
+    to ``say`` (``commands.demo``'s), then the summary (or one JSON object)."""
     result = run_aircraft(AircraftSettings(out, args.quick, args.seed), say)
     if args.json:
         print(json.dumps(result))

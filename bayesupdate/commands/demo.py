@@ -60,7 +60,7 @@ def run(args) -> int:
     if args.case == "aircraft":
         from bayesupdate.commands._demo_aircraft import run as run_aircraft
 
-        return run_aircraft(args)
+        return run_aircraft(args, check_out_folder(Path(args.out), args.force), say)
     if args.json:
         raise BayesUpdateError("demo --json: only with --case aircraft")
     from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo, side_by_side

@@ -12,9 +12,9 @@ posterior predictive band of every paired mode (the deck solved at posterior dra
 ``DIR/aircraft.json`` (the object ``--json`` prints).
 """
 
-import contextlib
-import io
 import json
+import subprocess
+import sys
 import time
 import warnings
 from dataclasses import asdict, dataclass
@@ -55,27 +55,26 @@ class AircraftSettings:
 
 
 class Chain:
-    """Runs ``bayesupdate`` commands in this process, timing each and reading its JSON."""
+    """Runs ``bayesupdate`` commands as a user does (``python -m bayesupdate ...`` in a child
+    process, the reduced bases shared through the on-disk cache), timing each and reading its
+    JSON; each command's ``warning:`` lines are told to ``say``."""
 
     def __init__(self, say):
         self.say, self.times = say, {}
 
     def __call__(self, key: str, *argv) -> dict:
-        from bayesupdate.cli import main
-
         self.say(f"bayesupdate {' '.join(map(str, argv))}")
-        out, err = io.StringIO(), io.StringIO()
+        command = [sys.executable, "-m", "bayesupdate", *map(str, argv), "--json", "--quiet"]
         t0 = time.perf_counter()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                code = main([*map(str, argv), "--json", "--quiet"])
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
         self.times[key] = round(time.perf_counter() - t0, 2)
-        for w in {str(w.message) for w in caught}:
-            self.say(f"  warning: {w}")
-        if code != 0:
-            raise BayesUpdateError(f"demo aircraft: {argv[0]} failed: {err.getvalue().strip()}")
-        return json.loads(out.getvalue())
+        for line in dict.fromkeys(done.stderr.splitlines()):
+            if line.startswith("warning:"):
+                self.say(f"  {line}")
+        if done.returncode != 0:
+            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+            raise BayesUpdateError(f"demo aircraft: {argv[0]} failed: {last}")
+        return json.loads(done.stdout)
 
 
 def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict:

@@ -94,3 +94,16 @@ def test_a_disconnected_deck_is_refused_with_its_grid_ids(tmp_path):
         msg = str(err.value)
         assert "disconnected: 2 separate pieces" in msg and "\n" not in msg
         assert "GRID 11, GRID 12 are not connected to the main piece of 3 nodes" in msg
+
+
+def test_two_parameters_on_one_card_field_are_refused():
+    """``PBEAM 1002 I1`` and a scale of ``PBEAM 1002,1003 I1`` both set card 1002's I1: the
+    last would win and the other would look insensitive, so the pair is refused by name (the
+    packaged v3.3 deck, so this runs without the shared data)."""
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = Path(__file__).resolve().parents[1] / "bayesupdate" / "data" / "maewing1" / "v3.3"
+    binds = {"a": "PBEAM 1002 I1", "b": "PBEAM 1002,1003 I1 scale"}
+    with pytest.raises(BayesUpdateError, match=r"parameters a .* and b .* act on the same"):
+        load_nastran_model(str(deck / "sol103_mAEWing1_Hati_FEMv3p3.bdf"),
+                           {n: {"binds": b} for n, b in binds.items()})  # fmt: skip

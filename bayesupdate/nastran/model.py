@@ -219,6 +219,8 @@ def deck_bindings(parameters: Mapping, bdf, structure) -> tuple[dict, dict, dict
 
 
 def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
+    """Refuse two parameters that set one thing: a property of the same shells, point masses
+    or springs, or the same field of one card (the last would win, the other seem insensitive)."""
     items = list(bindings.items())
     for i, (a, ba) in enumerate(items):
         for b, bb in items[i + 1 :]:
@@ -227,6 +229,8 @@ def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
                 and (ba.shell & bb.shell).any()
                 or (ba.mass & bb.mass).any()
                 or (ba.spring & bb.spring).any()
+                or (ba.field.card, ba.field.field) == (bb.field.card, bb.field.field)
+                and bool(set(ba.field.ids) & set(bb.field.ids))
             )
             if same:
                 raise BayesUpdateError(

@@ -106,7 +106,11 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     assert rows[1]["test_hz"] == pytest.approx(7.797, rel=3e-3)  # the authors' peak pick
     assert rows[1]["v33_hz"] == pytest.approx(5.3772, rel=1e-4)  # v3.3's f06
     assert rows[1]["v42_hz"] == pytest.approx(8.0042, rel=1e-4)  # v4.2's f06
-    assert out["calibrated_modes"] == [t for t, r in rows.items() if not r["held_out"]]
+    # every compared mode that is not held out was calibrated; a calibrated mode without a row
+    # (the 15.96 Hz mode 5, seen on one wing: v4.2 pairs it only by MAC at 66 Hz, outside the
+    # comparison's 60 % window) is still calibrated
+    assert {t for t, r in rows.items() if not r["held_out"]} <= set(out["calibrated_modes"])
+    assert set(out["calibrated_modes"]) - set(rows) <= {5}
     assert rows[1]["held_out"] is False and any(r["held_out"] for r in rows.values())
-    for t in out["calibrated_modes"]:  # calibrated: from -31 % / -50 % to within 5 %
+    for t in (t for t, r in rows.items() if not r["held_out"]):  # -31 / -50 % to within 5 %
         assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.05

@@ -85,7 +85,7 @@ class Chain:
 
 def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict:
     """The chain of the module docstring; returns the ``--json`` object.  chain : runs one
-    command (``Chain`` by default: in this process); runs : the FRF files (default: the
+    command (``Chain`` by default: a child process each); runs : the FRF files (default: the
     packaged ones)."""
     out, data = Path(settings.out), ac.data_folder()
     run = chain or Chain(say)
@@ -132,21 +132,26 @@ def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict
                   ("posterior_mean_bdf", "posterior_mean.bdf"), ("report", "report.md"))},
     }  # fmt: skip
     if not settings.quick:
-        paired = sorted(ac.pairs_of(corr["v33"]))
-        result["discover_modes"] = paired
-        result["discover"] = {}
-        for key, deck in (("v33", decks["v33"]), ("ours", out / "updated.bdf")):
-            study = _study(out, f"discover_{key}", deck, modes, ac.DISCOVER_PARAMETERS, paired,
-                           True)  # fmt: skip
-            try:
-                result["discover"][key] = _discover(run(f"discover {key}", "discover", study,
-                                                        *seed))  # fmt: skip
-            except BayesUpdateError as exc:  # e.g. too few paired modes to decide: said
-                result["discover"][key] = {"error": str(exc)}
+        result.update(_discover_both(run, out, decks, modes, corr["v33"], seed))
     result["times_s"]["total"] = round(sum(v for k, v in run.times.items()), 2)
     (out / "aircraft.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "report.md").write_text(report_markdown(result))
     return result
+
+
+def _discover_both(run, out: Path, decks: dict, modes: Path, corr_v33: dict, seed: list) -> dict:
+    """``discover`` on v3.3 and on the updated deck, on the GVT modes v3.3 pairs:
+    {"discover_modes", "discover": {key: summary or {"error"}}}."""
+    paired = sorted(ac.pairs_of(corr_v33))
+    found = {}
+    for key, deck in (("v33", decks["v33"]), ("ours", out / "updated.bdf")):
+        study = _study(out, f"discover_{key}", deck, modes, ac.DISCOVER_PARAMETERS, paired,
+                       True)  # fmt: skip
+        try:
+            found[key] = _discover(run(f"discover {key}", "discover", study, *seed))
+        except BayesUpdateError as exc:  # e.g. too few paired modes to decide: said
+            found[key] = {"error": str(exc)}
+    return {"discover_modes": paired, "discover": found}
 
 
 def _study(out: Path, name, deck, modes, params=ac.PARAMETERS, modes_list=None,

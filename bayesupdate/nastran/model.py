@@ -224,14 +224,14 @@ def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
     items = list(bindings.items())
     for i, (a, ba) in enumerate(items):
         for b, bb in items[i + 1 :]:
+            same_card_field = (ba.field.card, ba.field.field) == (bb.field.card, bb.field.field)
             same = (
-                _COLUMN.get(ba.property, -1) == _COLUMN.get(bb.property, -2)
-                and (ba.shell & bb.shell).any()
+                (_COLUMN.get(ba.property, -1) == _COLUMN.get(bb.property, -2)
+                 and (ba.shell & bb.shell).any())
                 or (ba.mass & bb.mass).any()
                 or (ba.spring & bb.spring).any()
-                or (ba.field.card, ba.field.field) == (bb.field.card, bb.field.field)
-                and bool(set(ba.field.ids) & set(bb.field.ids))
-            )
+                or (same_card_field and bool(set(ba.field.ids) & set(bb.field.ids)))
+            )  # fmt: skip
             if same:
                 raise BayesUpdateError(
                     f"parameters {a} ({ba.target!r}) and {b} ({bb.target!r}) act on the same "

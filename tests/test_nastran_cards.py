@@ -269,17 +269,6 @@ def test_rbe3_um_with_the_wrong_dofs_is_refused(capsys, tmp_path):
 
 
 # -- bad input: one message, exit 2, every card's file:line ---------------------------------------
-def test_scalar_point_cards_are_refused_with_their_lines(capsys, tmp_path):
-    """SPOINT, CELAS3 and CELAS4 (scalar points: not supported) and a CELAS2 on a scalar point
-    id (no GRID of that id): one message, each with its file:line."""
-    bulk = ("GRID,1,,0.,0.,0.\nCONM2,9,1,,1.\nCELAS2,1,100.,1,1\nSPOINT,101\n"
-            "CELAS3,2,5,101\nPELAS,5,10.\nCELAS4,3,20.,101\nCELAS2,4,5.,101,0\n")  # fmt: skip
-    line = rejected(capsys, "--model", _write(tmp_path, _deck(bulk), "scalar.bdf"))
-    for where in ("scalar.bdf:10 SPOINT", "scalar.bdf:11 CELAS3 2", "scalar.bdf:13 CELAS4 3",
-                  "scalar.bdf:14 CELAS2 4"):  # fmt: skip
-        assert where in line, line
-
-
 def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(capsys, tmp_path):
     """A missing INCLUDE (in any letter case), a DVPREL1 on a field that cannot be bound (PBAR
     I12) and an unsupported card: one message, exit 2, each with its file:line."""

@@ -61,7 +61,50 @@ class NastranModel(FEModel):
 
         if isinstance(self._general, LineAssembler):
             self._general.values = p
-        return super()._solve_general(p, props, n_modes, energies, method)
+        result = super()._solve_general(p, props, n_modes, energies, method)
+        if not self._spoint_mass().any():
+            return result
+        mass, cog = _without(self._spoint_mass(), result.mass_kg, result.centre_of_gravity)
+        return replace(result, mass_kg=mass, centre_of_gravity=cog)
+
+    # -- scalar points carry no rigid-body mass (``cards.scalar``) ---------------------------------
+    def _spoint_mass(self) -> np.ndarray:
+        """(6, 6) the share of scalar masses on scalar points in R^T M R (zeros without)."""
+        meta = self.structure.metadata.get("nastran", {})
+        return np.asarray(meta.get("spoint_rigid_mass", np.zeros((6, 6))), float)
+
+    def total_mass(self, params=None):
+        """``FEModel.total_mass`` without the scalar points' masses (MSC's weight generator
+        uses grids only)."""
+        mass, cog = super().total_mass(params)
+        if not self._spoint_mass().any():
+            return mass, cog
+        return _without(self._spoint_mass(), mass, cog)
+
+    def mass_properties(self, params=None):
+        """``FEModel.mass_properties`` without the scalar points' masses."""
+        if not self._spoint_mass().any():
+            return super().mass_properties(params)
+        from bayesupdate.fe.mass_properties import (
+            MassProperties,
+            from_rigid_mass,
+            rigid_body_mass_matrix,
+        )
+
+        Mr = rigid_body_mass_matrix(self.matrices(params)[1], self.structure.nodes)
+        Mr = Mr - self._spoint_mass()
+        if np.trace(Mr[:3, :3]) <= 1e-12 * np.trace(self._spoint_mass()[:3, :3]):
+            # masses on scalar points only (a scalar-only deck): no rigid-body mass, as MSC's
+            # weight generator prints it
+            return MassProperties(0.0, np.zeros(3), np.zeros((3, 3)))
+        return from_rigid_mass(Mr)
+
+    def mass_properties_function(self):
+        """``FEModel.mass_properties_function``; with scalar-point masses, ``mass_properties``
+        itself (the affine terms would count them)."""
+        if self._spoint_mass().any():
+            return self.mass_properties
+        return super().mass_properties_function()
 
     def matrices(self, params: Mapping[str, float] | None = None):
         """``FEModel.matrices`` with the line elements at ``params`` too (``lines``)."""
@@ -175,6 +218,15 @@ class NastranModel(FEModel):
         return NastranModel(
             structure, b, d, bo, name=name or self.name, deck=self.deck, bdf=self.bdf
         )
+
+
+def _without(share: np.ndarray, mass: float, cog) -> tuple[float, np.ndarray]:
+    """(mass, centre of gravity) less a (6, 6) rigid-body mass ``share`` about the origin
+    (``fe.mass_properties``: m = trace / 3 of its translational block, m c from its coupling
+    block); a zero mass keeps the origin as its centre."""
+    m = mass - float(np.trace(share[:3, :3]) / 3.0)
+    moment = mass * np.asarray(cog, float) - np.array([share[1, 5], share[2, 3], share[0, 4]])
+    return m, (moment / m if m > 0 else np.zeros(3))
 
 
 def _pad(binding, structure):

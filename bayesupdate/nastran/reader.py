@@ -250,6 +250,7 @@ def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     return cards.Context(
         elements, deck.table(*cards.PROPERTIES), deck.table("MAT1"), grids,
         node, settings["wtmass"], settings["coupmass"] < 1, builder, refusals,
+        spoint_cards=tuple(deck.of("SPOINT")),
     )  # fmt: skip
 
 
@@ -279,7 +280,8 @@ def read_structure(path, design: bool = False) -> tuple:
         props = _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells)
         if props is not None and not refusals.items:
             _add_shells(ctx, shell_rows, pids, nodes, props)
-    if not shell_rows.size and not other_rows.size:
+    scalar_only = any(c.name in cards.scalar.SCALAR_ENDS for c in ctx.elements.values())
+    if not shell_rows.size and not other_rows.size and not scalar_only:
         refusals.add("the deck has no elements")
     for row in other_rows:
         ctx.node[row] = ctx.builder.add_node(grids.xyz[row])
@@ -322,9 +324,15 @@ def _finish(ctx, eids, pids, props):
     grid_of_node = dict(zip(ctx.node[ctx.node >= 0].tolist(), ctx.grids.ids[ctx.node >= 0].tolist(),
                             strict=True))  # fmt: skip
 
+    spoint_of_node = {end.node: s for s, end in ctx.spoints.items()}
+
     def grid_name(node: int) -> str:
         grid = grid_of_node.get(node)
-        return f"GRID {grid}" if grid is not None else f"(a CBUSH arm end, node {node})"
+        if grid is not None:
+            return f"GRID {grid}"
+        if node in spoint_of_node:
+            return f"SPOINT {spoint_of_node[node]}"
+        return f"(a CBUSH arm end, node {node})"
 
     ctx.builder.node_names = grid_name
     structure = ctx.builder.build()
@@ -361,6 +369,10 @@ def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
         grid_frames=frame_of_node,
         grid_sets=_grid_sets(deck),
         notes=notes,
+        # {SPOINT id: (node, its DOF (6,) on the node's global DOFs)}: a scalar point's value
+        # in a shape phi (n_dof,) is phi[6 node : 6 node + 6] @ direction
+        spoint_dofs={s: (e.node, e.direction) for s, e in sorted(ctx.spoints.items())},
+        spoint_rigid_mass=cards.scalar.rigid_share(structure.nodes, ctx.spoint_masses),
     )
 
 

@@ -8,7 +8,7 @@ them; a new card family is one new file here and one entry in ``FAMILIES`` (and 
 ``deck.ELEMENT_CARDS``).  Shells (thousands) are converted as arrays in ``reader``.
 """
 
-from bayesupdate.nastran.cards import beams, masses, rigid, rods, springs
+from bayesupdate.nastran.cards import beams, masses, rigid, rods, scalar, springs
 from bayesupdate.nastran.cards.beams import L_DIMS, L_SECTIONS, library_dims, pbeam_layout
 from bayesupdate.nastran.cards.common import (
     ELEMENTS,
@@ -25,8 +25,8 @@ from bayesupdate.nastran.cards.rigid import rbe3_groups
 from bayesupdate.nastran.cards.rods import rod_values
 from bayesupdate.nastran.cards.springs import pbush_k, pbush_lines
 
-#: the card families, in the order the reader adds them
-FAMILIES = (beams, rods, masses, springs, rigid)
+#: the card families, in the order the reader adds them (scalar points first: elements use them)
+FAMILIES = (scalar, beams, rods, masses, springs, rigid)
 
 # the line families, re-built alone where a binding changes them (``nastran.lines``)
 add_beams, add_rods = beams.add, rods.add
@@ -36,6 +36,7 @@ GRID_FIELDS = {
     "CBAR": ("GA", "GB"), "CBEAM": ("GA", "GB"), "CROD": ("G1", "G2"), "CONROD": ("G1", "G2"),
     "CBUSH": ("GA", "GB"), "CELAS1": ("G1", "G2"), "CELAS2": ("G1", "G2"), "CONM2": ("G",),
     "CONM1": ("G",), "CMASS1": ("G1", "G2"), "CMASS2": ("G1", "G2"), "RBAR": ("GA", "GB"),
+    "CELAS3": (), "CELAS4": (), "CMASS3": (), "CMASS4": (),
     "RBE2": ("GN",), "RBE3": ("REFGRID",), "CQUAD4": ("G1", "G2", "G3", "G4"),
     "CTRIA3": ("G1", "G2", "G3"),
 }  # fmt: skip

@@ -10,6 +10,7 @@ at each end (``lumped_mass``).  A card that cannot be converted raises ``bulk.Ca
 
 import re
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -21,8 +22,9 @@ from bayesupdate.nastran.bulk import CardError
 from bayesupdate.nastran.frames import Grids
 
 #: element, property and material cards by family (``Context`` tables)
-ELEMENTS = ("CBAR", "CBEAM", "CROD", "CONROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "CELAS1",
-            "CELAS2", "CBUSH", "RBE2", "RBE3", "RBAR", "CQUAD4", "CTRIA3")  # fmt: skip
+ELEMENTS = ("CBAR", "CBEAM", "CROD", "CONROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3",
+            "CMASS4", "CELAS1", "CELAS2", "CELAS3", "CELAS4", "CBUSH", "RBE2", "RBE3", "RBAR",
+            "CQUAD4", "CTRIA3")  # fmt: skip
 PROPERTIES = ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS")
 
 
@@ -31,7 +33,9 @@ class Context:
     """What the card converters share: elements {(card name, id): Card} (elements, masses and
     rigid elements have id spaces of their own), property and material tables ({id: Card}),
     the grids, the structure node of each grid row (-1: not in the structure), WTMASS, lumped
-    line mass, the builder, the deck's refusals, notes for the user, the rigid elements' cards."""
+    line mass, the builder, the deck's refusals, notes for the user, the rigid elements' cards;
+    the deck's SPOINT cards, its scalar points as element ends ({id: ``scalar.End``}) and the
+    scalar masses on them ([(mass, ends)]: ``scalar.rigid_share``)."""
 
     elements: dict
     props: dict
@@ -46,6 +50,14 @@ class Context:
     framed: set = field(default_factory=set)
     #: {"rbe2 i" / "rbe3 i" (the builder's names): the card}, to name cards in its errors
     rigid: dict = field(default_factory=dict)
+    spoint_cards: tuple = ()
+    spoints: dict = field(default_factory=dict)
+    spoint_masses: list = field(default_factory=list)
+
+    @cached_property
+    def grids_set(self) -> set:
+        """The GRID ids (scalar element ends that are not scalar points)."""
+        return set(self.grids.ids.tolist())
 
     def each(self, names, convert) -> None:
         """``convert(self, card)`` for each element named ``names``, in id order; a refused

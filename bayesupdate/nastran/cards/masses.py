@@ -7,19 +7,20 @@ CMASS on one grid's rotation is an inertia about that CD axis.  Masses are x WTM
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.nastran.cards import scalar
 from bayesupdate.nastran.cards.common import Context, _builder_message
 from bayesupdate.nastran.frames import coordinate
 
 #: the cards this file converts (``cards.FAMILIES``)
-CARDS = ("CONM2", "CONM1", "CMASS1", "CMASS2")
+CARDS = ("CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3", "CMASS4")
 
 
 def add(ctx: Context) -> None:
     """CONM2 (offset and inertia; CID -1, 0 or rectangular), CONM1 (any symmetric PSD 6x6) and
-    CMASS1/CMASS2 on one grid's rotation (4, 5, 6: an inertia about that CD axis)."""
+    CMASS1-4 (on a grid's rotation 4, 5, 6: an inertia about that CD axis; scalar points)."""
     ctx.each(("CONM2",), _add_conm2)
     ctx.each(("CONM1",), _add_conm1)
-    ctx.each(("CMASS1", "CMASS2"), _add_cmass)
+    ctx.each(("CMASS1", "CMASS2", "CMASS3", "CMASS4"), _add_cmass)
 
 
 def _mass_frame(ctx: Context, m):
@@ -82,26 +83,25 @@ def _add_conm1(ctx: Context, m) -> None:
 
 
 def _add_cmass(ctx: Context, m) -> None:
-    """A scalar mass (``fe.scalar_mass``) on component C1 of G1 (and C2 of G2, or ground), in
-    the grids' CD frames: a rotation component makes it a rotary inertia about that axis."""
-    value = ctx.prop(m, ("PMASS",)).real("M") if m.name == "CMASS1" else m.real("M")
+    """CMASS1-4: a scalar mass (``fe.scalar_mass``) on the DOF of its first end and, with a
+    second, between the two (``scalar.ends``: GRID components in their CD frames, scalar
+    points); a rotation component makes it a rotary inertia about that axis."""
+    value = ctx.prop(m, ("PMASS",)).real("M") if m.name in ("CMASS1", "CMASS3") else m.real("M")
     if value < 0:
         m.fail("a negative mass is not supported")
-    ends = [(g, c) for g, c in ((m["G1"], m["C1"]), (m["G2"], m["C2"])) if g]
-    if not ends:
-        m.fail("needs a grid (scalar points are not supported)")
-    rows = ctx.grids.index([g for g, _ in ends], m)
-    comps = [int(c or 0) for _, c in ends]
-    if not all(1 <= c <= 6 for c in comps):
-        m.fail("components must be 1-6 (scalar points are not supported)")
-    frames = [ctx.grids.frame[r] for r in rows]
-    b = (
-        dict(node_b=ctx.node[rows[1]], component_b=comps[1], frame_b=frames[1])
-        if len(ends) == 2
-        else {}
-    )
+    points = scalar.ends(ctx, m)
+    if not points:
+        m.fail("both ends are grounded: give a GRID or SPOINT at one end at least")
+    a = points[0]
+    b = {}
+    if len(points) == 2:
+        if points[1].node == a.node and np.allclose(points[1].direction, a.direction):
+            m.fail(f"both ends are {a.label} (MSC QRG: the two points must be distinct)")
+        b = dict(node_b=points[1].node, component_b=points[1].comp, frame_b=points[1].frame)
     try:
-        ctx.builder.add_scalar_mass(ctx.node[rows[0]], comps[0], value * ctx.wtmass,
-                                    f"{m.name} {m.id()}", frame_a=frames[0], **b)  # fmt: skip
+        ctx.builder.add_scalar_mass(a.node, a.comp, value * ctx.wtmass, f"{m.name} {m.id()}",
+                                    frame_a=a.frame, **b)  # fmt: skip
     except BayesUpdateError as exc:
         m.fail(_builder_message(exc))
+    if any(p.spoint is not None for p in points):
+        ctx.spoint_masses.append((value * ctx.wtmass, points))

@@ -1,4 +1,4 @@
-"""CELAS1/CELAS2 and CBUSH + PBUSH as springs (MSC Nastran QRG).
+"""CELAS1-4 and CBUSH + PBUSH as springs (MSC Nastran QRG); scalar points: ``scalar``.
 
 A PBUSH's K line gives the six stiffnesses along the element axes (CID's, or x from GA to GB);
 its M line (MSC: one MASS, the lumped mass of the CBUSH) is translational mass, (1 - S) MASS
@@ -12,36 +12,44 @@ moments balance as in MSC's CBUSH.
 
 import numpy as np
 
+from bayesupdate.nastran.cards import scalar
 from bayesupdate.nastran.cards.beams import _orientation
 from bayesupdate.nastran.cards.common import Context
 from bayesupdate.nastran.frames import coordinate
 
 #: the cards this file converts (``cards.FAMILIES``)
-CARDS = ("CELAS1", "CELAS2", "CBUSH")
+CARDS = ("CELAS1", "CELAS2", "CELAS3", "CELAS4", "CBUSH")
 
 
 def add(ctx: Context) -> None:
-    """CELAS1/CELAS2 (one component each, in the grids' CD frames) and CBUSH + PBUSH."""
-    ctx.each(("CELAS1", "CELAS2"), _add_celas)
+    """CELAS1-4 (a GRID component in its CD frame or a scalar point at each end) and CBUSH +
+    PBUSH."""
+    ctx.each(("CELAS1", "CELAS2", "CELAS3", "CELAS4"), _add_celas)
     ctx.each(("CBUSH",), _add_cbush)
 
 
 def _add_celas(ctx: Context, e) -> None:
-    k = ctx.prop(e, ("PELAS",)).real("K") if e.name == "CELAS1" else e.real("K")
-    ids = [g for g in (e["G1"], e["G2"]) if g]
-    if len(ids) == 0 or k < 0:
-        e.fail("needs a grid and K >= 0 (scalar points are not supported)")
-    rows = ctx.grids.index(ids, e)
-    comps = [int(e["C1"] or 0), int(e["C2"] or 0)][: len(ids)]
-    if min(comps) < 1:
-        e.fail("components must be 1-6 (scalar points are not supported)")
-    frame = ctx.grids.frame[rows[0]]
-    if len(ids) == 2 and (comps[0] != comps[1] or not np.allclose(frame, ctx.grids.frame[rows[1]])):
-        e.fail("the two ends need the same component in the same CD frame")
+    """CELAS1-4: k on the two ends' DOF (``scalar.ends``), which must be one axis (the same
+    component in the same CD frame, or two frames' components along one axis): the spring acts
+    along it on both nodes' own DOFs, k (e . u_A - e . u_B)^2; one end: grounded."""
+    k = ctx.prop(e, ("PELAS",)).real("K") if e.name in ("CELAS1", "CELAS3") else e.real("K")
+    if k < 0:
+        e.fail(f"K = {k:g}: a negative spring is not supported")
+    points = scalar.ends(ctx, e)
+    if not points:
+        e.fail("both ends are grounded: give a GRID or SPOINT at one end at least")
+    a = points[0]
+    b = points[1] if len(points) == 2 else None
+    if b is not None and not np.allclose(a.direction, b.direction, rtol=0, atol=1e-9):
+        e.fail(f"{a.label} and {b.label} are unlike DOFs: a spring between two axes "
+               "(k [[1, -1], [-1, 1]] on two directions) is not supported; give both ends one "
+               "direction")  # fmt: skip
+    if b is not None and a.node == b.node:
+        e.fail(f"both ends are {a.label} (MSC QRG: the two connection points must be distinct)")
     stiff = np.zeros(6)
-    stiff[comps[0] - 1] = k
-    b = ctx.node[rows[1]] if len(ids) == 2 else None
-    ctx.builder.add_spring(ctx.node[rows[0]], b, stiff, f"{e.name} {e.id()}", frame=frame)
+    stiff[a.comp - 1] = k
+    ctx.builder.add_spring(a.node, None if b is None else b.node, stiff, f"{e.name} {e.id()}",
+                           frame=a.frame)  # fmt: skip
 
 
 def pbush_lines(p) -> dict[str, list]:

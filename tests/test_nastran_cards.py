@@ -92,6 +92,63 @@ def test_tapered_pbeams_converge_to_kirchhoffs_wedge(tmp_path):
     assert 3.5 < err[20] / err[40] < 4.5, err
 
 
+# -- PBEAML tapered stations ----------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "stations",
+    [
+        ",NO,1.,0.03,0.01,1.5\n",  # end B given
+        ",NO,0.5,,,\n,NO,1.,0.03,0.01,1.5\n",  # a blank station: linear between A and B
+        ",NO,0.5,0.03,0.015,1.\n,NO,1.,0.03,0.01,1.5\n",  # a station on the linear law
+    ],
+)  # fmt: skip
+def test_tapered_pbeaml_uses_the_mean_of_its_exact_section(tmp_path, stations):
+    """A PBEAML BAR, DIM1 b = 0.03 constant and DIM2 h from 0.02 (end A) to 0.01 (end B),
+    NSM 0.5 to 1.5: the element's section is the mean over its length of the section of the
+    linearly varying dimensions, in closed form A = b (hA + hB) / 2, I1 = b h^3 / 12 ->
+    b (hA^3 + hA^2 hB + hA hB^2 + hB^3) / 48, I2 = h b^3 / 12 -> b^3 (hA + hB) / 24, NSM 1;
+    the QRG's blank fields (end B: end A's; a station: linear between A and B) give the same."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+            f"PBEAML,5,1,,BAR\n,0.03,0.02,0.5{stations}CBEAM,1,5,1,2,0.,0.,1.\n"
+            "SPC1,1,123456,1\n")  # fmt: skip
+    model = load_nastran_model(_write(tmp_path, _deck(bulk)))
+    g = model.structure.general_beams
+    b, ha, hb = 0.03, 0.02, 0.01
+    assert g.area[0] == pytest.approx(b * (ha + hb) / 2, rel=1e-12)
+    assert g.iz[0] == pytest.approx(b * (ha**3 + ha**2 * hb + ha * hb**2 + hb**3) / 48, rel=1e-12)
+    assert g.iy[0] == pytest.approx(b**3 * (ha + hb) / 24, rel=1e-12)
+    assert g.nsm[0] == pytest.approx(1.0, rel=1e-12)
+    notes = model.structure.metadata["nastran"]["notes"]
+    assert any("PBEAML 5 is tapered" in n for n in notes), notes
+
+
+def _pbeaml_wedge(n: int) -> str:
+    """Kirchhoff's wedge (``_wedge``) with each element a PBEAML BAR from its end depths (the
+    last one to 0: the section is evaluated inside the element only)."""
+    L, b, h0 = 1.0, 0.02, 0.01
+    lines = ["PARAM,COUPMASS,1", "MAT1,1,2.e11,,0.3,7800.", "SPC1,1,123456,1"]
+    lines += [f"GRID,{k + 1},,{k * L / n!r},0.,0." for k in range(n + 1)]
+    for k in range(n):
+        ha, hb = h0 * (1 - k / n), h0 * (1 - (k + 1) / n)
+        lines += [f"PBEAML,{k + 1},1,,BAR", f",{b!r},{ha!r},0.,NO,1.,{b!r},{hb!r},0.",
+                  f"CBEAM,{k + 1},{k + 1},{k + 1},{k + 2},0.,0.,1."]  # fmt: skip
+    return _deck("\n".join(lines) + "\n", n_modes=1)
+
+
+def test_tapered_pbeamls_converge_to_kirchhoffs_wedge(tmp_path):
+    """The wedge of ``test_tapered_pbeams_converge_to_kirchhoffs_wedge`` in tapered PBEAML BARs
+    (Cowper's shear factor: shear flexibility is (h / L)^2 ~ 1e-4 here): second-order
+    convergence to omega_1 = 5.315 sqrt(E I0 / (m0 L^4)), 20 elements within 0.7 %, 40 within
+    0.2 %."""
+    E, rho, b, h0 = 2e11, 7800.0, 0.02, 0.01
+    exact = 5.315 * np.sqrt(E * b * h0**3 / 12 / (rho * b * h0)) / (2 * np.pi)
+    err = {}
+    for n in (20, 40):
+        model = load_nastran_model(_write(tmp_path, _pbeaml_wedge(n), f"wedge{n}.bdf"))
+        err[n] = model.solve(n_modes=1).frequencies_hz[0] / exact - 1
+    assert abs(err[20]) < 7e-3 and abs(err[40]) < 2e-3, err
+    assert 3.5 < err[20] / err[40] < 4.5, err
+
+
 # -- CBUSH CID, OCID and PBUSH M -----------------------------------------------------------------
 CORD7 = "CORD2R,7,,0.,0.,0.,0.3,0.4,0.866\n,1.,0.2,0.\n"
 
@@ -295,3 +352,16 @@ def test_a_binding_on_a_tapered_pbeam_is_refused(tmp_path):
     with pytest.raises(BayesUpdateError, match=r"parameter a: binds 'PBEAM 5 A': PBEAM 5 "
                        r"\(tapered.bdf:10\) is tapered"):  # fmt: skip
         load_nastran_model(deck, parameters={"a": {"binds": "PBEAM 5 A"}})
+
+
+def test_a_binding_on_a_tapered_pbeaml_is_refused(tmp_path):
+    """As for PBEAM: a binding would write one DIM2 at every PBEAML station."""
+    from bayesupdate.errors import BayesUpdateError
+
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+            "PBEAML,5,1,,BAR\n,0.03,0.02,0.5,NO,1.,0.03,0.01,1.5\nCBEAM,1,5,1,2,0.,0.,1.\n"
+            "SPC1,1,123456,1\n")  # fmt: skip
+    deck = _write(tmp_path, _deck(bulk), "taperedl.bdf")
+    with pytest.raises(BayesUpdateError, match=r"parameter d: binds 'PBEAML 5 DIM2': PBEAML 5 "
+                       r"\(taperedl.bdf:10\) is tapered"):  # fmt: skip
+        load_nastran_model(deck, parameters={"d": {"binds": "PBEAML 5 DIM2"}})

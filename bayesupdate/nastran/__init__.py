@@ -65,16 +65,19 @@ def _has_mass(structure) -> bool:
 
 
 def _refuse_tapered(bindings, deck) -> None:
-    """A binding writes one value at every PBEAM station (``bindings.set_field``), which would
-    make a tapered PBEAM constant: refused, naming the parameter and the card."""
+    """A binding writes one value at every PBEAM / PBEAML station (``bindings.set_field``),
+    which would make a tapered one constant: refused, naming the parameter and the card."""
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.nastran.cards.beams import is_tapered
+    from bayesupdate.nastran.cards.beams import is_tapered, library_is_tapered
 
+    tapered = {"PBEAM": is_tapered, "PBEAML": library_is_tapered}
     for name, b in bindings.items():
-        for i in b.field.ids if b.field.card == "PBEAM" else ():
-            card = deck.table("PBEAM").get(i)
-            if card is not None and is_tapered(card):
+        kind = b.field.card
+        for i in b.field.ids if kind in tapered else ():
+            card = deck.table(kind).get(i)
+            if card is not None and tapered[kind](card):
                 raise BayesUpdateError(
-                    f"parameter {name}: binds {b.target!r}: PBEAM {i} ({card.where}) is tapered "
-                    "and a binding sets one value at every station; bind a constant PBEAM"
+                    f"parameter {name}: binds {b.target!r}: {kind} {i} ({card.where}) is "
+                    f"tapered and a binding sets one value at every station; bind a constant "
+                    f"{kind}"
                 )

@@ -1,4 +1,4 @@
-"""CBAR and CBEAM with PBAR, PBARL, PBEAM (constant or tapered) and PBEAML (MSC Nastran QRG).
+"""CBAR and CBEAM with PBAR, PBARL, PBEAM and PBEAML (constant or tapered; MSC Nastran QRG).
 
 A CBAR/CBEAM orientation vector v lies in the element's x-y plane, its section has I1 about z
 (plane 1, x-y) and I2 about y, and its offsets WA, WB run from the grids to the element's ends
@@ -134,32 +134,93 @@ def _general_section(ctx: Context, prop, card):
 
 
 def library_dims(prop, card) -> tuple[str, np.ndarray, float]:
-    """(TYPE, DIM (n,), NSM) of a PBARL or a constant PBEAML (refused when tapered)."""
+    """(TYPE, DIM (n,), NSM) of a PBARL or of a PBEAML's end A (its stations:
+    ``library_stations``)."""
     kind = str(prop["TYPE"])
     if kind not in L_DIMS:
         card.fail(f"{prop.name} {prop.id()} type {kind}: only {', '.join(L_SECTIONS)}")
     n = L_DIMS[kind]
     dims = np.array([float(prop.value(8 + k) or 0.0) for k in range(n)])
     nsm = float(prop.value(8 + n) or 0.0)
-    if prop.name == "PBEAML":  # stations: SO, X/XB, DIMs, NSM each; blank = end A's
-        i = 9 + n
-        while i < len(prop.raw):
-            vals = [prop.value(i + 2 + k) for k in range(n)]
-            other = np.array(
-                [d if v is None else float(v) for d, v in zip(dims, vals, strict=True)]
-            )
-            if np.any(other != dims):
-                card.fail(f"PBEAML {prop.id()} is tapered; only constant sections")
-            i += 3 + n
     return kind, dims, nsm
 
 
+def library_stations(prop, card) -> tuple[np.ndarray, np.ndarray]:
+    """(x (k,), values (k, n + 1)) of a PBEAML: x / L of end A, each station and end B (0 ... 1),
+    and DIM1..DIMn, NSM there (a PBARL: end A alone, x = [0]).  Blank fields as for PBEAM
+    (``pbeam_stations``): at end B (X/XB = 1) end A's, at an intermediate station the linear
+    interpolation between end A and end B; no end B station: end B is end A."""
+    _, dims, nsm = library_dims(prop, card)
+    n = dims.size
+    a = np.append(dims, nsm)
+    x, rows, i = [0.0], [], 9 + n  # stations: SO, X/XB, DIMs, NSM (3 + n fields each)
+    while prop.name == "PBEAML" and i < len(prop.raw):
+        xb = prop.value(i + 1)
+        if not isinstance(xb, int | float) or not 0 < xb <= 1 or xb <= x[-1]:
+            card.fail(f"PBEAML {prop.id()}: station X/XB = {xb!r}; give increasing values in "
+                      "(0, 1]")  # fmt: skip
+        x.append(float(xb))
+        rows.append([prop.value(i + 2 + k) for k in range(n + 1)])
+        i += 3 + n
+    end_b = next((r for xb, r in zip(x[1:], rows, strict=True) if xb == 1.0), None)
+    b = a if end_b is None else np.array([a[k] if v is None else float(v)
+                                          for k, v in enumerate(end_b)])  # fmt: skip
+    vals = [a] + [np.array([a[k] + xb * (b[k] - a[k]) if v is None else float(v)
+                            for k, v in enumerate(r)])
+                  for xb, r in zip(x[1:], rows, strict=True)]  # fmt: skip
+    if x[-1] < 1.0 and len(x) > 1:
+        x.append(1.0)
+        vals.append(b)
+    return np.array(x), np.array(vals)
+
+
+def library_is_tapered(prop) -> bool:
+    """True if a PBEAML's dimensions or NSM vary along it (``library_stations``)."""
+    _, v = library_stations(prop, prop)
+    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+
+
+#: Gauss-Legendre points and weights on [0, 1] (5 points: exact for polynomials of degree 9,
+#: so for A and I of a section whose dimensions vary linearly, degree 4 at most)
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(5)
+_GAUSS = ((_NODES + 1) / 2, _WEIGHTS / 2)
+
+
 def _library_section(ctx: Context, prop, card, nu):
-    """(``BeamSection``, nsm) of a PBARL/PBEAML of a shape in ``L_SECTIONS``.  Nastran's
-    figures have y_elem vertical: the shapes are built with their height along z and turned.
-    MSC's ROD uses the shear factor 0.9 (with it the beam_modes deck matches MSC to 2e-4 %;
-    Cowper's 0.886 is 0.3 % low on the 4th bending pair); the others use Cowper's (a note)."""
-    kind, d, nsm = library_dims(prop, card)
+    """(``BeamSection``, nsm) of a PBARL/PBEAML of a shape in ``L_SECTIONS``.  A tapered PBEAML
+    (dimensions varying linearly between its stations, ``library_stations``): the mean over
+    the element of each section property of the section at each point (Gauss-Legendre, 5 points
+    a segment: exact for A, I and J of the ROD, TUBE and BAR's bending), shear factors as the
+    mean shear area over the mean area, with a note; exact as the taper goes to 0, and a
+    member meshed in several elements converges to the tapered beam (``tests``)."""
+    kind, _, _ = library_dims(prop, card)
+    x, v = library_stations(prop, card)
+    if not library_is_tapered(prop):
+        return _shape_section(ctx, prop, card, kind, v[0, :-1], nu), v[0, -1]
+    note = (f"PBEAML {prop.id()} is tapered: each of its CBEAMs uses the mean of its section "
+            "properties over its length (mesh a tapered member in several elements)")  # fmt: skip
+    if note not in ctx.notes:
+        ctx.notes.append(note)
+    points, weights = [], []
+    for k in range(len(x) - 1):
+        length = x[k + 1] - x[k]
+        points += [v[k] + g * (v[k + 1] - v[k]) for g in _GAUSS[0]]
+        weights += list(length * _GAUSS[1])
+    secs = [_shape_section(ctx, prop, card, kind, p[:-1], nu) for p in points]
+    w = np.array(weights)
+    mean = {f: float(w @ [getattr(s, f) for s in secs])
+            for f in ("area", "iy", "iz", "torsion", "iyz")}  # fmt: skip
+    shear = {f: float(w @ [getattr(s, f) * s.area for s in secs]) / mean["area"]
+             for f in ("shear_y", "shear_z")}  # fmt: skip
+    nsm = float(np.trapezoid(v[:, -1], x))
+    return replace(secs[0], **mean, **shear, name=f"PBEAML {prop.id()} (mean)"), nsm
+
+
+def _shape_section(ctx: Context, prop, card, kind, d, nu):
+    """``BeamSection`` of a library shape with dimensions ``d``.  Nastran's figures have y_elem
+    vertical: the shapes are built with their height along z and turned.  MSC's ROD uses the
+    shear factor 0.9 (with it the beam_modes deck matches MSC to 2e-4 %; Cowper's 0.886 is 0.3 %
+    low on the 4th bending pair); the others use Cowper's (a note)."""
     pid = prop.id()
     if kind not in L_SECTIONS:
         card.fail(f"{prop.name} {pid} type {kind}: only {', '.join(L_SECTIONS)}")
@@ -167,18 +228,18 @@ def _library_section(ctx: Context, prop, card, nu):
         card.fail(f"{prop.name} {pid}: an I with unequal flanges is not supported")
     try:
         if kind == "ROD":
-            return replace(ss.rod_section(2 * d[0], nu), shear_y=0.9, shear_z=0.9), nsm
+            return replace(ss.rod_section(2 * d[0], nu), shear_y=0.9, shear_z=0.9)
         if kind in ("TUBE", "TUBE2"):
             wall = d[0] - d[1] if kind == "TUBE" else d[1]
-            return ss.tube_section(2 * d[0], wall, nu), nsm
+            return ss.tube_section(2 * d[0], wall, nu)
         note = f"{prop.name} {pid} {kind}: shear factors of Cowper (1966); Nastran's own may differ"
         if note not in ctx.notes:
             ctx.notes.append(note)
         if kind == "BAR":
-            return ss.bar_section(d[0], d[1], nu).swap_yz(), nsm
+            return ss.bar_section(d[0], d[1], nu).swap_yz()
         if kind == "BOX":
-            return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz(), nsm
-        return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz(), nsm
+            return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz()
+        return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz()
     except BayesUpdateError as exc:
         card.fail(f"{prop.name} {pid}: {exc}")
 
@@ -221,8 +282,8 @@ def _pins(e):
 
 
 def add(ctx: Context) -> None:
-    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM (tapered: its mean section), PBARL
-    or PBEAML (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
+    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM, PBARL or PBEAML (``L_SECTIONS``;
+    a tapered PBEAM or PBEAML: its mean section), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
     (COUPMASS < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each,
     and for CBEAM also half the torsional inertia rho (I1 + I2) L about the axis (MSC lumps none
     for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with against MSC's 3554.923)."""

@@ -99,7 +99,8 @@ def test_spring_ends_on_one_axis_in_two_frames(tmp_path):
     has its y axis along basic x: one axis, so C1 != C2 is the same spring as C1 = C2 = 1 in
     basic; GRID 2 held, CMASS2 m = 4 on GRID 1's x: f = sqrt(k / m) / 2 pi."""
     bulk = ("CORD2R,8,,0.,0.,0.,0.,0.,1.\n,0.,-1.,0.\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.,8\n"
-            "CELAS2,1,400.,1,1,2,2\nCMASS2,2,4.,1,1\nSPC1,1,123456,2\nSPC1,1,23456,1\n")  # fmt: skip
+            "CELAS2,1,400.,1,1,2,2\nCMASS2,2,4.,1,1\nSPC1,1,123456,2\n"
+            "SPC1,1,23456,1\n")  # fmt: skip
     deck = _deck(bulk, 1).replace("CEND\n", "CEND\nSPC = 1\n")
     r = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=1)
     assert r.frequencies_hz[0] == pytest.approx(_hz(100.0), rel=1e-12)
@@ -151,3 +152,17 @@ def test_a_scalar_point_apart_from_the_structure_is_named(capsys, tmp_path):
             "CELAS4,1,250.,40\nCMASS4,2,4.,40\n")  # fmt: skip
     line = rejected(capsys, _write(tmp_path, _deck(bulk), "apart.bdf"))
     assert "SPOINT 40" in line and "disconnected" in line, line
+
+
+def test_bindings_on_scalar_springs(tmp_path):
+    """``binds = "CELAS4 1 K"`` and ``"PELAS 5 K"`` (the CELAS3 of that property) on the chain
+    of ``test_two_dof_chain_on_scalar_points``: the modes at k1 = 1800, k2 = 300 are those of
+    the closed form at those values."""
+    bulk = ("SPOINT,1,2\nCELAS4,1,1000.,1\nCELAS3,2,5,1,2\nPELAS,5,500.\nCMASS4,3,2.,1\n"
+            "CMASS3,4,6,2\nPMASS,6,1.\n")  # fmt: skip
+    params = {"k1": {"binds": "CELAS4 1 K"}, "k2": {"binds": "PELAS 5 K"}}
+    model = load_nastran_model(_write(tmp_path, _deck(bulk)), parameters=params)
+    f = model.solve({"k1": 1800.0, "k2": 300.0}, n_modes=2).frequencies_hz
+    lam = scipy.linalg.eigh([[2100.0, -300.0], [-300.0, 300.0]], np.diag([2.0, 1.0]),
+                            eigvals_only=True)  # fmt: skip
+    assert f == pytest.approx(_hz(lam), rel=1e-12)

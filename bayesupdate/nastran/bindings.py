@@ -14,8 +14,8 @@ MAT1 E          youngs_modulus /       the shells of every PSHELL with that MID1
                 modulus_factor (scale)
 MAT1 RHO        density                the same shells
 CONM2 M         mass_factor            that point mass
-CELAS2 K        stiffness_factor       that spring
-PELAS K         stiffness_factor       the CELAS1 springs of that property
+CELAS2/4 K      stiffness_factor       that spring
+PELAS K         stiffness_factor       the CELAS1 and CELAS3 springs of that property
 PBUSH K1-K6     stiffness_factor       the CBUSH springs of that property (its only K)
 PBUSH K scale   stiffness_factor       the CBUSH springs of that property (all six)
 PBAR A I1 I2 J  line (re-built)        the CBARs of that property (``lines``), also NSM
@@ -51,6 +51,7 @@ FIELDS = {
     "MAT1": {"E": ("youngs_modulus", "shell"), "RHO": ("density", "shell")},
     "CONM2": {"M": ("mass_factor", "mass")},
     "CELAS2": {"K": ("stiffness_factor", "spring")},
+    "CELAS4": {"K": ("stiffness_factor", "spring")},
     "PELAS": {"K": ("stiffness_factor", "spring")},
     "PBUSH": {
         **{f"K{i}": ("stiffness_factor", "spring") for i in range(1, 7)},
@@ -123,7 +124,7 @@ def parse_binding(text, name: str) -> DeckField:
 
 def _bindable() -> str:
     return (
-        "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2 K, PELAS K, PBUSH K1-K6 (or K scale), "
+        "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2/CELAS4 K, PELAS K, PBUSH K1-K6 (or K scale), "
         "PBAR/PBEAM A I1 I2 J NSM, PROD A J NSM, PBARL/PBEAML DIM1-DIM10 NSM"
     )
 
@@ -283,10 +284,11 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
     elif f.card == "CONM2":
         out["mass"] = _part_mask(s.mass_part, parts, [f"CONM2 {i}" for i in f.ids])
     else:
-        if f.card == "CELAS2":
-            names = [f"CELAS2 {i}" for i in f.ids]
+        if f.card in ("CELAS2", "CELAS4"):
+            names = [f"{f.card} {i}" for i in f.ids]
         elif f.card == "PELAS":
-            names = [f"CELAS1 {e.id()}" for e in deck.of("CELAS1") if e["PID"] in f.ids]
+            names = [f"{e.name} {e.id()}" for e in deck.of("CELAS1", "CELAS3")
+                     if e["PID"] in f.ids]  # fmt: skip
         else:
             names = [f"PBUSH {i}" for i in f.ids]
             _check_pbush(f, cards)

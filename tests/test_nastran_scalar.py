@@ -166,3 +166,27 @@ def test_bindings_on_scalar_springs(tmp_path):
     lam = scipy.linalg.eigh([[2100.0, -300.0], [-300.0, 300.0]], np.diag([2.0, 1.0]),
                             eigvals_only=True)  # fmt: skip
     assert f == pytest.approx(_hz(lam), rel=1e-12)
+
+
+def test_spc_on_a_scalar_point(tmp_path):
+    """SPC1 (component 0) holds SPOINT 1 of the chain of ``test_two_dof_chain_on_scalar_points``:
+    SPOINT 2 alone on k2 = 500, m2 = 1."""
+    bulk = ("SPOINT,1,2\nCELAS4,1,1000.,1\nCELAS3,2,5,1,2\nPELAS,5,500.\nCMASS4,3,2.,1\n"
+            "CMASS3,4,6,2\nPMASS,6,1.\nSPC1,1,0,1\n")  # fmt: skip
+    deck = _deck(bulk, 1).replace("CEND\n", "CEND\nSPC = 1\n")
+    r = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=1)
+    assert r.frequencies_hz[0] == pytest.approx(_hz(500.0), rel=1e-12)
+
+
+def test_cmass2_between_unlike_dofs(tmp_path):
+    """CMASS2 m = 1 between x of GRID 1 and y of GRID 2 (C1 != C2: [[m, -m], [-m, m]] on the two
+    DOFs, QRG CMASS2), grounded CMASS2 2 and 3 on them, grounded springs 400 and 900, the other
+    DOFs held: the modes of K = diag(400, 900), M = [[3, -1], [-1, 4]]."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCMASS2,1,1.,1,1,2,2\nCMASS2,2,2.,1,1\n"
+            "CMASS2,3,3.,2,2\nCELAS2,4,400.,1,1\nCELAS2,5,900.,2,2\nSPC1,1,23456,1\n"
+            "SPC1,1,13456,2\n")  # fmt: skip
+    deck = _deck(bulk, 2).replace("CEND\n", "CEND\nSPC = 1\n")
+    r = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=2)
+    lam = scipy.linalg.eigh(np.diag([400.0, 900.0]), [[3.0, -1.0], [-1.0, 4.0]],
+                            eigvals_only=True)  # fmt: skip
+    assert r.frequencies_hz == pytest.approx(_hz(lam), rel=1e-12)

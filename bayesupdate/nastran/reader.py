@@ -209,6 +209,9 @@ def _add_spcs(ctx, deck, settings):
         if ps:
             items.append((int(gid), ps, deck.table("GRID")[int(gid)]))
     for gid, comps, card in items:
+        if gid in ctx.spoints or gid in ctx.unused_spoints:
+            _hold_spoint(ctx, gid, comps, card)
+            continue
         try:
             row = ctx.grids.index([gid], card)[0]
             if ctx.node[row] >= 0:
@@ -216,6 +219,16 @@ def _add_spcs(ctx, deck, settings):
                 ctx.builder.add_support(int(ctx.node[row]), digits)
         except CardError as exc:
             ctx.refusals.add(str(exc))
+
+
+def _hold_spoint(ctx, sid: int, comps: str, card) -> None:
+    """SPC/SPC1 on a scalar point (component 0 or blank): its one DOF held."""
+    if comps not in ("0", "None", ""):
+        ctx.refusals.card(card, f"SPOINT {sid}: component {comps}; a scalar point has one DOF "
+                          "(give 0 or blank)")  # fmt: skip
+    elif sid in ctx.spoints:
+        end = ctx.spoints[sid]
+        ctx.builder.add_support(end.node, str(end.comp))
 
 
 def _autospc(ctx, structure):

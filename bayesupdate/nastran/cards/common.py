@@ -52,6 +52,7 @@ class Context:
     rigid: dict = field(default_factory=dict)
     spoint_cards: tuple = ()
     spoints: dict = field(default_factory=dict)
+    unused_spoints: set = field(default_factory=set)
     spoint_masses: list = field(default_factory=list)
 
     @cached_property

@@ -104,6 +104,7 @@ def add(ctx: Context) -> None:
         tied = [a for s in members for a in anchors.get(s, [])]
         _embed(ctx, members, tied[0] if tied else None, used)
     unused = sorted(set(declared) - set(used))
+    ctx.unused_spoints = set(unused)
     if unused:
         ctx.notes.append(f"{len(unused)} SPOINT(s) used by no element were dropped (AUTOSPC)")
 

@@ -40,7 +40,7 @@ def _add_celas(ctx: Context, e) -> None:
         e.fail("both ends are grounded: give a GRID or SPOINT at one end at least")
     a = points[0]
     b = points[1] if len(points) == 2 else None
-    if b is not None and not np.allclose(a.direction, b.direction, rtol=0, atol=1e-9):
+    if b is not None and not np.allclose(a.direction, b.direction):
         e.fail(f"{a.label} and {b.label} are unlike DOFs: a spring between two axes "
                "(k [[1, -1], [-1, 1]] on two directions) is not supported; give both ends one "
                "direction")  # fmt: skip

@@ -218,11 +218,23 @@ def _batch_residuals(problem: CalibrationProblem):
             mass = np.array([_mass_or_nan(mass_of, names, row) for row in full])
             target = spec.mass_target_kg
             parts.append((np.sqrt(spec.mass_weight) * (mass - target) / target)[:, None])
+        if spec.mass_properties is not None:  # measured CG / inertia: as ``residual_vector``
+            props = np.array([_properties_or_nan(problem, names, row) for row in full])
+            parts.append(spec.mass_properties.residuals(props))
         if spec.mac_weight > 0:
             parts.append(np.sqrt(spec.mac_weight * np.clip(1.0 - mac, 0, 1)))
         return np.hstack(parts)
 
     return residuals
+
+
+def _properties_or_nan(problem: CalibrationProblem, names, row: np.ndarray) -> np.ndarray:
+    """(k,) the measured CG / inertia components' model values at one point, NaN where the
+    model rejects the values."""
+    try:
+        return problem.mass_property_values(dict(zip(names, map(float, row), strict=True)))
+    except BayesUpdateError:
+        return np.full(len(problem.objective.mass_properties.names), np.nan)
 
 
 def _mass_or_nan(mass_of, names: tuple[str, ...], row: np.ndarray) -> float:

@@ -23,6 +23,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced.affine import AffineDecomposition
+from bayesupdate.fe.reduced.rigid import compressed_stiffness, rigid_energy
 from bayesupdate.fe.reduced.sensitivity import static_corrections
 
 
@@ -34,8 +35,10 @@ class ReducedBasis:
     all orthonormal in the mass matrix at the box centre.  V_sensor : (n_sensors, r) its sensor
     read-out (shapes at the sensors of a reduced solution y are V_sensor @ y).  K_terms /
     M_terms : (C (n_terms, k), B (k, r_e^2) or (k, r^2)) with the projected terms ~= C @ B
-    (``compress_terms``), K on the elastic block only (K R = 0).  decomposition : the affine
-    terms the coefficients come from.
+    (``compress_terms``), K on the elastic block only (K R = 0) unless ``rigid_energy`` (the
+    rigid motions carry strain energy: springs to ground under a SUPORT), then on all r
+    coordinates, compressed onto the elastic ones at each point (``reduced.rigid``).
+    decomposition : the affine terms the coefficients come from.
     """
 
     decomposition: AffineDecomposition
@@ -44,6 +47,7 @@ class ReducedBasis:
     n_rigid: int
     K_terms: tuple[np.ndarray, np.ndarray]
     M_terms: tuple[np.ndarray, np.ndarray]
+    rigid_energy: bool = False
 
     @property
     def size(self) -> int:
@@ -56,8 +60,11 @@ class ReducedBasis:
         rigid-body motions.  Two matrix products over the projected affine terms."""
         cK, cM = self.decomposition.coefficients(theta_full)
         r, nr = self.size, self.n_rigid
-        K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r - nr, r - nr)
         M = ((cM @ self.M_terms[0]) @ self.M_terms[1]).reshape(-1, r, r)
+        if self.rigid_energy:
+            K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r, r)
+            return compressed_stiffness(K, M, nr), M
+        K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r - nr, r - nr)
         return K, M
 
     def eigen(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
@@ -74,15 +81,21 @@ class ReducedBasis:
         Qf = np.zeros((self.size, nr + m))
         Qf[:nr, :nr] = np.eye(nr)
         Qf[nr:, nr:] = Q
-        BK = self.K_terms[1].reshape(-1, re, re)
         BM = self.M_terms[1].reshape(-1, self.size, self.size)
+        if self.rigid_energy:
+            BK = self.K_terms[1].reshape(-1, self.size, self.size)
+            K_terms = (self.K_terms[0], (Qf.T @ BK @ Qf).reshape(BK.shape[0], -1))
+        else:
+            BK = self.K_terms[1].reshape(-1, re, re)
+            K_terms = (self.K_terms[0], (Q.T @ BK @ Q).reshape(BK.shape[0], -1))
         return ReducedBasis(
             self.decomposition,
             self.V @ Qf,
             self.V_sensor @ Qf,
             nr,
-            (self.K_terms[0], (Q.T @ BK @ Q).reshape(BK.shape[0], -1)),
+            K_terms,
             (self.M_terms[0], (Qf.T @ BM @ Qf).reshape(BM.shape[0], -1)),
+            self.rigid_energy,
         )
 
 
@@ -187,7 +200,10 @@ def projected_basis(
     # sensor read-out is linear in the shape: sensor shapes of a reduced solution y are
     # V_sensor @ y, so a batch of shapes costs (n_sensors x r x n_modes) per point
     nr = n_rigid
-    Kt = decomposition.project(V, decomposition.k_stacks)[:, nr:, nr:]
+    Kt = decomposition.project(V, decomposition.k_stacks)
+    coupled = rigid_energy(Kt, nr)
+    if not coupled:
+        Kt = Kt[:, nr:, nr:]
     Mt = decomposition.project(V, decomposition.m_stacks)
     return ReducedBasis(
         decomposition,
@@ -196,6 +212,7 @@ def projected_basis(
         nr,
         compress_terms(Kt.reshape(Kt.shape[0], -1)),
         compress_terms(Mt.reshape(Mt.shape[0], -1)),
+        coupled,
     )
 
 

@@ -70,10 +70,10 @@ class BasisMadeExact:
         """The problem on the basis enriched at the best of ``ends`` (n, d) (SI) by
         ``objectives`` (n,); on the basis as it was when the enlarged one misses its tolerance
         or size (a warning then says so)."""
-        best = ends[int(np.argmin(objectives))][None, :]
+        best, names = self._full_point(ends[int(np.argmin(objectives))])
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            checked = self.rom.certify_at(best, self.problem.names, enrich_above=0.0)[0]
+            checked = self.rom.certify_at(best, names, enrich_above=0.0)[0]
         if not checked.certified:
             for w in caught:
                 warnings.warn(
@@ -85,6 +85,13 @@ class BasisMadeExact:
         self.checked = checked
         return replace(self.problem, model=checked)
 
+    def _full_point(self, theta: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
+        """(1, k) point and its k names: ``theta`` (d,) with the problem's fixed values of the
+        model's other parameters (the basis fills in defaults for names it is not given)."""
+        fixed = tuple(k for k in self.problem.fixed if k in self.rom.parameter_names)
+        row = np.concatenate([theta, [self.problem.fixed[k] for k in fixed]])
+        return row[None, :], self.problem.names + fixed
+
     def evaluated_in_full(self, result: CalibrationResult) -> CalibrationResult:
         """``result`` (found on the basis) with its objective, frequencies, mass and table from
         one full solve at its optimum; a warning when the basis's relative frequency error there
@@ -95,7 +102,7 @@ class BasisMadeExact:
             return result
         basis = self.rom if self.checked is None else self.checked
         n_model = evaluation.all_frequencies_hz.size
-        f_rom = basis.predict_frequencies_batch(result.theta[None, :], problem.names, n_model)[0]
+        f_rom = basis.predict_frequencies_batch(*self._full_point(result.theta), n_model)[0]
         error = float(np.max(np.abs(f_rom / evaluation.all_frequencies_hz - 1.0)))
         if not error <= basis.tol:
             warnings.warn(

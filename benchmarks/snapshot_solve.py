@@ -29,8 +29,9 @@ from bayesupdate.fe.reduced.basis import _snapshot  # noqa: E402
 from bayesupdate.fe.reduced.sensitivity import static_corrections  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 
-#: the box of ``calibrate --model exhaust_shell --data paper:ema`` (``exhaust``'s bounds)
-N_MODES = 18  # 14 model modes + the 4 extra modes a snapshot keeps
+#: modes per snapshot: the 14 model modes of ``calibrate --data paper:ema`` + the 4 extra modes
+#: a snapshot keeps (``ReducedSettings.extra_modes``); the box is the model's default bounds
+N_MODES = 18
 
 
 def separate(fe, dec, params):

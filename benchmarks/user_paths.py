@@ -14,8 +14,15 @@ one, and is printed on its own).  Wall and CPU seconds (the child's user + syste
 1-minute load average before each run are printed: on a shared machine the wall time says
 little without them.
 
+The calibrate pair also prints each run's phase timings (``timings`` of its ``--json``: the
+basis's snapshots, certification or cached check, the starts, the check of the ends) and the
+largest relative frequency and parameter gap of the cached run's optimum to the first run's;
+``--workers N`` runs that pair on N local processes (the executor seam; default: serial, as a
+user's plain command).
+
     python benchmarks/user_paths.py --only demo_quick --runs 3
     python benchmarks/user_paths.py --only calibrate_shell_first,calibrate_shell_cached --runs 1
+    python benchmarks/user_paths.py --only calibrate_shell_first,calibrate_shell_cached --workers 2
 """
 
 import argparse
@@ -58,19 +65,25 @@ def run_cli(arguments: list[str], cache: str, out: str) -> dict:
     return {"wall_s": wall, "cpu_s": cpu, "load": load, "stdout": done.stdout}
 
 
-def _calibrate_pairs(runs: int, wanted: set) -> dict:
-    """The calibrate pair ``runs`` times, each in a fresh cache folder: {name: [run, ...]}."""
+def _calibrate_pairs(runs: int, wanted: set, workers: int = 1) -> dict:
+    """The calibrate pair ``runs`` times, each in a fresh cache folder, on ``workers`` local
+    processes (1: serial): {name: [run, ...]}."""
     out = {"calibrate_shell_first": [], "calibrate_shell_cached": []}
+    shell = SHELL + (["--workers", str(workers)] if workers > 1 else [])
     for _ in range(runs):
         with tempfile.TemporaryDirectory() as cache:
-            out["calibrate_shell_first"].append(run_cli(SHELL, cache, cache))
+            out["calibrate_shell_first"].append(run_cli(shell, cache, cache))
             if "calibrate_shell_cached" in wanted:
-                out["calibrate_shell_cached"].append(run_cli(SHELL, cache, cache))
+                out["calibrate_shell_cached"].append(run_cli(shell, cache, cache))
     first, cached = out["calibrate_shell_first"], out["calibrate_shell_cached"]
     for a, b in zip(first, cached, strict=False):
-        fa = np.array(json.loads(a["stdout"])["frequencies_hz"])
-        fb = np.array(json.loads(b["stdout"])["frequencies_hz"])
+        ja, jb = json.loads(a["stdout"]), json.loads(b["stdout"])
+        fa, fb = np.array(ja["frequencies_hz"]), np.array(jb["frequencies_hz"])
         b["optimum_gap"] = float(np.max(np.abs(fb / fa - 1)))
+        pa, pb = ja["parameters"], jb["parameters"]
+        b["parameter_gap"] = max(abs(pb[k] / pa[k] - 1) for k in pa)
+    for r in first + cached:
+        r["timings"] = json.loads(r["stdout"]).get("timings", {})
     return {k: v for k, v in out.items() if k in wanted}
 
 
@@ -90,17 +103,23 @@ def report(name: str, done: list[dict]) -> None:
     cpu = np.median([r["cpu_s"] for r in done])
     print(f"{name:24s} median wall {wall:7.1f} s  cpu {cpu:7.1f} s  ({len(done)} runs)")
     for k, r in enumerate(done):
-        gap = f"  optimum vs first run: {r['optimum_gap']:.1e}" if "optimum_gap" in r else ""
+        gap = ""
+        if "optimum_gap" in r:
+            gap = (f"  optimum vs first run: frequencies {r['optimum_gap']:.1e}, "
+                   f"parameters {r['parameter_gap']:.1e}")  # fmt: skip
         print(
             f"{'':24s}   run {k + 1}: wall {r['wall_s']:7.1f} s  cpu {r['cpu_s']:7.1f} s  "
             f"load {r['load']:5.2f}{gap}"
         )
+        for phase, seconds in r.get("timings", {}).items():
+            print(f"{'':24s}     {phase}: {seconds:.1f} s wall")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default=",".join(PATHS), help="comma-separated path names")
     ap.add_argument("--runs", type=int, default=3, help="runs of each path (default 3)")
+    ap.add_argument("--workers", type=int, default=1, help="calibrate pair: local processes")
     args = ap.parse_args()
     wanted = [n.strip() for n in args.only.split(",") if n.strip()]
     unknown = sorted(set(wanted) - set(PATHS))
@@ -108,7 +127,7 @@ def main() -> None:
         raise SystemExit(f"--only: unknown {unknown}; paths are {list(PATHS)}; --runs >= 1")
     print(f"{os.cpu_count()} CPUs; OPENBLAS_NUM_THREADS=1; load before: {os.getloadavg()[0]:.2f}")
     shell = {n for n in wanted if n.startswith("calibrate_shell")}
-    results = _calibrate_pairs(args.runs, shell) if shell else {}
+    results = _calibrate_pairs(args.runs, shell, args.workers) if shell else {}
     for name in wanted:
         if name not in shell:
             results[name] = _repeated(name, args.runs)

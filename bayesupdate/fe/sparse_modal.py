@@ -265,11 +265,14 @@ def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> S
     return SparseModes(np.sqrt(np.maximum(lam, 0)) / (2 * np.pi), lam, shapes, rigid, lam_r)
 
 
-def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
+def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None):
     """Elastic and rigid modes of a reduced pencil (Kf, Mf) (n, n) sparse whose allowed rigid
     motions are the columns of R (n, r); dof_ids (n,) global DOF number of each coordinate (for
-    mechanism messages).  Returns (lam (m,), phi (n, m), rigid modes (n, r') and their
-    eigenvalues (r',)), all mass-normalised; raises BayesUpdateError for a mechanism."""
+    mechanism messages).  solve : a factorisation of Kf - shift Mf (``factorize``) the caller
+    made and uses again (e.g. for design sensitivities, ``fe.reduced.sensitivity``); None: made
+    here when the Lanczos path needs one.  Returns (lam (m,), phi (n, m), rigid modes (n, r')
+    and their eigenvalues (r',)), all mass-normalised; raises BayesUpdateError for a
+    mechanism."""
     Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol, settings.rigid_set)
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
     n_el = Kf.shape[0] - Rm.shape[1]
@@ -281,7 +284,7 @@ def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids):
         lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
     else:
         bordered = settings.rigid_set == "rigid_motions"
-        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings, bordered)
+        lam, phi = _lanczos_modes(Kf, Mf, Rm, settings, bordered, solve)
     zero = settings.zero_tol * _diagonal_energy(Kf.diagonal(), phi)
     _check_mechanism(lam, phi, zero, np.asarray(dof_ids))
     idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
@@ -389,14 +392,16 @@ def factorize(A, kind: str = "auto"):
     return lu.solve
 
 
-def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings, bordered: bool = False):
+def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings, bordered: bool = False, solve=None):
     """Shift-invert Lanczos on the complement of the rigid modes Rm (M-orthonormal).
 
     bordered : Rm need not be eigenvectors (a SUPORT's rigid motions on springs): the operator is
-    the constrained inverse (module docstring), from Z = A^-1 M Rm and S = Rm^T M Z made once."""
+    the constrained inverse (module docstring), from Z = A^-1 M Rm and S = Rm^T M Z made once.
+    solve : the factorisation of Kf - shift Mf (None: made here)."""
     n = Kf.shape[0]
     sigma = settings.shift
-    solve = factorize((Kf - sigma * Mf).tocsc(), settings.factorization)
+    if solve is None:
+        solve = factorize((Kf - sigma * Mf).tocsc(), settings.factorization)
     MR = Mf @ Rm
 
     def project(x):

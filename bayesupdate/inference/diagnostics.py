@@ -8,7 +8,6 @@ chains, can be optimistic; we therefore also report emcee's ESS = n_draws * n_wa
 ``ess_bulk`` reported is the smaller of the two.
 """
 
-import arviz_stats
 import numpy as np
 
 from bayesupdate.inference.likelihood import LogPosterior
@@ -18,6 +17,9 @@ from bayesupdate.inference.sampling import PosteriorResult, rhat_and_ess
 def summarise(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
     """Per parameter: mean, sd, hdi_low, hdi_high, r_hat, ess_bulk, ess_tail, ess_arviz_bulk,
     ess_autocorr.  Uses the post-burn-in chain, walkers as chains (module docstring)."""
+    # imported here: ArviZ's import takes seconds, and every command imports this module
+    import arviz_stats
+
     post = result.chain[result.burn :]  # (draws, walkers, d)
     by_chain = np.moveaxis(post, 1, 0)  # (walkers, draws, d)
     rhat, ess_b, ess_tau = rhat_and_ess(post, result.autocorr_time)

@@ -30,6 +30,7 @@ a pure function of the problem and its start, so the result is the same bits on 
 """
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import partial
 
@@ -501,7 +502,7 @@ def _distinct_optima(
 def calibrate(
     problem: CalibrationProblem,
     settings: CalibrationSettings = CalibrationSettings(),
-    refine: CalibrationProblem | None = None,
+    refine: CalibrationProblem | Callable[..., CalibrationProblem] | None = None,
     stop: StopRequest | None = None,
     executor=None,
 ) -> CalibrationResult:
@@ -512,7 +513,9 @@ def calibrate(
     data and pairing): every end is re-evaluated on it, those within 5 % of the best are
     polished on it (Nelder-Mead, 60 d evaluations) unless within 1 % of the best with an exact
     objective that agrees with the surrogate's to 1 %, and the result (objectives, table) is
-    that of ``refine``; ``evaluations`` counts both models' evaluations.
+    that of ``refine``; ``evaluations`` counts both models' evaluations.  Or a function
+    (ends theta (n, d) SI, their objectives (n,)) -> that problem, called once when the starts
+    have ended (a surrogate made exact where they ended: ``pipelines.calibrate``).
     stop : the run's ``compute.stop.StopRequest``, checked before each start (None: none).
     executor : where the starts (and the refine polishes) run, one task each
     (``compute.executors``; None: in this process); the result is the same bits on any.
@@ -527,6 +530,8 @@ def calibrate(
     job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest())
     ends, objectives = _local_fits(job, u_starts, counter, executor)
     if refine is not None:
+        if callable(refine):
+            refine = refine(box.theta_from_u(np.array(ends)), np.array(objectives))
         ends, objectives = _refined(refine, problem, counter, ends, objectives, executor)
         problem = refine
     ends = np.array(ends)

@@ -24,7 +24,8 @@ from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.fe.model import FEModel
 from bayesupdate.fe.reduced.affine import AffineDecomposition
 from bayesupdate.fe.reduced.rigid import compressed_stiffness, rigid_energy
-from bayesupdate.fe.reduced.sensitivity import static_corrections
+from bayesupdate.fe.reduced.sensitivity import SHIFT, static_corrections
+from bayesupdate.fe.sparse_modal import ModalSettings, factorize, solve_reduced_modes
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,6 +108,8 @@ def _solve_point(shared: tuple, row: np.ndarray):
     fe, names, n_modes, decomposition = shared
     params = dict(zip(names, map(float, row), strict=True))
     try:
+        if decomposition is not None and _shares_factorisation(fe):
+            return _snapshot(fe, decomposition, params, n_modes)
         sol = fe.solve(params, n_modes).modes
         if decomposition is None:
             return sol.frequencies_hz, sol.shapes
@@ -114,6 +117,44 @@ def _solve_point(shared: tuple, row: np.ndarray):
     except (BayesUpdateError, np.linalg.LinAlgError):
         return None
     return sol.frequencies_hz, np.concatenate([sol.shapes, extra], axis=1)
+
+
+def _modal_settings(fe: FEModel, n_modes: int) -> ModalSettings:
+    """The ``ModalSettings`` of ``FEModel.solve`` on the sparse path (a SUPORT deck's rigid
+    set from the structure's metadata)."""
+    rigid_set = fe.structure.metadata.get("rigid_set", "zero_energy")
+    return ModalSettings(n_modes=n_modes, rigid_set=rigid_set)
+
+
+def _shares_factorisation(fe: FEModel) -> bool:
+    """Whether a snapshot of ``fe`` is solved by shift-invert Lanczos (the sparse path, above
+    ``dense_below`` independent DOFs) with the sensitivities' shift, so that both can use one
+    factorisation of K - sigma M."""
+    g = fe.general
+    settings = ModalSettings()
+    return (
+        g is not None
+        and settings.shift == SHIFT
+        and g.transform.independent.size >= settings.dense_below
+    )
+
+
+def _snapshot(fe: FEModel, decomposition: AffineDecomposition, params, n_modes: int):
+    """(frequencies (n_modes,) [Hz], [modes, design-sensitivity vectors] (n_dof, k)) at
+    ``params``: the modes of ``FEModel.solve`` (same assembly, constraints and solver) and
+    ``static_corrections`` from the one factorisation of T^T (K - sigma M) T the Lanczos
+    iteration made, instead of a second assembly and factorisation."""
+    g = fe.general
+    tr = g.transform
+    K, M = fe.matrices(params)
+    Kf, Mf = tr.reduce(K), tr.reduce(M)
+    settings = _modal_settings(fe, n_modes)
+    solve = factorize((Kf - settings.shift * Mf).tocsc(), settings.factorization)
+    lam, phi = solve_reduced_modes(Kf, Mf, g.rigid, settings, tr.independent, solve)[:2]
+    shapes = np.asarray(tr.expand(phi))
+    extra = static_corrections(fe, decomposition, params, lam, shapes, solve=solve)
+    freqs = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+    return freqs, np.concatenate([shapes, extra], axis=1)
 
 
 def full_solves(

@@ -74,17 +74,21 @@ def static_corrections(
     params: Mapping[str, float],
     eigenvalues: np.ndarray,
     shapes: np.ndarray,
+    solve=None,
 ) -> np.ndarray:
     """(n_dof, n_params * m) static corrections X_ij of the module docstring at ``params``
     (all parameters, SI) for the modes ``shapes`` (n_dof, m) with ``eigenvalues`` (m,)
-    [rad^2/s^2]; full-DOF vectors that satisfy the supports and rigid elements (u = T q)."""
+    [rad^2/s^2]; full-DOF vectors that satisfy the supports and rigid elements (u = T q).
+    solve : the factorisation of T^T (K - SHIFT M) T at ``params`` that the snapshot's eigen-solve
+    made (``sparse_modal.factorize``; None: made here)."""
     theta = np.array([params[k] for k in decomposition.names], dtype=float)
     dK, dM = coefficient_derivatives(decomposition, theta)
-    K, M = fe.matrices(params)
     g = fe.general
     T = None if g is None else g.transform.T
-    A = K - SHIFT * M if T is None else T.T @ ((K - SHIFT * M) @ T)
-    solve = factorize(A.tocsc())
+    if solve is None:
+        K, M = fe.matrices(params)
+        A = K - SHIFT * M if T is None else T.T @ ((K - SHIFT * M) @ T)
+        solve = factorize(A.tocsc())
     out = []
     for j in range(theta.size):
         load = apply_terms(decomposition.k_stacks, dK[j], shapes)

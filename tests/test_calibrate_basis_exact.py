@@ -100,8 +100,10 @@ def test_the_basis_is_exact_at_the_best_end_and_few_full_solves_are_made(problem
     assert (
         np.max(np.abs(exact.checked.predict_frequencies_batch(best, problem.names) / f - 1)) < 1e-9
     )
-    # certify_at (its check and the enrichment's shapes) and the final evaluation: 3 full solves,
-    # against 60 d per end near the best on full solves
+    # certify_at (its check and the enrichment's shapes) and the final evaluation: 3 full solves.
+    # The path on full solves re-evaluates each distinct end once and skips the polish of ends
+    # whose full and reduced objectives agree to 1 % (``optimize._refined``): 5 full solves here;
+    # before that rule it polished with 60 d full solves per end near the best
     assert solves["basis"] == 3
-    assert solves["full"] > 100 * solves["basis"]
+    assert solves["full"] == 5
     assert basis.starts == both[0].starts

@@ -14,9 +14,9 @@ modes; the Lanczos operator is restricted to their M-orthogonal complement
 below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalised: the value its
 eigenvalue would have without any cancellation between DOFs) is a mechanism and is reported with
 the DOFs
-that move.  Small models (below ``ModalSettings.dense_below`` DOFs) use a banded shift-invert block
-Krylov on the same complement (``fe.eigen_small``, residual-checked), or dense LAPACK where
-they are too small for it.
+that move.  Small models (below ``ModalSettings.dense_below`` DOFs) use dense LAPACK on the same
+complement, or (``ModalSettings.small_method`` "krylov") a banded shift-invert block Krylov
+on it (``fe.eigen_small``, residual-checked).
 
 Springs to ground: the allowed rigid motions then carry energy and come out of the iteration as
 low modes.  They are *suspension* modes and, as on the beam path (``fe.eigensolve``), elastic
@@ -166,9 +166,9 @@ class ModalSettings:
     "cholmod" (an error without scikit-sparse) or "superlu"; rigid_set : "zero_energy" (the
     default: suspension modes on springs to ground are elastic modes) or "rigid_motions" (every
     allowed rigid motion is a rigid mode, as MSC Nastran's SUPORT makes it; module docstring);
-    small_method : below dense_below, "krylov" (banded shift-invert block Krylov,
-    ``fe.eigen_small``, residual-checked, dense LAPACK where the pencil is too small for it or it
-    does not converge) or "dense" (LAPACK always).
+    small_method : below dense_below, "dense" (LAPACK) or "krylov" (banded shift-invert block
+    Krylov, ``fe.eigen_small``, residual-checked; dense LAPACK where the pencil is too small for
+    it or it does not converge; ``NastranModel``'s choice).
     """
 
     n_modes: int = 20
@@ -179,7 +179,7 @@ class ModalSettings:
     seed: int = 0
     factorization: str = "auto"
     rigid_set: str = "zero_energy"
-    small_method: str = "krylov"
+    small_method: str = "dense"
 
     def __post_init__(self):
         if not (self.shift < 0 and np.isfinite(self.shift)):
@@ -317,9 +317,10 @@ def _check_mechanism(lam, phi, zero, free):
 
 
 def _small_modes(Kf, Mf, Rm, settings: ModalSettings):
-    """Below ``dense_below``: banded block Krylov (``fe.eigen_small``; ~3x faster than LAPACK at
-    350 DOFs) where the pencil is large enough for it, else or where it does not converge dense
-    LAPACK (which also reports a singular K - sigma M)."""
+    """Below ``dense_below``: dense LAPACK, or for ``small_method`` "krylov" the banded block
+    Krylov (``fe.eigen_small``; ~3x faster than LAPACK at 350 DOFs) where the pencil is large
+    enough for it, with LAPACK where it does not converge (LAPACK also reports a singular
+    K - sigma M)."""
     ks = KrylovSettings()
     n_rigid = Rm.shape[1]
     if settings.small_method == "krylov" and worthwhile(Kf.shape[0], settings.n_modes, n_rigid, ks):

@@ -16,7 +16,8 @@ SUPORT, ``ModalSettings.rigid_set = "rigid_motions"``).  Dense LAPACK spends O(n
   constraint space and the massless DOFs follow their statically condensed values;
 * block Krylov (Ericsson & Ruhe, Math. Comp. 35 (1980) 1251; Bathe, *Finite Element
   Procedures*, 2014, sec. 11.5-11.6) from a seeded random block, M-orthonormalised by classical
-  Gram-Schmidt twice (Giraud et al., Numer. Math. 101 (2005) 87) and Cholesky QR;
+  Gram-Schmidt twice (Giraud et al., Numer. Math. 101 (2005) 87) and the eigen-decomposition
+  of each block's M-Gram matrix;
 * Rayleigh-Ritz on the basis V (V^T M V = I); a Ritz pair is accepted when its residual
   r = K x - lambda M x, with its component along M Rm removed (the constraint's Lagrange
   multiplier), is below ``tol`` x |lambda| ||M x|| (the eigenvalue error is quadratic in it,
@@ -48,17 +49,15 @@ class KrylovSettings:
 
     block : vectors per Krylov block (at least 1); max_blocks : blocks before giving up (None is
     returned); tol : accepted relative residual ||r|| / (|lambda| ||M x||) of every wanted mode;
-    seed : of the random start block; min_size : smallest pencil (n) worth the iteration, in
-    units of (n_modes + r + block) (below it dense LAPACK is as fast); ritz_from : basis size,
-    in units of n_modes, of the first Rayleigh-Ritz step of a cold start (each step costs about
-    as much as the blocks before it; later steps follow every block).
+    seed : of the random start block; ritz_from : basis size, in units of n_modes, of the first
+    Rayleigh-Ritz step of a cold start (each step costs about as much as the blocks before it;
+    later steps follow every block).
     """
 
     block: int = 8
     max_blocks: int = 40
     tol: float = 1e-5
     seed: int = 0
-    min_size: float = 4.0
     ritz_from: float = 3.5
 
 
@@ -87,8 +86,9 @@ class BandCholesky:
 
 
 def worthwhile(n: int, n_modes: int, n_rigid: int, settings: KrylovSettings) -> bool:
-    """True if a pencil of n DOFs is large enough for the iteration to beat dense LAPACK."""
-    return n >= settings.min_size * (n_modes + n_rigid + settings.block)
+    """True if a pencil of n DOFs is large enough for the iteration: twice the basis it needs
+    (its basis is capped at n / 2; below that dense LAPACK costs about as much)."""
+    return n >= 2 * (settings.ritz_from * n_modes + n_rigid + settings.block)
 
 
 def krylov_modes(Kf, Mf, Rm, n_modes: int, sigma: float, settings: KrylovSettings, start=None):
@@ -166,12 +166,13 @@ def _constrained_inverse(chol: BandCholesky, Mf, Rm):
 
 
 def _m_orthonormal_block(Y, Mf, V, MV):
-    """Y made M-orthogonal to V (classical Gram-Schmidt twice) and M-orthonormal (Cholesky QR),
-    (Y, M Y).  A block that has lost directions (a column reduced 1e-10 by Gram-Schmidt: a mode
-    the basis already holds, as from a warm start) keeps its well-conditioned part through the
-    eigen-decomposition of its scaled M-Gram matrix, and an ill-conditioned block is
-    orthonormalised a second time (Cholesky QR twice: Fukaya et al., SIAM J. Sci. Comput. 42
-    (2020) A477); (None, None) when nothing is left."""
+    """(Y, M Y): Y made M-orthogonal to V (classical Gram-Schmidt twice) and M-orthonormal
+    through the eigen-decomposition of its M-Gram matrix scaled to unit diagonal, keeping its
+    well-conditioned part: columns that Gram-Schmidt reduces by 1e-10 (a mode the basis already
+    holds, as from a warm start) and directions below 1e-12 of the largest are dropped.  A
+    block whose Gram matrix had a condition above 1e4 is orthonormalised a second time (as in
+    Cholesky QR twice: Fukaya et al., SIAM J. Sci. Comput. 42 (2020) A477).  (None, None) when
+    nothing is left."""
     before = np.einsum("ij,ij->j", Y, Y)
     for _ in range(2):
         Y = Y - V @ (MV.T @ Y)

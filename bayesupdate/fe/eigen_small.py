@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg.lapack import dpbtrf, dpbtrs
+from scipy.linalg.lapack import dpbtrf, dpbtrs, dtrtri
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 
@@ -166,18 +166,28 @@ def _constrained_inverse(chol: BandCholesky, Mf, Rm):
 
 
 def _m_orthonormal_block(Y, Mf, V, MV):
-    """(Y, M Y): Y made M-orthogonal to V (classical Gram-Schmidt twice) and M-orthonormal
-    through the eigen-decomposition of its M-Gram matrix scaled to unit diagonal, keeping its
-    well-conditioned part: columns that Gram-Schmidt reduces by 1e-10 (a mode the basis already
+    """(Y, M Y): Y made M-orthogonal to V (classical Gram-Schmidt twice) and M-orthonormal, by
+    Cholesky QR where its M-Gram matrix has a condition below 1e4, else through the
+    eigen-decomposition of that matrix scaled to unit diagonal, keeping its well-conditioned
+    part: columns that Gram-Schmidt reduces by 1e-10 (a mode the basis already
     holds, as from a warm start) and directions below 1e-12 of the largest are dropped.  A
     block whose Gram matrix had a condition above 1e4 is orthonormalised a second time (as in
     Cholesky QR twice: Fukaya et al., SIAM J. Sci. Comput. 42 (2020) A477).  (None, None) when
     nothing is left."""
-    before = np.einsum("ij,ij->j", Y, Y)
+    Y0 = Y
     for _ in range(2):
         Y = Y - V @ (MV.T @ Y)
-    Y = Y[:, np.einsum("ij,ij->j", Y, Y) > 1e-20 * before]
     MY = Mf @ Y
+    try:  # the usual case, a well-conditioned block: Cholesky QR
+        L = np.linalg.cholesky(Y.T @ MY)
+        d = np.diag(L)
+        if d.min() > 1e-2 * d.max():  # condition <= 1e4: orthonormal to round-off
+            C = dtrtri(L, lower=1)[0].T
+            return Y @ C, MY @ C
+    except np.linalg.LinAlgError:
+        pass
+    live = np.einsum("ij,ij->j", Y, Y) > 1e-20 * np.einsum("ij,ij->j", Y0, Y0)
+    Y, MY = Y[:, live], MY[:, live]
     for _ in range(2):
         if Y.shape[1] == 0:
             return None, None

@@ -14,8 +14,10 @@ machine shared with other jobs (the wall time also counts waits for a core):
   commit itself: ``--before-only`` with ``PYTHONPATH=<old checkout>``), and the largest
   relative difference of their frequencies;
 * the parts of a solve: the assembly (``model.matrices``) and the eigen-solve alone on the
-  same matrices, dense LAPACK (the default below ``ModalSettings.dense_below`` DOFs) against
-  shift-invert Lanczos, for 20 and for 6 modes; the top of a profile of the solve;
+  same matrices, the banded block Krylov (``fe.eigen_small``: a deck's default below
+  ``ModalSettings.dense_below`` DOFs, ``NastranModel.small_method``), dense LAPACK (the default
+  before it) and shift-invert Lanczos, for 20 and for 6 modes; the top of a profile of the
+  solve (every route on these matrices side by side: ``benchmarks/deck_eigen_routes.py``);
 * the certified reduced basis (``fe.reduced``; the three fields enter K and M non-linearly, so
   each is interpolated in log(theta), ``LineGroup``): its build time, size and certified error,
   and a reduced solve (``predict``, with shapes and mass) and a batched one per point;
@@ -91,6 +93,9 @@ def before_after(fe, repeats: int) -> None:
     print(f"line fields on records: {g.fields is not None} {g.fields_note}")
     after = [fe.solve(p, N_MODES).frequencies_hz for p in pts]
     t_after = [median_ms(lambda p=p: fe.solve(p, N_MODES), repeats) for p in pts]
+    dense = [fe.solve(p, N_MODES, method="dense").frequencies_hz for p in pts]
+    t_dense = [median_ms(lambda p=p: fe.solve(p, N_MODES, method="dense"), repeats) for p in pts]
+    dense_miss = max(float(np.max(np.abs(a / b - 1))) for a, b in zip(after, dense, strict=True))
     reference = LineAssembler(fe.structure, fe._shell_keys(), fe.bdf, fe.bindings, fe.deck,
                               fe._defaults, fe._bounds, fast=False)  # fmt: skip
     fe._general = reference
@@ -103,6 +108,9 @@ def before_after(fe, repeats: int) -> None:
     print(f"full solve ({N_MODES} modes) per point, median CPU [ms]:")
     print(f"  before (cards re-converted each solve): {np.round(t_before, 1)}")
     print(f"  after  (records + vectorised kernels):  {np.round(t_after, 1)}")
+    print(f"  after, with dense LAPACK (the eigen-solve before fe.eigen_small): "
+          f"{np.round(t_dense, 1)}; frequencies vs the default "
+          f"{dense_miss:.1e}")  # fmt: skip
     print(f"  frequencies after vs before: largest relative difference {miss:.1e}")
 
 
@@ -118,16 +126,20 @@ def parts(fe, repeats: int) -> None:
           f"{t_lines:.2f} ms")  # fmt: skip
     K, M = fe.matrices(p)
     st = ModalSettings(rigid_set=fe.structure.metadata.get("rigid_set", "zero_energy"))
+    methods = {
+        "Krylov": replace(st, dense_below=10**9, small_method="krylov"),
+        "dense": replace(st, dense_below=10**9, small_method="dense"),
+        "Lanczos": replace(st, dense_below=0),
+    }
     for k in (N_MODES, 6):
-        dense = median_ms(lambda k=k: g.solve(K, M, k, settings=replace(st, dense_below=10**9)),
-                          repeats)  # fmt: skip
-        lanczos = median_ms(lambda k=k: g.solve(K, M, k, settings=replace(st, dense_below=0)),
-                            repeats)  # fmt: skip
-        fd = g.solve(K, M, k, settings=replace(st, dense_below=10**9)).frequencies_hz
-        fl = g.solve(K, M, k, settings=replace(st, dense_below=0)).frequencies_hz
+        t = {m: median_ms(lambda k=k, s=s: g.solve(K, M, k, settings=s), repeats)
+             for m, s in methods.items()}  # fmt: skip
+        f = {m: g.solve(K, M, k, settings=s).frequencies_hz for m, s in methods.items()}
         print(
-            f"eigen-solve alone, {k} modes, median CPU [ms]: dense {dense:.1f}, Lanczos "
-            f"{lanczos:.1f} (frequencies differ by {np.abs(fd / fl - 1).max():.1e})"
+            f"eigen-solve alone, {k} modes, median CPU [ms]: block Krylov {t['Krylov']:.1f}, "
+            f"dense {t['dense']:.1f}, Lanczos {t['Lanczos']:.1f} (frequencies vs dense: "
+            f"Krylov {np.abs(f['Krylov'] / f['dense'] - 1).max():.1e}, "
+            f"Lanczos {np.abs(f['Lanczos'] / f['dense'] - 1).max():.1e})"
         )
     prof = cProfile.Profile()
     prof.runcall(lambda: [fe.solve(p, N_MODES) for _ in range(repeats)])

@@ -172,7 +172,7 @@ class GeneralAssembler:
         tr = self.transform
         settings = replace(settings or ModalSettings(), n_modes=n_modes)
         if dense:
-            settings = replace(settings, dense_below=tr.independent.size + 1)
+            settings = replace(settings, dense_below=tr.independent.size + 1, small_method="dense")
         lam, phi, Rm, lam_r = solve_reduced_modes(
             tr.reduce(K),
             tr.reduce(M),

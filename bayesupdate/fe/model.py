@@ -173,6 +173,10 @@ class FEModel:
     bounds : name -> (low, high).  Unbound names are rejected with the list of known ones.
     """
 
+    #: solver of the general path below ``ModalSettings.dense_below`` DOFs
+    #: (``ModalSettings.small_method``; ``NastranModel`` uses the banded block Krylov)
+    small_method = "dense"
+
     def __init__(
         self,
         structure: Structure,
@@ -455,7 +459,10 @@ class FEModel:
         K, M, elem = g.assemble(props, shell_props)
         # a structure may ask for MSC's SUPORT convention (metadata "rigid_set": the Nastran
         # reader sets it for a deck with SUPORT; ``fe.sparse_modal.ModalSettings``)
-        settings = ModalSettings(rigid_set=self.structure.metadata.get("rigid_set", "zero_energy"))
+        settings = ModalSettings(
+            rigid_set=self.structure.metadata.get("rigid_set", "zero_energy"),
+            small_method=self.small_method,
+        )
         modes = g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
         mass, cog = g.total_mass(M)
         en = general_energies(g, elem, shell_props, modes) if energies else None

@@ -14,7 +14,9 @@ modes; the Lanczos operator is restricted to their M-orthogonal complement
 below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalised: the value its
 eigenvalue would have without any cancellation between DOFs) is a mechanism and is reported with
 the DOFs
-that move.  Small models use dense LAPACK on the same complement.
+that move.  Small models (below ``ModalSettings.dense_below`` DOFs) use dense LAPACK on the same
+complement, or (``ModalSettings.small_method`` "krylov") a banded shift-invert block Krylov
+on it (``fe.eigen_small``, residual-checked).
 
 Springs to ground: the allowed rigid motions then carry energy and come out of the iteration as
 low modes.  They are *suspension* modes and, as on the beam path (``fe.eigensolve``), elastic
@@ -44,12 +46,15 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.eigen_small import KrylovSettings, krylov_modes, worthwhile
 from bayesupdate.fe.node_pattern import NODE_DOF, node_blocks, node_pattern
 
 COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
 FACTORIZATIONS = ("auto", "cholmod", "superlu")
 #: which modes are rigid: the zero-energy ones, or every allowed rigid motion (SUPORT)
 RIGID_SETS = ("zero_energy", "rigid_motions")
+#: solvers of a pencil below ``ModalSettings.dense_below`` DOFs
+SMALL_METHODS = ("krylov", "dense")
 
 
 def sorted_unique(keys: np.ndarray) -> np.ndarray:
@@ -160,7 +165,10 @@ class ModalSettings:
     vector; factorization : "auto" (CHOLMOD if scikit-sparse is installed, else SuperLU),
     "cholmod" (an error without scikit-sparse) or "superlu"; rigid_set : "zero_energy" (the
     default: suspension modes on springs to ground are elastic modes) or "rigid_motions" (every
-    allowed rigid motion is a rigid mode, as MSC Nastran's SUPORT makes it; module docstring).
+    allowed rigid motion is a rigid mode, as MSC Nastran's SUPORT makes it; module docstring);
+    small_method : below dense_below, "dense" (LAPACK) or "krylov" (banded shift-invert block
+    Krylov, ``fe.eigen_small``, residual-checked; dense LAPACK where the pencil is too small for
+    it or it does not converge; ``NastranModel``'s choice).
     """
 
     n_modes: int = 20
@@ -171,6 +179,7 @@ class ModalSettings:
     seed: int = 0
     factorization: str = "auto"
     rigid_set: str = "zero_energy"
+    small_method: str = "dense"
 
     def __post_init__(self):
         if not (self.shift < 0 and np.isfinite(self.shift)):
@@ -181,6 +190,11 @@ class ModalSettings:
             raise BayesUpdateError(
                 f"modal settings: factorization must be one of {FACTORIZATIONS}, "
                 f"got {self.factorization!r}"
+            )
+        if self.small_method not in SMALL_METHODS:
+            raise BayesUpdateError(
+                f"modal settings: small_method must be one of {SMALL_METHODS}, "
+                f"got {self.small_method!r}"
             )
         if self.rigid_set not in RIGID_SETS:
             raise BayesUpdateError(
@@ -281,7 +295,7 @@ def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None)
             f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
         )
     if Kf.shape[0] < settings.dense_below:
-        lam, phi = _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
+        lam, phi = _small_modes(Kf, Mf, Rm, settings)
     else:
         bordered = settings.rigid_set == "rigid_motions"
         lam, phi = _lanczos_modes(Kf, Mf, Rm, settings, bordered, solve)
@@ -303,6 +317,20 @@ def _check_mechanism(lam, phi, zero, free):
             f"modes the supports allow; the first moves {dof_names(free[order])}; connect or "
             "support these DOFs"
         )
+
+
+def _small_modes(Kf, Mf, Rm, settings: ModalSettings):
+    """Below ``dense_below``: dense LAPACK, or for ``small_method`` "krylov" the banded block
+    Krylov (``fe.eigen_small``; ~3x faster than LAPACK at 350 DOFs) where the pencil is large
+    enough for it, with LAPACK where it does not converge (LAPACK also reports a singular
+    K - sigma M)."""
+    ks = KrylovSettings()
+    n_rigid = Rm.shape[1]
+    if settings.small_method == "krylov" and worthwhile(Kf.shape[0], settings.n_modes, n_rigid, ks):
+        out = krylov_modes(Kf, Mf, Rm, settings.n_modes, settings.shift, ks)
+        if out is not None:
+            return out
+    return _dense_modes(Kf, Mf, Rm, settings.n_modes, settings.shift)
 
 
 def _dense_modes(Kf, Mf, Rm, n_modes, sigma):

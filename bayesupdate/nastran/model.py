@@ -28,6 +28,10 @@ class NastranModel(FEModel):
     ``bdf`` its read cards (``deck.Deck``; needed when a binding acts on line elements:
     ``lines``)."""
 
+    #: a deck of a few hundred DOFs: banded block Krylov, ~3x faster than dense LAPACK at the
+    #: mAEWing1 deck's 354 (``fe.eigen_small``; ``benchmarks/deck_eigen_routes.py``)
+    small_method = "krylov"
+
     def __init__(self, structure, bindings, defaults, bounds, name="deck", deck="", bdf=None):
         self.deck, self.bdf = str(deck), bdf
         super().__init__(structure, bindings, defaults, bounds, name=name)

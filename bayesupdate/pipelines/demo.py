@@ -77,6 +77,15 @@ class DemoSettings:
         return 16 if self.quick else 32
 
     @property
+    def exact_polish(self) -> bool:
+        """Whether the beam exhaust's optima (its seed optimum and the virtual test's) have their
+        ends polished again on the full model (``bayesupdate calibrate``'s path) after the
+        Nelder-Mead polish on the certified basis.  Not in a quick run: on the beam's seed
+        optimum (the quick demo, seed 0) that second polish cost 8.6 of its 23.1 s CPU and
+        left Expr on the basis at 0.06696 (0.06731 by a full solve at the basis's optimum)."""
+        return not self.quick
+
+    @property
     def steps(self) -> int:
         """Step budget; the sampler stops earlier once R-hat, ESS and 50 tau are met.  The
         shell seed case's mixture, fitted in the unit box (``moves.staged``), converges in
@@ -112,7 +121,8 @@ class OptimumPart:
 
     name : the model.  calibration : the optimum (``CalibrationResult``).  polished : its ends
     polished on the full model (the beam's ``run_calibration``) or not (the shell's, as
-    ``run_sampling`` places its walkers).  front : ``inference.pareto_front_mass``'s points,
+    ``run_sampling`` places its walkers; the beam's in a quick run, polished on its basis
+    only, ``DemoSettings.exact_polish``).  front : ``inference.pareto_front_mass``'s points,
     one per ``FRONT_WEIGHTS``.  basis : the basis's ``summary()`` with its build "wall_s",
     "cpu_s" and "error_at_optimum" (a full solve there), or None without a basis.  search, rom:
     the problem on that basis and the basis (``surrogates.sampling_problem``), for
@@ -231,7 +241,8 @@ def run_demo(
     step(next(names))
     shell_check = check_at_density(prepared, seed_optimum.calibration)
     step(next(names))
-    beam_optimum = optimum_part(prepare(_study(settings, "paper:ema", BEAM_MODEL)), polished=True)
+    beam = prepare(_study(settings, "paper:ema", BEAM_MODEL))
+    beam_optimum = optimum_part(beam, polished=True, exact=settings.exact_polish)
     seed_discovery = None
     if not settings.quick:
         step(next(names))
@@ -288,13 +299,14 @@ def fe_part(model: dict) -> FePart:
 
 
 def optimum_part(
-    prepared: PreparedStudy, polished: bool, weights: tuple = FRONT_WEIGHTS
+    prepared: PreparedStudy, polished: bool, weights: tuple = FRONT_WEIGHTS, exact: bool = True
 ) -> OptimumPart:
     """The optimum against the study's data and the front (one fit per mass-term weight in
     ``weights``), both on the certified basis that ``run_sampling`` builds for this study
     (``pipelines.surrogates.sampling_problem``).  ``polished``: as ``run_calibration`` (ends
-    polished on the full model), else as ``run_sampling`` places its walkers (no polish, the
-    basis checked at the optimum by a full solve)."""
+    polished on the basis, then on the full model; with ``exact=False`` on the basis only),
+    else as ``run_sampling`` places its walkers (no polish, the basis checked at the optimum
+    by a full solve)."""
     import time
 
     from bayesupdate.inference.optimize import (
@@ -312,7 +324,7 @@ def optimum_part(
         starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design,
         polish=opt.polish if polished else False,
     )  # fmt: skip
-    refine = prepared.problem if polished and rom is not None else None
+    refine = prepared.problem if polished and exact and rom is not None else None
     calibration = calibrate(search, fit, refine=refine)
     basis = None
     if rom is not None:
@@ -323,7 +335,8 @@ def optimum_part(
         polish=False,
     )  # fmt: skip
     name = prepared.study.model.source
-    return OptimumPart(name, calibration, polished, tuple(front), basis, search, rom)
+    on_full = polished and (refine is not None or rom is None)
+    return OptimumPart(name, calibration, on_full, tuple(front), basis, search, rom)
 
 
 def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) -> ShellCheck:
@@ -348,16 +361,20 @@ def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) ->
 
 
 def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
-    """The virtual test on the beam exhaust: its optimum (``run_calibration``), then the
-    posterior, written to ``path`` and judged by the stored reference of the default virtual
-    test (it applies only when ``data_source`` holds that test's modes)."""
+    """The virtual test on the beam exhaust: its optimum (``run_calibration``; in a quick run
+    polished on the certified basis only, ``DemoSettings.exact_polish``, which the sampler then
+    reuses), then the posterior, written to ``path`` and judged by the stored reference of the
+    default virtual test (it applies only when ``data_source`` holds that test's modes)."""
     from bayesupdate.pipelines.calibrate import run_calibration
 
     prepared = prepare(_study(settings, data_source))
-    calibration = run_calibration(prepared)
     reference = demo_reference("virtual")
     options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
-    run = run_sampling(prepared, options, calibration=calibration)
+    if settings.exact_polish:
+        run = run_sampling(prepared, options, calibration=run_calibration(prepared))
+    else:
+        part = optimum_part(prepared, polished=True, weights=(), exact=False)
+        run = run_sampling(prepared, options, part.calibration, (part.search, part.rom))
     return CalibrationPart(run, path, prepared.problem)
 
 
@@ -407,7 +424,8 @@ def side_by_side(results: DemoResults, solves: int = 3) -> dict:
     from bayesupdate.pipelines.exhaust_comparison import calibrated_in_run, demo_comparison
 
     shell = f"this run: certified basis, {results.settings.starts} starts, not polished"
-    beam = f"this run: certified basis, {results.settings.starts} starts, polished on full solves"
+    where = "full solves" if results.beam_optimum.polished else "the certified basis"
+    beam = f"this run: certified basis, {results.settings.starts} starts, polished on {where}"
     calibrated = {
         "exhaust": calibrated_in_run(results.beam_optimum, beam),
         "exhaust_shell": calibrated_in_run(results.seed_optimum, shell),

@@ -15,7 +15,7 @@ from bayesupdate.cli import main
 from bayesupdate.ema.modal_h5 import write_modal_h5
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
-from bayesupdate.paper import TABLE2_EMA_HZ
+from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ
 
 
 def _json(capsys, argv) -> dict:

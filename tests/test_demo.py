@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bayesupdate import paper
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines import demo
 from bayesupdate.pipelines.exhaust_comparison import (
     Calibrated,

@@ -222,7 +222,7 @@ def mpc_reasons(modes) -> list[str | None]:
     return [None if np.isfinite(v) else "not finite" for v in modes.mpc]
 
 
-CUT_KEYS = ("cut_hz", "cut_damping", "cut_end")
+_CUT_KEYS = ("cut_hz", "cut_damping", "cut_end")
 
 
 def identify_summary(result: Identification, out, notes, report=None) -> dict:
@@ -252,7 +252,7 @@ def identify_summary(result: Identification, out, notes, report=None) -> dict:
         # resonances an end of the range cuts: fitted, not reported as modes (ema.identify)
         "cut": [
             {"frequency_hz": float(f), "damping_ratio": float(z), "end": e}
-            for f, z, e in zip(*(result.extra[k] for k in CUT_KEYS), strict=True)
+            for f, z, e in zip(*(result.extra[k] for k in _CUT_KEYS), strict=True)
         ],
         "out": str(out),
         "notes": list(notes),

@@ -708,21 +708,19 @@ def discover(
 ) -> DiscoveryResult:
     """Run discovery (module docstring).
 
-    model : an ``FEModel`` (effects extend its structure).  data : ``ModalData``.
-    parameters : the design variables to calibrate (as ``build_problem``; None: model defaults).
-    baseline : a ``CalibrationResult`` of the same problem to start from (else calibrated here).
+    model : an ``FEModel`` (effects extend its structure).  data : ``ModalData``.  parameters :
+    the design variables to calibrate (as ``build_problem``; None: model defaults).  baseline : a
+    ``CalibrationResult`` of the same problem to start from (else calibrated here).
     predictive_rel_var : (m,) posterior-predictive variance of the relative frequencies, if a
-    posterior is available (widens the flagging z-scores).
-    progress : optional callable(str) for progress messages.
-    executor : where the baseline's starts, the score tests and the refits run
-    (``compute.executors``; None: in this process); the result is the same bits on every executor.
+    posterior is available (widens the flagging z-scores).  progress : optional callable(str)
+    for progress messages.  executor : where the baseline's starts, the score tests and the
+    refits run (``compute.executors``; None: in this process); the same bits on every executor.
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
     frequencies against the model's sorted ones: the honest likelihood without shapes; shape
-    tracking against the reference design, the calibration default, puts a wall in the objective
-    where a hidden effect reorders two close modes, and a refit stalls there).
-    rules : a MAC pairing's threshold and frequency window (``inference.pairing.PairingRules``;
-    None: every test mode is paired): test modes refused at the reference design are left out
-    (``discovery_problem``) and named in the result's ``pairing``.
+    tracking, the calibration default, puts a wall in the objective where a hidden effect
+    reorders two close modes, and a refit stalls there).  rules : a MAC pairing's
+    ``PairingRules`` (None: every test mode is paired): test modes refused at the reference
+    design are left out and named in the result's ``pairing`` (``discovery_problem``).
     """
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
@@ -742,20 +740,9 @@ def discover(
     verdict, reason, named, ambiguous = _verdict(base_fit, fits, flags, len(where.scores), settings)
     say(f"verdict: {verdict} ({reason})")
     return DiscoveryResult(
-        verdict=verdict,
-        reason=reason,
-        baseline=base_fit,
-        noise=base_fit.space.noise,
-        flags=flags,
-        localization=where,
-        fits=fits,
-        named=named,
-        ambiguous_with=ambiguous,
-        settings=settings,
-        wall_s=time.perf_counter() - t0,
-        data_source=data.source,
-        model_name=getattr(model, "name", ""),
-        timings=timings,
-        reduced=reduced_summary(base_fit, where, fits),
-        pairing=record,
-    )
+        verdict=verdict, reason=reason, baseline=base_fit, noise=base_fit.space.noise,
+        flags=flags, localization=where, fits=fits, named=named, ambiguous_with=ambiguous,
+        settings=settings, wall_s=time.perf_counter() - t0, data_source=data.source,
+        model_name=getattr(model, "name", ""), timings=timings,
+        reduced=reduced_summary(base_fit, where, fits), pairing=record,
+    )  # fmt: skip

@@ -19,7 +19,7 @@ _.propose  # inference/delayed_acceptance: emcee's Move API
 build_shear_building_model  # models/__init__ registry: "module:function" strings
 extended_model_from_result  # pipelines/model_source: public, named in results_io and README
 assemble_coo  # fe/sparse_modal: public assembly helper
-# the seed's tables (paper.py holds them all; the README quotes them)
+# the seed's tables (models/exhaust_paper.py holds them all; the README quotes them)
 TABLE3_OPTIMUM_PAPER
 EXPR_INITIAL_REPORTED
 # attributes pyfe3d's shell probe reads (benchmarks/shell_speed.py)

@@ -42,7 +42,9 @@ def _command_modules():
             yield importlib.import_module(f"bayesupdate.commands.{info.name}")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``bayesupdate`` parser: every command by name and help line; the arguments of
+    ``command`` only (a run parses one command's; None: every command's, e.g. for the docs)."""
     parser = _OneLineParser(
         prog="bayesupdate",
         description="Probabilistic FE model updating: modal solve, modal identification, "
@@ -59,25 +61,38 @@ def build_parser() -> argparse.ArgumentParser:
             description=getattr(module, "DESCRIPTION", module.HELP),
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
-        module.add_arguments(p)
-        if module.NAME != "cache":
-            p.add_argument(
-                "--no-cache",
-                action="store_true",
-                help="neither read nor write the on-disk cache of reduced bases (see: cache)",
-            )
-        p.add_argument(
-            "--quiet",
-            action="store_true",
-            help="no progress on stderr (default: bars on a terminal, a line per phase else)",
-        )
+        if command is None or module.NAME == command:
+            _add_arguments(p, module)
         p.set_defaults(_run=module.run)
     return parser
 
 
+def _add_arguments(p, module) -> None:
+    """The command's own arguments, then --no-cache and --quiet."""
+    module.add_arguments(p)
+    if module.NAME != "cache":
+        p.add_argument(
+            "--no-cache",
+            action="store_true",
+            help="neither read nor write the on-disk cache of reduced bases (see: cache)",
+        )
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress on stderr (default: bars on a terminal, a line per phase else)",
+    )
+
+
+def _command_in(argv: list[str] | None) -> str | None:
+    """The command a command line names: its first word that is not an option (the top level
+    takes options without values only); None without one."""
+    words = sys.argv[1:] if argv is None else argv
+    return next((w for w in words if not w.startswith("-")), None)
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
-        parser = build_parser()
+        parser = build_parser(_command_in(argv))
         args = parser.parse_args(argv)
         if getattr(args, "_run", None) is None:
             parser.print_help()

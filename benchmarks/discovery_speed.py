@@ -23,7 +23,7 @@ from bayesupdate.discovery.results_io import extend_with_specs  # noqa: E402
 from bayesupdate.discovery.workflow import discover  # noqa: E402
 from bayesupdate.modal_data import noisy_modes  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
+from bayesupdate.models.exhaust_paper import TABLE3_OPTIMUM_SI  # noqa: E402
 
 HIDDEN = "joint_flexibility@cold_pipe/main_muffler:k_rot=1e3"
 NOISE = 0.003

@@ -48,7 +48,6 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from bayesupdate.inference.data import paper_ema  # noqa: E402
 from bayesupdate.inference.diagnostics import summarise  # noqa: E402
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noqa: E402
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
@@ -56,7 +55,7 @@ from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
 from bayesupdate.inference.problem import ObjectiveSpec, build_problem  # noqa: E402
 from bayesupdate.inference.sampling import SamplerSettings, sample_posterior  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import MEASURED_MASS_KG  # noqa: E402
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG, paper_ema  # noqa: E402
 from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior  # noqa: E402
 
 

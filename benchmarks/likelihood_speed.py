@@ -34,7 +34,7 @@ import numpy as np  # noqa: E402
 from bayesupdate.fe.batched_eigen import THREADS_VARIABLE, solver_threads  # noqa: E402
 from bayesupdate.fe.reduced import reduced_model_for  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import TABLE2_EMA_HZ, TABLE3_OPTIMUM_SI  # noqa: E402
+from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ, TABLE3_OPTIMUM_SI  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from reference_eigen import sygvd_elastic_eigenvalues  # noqa: E402

@@ -28,7 +28,7 @@ from hidden_effect_study import N_MODES, truth_model  # noqa: E402
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.problem import ObjectiveSpec, build_problem  # noqa: E402
 from bayesupdate.modal_data import ModalData  # noqa: E402
-from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
+from bayesupdate.models.exhaust_paper import TABLE3_OPTIMUM_SI  # noqa: E402
 
 NOISE = 0.003  # relative frequency noise of the study
 MASS_SD = 0.003  # relative sd of the weighed mass

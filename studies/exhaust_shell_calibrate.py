@@ -29,7 +29,7 @@ from bayesupdate.inference import (
     objective_expr,
 )
 from bayesupdate.models import get_model
-from bayesupdate.paper import (
+from bayesupdate.models.exhaust_paper import (
     DESIGN_VARIABLES,
     EXPR_FINAL_REPORTED,
     MEASURED_MASS_KG,

@@ -25,9 +25,9 @@ from scipy.optimize import least_squares
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import Assembler
 from bayesupdate.models.exhaust import mode_character
+from bayesupdate.models.exhaust_paper import OPTIMUM_MASS_KG, TABLE1_FEA_HZ, TABLE3_OPTIMUM_SI
 from bayesupdate.models.exhaust_shell import _shell_areas, build_exhaust_shell_model
 from bayesupdate.models.exhaust_shell_geometry import FIT_NAMES, FITS, SHELL_QUANTITIES
-from bayesupdate.paper import OPTIMUM_MASS_KG, TABLE1_FEA_HZ, TABLE3_OPTIMUM_SI
 
 LO = np.array([SHELL_QUANTITIES[n][1][0] for n in FIT_NAMES])
 HI = np.array([SHELL_QUANTITIES[n][1][1] for n in FIT_NAMES])

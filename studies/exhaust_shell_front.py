@@ -35,7 +35,7 @@ from bayesupdate.inference import (
     pareto_front_mass,
 )
 from bayesupdate.models import get_model
-from bayesupdate.paper import MEASURED_MASS_KG
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG
 
 
 def _problems(name: str, options: dict):

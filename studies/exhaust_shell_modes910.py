@@ -17,8 +17,8 @@ import numpy as np
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.models import exhaust_shell, get_model
 from bayesupdate.models.exhaust import fitted_geometry, mode_character
+from bayesupdate.models.exhaust_paper import TABLE1_FEA_HZ
 from bayesupdate.models.exhaust_shell_geometry import FITS, shell_geometry
-from bayesupdate.paper import TABLE1_FEA_HZ
 
 MESH = 16
 #: the variants start from the previous best (round collar, caps of the mantle's gauge)

@@ -14,8 +14,8 @@ import argparse
 
 import numpy as np
 
-from bayesupdate import paper
 from bayesupdate.correlation import mac_matrix
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.models import get_model
 
 

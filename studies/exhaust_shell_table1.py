@@ -15,7 +15,7 @@ import numpy as np
 from bayesupdate.correlation import mac_matrix
 from bayesupdate.models import get_model
 from bayesupdate.models.exhaust import mode_character
-from bayesupdate.paper import MEASURED_MASS_KG, TABLE1_FEA_HZ
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG, TABLE1_FEA_HZ
 
 
 def _characters(model, result) -> list[str]:

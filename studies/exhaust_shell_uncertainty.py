@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate.paper import DESIGN_VARIABLES, TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI
+from bayesupdate.models.exhaust_paper import DESIGN_VARIABLES, TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI
 
 
 def read_optima(paths) -> list[tuple[str, dict]]:

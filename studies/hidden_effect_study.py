@@ -51,7 +51,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from bayesupdate.paper import TABLE3_OPTIMUM_SI  # noqa: E402
+from bayesupdate.models.exhaust_paper import TABLE3_OPTIMUM_SI  # noqa: E402
 
 N_MODES = 12
 

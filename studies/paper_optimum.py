@@ -34,7 +34,7 @@ from bayesupdate.inference import (  # noqa: E402
     write_result,
 )
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import (  # noqa: E402
+from bayesupdate.models.exhaust_paper import (  # noqa: E402
     DESIGN_VARIABLES,
     EXPR_FINAL_REPORTED,
     MEASURED_MASS_KG,

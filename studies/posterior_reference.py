@@ -74,11 +74,11 @@ from bayesupdate.inference import (  # noqa: E402
     sample_posterior,
     summarise,
 )
-from bayesupdate.inference.data import paper_ema  # noqa: E402
 from bayesupdate.inference.moves import DefensiveProposal, fit_gaussian_mixture  # noqa: E402
 from bayesupdate.inference.reference_check import reference_errors, within_tolerance  # noqa: E402
 from bayesupdate.inference.sampling import sampler_space  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
+from bayesupdate.models.exhaust_paper import paper_ema  # noqa: E402
 from bayesupdate.pipelines.surrogates import (  # noqa: E402
     certify_rom,
     sampling_problem,

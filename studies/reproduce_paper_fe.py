@@ -27,7 +27,7 @@ from bayesupdate.atomic import atomic_path, check_output_path  # noqa: E402
 from bayesupdate.errors import BayesUpdateError  # noqa: E402
 from bayesupdate.models import exhaust_fit  # noqa: E402
 from bayesupdate.models.exhaust import GEOMETRY_FILES, fitted_geometry, load_geometries  # noqa: E402
-from bayesupdate.paper import OPTIMUM_MASS_KG, TABLE1_FEA_HZ, TABLE4_FINAL_HZ  # noqa: E402
+from bayesupdate.models.exhaust_paper import OPTIMUM_MASS_KG, TABLE1_FEA_HZ, TABLE4_FINAL_HZ  # noqa: E402
 
 PAPER_PLANES = {1: "H", 2: "V", 3: "H"}
 PAPER_NODES = {1: 2, 2: 2, 3: 3}

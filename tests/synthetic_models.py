@@ -36,7 +36,7 @@ def exhaust_like_model(n_points: int = 20, mass_kg: float = 12.0):
     ``mass_kg`` (phi^T M phi = 1).  Damping 0.5 % rising to 3 %.  Returns (natural_hz (12,),
     damping (12,), shapes (2 n_points, 12), labels ``1V..nV, 1H..nH``).
     """
-    from bayesupdate.paper import TABLE2_EMA_HZ, TABLE2_PLANE
+    from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ, TABLE2_PLANE
 
     x = (np.arange(n_points) + 0.5) / n_points
     phi = free_beam_shapes(x, 7)

@@ -21,7 +21,7 @@ from bayesupdate.inference import (  # noqa: E402
 from bayesupdate.inference.pairing import pair_batch  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 from bayesupdate.models.exhaust import JOINTS, joint_parameter  # noqa: E402
-from bayesupdate.paper import (  # noqa: E402
+from bayesupdate.models.exhaust_paper import (  # noqa: E402
     DESIGN_VARIABLES,
     MEASURED_MASS_KG,
     TABLE3_INITIAL_SI,

@@ -15,7 +15,7 @@ from bayesupdate.cli import main
 from bayesupdate.ema.modal_h5 import write_modal_h5
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
-from bayesupdate.paper import TABLE2_EMA_HZ
+from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ
 
 
 def _json(capsys, argv) -> dict:
@@ -249,3 +249,50 @@ def test_geometry_options_without_a_geometry_are_refused(capsys):
     code = main(["correlate", "--model", "exhaust", "--data", "paper:ema", "--length-unit", "mm"])
     err = capsys.readouterr().err
     assert code == 2 and "--length-unit and --pair-tolerance need --geometry" in err
+
+
+def test_data_modes_choose_the_test_modes_paired_and_reported(virtual, tmp_path, capsys):
+    """``[data] modes = [2, 5, 9]``: only those test modes are paired (by MAC: each with the
+    model mode of its own number, the test being the unchanged model) and reported, numbered as
+    in the file; the HDF5 file keeps the numbers."""
+    folder, data = virtual
+    study = tmp_path / "study.toml"
+    study.write_text(
+        f'[model]\nsource = "exhaust"\n[data]\nsource = "{folder / "virtual.h5"}"\n'
+        "modes = [9, 2, 5]\n"
+    )
+    h5 = tmp_path / "corr.h5"
+    out = _json(capsys, ["correlate", str(study), "--out", str(h5), "--json"])
+    assert [(m["test"], m["model"]) for m in out["modes"]] == [(2, 2), (5, 5), (9, 9)]
+    np.testing.assert_allclose([m["test_hz"] for m in out["modes"]], data.frequencies_hz[[1, 4, 8]])
+    assert len(out["mac"]) == 3 and out["unpaired_test"] == [] and out["refused"] == []
+    np.testing.assert_allclose([m["mac"] for m in out["modes"]], 1.0, atol=1e-6)
+    with h5py.File(h5) as fh:
+        assert fh["correlation/test_numbers"][()].tolist() == [2, 5, 9]
+
+
+def test_data_modes_without_shapes_pair_each_mode_with_the_model_mode_of_its_number(
+    tmp_path, capsys
+):
+    """Frequencies only (the seed's Table 2), modes 3 and 7: paired in order by their numbers
+    in the source (test 3 with model 3, not model 1)."""
+    study = tmp_path / "study.toml"
+    study.write_text('[model]\nsource = "exhaust"\n[data]\nsource = "paper:ema"\nmodes = [3, 7]\n')
+    out = _json(capsys, ["correlate", str(study), "--json"])
+    model_hz = get_model("exhaust").solve(None, 11).frequencies_hz
+    assert [(m["test"], m["model"]) for m in out["modes"]] == [(3, 3), (7, 7)]
+    np.testing.assert_allclose([m["model_hz"] for m in out["modes"]], model_hz[[2, 6]], rtol=1e-9)
+    np.testing.assert_allclose([m["test_hz"] for m in out["modes"]], TABLE2_EMA_HZ[[2, 6]])
+
+
+def test_a_data_mode_the_file_lacks_is_one_line_exit_2(virtual, tmp_path, capsys):
+    folder, _ = virtual
+    study = tmp_path / "study.toml"
+    study.write_text(
+        f'[model]\nsource = "exhaust"\n[data]\nsource = "{folder / "virtual.h5"}"\n'
+        "modes = [2, 13]\n"
+    )
+    assert main(["correlate", str(study), "--out", str(tmp_path / "c.h5")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "13" in err
+    assert not (tmp_path / "c.h5").exists()

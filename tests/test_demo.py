@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayesupdate import paper
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines import demo
 from bayesupdate.pipelines.exhaust_comparison import (
     Calibrated,

@@ -44,7 +44,7 @@ PUBLIC_MODULES = (
     "bayesupdate.modal_data",
     "bayesupdate.model_protocol",
     "bayesupdate.models",
-    "bayesupdate.paper",
+    "bayesupdate.models.exhaust_paper",
     "bayesupdate.units",
     "bayesupdate.inference.evaluators",
     "bayesupdate.fe.frames",

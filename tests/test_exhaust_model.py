@@ -17,7 +17,7 @@ from bayesupdate.models.exhaust import (
     load_geometries,
     mode_character,
 )
-from bayesupdate.paper import (
+from bayesupdate.models.exhaust_paper import (
     DESIGN_VARIABLES,
     MEASURED_MASS_KG,
     TABLE1_FEA_HZ,

@@ -22,9 +22,9 @@ from bayesupdate.correlation import mac_matrix
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.models import get_model
 from bayesupdate.models.exhaust import mode_character
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG, TABLE1_FEA_HZ
 from bayesupdate.models.exhaust_shell import _shell_areas
 from bayesupdate.models.exhaust_shell_mesh import oval_body
-from bayesupdate.paper import MEASURED_MASS_KG, TABLE1_FEA_HZ
 
 
 @pytest.fixture(scope="module")

@@ -175,13 +175,13 @@ def test_crash_while_writing_a_checkpoint_keeps_the_previous_checkpoint(tmp_path
         original(path, *args, **kwargs)
         snapshots.append(Path(path).read_bytes())
 
-    monkeypatch.setattr("bayesupdate.pipelines.sample.write_result", flaky)
+    monkeypatch.setattr(results, "write_result", flaky)
     assert main(["sample", str(study), "--out", str(out), "--no-progress"]) == 1
     assert out.read_bytes() == snapshots[-1]
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial" and h5["posterior/chain"].shape[0] == 100
     assert _files(tmp_path) == ["run.h5", "study.toml"]
-    monkeypatch.setattr("bayesupdate.pipelines.sample.write_result", original)
+    monkeypatch.setattr(results, "write_result", original)
     assert main(["sample", str(study), "--out", str(out), "--resume", "--no-progress"]) == 0
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "complete" and h5["posterior/chain"].shape[0] == 200
@@ -321,9 +321,9 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     """A SIGTERM that lands while the first checkpoint is being written (as on a loaded
     machine): the write completes, the run stops before the next block with the resume hint,
     exit 130, and --resume completes it."""
-    from bayesupdate.pipelines import sample as runner
+    from bayesupdate.inference import results
 
-    original = runner.write_result
+    original = results.write_result
     calls = []
 
     def signalled(path, *args, **kwargs):
@@ -333,7 +333,7 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
             time.sleep(0.05)
         original(path, *args, **kwargs)
 
-    monkeypatch.setattr(runner, "write_result", signalled)
+    monkeypatch.setattr(results, "write_result", signalled)
     study = tmp_path / "study.toml"
     study.write_text(STUDY.format(steps=200, check=50))
     out = tmp_path / "run.h5"
@@ -342,7 +342,7 @@ def test_a_stop_landing_in_a_checkpoint_write_ends_with_a_resumable_file(
     assert "stopped after 50 steps" in err and "--resume" in err, err
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial" and h5["posterior/chain"].shape[0] == 50
-    monkeypatch.setattr(runner, "write_result", original)
+    monkeypatch.setattr(results, "write_result", original)
     assert main(["sample", str(study), "--out", str(out), "--resume", "--no-progress"]) == 0
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "complete" and h5["posterior/chain"].shape[0] == 200

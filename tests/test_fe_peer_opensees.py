@@ -136,7 +136,7 @@ def test_exhaust_matches_opensees():
     """The built-in exhaust (elbow factor off, as OpenSees' Timoshenko beam cannot carry it with
     rotary inertia) at the paper's optimum design (seed Table 3)."""
     from bayesupdate.models import get_model
-    from bayesupdate.paper import TABLE3_OPTIMUM_SI
+    from bayesupdate.models.exhaust_paper import TABLE3_OPTIMUM_SI
 
     model = get_model("exhaust", elbow_flexibility=False)
     params = dict(TABLE3_OPTIMUM_SI)
@@ -168,7 +168,7 @@ def test_exhaust_like_for_like(beam, design):
     """The exhaust's K and M as OpenSees assembles them equal ours to round-off; through one solver
     their frequencies agree to ~1e-11, and OpenSees' own QZ solve is the part that differs more."""
     from bayesupdate.models import get_model
-    from bayesupdate.paper import TABLE3_OPTIMUM_SI
+    from bayesupdate.models.exhaust_paper import TABLE3_OPTIMUM_SI
 
     model = get_model("exhaust", elbow_flexibility=beam != "timoshenko")
     if beam != "timoshenko":

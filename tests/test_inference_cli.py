@@ -11,7 +11,7 @@ from bayesupdate.inference import load_modal_data, read_result, to_datatree
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS
 from bayesupdate.inference.sampling import check_schedule
-from bayesupdate.paper import TABLE2_EMA_HZ
+from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ
 
 STUDY = """
 [model]

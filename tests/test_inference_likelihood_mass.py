@@ -19,7 +19,7 @@ from bayesupdate.inference import (  # noqa: E402
 )
 from bayesupdate.inference.likelihood import mass_function  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import MEASURED_MASS_KG  # noqa: E402
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ from bayesupdate.inference import LikelihoodSpec, LogPosterior, ObjectiveSpec, b
 from bayesupdate.inference.problem import objective_expr
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
-from bayesupdate.paper import (
+from bayesupdate.models.exhaust_paper import (
     TABLE1_FEA_HZ,
     TABLE2_EMA_HZ,
     TABLE4_EMA_HZ,

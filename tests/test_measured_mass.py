@@ -10,10 +10,10 @@ import pytest
 from bayesupdate.cli import main
 from bayesupdate.config import parse_study
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.data import PAPER_MASS_SD_REL, load_modal_data
+from bayesupdate.inference.data import load_modal_data
 from bayesupdate.inference.results import read_result
 from bayesupdate.modal_data import ModalData
-from bayesupdate.paper import MEASURED_MASS_KG
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG, PAPER_MASS_SD_REL
 from bayesupdate.pipelines.study import DEFAULT_MASS_WEIGHT, prepare
 
 SHEAR_STUDY = """

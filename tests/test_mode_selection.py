@@ -154,16 +154,35 @@ def test_a_planted_wrong_mode_is_refused_and_named(planted, tmp_path, capsys):
         assert json.loads(h5.attrs["warnings_json"]) == []
 
 
-def test_discovery_leaves_the_refused_mode_out_too(planted):
+def test_discovery_leaves_the_refused_mode_out_too_with_one_reference_solve(planted):
+    """Discovery applies the study's pairing rules where it pairs (``discovery_problem``):
+    the planted mode 6 is refused and left out, the record names it, and setting the problem up
+    solves the model once (the reference design), not once to screen and again to pair."""
+    from bayesupdate.discovery.workflow import discovery_problem
     from bayesupdate.inference.data import load_modal_data
-    from bayesupdate.pipelines.discover import paired_data
-    from bayesupdate.pipelines.model_source import study_model
+    from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
     study = _study(planted)
     data = load_modal_data(planted)
-    kept, record = paired_data(study, study_model(study, data.dof_labels), data)
-    np.testing.assert_array_equal(kept.frequencies_hz, np.delete(data.frequencies_hz, 5))
+    model = study_model(study, data.dof_labels)
+    solves = []
+    predict = model.predict
+
+    def counted(*args, **kwargs):
+        solves.append(1)
+        return predict(*args, **kwargs)
+
+    object.__setattr__(model, "predict", counted)
+    parameters = problem_parameters(study.parameters)
+    problem, record = discovery_problem(model, data, parameters, rules=study.pairing.rules())
+    assert len(solves) == 1
+    np.testing.assert_array_equal(problem.data.frequencies_hz, np.delete(data.frequencies_hz, 5))
     assert [r["test_mode"] for r in record["refused"]] == [6]
+    assert record["method"] == "mac" and record["mac_threshold"] == 0.6
+    assert problem.test_modes == (1, 2, 3, 4, 5, 7)
+    # the candidates pair without a window, so the baseline does too (same pairing both sides)
+    assert problem.pairing.window is None
+    assert discovery_problem(model, data, parameters)[1] == {}  # no rules, no record
 
 
 def test_screening_names_each_reason_with_its_mac():

@@ -22,7 +22,7 @@ from bayesupdate.inference import (  # noqa: E402
 from bayesupdate.inference.mass_properties import MassPropertyTargets  # noqa: E402
 from bayesupdate.inference.parameter_space import EvaluationCount  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import MEASURED_MASS_KG  # noqa: E402
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG  # noqa: E402
 
 
 def _rows(u: np.ndarray) -> np.ndarray:

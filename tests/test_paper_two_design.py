@@ -36,7 +36,7 @@ from bayesupdate.models.exhaust import (  # noqa: E402
     load_geometries,
 )
 from bayesupdate.models.exhaust_fit import FIT_SETUPS, evaluate  # noqa: E402
-from bayesupdate.paper import (  # noqa: E402
+from bayesupdate.models.exhaust_paper import (  # noqa: E402
     DESIGN_VARIABLES,
     MEASURED_MASS_KG,
     OPTIMUM_MASS_KG,

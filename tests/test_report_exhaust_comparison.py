@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from bayesupdate import paper
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines.exhaust_comparison import (
     Calibrated,
     ExhaustRecord,

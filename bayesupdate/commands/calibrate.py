@@ -3,7 +3,17 @@
 import json
 import sys
 
-from bayesupdate.errors import BayesUpdateError
+from bayesupdate.commands._shared import (
+    add_compute_arguments,
+    add_full_argument,
+    add_study_arguments,
+    add_write_bdf_argument,
+    compute_from_args,
+    report_refused,
+    report_warnings,
+    study_from_args,
+    write_bdf,
+)
 
 NAME = "calibrate"
 HELP = "point optimum of the model against test frequencies (seed eq. 19), multi-start"
@@ -39,124 +49,6 @@ threshold or a pair outside the window at the optimum, fewer than half the start
 best."""
 
 
-def add_study_arguments(parser, sampling: bool = False) -> None:
-    """Arguments shared by calibrate and sample."""
-    parser.add_argument(
-        "study", nargs="?", help="TOML study file (docs/reference/study-file.md); optional"
-    )
-    parser.add_argument("--model", help="built-in model name or package.module:function")
-    parser.add_argument("--data", help="test data: paper:ema, a CSV frequency table, .h5 or .uff")
-    parser.add_argument("--out", help="result file (HDF5)")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing --out")
-    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    parser.add_argument("--seed", type=int, help="random seed (optimizer and sampler)")
-    parser.add_argument("--starts", type=int, help="number of optimizer starts")
-    parser.add_argument(
-        "--no-mass",
-        action="store_true",
-        help="ignore the data's measured mass (by default it is data: a mass term in the "
-        "objective and, with its sd, in the likelihood)",
-    )
-    parser.add_argument(
-        "--effect",
-        action="append",
-        default=[],
-        metavar="SPEC",
-        help="extend the model by an effect KIND@LOCATION[:name=value] (repeatable), e.g. one "
-        "named by 'discover'",
-    )
-    if sampling:
-        parser.add_argument("--steps", type=int, help="step budget of the sampler")
-        parser.add_argument("--walkers", type=int, help="number of walkers")
-        parser.add_argument("--resume", action="store_true", help="continue a partial --out")
-        parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-
-
-def add_compute_arguments(parser) -> None:
-    """--workers / --scheduler: where independent tasks run (``compute.executors``)."""
-    parser.add_argument(
-        "--workers",
-        type=int,
-        metavar="N",
-        help="run independent tasks in N local processes (default: the study's [compute], "
-        "else $BAYESUPDATE_SCHEDULER, else serial); results are the same bits",
-    )
-    parser.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help="run independent tasks on the workers of a Dask scheduler, e.g. tcp://head:8786 "
-        "(pip install 'bayesupdate[dask]')",
-    )
-
-
-def compute_from_args(args, study):
-    """``ComputeSettings`` from --workers/--scheduler, the study's [compute] table and
-    $BAYESUPDATE_SCHEDULER (``config.compute_settings``)."""
-    from bayesupdate.config import compute_settings
-
-    return compute_settings(
-        getattr(args, "workers", None),
-        getattr(args, "scheduler", None),
-        study.extensions.get("compute"),
-    )
-
-
-def study_from_args(args):
-    """StudyConfig from a study file and/or --model/--data flags (flags win)."""
-    from bayesupdate.config import StudyConfig, load_study, with_overrides
-
-    if args.study is None and args.model is None:
-        raise BayesUpdateError(f"{NAME}: give a STUDY.toml or --model (and --data)")
-    study = load_study(args.study) if args.study else StudyConfig()
-    changes = {
-        "model__source": args.model,
-        "data__source": args.data,
-        "optimizer__seed": args.seed,
-        "optimizer__starts": args.starts,
-        "sampler__seed": args.seed,
-        "sampler__steps": getattr(args, "steps", None),
-        "sampler__walkers": getattr(args, "walkers", None),
-        "sampler__reduced": False if getattr(args, "full", False) else None,
-        "optimizer__polish": False if getattr(args, "no_polish", False) else None,
-        "objective__use_measured_mass": False if getattr(args, "no_mass", False) else None,
-    }
-    study = with_overrides(study, **changes)
-    # --data replaces inline data of the study file entirely, with its choice of modes
-    if args.data is not None and study.data.frequencies_hz is not None:
-        from dataclasses import replace
-
-        study = replace(
-            study,
-            data=replace(study.data, frequencies_hz=None, weights=None, sd_hz=None, modes=None),
-        )
-    return study
-
-
-def write_bdf(path, model, values) -> None:
-    """``--write-bdf``: the Nastran deck with ``values`` in its bound fields (no path: nothing)."""
-    if path:
-        from bayesupdate.nastran.writer import write_updated_deck
-
-        write_updated_deck(model, values, path)
-
-
-def add_write_bdf_argument(parser) -> None:
-    parser.add_argument(
-        "--write-bdf",
-        metavar="FILE",
-        help="Nastran deck model: write the deck with the calibrated values (calibrate: the "
-        "optimum; sample: the posterior mean) in its bound fields",
-    )
-
-
-def add_full_argument(parser) -> None:
-    parser.add_argument(
-        "--full",
-        action="store_true",
-        help="full FE solves (no certified reduced basis) for FE models and Nastran decks",
-    )
-
-
 def add_arguments(parser) -> None:
     add_study_arguments(parser)
     add_compute_arguments(parser)
@@ -167,19 +59,6 @@ def add_arguments(parser) -> None:
         action="store_true",
         help="skip the Nelder-Mead polish of each start (faster; ends may stop on a kink)",
     )
-
-
-def report_refused(problem) -> None:
-    """The test modes the pairing refused at the reference design, one line each on stderr."""
-    pairing = problem.pairing
-    for refused in pairing.refused:
-        print(f"pairing: {refused.message(pairing.rules)}", file=sys.stderr)
-
-
-def report_warnings(warnings) -> None:
-    """One ``warning:`` line per warning on stderr."""
-    for line in warnings:
-        print(f"warning: {line}", file=sys.stderr)
 
 
 def calibration_json(result, problem, warnings=()) -> dict:

@@ -1,9 +1,14 @@
 """``bayesupdate discover``: find where model and test disagree, name the missing effect."""
 
-import dataclasses
 import json
 import sys
 
+from bayesupdate.commands._shared import (
+    add_compute_arguments,
+    add_study_arguments,
+    compute_from_args,
+    study_file,
+)
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "discover"
@@ -31,8 +36,6 @@ design away from what the frequencies say (bayesupdate.discovery.shape_evidence)
 
 
 def add_arguments(parser) -> None:
-    from bayesupdate.commands.calibrate import add_compute_arguments, add_study_arguments
-
     # study, --model, --data, --out, --force, --json, --seed, --starts, --effect: as calibrate
     add_study_arguments(parser)
     parser.add_argument("--kinds", help="comma-separated effect kinds to consider (default all)")
@@ -59,23 +62,6 @@ def add_arguments(parser) -> None:
     )
 
 
-def _study(args):
-    from bayesupdate.config import StudyConfig, load_study, with_overrides
-
-    if args.study is None and args.model is None:
-        raise BayesUpdateError(f"{NAME}: give a STUDY.toml or --model (and --data)")
-    study = load_study(args.study) if args.study else StudyConfig()
-    study = with_overrides(study, model__source=args.model, data__source=args.data)
-    if args.data is not None and study.data.frequencies_hz is not None:
-        study = dataclasses.replace(
-            study,
-            data=dataclasses.replace(
-                study.data, frequencies_hz=None, weights=None, sd_hz=None, modes=None
-            ),
-        )
-    return study
-
-
 def _settings(study, args):
     from bayesupdate.discovery.settings import DiscoverySettings
 
@@ -94,13 +80,12 @@ def _settings(study, args):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.commands.calibrate import compute_from_args
     from bayesupdate.compute.progress import timings as phase_timings
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
 
-    study = _study(args)
+    study = study_file(args)
     if args.out:
         check_output_path(args.out, args.force)
     if args.posterior_steps < 0:

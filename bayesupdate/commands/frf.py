@@ -3,6 +3,7 @@
 import numpy as np
 
 from bayesupdate.atomic import check_output_path
+from bayesupdate.commands._shared import parse_band
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "frf"
@@ -190,11 +191,10 @@ def _read_runs(args, names: list[str]) -> tuple[list, list[str], float]:
 
 def _lines_to_write(args, est) -> tuple[float, float]:
     """(lo, hi) [Hz]: --band, or the lines the force excites (below a sweep's top)."""
-    from bayesupdate.commands.identify import _parse_band
     from bayesupdate.ema.excitation import excited_band
 
     if args.band is not None:
-        return _parse_band(args.band)
+        return parse_band(args.band)
     return excited_band(est.frequencies_hz, est.force_autospectrum, sweep_top_hz=est.sweep_top_hz)
 
 

@@ -4,6 +4,7 @@ import json
 import sys
 
 from bayesupdate.atomic import check_output_path
+from bayesupdate.commands._shared import parse_band
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "identify"
@@ -29,16 +30,6 @@ examples:
   bayesupdate identify test.uff --out modes.h5 --plots plots --json
   bayesupdate identify run1.uff run2.uff run3.uff --band 3:35 --out gvt.h5 --report gvt_report
 """
-
-
-def _parse_band(text: str | None):
-    if text is None:
-        return None
-    try:
-        lo, hi = (float(x) for x in text.split(":"))
-    except ValueError:
-        raise BayesUpdateError(f"--band {text!r}: give LO:HI in Hz, e.g. 60:500") from None
-    return lo, hi
 
 
 def add_arguments(parser) -> None:
@@ -121,7 +112,8 @@ def _identify(args, request, data, inp):
 def run(args) -> int:
     from bayesupdate.compute import progress
     from bayesupdate.ema.modal_h5 import write_modal_h5
-    from bayesupdate.pipelines.identify import IdentifyRequest, read_frf_files
+    from bayesupdate.ema.run_groups import parse_groups
+    from bayesupdate.pipelines.identify import IdentifyRequest, identify_summary, read_frf_files
     from bayesupdate.report.identify_report import (
         IdentifyInput,
         check_report_folder,
@@ -129,11 +121,9 @@ def run(args) -> int:
     )
 
     out = check_output_path(args.out, args.force)
-    from bayesupdate.ema.run_groups import parse_groups
-
     groups = parse_groups(args.groups, len(args.frf_file))
     request = IdentifyRequest(
-        tuple(args.frf_file), _parse_band(args.band), args.max_order, args.method, groups
+        tuple(args.frf_file), parse_band(args.band), args.max_order, args.method, groups
     )
     if args.report:
         check_report_folder(args.report, args.force)
@@ -155,7 +145,7 @@ def run(args) -> int:
     if args.plots:
         _write_plots(args.plots, result, data.frfs)
     report = write_identify_report(args.report, inp, result)[0] if args.report else None
-    summary = _summary(result, out, run_.notes, report)
+    summary = identify_summary(result, out, run_.notes, report)
     summary["timings"] = timings
     if args.json:
         print(json.dumps(summary))
@@ -178,86 +168,3 @@ def _print_modes(summary: dict, out, report) -> None:
     print(f"wrote {out}")
     if report is not None:
         print(f"report: {report}")
-
-
-CUT_KEYS = ("cut_hz", "cut_damping", "cut_end")
-
-
-def _summary(result, out, notes, report) -> dict:
-    """The modes, dropped poles, notes and files as printed by --json."""
-    from bayesupdate.report.identify_report import mpc_reasons
-
-    modes = result.modes
-    no_mpc = mpc_reasons(modes)  # e.g. the phase scatter of one value says nothing
-    summary = {
-        "modes": [
-            {
-                "frequency_hz": float(modes.frequencies_hz[r]),
-                "identification_sd_hz": float(modes.identification_sd_hz[r]),
-                "damping_ratio": float(modes.damping_ratio[r]),
-                "mpc": None if no_mpc[r] else float(modes.mpc[r]),
-                "shape_sd_rel": float(modes.shape_sd_rel[r]),
-                "mass_normalised": bool(modes.extra["mass_normalised"][r]),
-                "stable_orders": int(modes.extra["stable_orders"][r]),
-                **_group_keys(modes.extra, r),
-            }
-            for r in range(modes.n_modes)
-        ],
-        "groups": _groups(result),
-        "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
-        # resonances an end of the range cuts: fitted, not reported as modes (ema.identify)
-        "cut": [
-            {"frequency_hz": float(f), "damping_ratio": float(z), "end": e}
-            for f, z, e in zip(*(result.extra[k] for k in CUT_KEYS), strict=True)
-        ],
-        "out": str(out),
-        "notes": list(notes),
-    }
-    if report is not None:
-        summary["report"] = str(report)
-    return summary
-
-
-def _group_keys(extra: dict, r: int) -> dict:
-    """Per-mode run-group values (absent with one group): the frequency spread [Hz], whether
-    the pole shifts, the MPC and frequency with one pole over all runs, and per group the
-    frequency [Hz], damping, sd [Hz], MPC and whether the group sees the mode."""
-    if "group_frequencies_hz" not in extra:
-        return {}
-    return {
-        "frequency_spread_hz": float(extra["frequency_spread_hz"][r]),
-        "pole_shift": bool(extra["pole_shift"][r]),
-        "group_poles_used": bool(extra["group_poles_used"][r]),
-        "mpc_one_pole": float(extra["mpc_one_pole"][r]),
-        "frequency_one_pole_hz": float(extra["frequency_one_pole_hz"][r]),
-        "per_group": [
-            {
-                "frequency_hz": float(f),
-                "damping_ratio": float(z),
-                "sd_hz": float(s),
-                "mpc": float(m),
-                "sees": bool(k),
-            }
-            for f, z, s, m, k in zip(
-                *(
-                    extra[key][r]
-                    for key in (
-                        "group_frequencies_hz",
-                        "group_damping_ratio",
-                        "group_sd_hz",
-                        "group_mpc",
-                        "group_sees",
-                    )
-                ),
-                strict=True,
-            )
-        ],
-    }
-
-
-def _groups(result) -> list[dict]:
-    """Run groups: file positions (from 1) and whether they were found automatically."""
-    rg = result.extra.get("run_groups")
-    if rg is None:
-        return []
-    return [{"files": [j + 1 for j in g.files], "automatic": rg.automatic} for g in rg.groups]

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 
+from bayesupdate.commands._shared import deck_set_values
 from bayesupdate.units import parse_assignments
 
 NAME = "modes"
@@ -132,19 +133,19 @@ def inertia_record(props, units: dict | None) -> dict:
 
 def _model_and_values(args):
     """(model, parameter values): a built-in model with SI ``--set`` values, or a Nastran deck
-    whose ``--set`` names are bindings (``"PSHELL 3 T=0.06"``), plain numbers in its units."""
-    from bayesupdate.commands.simulate import deck_set_values
+    whose ``--set`` names are bindings (``"PSHELL 3 T=0.06"``), plain numbers in its units
+    (``pipelines.model_source.resolve_model``)."""
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.models import get_model
-    from bayesupdate.nastran import is_nastran_path, load_nastran_model
+    from bayesupdate.pipelines.model_source import is_deck, resolve_model
 
-    if is_nastran_path(args.model):
+    if is_deck(args.model):
         if args.geometry is not None:
             raise BayesUpdateError("--geometry: only the exhaust model has a geometry")
         params = deck_set_values(args.set)
-        return load_nastran_model(args.model, {n: {"binds": n} for n in params}), params
+        tables = {n: {"binds": n} for n in params}
+        return resolve_model(args.model, tables, needs_parameters=False), params
     options = {} if args.geometry is None else {"geometry": _geometry(args.geometry)}
-    return get_model(args.model, **options), parse_assignments(args.set)
+    return resolve_model(args.model, options=options), parse_assignments(args.set)
 
 
 def _check_sed_map(model, args) -> None:

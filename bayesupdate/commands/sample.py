@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from bayesupdate.commands.calibrate import (
+from bayesupdate.commands._shared import (
     add_compute_arguments,
     add_full_argument,
     add_study_arguments,

@@ -1,6 +1,10 @@
 """``bayesupdate sensitivity``: which parameters the measured modes can inform, before updating."""
 
-from bayesupdate.commands._output import emit
+from dataclasses import replace
+
+import numpy as np
+
+from bayesupdate.commands._shared import add_correlate_arguments, correlate_study, emit
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sensitivity"
@@ -28,9 +32,7 @@ with shapes, else null), "singular_values", "rank", "directions" [{"singular_val
 
 
 def add_arguments(parser) -> None:
-    from bayesupdate.commands.correlate import add_arguments as correlate_arguments
-
-    correlate_arguments(parser)  # the same inputs and outputs as correlate
+    add_correlate_arguments(parser)  # the same inputs and outputs as correlate
     parser.add_argument(
         "--candidates",
         nargs="+",
@@ -66,31 +68,23 @@ def _deck_card_ids(bdf, card: str) -> list[int]:
 
 def candidate_model(args, study, data):
     """(model, candidate base values {name: value}): the study's model with its parameters,
-    or a deck re-read with the --candidates bound."""
-    from dataclasses import replace
-
-    from bayesupdate.commands.correlate import study_model_any
-    from bayesupdate.nastran import is_nastran_path, load_nastran_model
+    or a deck re-read with the --candidates bound (``pipelines.model_source``)."""
+    from bayesupdate.pipelines.correlate import study_correlation_model
+    from bayesupdate.pipelines.model_source import is_deck, resolve_model
     from bayesupdate.pipelines.sensitivity import expand_candidates
 
     labels = data.dof_labels if data.shapes is not None else ()
     source = study.model.source
-    if args.candidates and not is_nastran_path(source):
+    if args.candidates and not is_deck(source):
         raise BayesUpdateError(
             f"--candidates: only for a Nastran deck; {source!r} has parameters "
             "(list them in the study's [parameters] tables)"
         )
-    if args.candidates and study.test is not None:
-        # the [test] geometry pairs the test DOFs with the deck, as correlate and calibrate do
-        first = load_nastran_model(source, None)
-        tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(first.bdf, c))
-        model = study_model_any(replace(study, parameters=tables), labels)[0]
-    elif args.candidates:
-        first = load_nastran_model(source, None, tuple(labels), dict(study.model.test_points))
-        tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(first.bdf, c))
-        model = load_nastran_model(source, tables, tuple(labels), dict(study.model.test_points))
-    else:
-        model = study_model_any(study, labels)[0]
+    if args.candidates:
+        deck = resolve_model(source, units=study.model.units, needs_parameters=False)
+        tables = expand_candidates(args.candidates, lambda c: _deck_card_ids(deck.bdf, c))
+        study = replace(study, parameters=tables)
+    model = study_correlation_model(study, labels)[0]
     names = tuple(study.parameters) if study.parameters and not args.candidates else ()
     base = model.default_parameters()
     if names:
@@ -105,7 +99,6 @@ def candidate_model(args, study, data):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.commands.correlate import study_inputs
     from bayesupdate.pipelines.correlate import CorrelateSettings, correlate
     from bayesupdate.pipelines.sensitivity import (
         SensitivityInput,
@@ -123,16 +116,17 @@ def run(args) -> int:
     )
     if args.out:
         check_output_path(args.out, args.force)
-    study, data = study_inputs(args, with_model=False)
+    study, data, numbers = correlate_study(args)
     model, base = candidate_model(args, study, data)
-    corr = correlate(model, data, pairing, name=str(study.model.source))
+    corr = correlate(model, data, pairing, str(study.model.source), numbers=numbers)
     if not corr.pairs.test.size:
         raise BayesUpdateError("sensitivity: no test mode pairs with a model mode (see correlate)")
     if args.report:  # made only once the inputs have passed (no folder left by bad input)
         check_report_folder(args.report, args.force)
     test_shapes = None if data.shapes is None else data.shapes[:, corr.pairs.test]
+    in_source = np.array([corr.number(t) - 1 for t in corr.pairs.test], dtype=int)
     inp = SensitivityInput(model, str(study.model.source), base, corr.pairs.model,
-                           corr.pairs.test, test_shapes, data.dof_labels, corr.notes)  # fmt: skip
+                           in_source, test_shapes, data.dof_labels, corr.notes)  # fmt: skip
     result = run_sensitivity(inp, settings)
     if args.out:
         write_sensitivity_h5(args.out, result)

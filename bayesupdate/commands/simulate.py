@@ -4,6 +4,8 @@ import json
 
 import numpy as np
 
+from bayesupdate.commands._shared import deck_set_values
+
 NAME = "simulate"
 HELP = "virtual impact test of a model or deck (optionally with a hidden effect) -> UFF 58"
 DESCRIPTION = """Simulate the seed's modal test on an FE model (built-in, or a Nastran deck): roving
@@ -158,23 +160,6 @@ def run(args) -> int:
     return 0
 
 
-def deck_set_values(items) -> dict[str, float]:
-    """``--set`` items on a Nastran deck -> {name: value}: plain numbers in the deck's units (a
-    unit suffix is refused: the deck's unit system is its own); one-line error otherwise."""
-    from bayesupdate.errors import BayesUpdateError
-
-    params = {}
-    for item in items:
-        name, _, value = item.partition("=")
-        try:
-            params[name.strip()] = float(value)
-        except ValueError:
-            raise BayesUpdateError(
-                f"--set {item!r}: give NAME=VALUE, a plain number in the deck's units"
-            ) from None
-    return params
-
-
 def tested_model(args):
     """(model, true parameters) of ``simulate``'s arguments: a built-in model with ``--set``
     values (SI units), or a Nastran deck measured at its test points (``--test-points``, else the
@@ -182,21 +167,19 @@ def tested_model(args):
     bindings themselves (``--set "PSHELL 3 T=0.06"``), values in the deck's units."""
     from bayesupdate.config import load_study
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.models import get_model
-    from bayesupdate.nastran import is_nastran_path
+    from bayesupdate.pipelines.model_source import deck_test_model, is_deck, resolve_model
     from bayesupdate.units import parse_assignments
 
     study = load_study(args.study) if args.study else None
     source = args.model or (study.model.source if study else "exhaust")
-    if not is_nastran_path(source):
+    if not is_deck(source):
         if study or args.test_points:
             raise BayesUpdateError(
                 f"--study / --test-points: only for a Nastran deck model, not {source!r}"
             )
-        model = get_model(source, **true_geometry(source, args.geometry))
+        model = resolve_model(source, options=true_geometry(source, args.geometry))
         return model, parse_assignments(args.set)
     from bayesupdate.nastran.test_points import read_test_points
-    from bayesupdate.pipelines.model_source import deck_test_model
 
     if args.geometry:
         raise BayesUpdateError("--geometry: only the exhaust model has a geometry")

@@ -118,6 +118,7 @@ class DiscoveryResult:
     model_name: str = ""
     timings: dict = field(default_factory=dict)
     reduced: dict | None = None
+    pairing: dict = field(default_factory=dict)
 
     @property
     def best(self) -> ModelFit | None:
@@ -411,16 +412,36 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
         )
 
 
-def _prepare(
-    model, data, settings: DiscoverySettings, parameters, baseline, pairing: str, say, executor
-) -> tuple[object, list, object]:
-    """The calibration problem (``pairing`` "auto" resolved as ``discover`` says; on the design
-    variables' certified basis for a large model, ``reduced_candidates``), the library's
-    effects and the baseline ``CalibrationResult`` (calibrated here from ``baseline_starts``
-    starts, seeded by ``seed``, on ``executor``, when none is given)."""
+def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None):
+    """(calibration problem, pairing record): the problem discovery calibrates and compares
+    its candidates on, set up with one reference solve (``inference.problem.build_problem``).
+
+    ``pairing`` "auto" is resolved as ``discover`` says.  A MAC pairing with ``rules``
+    (``inference.pairing.PairingRules``: the study's ``[pairing]``) refuses, at the reference
+    design, the test modes whose best pair misses them: they are left out of ``problem.data``
+    and named in the record (``ModePairing.to_dict``: method, rules, refused).  The candidates'
+    problems (``localization.candidate_problem``) pair without a frequency window, so the
+    baseline's drops it too: both sides of every Bayes factor pair alike.  The record is {}
+    when no rules applied (no rules, no test shapes, or a pairing other than MAC)."""
     if pairing == "auto":
         pairing = "mac" if data.shapes is not None else "order"
-    problem = build_problem(model, data, parameters, pairing=pairing)
+    problem = build_problem(model, data, parameters, pairing=pairing, rules=rules)
+    if problem.pairing.rules is None:
+        return problem, {}
+    record = problem.pairing.to_dict()
+    unwindowed = replace(problem.pairing, rules=None, test_hz=None, refused=())
+    return replace(problem, pairing=unwindowed), record
+
+
+def _prepare(
+    model, data, settings: DiscoverySettings, parameters, baseline, pairing, say, executor
+) -> tuple[object, list, object, dict]:
+    """The calibration problem and its pairing record (``discovery_problem``; ``pairing``:
+    (method, rules); on the design variables' certified basis for a large model,
+    ``reduced_candidates``), the library's effects and the baseline ``CalibrationResult``
+    (calibrated here from ``baseline_starts`` starts, seeded by ``seed``, on ``executor``, when
+    none is given)."""
+    problem, record = discovery_problem(model, data, parameters, *pairing)
     check_enough_modes(problem)
     if use_reduced(model):
         say("certified reduced basis of the design variables")
@@ -434,7 +455,7 @@ def _prepare(
             CalibrationSettings(starts=starts, seed=settings.seed, max_nfev=100),
             executor=executor,
         )
-    return problem, effects, baseline
+    return problem, effects, baseline, record
 
 
 def _box_centre(problem) -> np.ndarray:
@@ -683,26 +704,28 @@ def discover(
     predictive_rel_var: np.ndarray | None = None,
     progress=None,
     executor=None,
+    rules=None,
 ) -> DiscoveryResult:
     """Run discovery (module docstring).
 
-    model : an ``FEModel`` (effects extend its structure).  data : ``ModalData``.
-    parameters : the design variables to calibrate (as ``build_problem``; None: model defaults).
-    baseline : a ``CalibrationResult`` of the same problem to start from (else calibrated here).
+    model : an ``FEModel`` (effects extend its structure).  data : ``ModalData``.  parameters :
+    the design variables to calibrate (as ``build_problem``; None: model defaults).  baseline : a
+    ``CalibrationResult`` of the same problem to start from (else calibrated here).
     predictive_rel_var : (m,) posterior-predictive variance of the relative frequencies, if a
-    posterior is available (widens the flagging z-scores).
-    progress : optional callable(str) for progress messages.
-    executor : where the baseline's starts, the score tests and the refits run
-    (``compute.executors``; None: in this process); the result is the same bits on every executor.
+    posterior is available (widens the flagging z-scores).  progress : optional callable(str)
+    for progress messages.  executor : where the baseline's starts, the score tests and the
+    refits run (``compute.executors``; None: in this process); the same bits on every executor.
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
     frequencies against the model's sorted ones: the honest likelihood without shapes; shape
-    tracking against the reference design, the calibration default, puts a wall in the objective
-    where a hidden effect reorders two close modes, and a refit stalls there).
+    tracking, the calibration default, puts a wall in the objective where a hidden effect
+    reorders two close modes, and a refit stalls there).  rules : a MAC pairing's
+    ``PairingRules`` (None: every test mode is paired): test modes refused at the reference
+    design are left out and named in the result's ``pairing`` (``discovery_problem``).
     """
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
-    problem, effects, baseline = _prepare(
-        model, data, settings, parameters, baseline, pairing, say, executor
+    problem, effects, baseline, record = _prepare(
+        model, data, settings, parameters, baseline, (pairing, rules), say, executor
     )
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)
@@ -717,19 +740,9 @@ def discover(
     verdict, reason, named, ambiguous = _verdict(base_fit, fits, flags, len(where.scores), settings)
     say(f"verdict: {verdict} ({reason})")
     return DiscoveryResult(
-        verdict=verdict,
-        reason=reason,
-        baseline=base_fit,
-        noise=base_fit.space.noise,
-        flags=flags,
-        localization=where,
-        fits=fits,
-        named=named,
-        ambiguous_with=ambiguous,
-        settings=settings,
-        wall_s=time.perf_counter() - t0,
-        data_source=data.source,
-        model_name=getattr(model, "name", ""),
-        timings=timings,
-        reduced=reduced_summary(base_fit, where, fits),
-    )
+        verdict=verdict, reason=reason, baseline=base_fit, noise=base_fit.space.noise,
+        flags=flags, localization=where, fits=fits, named=named, ambiguous_with=ambiguous,
+        settings=settings, wall_s=time.perf_counter() - t0, data_source=data.source,
+        model_name=getattr(model, "name", ""), timings=timings,
+        reduced=reduced_summary(base_fit, where, fits), pairing=record,
+    )  # fmt: skip

@@ -1,15 +1,29 @@
-"""Figures from a result file (``read_result`` dict): trace, pair, predictive, residuals, Table 3.
+"""Figures from a result file (``read_result`` dict): trace, pair, predictive, residuals, and
+the design variables beside a published reference design (``DesignReference``).
 
 All functions take the dict returned by ``results.read_result`` and return a matplotlib Figure
-(Agg backend, nothing shown); ``save_all`` writes the set as PNG files.
+(Agg backend, nothing shown); ``save_all`` writes the set as PNG files.  A reference design is
+given by the caller (e.g. the seed's Table 3 in ``models.exhaust_paper``): this
+module knows no model or paper.
 """
 
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from bayesupdate import plotting
-from bayesupdate.paper import TABLE3_INITIAL_SI, TABLE3_OPTIMUM_SI
+
+
+@dataclass(frozen=True)
+class DesignReference:
+    """A published design to draw the posterior against.  initial, optimum : {parameter name:
+    value} (SI; the initial values normalise both axes); label : what the optimum is (legend)."""
+
+    initial: Mapping[str, float]
+    optimum: Mapping[str, float]
+    label: str
 
 
 def _posterior(result: dict):
@@ -109,43 +123,50 @@ def plot_residuals(result: dict):
     return fig
 
 
-def plot_design_vs_table3(result: dict):
-    """Posterior of each design variable (normalised by its Table 3 initial value) beside the
-    seed's Table 3 optimum; only parameters named as in Table 3.  None if there are none."""
+def plot_design_vs_reference(result: dict, reference: DesignReference):
+    """Posterior of each design variable (normalised by the reference's initial value) beside
+    the reference optimum (e.g. the seed's Table 3); only parameters the reference names.  None
+    if there are none."""
+    initial, optimum = reference.initial, reference.optimum
     names, chain, burn = _posterior(result)
-    shared = [n for n in names if n in TABLE3_OPTIMUM_SI]
+    shared = [n for n in names if n in optimum and n in initial]
     if not shared:
         return None
     flat = chain[burn:].reshape(-1, chain.shape[-1])
     fig, ax = plotting.subplots(figsize=(8, 3.5))
-    data = [flat[:, names.index(n)] / TABLE3_INITIAL_SI[n] for n in shared]
+    data = [flat[:, names.index(n)] / initial[n] for n in shared]
     ax.violinplot(data, showmedians=True)
     x = np.arange(1, len(shared) + 1)
     ax.plot(
         x,
-        [TABLE3_OPTIMUM_SI[n] / TABLE3_INITIAL_SI[n] for n in shared],
+        [optimum[n] / initial[n] for n in shared],
         "r*",
         ms=12,
-        label="seed Table 3 optimum",
+        label=reference.label,
     )
     opt = dict(
         zip(result["optimum"]["attrs"]["parameter_names"], result["optimum"]["theta"], strict=True)
     )
-    ax.plot(x, [opt[n] / TABLE3_INITIAL_SI[n] for n in shared], "kx", ms=9, label="our optimum")
+    ax.plot(x, [opt[n] / initial[n] for n in shared], "kx", ms=9, label="our optimum")
     ax.set_xticks(x, shared, rotation=20)
-    ax.set_ylabel("value / Table 3 initial")
+    ax.set_ylabel("value / reference initial")
     ax.legend()
     fig.tight_layout()
     return fig
 
 
-def save_all(result: dict, folder: str | Path) -> list[Path]:
-    """Write every applicable figure as PNG into ``folder``; returns the paths."""
+def save_all(
+    result: dict, folder: str | Path, reference: DesignReference | None = None
+) -> list[Path]:
+    """Write every applicable figure as PNG into ``folder``; returns the paths.  With a
+    ``reference`` design whose names the result shares, also ``design_vs_reference.png``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     makers = {"residuals": plot_residuals}
     if "posterior" in result and "autocorr_time" in result["posterior"]:
-        makers.update(trace=plot_trace, pair=plot_pair, design_vs_table3=plot_design_vs_table3)
+        makers.update(trace=plot_trace, pair=plot_pair)
+        if reference is not None:
+            makers["design_vs_reference"] = lambda r: plot_design_vs_reference(r, reference)
         if "predictions" in result["posterior"]:
             makers["predictive"] = plot_predictive
     paths = []

@@ -44,6 +44,7 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 
 import json
 import platform
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -51,6 +52,7 @@ import h5py
 import numpy as np
 
 from bayesupdate.atomic import atomic_path
+from bayesupdate.compute import progress
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.mass_properties import mass_property_report
 from bayesupdate.inference.optimize import CalibrationResult
@@ -58,6 +60,34 @@ from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.inference.sampling import PosteriorResult, SamplerState
 
 SCHEMA = "bayesupdate-result/1"
+
+
+@dataclass(frozen=True)
+class ResultWriter:
+    """The result file of one run, rewritten whole (``write_result``) each time a part is new.
+
+    path : the HDF5 file (None: nothing is written).  problem, calibration, config, command:
+    as ``write_result``.  ``write(**parts)`` writes the file with ``parts`` (posterior, state,
+    diagnostics, predictions, warnings) and the run's phase timings so far; ``checkpoint`` is the
+    sampler's callback (``sampling.sample_posterior``): the chain so far after each unfinished
+    block (status "partial", which ``sample --resume`` continues)."""
+
+    path: str | Path | None
+    problem: CalibrationProblem
+    calibration: CalibrationResult
+    config: dict
+    command: str = ""
+
+    def write(self, **parts) -> None:
+        if self.path is not None:
+            write_result(
+                self.path, self.problem, self.calibration, self.config, command=self.command,
+                timings=progress.timings(), **parts,
+            )  # fmt: skip
+
+    def checkpoint(self, state: SamplerState) -> None:
+        if not state.finished:
+            self.write(state=state)
 
 
 def package_versions() -> dict[str, str]:

@@ -3,6 +3,8 @@
 ``exhaust``: the seed's exhaust system (Lupea 2013); ``exhaust_shell``: the same with shell
 bodies (catalyst, mufflers).  ``shear_building``: the two-DOF shear building
 used to verify the sampler against quadrature.  Each factory returns a ``ParametricModel``.
+A Nastran deck is a model source too, resolved beside these by
+``pipelines.model_source.resolve_model`` (this package reads no deck).
 """
 
 import importlib
@@ -18,16 +20,13 @@ BUILTIN_MODELS = {
 
 
 def get_model(name: str, **options):
-    """Return the built-in model ``name`` (see ``BUILTIN_MODELS``), or the Nastran deck at the
-    path ``name`` (.bdf, .dat, .nas, .blk; ``bayesupdate.nastran``)."""
-    from bayesupdate.nastran import is_nastran_path, load_nastran_model
-
-    if is_nastran_path(name):
-        return load_nastran_model(name, **options)
+    """Return the built-in model ``name`` (see ``BUILTIN_MODELS``) built with the factory's
+    keyword ``options``.  A Nastran deck or a ``package.module:function`` model:
+    ``pipelines.model_source.resolve_model``."""
     if name not in BUILTIN_MODELS:
         raise BayesUpdateError(
-            f"unknown model {name!r}; built-in models are {sorted(BUILTIN_MODELS)} "
-            "or give 'package.module:function' or a Nastran deck (.bdf, .dat, .nas, .blk)"
+            f"unknown model {name!r}; built-in models are {sorted(BUILTIN_MODELS)} (a Nastran "
+            "deck or 'package.module:function': bayesupdate.pipelines.model_source.resolve_model)"
         )
     module_name, factory = BUILTIN_MODELS[name].split(":")
     return getattr(importlib.import_module(module_name), factory)(**options)

@@ -57,7 +57,7 @@ from bayesupdate.fe import (
     oval_tube,
     solid_round,
 )
-from bayesupdate.paper import MEASURED_MASS_KG
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG
 
 PARTS = (
     "hot_pipe",

@@ -37,7 +37,7 @@ from bayesupdate.models.exhaust import (
     full_geometry,
     mode_character,
 )
-from bayesupdate.paper import (
+from bayesupdate.models.exhaust_paper import (
     OPTIMUM_MASS_KG,
     TABLE1_FEA_HZ,
     TABLE3_INITIAL_SI,

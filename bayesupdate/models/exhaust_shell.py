@@ -44,6 +44,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, FEModel, Material, StructureBuilder, circular_tube
 from bayesupdate.fe.assembly import Assembler
 from bayesupdate.models import exhaust
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG
 from bayesupdate.models.exhaust_shell_geometry import (
     MESH_DENSITY_DEFAULT,
     check_mesh_density,
@@ -51,7 +52,6 @@ from bayesupdate.models.exhaust_shell_geometry import (
     shell_geometry,
 )
 from bayesupdate.models.exhaust_shell_mesh import oval_body
-from bayesupdate.paper import MEASURED_MASS_KG
 
 N_SENSORS = exhaust.N_SENSORS
 DESIGN_BINDINGS = exhaust.DESIGN_BINDINGS

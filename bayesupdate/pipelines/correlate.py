@@ -37,6 +37,7 @@ from bayesupdate.correlation import (
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.pairing import label_rows
 from bayesupdate.modal_data import ModalData
+from bayesupdate.pipelines.model_source import paired_study_model, study_model
 
 
 @dataclass(frozen=True)
@@ -99,7 +100,9 @@ class Correlation:
     shapes only), expanded (n_dof, k) the paired test shapes expanded by SEREP: None where not
     computed.  notes : what a reader must know (why something is missing).  model_nodes
     (n_nodes, 3) the model's node coordinates (its own units) for the report's picture of the
-    test points on the model; None for a model without a structure.
+    test points on the model; None for a model without a structure.  test_numbers (m_t,) each
+    test mode's 1-based number in its source (a study's ``[data] modes``; () : 1..m_t), the
+    number a reader is shown (``number``).
     """
 
     model: str
@@ -119,6 +122,11 @@ class Correlation:
     expanded: np.ndarray | None = None
     notes: tuple[str, ...] = ()
     model_nodes: np.ndarray | None = None
+    test_numbers: tuple[int, ...] = ()
+
+    def number(self, t: int) -> int:
+        """The source's 1-based number of test mode ``t`` (0-based index here)."""
+        return int(self.test_numbers[t]) if self.test_numbers else int(t) + 1
 
     @property
     def error_pct(self) -> np.ndarray:
@@ -219,25 +227,43 @@ def geometry_mapping(pairing) -> SensorMapping:
     return SensorMapping(np.asarray(t.matrix, float), tuple(points), source, float(t.rms))
 
 
+def study_correlation_model(study, test_labels=()) -> tuple:
+    """(model, ``SensorMapping`` or None): the study's model (``model_source``; a Nastran deck
+    also without bound parameters: correlation moves none) whose sensors are the test DOFs
+    ``test_labels``; with a ``[test]`` geometry they are paired with it by position and the
+    mapping says how, else the model's own sensors (a deck's ``[model.test_points]``) read
+    them and the mapping is None (``sensor_mapping`` then)."""
+    if study.test is None:
+        return study_model(study, test_labels, needs_parameters=False), None
+    model, pairing = paired_study_model(study, test_labels, needs_parameters=False)
+    return model, None if pairing is None else geometry_mapping(pairing)
+
+
 def correlate(
     model,
     data: ModalData,
     settings: CorrelateSettings,
     name: str = "model",
     mapping: SensorMapping | None = None,
+    numbers: tuple[int, ...] = (),
 ) -> Correlation:
     """Correlate ``model`` with the test ``data`` (module docstring); ``mapping``: the test
     DOFs on the model when a test geometry paired them (``geometry_mapping``), else the
-    model's own sensors (``sensor_mapping``)."""
-    n_model = data.n_modes + settings.extra_modes
-    modes = model_modes(model, n_model, settings.parameters)
+    model's own sensors (``sensor_mapping``).  ``numbers`` (m_t,): each test mode's 1-based
+    number in its source when ``data`` holds a selection of it (``inference.data.select_modes``;
+    () : 1..m_t); without shapes test mode k is paired with model mode k, so the model computes
+    up to the highest number plus ``settings.extra_modes``."""
+    numbers = tuple(int(n) for n in numbers) or tuple(range(1, data.n_modes + 1))
+    if len(numbers) != data.n_modes:
+        raise ValueError(f"correlate: {len(numbers)} numbers for {data.n_modes} test modes")
+    modes = model_modes(model, max(numbers) + settings.extra_modes, settings.parameters)
     if data.shapes is None or modes.shapes is None:
-        return _frequencies_only(model, data, modes, name)
+        return _frequencies_only(model, data, modes, name, numbers)
     rows = _rows(modes, data.dof_labels)
     model_at = modes.shapes[rows]
     mac = mac_matrix(data.shapes, model_at)
     pairs = pair_modes(mac, settings.mac_threshold)
-    notes = _pair_notes(pairs, settings.mac_threshold)
+    notes = _pair_notes(pairs, settings.mac_threshold, numbers)
     base = Correlation(
         model=name,
         data=data.source,
@@ -254,6 +280,7 @@ def correlate(
         test_shapes=_realise(data.shapes),
         model_shapes=model_at,
         model_nodes=_nodes(model),
+        test_numbers=_shown(numbers),
     )
     return _with_serep(base, modes, rows, data, notes)
 
@@ -263,7 +290,14 @@ def _nodes(model) -> np.ndarray | None:
     return None if structure is None else np.asarray(structure.nodes, float)
 
 
-def _frequencies_only(model, data: ModalData, modes: ModelModes, name: str) -> Correlation:
+def _shown(numbers: tuple[int, ...]) -> tuple[int, ...]:
+    """The numbers a ``Correlation`` keeps: () when they are 1..m (the whole source)."""
+    return () if numbers == tuple(range(1, len(numbers) + 1)) else numbers
+
+
+def _frequencies_only(
+    model, data: ModalData, modes: ModelModes, name: str, numbers: tuple[int, ...]
+) -> Correlation:
     why = "the test has no shapes" if data.shapes is None else "the model gives no shapes"
     labels = data.dof_labels if modes.shapes is not None else ()
     return Correlation(
@@ -272,9 +306,30 @@ def _frequencies_only(model, data: ModalData, modes: ModelModes, name: str) -> C
         dof_labels=tuple(labels),
         test_hz=data.frequencies_hz,
         model_hz=np.asarray(modes.frequencies_hz),
-        pairs=pair_in_order(data.n_modes, modes.frequencies_hz.size),
+        pairs=_pairs_in_order(numbers, modes.frequencies_hz.size),
         mapping=sensor_mapping(model, labels),
         notes=(f"{why}: modes are paired in order (no MAC, COMAC or orthogonality)",),
+        test_numbers=_shown(numbers),
+    )
+
+
+def _pairs_in_order(numbers: tuple[int, ...], n_model: int) -> ModePairs:
+    """Frequencies only: test mode number k of its source with model mode k (a selection of a
+    source's modes keeps the source's numbers; all of them: ``correlation.pair_in_order``)."""
+    if numbers == tuple(range(1, len(numbers) + 1)):
+        return pair_in_order(len(numbers), n_model)
+    model = np.asarray(numbers, dtype=int) - 1
+    test = np.flatnonzero(model < n_model)
+    paired = set(model[test].tolist())
+    return ModePairs(
+        test=test,
+        model=model[test],
+        mac=np.full(test.size, np.nan),
+        refused=(),
+        swapped=(),
+        unpaired_test=tuple(int(t) for t in np.flatnonzero(model >= n_model)),
+        unpaired_model=tuple(m for m in range(n_model) if m not in paired),
+        method="order",
     )
 
 
@@ -284,13 +339,14 @@ def _realise(shapes: np.ndarray) -> np.ndarray:
     return realise(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
 
 
-def _pair_notes(pairs: ModePairs, threshold: float) -> list[str]:
+def _pair_notes(pairs: ModePairs, threshold: float, numbers: tuple[int, ...]) -> list[str]:
     notes = [
-        f"test mode {t + 1} refused: its best model mode {m + 1} has MAC {v:.3f} < {threshold:g}"
+        f"test mode {numbers[t]} refused: its best model mode {m + 1} has MAC {v:.3f} < "
+        f"{threshold:g}"
         for t, m, v in pairs.refused
     ]
     if pairs.swapped:
-        named = ", ".join(f"test {t + 1} - model {m + 1}" for t, m in pairs.swapped)
+        named = ", ".join(f"test {numbers[t]} - model {m + 1}" for t, m in pairs.swapped)
         notes.append(f"swapped (model modes out of the test's order): {named}")
     return notes
 
@@ -339,6 +395,7 @@ def write_correlation_h5(path, result: Correlation) -> None:
     alignment (NaN: none fitted)):
 
     - ``test_hz`` (m_t,), ``model_hz`` (m_m,) [Hz]; ``dof_labels`` (n_a,) strings;
+      ``test_numbers`` (m_t,) each test mode's 1-based number in its source;
     - ``pairs/test``, ``pairs/model`` (k,) 0-based, ``pairs/mac`` (k,), ``pairs/error_pct`` (k,);
     - ``transform`` (4, 4) test -> model; ``points/model_node`` (n_a,) (-1: none),
       ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3), ``points/distance`` (n_a,)
@@ -360,6 +417,7 @@ def write_correlation_h5(path, result: Correlation) -> None:
                        mapping_source=result.mapping.source,
                        rms_residual=np.nan if rms is None else rms)  # fmt: skip
         g["test_hz"], g["model_hz"] = result.test_hz, result.model_hz
+        g["test_numbers"] = np.array([result.number(t) for t in range(result.test_hz.size)])
         g["dof_labels"] = np.array(result.dof_labels, dtype=h5py.string_dtype())
         g["notes"] = np.array(result.notes, dtype=h5py.string_dtype())
         pairs = g.create_group("pairs")

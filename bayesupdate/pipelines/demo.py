@@ -26,10 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate import paper
 from bayesupdate.config import StudyConfig, parse_study
 from bayesupdate.discovery.results_io import write_discovery
 from bayesupdate.discovery.settings import DiscoverySettings
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines.discover import DiscoveryRequest, DiscoveryRun, discover_study
 from bayesupdate.pipelines.sample import SamplingOptions, SamplingRun, run_sampling
 from bayesupdate.pipelines.simulate import VirtualTest, VirtualTestSettings, simulate_test

@@ -15,7 +15,6 @@ from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.discovery.workflow import DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data, select_modes
-from bayesupdate.inference.problem import build_problem
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
 
@@ -37,8 +36,8 @@ class DiscoveryRun:
     """model : the (extended) FE model discovery ran on.  effects : the specs it was extended
     by.  result : what discovery found.  posterior : (PosteriorResult, summary dict) of the final
     model, or None.  compute : where the work ran ({"kind", "workers", ...}).  pairing : the
-    MAC pairing's record (``paired_data``: method, rules, refused test modes; {} without test
-    shapes)."""
+    MAC pairing's record (``discovery.workflow.discovery_problem``: method, rules, refused test
+    modes; {} without test shapes)."""
 
     model: object
     effects: tuple[str, ...]
@@ -46,23 +45,6 @@ class DiscoveryRun:
     posterior: tuple | None = None
     compute: dict = field(default_factory=lambda: {"kind": "serial", "workers": 1})
     pairing: dict = field(default_factory=dict)
-
-
-def paired_data(study: StudyConfig, model, data):
-    """(data, pairing record): the test modes whose MAC pair meets the study's ``[pairing]``
-    rules at the reference design (``inference.problem.build_problem``), with the refused
-    ones in ``pairing["refused"]``; data without shapes are returned as they are."""
-    if data.shapes is None or study.pairing.method not in ("auto", "mac"):
-        return data, {}
-    problem = build_problem(
-        model,
-        data,
-        problem_parameters(study.parameters) or None,
-        study.pairing.method,
-        study.pairing.extra_modes,
-        rules=study.pairing.rules(),
-    )
-    return problem.data, problem.pairing.to_dict()
 
 
 def discover_study(
@@ -80,7 +62,6 @@ def discover_study(
             "use a built-in FE model such as 'exhaust'"
         )
     model = extend_with_specs(model, request.effects)
-    data, pairing = paired_data(study, model, data)
     with open_executor(request.compute) as executor:
         compute = executor.describe()
         result = discover(
@@ -91,6 +72,7 @@ def discover_study(
             pairing=study.pairing.method,
             progress=progress,
             executor=executor,
+            rules=study.pairing.rules(),
         )
     posterior = None
     if request.posterior_steps > 0:
@@ -100,4 +82,4 @@ def discover_study(
         seed = request.settings.seed + 1
         chain, _ = sample_final(result, steps=request.posterior_steps, seed=seed)
         posterior = (chain, summarise(chain))
-    return DiscoveryRun(model, tuple(request.effects), result, posterior, compute, pairing)
+    return DiscoveryRun(model, tuple(request.effects), result, posterior, compute, result.pairing)

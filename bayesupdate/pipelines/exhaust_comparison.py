@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate import paper
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.models import exhaust_paper as paper
 
 MODELS = ("exhaust", "exhaust_shell")
 

@@ -7,6 +7,8 @@ identification and the notes a user must read with the modes).  With several fil
 are grouped where poles shift between them (:mod:`bayesupdate.ema.run_groups`): each group's
 poles and residues are estimated apart, and the modes reported are the groups' combined
 (frequency, damping, sd with the spread) with the shapes assembled over the groups.
+``identify_summary`` is the record ``identify --json`` prints, with the rule of when a mode's
+MPC means something (``mpc_reasons``).
 """
 
 from dataclasses import dataclass, replace
@@ -208,3 +210,98 @@ def _group_notes(result: Identification) -> list[str]:
             str(r + 1) for r in small
         )
     return [text]
+
+
+def mpc_reasons(modes) -> list[str | None]:
+    """Per mode: None when its MPC is meaningful, else why it is not reported (the phase
+    scatter of a shape over one DOF says nothing; an MPC not computed or not finite)."""
+    if len(modes.dof_labels) < 2:
+        return ["one DOF"] * modes.n_modes
+    if modes.mpc is None:
+        return ["not computed"] * modes.n_modes
+    return [None if np.isfinite(v) else "not finite" for v in modes.mpc]
+
+
+_CUT_KEYS = ("cut_hz", "cut_damping", "cut_end")
+
+
+def identify_summary(result: Identification, out, notes, report=None) -> dict:
+    """What ``identify --json`` prints: per mode its frequency [Hz], identification sd [Hz],
+    damping ratio, MPC (None where ``mpc_reasons`` says it means nothing), shape sd, scaling,
+    stable orders and the run-group values; the run groups, the dropped poles [Hz], the
+    resonances an end of the range cuts, the notes and the files written (``out``, ``report``
+    or None)."""
+    modes = result.modes
+    no_mpc = mpc_reasons(modes)  # e.g. the phase scatter of one value says nothing
+    summary = {
+        "modes": [
+            {
+                "frequency_hz": float(modes.frequencies_hz[r]),
+                "identification_sd_hz": float(modes.identification_sd_hz[r]),
+                "damping_ratio": float(modes.damping_ratio[r]),
+                "mpc": None if no_mpc[r] else float(modes.mpc[r]),
+                "shape_sd_rel": float(modes.shape_sd_rel[r]),
+                "mass_normalised": bool(modes.extra["mass_normalised"][r]),
+                "stable_orders": int(modes.extra["stable_orders"][r]),
+                **_group_keys(modes.extra, r),
+            }
+            for r in range(modes.n_modes)
+        ],
+        "groups": _groups(result),
+        "dropped_hz": [float(x) for x in result.extra["dropped_hz"]],
+        # resonances an end of the range cuts: fitted, not reported as modes (ema.identify)
+        "cut": [
+            {"frequency_hz": float(f), "damping_ratio": float(z), "end": e}
+            for f, z, e in zip(*(result.extra[k] for k in _CUT_KEYS), strict=True)
+        ],
+        "out": str(out),
+        "notes": list(notes),
+    }
+    if report is not None:
+        summary["report"] = str(report)
+    return summary
+
+
+def _group_keys(extra: dict, r: int) -> dict:
+    """Per-mode run-group values (absent with one group): the frequency spread [Hz], whether
+    the pole shifts, the MPC and frequency with one pole over all runs, and per group the
+    frequency [Hz], damping, sd [Hz], MPC and whether the group sees the mode."""
+    if "group_frequencies_hz" not in extra:
+        return {}
+    return {
+        "frequency_spread_hz": float(extra["frequency_spread_hz"][r]),
+        "pole_shift": bool(extra["pole_shift"][r]),
+        "group_poles_used": bool(extra["group_poles_used"][r]),
+        "mpc_one_pole": float(extra["mpc_one_pole"][r]),
+        "frequency_one_pole_hz": float(extra["frequency_one_pole_hz"][r]),
+        "per_group": [
+            {
+                "frequency_hz": float(f),
+                "damping_ratio": float(z),
+                "sd_hz": float(s),
+                "mpc": float(m),
+                "sees": bool(k),
+            }
+            for f, z, s, m, k in zip(
+                *(
+                    extra[key][r]
+                    for key in (
+                        "group_frequencies_hz",
+                        "group_damping_ratio",
+                        "group_sd_hz",
+                        "group_mpc",
+                        "group_sees",
+                    )
+                ),
+                strict=True,
+            )
+        ],
+    }
+
+
+def _groups(result) -> list[dict]:
+    """Run groups: file positions (from 1) and whether they were found automatically."""
+    rg = result.extra.get("run_groups")
+    if rg is None:
+        return []
+    return [{"files": [j + 1 for j in g.files], "automatic": rg.automatic} for g in rg.groups]

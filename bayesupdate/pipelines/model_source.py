@@ -2,7 +2,9 @@
 ``package.module:function``, or the final model of a discovery result file.
 
 This is the one place that knows every kind of model source, so inference (which sees only the
-``model_protocol``) and discovery (which extends FE models) need not import ``models``.
+``model_protocol``) and discovery (which extends FE models) need not import ``models``, and
+``models`` (built-in structures by name) need not import ``nastran``: every command and pipeline
+resolves its model here.
 """
 
 from collections.abc import Mapping
@@ -10,9 +12,16 @@ from collections.abc import Mapping
 from bayesupdate.errors import BayesUpdateError
 
 
+def is_deck(source) -> bool:
+    """Whether the model source ``source`` is a Nastran deck path (.bdf, .dat, .nas, .blk)."""
+    from bayesupdate.nastran import is_nastran_path
+
+    return is_nastran_path(source)
+
+
 def resolve_model(
     source: str, parameters: Mapping | None = None, sensors=(), options=None, deck=None,
-    units=None,
+    units=None, needs_parameters: bool = True,
 ):  # fmt: skip
     """A built-in model name (``bayesupdate.models.get_model``), a Nastran deck path, or a
     ``module:function`` spec (``inference.user_model.load_user_model``: its parameters and
@@ -21,7 +30,9 @@ def resolve_model(
 
     A Nastran deck (``nastran.load_nastran_model``) takes its parameters from the tables'
     ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``, in its
-    own ``units`` (a name, ``nastran.units``; None: recognised from the deck)."""
+    own ``units`` (a name, ``nastran.units``; None: recognised from the deck).  A deck without
+    bound parameters is refused unless ``needs_parameters`` is False (``modes``, ``correlate``:
+    a model at its own values)."""
     from bayesupdate.inference.user_model import load_user_model
     from bayesupdate.models import BUILTIN_MODELS, get_model
     from bayesupdate.nastran import is_nastran_path, load_nastran_model
@@ -31,7 +42,7 @@ def resolve_model(
             raise BayesUpdateError(f"model.options: a Nastran deck takes none ({source})")
         labels, points = deck if deck is not None else ((), None)
         model = load_nastran_model(str(source), parameters, labels, points, units=units)
-        if not model.parameter_names:
+        if needs_parameters and not model.parameter_names:
             raise BayesUpdateError(
                 f"model {source}: a Nastran deck's parameters are deck fields; give them in a "
                 'study file, e.g. [parameters.t] binds = "PSHELL 3 T" (or DESVAR/DVPREL1 cards)'
@@ -51,8 +62,9 @@ def resolve_model(
         return load_user_model(source, parameters or {}, tuple(sensors))
     if source not in BUILTIN_MODELS:
         raise BayesUpdateError(
-            f"model.source {source!r}: unknown; built-in models are {sorted(BUILTIN_MODELS)} "
-            "or give 'package.module:function'"
+            f"model.source {source!r}: unknown model; built-in models are "
+            f"{sorted(BUILTIN_MODELS)}, or give 'package.module:function' or a Nastran deck "
+            "(.bdf, .dat, .nas, .blk)"
         )
     try:
         return get_model(source, **(options or {}))
@@ -83,13 +95,14 @@ def _points_given(deck) -> bool:
     return deck is not None and bool(deck[1])
 
 
-def study_model(study, test_labels=()):
+def study_model(study, test_labels=(), needs_parameters: bool = True):
     """The model of a ``config.StudyConfig`` (its ``[model]`` table and parameter tables);
     a Nastran deck reads shapes at ``test_labels`` (the test data's DOF labels), mapped by
     ``[model.test_points]``, or by position through the study's ``[test]`` geometry
-    (``paired_study_model``), which any FE model takes."""
+    (``paired_study_model``), which any FE model takes.  ``needs_parameters``: as
+    ``resolve_model``."""
     if study.test is not None:
-        return paired_study_model(study, test_labels)[0]
+        return paired_study_model(study, test_labels, needs_parameters)[0]
     return resolve_model(
         study.model.source,
         study.parameters,
@@ -97,20 +110,22 @@ def study_model(study, test_labels=()):
         study.model.options,
         deck=(tuple(test_labels), dict(study.model.test_points)),
         units=study.model.units,
+        needs_parameters=needs_parameters,
     )
 
 
-def paired_study_model(study, test_labels=()):
+def paired_study_model(study, test_labels=(), needs_parameters: bool = True):
     """(model, ``testgeom.TestPairing`` or None): the study's FE model whose sensors are the
     test DOFs ``test_labels``, paired with it by the ``[test]`` table (read the geometry, align
     it, pair each point with the nearest node or element point: ``testgeom``).  Without labels
-    (frequencies only) the geometry is read and checked, and the model keeps its sensors."""
+    (frequencies only) the geometry is read and checked, and the model keeps its sensors.
+    ``needs_parameters``: as ``resolve_model``."""
     from bayesupdate.testgeom import pair_structure, read_geometry, with_pairing
 
     cfg = study.test
     model = resolve_model(
         study.model.source, study.parameters, study.model.sensors, study.model.options,
-        units=study.model.units,
+        units=study.model.units, needs_parameters=needs_parameters,
     )  # fmt: skip
     geometry = read_geometry(cfg.geometry, cfg.length_unit)
     if not test_labels:

@@ -9,7 +9,6 @@ import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from bayesupdate.compute import progress
 from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.config import SamplerConfig
@@ -23,7 +22,7 @@ from bayesupdate.inference.diagnostics import (
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
 from bayesupdate.inference.reference_check import accuracy_against
-from bayesupdate.inference.results import read_config, read_sampler_state, write_result
+from bayesupdate.inference.results import ResultWriter, read_config, read_sampler_state
 from bayesupdate.inference.sampling import (
     PosteriorResult,
     SamplerSettings,
@@ -128,10 +127,10 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
             full_reason = "the reduced basis missed its tolerance at the optimum"
     log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
     screen, unscreened = _screen(problem, rom, prepared.likelihood, cfg, calibration)
-    write = _writer(options.out, prepared, calibration, config)
-    posterior = _sample(log_post, calibration, cfg, screen, options, write, state)
+    writer = ResultWriter(options.out, prepared.problem, calibration, config, "sample")
+    posterior = _sample(log_post, calibration, cfg, screen, options, writer.checkpoint, state)
     if posterior.interrupted:
-        write(state=posterior.state)
+        writer.write(state=posterior.state)
         return SamplingRun(calibration, posterior, {}, {})
     posterior, summary = _diagnosed(posterior, log_post, rom, screen, cfg, basis_note)
     notes = {"full_solves_reason": full_reason, "screen_skipped": unscreened}
@@ -143,7 +142,7 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
         posterior = replace(posterior, diagnostics={**posterior.diagnostics, **notes})
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     found = tuple(sampling_warnings(prepared.problem, calibration, posterior.samples()))
-    write(posterior=posterior, diagnostics=summary, predictions=predictions, warnings=found)
+    writer.write(posterior=posterior, diagnostics=summary, predictions=predictions, warnings=found)
     return SamplingRun(calibration, posterior, summary, predictions, warnings=found)
 
 
@@ -194,19 +193,6 @@ def _resume_state(options: SamplingOptions, config: dict) -> SamplerState | None
     return state
 
 
-def _writer(out, prepared: PreparedStudy, calibration: CalibrationResult, config: dict):
-    """write(**parts): the result file at ``out`` with ``parts`` (a no-op without ``out``)."""
-
-    def write(**parts) -> None:
-        if out is not None:
-            write_result(
-                out, prepared.problem, calibration, config, command="sample",
-                timings=progress.timings(), **parts,
-            )  # fmt: skip
-
-    return write
-
-
 def _screen(problem, rom, likelihood, cfg: SamplerConfig, calibration) -> tuple:
     """(the screening posterior or None, why a configured screen was dropped or "")."""
     if not cfg.screen:
@@ -233,13 +219,9 @@ def sampler_settings(cfg: SamplerConfig, progress: bool = False) -> SamplerSetti
     )
 
 
-def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, write, state):
-    """emcee with the study's sampler settings; a checkpoint after every unfinished block."""
-
-    def checkpoint(sampler_state):
-        if not sampler_state.finished:
-            write(state=sampler_state)
-
+def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, checkpoint, state):
+    """emcee with the study's sampler settings; ``checkpoint`` (``ResultWriter.checkpoint``)
+    after every block."""
     return sample_posterior(
         log_post,
         calibration,

@@ -226,7 +226,8 @@ def _tracked(predict, params: dict, ref: _Solved, modes: np.ndarray) -> tuple[_S
 @dataclass(frozen=True)
 class SensitivityInput:
     """model, its name, the candidate parameters' base values (name -> value), the 0-based
-    model modes to differentiate and the test modes paired with them, the test's shapes at the
+    model modes to differentiate and the test modes paired with them (0-based in the test's
+    source: its ``[data] modes`` number less one), the test's shapes at the
     model's shape labels for those pairs (n_a, k) and those labels (empty: no shapes)."""
 
     model: object
@@ -290,7 +291,8 @@ def run_sensitivity(inp: SensitivityInput, settings: SensitivitySettings):
 def write_sensitivity_h5(path, result: Sensitivity) -> None:
     """Write ``result`` to HDF5 atomically.  Layout (group ``/sensitivity``, attributes
     ``model``, ``method``, ``rank``): ``names`` (n_p,) strings, ``values`` (n_p,), ``modes`` and
-    ``test_modes`` (k,) 0-based, ``frequencies_hz`` (k,), ``matrix`` (k, n_p) d ln f / d ln p,
+    ``test_modes`` (k,) 0-based (the test's: in its source), ``frequencies_hz`` (k,), ``matrix``
+    (k, n_p) d ln f / d ln p,
     ``mac_matrix`` (k, n_p) when computed, ``singular_values`` (n_p,), ``directions`` (n_p, n_p)
     rows over the parameters, ``suggested`` (rank,) parameter indices, ``groups`` (n_p,) group
     number of each parameter (-1: none), ``notes`` strings."""

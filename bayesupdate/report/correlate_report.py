@@ -41,7 +41,7 @@ def _figure(name: str, drawn: dict) -> tuple:
 def _frequency_table(result) -> Table:
     pairs = result.pairs
     rows = tuple(
-        (int(t) + 1, int(m) + 1, f"{result.test_hz[t]:.4f}", f"{result.model_hz[m]:.4f}",
+        (result.number(t), int(m) + 1, f"{result.test_hz[t]:.4f}", f"{result.model_hz[m]:.4f}",
          f"{e:+.2f}", "-" if v != v else f"{v:.3f}")
         for t, m, e, v in zip(pairs.test, pairs.model, result.error_pct, pairs.mac, strict=True)
     )  # fmt: skip
@@ -56,13 +56,19 @@ def _pairs_text(result) -> tuple:
     pairs = result.pairs
     parts = []
     if pairs.swapped:
-        parts.append("Swapped (model mode out of the test's order): " + ", ".join(
-            f"test {t + 1} - model {m + 1}" for t, m in pairs.swapped) + ".")  # fmt: skip
+        named = ", ".join(f"test {result.number(t)} - model {m + 1}" for t, m in pairs.swapped)
+        parts.append(f"Swapped (model mode out of the test's order): {named}.")
     for t, m, v in pairs.refused:
-        parts.append(f"Refused: test mode {t + 1}, best model mode {m + 1} at MAC {v:.3f}.")
-    for name, modes in (("test", pairs.unpaired_test), ("model", pairs.unpaired_model)):
-        if modes:
-            parts.append(f"Unpaired {name} modes: {', '.join(str(i + 1) for i in modes)}.")
+        parts.append(
+            f"Refused: test mode {result.number(t)}, best model mode {m + 1} at MAC {v:.3f}."
+        )
+    unpaired = (
+        ("test", [result.number(t) for t in pairs.unpaired_test]),
+        ("model", [m + 1 for m in pairs.unpaired_model]),
+    )
+    for name, numbers in unpaired:
+        if numbers:
+            parts.append(f"Unpaired {name} modes: {', '.join(map(str, numbers))}.")
     return tuple(parts) or ("Every test mode is paired, none out of order.",)
 
 
@@ -190,7 +196,7 @@ def _draw_shapes(result, path: Path) -> None:
         ax.bar(x, msf * test / peak, color="tab:blue", width=0.7, label="test")
         ax.plot(x, model / peak, "o", color="tab:red", ms=3, label="model")
         ax.axhline(0, color="0.4", lw=0.6)
-        title = f"test {t + 1} ({result.test_hz[t]:.2f} Hz) - model {m + 1} "
+        title = f"test {result.number(t)} ({result.test_hz[t]:.2f} Hz) - model {m + 1} "
         ax.set_title(f"{title}({result.model_hz[m]:.2f} Hz), MAC {pairs.mac[r]:.3f}", fontsize=8)
     for ax in axes.flat[k:]:
         ax.axis("off")

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate import paper
 from bayesupdate.discovery.results_io import discovery_summary
 from bayesupdate.inference.reference_check import MEAN_TOLERANCE_SD, SD_TOLERANCE
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines.demo import (
     IDENTIFIED_BELOW_HZ,
     CalibrationPart,
@@ -27,7 +27,7 @@ _PLOT_CAPTIONS = {
     "trace": "Trace of the walkers (burn-in shaded) for each parameter.",
     "pair": "Posterior pair plot: marginals and pairwise correlations.",
     "predictive": "Posterior predictive frequencies (90 % bands) against the test.",
-    "design_vs_table3": "Design variables: posterior beside the seed's Table 3 optimum.",
+    "design_vs_reference": "Design variables: posterior beside the seed's Table 3 optimum.",
 }
 
 
@@ -395,7 +395,10 @@ def _calibration_figures(part: CalibrationPart, folder: Path) -> list:
     from bayesupdate.inference.results import read_result
 
     folder.mkdir(exist_ok=True)
-    return inference_plots.save_all(read_result(part.path), folder)
+    table3 = inference_plots.DesignReference(
+        paper.TABLE3_INITIAL_SI, paper.TABLE3_OPTIMUM_SI, "seed Table 3 optimum"
+    )
+    return inference_plots.save_all(read_result(part.path), folder, table3)
 
 
 def _identification_figures(truth: VirtualTest, identified: IdentifiedPart, folder: Path) -> list:

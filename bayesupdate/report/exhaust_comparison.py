@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate import paper
+from bayesupdate.models import exhaust_paper as paper
 from bayesupdate.pipelines.exhaust_comparison import MODELS, ExhaustRecord, better_exhaust
 from bayesupdate.report.document import Figure, Section, Table
 

@@ -17,7 +17,7 @@ from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.ema.identify import Identification
 from bayesupdate.ema.lsfd import realise
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.pipelines.identify import identification_notes
+from bayesupdate.pipelines.identify import identification_notes, mpc_reasons
 from bayesupdate.report.document import Alert, Document, Figure, Section, Table
 
 METHOD_TEXT = {
@@ -69,15 +69,6 @@ class IdentifyInput:
     max_order: int | None = None
     merge_notes: tuple[str, ...] = ()
     out: str = ""
-
-
-def mpc_reasons(modes) -> list[str | None]:
-    """Per mode: None when its MPC is meaningful, else why it is not reported."""
-    if len(modes.dof_labels) < 2:
-        return ["one DOF"] * modes.n_modes
-    if modes.mpc is None:
-        return ["not computed"] * modes.n_modes
-    return [None if np.isfinite(v) else "not finite" for v in modes.mpc]
 
 
 def normalised_shapes(shapes: np.ndarray) -> np.ndarray:

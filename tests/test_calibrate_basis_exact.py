@@ -21,7 +21,7 @@ from bayesupdate.inference import (  # noqa: E402
     load_modal_data,
 )
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.paper import MEASURED_MASS_KG  # noqa: E402
+from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG  # noqa: E402
 from bayesupdate.pipelines.calibrate import BasisMadeExact  # noqa: E402
 
 #: 2 starts, not polished on the basis during the search: the refine step's own Nelder-Mead

@@ -499,6 +499,15 @@ def _distinct_optima(
     return tuple(distinct)
 
 
+def _with_refine(refine, problem, box, counter, ends, objectives, executor):
+    """(the exact problem, its ends, their objectives) after ``_refined``; ``refine`` as in
+    ``calibrate`` (a function of the ends is called once here)."""
+    if callable(refine):
+        refine = refine(box.theta_from_u(np.array(ends)), np.array(objectives))
+    ends, objectives = _refined(refine, problem, counter, ends, objectives, executor)
+    return refine, ends, objectives
+
+
 def calibrate(
     problem: CalibrationProblem,
     settings: CalibrationSettings = CalibrationSettings(),
@@ -530,10 +539,8 @@ def calibrate(
     job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest())
     ends, objectives = _local_fits(job, u_starts, counter, executor)
     if refine is not None:
-        if callable(refine):
-            refine = refine(box.theta_from_u(np.array(ends)), np.array(objectives))
-        ends, objectives = _refined(refine, problem, counter, ends, objectives, executor)
-        problem = refine
+        problem, ends, objectives = _with_refine(refine, problem, box, counter, ends, objectives,
+                                                 executor)  # fmt: skip
     ends = np.array(ends)
     objectives = np.array(objectives)
     order = np.argsort(objectives, kind="stable")

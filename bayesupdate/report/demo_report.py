@@ -248,12 +248,16 @@ def _beam_sections(optimum: OptimumPart) -> list[Section]:
     residual tables); its front is drawn in the side-by-side section."""
     c, b = optimum.calibration, optimum.basis or {}
     how = "; polished on full solves" if optimum.polished else "; on the certified basis"
+    polish = (
+        "every end polished on the full model"
+        if optimum.polished
+        else "every end polished on the certified basis (a quick run: not again on full solves)"
+    )
     text = (
         "The beam exhaust (`exhaust`) calibrated the same way, for the side by side: its "
         "optimum from its own multi-start calibration (`bayesupdate calibrate`'s path: the "
         f"search on its certified basis of {b.get('size', '-')} vectors, built in "
-        f"{b.get('cpu_s', float('nan')):.1f} s CPU, every end polished on the full model). "
-        "Its posterior is not sampled here."
+        f"{b.get('cpu_s', float('nan')):.1f} s CPU, {polish}). Its posterior is not sampled here."
     )
     tables = (_design_table(c, how=how), _residual_table(c, "seed"))
     return [Section("The beam exhaust against Table 2: optimum", (text, *tables))]

@@ -16,8 +16,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
-from bayesupdate.fe.bush import two_node_matrices
+from bayesupdate.fe.elements.beam import element_frames, local_beam_matrices, to_global
+from bayesupdate.fe.elements.spring import two_node_matrices
 from bayesupdate.fe.rotations import skew
 from bayesupdate.fe.sections import section_areas, section_properties
 from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
@@ -155,7 +155,7 @@ class Assembler:
         return np.einsum("pji,pjk,pkl->pil", T, D, T)
 
     def spring_matrices(self, props: ElementProperties) -> np.ndarray:
-        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs] (``fe.bush``: acting at
+        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs] (``fe.elements.spring``: acting at
         each spring's location); grounded springs have zero blocks on their (dummy) second
         node."""
         s = self.structure
@@ -163,7 +163,7 @@ class Assembler:
         return two_node_matrices(k, s.spring_frame, self.spring_grounded, self._spring_offset)
 
     def scalar_mass_matrices(self) -> np.ndarray:
-        """(n, 12, 12) scalar-mass matrices (``fe.scalar_mass``; no parameters act on them)."""
+        """(n, 12, 12) scalar-mass matrices (``fe.elements.scalar_mass``; no parameters act on them)."""
         return self._scalar_M
 
     def assemble(self, props: ElementProperties | None = None):
@@ -235,7 +235,7 @@ class Assembler:
         total = m_beam.sum() + m_point.sum()
         moment = m_beam @ mid + m_point @ pos_point
         if s.scalar_masses is not None:
-            # the rigid-body functional of ``general.GeneralAssembler.total_mass``: trace / 3
+            # the rigid-body functional of ``sparse_assembly.GeneralAssembler.total_mass``: trace / 3
             # of the translational block, the first moments from the translation-rotation
             # coupling
             Mr = s.scalar_masses.rigid_mass(s.nodes)

@@ -43,7 +43,7 @@ def _quadratic_forms(mats, dofs, shapes):
 
 
 def _scalar_kinetic(kinetic, assembler, element_matrices: dict, shapes) -> None:
-    """Add the scalar masses' kinetic energies (``fe.scalar_mass``) to ``kinetic`` (n_parts, m)
+    """Add the scalar masses' kinetic energies (``fe.elements.scalar_mass``) to ``kinetic`` (n_parts, m)
     by part, in place."""
     sm = assembler.structure.scalar_masses
     if sm is not None:
@@ -81,7 +81,7 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
 
 
 def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEnergies:
-    """Energy shares of a general structure's modes (``fe.general.GeneralAssembler`` ``g``):
+    """Energy shares of a general structure's modes (``fe.sparse_assembly.GeneralAssembler`` ``g``):
     beams, springs and point masses as ``modal_energies``, general beams and rods (their element
     matrices in ``g.lines``), plus every shell element (direct
     element matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs

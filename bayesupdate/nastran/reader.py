@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.shell import SHEAR_FACTOR
+from bayesupdate.fe.elements.shell import SHEAR_FACTOR
 from bayesupdate.fe.structure import Material, StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bulk import CardError
@@ -223,7 +223,7 @@ def _autospc(ctx, structure):
     nodes have all six; springs and rods are checked on their assembled diagonal."""
     from bayesupdate.fe.assembly import Assembler
     from bayesupdate.fe.constraints import Constraints, constraint_transform
-    from bayesupdate.fe.general import line_matrices
+    from bayesupdate.fe.sparse_assembly import line_matrices
 
     a = Assembler(structure)
     K, _, _ = a.assemble(a.default_properties())
@@ -343,7 +343,7 @@ def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
         notes.append(f"{n_auto} DOF(s) with no stiffness were held (AUTOSPC)")
     if structure.shells is not None:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
-                     "penalty is fixed (fe.shell.DRILL_ALPHA)")  # fmt: skip
+                     "penalty is fixed (fe.elements.shell.DRILL_ALPHA)")  # fmt: skip
         notes.append("shell mass is consistent (Nastran's default is lumped, COUPMASS -1)")
     n_nodes = structure.n_nodes
     used = ctx.node >= 0

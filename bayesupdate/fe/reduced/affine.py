@@ -181,8 +181,8 @@ def _line_groups(fe: FEModel, bounds, interp_tol: float) -> list:
     for line in getattr(fe, "line_groups", lambda *_: ())(bounds, interp_tol):
         params = tuple(fe.parameter_names.index(n) for n in line.names)
         group = InterpolatedGroup(np.zeros(0, int), params, line.log_pieces, line.degrees, -1, -1)
-        k_parts = [pattern_part(fe.general, d) for d in line.dK]
-        m_parts = [pattern_part(fe.general, d) for d in line.dM]
+        k_parts = [pattern_part(fe.sparse_assembly, d) for d in line.dK]
+        m_parts = [pattern_part(fe.sparse_assembly, d) for d in line.dM]
         out.append((group, k_parts, m_parts))
     return out
 

@@ -45,7 +45,7 @@ class ShellMassTerms:
 
     @classmethod
     def of(cls, fe: FEModel) -> "ShellMassTerms":
-        g = fe.general
+        g = fe.sparse_assembly
         line_M = g.line_data()[1]
         lines = _translational_mass(g, np.arange(g.nnz), line_M)
         nsm, powers = [], {}
@@ -63,7 +63,7 @@ class ShellMassTerms:
     def total_mass(self, fe: FEModel, params) -> float:
         """Total mass [kg] of ``fe`` (the model these terms are of) at ``params`` (name -> SI
         value), the values validated as ``FEModel.total_mass`` validates them."""
-        g = fe.general
+        g = fe.sparse_assembly
         props = fe.element_properties(params)
         check_properties(fe.structure, props)
         with np.errstate(invalid="ignore", divide="ignore"):  # its CoG is 0/0 without beams
@@ -88,7 +88,7 @@ def total_mass(fe: FEModel, params) -> float:
     """Total mass [kg] of ``fe`` at ``params`` (name -> SI value, all names): ``FEModel.total_mass``
     on the banded beam path (no assembly there), the per-term masses on a general structure,
     computed once per FE model (the reduced models of one FE model share them)."""
-    if fe.general is None:
+    if fe.sparse_assembly is None:
         return fe.total_mass(params)[0]
     terms = _TERMS.get(fe)
     if terms is None:

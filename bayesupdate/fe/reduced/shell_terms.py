@@ -82,7 +82,7 @@ def general_terms(fe: FEModel, terms: AffineTerms, f_ref: np.ndarray):
     by their feature pair (``AffineDecomposition``; (0, 0) the constant term), each matrix
     multiplied by f_ref[a] f_ref[b] (the features at a reference point, so that the stored
     matrices have the size of their contribution there); empty on the banded beam path."""
-    g = fe.general
+    g = fe.sparse_assembly
     if g is None:
         return {}, {}
     n = len(fe.parameter_names)

@@ -25,12 +25,12 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-from bayesupdate.fe import shell
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.constraints import Constraints, constraint_transform
 from bayesupdate.fe.eigensolve import ModalSolution
-from bayesupdate.fe.general_beam import general_beam_matrices
-from bayesupdate.fe.rod import rod_matrices
+from bayesupdate.fe.elements.general_beam import general_beam_matrices
+from bayesupdate.fe.elements.rod import rod_matrices
 from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.shell_model import ShellAssembly
 from bayesupdate.fe.sparse_modal import (

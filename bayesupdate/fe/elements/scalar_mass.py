@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.rod import line_dofs
+from bayesupdate.fe.elements.rod import line_dofs
 from bayesupdate.fe.rotations import rigid_body_basis
 
 

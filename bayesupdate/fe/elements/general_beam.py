@@ -1,7 +1,7 @@
 """General 3-D beams: arbitrary section properties, rigid end offsets and pin flags, vectorised
 over elements (the ``CBAR``/``CBEAM`` of Nastran).
 
-Each element is the Timoshenko beam of ``fe.beam`` (Przemieniecki 1968, eqs 5.116 and
+Each element is the Timoshenko beam of ``fe.elements.beam`` (Przemieniecki 1968, eqs 5.116 and
 11.41-11.42, the same bending blocks), built in four exact steps:
 
 1. *Principal axes.*  With a product of inertia iyz != 0 the element is formed in the section's
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.beam import (
+from bayesupdate.fe.elements.beam import (
     _XY,
     _XZ,
     _XZ_SIGN,
@@ -38,7 +38,7 @@ from bayesupdate.fe.beam import (
     to_global,
 )
 from bayesupdate.fe.constraints import rigid_link
-from bayesupdate.fe.rod import line_dofs
+from bayesupdate.fe.elements.rod import line_dofs
 
 #: mass formulations of a line element
 MASS_KINDS = ("consistent", "lumped", "none")

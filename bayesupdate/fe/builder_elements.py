@@ -135,8 +135,8 @@ def _constraints(builder) -> Constraints | None:
 def general_parts(builder) -> dict:
     """``shells``, ``constraints``, ``general_beams`` and ``rods`` fields of the ``Structure``
     being built."""
-    from bayesupdate.fe.general_beam import GeneralBeams
-    from bayesupdate.fe.rod import Rods
+    from bayesupdate.fe.elements.general_beam import GeneralBeams
+    from bayesupdate.fe.elements.rod import Rods
 
     return dict(
         shells=_shell_elements(builder),
@@ -220,7 +220,7 @@ def add_beams(
     shear_modulus=None,
     torsion_inertia=None,
 ):
-    """General beams (``fe.general_beam``) on existing node pairs; returns their indices.
+    """General beams (``fe.elements.general_beam``) on existing node pairs; returns their indices.
 
     section : ``standard_sections.BeamSection``; material : ``Material`` (G = E / 2(1 + nu)
     unless ``shear_modulus`` [Pa]); up : local z reference (3,) or (n, 3), default global z
@@ -321,9 +321,9 @@ def add_rods(
     mass="consistent",
     shear_modulus=None,
 ):
-    """Rods (``fe.rod``): area [m^2] and torsion constant [m^4] (scalars or one per element),
+    """Rods (``fe.elements.rod``): area [m^2] and torsion constant [m^4] (scalars or one per element),
     nsm [kg/m], mass 'consistent' or 'lumped'.  Returns their indices."""
-    from bayesupdate.fe.rod import Rods
+    from bayesupdate.fe.elements.rod import Rods
 
     what = f"add_rods (part {part!r})"
     if mass not in ("consistent", "lumped", "none"):

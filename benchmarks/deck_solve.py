@@ -87,7 +87,7 @@ def before_after(fe, repeats: int) -> None:
     from bayesupdate.nastran.lines import LineAssembler
 
     pts = points(fe)
-    g = fe.sparse_assembly
+    g = fe.general
     print(f"line fields on records: {g.fields is not None} {g.fields_note}")
     after = [fe.solve(p, N_MODES).frequencies_hz for p in pts]
     t_after = [median_ms(lambda p=p: fe.solve(p, N_MODES), repeats) for p in pts]
@@ -110,7 +110,7 @@ def parts(fe, repeats: int) -> None:
     from bayesupdate.fe.sparse_modal import ModalSettings
 
     p = points(fe)[0]
-    g = fe.sparse_assembly
+    g = fe.general
     t_asm = median_ms(lambda: fe.matrices(p), repeats)
     theta = g.fields.theta(fe.full_parameters(p)) if g.fields is not None else None
     t_lines = median_ms(lambda: g.fields.contribution(theta), repeats) if theta is not None else 0

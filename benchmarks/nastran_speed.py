@@ -49,7 +49,8 @@ def ours(repeats=3):
 
 
 def ours_drilling(alpha):
-    """Frequencies with the shell drilling penalty alpha G (fe.elements.shell.DRILL_ALPHA) changed."""
+    """Frequencies with the shell drilling penalty alpha G (fe.elements.shell.DRILL_ALPHA)
+    changed."""
     from bayesupdate.fe.elements import shell
     from bayesupdate.nastran import load_nastran_model
 

@@ -33,7 +33,11 @@ from bayesupdate.fe import STEEL, FEModel, Material, StructureBuilder, circular_
 from bayesupdate.fe import standard_sections as ss
 from bayesupdate.fe.assembly import Assembler
 from bayesupdate.fe.frames import CoordinateFrame
-from bayesupdate.fe.sparse_assembly import line_matrices
+
+
+def line_matrices(structure) -> list:
+    """[(dofs, K, M)] of the structure's element families (``fe.elements.base``), as assembled."""
+    return [(f.dofs, f.K, f.M) for f in Assembler(structure).families]
 
 
 def _solve(structure, n_modes=8):

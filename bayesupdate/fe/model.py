@@ -18,7 +18,8 @@ bend_factor        extra factor dividing EI of a named bend     -         K non-
 =================  ==========================================  ========  =====================
 
 On a part with shells, thickness, density, youngs_modulus and modulus_factor act on its shells as
-well (shell K and M are exact sums of powers of the thickness, ``fe.sparse_assembly``).  A structure with
+well (shell K and M are exact sums of powers of the thickness, ``fe.sparse_assembly``).  A
+structure with
 shells, supports or rigid elements is solved on the sparse path (``fe.sparse_assembly``: constraints
 eliminated exactly, shift-invert Lanczos, rigid-body modes the supports allow removed exactly);
 a beam structure without them keeps the banded Krylov path (``method="sparse"`` forces the
@@ -36,8 +37,8 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.rotations import rigid_body_basis
+from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction

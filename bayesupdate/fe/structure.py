@@ -16,6 +16,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.constraints import Constraints
+from bayesupdate.fe.elements import families_of
 from bayesupdate.fe.sections import _SHAPE_CODE, Section
 from bayesupdate.fe.shell_model import ShellElements
 
@@ -84,6 +85,8 @@ class Structure:
     sensor_read : None (each sensor reads its node's translations along its direction) or
     (DOFs (n_s, K), weights (n_s, K)): sensor s reads sum_k weights[s, k] * shape[DOFs[s, k]]
     (a test point between nodes, interpolated with a rigid arm: ``testgeom.observation``).
+    elements : instances of registered element families with no field of their own
+    (``fe.elements.base``: assembled, in the energies, the mass and the reduced basis).
     """
 
     nodes: np.ndarray
@@ -126,6 +129,7 @@ class Structure:
     spring_offset: np.ndarray | None = None
     scalar_masses: "ScalarMasses | None" = None
     sensor_read: tuple[np.ndarray, np.ndarray] | None = None
+    elements: tuple = ()
 
     def spring_offsets(self) -> np.ndarray:
         """(S, 2, 3) offsets [m] from each spring's nodes to its location (zeros: at the
@@ -386,7 +390,8 @@ class StructureBuilder:
         stiffness : 6 values (kx, ky, kz [N/m], krx, kry, krz [N m/rad]) along the rows of
         ``frame`` (3x3, default global axes).  location : None (the spring acts on the nodes' own
         DOFs: meant for coincident nodes) or the point p (3,) [m] where it acts, rigidly linked to
-        both nodes (``fe.elements.spring``, Nastran CBUSH: a point on GA-GB at S, or an OCID offset): the
+        both nodes (``fe.elements.spring``, Nastran CBUSH: a point on GA-GB at S, or an OCID
+        offset): the
         springs see the relative motion at p, so separated ends keep moment equilibrium."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
@@ -695,12 +700,11 @@ def check_connected(structure: Structure, node_names=None) -> None:
         pairs.append(structure.shells.edges())
     if structure.constraints is not None:
         pairs.append(structure.constraints.edges())
-    for lines in (structure.general_beams, structure.rods):
-        if lines is not None:
-            pairs.append(lines.nodes)
-    sm = structure.scalar_masses
-    if sm is not None:
-        pairs.append(sm.nodes[~sm.grounded])
+    family_nodes = [f.nodes.reshape(f.n_elements, -1) for f in families_of(structure)]
+    for nodes in family_nodes:
+        # an element joins its nodes; one with a grounded end (-1) joins none
+        joined = nodes[(nodes >= 0).all(axis=1)]
+        pairs.append(np.stack([joined[:, :-1], joined[:, 1:]], axis=-1))
     edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)
@@ -708,8 +712,8 @@ def check_connected(structure: Structure, node_names=None) -> None:
     used[edges.ravel()] = True
     used[structure.mass_node] = True
     used[structure.spring_nodes[:, 0]] = True
-    if sm is not None:
-        used[sm.nodes[:, 0]] = True
+    for nodes in family_nodes:
+        used[nodes[nodes >= 0]] = True
     if structure.is_general and not np.all(used):
         raise BayesUpdateError(
             f"node {name(np.flatnonzero(~used)[:1])} is used by no element; remove it or connect it"

@@ -1,6 +1,7 @@
 """The seed's exhaust as the paper built it: closed shell bodies joined by beam pipes.
 
-The catalyst and both mufflers are closed shells (MITC4 quads, ``fe.elements.shell``): an oval mantle, two
+The catalyst and both mufflers are closed shells (MITC4 quads, ``fe.elements.shell``): an oval
+mantle, two
 oval end caps (flat or conical, fitted) and, in the main muffler, two internal baffles
 (``exhaust_shell_mesh``); the pre-silencer's straight-through pipe is a beam from cap to cap.
 The pipes are the beam pipes of ``exhaust`` (same routing, lengths, bend radii, B31.3 elbow

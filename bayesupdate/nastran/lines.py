@@ -38,8 +38,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
+from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bindings import _card, set_field

@@ -7,7 +7,8 @@ user can form the viscous damping matrix C for FRF synthesis or complex modes,
 
 with c in N s/m (translations) and N m s/rad (rotations) along the rows of the damper's frame R
 (3x3, rows = its axes in global coordinates), T = blockdiag(R, R) per node (the same element form
-as a spring, ``fe.elements.spring``, including its location: a damper whose ends are apart acts at a point
+as a spring, ``fe.elements.spring``, including its location: a damper whose ends are apart acts at
+a point
 rigidly linked to both, as Nastran's CBUSH B); a grounded damper keeps only the [[c]] block on its
 first node.
 """

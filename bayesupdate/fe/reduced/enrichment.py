@@ -46,7 +46,7 @@ class ShiftedSolver:
 
     def __init__(self, fe: FEModel, params: Mapping[str, float], shift: float):
         K, M = fe.matrices(params)
-        g = fe.sparse_assembly
+        g = fe.general
         self.T = sp.identity(K.shape[0], format="csr") if g is None else g.transform.T
         self.M = M
         A = self.T.T @ ((K + shift * M) @ self.T)

@@ -34,7 +34,7 @@ class ResidualIndicator:
 
     def __init__(self, fe: FEModel, centre: Mapping[str, float]):
         K0, M0 = fe.matrices(centre)
-        g = fe.sparse_assembly
+        g = fe.general
         self.fe = fe
         self.T = None if g is None else g.transform.T
         A = K0 - SHIFT * M0

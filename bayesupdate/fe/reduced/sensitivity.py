@@ -81,7 +81,7 @@ def static_corrections(
     theta = np.array([params[k] for k in decomposition.names], dtype=float)
     dK, dM = coefficient_derivatives(decomposition, theta)
     K, M = fe.matrices(params)
-    g = fe.sparse_assembly
+    g = fe.general
     T = None if g is None else g.transform.T
     A = K - SHIFT * M if T is None else T.T @ ((K - SHIFT * M) @ T)
     solve = factorize(A.tocsc())

@@ -221,7 +221,8 @@ def _pins(e):
 
 
 def add(ctx: Context) -> None:
-    """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM (tapered: its mean section), PBARL
+    """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM (tapered: its mean section),
+    PBARL
     or PBEAML (``L_SECTIONS``), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass
     (COUPMASS < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each,
     and for CBEAM also half the torsional inertia rho (I1 + I2) L about the axis (MSC lumps none

@@ -82,7 +82,8 @@ def _add_conm1(ctx: Context, m) -> None:
 
 
 def _add_cmass(ctx: Context, m) -> None:
-    """A scalar mass (``fe.elements.scalar_mass``) on component C1 of G1 (and C2 of G2, or ground), in
+    """A scalar mass (``fe.elements.scalar_mass``) on component C1 of G1 (and C2 of G2, or ground),
+    in
     the grids' CD frames: a rotation component makes it a rotary inertia about that axis."""
     value = ctx.prop(m, ("PMASS",)).real("M") if m.name == "CMASS1" else m.real("M")
     if value < 0:

@@ -62,10 +62,11 @@ class LumpedMasses:
 
 
 @pytest.fixture
-def registered(monkeypatch):
-    """The family registered for this test only (the registry is restored afterwards)."""
+def registry(monkeypatch):
+    """The registry with the family registered, for this test only (restored afterwards)."""
     monkeypatch.setattr(base, "FAMILIES", dict(base.FAMILIES))
     base.register(LumpedMasses)
+    return base.FAMILIES
 
 
 def _chain():
@@ -97,7 +98,8 @@ def _model(s):
     )
 
 
-def test_registered_family_assembles_to_the_chain_closed_form(registered):
+def test_registered_family_assembles_to_the_chain_closed_form(registry):
+    assert registry[FAMILY] is LumpedMasses
     fe = _model(_chain())
     n = 6 * (N - 1)
     for method in ("krylov", "sparse"):
@@ -110,7 +112,8 @@ def test_registered_family_assembles_to_the_chain_closed_form(registered):
         assert r.mass_kg == pytest.approx(N * MASS, rel=1e-12)
 
 
-def test_registered_family_enters_the_reduced_basis(registered):
+def test_registered_family_enters_the_reduced_basis(registry):
+    assert registry[FAMILY] is LumpedMasses
     fe = _model(_chain())
     settings = ReducedSettings(n_modes=12, tol=1e-6, seed=0)
     rom = ReducedFEModel(fe, settings=settings).build()
@@ -124,7 +127,7 @@ def test_unregistered_family_is_refused():
         FEModel(_chain(), {}, {}, {})
 
 
-def test_files_a_new_family_touches(registered):
+def test_files_a_new_family_touches(registry):
     """The measure of the contributing guide: the files a new family touches are the files of
     the package that name it (none) and the file of its class (here this test): one file, whose
     one ``register`` call is the registration."""
@@ -132,4 +135,4 @@ def test_files_a_new_family_touches(registered):
     naming = {p for p in package.rglob("*.py") if FAMILY in p.read_text()}
     touched = naming | {Path(inspect.getsourcefile(LumpedMasses)).resolve()}
     assert touched == {Path(__file__).resolve()}
-    assert base.FAMILIES[FAMILY] is LumpedMasses
+    assert registry[FAMILY] is LumpedMasses

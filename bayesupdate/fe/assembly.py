@@ -18,11 +18,11 @@ import scipy.sparse as sp
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.elements import ElementSettings, families_of
 from bayesupdate.fe.elements.base import FamilyMatrices, rigid_mass
-from bayesupdate.fe.elements.beam import element_frames, local_beam_matrices, to_global
+from bayesupdate.fe.elements.beam import TubeBeams, element_frames
 from bayesupdate.fe.elements.point_mass import offset_link, point_mass_matrices
 from bayesupdate.fe.elements.spring import two_node_matrices
-from bayesupdate.fe.sections import section_areas, section_properties
-from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
+from bayesupdate.fe.sections import section_areas
+from bayesupdate.fe.structure import Structure
 
 
 @dataclass(frozen=True)
@@ -61,9 +61,20 @@ class Assembler:
         )
         self.spring_grounded = grounded
         self._spring_offset = s.spring_offsets()
+        self._settings = settings = ElementSettings(s.shear, s.rotary_inertia)
+        self.tubes = TubeBeams(
+            self.frames,
+            self.lengths,
+            s.beam_shape,
+            s.beam_width,
+            s.beam_height,
+            s.beam_nu,
+            s.beam_shear_factor,
+            s.beam_elbow,
+            s.beam_bend_radius,
+        )
         # the registered element families (``fe.elements.base``): no parameter acts on them,
         # so their matrices are computed once
-        settings = ElementSettings(s.shear, s.rotary_inertia)
         self.families = tuple(FamilyMatrices.of(f, s.nodes, settings) for f in families_of(s))
         self._build_pattern()
         self._family_K = self._scatter_families("K")
@@ -111,41 +122,9 @@ class Assembler:
         )
 
     def beam_matrices(self, props: ElementProperties, elements=None):
-        """Global-axis beam matrices (n_e, 12, 12) for ``elements`` (index array, default all)."""
-        s = self.structure
-        e = slice(None) if elements is None else elements
-        t = props.beam_thickness[e]
-        sec = section_properties(
-            s.beam_shape[e], s.beam_width[e], s.beam_height[e], t, s.beam_nu[e]
-        )
-        if s.beam_shear_factor is not None:
-            k = s.beam_shear_factor[e]
-            for axis in ("Asy", "Asz"):
-                sec[axis] = np.where(k > 0, k * sec["A"], sec[axis])
-        E = props.beam_E[e]
-        G = E / (2.0 * (1.0 + s.beam_nu[e]))
-        elbow = np.where(
-            s.beam_elbow[e],
-            _bend_flexibility_factor(t, s.beam_bend_radius[e], s.beam_width[e]),
-            1.0,
-        )
-        Kl, Ml = local_beam_matrices(
-            self.lengths[e],
-            E,
-            G,
-            props.beam_rho[e],
-            sec["A"],
-            sec["Iy"],
-            sec["Iz"],
-            sec["J"],
-            sec["Asy"],
-            sec["Asz"],
-            shear=s.shear,
-            bend_factor=elbow * props.beam_bend_factor[e],
-            rotary_inertia=s.rotary_inertia,
-        )
-        R = self.frames[e]
-        return to_global(Kl, R), to_global(Ml, R)
+        """Global-axis beam matrices (n_e, 12, 12) for ``elements`` (index array, default all)
+        (``elements.beam.TubeBeams``)."""
+        return self.tubes.matrices(props, self._settings, elements)
 
     def mass_matrices(self, props: ElementProperties) -> np.ndarray:
         """(P, 6, 6) point-mass matrices at their nodes (rigid offset included)."""

@@ -177,14 +177,6 @@ class Structure:
         return dofs, self.sensor_direction
 
 
-def _bend_flexibility_factor(thickness, bend_radius, outer_diameter):
-    """ASME B31.3 flexibility factor k = max(1, 1.65/h), h = t R / r^2 (r mean radius). (n,)"""
-    r = 0.5 * (outer_diameter - thickness)
-    h = thickness * bend_radius / r**2
-    with np.errstate(divide="ignore"):
-        return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
-
-
 class StructureBuilder:
     """Mutable builder of a ``Structure``.
 

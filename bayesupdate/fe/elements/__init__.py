@@ -18,11 +18,10 @@ reduced basis loop over (``families_of``).
 # importing the families registers them (``base.register``), in this order of assembly
 from bayesupdate.fe.elements import general_beam, rod, scalar_mass  # noqa: F401, E402
 from bayesupdate.fe.elements.base import (  # noqa: E402
-    FAMILIES,
     ElementFamily,
     ElementSettings,
     families_of,
     register,
 )
 
-__all__ = ["FAMILIES", "ElementFamily", "ElementSettings", "families_of", "register"]
+__all__ = ["ElementFamily", "ElementSettings", "families_of", "register"]

@@ -23,12 +23,16 @@ def test_import_layer_contracts_are_kept(capsys):
     # the rooms' own contracts are there (a contract deleted from pyproject.toml would pass)
     kinds = {c["name"]: c["type"] for c in contracts["contracts"]}
     assert kinds["compute imports nothing above the core"] == "forbidden"
+    elements = (
+        "element families import nothing above fe (nor fe's assembly, model or reduced basis)"
+    )
+    assert kinds[elements] == "forbidden"
     assert kinds["the core imports nothing of the package above it (compute included)"] == (
         "forbidden"
     )
     acyclic = [c for c in contracts["contracts"] if c["type"] == "acyclic_siblings"]
     assert [c["ancestors"] for c in acyclic] == [["bayesupdate"]]
-    assert len(contracts["contracts"]) == 9
+    assert len(contracts["contracts"]) == 10
 
 
 def test_no_dead_code():

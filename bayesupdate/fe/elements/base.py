@@ -27,7 +27,7 @@ each class's ``of(structure)`` finds its instance.  Units: SI in, SI out; K [N/m
 """
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -44,7 +44,6 @@ class ElementSettings:
     rotary_inertia: bool = True
 
 
-@runtime_checkable
 class ElementFamily(Protocol):
     """One element family without design parameters (module docstring).
 

@@ -49,8 +49,9 @@ def ours(repeats=3):
 
 
 def ours_drilling(alpha):
-    """Frequencies with the shell drilling penalty alpha G (fe.shell.DRILL_ALPHA) changed."""
-    from bayesupdate.fe import shell
+    """Frequencies with the shell drilling penalty alpha G (fe.elements.shell.DRILL_ALPHA)
+    changed."""
+    from bayesupdate.fe.elements import shell
     from bayesupdate.nastran import load_nastran_model
 
     old, shell.DRILL_ALPHA = shell.DRILL_ALPHA, alpha

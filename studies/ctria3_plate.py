@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from bayesupdate.fe import shell
 from bayesupdate.fe import shell_mesh as sm
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.shell_model import ShellAssembly, shell_mesh
 from bayesupdate.fe.sparse_modal import ModalSettings, solve_sparse_modes
 

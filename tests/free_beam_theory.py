@@ -8,7 +8,7 @@ both models are scaled to the authors' 7 frequencies and only then extrapolated:
 - Euler-Bernoulli: f_n = c (beta_n L)^2, beta_n L = 4.7300, 7.8532, 10.9956, 14.1372,
   17.2788, 20.4204, 23.5619, then (2n + 1) pi / 2; c by least squares on log f.
 - Timoshenko (shear and rotary inertia): a free-free beam of 100 elements of
-  ``bayesupdate.fe.beam`` (Przemieniecki 1968, eqs 5.116, 11.41-11.42; at s -> 0 modes 1-12
+  ``bayesupdate.fe.elements.beam`` (Przemieniecki 1968, eqs 5.116, 11.41-11.42; at s -> 0 modes 1-12
   are within 2e-5 of the exact roots above), eigenvalues omega^2 rho A L^4 / EI
   (L = 1, I / A = s^2, E / (kappa G) = 2 (1 + nu) / kappa with Cowper's
   kappa = 10 (1 + nu) / (12 + 11 nu) for a rectangle, nu = 0.3); the slenderness s = r / L
@@ -19,7 +19,7 @@ import numpy as np
 from scipy.linalg import eigh
 from scipy.optimize import minimize_scalar
 
-from bayesupdate.fe.beam import local_beam_matrices
+from bayesupdate.fe.elements.beam import local_beam_matrices
 
 #: the data authors' 7 frequencies [Hz] (sdypy-EMA tests/test_data.py nat_freq_true)
 BEAM_REFERENCE_HZ = np.array(
@@ -27,7 +27,7 @@ BEAM_REFERENCE_HZ = np.array(
      4181.71710178]
 )  # fmt: skip
 _BETA_L = np.array([4.7300408, 7.8532046, 10.9956078, 14.1371655, 17.2787597, 20.4203522])
-#: (v, rz) bending DOFs of the 12-DOF element of bayesupdate.fe.beam
+#: (v, rz) bending DOFs of the 12-DOF element of bayesupdate.fe.elements.beam
 _PLANE = np.array([1, 5, 7, 11])
 _NU = 0.3
 _N_ELEMENTS = 100

@@ -23,6 +23,10 @@ def test_import_layer_contracts_are_kept(capsys):
     # the rooms' own contracts are there (a contract deleted from pyproject.toml would pass)
     kinds = {c["name"]: c["type"] for c in contracts["contracts"]}
     assert kinds["compute imports nothing above the core"] == "forbidden"
+    elements = (
+        "element families import nothing above fe (nor fe's assembly, model or reduced basis)"
+    )
+    assert kinds[elements] == "forbidden"
     assert kinds["the core imports nothing of the package above it (compute included)"] == (
         "forbidden"
     )
@@ -32,7 +36,7 @@ def test_import_layer_contracts_are_kept(capsys):
     assert kinds[models + "pipelines.model_source)"] == "forbidden"
     independent = "no command imports another (what they share is commands._shared)"
     assert kinds[independent] == "independence"
-    assert len(contracts["contracts"]) == 11
+    assert len(contracts["contracts"]) == 12
 
 
 def test_every_command_module_is_in_the_independence_contract():

@@ -7,7 +7,7 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import StructureBuilder
-from bayesupdate.fe.dampers import damping_matrix
+from bayesupdate.fe.elements.damper import damping_matrix
 
 
 def _two_masses(frame=None):

@@ -2,7 +2,7 @@
 node-local frames (issue 18 items 3-4), each against a closed form or an independent path.
 
 - general section = tube section: the same A, I, J, shear areas give the same element matrices
-  as ``fe.beam`` (to ~1e-16, asserted 1e-12) and the same modes;
+  as ``fe.elements.beam`` (to ~1e-16, asserted 1e-12) and the same modes;
 - I12 != 0: the unsymmetric-bending tip deflection of a cantilever, v = P L^3 Iy / (3 E D),
   w = -P L^3 Iyz / (3 E D), D = Iy Iz - Iyz^2 (exact for one cubic element), and the same modes
   as the beam with the principal properties turned by the principal angle;
@@ -33,7 +33,11 @@ from bayesupdate.fe import STEEL, FEModel, Material, StructureBuilder, circular_
 from bayesupdate.fe import standard_sections as ss
 from bayesupdate.fe.assembly import Assembler
 from bayesupdate.fe.frames import CoordinateFrame
-from bayesupdate.fe.general import line_matrices
+
+
+def line_matrices(structure) -> list:
+    """[(dofs, K, M)] of the structure's element families (``fe.elements.base``), as assembled."""
+    return [(f.dofs, f.K, f.M) for f in Assembler(structure).families]
 
 
 def _solve(structure, n_modes=8):

@@ -3,7 +3,7 @@ chunked per-power shell data against the direct element assembly."""
 
 import numpy as np
 
-from bayesupdate.fe import shell
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.node_pattern import node_blocks, node_pattern
 from bayesupdate.fe.shell_model import ShellAssembly, shell_mesh
 from bayesupdate.fe.sparse_modal import SparsePattern, dof_pattern, element_dofs

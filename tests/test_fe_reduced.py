@@ -10,6 +10,7 @@ import pytest
 import scipy.linalg as sl
 
 from bayesupdate.fe import STEEL, Binding, FEModel, StructureBuilder, circular_tube, oval_tube
+from bayesupdate.fe.elements.beam import bend_flexibility_factor
 from bayesupdate.fe.reduced import (
     ReducedFEModel,
     ReducedSettings,
@@ -18,7 +19,6 @@ from bayesupdate.fe.reduced import (
     reduced_model_for,
 )
 from bayesupdate.fe.reduced.affine import b31_kinks
-from bayesupdate.fe.structure import _bend_flexibility_factor
 from bayesupdate.inference.evaluators import PoolEvaluator
 
 N_MODES = 8
@@ -228,7 +228,7 @@ def test_b31_kink_is_where_the_flexibility_factor_leaves_one(fe):
     for t in kinks:
         D = s.beam_width[elements[0]]
         R = s.beam_bend_radius[elements]
-        k = _bend_flexibility_factor(np.full(R.size, t), R, np.full(R.size, D))
+        k = bend_flexibility_factor(np.full(R.size, t), R, np.full(R.size, D))
         assert np.any(np.isclose(k, 1.0, rtol=1e-9))
 
 

@@ -1,4 +1,5 @@
-"""Scalar masses (``fe.scalar_mass``, Nastran CMASS1/CMASS2): a 2-DOF closed form, a grounded
+"""Scalar masses (``fe.elements.scalar_mass``, Nastran CMASS1/CMASS2): a 2-DOF closed form, a
+grounded
 rotary scalar mass against a point mass's inertia, the mass report, energies, reduced terms."""
 
 import numpy as np

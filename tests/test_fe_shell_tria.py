@@ -1,4 +1,5 @@
-"""The 3-node shell triangle (DKT bending, ``bayesupdate.fe.shell_tria``) against closed forms.
+"""The 3-node shell triangle (DKT bending, ``bayesupdate.fe.elements.shell_tria``) against closed
+forms.
 
 Tolerances and why:
 - simply supported square plate, 32 x 32 cells each cut in two triangles along the same diagonal
@@ -14,8 +15,8 @@ Tolerances and why:
 import numpy as np
 import pytest
 
-from bayesupdate.fe import shell, shell_tria
 from bayesupdate.fe import shell_mesh as sm
+from bayesupdate.fe.elements import shell, shell_tria
 from bayesupdate.fe.shell_model import ShellAssembly, shell_mesh
 from bayesupdate.fe.sparse_modal import ModalSettings, solve_sparse_modes
 

@@ -1,4 +1,5 @@
-"""Springs whose ends are apart, acting at a location (``fe.bush``, Nastran CBUSH with GA, GB
+"""Springs whose ends are apart, acting at a location (``fe.elements.spring``, Nastran CBUSH with
+GA, GB
 apart): equilibrium, rigid-body invariance, closed forms, RBE2 equivalence, the coincident case."""
 
 import numpy as np

@@ -5,7 +5,7 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, Binding, FEModel, StructureBuilder, circular_tube
-from bayesupdate.fe.structure import _bend_flexibility_factor
+from bayesupdate.fe.elements.beam import bend_flexibility_factor
 
 SEC = circular_tube(0.045, 1.5e-3)
 
@@ -40,11 +40,11 @@ def test_b31_3_flexibility_factor():
     t, R, D = 1.5e-3, 0.2, 0.045
     r = (D - t) / 2
     h = t * R / r**2
-    assert _bend_flexibility_factor(np.array([t]), np.array([R]), np.array([D]))[
-        0
-    ] == pytest.approx(1.65 / h, rel=1e-12)
+    assert bend_flexibility_factor(np.array([t]), np.array([R]), np.array([D]))[0] == pytest.approx(
+        1.65 / h, rel=1e-12
+    )
     # a stiff (thick, large-radius) bend is not made stiffer than a straight pipe: k >= 1
-    assert _bend_flexibility_factor(np.array([8e-3]), np.array([5.0]), np.array([0.045]))[0] == 1
+    assert bend_flexibility_factor(np.array([8e-3]), np.array([5.0]), np.array([0.045]))[0] == 1
 
 
 def test_elbow_flexibility_softens_in_plane_bending_only_through_the_bend():

@@ -16,11 +16,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.beam import element_frames, local_beam_matrices, to_global
-from bayesupdate.fe.bush import two_node_matrices
-from bayesupdate.fe.rotations import skew
-from bayesupdate.fe.sections import section_areas, section_properties
-from bayesupdate.fe.structure import Structure, _bend_flexibility_factor
+from bayesupdate.fe.elements import ElementSettings, families_of
+from bayesupdate.fe.elements.base import FamilyMatrices, rigid_mass
+from bayesupdate.fe.elements.beam import TubeBeams, element_frames
+from bayesupdate.fe.elements.point_mass import offset_link, point_mass_matrices
+from bayesupdate.fe.elements.spring import two_node_matrices
+from bayesupdate.fe.sections import section_areas
+from bayesupdate.fe.structure import Structure
 
 
 @dataclass(frozen=True)
@@ -51,11 +53,7 @@ class Assembler:
         self.beam_dofs = (6 * s.beam_nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
         self.mass_dofs = 6 * s.mass_node[:, None] + np.arange(6)
         # rigid link of point masses: node DOFs -> DOFs at the mass centre
-        T = np.zeros((len(s.mass_node), 6, 6))
-        T[:, :3, :3] = np.eye(3)
-        T[:, 3:, 3:] = np.eye(3)
-        T[:, :3, 3:] = -skew(s.mass_offset)
-        self._mass_T = T
+        self._mass_T = offset_link(s.mass_offset)
         grounded = s.spring_nodes[:, 1] < 0
         b_nodes = np.where(grounded, s.spring_nodes[:, 0], s.spring_nodes[:, 1])
         self.spring_dofs = np.concatenate(
@@ -63,15 +61,30 @@ class Assembler:
         )
         self.spring_grounded = grounded
         self._spring_offset = s.spring_offsets()
-        sm = s.scalar_masses
-        self.scalar_dofs = np.zeros((0, 12), int) if sm is None else sm.dofs()
-        self._scalar_M = np.zeros((0, 12, 12)) if sm is None else sm.matrices()
+        self._settings = settings = ElementSettings(s.shear, s.rotary_inertia)
+        self.tubes = TubeBeams(
+            self.frames,
+            self.lengths,
+            s.beam_shape,
+            s.beam_width,
+            s.beam_height,
+            s.beam_nu,
+            s.beam_shear_factor,
+            s.beam_elbow,
+            s.beam_bend_radius,
+        )
+        # the registered element families (``fe.elements.base``): no parameter acts on them,
+        # so their matrices are computed once
+        self.families = tuple(FamilyMatrices.of(f, s.nodes, settings) for f in families_of(s))
         self._build_pattern()
+        self._family_K = self._scatter_families("K")
+        self._family_M = self._scatter_families("M")
 
     # -- sparse pattern ------------------------------------------------------------------------
     def _build_pattern(self):
         n = self.n_dof
-        blocks = [self.beam_dofs, self.mass_dofs, self.spring_dofs, self.scalar_dofs]
+        blocks = [self.beam_dofs, self.mass_dofs, self.spring_dofs]
+        blocks += [f.dofs for f in self.families]
         rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks])
         cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in blocks])
         # every node gets its diagonal so the pattern is never structurally singular
@@ -87,7 +100,7 @@ class Assembler:
         self._pos_beam = inverse[: splits[0]]
         self._pos_mass = inverse[splits[0] : splits[1]]
         self._pos_spring = inverse[splits[1] : splits[2]]
-        self._pos_scalar = inverse[splits[2] : splits[3]]
+        self._pos_families = [inverse[a:b] for a, b in zip(splits[2:-1], splits[3:], strict=True)]
         indptr = np.zeros(n + 1, dtype=np.int32)
         np.add.at(indptr, self.pattern_rows + 1, 1)
         self.indptr = np.cumsum(indptr).astype(np.int32)
@@ -109,67 +122,42 @@ class Assembler:
         )
 
     def beam_matrices(self, props: ElementProperties, elements=None):
-        """Global-axis beam matrices (n_e, 12, 12) for ``elements`` (index array, default all)."""
-        s = self.structure
-        e = slice(None) if elements is None else elements
-        t = props.beam_thickness[e]
-        sec = section_properties(
-            s.beam_shape[e], s.beam_width[e], s.beam_height[e], t, s.beam_nu[e]
-        )
-        if s.beam_shear_factor is not None:
-            k = s.beam_shear_factor[e]
-            for axis in ("Asy", "Asz"):
-                sec[axis] = np.where(k > 0, k * sec["A"], sec[axis])
-        E = props.beam_E[e]
-        G = E / (2.0 * (1.0 + s.beam_nu[e]))
-        elbow = np.where(
-            s.beam_elbow[e],
-            _bend_flexibility_factor(t, s.beam_bend_radius[e], s.beam_width[e]),
-            1.0,
-        )
-        Kl, Ml = local_beam_matrices(
-            self.lengths[e],
-            E,
-            G,
-            props.beam_rho[e],
-            sec["A"],
-            sec["Iy"],
-            sec["Iz"],
-            sec["J"],
-            sec["Asy"],
-            sec["Asz"],
-            shear=s.shear,
-            bend_factor=elbow * props.beam_bend_factor[e],
-            rotary_inertia=s.rotary_inertia,
-        )
-        R = self.frames[e]
-        return to_global(Kl, R), to_global(Ml, R)
+        """Global-axis beam matrices (n_e, 12, 12) for ``elements`` (index array, default all)
+        (``elements.beam.TubeBeams``)."""
+        return self.tubes.matrices(props, self._settings, elements)
 
     def mass_matrices(self, props: ElementProperties) -> np.ndarray:
         """(P, 6, 6) point-mass matrices at their nodes (rigid offset included)."""
         s = self.structure
-        D = np.zeros((len(s.mass_node), 6, 6))
-        D[:, :3, :3] = (s.mass_value * props.mass_scale)[:, None, None] * np.eye(3)
-        D[:, 3:, 3:] = s.mass_inertia * props.mass_scale[:, None, None]
-        T = self._mass_T
-        return np.einsum("pji,pjk,pkl->pil", T, D, T)
+        scale = props.mass_scale
+        return point_mass_matrices(
+            self._mass_T, s.mass_value * scale, s.mass_inertia * scale[:, None, None]
+        )
 
     def spring_matrices(self, props: ElementProperties) -> np.ndarray:
-        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs] (``fe.bush``: acting at
+        """(S, 12, 12) spring stiffness on [node_a DOFs, node_b DOFs] (``fe.elements.spring``:
+        acting at
         each spring's location); grounded springs have zero blocks on their (dummy) second
         node."""
         s = self.structure
         k = s.spring_k * props.spring_scale[:, None]
         return two_node_matrices(k, s.spring_frame, self.spring_grounded, self._spring_offset)
 
-    def scalar_mass_matrices(self) -> np.ndarray:
-        """(n, 12, 12) scalar-mass matrices (``fe.scalar_mass``; no parameters act on them)."""
-        return self._scalar_M
+    def _scatter_families(self, which: str) -> np.ndarray | None:
+        """(nnz,) sum of the registered families' K or M (None: no family has any)."""
+        data = None
+        for f, pos in zip(self.families, self._pos_families, strict=True):
+            mats = getattr(f, which)
+            if np.any(mats):
+                part = self._scatter(pos, mats)
+                data = part if data is None else data + part
+        return data
 
     def assemble(self, props: ElementProperties | None = None):
         """Global K and M as CSR matrices, plus the element matrices used (for energies).
 
-        Returns (K, M, parts) where parts = dict(beam_K, beam_M, mass_M, spring_K, scalar_M).
+        Returns (K, M, parts) where parts = dict(beam_K, beam_M, mass_M, spring_K) (the
+        registered families' matrices are ``families``).
         """
         props = self.default_properties() if props is None else props
         check_properties(self.structure, props)
@@ -180,9 +168,11 @@ class Assembler:
         )
         K = self._scatter(self._pos_beam, bK) + K_spring
         M = self._scatter(self._pos_beam, bM) + M_mass
-        if len(self._scalar_M):
-            M += self._scatter(self._pos_scalar, self._scalar_M)
-        elem = dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK, scalar_M=self._scalar_M)
+        if self._family_K is not None:
+            K += self._family_K
+        if self._family_M is not None:
+            M += self._family_M
+        elem = dict(beam_K=bK, beam_M=bM, mass_M=mM, spring_K=sK)
         return self.to_csr(K), self.to_csr(M), elem
 
     def _reusing(self, name: str, scale: np.ndarray, matrices, positions):
@@ -221,7 +211,7 @@ class Assembler:
 
     def total_mass(self, props: ElementProperties | None = None):
         """Total mass [kg] and centre of gravity (3,) [m] from the beams, point masses and the
-        translational scalar masses (``scalar_mass.ScalarMasses.rigid_mass``)."""
+        registered families (``elements.base.rigid_mass`` of their M)."""
         props = self.default_properties() if props is None else props
         s = self.structure
         memo = getattr(self, "_area_memo", None)  # areas change only with the wall thickness
@@ -234,11 +224,11 @@ class Assembler:
         pos_point = s.nodes[s.mass_node] + s.mass_offset
         total = m_beam.sum() + m_point.sum()
         moment = m_beam @ mid + m_point @ pos_point
-        if s.scalar_masses is not None:
-            # the rigid-body functional of ``general.GeneralAssembler.total_mass``: trace / 3
-            # of the translational block, the first moments from the translation-rotation
-            # coupling
-            Mr = s.scalar_masses.rigid_mass(s.nodes)
+        for f in self.families:
+            # the rigid-body functional of ``sparse_assembly.GeneralAssembler.total_mass``:
+            # trace / 3 of the translational block, the first moments from the
+            # translation-rotation coupling
+            Mr = rigid_mass(f.M, f.dofs, s.nodes)
             total = total + np.trace(Mr[:3, :3]) / 3.0
             moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
         cog = moment / total

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.fe.elements.base import quadratic_forms
+
 
 @dataclass(frozen=True)
 class ModalEnergies:
@@ -34,21 +36,13 @@ class ModalEnergies:
     shell_kinetic_density: np.ndarray | None = None
 
 
-def _quadratic_forms(mats, dofs, shapes):
-    """phi_e^T A_e phi_e for stacks A (n_e, k, k) with DOF maps (n_e, k); returns (n_e, m)."""
-    if mats.shape[0] == 0:
-        return np.zeros((0, shapes.shape[1]))
-    local = shapes[dofs]  # (n_e, k, m)
-    return np.einsum("ekm,ekl,elm->em", local, mats, local, optimize=True)
-
-
-def _scalar_kinetic(kinetic, assembler, element_matrices: dict, shapes) -> None:
-    """Add the scalar masses' kinetic energies (``fe.scalar_mass``) to ``kinetic`` (n_parts, m)
-    by part, in place."""
-    sm = assembler.structure.scalar_masses
-    if sm is not None:
-        t = 0.5 * _quadratic_forms(element_matrices["scalar_M"], assembler.scalar_dofs, shapes)
-        np.add.at(kinetic, sm.part, t)
+def _family_energies(strain, kinetic, assembler, shapes) -> None:
+    """Add the registered element families' strain and kinetic energies (``fe.elements.base``:
+    general beams, rods, scalar masses, ...) to ``strain``, ``kinetic`` (n_parts, m) by part,
+    in place."""
+    for f in assembler.families:
+        np.add.at(strain, f.part, 0.5 * quadratic_forms(f.K, f.dofs, shapes))
+        np.add.at(kinetic, f.part, 0.5 * quadratic_forms(f.M, f.dofs, shapes))
 
 
 def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> ModalEnergies:
@@ -59,17 +53,17 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
     s = assembler.structure
     n_parts = len(s.parts)
     m = shapes.shape[1]
-    ub = 0.5 * _quadratic_forms(element_matrices["beam_K"], assembler.beam_dofs, shapes)
-    us = 0.5 * _quadratic_forms(element_matrices["spring_K"], assembler.spring_dofs, shapes)
-    tb = 0.5 * _quadratic_forms(element_matrices["beam_M"], assembler.beam_dofs, shapes)
-    tm = 0.5 * _quadratic_forms(element_matrices["mass_M"], assembler.mass_dofs, shapes)
+    ub = 0.5 * quadratic_forms(element_matrices["beam_K"], assembler.beam_dofs, shapes)
+    us = 0.5 * quadratic_forms(element_matrices["spring_K"], assembler.spring_dofs, shapes)
+    tb = 0.5 * quadratic_forms(element_matrices["beam_M"], assembler.beam_dofs, shapes)
+    tm = 0.5 * quadratic_forms(element_matrices["mass_M"], assembler.mass_dofs, shapes)
     strain = np.zeros((n_parts, m))
     kinetic = np.zeros((n_parts, m))
     np.add.at(strain, s.beam_part, ub)
     np.add.at(strain, s.spring_part, us)
     np.add.at(kinetic, s.beam_part, tb)
     np.add.at(kinetic, s.mass_part, tm)
-    _scalar_kinetic(kinetic, assembler, element_matrices, shapes)
+    _family_energies(strain, kinetic, assembler, shapes)
     total_u = np.maximum(strain.sum(axis=0), 1e-300)
     total_t = np.maximum(kinetic.sum(axis=0), 1e-300)
     return ModalEnergies(
@@ -81,15 +75,15 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
 
 
 def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEnergies:
-    """Energy shares of a general structure's modes (``fe.general.GeneralAssembler`` ``g``):
-    beams, springs and point masses as ``modal_energies``, general beams and rods (their element
-    matrices in ``g.lines``), plus every shell element (direct
+    """Energy shares of a general structure's modes (``fe.sparse_assembly.GeneralAssembler`` ``g``):
+    beams, springs, point masses and the registered element families as ``modal_energies``, plus
+    every shell element (direct
     element matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs
     of rigid elements included), so the element energies sum to the mode's lambda / 2."""
     s = g.structure
     shapes = modes.shapes
     m = shapes.shape[1]
-    quad = _quadratic_forms
+    quad = quadratic_forms
     b = g.beams
     strain = np.zeros((len(s.parts), m))
     kinetic = np.zeros((len(s.parts), m))
@@ -100,11 +94,7 @@ def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEner
     )
     np.add.at(kinetic, s.beam_part, 0.5 * quad(element_matrices["beam_M"], b.beam_dofs, shapes))
     np.add.at(kinetic, s.mass_part, 0.5 * quad(element_matrices["mass_M"], b.mass_dofs, shapes))
-    _scalar_kinetic(kinetic, b, element_matrices, shapes)
-    line_parts = [x.part for x in (s.general_beams, s.rods) if x is not None]
-    for (dofs, K, M), part in zip(g.lines, line_parts, strict=True):
-        np.add.at(strain, part, 0.5 * quad(K, dofs, shapes))
-        np.add.at(kinetic, part, 0.5 * quad(M, dofs, shapes))
+    _family_energies(strain, kinetic, b, shapes)
     fields = {}
     if s.shells is not None:
         n_sh = s.shells.n_elements

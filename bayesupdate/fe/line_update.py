@@ -11,7 +11,8 @@ pattern at positions found once:
 
     K(theta) = K(deck) + sum_e P_e^T (K_e(theta) - K_e(deck)) P_e,   M likewise,
 
-P_e the element's place in the CSR data of ``general.GeneralAssembler`` (``delta`` returns the
+P_e the element's place in the CSR data of ``sparse_assembly.GeneralAssembler`` (``delta`` returns
+the
 (nnz,) data of the sum).  The elements' new values are whole ``GeneralBeams`` / ``Rods`` records
 of the chosen elements (``beams`` / ``rods`` hold the deck's; ``dataclasses.replace`` the fields
 that change), so any field of them can follow a parameter, the mapping from card fields to these
@@ -27,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.general import _block_keys
-from bayesupdate.fe.general_beam import _subset, general_beam_matrices
-from bayesupdate.fe.rod import Rods, rod_matrices
+from bayesupdate.fe.elements.general_beam import _subset, general_beam_matrices
+from bayesupdate.fe.elements.rod import Rods, rod_matrices
+from bayesupdate.fe.sparse_assembly import _block_keys
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,7 @@ class PointMassValues:
 class LineUpdate:
     """(dK, dM) on a general assembler's pattern from new values of chosen elements.
 
-    g : ``general.GeneralAssembler``; beams, rods, masses : indices (into the structure's
+    g : ``sparse_assembly.GeneralAssembler``; beams, rods, masses : indices (into the structure's
     ``general_beams``, ``rods`` and point masses) of the elements that may change."""
 
     def __init__(self, g, beams=(), rods=(), masses=()):

@@ -44,7 +44,8 @@ def with_spring(
     offset=None,
 ) -> Structure:
     """Copy with a 6-DOF spring (``node_b`` None = to ground); stiffness 6 values in ``frame``;
-    offset (2, 3) [m] from node A and node B to the spring's location (``fe.bush``; None: at the
+    offset (2, 3) [m] from node A and node B to the spring's location (``fe.elements.spring``;
+    None: at the
     nodes)."""
     parts, pid = _part_ids(structure, part)
     R = np.eye(3) if frame is None else np.asarray(frame, dtype=float)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe import shell
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.sparse_modal import SparsePattern, element_dofs
 
 #: warp (largest node distance from the mean plane / mean diagonal) above which a quad is reported:

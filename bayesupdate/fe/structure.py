@@ -16,14 +16,15 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.constraints import Constraints
+from bayesupdate.fe.elements import families_of
 from bayesupdate.fe.sections import _SHAPE_CODE, Section
 from bayesupdate.fe.shell_model import ShellElements
 
 if TYPE_CHECKING:
-    from bayesupdate.fe.dampers import Dampers
-    from bayesupdate.fe.general_beam import GeneralBeams
-    from bayesupdate.fe.rod import Rods
-    from bayesupdate.fe.scalar_mass import ScalarMasses
+    from bayesupdate.fe.elements.damper import Dampers
+    from bayesupdate.fe.elements.general_beam import GeneralBeams
+    from bayesupdate.fe.elements.rod import Rods
+    from bayesupdate.fe.elements.scalar_mass import ScalarMasses
 
 
 @dataclass(frozen=True)
@@ -69,21 +70,23 @@ class Structure:
     Springs (S): spring_nodes (S, 2) with -1 for ground, spring_k (S, 6) in the spring frame,
     spring_frame (S, 3, 3) rows = spring axes in global coordinates, spring_part;
     spring_offset None (every spring acts on its nodes' own DOFs) or (S, 2, 3) [m] from node A
-    and node B to the spring's location (``fe.bush``: Nastran CBUSH with separated ends).
+    and node B to the spring's location (``fe.elements.spring``: Nastran CBUSH with separated ends).
     Sensors: sensor_labels, sensor_node, sensor_direction (n_s, 3) unit vectors.
     parts, bends : names.
     beam_shear_factor : None (each section's own shear areas) or (E,) shear area / area imposed
     on both axes where > 0 (a Nastran PBARL ROD has 0.9, not Cowper's value).
     shells : ``ShellElements`` or None; constraints : supports and rigid elements
     (``constraints.Constraints``) or None.  A structure with either is solved on the sparse path
-    (``fe.general``); without them it is the beam structure of before, solved as before.
+    (``fe.sparse_assembly``); without them it is the beam structure of before, solved as before.
     general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
-    dampers : ``dampers.Dampers`` or None: viscous dampers as data (normal modes ignore them).
+    dampers : ``damper.Dampers`` or None: viscous dampers as data (normal modes ignore them).
     scalar_masses : ``scalar_mass.ScalarMasses`` or None (Nastran CMASS1/CMASS2).
     sensor_read : None (each sensor reads its node's translations along its direction) or
     (DOFs (n_s, K), weights (n_s, K)): sensor s reads sum_k weights[s, k] * shape[DOFs[s, k]]
     (a test point between nodes, interpolated with a rigid arm: ``testgeom.observation``).
+    elements : instances of registered element families with no field of their own
+    (``fe.elements.base``: assembled, in the energies, the mass and the reduced basis).
     """
 
     nodes: np.ndarray
@@ -126,6 +129,7 @@ class Structure:
     spring_offset: np.ndarray | None = None
     scalar_masses: "ScalarMasses | None" = None
     sensor_read: tuple[np.ndarray, np.ndarray] | None = None
+    elements: tuple = ()
 
     def spring_offsets(self) -> np.ndarray:
         """(S, 2, 3) offsets [m] from each spring's nodes to its location (zeros: at the
@@ -171,14 +175,6 @@ class Structure:
             return self.sensor_read
         dofs = 6 * self.sensor_node[:, None] + np.arange(3)[None, :]
         return dofs, self.sensor_direction
-
-
-def _bend_flexibility_factor(thickness, bend_radius, outer_diameter):
-    """ASME B31.3 flexibility factor k = max(1, 1.65/h), h = t R / r^2 (r mean radius). (n,)"""
-    r = 0.5 * (outer_diameter - thickness)
-    h = thickness * bend_radius / r**2
-    with np.errstate(divide="ignore"):
-        return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
 
 
 class StructureBuilder:
@@ -386,7 +382,8 @@ class StructureBuilder:
         stiffness : 6 values (kx, ky, kz [N/m], krx, kry, krz [N m/rad]) along the rows of
         ``frame`` (3x3, default global axes).  location : None (the spring acts on the nodes' own
         DOFs: meant for coincident nodes) or the point p (3,) [m] where it acts, rigidly linked to
-        both nodes (``fe.bush``, Nastran CBUSH: a point on GA-GB at S, or an OCID offset): the
+        both nodes (``fe.elements.spring``, Nastran CBUSH: a point on GA-GB at S, or an OCID
+        offset): the
         springs see the relative motion at p, so separated ends keep moment equilibrium."""
         node_a = self._check_node(node_a)
         node_b = -1 if node_b is None else self._check_node(node_b)
@@ -404,7 +401,7 @@ class StructureBuilder:
         p = np.asarray(location, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise BayesUpdateError(f"{what}: location must be 3 finite coordinates [m]")
-        from bayesupdate.fe.bush import location_offsets
+        from bayesupdate.fe.elements.spring import location_offsets
 
         xb = None if node_b < 0 else self.node_xyz(node_b)
         return location_offsets(self.node_xyz(node_a), xb, p)
@@ -414,7 +411,7 @@ class StructureBuilder:
         frame_a=None, frame_b=None,
     ) -> int:  # fmt: skip
         """Scalar mass between one DOF of ``node_a`` and one of ``node_b`` (None = ground):
-        Nastran CMASS1/CMASS2 (``fe.scalar_mass``), M = [[m, -m], [-m, m]] on the two DOFs.
+        Nastran CMASS1/CMASS2 (``fe.elements.scalar_mass``), M = [[m, -m], [-m, m]] on the two DOFs.
 
         component_a, component_b : 1-6 or a name ('ux' ... 'rz'): a translation or rotation of
         the node's displacement frame ``frame_a`` / ``frame_b`` (3x3, rows = its axes in global
@@ -442,7 +439,7 @@ class StructureBuilder:
 
     def add_damper(self, node_a, node_b, damping, part: str, frame=None, location=None) -> int:
         """6-component viscous damper between ``node_a`` and ``node_b`` (None = ground), kept as
-        data (``fe.dampers``: normal modes ignore it; ``damping_matrix`` gives C).
+        data (``fe.elements.damper``: normal modes ignore it; ``damping_matrix`` gives C).
 
         damping : 6 values (cx, cy, cz [N s/m], crx, cry, crz [N m s/rad]) along the rows of
         ``frame`` (3x3, default global axes); location : as ``add_spring``."""
@@ -455,11 +452,11 @@ class StructureBuilder:
         )
         return len(self._dampers) - 1
 
-    # -- shells, supports and rigid elements (``fe.builder_general``) --------------------------
+    # -- shells, supports and rigid elements (``fe.builder_elements``) --------------------------
     def add_shells(self, points, quads=None, trias=None, *, thickness, material, part, **kw):
-        """Flat shell elements on ``points`` (n, 3) [m]; see ``builder_general.add_shells``.
+        """Flat shell elements on ``points`` (n, 3) [m]; see ``builder_elements.add_shells``.
         Returns the structure node number of each point (points on existing nodes reuse them)."""
-        from bayesupdate.fe.builder_general import add_shells
+        from bayesupdate.fe.builder_elements import add_shells
 
         return add_shells(self, points, quads, trias, thickness, material, part, **kw)
 
@@ -519,26 +516,26 @@ class StructureBuilder:
         self._rbe3.append((ref, ref_c, ns, w, node_c, um_sets))
         return i
 
-    # -- general beams, rods and node frames (``fe.builder_general``) ---------------------------
+    # -- general beams, rods and node frames (``fe.builder_elements``) ---------------------------
     def add_beams(self, node_pairs, section, material, part, **kw) -> np.ndarray:
         """General beams on node pairs (n, 2): any ``standard_sections.BeamSection``, optional
-        ``up``, ``offsets``, ``pins``, ``mass``, ``nsm`` (``builder_general.add_beams``).
+        ``up``, ``offsets``, ``pins``, ``mass``, ``nsm`` (``builder_elements.add_beams``).
         Returns their element indices."""
-        from bayesupdate.fe.builder_general import add_beams
+        from bayesupdate.fe.builder_elements import add_beams
 
         return add_beams(self, node_pairs, section, material, part, **kw)
 
     def add_rods(self, node_pairs, area, material, part, **kw) -> np.ndarray:
         """Axial rods (truss members) on node pairs (n, 2), area [m^2]; optional ``torsion``,
-        ``nsm``, ``mass`` (``builder_general.add_rods``).  Returns their element indices."""
-        from bayesupdate.fe.builder_general import add_rods
+        ``nsm``, ``mass`` (``builder_elements.add_rods``).  Returns their element indices."""
+        from bayesupdate.fe.builder_elements import add_rods
 
         return add_rods(self, node_pairs, area, material, part, **kw)
 
     def set_frame(self, nodes, frame) -> None:
         """DOF axes of ``nodes`` from a ``frames.CoordinateFrame`` (rectangular, cylindrical,
         spherical): supports and rigid-element components on them act in those axes."""
-        from bayesupdate.fe.builder_general import set_frame
+        from bayesupdate.fe.builder_elements import set_frame
 
         set_frame(self, nodes, frame)
 
@@ -608,7 +605,7 @@ class StructureBuilder:
             structure = replace(structure, scalar_masses=_scalar_masses(self._scalar_masses))
         general = (self._general_beams, self._rods, self._frames)
         if self._shell_blocks or self._supports or self._rbe2 or self._rbe3 or any(general):
-            from bayesupdate.fe.builder_general import general_parts
+            from bayesupdate.fe.builder_elements import general_parts
 
             structure = replace(structure, **general_parts(self))
         if check:
@@ -637,7 +634,7 @@ def _spring_offsets(records: list[dict]) -> np.ndarray | None:
 
 def _scalar_direction(component, frame, what: str) -> np.ndarray:
     from bayesupdate.fe.constraints import parse_components
-    from bayesupdate.fe.scalar_mass import component_direction
+    from bayesupdate.fe.elements.scalar_mass import component_direction
 
     if not isinstance(component, str | int | np.integer) and np.size(component) == 6:
         d = np.asarray(component, dtype=float).reshape(6)
@@ -654,7 +651,7 @@ def _scalar_direction(component, frame, what: str) -> np.ndarray:
 
 
 def _scalar_masses(records: list[dict]) -> "ScalarMasses":
-    from bayesupdate.fe.scalar_mass import ScalarMasses
+    from bayesupdate.fe.elements.scalar_mass import ScalarMasses
 
     return ScalarMasses(
         nodes=np.array([r["nodes"] for r in records], dtype=int),
@@ -665,7 +662,7 @@ def _scalar_masses(records: list[dict]) -> "ScalarMasses":
 
 
 def _dampers(records: list[dict]) -> "Dampers":
-    from bayesupdate.fe.dampers import Dampers
+    from bayesupdate.fe.elements.damper import Dampers
 
     return Dampers(
         nodes=np.array([d["nodes"] for d in records], dtype=int),
@@ -695,12 +692,11 @@ def check_connected(structure: Structure, node_names=None) -> None:
         pairs.append(structure.shells.edges())
     if structure.constraints is not None:
         pairs.append(structure.constraints.edges())
-    for lines in (structure.general_beams, structure.rods):
-        if lines is not None:
-            pairs.append(lines.nodes)
-    sm = structure.scalar_masses
-    if sm is not None:
-        pairs.append(sm.nodes[~sm.grounded])
+    family_nodes = [f.nodes.reshape(f.n_elements, -1) for f in families_of(structure)]
+    for nodes in family_nodes:
+        # an element joins its nodes; one with a grounded end (-1) joins none
+        joined = nodes[(nodes >= 0).all(axis=1)]
+        pairs.append(np.stack([joined[:, :-1], joined[:, 1:]], axis=-1))
     edges = np.concatenate([p.reshape(-1, 2) for p in pairs], axis=0)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)
@@ -708,8 +704,8 @@ def check_connected(structure: Structure, node_names=None) -> None:
     used[edges.ravel()] = True
     used[structure.mass_node] = True
     used[structure.spring_nodes[:, 0]] = True
-    if sm is not None:
-        used[sm.nodes[:, 0]] = True
+    for nodes in family_nodes:
+        used[nodes[nodes >= 0]] = True
     if structure.is_general and not np.all(used):
         raise BayesUpdateError(
             f"node {name(np.flatnonzero(~used)[:1])} is used by no element; remove it or connect it"

@@ -1,6 +1,7 @@
 """The seed's exhaust as the paper built it: closed shell bodies joined by beam pipes.
 
-The catalyst and both mufflers are closed shells (MITC4 quads, ``fe.shell``): an oval mantle, two
+The catalyst and both mufflers are closed shells (MITC4 quads, ``fe.elements.shell``): an oval
+mantle, two
 oval end caps (flat or conical, fitted) and, in the main muffler, two internal baffles
 (``exhaust_shell_mesh``); the pre-silencer's straight-through pipe is a beam from cap to cap.
 The pipes are the beam pipes of ``exhaust`` (same routing, lengths, bend radii, B31.3 elbow
@@ -33,7 +34,7 @@ Design variables (seed Table 3): ``t_hot_pipe``/``t_cold_pipe`` -> the pipes' be
 ``t_main_muffler`` -> every sheet of the main muffler (mantle and baffles at it, the caps at a
 fixed fitted ratio of it: ``fe``'s per-element ``thickness_factor``);
 ``rho_catalyst``/``rho_intermediate_muffler`` -> the density of those bodies' shells (mantle and
-caps).  Shell thickness and density enter K and M as exact sums of powers (``fe.general``).
+caps).  Shell thickness and density enter K and M as exact sums of powers (``fe.sparse_assembly``).
 """
 
 from dataclasses import replace

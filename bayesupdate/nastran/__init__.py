@@ -54,14 +54,15 @@ def load_nastran_model(
 
 
 def _has_mass(structure) -> bool:
+    from bayesupdate.fe.elements import families_of
+
     s = structure
     shells = s.shells is not None and bool(
         (s.shells.rho > 1e-200).any() or (s.shells.nsm > 0).any()
     )
-    lines = any(x is not None and x.has_mass() for x in (s.general_beams, s.rods))
-    scalar = s.scalar_masses is not None and bool((s.scalar_masses.mass > 0).any())
+    families = any(f.has_mass() for f in families_of(s))  # general beams, rods, scalar masses
     points = bool((s.mass_value > 0).any() or (s.mass_inertia != 0).any())
-    return bool(shells or lines or scalar or points or (s.beam_rho > 1e-200).any())
+    return bool(shells or families or points or (s.beam_rho > 1e-200).any())
 
 
 def _refuse_tapered(bindings, deck) -> None:

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.shell import SHEAR_FACTOR
+from bayesupdate.fe.elements.shell import SHEAR_FACTOR
 from bayesupdate.fe.structure import Material, StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bulk import CardError
@@ -236,13 +236,10 @@ def _autospc(ctx, structure):
     nodes have all six; springs and rods are checked on their assembled diagonal."""
     from bayesupdate.fe.assembly import Assembler
     from bayesupdate.fe.constraints import Constraints, constraint_transform
-    from bayesupdate.fe.general import line_matrices
 
     a = Assembler(structure)
     K, _, _ = a.assemble(a.default_properties())
-    diag = np.abs(K.diagonal())
-    for dofs, Ke, _ in line_matrices(structure):
-        np.add.at(diag, dofs.ravel(), np.abs(np.diagonal(Ke, axis1=1, axis2=2)).ravel())
+    diag = np.abs(K.diagonal())  # the element families (rods, general beams) included
     if structure.shells is not None:
         sh = structure.shells
         for conn in (sh.quads, sh.trias):
@@ -364,7 +361,7 @@ def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
         notes.append(f"{n_auto} DOF(s) with no stiffness were held (AUTOSPC)")
     if structure.shells is not None:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
-                     "penalty is fixed (fe.shell.DRILL_ALPHA)")  # fmt: skip
+                     "penalty is fixed (fe.elements.shell.DRILL_ALPHA)")  # fmt: skip
         notes.append("shell mass is consistent (Nastran's default is lumped, COUPMASS -1)")
     n_nodes = structure.n_nodes
     used = ctx.node >= 0

@@ -18,7 +18,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from bayesupdate import plotting
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.shell import quad_frames, tria_frames
+from bayesupdate.fe.elements.shell import quad_frames, tria_frames
 
 #: the colour scale spans this many decades below each mode's peak density
 DECADES = 3.0

@@ -11,7 +11,9 @@ the B31.3 factor and tensor-product when two such parameters act on the same bea
 is raised until the element matrices are reproduced to ``interp_tol`` (relative, checked between
 the nodes), so the interpolation is exact to far below the frequency tolerance.
 
-Shells, general beams and rods (a general structure, ``FEModel.general``) need no interpolation:
+The registered element families (general beams, rods, scalar masses: ``fe.elements.base``) carry
+no parameter: their K and M join the constant term.  Shells (``FEModel.general``) need no
+interpolation:
 shell K and M are exact polynomials in the thickness and linear in modulus and density
 (``reduced.shell_terms``), hence the features theta^2 and theta^3.
 """
@@ -216,8 +218,8 @@ def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
 
 def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
     """The constant term (beams without parameters at the defaults, unbound masses and springs,
-    the scalar masses)
-    and one linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
+    the registered element families: no parameter acts on them, ``fe.elements.base``) and one
+    linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
     m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``."""
     s, a = fe.structure, fe.beam_assembler
     props0, unit = terms.defaults, terms.unit
@@ -236,13 +238,10 @@ def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
         else (np.zeros((0, 12, 12)),) * 2
     )
     k_stacks = [[(a.beam_dofs[free_beams], bK0), (a.spring_dofs[free_springs], sK[free_springs])]]
-    m_stacks = [
-        [
-            (a.beam_dofs[free_beams], bM0),
-            (a.mass_dofs[free_masses], mM[free_masses]),
-            (a.scalar_dofs, a.scalar_mass_matrices()),  # no parameter acts on scalar masses
-        ]
-    ]
+    m_stacks = [[(a.beam_dofs[free_beams], bM0), (a.mass_dofs[free_masses], mM[free_masses])]]
+    for f in a.families:
+        k_stacks[0].append((f.dofs, f.K))
+        m_stacks[0].append((f.dofs, f.M))
     k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
     for j, t in point:
         m_stacks.append([(a.mass_dofs[t.elements], mM_unit[t.elements])])

@@ -5,10 +5,11 @@ matrix, r_i the rigid translations (``GeneralAssembler.total_mass``).  M is an e
 (``reduced.shell_terms``): per shell group g with density rho_g and thickness parameter theta_g,
 M_g = M_nsm + rho_g sum_p theta_g^p M_p, so
 
-    m(theta) = m_beams(theta) + m(M_lines) + sum_g [m(M_nsm,g) + rho_g sum_p theta_g^p m(M_p,g)],
+    m(theta) = m_beams(theta) + sum_g [m(M_nsm,g) + rho_g sum_p theta_g^p m(M_p,g)],
 
-the scalars m(.) computed once.  The beams and point masses keep their own exact formula
-(rho A(t) L and the point masses, ``Assembler.total_mass``), equal to the functional of their
+the scalars m(.) computed once.  The beams, point masses and registered element families
+(general beams, rods, scalar masses) keep their own exact formula (rho A(t) L, the point masses
+and the families' rigid-body mass, ``Assembler.total_mass``), equal to the functional of their
 assembled M: a rigid translation carries an element's mass alone.  One evaluation is a few
 array operations on the shells' property arrays instead of an assembly of the full K and M.
 """
@@ -33,12 +34,11 @@ def _translational_mass(g, pos: np.ndarray, values: np.ndarray) -> float:
 @dataclass(frozen=True, eq=False)
 class ShellMassTerms:
     """Per shell group: ``nsm`` m(M_nsm,g) (n_groups,) and ``powers`` {p: m(M_p,g) (n_groups,)}
-    [kg per unit density and theta^p]; ``lines`` m(M_lines) [kg] (general beams, rods);
-    ``line_terms`` ((name, theta0, m(dM)), ...) of a deck's linear line-element parameters
+    [kg per unit density and theta^p]; ``line_terms`` ((name, theta0, m(dM)), ...) of a deck's
+    linear line-element parameters
     (``NastranModel.line_terms``).  Holds no reference to its FE model (it is the value of a
     weak-keyed cache on that model)."""
 
-    lines: float
     nsm: np.ndarray
     powers: dict
     line_terms: tuple = ()
@@ -46,8 +46,6 @@ class ShellMassTerms:
     @classmethod
     def of(cls, fe: FEModel) -> "ShellMassTerms":
         g = fe.general
-        line_M = g.line_data()[1]
-        lines = _translational_mass(g, np.arange(g.nnz), line_M)
         nsm, powers = [], {}
         if fe.structure.shells is not None:
             for k, (pos, _, m0, Mp) in enumerate(g.terms):
@@ -58,7 +56,7 @@ class ShellMassTerms:
             (t.name, t.theta0, _translational_mass(g, np.arange(g.nnz), t.dM))
             for t in getattr(fe, "line_terms", tuple)()
         )
-        return cls(lines, np.array(nsm), powers, line_terms)
+        return cls(np.array(nsm), powers, line_terms)
 
     def total_mass(self, fe: FEModel, params) -> float:
         """Total mass [kg] of ``fe`` (the model these terms are of) at ``params`` (name -> SI
@@ -67,7 +65,7 @@ class ShellMassTerms:
         props = fe.element_properties(params)
         check_properties(fe.structure, props)
         with np.errstate(invalid="ignore", divide="ignore"):  # its CoG is 0/0 without beams
-            m = g.beams.total_mass(props)[0] + self.lines
+            m = g.beams.total_mass(props)[0]
         for name, theta0, dm in self.line_terms:
             m += (params[name] - theta0) * dm
         # a deck's line-element fields that do not enter linearly (``NastranModel``)

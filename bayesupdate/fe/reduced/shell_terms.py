@@ -1,4 +1,4 @@
-"""The exact affine terms of a general structure's shells, general beams and rods.
+"""The exact affine terms of a general structure's shells and of a deck's bound line fields.
 
 Shells are grouped by ``GeneralAssembler`` (same bound parameters, nominal E, rho and part); in a
 group with thickness t, modulus E and density rho, exactly (``shell.power_matrices``)
@@ -10,7 +10,8 @@ K_p at the nominal modulus E0, M_p per unit density.  With t = s_t theta_t (s th
 t0^p) times theta_E (or 1), theta_t^p times theta_rho (or 1), the constant factors folded into the
 matrices.  Terms with the same feature pair are summed, so a deck with many fixed-thickness
 property groups adds to the constant term only.  No interpolation: the decomposition is exact.
-General beams and rods join the constant term; a Nastran deck's line-element fields that enter
+General beams and rods join the constant term (``reduced.affine``, through
+``fe.elements.base``); a Nastran deck's line-element fields that enter
 K and M linearly (``NastranModel.line_terms``: a shear-rigid PBAR's A, I1, I2, J, a PROD's A, J,
 NSM) add theta_j x dK_j and the constant -theta0_j x dK_j.
 
@@ -87,9 +88,6 @@ def general_terms(fe: FEModel, terms: AffineTerms, f_ref: np.ndarray):
         return {}, {}
     n = len(fe.parameter_names)
     K, M = _Accumulator(g, f_ref), _Accumulator(g, f_ref)
-    line_K, line_M = g.line_data()
-    K.add((0, 0), np.flatnonzero(line_K), line_K[line_K != 0])
-    M.add((0, 0), np.flatnonzero(line_M), line_M[line_M != 0])
     # a deck's line-element fields that enter linearly (``nastran.lines.LineTerm``):
     # K_L(theta) = K_L(deck) + sum_j (theta_j - theta0_j) dK_j, M likewise
     for t in getattr(fe, "line_terms", tuple)():

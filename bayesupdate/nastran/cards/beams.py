@@ -3,7 +3,7 @@
 A CBAR/CBEAM orientation vector v lies in the element's x-y plane, its section has I1 about z
 (plane 1, x-y) and I2 about y, and its offsets WA, WB run from the grids to the element's ends
 (OFFT G: the end grid's CD frame, B: basic); pin flags PA/PB release element-axis components.
-The elements are ``fe.general_beam`` elements; lumped mass (COUPMASS < 1) at their ends.
+The elements are ``fe.elements.general_beam`` elements; lumped mass (COUPMASS < 1) at their ends.
 """
 
 from dataclasses import replace
@@ -282,7 +282,7 @@ def _pins(e):
 
 
 def add(ctx: Context) -> None:
-    """CBAR and CBEAM (``fe.general_beam``) with PBAR, PBEAM, PBARL or PBEAML (``L_SECTIONS``;
+    """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM, PBARL or PBEAML (``L_SECTIONS``;
     a tapered PBEAM or PBEAML: its mean section), offsets WA/WB and pin flags PA/PB.  G from
     MAT1.  Lumped mass (COUPMASS < 1): point masses at the element's ends (rigidly offset),
     (rho A + NSM) L / 2 each, and for CBEAM also half the torsional inertia rho (I1 + I2) L about

@@ -53,7 +53,7 @@ def _add_conm1(ctx: Context, m) -> None:
     rigid-body matrix (M_tt = m I, M_tr = -m skew(c), c the offset of the centre of mass) is a
     point mass with its inertia about that centre; any other positive semi-definite matrix is
     the sum of its eigen-terms lambda_k v_k v_k^T, each a grounded scalar mass on the direction
-    v_k (6,) of the grid's six DOFs (``fe.scalar_mass``), which is the matrix itself."""
+    v_k (6,) of the grid's six DOFs (``fe.elements.scalar_mass``), which is the matrix itself."""
     from bayesupdate.fe.rotations import skew
 
     row = ctx.rows(m, ("G",))[0]
@@ -83,7 +83,7 @@ def _add_conm1(ctx: Context, m) -> None:
 
 
 def _add_cmass(ctx: Context, m) -> None:
-    """CMASS1-4: a scalar mass (``fe.scalar_mass``) on the DOF of its first end and, with a
+    """CMASS1-4: a scalar mass (``fe.elements.scalar_mass``) on the DOF of its first end and, with a
     second, between the two (``scalar.ends``: GRID components in their CD frames, scalar
     points); a rotation component makes it a rotary inertia about that axis."""
     value = ctx.prop(m, ("PMASS",)).real("M") if m.name in ("CMASS1", "CMASS3") else m.real("M")

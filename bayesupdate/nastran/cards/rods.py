@@ -1,4 +1,4 @@
-"""CROD (with PROD) and CONROD as ``fe.rod`` elements (MSC Nastran QRG)."""
+"""CROD (with PROD) and CONROD as ``fe.elements.rod`` elements (MSC Nastran QRG)."""
 
 import numpy as np
 
@@ -21,7 +21,8 @@ def rod_values(e, p) -> tuple[int, float, float, float]:
 
 
 def add(ctx: Context) -> None:
-    """CROD (with PROD) and CONROD as rods (``fe.rod``): axial EA / L and torsion GJ / L (G from
+    """CROD (with PROD) and CONROD as rods (``fe.elements.rod``): axial EA / L and torsion GJ / L
+    (G from
     MAT1), consistent mass (COUPMASS 1) or mass lumped at the ends."""
     ctx.each(("CROD", "CONROD"), _add_rod)
 

@@ -6,7 +6,8 @@ at GA and S MASS at GB (QRG PBUSH remark 13); its B and GE lines (damping) do no
 modes and are listed once as ignored.
 
 A CBUSH whose ends are apart acts at its location (S along GA-GB, or S1-S3 in OCID) through
-rigid arms from both grids (``StructureBuilder.add_spring(location=...)``, ``fe.bush``), so
+rigid arms from both grids (``StructureBuilder.add_spring(location=...)``, ``fe.elements.spring``),
+so
 moments balance as in MSC's CBUSH.
 """
 

@@ -7,10 +7,17 @@ Structural Analysis* (1968), eqs 5.116 and 11.41-11.42 (also Friedman & Kosmatka
 Phi = 0 they reduce to the Euler-Bernoulli element with the classical 1/420 consistent mass.
 
 All functions take (n,) arrays and return (n, 12, 12) arrays; lengths in m, E and G in Pa,
-density in kg/m^3.
+density in kg/m^3.  ``TubeBeams`` holds the exhaust's tube beams (the ``Structure``'s ``beam_*``
+columns) and gives their global K and M at given wall thickness, density, modulus and bend
+factor: the design parameters of ``fe.model`` act on these four arrays.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
+
+from bayesupdate.fe.elements.base import ElementSettings
+from bayesupdate.fe.sections import section_properties
 
 # bending in the x-y plane uses (v, rz) = local DOFs 1, 5, 7, 11; x-z plane uses (w, ry) = 2, 4, 8,
 # 10 with ry = -dw/dx, hence the sign pattern below.
@@ -143,3 +150,65 @@ def to_global(K_local, R):
     for b in range(4):
         T[:, 3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = R
     return np.matmul(np.matmul(T.transpose(0, 2, 1), K_local), T)
+
+
+def bend_flexibility_factor(thickness, bend_radius, outer_diameter):
+    """ASME B31.3 flexibility factor k = max(1, 1.65/h), h = t R / r^2 (r mean radius). (n,)"""
+    r = 0.5 * (outer_diameter - thickness)
+    h = thickness * bend_radius / r**2
+    with np.errstate(divide="ignore"):
+        return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
+
+
+@dataclass(frozen=True)
+class TubeBeams:
+    """Tube beams (circular, oval, solid round sections: ``fe.sections``) as element arrays of
+    what no design parameter changes: frames (n, 3, 3) (rows local x, y, z), lengths (n,) [m],
+    shape (n,) section codes, width, height (n,) [m], nu (n,), shear_factor (n,) (> 0: the shear
+    area is shear_factor x A; None: the sections' own), elbow (n,) bool (ASME B31.3 factor
+    applies), bend_radius (n,) [m]."""
+
+    frames: np.ndarray
+    lengths: np.ndarray
+    shape: np.ndarray
+    width: np.ndarray
+    height: np.ndarray
+    nu: np.ndarray
+    shear_factor: np.ndarray | None
+    elbow: np.ndarray
+    bend_radius: np.ndarray
+
+    def matrices(self, props, settings: ElementSettings, elements=None):
+        """Global-axis (K, M) (n_e, 12, 12) of ``elements`` (index array, default all) at
+        ``props``, any record with (n,) arrays ``beam_thickness`` [m], ``beam_rho`` [kg/m^3],
+        ``beam_E`` [Pa] and ``beam_bend_factor`` (a factor dividing EI on top of the B31.3
+        factor of elbows; ``fe.assembly.ElementProperties``)."""
+        e = slice(None) if elements is None else elements
+        t = props.beam_thickness[e]
+        sec = section_properties(self.shape[e], self.width[e], self.height[e], t, self.nu[e])
+        if self.shear_factor is not None:
+            k = self.shear_factor[e]
+            for axis in ("Asy", "Asz"):
+                sec[axis] = np.where(k > 0, k * sec["A"], sec[axis])
+        E = props.beam_E[e]
+        G = E / (2.0 * (1.0 + self.nu[e]))
+        elbow = np.where(
+            self.elbow[e], bend_flexibility_factor(t, self.bend_radius[e], self.width[e]), 1.0
+        )
+        Kl, Ml = local_beam_matrices(
+            self.lengths[e],
+            E,
+            G,
+            props.beam_rho[e],
+            sec["A"],
+            sec["Iy"],
+            sec["Iz"],
+            sec["J"],
+            sec["Asy"],
+            sec["Asz"],
+            shear=settings.shear,
+            bend_factor=elbow * props.beam_bend_factor[e],
+            rotary_inertia=settings.rotary_inertia,
+        )
+        R = self.frames[e]
+        return to_global(Kl, R), to_global(Ml, R)

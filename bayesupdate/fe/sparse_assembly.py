@@ -8,8 +8,9 @@ beam ``Assembler``, unchanged) together with shells, supports and rigid elements
   common thickness (``shell.power_matrices``):
   K = (E / E0) sum_p t^p K_p,  M = M_nsm + rho sum_p t^p M_p  (M_p per unit density),
   so a new parameter point costs a few vector operations per group and no element computation.
-* General beams and rods (``general_beam``, ``rod``) carry no parameters: their K and M are
-  assembled once into the pattern and added to every re-assembly.
+* The registered element families (``fe.elements.base``: general beams, rods, scalar masses)
+  carry no parameters: the beam ``Assembler`` assembles them once into its pattern and adds them
+  to every re-assembly.
 * Supports, rigid elements and node frames: u = T u_ind (``constraints``; T includes the
   frames' rotation), K_r = T^T K T, M_r = T^T M T, solved
   by ``sparse_modal.solve_reduced_modes`` (shift-invert Lanczos with a negative shift, the
@@ -25,12 +26,10 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-from bayesupdate.fe import shell
 from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.constraints import Constraints, constraint_transform
 from bayesupdate.fe.eigensolve import ModalSolution
-from bayesupdate.fe.general_beam import general_beam_matrices
-from bayesupdate.fe.rod import rod_matrices
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.shell_model import ShellAssembly
 from bayesupdate.fe.sparse_modal import (
@@ -64,9 +63,7 @@ class GeneralAssembler:
             self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
             pat = self.shells.pattern
             keys.append(pat.rows.astype(np.int64) * n + pat.cols)
-        self.lines = line_matrices(s)
-        line_keys = [_block_keys(dofs, n) for dofs, _, _ in self.lines]
-        union = sorted_unique(np.concatenate(keys + line_keys))
+        union = sorted_unique(np.concatenate(keys))
         self.nnz = union.size
         self.rows = (union // n).astype(np.int32)
         self.cols = (union % n).astype(np.int32)
@@ -75,11 +72,6 @@ class GeneralAssembler:
         if self.shells is not None:
             self._pos_shell = np.searchsorted(union, keys[1])
             self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
-        self._line_K, self._line_M = np.zeros(self.nnz), np.zeros(self.nnz)
-        for (_, K, M), key in zip(self.lines, line_keys, strict=True):
-            pos = np.searchsorted(union, key)
-            self._line_K += np.bincount(pos, K.ravel(), self.nnz)
-            self._line_M += np.bincount(pos, M.ravel(), self.nnz)
         c = s.constraints if s.constraints is not None else Constraints()
         self.transform = constraint_transform(s.nodes, c)
         self.rigid = allowed_rigid(s.nodes, self.transform)
@@ -140,10 +132,6 @@ class GeneralAssembler:
             out.append((idx, dofs, shell.to_global(K, f.R), shell.to_global(M, f.R)))
         return out
 
-    def line_data(self) -> tuple[np.ndarray, np.ndarray]:
-        """(K data, M data) (nnz,) of the general beams and rods (constant: no parameters)."""
-        return self._line_K, self._line_M
-
     # -- assembly and solution ------------------------------------------------------------------
     def csr(self, data: np.ndarray) -> sp.csr_matrix:
         return sp.csr_matrix((data, self.cols, self.indptr), shape=(self.n_dof, self.n_dof))
@@ -152,7 +140,7 @@ class GeneralAssembler:
         """Full (K, M) CSR at beam properties ``props`` and shell (t, E, rho) arrays, plus the
         beam assembler's element matrices (for energies)."""
         Kb, Mb, elem = self.beams.assemble(props)
-        K, M = self._line_K.copy(), self._line_M.copy()
+        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
         K[self._pos_beam] += Kb.data
         M[self._pos_beam] += Mb.data
         if self.shells is not None:
@@ -195,18 +183,6 @@ class GeneralAssembler:
         Mr = R.T @ (M @ R)
         m = float(np.trace(Mr[:3, :3]) / 3.0)
         return m, np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]]) / m
-
-
-def line_matrices(structure: Structure) -> list:
-    """[(dofs (n, 12), K (n, 12, 12), M (n, 12, 12))] of the general beams and the rods."""
-    out = []
-    b, r = structure.general_beams, structure.rods
-    if b is not None:
-        K, M = general_beam_matrices(structure.nodes, b, structure.shear, structure.rotary_inertia)
-        out.append((b.dofs(), K, M))
-    if r is not None:
-        out.append((r.dofs(), *rod_matrices(structure.nodes, r)))
-    return out
 
 
 def _nonzero_take(nnz: int, values):

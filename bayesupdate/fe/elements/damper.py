@@ -7,7 +7,8 @@ user can form the viscous damping matrix C for FRF synthesis or complex modes,
 
 with c in N s/m (translations) and N m s/rad (rotations) along the rows of the damper's frame R
 (3x3, rows = its axes in global coordinates), T = blockdiag(R, R) per node (the same element form
-as a spring, ``fe.bush``, including its location: a damper whose ends are apart acts at a point
+as a spring, ``fe.elements.spring``, including its location: a damper whose ends are apart acts at
+a point
 rigidly linked to both, as Nastran's CBUSH B); a grounded damper keeps only the [[c]] block on its
 first node.
 """
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from bayesupdate.fe.bush import two_node_matrices
+from bayesupdate.fe.elements.spring import two_node_matrices
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,7 @@ class Dampers:
 
     def element_matrices(self) -> np.ndarray:
         """(n, 12, 12) damper matrices on [node_a DOFs, node_b DOFs] in global axes, acting at
-        each damper's location (``offset`` (n, 2, 3) [m] from its nodes, ``fe.bush``)."""
+        each damper's location (``offset`` (n, 2, 3) [m] from its nodes, ``fe.elements.spring``)."""
         return two_node_matrices(self.damping, self.frame, self.nodes[:, 1] < 0, self.offset)
 
 

@@ -31,7 +31,8 @@ t^2 / (t^2 + alpha h^2) (stabilised DSG3 and CS-DSG3, Nguyen-Thoi et al. 2012;
 MIN3, Tessler & Hughes 1985; DKMT, Katili 1993): either makes the stiffness
 a rational function of t, which the exact thickness powers cannot hold.
 
-Local DOFs per node as in ``bayesupdate.fe.shell``: [u v w rx ry rz], beta_x = ry, beta_y = -rx.
+Local DOFs per node as in ``bayesupdate.fe.elements.shell``: [u v w rx ry rz], beta_x = ry, beta_y
+= -rx.
 """
 
 import numpy as np

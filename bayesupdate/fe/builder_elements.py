@@ -135,8 +135,8 @@ def _constraints(builder) -> Constraints | None:
 def general_parts(builder) -> dict:
     """``shells``, ``constraints``, ``general_beams`` and ``rods`` fields of the ``Structure``
     being built."""
-    from bayesupdate.fe.general_beam import GeneralBeams
-    from bayesupdate.fe.rod import Rods
+    from bayesupdate.fe.elements.general_beam import GeneralBeams
+    from bayesupdate.fe.elements.rod import Rods
 
     return dict(
         shells=_shell_elements(builder),
@@ -220,7 +220,7 @@ def add_beams(
     shear_modulus=None,
     torsion_inertia=None,
 ):
-    """General beams (``fe.general_beam``) on existing node pairs; returns their indices.
+    """General beams (``fe.elements.general_beam``) on existing node pairs; returns their indices.
 
     section : ``standard_sections.BeamSection``; material : ``Material`` (G = E / 2(1 + nu)
     unless ``shear_modulus`` [Pa]); up : local z reference (3,) or (n, 3), default global z
@@ -229,7 +229,7 @@ def add_beams(
     ('456', 'rz', ...); mass : 'consistent', 'lumped' or 'none'; nsm [kg/m]; torsion_inertia
     [kg m] per length (default rho (iy + iz)).
     """
-    from bayesupdate.fe import general_beam as gb
+    from bayesupdate.fe.elements import general_beam as gb
     from bayesupdate.fe.standard_sections import BeamSection
 
     what = f"add_beams (part {part!r})"
@@ -283,7 +283,7 @@ def _beam_properties(material, section, shear_modulus, torsion_inertia, what: st
 
 def _check_beams(xyz, b, what: str) -> None:
     """Zero length (after offsets), an orientation along the axis, pins that free the element."""
-    from bayesupdate.fe import general_beam as gb
+    from bayesupdate.fe.elements import general_beam as gb
 
     xa = xyz[b.nodes[:, 0]] + b.offset[:, 0]
     d = xyz[b.nodes[:, 1]] + b.offset[:, 1] - xa
@@ -321,9 +321,10 @@ def add_rods(
     mass="consistent",
     shear_modulus=None,
 ):
-    """Rods (``fe.rod``): area [m^2] and torsion constant [m^4] (scalars or one per element),
+    """Rods (``fe.elements.rod``): area [m^2] and torsion constant [m^4] (scalars or one per
+    element),
     nsm [kg/m], mass 'consistent' or 'lumped'.  Returns their indices."""
-    from bayesupdate.fe.rod import Rods
+    from bayesupdate.fe.elements.rod import Rods
 
     what = f"add_rods (part {part!r})"
     if mass not in ("consistent", "lumped", "none"):

@@ -1,7 +1,7 @@
 """General 3-D beams: arbitrary section properties, rigid end offsets and pin flags, vectorised
 over elements (the ``CBAR``/``CBEAM`` of Nastran).
 
-Each element is the Timoshenko beam of ``fe.beam`` (Przemieniecki 1968, eqs 5.116 and
+Each element is the Timoshenko beam of ``fe.elements.beam`` (Przemieniecki 1968, eqs 5.116 and
 11.41-11.42, the same bending blocks), built in four exact steps:
 
 1. *Principal axes.*  With a product of inertia iyz != 0 the element is formed in the section's
@@ -28,7 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.beam import (
+from bayesupdate.fe.constraints import rigid_link
+from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
+from bayesupdate.fe.elements.beam import (
     _XY,
     _XZ,
     _XZ_SIGN,
@@ -37,13 +39,12 @@ from bayesupdate.fe.beam import (
     element_frames,
     to_global,
 )
-from bayesupdate.fe.constraints import rigid_link
-from bayesupdate.fe.rod import line_dofs
 
 #: mass formulations of a line element
 MASS_KINDS = ("consistent", "lumped", "none")
 
 
+@register
 @dataclass(frozen=True)
 class GeneralBeams:
     """General beam elements as arrays (n elements).
@@ -52,8 +53,12 @@ class GeneralBeams:
     shear_y, shear_z (shear-area factors, 0 = rigid in shear); nsm [kg/m]; torsion_inertia
     [kg m]; up (n, 3) local z reference (local y = up x axis normalised); offset (n, 2, 3) [m]
     from each node to the element's end (global axes); pins (n, 2, 6) bool released element-axis
-    DOFs at end a and b; mass (n,) index into ``MASS_KINDS``.
+    DOFs at end a and b; mass (n,) index into ``MASS_KINDS``.  An ``elements.base.ElementFamily``
+    (``Structure.general_beams``).
     """
+
+    #: registry name (a plain class attribute: not a dataclass field)
+    family = "general_beam"
 
     nodes: np.ndarray
     part: np.ndarray
@@ -86,6 +91,14 @@ class GeneralBeams:
         """True if some element carries mass of its own (mass kind not 'none')."""
         carries = np.asarray(MASS_KINDS)[self.mass] != "none"
         return bool(np.any(carries & (self.rho * self.area + self.nsm > 1e-200)))
+
+    def matrices(self, xyz: np.ndarray, settings: ElementSettings):
+        """Global (K, M) (n, 12, 12) on nodes xyz (N, 3) [m] (``general_beam_matrices``)."""
+        return general_beam_matrices(xyz, self, settings.shear, settings.rotary_inertia)
+
+    @classmethod
+    def of(cls, structure) -> "GeneralBeams | None":
+        return structure.general_beams
 
 
 def end_frames(xyz: np.ndarray, b: GeneralBeams):

@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bayesupdate.fe import shell_tria
+from bayesupdate.fe.elements import shell_tria
 
 #: drilling penalty as a fraction of the in-plane shear modulus (Hughes & Brezzi 1989 allow
 #: any gamma > 0).  Measured on the free cylinder (48 x 60 quads): alpha 1e-5 -> 1e-3 moves the

@@ -14,11 +14,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
 
+
+@register
 @dataclass(frozen=True)
 class Rods:
     """Rod elements (n): nodes (n, 2), part (n,), E, G [Pa], rho [kg/m^3], area [m^2],
-    torsion J [m^4] (0: no twist stiffness), nsm [kg/m], lumped (n,) bool."""
+    torsion J [m^4] (0: no twist stiffness), nsm [kg/m], lumped (n,) bool.  An
+    ``elements.base.ElementFamily`` (``Structure.rods``)."""
+
+    #: registry name (a plain class attribute: not a dataclass field)
+    family = "rod"
 
     nodes: np.ndarray
     part: np.ndarray
@@ -41,6 +48,15 @@ class Rods:
     def has_mass(self) -> bool:
         """True if some rod carries mass of its own."""
         return bool(np.any(self.rho * self.area + self.nsm > 1e-200))
+
+    def matrices(self, xyz: np.ndarray, settings: ElementSettings):
+        """Global (K, M) (n, 12, 12) on nodes xyz (N, 3) [m] (``rod_matrices``; a rod has no
+        shear or rotary inertia to set)."""
+        return rod_matrices(xyz, self)
+
+    @classmethod
+    def of(cls, structure) -> "Rods | None":
+        return structure.rods
 
 
 def rod_matrices(xyz: np.ndarray, r: Rods):
@@ -68,8 +84,3 @@ def rod_matrices(xyz: np.ndarray, r: Rods):
             3
         )
     return K, M
-
-
-def line_dofs(nodes: np.ndarray) -> np.ndarray:
-    """(n, 12) global DOF numbers of two-node elements with end nodes ``nodes`` (n, 2)."""
-    return (6 * nodes[:, :, None] + np.arange(6)).reshape(-1, 12)

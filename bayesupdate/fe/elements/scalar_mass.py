@@ -20,15 +20,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.rod import line_dofs
-from bayesupdate.fe.rotations import rigid_body_basis
+from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
 
 
+@register
 @dataclass(frozen=True)
 class ScalarMasses:
     """n scalar masses: nodes (n, 2) (second -1 = ground); direction (n, 2, 6) unit DOF vectors
     d_A, d_B in the nodes' six global DOFs (d_B zero when grounded); mass (n,) [kg on a
-    translation, kg m^2 on a rotation]; part (n,) part indices."""
+    translation, kg m^2 on a rotation]; part (n,) part indices.  An
+    ``elements.base.ElementFamily`` (``Structure.scalar_masses``)."""
+
+    #: registry name (a plain class attribute: not a dataclass field)
+    family = "scalar_mass"
 
     nodes: np.ndarray
     direction: np.ndarray
@@ -48,19 +52,20 @@ class ScalarMasses:
         nodes = np.where(self.nodes >= 0, self.nodes, self.nodes[:, :1])
         return line_dofs(nodes)
 
-    def matrices(self, scale=None) -> np.ndarray:
-        """(n, 12, 12) M_e = m v v^T, v = (d_A, -d_B); ``scale`` (n,) factors on m (default 1)."""
+    def matrices(self, xyz: np.ndarray, settings: ElementSettings):
+        """(K, M) (n, 12, 12): K = 0 and M_e = m v v^T, v = (d_A, -d_B) (the node positions and
+        the settings play no part)."""
         v = self._v()
-        m = self.mass if scale is None else self.mass * scale
-        return m[:, None, None] * v[:, :, None] * v[:, None, :]
+        M = self.mass[:, None, None] * v[:, :, None] * v[:, None, :]
+        return np.zeros_like(M), M
 
-    def rigid_mass(self, nodes: np.ndarray) -> np.ndarray:
-        """(6, 6) R^T M R of the elements on the rigid motions R about the origin (3
-        translations, 3 rotations) of nodes (N, 3) [m]: their share of the structure's rigid-body
-        mass matrix (translational block: mass [kg])."""
-        R = rigid_body_basis(nodes, centre=np.zeros(3))
-        Rv = np.einsum("eki,ek->ei", R[self.dofs()], self._v())  # (n, 6) = R_e^T v
-        return np.einsum("e,ei,ej->ij", self.mass, Rv, Rv)
+    def has_mass(self) -> bool:
+        """True if some element has a non-zero mass."""
+        return bool(np.any(self.mass > 0))
+
+    @classmethod
+    def of(cls, structure) -> "ScalarMasses | None":
+        return structure.scalar_masses
 
     def _v(self) -> np.ndarray:
         """(n, 12) v = (d_A, -d_B)."""

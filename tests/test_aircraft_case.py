@@ -136,5 +136,12 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     assert {t for t, r in rows.items() if not r["held_out"]} <= set(out["calibrated_modes"])
     assert set(out["calibrated_modes"]) - set(rows) <= {5}
     assert rows[1]["held_out"] is False and any(r["held_out"] for r in rows.values())
-    for t in (t for t, r in rows.items() if not r["held_out"]):  # -31 / -50 % to within 5 %
-        assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.05
+    for t in (t for t, r in rows.items() if not r["held_out"]):  # -31 / -50 % to within 0.5 %
+        assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.005
+    m = out["metrics"]
+    assert m["ours"]["calibrated"]["rms_error_pct"] < m["v42"]["calibrated"]["rms_error_pct"]
+    assert m["ours"]["calibrated"]["mean_mac"] > m["v42"]["calibrated"]["mean_mac"]
+    # the held-out 30.7 Hz mode: +53 % with v3.3's own I1 scaled (inner/outer), about +20 %
+    # with one outer section; v4.2 is within 3 % (the docs page says why we still lose)
+    assert rows[10]["held_out"] and abs(rows[10]["ours_hz"] / rows[10]["test_hz"] - 1) < 0.3
+    assert all(r["ours_in_range"] for r in out["mass_properties"])

@@ -109,8 +109,8 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
         lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
     # full solves: the reduced basis of these bound line fields is refused after it is built
     # (its frequencies fall below the full ones by more than the Rayleigh-Ritz check allows),
-    # and with four parameters building it costs minutes
-    lines += ["[sampler]", "reduced = false"]
+    # and with four parameters building it costs minutes; sample's screen would build it too
+    lines += ["[sampler]", "reduced = false", "screen = false"]
     if parameters:
         for name, (binds, (low, high)) in parameters.items():
             lines += [f"[parameters.{name}]", f'binds = "{binds}"', f"bounds = [{low}, {high}]"]

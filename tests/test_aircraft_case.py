@@ -90,6 +90,30 @@ def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_p
     assert study.test.geometry.endswith("gvt_geometry.unv")
 
 
+def test_parameters_bind_one_outer_section_and_the_foam_masses_alone():
+    """``I1_wing`` starts at the mean of the seven outer PBEAM I1 (0.0266516 in^4, from the
+    cards); ``m_foam`` acts on the 32 foam CONM2 M fields alone (3.4588688 lb summed from the
+    cards: at 0.05 the weight falls by 0.95 of it) and ``rho_wing`` on the wing beams only
+    (the foam's weight moved into them keeps the weight)."""
+    from bayesupdate.nastran import load_nastran_model
+
+    tables = {n: {"binds": b, "bounds": list(bd)} for n, (b, bd) in ac.PARAMETERS.items()}
+    model = load_nastran_model(ac.data_folder() / ac.V33_DECK, tables)
+    wtmass = model.structure.metadata["nastran"]["wtmass"]
+
+    def props(**p):
+        return ac.weight_units(model.mass_properties(p), wtmass)
+
+    assert model.full_parameters(None)["I1_wing"] == pytest.approx(0.0266516, rel=1e-5)
+    base = props()
+    assert base["mass"] == pytest.approx(14.0589, rel=1e-5)  # v3.3's f06
+    assert props(m_foam=0.05)["mass"] == pytest.approx(base["mass"] - 0.95 * 3.4588688, rel=1e-7)
+    beams = props(rho_wing=2.0)["mass"] - base["mass"]  # the MAT1 903 beams' own weight
+    moved = props(m_foam=0.05, rho_wing=1.0 + 0.95 * 3.4588688 / beams)
+    # rel 1e-8: the beams' records follow RHO through a map found from one step (``lines``)
+    assert moved["mass"] == pytest.approx(base["mass"], rel=1e-8)
+
+
 @pytest.mark.slow
 def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     from bayesupdate.cli import main
@@ -112,5 +136,12 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     assert {t for t, r in rows.items() if not r["held_out"]} <= set(out["calibrated_modes"])
     assert set(out["calibrated_modes"]) - set(rows) <= {5}
     assert rows[1]["held_out"] is False and any(r["held_out"] for r in rows.values())
-    for t in (t for t, r in rows.items() if not r["held_out"]):  # -31 / -50 % to within 5 %
-        assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.05
+    for t in (t for t, r in rows.items() if not r["held_out"]):  # -31 / -50 % to within 0.5 %
+        assert abs(rows[t]["ours_hz"] / rows[t]["test_hz"] - 1) < 0.005
+    m = out["metrics"]
+    assert m["ours"]["calibrated"]["rms_error_pct"] < m["v42"]["calibrated"]["rms_error_pct"]
+    assert m["ours"]["calibrated"]["mean_mac"] > m["v42"]["calibrated"]["mean_mac"]
+    # the held-out 30.7 Hz mode: +53 % with v3.3's own I1 scaled (inner/outer), about +20 %
+    # with one outer section; v4.2 is within 3 % (the docs page says why we still lose)
+    assert rows[10]["held_out"] and abs(rows[10]["ours_hz"] / rows[10]["test_hz"] - 1) < 0.3
+    assert all(r["ours_in_range"] for r in out["mass_properties"])

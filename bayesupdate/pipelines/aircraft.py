@@ -9,12 +9,17 @@ What is fixed here, and why:
 
 - ``ALIGN``: the test frame (origin at the nose, X left, Y aft, inches) to the decks' frame
   (x aft, y right, origin 15.55 in aft of the nose); ``PAIR_TOLERANCE`` 5 in.
-- ``PARAMETERS``: three parameters chosen from ``bayesupdate sensitivity`` on v3.3 (the
-  wing's PBEAM I1 fields 1002, 1003 and 1005 carry the paired modes; the QR pick), grouped
-  spanwise into the inner (PBEAM 1002-1003) and outer (1004-1009) flap bending stiffness as
-  scale factors, and the wing's foam point masses (CONM2 170001-170016, 180001-180016) as one
-  scale: the weight pins it, and it is what the authors moved between v3.3 and v4.2 (v4.2 sets
-  those CONM2s to zero and puts the foam's mass into the beams).
+- ``PARAMETERS``: four parameters, from ``bayesupdate sensitivity`` on v3.3 and the physics of
+  the authors' own update (v3.3 -> v4.2).  The paired modes see the wing's flap bending (PBEAM
+  I1 of 1002-1009) and its masses, torsion (J) and the in-plane section (I2) at most 0.04 (log
+  sensitivities).  ``EI_root`` scales the root segment's I1 (PBEAM 1002); ``I1_wing`` sets one
+  I1 for the outer segments 1003-1009 (v3.3 has seven different ones, 0.0099-0.0563 in^4, its
+  1003 the weakest; v4.2 gives them one section, 0.138 in^4 at E 2.60e6 psi, and the spar is
+  one uniform spar); ``m_foam`` scales the wing's foam point masses (CONM2 170001-170016,
+  180001-180016: M only, their own I11-I33 stay) and ``rho_wing`` the density of the wing
+  beams (MAT1 903), so that mass can move between the foam lumps and the beams at the same
+  weight, as the authors moved it (v4.2 sets those CONM2 M to 0 and puts the foam into the
+  beams' RHO x A).  The measured weight and inertias decide the two masses' sum.
 - ``MEASURED``: the measured mass properties of the authors' SOL 200 deck
   (``sol200_full_model/DESVAR_mAEWing1_FULL_ALL.dat``, DEQATN 1300 and DCONSTR 90001): weight
   13.76 lb (range 13.4-14.2), IXX 9560 lb in^2 (9321-9799), IYY 1643 lb in^2 (1601-1684.1);
@@ -50,9 +55,12 @@ FREQUENCY_WINDOW = 0.6
 _FOAM = ",".join(f"{side}{k:02d}" for k in range(1, 17) for side in ("1700", "1800"))
 #: name -> (binding, bounds): see the module docstring
 PARAMETERS = {
-    "EI_inner": ("PBEAM 1002,1003 I1 scale", (0.25, 16.0)),
-    "EI_outer": ("PBEAM 1004,1005,1006,1007,1008,1009 I1 scale", (0.25, 16.0)),
+    "EI_root": ("PBEAM 1002 I1 scale", (0.25, 16.0)),
+    # absolute [in^4]: one section for the seven segments (default: the mean of their seven
+    # I1, 0.0267); bounds 0.64 x the weakest (0.0099) to 7.1 x the stiffest (0.0563)
+    "I1_wing": ("PBEAM 1003,1004,1005,1006,1007,1008,1009 I1", (0.0063, 0.40)),
     "m_foam": (f"CONM2 {_FOAM} M scale", (0.05, 2.0)),
+    "rho_wing": ("MAT1 903 RHO scale", (0.5, 8.0)),
 }
 #: discover's design variable: one flap bending scale of the whole wing, so that the few paired
 #: modes can still decide between effects (discover needs more modes than parameters)
@@ -99,6 +107,10 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
     if calibration_modes is not None:
         lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
+    # full solves: the reduced basis of these bound line fields is refused after it is built
+    # (its frequencies fall below the full ones by more than the Rayleigh-Ritz check allows),
+    # and with four parameters building it costs minutes; sample's screen would build it too
+    lines += ["[sampler]", "reduced = false", "screen = false"]
     if parameters:
         for name, (binds, (low, high)) in parameters.items():
             lines += [f"[parameters.{name}]", f'binds = "{binds}"', f"bounds = [{low}, {high}]"]

@@ -43,9 +43,27 @@ def _add_conm2(ctx: Context, m) -> None:
     J = R.T @ J @ R * ctx.wtmass
     try:
         ctx.builder.add_point_mass(ctx.node[row], m.real("M") * ctx.wtmass, f"CONM2 {m.id()}",
-                                   J, offset)  # fmt: skip
+                                   None, offset)  # fmt: skip
     except BayesUpdateError as exc:
         m.fail(_builder_message(exc))
+    _add_rotary_inertia(ctx, m, ctx.node[row], J)
+
+
+def _add_rotary_inertia(ctx: Context, m, node: int, J: np.ndarray) -> None:
+    """A CONM2's own inertia J (3, 3), global axes, about its centre of gravity: the rotation
+    block [[0, 0], [0, J]] of its 6x6 at the grid whatever the offset (the centre's rotations
+    are the grid's), as grounded scalar masses on its principal axes (``fe.scalar_mass``).
+    Kept apart from the point mass so that a binding on CONM2 M scales M (and the offset's
+    m d^2 terms) but not I11-I33, as a deck with M edited does (MSC QRG CONM2: M and Iij are
+    separate fields)."""
+    if not np.any(J):
+        return
+    lam, V = np.linalg.eigh(0.5 * (J + J.T))
+    if lam.min() < -1e-12 * max(lam.max(), 1e-300):
+        m.fail(f"the inertia is not positive semi-definite (eigenvalue {lam.min():.3g})")
+    for k in np.flatnonzero(lam > 1e-14 * lam.max()):
+        ctx.builder.add_scalar_mass(node, np.r_[np.zeros(3), V[:, k]], float(lam[k]),
+                                    f"CONM2 {m.id()}")  # fmt: skip
 
 
 def _add_conm1(ctx: Context, m) -> None:

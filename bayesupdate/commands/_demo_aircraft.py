@@ -38,8 +38,8 @@ class AircraftSettings:
     quick: bool = False
     seed: int = 0
 
-    # the reduced basis of these bound fields is refused here (its frequencies fall 4e-5 below
-    # the full ones), so every evaluation is a full solve of the deck: the chain is kept short
+    # every evaluation is a full solve of the deck (``pipelines.aircraft.study_text`` says why
+    # not the reduced basis): the chain is kept short
 
     @property
     def starts(self) -> int:

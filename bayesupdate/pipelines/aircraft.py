@@ -107,9 +107,9 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
     if calibration_modes is not None:
         lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
-    # full solves: the reduced basis of these bound line fields is refused after it is built
-    # (its frequencies fall below the full ones by more than the Rayleigh-Ritz check allows),
-    # and with four parameters building it costs minutes; sample's screen would build it too
+    # full solves: the reduced basis of these four bound fields certifies (size 58, error
+    # 2.9e-5) but its build took 410 s CPU (non-affine line fields interpolated over a 4-d box),
+    # against 14-17 ms per full solve of the deck; sample's screen would build it too
     lines += ["[sampler]", "reduced = false", "screen = false"]
     if parameters:
         for name, (binds, (low, high)) in parameters.items():

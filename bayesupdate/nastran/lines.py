@@ -21,9 +21,11 @@ their matrices at new values, both the reading of the deck written with them:
 
   M likewise, P_e the element's positions in the general CSR pattern (exactly K(deck) at the
   deck's values).  The elements' matrices stay exact whatever the field: the Timoshenko shear
-  parameter 12 EI / (k G A L^2) is not affine, its records are.  A field whose records are not
-  affine (a PBARL/PBEAML dimension: A, I are polynomials in it; RHO and A of the same
-  elements: a product) keeps ``LineRebuild`` at every solve.
+  parameter 12 EI / (k G A L^2) is not affine, its records are.  Records that are products of
+  two bound fields (RHO and A or I1 of the same elements: rho A, the twist inertia
+  rho (I1 + I2)) are bilinear: one more re-build per pair of parameters gives the
+  cross terms, checked at the same seeded points.  A field whose records are neither (a
+  PBARL/PBEAML dimension: A, I are polynomials in it) keeps ``LineRebuild`` at every solve.
 
 For the reduced basis (``fe.reduced``), ``affine_line_terms`` finds the fields that enter K and M
 linearly (a shear-rigid PBAR's A, I1, I2, J, a PROD's A and J, every NSM):
@@ -34,6 +36,7 @@ the reduced model's ``interp_tol``, as the built-in models' non-linear beam para
 """
 
 from dataclasses import dataclass, replace
+from dataclasses import field as _field
 
 import numpy as np
 
@@ -159,7 +162,11 @@ class LineFields:
     masses : indices of the bound general beams, rods and lumped point masses in the structure;
     records0 : (GeneralBeams | None, Rods | None, PointMassValues) at the deck's values;
     slopes : {(family, field): (n, ..., p) d record / d theta}, the non-zero ones; update :
-    ``LineUpdate`` of those elements on the general pattern."""
+    ``LineUpdate`` of those elements on the general pattern; pairs : {(family, field): (n, ...,
+    q) d^2 record / d theta_i d theta_j} of the parameter pairs ``pair_index`` (q pairs (i, j)):
+    a record that is a product of two bound fields (RHO and A or I1 of the same elements: the
+    mass per length rho A, the twist inertia rho (I1 + I2)) is bilinear in them, so the records
+    are exact with these terms (none when every record is affine)."""
 
     names: tuple[str, ...]
     theta0: np.ndarray
@@ -169,6 +176,8 @@ class LineFields:
     records0: tuple
     slopes: dict
     update: LineUpdate
+    pairs: dict = _field(default_factory=dict)
+    pair_index: tuple = ()
 
     def theta(self, values) -> np.ndarray:
         """(p,) the parameters of ``values`` ({name: deck units}; None: the deck's)."""
@@ -180,12 +189,16 @@ class LineFields:
         """(GeneralBeams | None, Rods | None, PointMassValues) of the bound elements at
         ``theta`` (p,)."""
         step = theta - self.theta0
+        both = np.array([step[i] * step[j] for i, j in self.pair_index])
         out = []
         for k, family in enumerate(("beam", "rod", "mass")):
             rec = self.records0[k]
             if rec is not None:
                 fields = {f: getattr(rec, f) + slope @ step
                           for (fam, f), slope in self.slopes.items() if fam == family}  # fmt: skip
+                for (fam, f), pair in self.pairs.items():
+                    if fam == family:
+                        fields[f] = fields.get(f, getattr(rec, f)) + pair @ both
                 rec = replace(rec, **fields)
             out.append(rec)
         return tuple(out)
@@ -274,6 +287,10 @@ def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields 
             for x in _fields(f)
         ):
             return None, "the re-built elements' values differ from the read ones"
+    # the records at theta0 anchor the slopes: an absolute value bound on cards whose deck
+    # values differ (one I1 for seven PBEAMs) writes theta0 into all of them, not the deck's
+    at0 = rebuild.structure_at(dict(zip(names, theta0, strict=True)))
+    rec0 = {f: _values(at0, f) for f in families}
     slopes = {}
     step = np.where(high > theta0, high, low) - theta0
     for j, name in enumerate(names):
@@ -291,22 +308,61 @@ def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields 
     records0 = (rec0.get("beam"), rec0.get("rod"), rec0.get("mass", no_mass))
     update = LineUpdate(g, beams=rows[0], rods=rows[1], masses=rows[2])
     fields = LineFields(names, theta0, *rows, records0, slopes, update)
+    probe = (rebuild, s, rows, families)
+    reason = _miss(probe, fields, low, high)
+    if reason and len(names) > 1:  # a product of two fields: bilinear terms (``LineFields``)
+        pairs = _pair_terms(probe, fields, step)
+        if pairs is None:
+            return None, "a parameter changes which elements or masses there are"
+        fields = replace(fields, pairs=pairs[0], pair_index=pairs[1])
+        reason = _miss(probe, fields, low, high)
+    return (None, reason) if reason else (fields, "")
+
+
+def _pair_terms(probe, fields: LineFields, step: np.ndarray):
+    """({(family, field): (n, ..., q) d^2 record / d theta_i d theta_j}, the q pairs (i, j)) from
+    one re-build per pair of parameters at theta0 + step_i e_i + step_j e_j (the single steps
+    are the affine slopes' own points); None when a step changes the elements."""
+    rebuild, s, rows, families = probe
+    names, p = fields.names, len(fields.names)
+    index = tuple((i, j) for i in range(p) for j in range(i + 1, p))
+    pairs = {}
+    for q, (i, j) in enumerate(index):
+        theta = fields.theta0 + step * np.isin(np.arange(p), (i, j))
+        at = rebuild.structure_at(dict(zip(names, theta, strict=True)))
+        if not _same_layout(s, at, rows):
+            return None
+        affine = fields.records(theta)
+        for k, f in enumerate(("beam", "rod", "mass")):
+            for name in _fields(f) if f in families else ():
+                exact = getattr(_values(at, f), name)
+                d = exact - getattr(affine[k], name)
+                d = np.where(np.abs(d) > RECORD_TOL * max(np.abs(exact).max(), 1e-300), d, 0.0)
+                if np.any(d != 0):
+                    term = pairs.setdefault((f, name), np.zeros((*d.shape, len(index))))
+                    term[..., q] = d / (step[i] * step[j])
+    return pairs, index
+
+
+def _miss(probe, fields: LineFields, low: np.ndarray, high: np.ndarray) -> str:
+    """ "" when ``fields.records`` equal the re-built elements at the seeded points of the box
+    (``LINEAR_SEED``, ``LINEAR_POINTS``) to ``RECORD_TOL``, else the reason."""
+    rebuild, s, rows, families = probe
+    names = fields.names
     rng = np.random.default_rng(LINEAR_SEED)
     for u in rng.uniform(size=(LINEAR_POINTS, len(names))):
         theta = low + u * (high - low)
-        probe = rebuild.structure_at(dict(zip(names, theta, strict=True)))
-        if not _same_layout(s, probe, rows):
-            return None, "a parameter changes which elements or masses there are"
-        affine = fields.records(theta)
+        at = rebuild.structure_at(dict(zip(names, theta, strict=True)))
+        if not _same_layout(s, at, rows):
+            return "a parameter changes which elements or masses there are"
+        approx = fields.records(theta)
         for k, f in enumerate(("beam", "rod", "mass")):
-            if f not in families:
-                continue
-            for field in _fields(f):
-                exact, approx = getattr(_values(probe, f), field), getattr(affine[k], field)
+            for name in _fields(f) if f in families else ():
+                exact, mine = getattr(_values(at, f), name), getattr(approx[k], name)
                 scale = max(float(np.abs(exact).max()), 1e-300)
-                if np.abs(exact - approx).max() > RECORD_TOL * scale:
-                    return None, f"the elements' {field} is not affine in {', '.join(names)}"
-    return fields, ""
+                if np.abs(exact - mine).max() > RECORD_TOL * scale:
+                    return f"the elements' {name} is not affine in {', '.join(names)}"
+    return ""
 
 
 #: relative round-off allowed between the affine sum and the re-built elements (exact: ~1e-15)

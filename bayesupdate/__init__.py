@@ -8,5 +8,5 @@ the CLI, files and plots at the edge.
 
 from bayesupdate.errors import BayesUpdateError
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["BayesUpdateError", "__version__"]

@@ -119,7 +119,23 @@ def test_deck_modes_equal_dense_lapack(bound, factors):
     p = {k: d[k] * f for k, f in zip(BINDS, factors, strict=True)}
     assert bound.small_method == "krylov"
     new, old = bound.solve(p, 20), bound.solve(p, 20, method="dense")
-    np.testing.assert_allclose(new.frequencies_hz, old.frequencies_hz, rtol=1e-8)
+    # the reference is each mode's Rayleigh quotient in extended precision (its error is
+    # quadratic in the shape's, so both solvers' quotients agree to 7.7e-13, measured).  The
+    # frequencies the solvers report carry the double-precision round-off of this deck
+    # (E = 6.66e10 beside foam-covered beams): measured against the quotients, dense LAPACK
+    # 5.5e-9 and 1.7e-8, the Krylov solve 1.6e-9 and 1.4e-8 at these two points, so both are
+    # held to the same 3e-8: the Krylov solve is as accurate as LAPACK, not more
+    Kx, Mx = (X.toarray().astype(np.longdouble) for X in bound.matrices(p))
+
+    def quotient_hz(x):
+        x = x.astype(np.longdouble)
+        lam = np.einsum("ij,ij->j", x, Kx @ x) / np.einsum("ij,ij->j", x, Mx @ x)
+        return np.sqrt(lam).astype(float) / (2 * np.pi)
+
+    f_new, f_old = quotient_hz(new.modes.shapes), quotient_hz(old.modes.shapes)
+    np.testing.assert_allclose(f_new, f_old, rtol=1e-11)
+    np.testing.assert_allclose(new.frequencies_hz, f_new, rtol=3e-8)
+    np.testing.assert_allclose(old.frequencies_hz, f_old, rtol=3e-8)
     assert new.modes.n_rigid == old.modes.n_rigid == 6
     M = bound.matrices(p)[1]
     a, b = new.modes.shapes, old.modes.shapes
@@ -136,4 +152,4 @@ def test_deck_modes_equal_dense_lapack(bound, factors):
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
     out = krylov_modes(Kf, Mf, Rm, 20, SIGMA, KrylovSettings())
     assert out is not None
-    np.testing.assert_allclose(np.sqrt(out[0]) / (2 * np.pi), old.frequencies_hz, rtol=1e-8)
+    np.testing.assert_array_equal(np.sqrt(out[0]) / (2 * np.pi), new.frequencies_hz)

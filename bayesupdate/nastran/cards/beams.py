@@ -282,8 +282,9 @@ def _pins(e):
 
 
 def add(ctx: Context) -> None:
-    """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM, PBARL or PBEAML (``L_SECTIONS``;
-    a tapered PBEAM or PBEAML: its mean section), offsets WA/WB and pin flags PA/PB.  G from
+    """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM, PBARL or PBEAML
+    (``L_SECTIONS``; a tapered PBEAM or PBEAML: its mean section), offsets WA/WB and pin flags
+    PA/PB.  G from
     MAT1.  Lumped mass (COUPMASS < 1): point masses at the element's ends (rigidly offset),
     (rho A + NSM) L / 2 each, and for CBEAM also half the torsional inertia rho (I1 + I2) L about
     the axis (MSC lumps none for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with

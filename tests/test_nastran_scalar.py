@@ -8,6 +8,7 @@ import pytest
 import scipy.linalg
 
 from bayesupdate.cli import main
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.nastran import load_nastran_model
 
 
@@ -127,21 +128,66 @@ def rejected(capsys, path) -> str:
     return lines[0]
 
 
-def test_unknown_scalar_points_and_unlike_dofs_in_one_message(capsys, tmp_path):
+def test_unknown_scalar_points_in_one_message(capsys, tmp_path):
     """CELAS3 on an SPOINT id that no SPOINT declares, a CELAS2 on an id that is neither GRID
-    nor SPOINT, an SPOINT with a GRID's id and a CELAS2 between unlike DOFs (x of GRID 1, z of
-    GRID 2): one message with each card's file:line."""
+    nor SPOINT and an SPOINT with a GRID's id: one message with each card's file:line (the
+    CELAS2 between unlike DOFs, x of GRID 1 and z of GRID 2, is a scalar spring: accepted)."""
     bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCONM2,9,1,,1.\nCONM2,10,2,,1.\nSPOINT,101\n"
             "CELAS3,2,5,101,102\nPELAS,5,10.\nCELAS2,4,5.,77,0\nSPOINT,2\n"
             "CELAS2,6,5.,1,1,2,3\nCMASS4,7,1.,101\n")  # fmt: skip
     line = rejected(capsys, _write(tmp_path, _deck(bulk), "scalar.bdf"))
     for where in ("scalar.bdf:11 CELAS3 2: S2: SPOINT 102 does not exist",
                   "scalar.bdf:13 CELAS2 4: G1: GRID or SPOINT 77 does not exist",
-                  "scalar.bdf:14 SPOINT 2: SPOINT 2 is also a GRID id",
-                  "scalar.bdf:15 CELAS2 6: component 1 of GRID 1 and component 3 of GRID 2 "
-                  "are unlike DOFs"):  # fmt: skip
+                  "scalar.bdf:14 SPOINT 2: SPOINT 2 is also a GRID id"):  # fmt: skip
         assert where in line, line
-    assert "4 card(s) refused" in line, line
+    assert "3 card(s) refused" in line and "CELAS2 6" not in line, line
+
+
+def _x_to_ry(k=300.0, k0=500.0, kr=200.0, m=2.0, j=0.5, extra=""):
+    """GRID 1 (x free) and GRID 2 (ry free, 3 in away): CELAS2 k between component 1 of GRID 1
+    and component 5 of GRID 2, grounded CELAS2 k0 (1x) and kr (2ry), CMASS2 m (1x), j (2ry)."""
+    bulk = (f"GRID,1,,0.,0.,0.\nGRID,2,,3.,0.,0.\nCELAS2,1,{k},1,1,2,5\nCELAS2,2,{k0},1,1\n"
+            f"CELAS2,3,{kr},2,5\nCMASS2,4,{m},1,1\nCMASS2,5,{j},2,5\nSPC1,1,23456,1\n"
+            f"SPC1,1,12346,2\n{extra}")  # fmt: skip
+    return _deck(bulk, 2).replace("CEND\n", "CEND\nSPC = 1\n")
+
+
+def test_celas2_between_unlike_dofs_is_a_scalar_spring(tmp_path):
+    """CELAS2 k = 300 between x of GRID 1 and ry of GRID 2 (C1 != C2: k [[1, -1], [-1, 1]] on the
+    two DOFs, QRG CELAS2; ``fe.elements.scalar_spring``): the modes of the 2-DOF closed form
+    K = [[k0 + k, -k], [-k, k + kr]], M = diag(m, j), shapes included."""
+    model = load_nastran_model(_write(tmp_path, _x_to_ry()))
+    r = model.solve(n_modes=2)
+    lam, phi = scipy.linalg.eigh([[800.0, -300.0], [-300.0, 500.0]], np.diag([2.0, 0.5]))
+    assert r.frequencies_hz == pytest.approx(_hz(lam), rel=1e-12)
+    shapes = r.modes.shapes
+    ratio = shapes[6 * 1 + 4] / shapes[0]  # GRID 2 ry over GRID 1 x
+    assert ratio == pytest.approx(phi[1] / phi[0], rel=1e-10)
+    assert "scalar_spring" in [f.family for f in model.structure.elements]
+
+
+def test_celas1_between_a_scalar_point_and_a_rotation(tmp_path):
+    """CELAS1 (PELAS 300) between SPOINT 9 (mass 2, sprung by 500 to the held GRID 1's x, which
+    places it along x) and ry of GRID 2: the closed form of
+    ``test_celas2_between_unlike_dofs_is_a_scalar_spring`` (a scalar point is a DOF like any
+    other)."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,3.,0.,0.\nSPOINT,9\nCELAS2,1,500.,9,0,1,1\n"
+            "CELAS1,6,7,9,0,2,5\nPELAS,7,300.\nCELAS2,3,200.,2,5\nCMASS4,4,2.,9\n"
+            "CMASS2,5,0.5,2,5\nCONM2,8,1,,1.\nSPC1,1,123456,1\nSPC1,1,12346,2\n")  # fmt: skip
+    deck = _deck(bulk, 2).replace("CEND\n", "CEND\nSPC = 1\n")
+    model = load_nastran_model(_write(tmp_path, deck))
+    r = model.solve(n_modes=2)
+    lam = scipy.linalg.eigh([[800.0, -300.0], [-300.0, 500.0]], np.diag([2.0, 0.5]),
+                            eigvals_only=True)  # fmt: skip
+    assert r.frequencies_hz == pytest.approx(_hz(lam), rel=1e-12)
+    assert "scalar_spring" in [f.family for f in model.structure.elements]
+
+
+def test_a_binding_on_a_scalar_spring_is_refused(tmp_path):
+    """``binds = "CELAS2 1 K"`` on the spring between unlike DOFs: one message naming it."""
+    path = _write(tmp_path, _x_to_ry())
+    with pytest.raises(BayesUpdateError, match=r"CELAS2 1 join\(s\) unlike DOFs"):
+        load_nastran_model(path, parameters={"k": {"binds": "CELAS2 1 K"}})
 
 
 def test_a_scalar_point_apart_from_the_structure_is_named(capsys, tmp_path):

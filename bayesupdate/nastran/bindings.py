@@ -292,8 +292,26 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
         else:
             names = [f"PBUSH {i}" for i in f.ids]
             _check_pbush(f, cards)
+        _refuse_scalar_springs(f, s, names)
         out["spring"] = _part_mask(s.spring_part, parts, names)
     return out
+
+
+def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
+    """A CELAS between unlike DOFs is a scalar spring (``fe.elements.scalar_spring``), which no
+    binding acts on: refused by name rather than silently left at the deck's K."""
+    from bayesupdate.fe.elements.scalar_spring import ScalarSprings
+
+    springs = ScalarSprings.of(structure)
+    if springs is None:
+        return
+    scalar = {structure.parts[p] for p in springs.part}
+    hit = [n for n in names if n in scalar]
+    if hit:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: {', '.join(hit)} join(s) unlike DOFs (a scalar "
+            "spring), whose K cannot be a parameter; bind the springs along one axis only"
+        )
 
 
 def _part_mask(part_of, parts, names) -> np.ndarray:

@@ -19,7 +19,7 @@ import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.elements.shell import SHEAR_FACTOR
-from bayesupdate.fe.structure import Material, StructureBuilder
+from bayesupdate.fe.structure import Material, StructureBuilder, check_connected
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bulk import CardError
 from bayesupdate.nastran.deck import Refusals, check_cards, read_deck
@@ -345,7 +345,11 @@ def _finish(ctx, eids, pids, props):
         return f"(a CBUSH arm end, node {node})"
 
     ctx.builder.node_names = grid_name
-    structure = ctx.builder.build()
+    structure = ctx.builder.build(check=False)
+    springs, parts = cards.springs.scalar_springs(ctx.scalar_springs, structure.parts)
+    if springs is not None:
+        structure = replace(structure, elements=(*structure.elements, springs), parts=parts)
+    check_connected(structure, grid_name)
     if props is not None and eids.size:
         structure = _patch_shells(structure, pids, props)
     return structure

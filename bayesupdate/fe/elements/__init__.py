@@ -25,3 +25,7 @@ from bayesupdate.fe.elements.base import (  # noqa: E402
 )
 
 __all__ = ["ElementFamily", "ElementSettings", "families_of", "register"]
+
+# scalar springs between any two DOFs or to ground (CELAS1/CELAS2): registered last, held in
+# ``Structure.elements``
+from bayesupdate.fe.elements import scalar_spring  # noqa: E402, F401, I001

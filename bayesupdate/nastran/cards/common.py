@@ -35,7 +35,8 @@ class Context:
     the grids, the structure node of each grid row (-1: not in the structure), WTMASS, lumped
     line mass, the builder, the deck's refusals, notes for the user, the rigid elements' cards;
     the deck's SPOINT cards, its scalar points as element ends ({id: ``scalar.End``}) and the
-    scalar masses on them ([(mass, ends)]: ``scalar.rigid_share``)."""
+    scalar masses on them ([(mass, ends)]: ``scalar.rigid_share``); the scalar springs between
+    unlike DOFs."""
 
     elements: dict
     props: dict
@@ -54,6 +55,9 @@ class Context:
     spoints: dict = field(default_factory=dict)
     unused_spoints: set = field(default_factory=set)
     spoint_masses: list = field(default_factory=list)
+    #: CELAS between unlike DOFs: [(part name, k, End, End or None)] (``springs``,
+    #: ``fe.elements.scalar_spring``), added to the built structure (``reader``)
+    scalar_springs: list = field(default_factory=list)
 
     @cached_property
     def grids_set(self) -> set:

@@ -18,13 +18,14 @@ every rigid-body motion, the value the springs ask of it in a zero-energy mode:
   free DOF along x and its other five components held: the only rigid motion left is "all
   points equal", the cluster's own zero-energy mode when no spring grounds it.
 
-A spring between two points acts on the structure's axis of both (``StructureBuilder.add_spring``
-on the nodes' own DOFs: k (e . u_A - e . u_B)^2), so its two ends must be one physical DOF
-direction e (same component in the same CD frame, or components of two frames that name the same
-axis).  Two unlike DOFs (C1 = 1 of one grid, C2 = 3 of another) have no such axis: that element,
-and a cluster tied by springs to two unlike GRID components, are refused (a scalar spring on two
-directions is an element family ``fe`` does not have).  Masses have no such limit
-(``add_scalar_mass`` takes a direction at each end).
+A spring between two points on one physical DOF direction e (same component in the same CD
+frame, or components of two frames that name the same axis) acts on the structure's axis of both
+(``StructureBuilder.add_spring`` on the nodes' own DOFs: k (e . u_A - e . u_B)^2).  Two unlike
+DOFs (C1 = 1 of one grid, C2 = 5 of another, or a scalar point placed along another direction)
+make a scalar spring k (d_A . u_A - d_B . u_B)^2 (``fe.elements.scalar_spring``, ``springs``);
+a cluster sprung to several GRID components is placed at the first (by element id), and its
+springs to the others are scalar springs.  Masses likewise take a direction at each end
+(``add_scalar_mass``).
 
 A scalar point carries no rigid-body mass (MSC's grid point weight generator uses grids only):
 ``scalar_point_rigid_mass`` is the share the embedding gives the scalar masses on scalar points

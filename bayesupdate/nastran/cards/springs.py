@@ -1,5 +1,9 @@
 """CELAS1-4 and CBUSH + PBUSH as springs (MSC Nastran QRG); scalar points: ``scalar``.
 
+A CELAS whose two ends are one axis is a spring on the nodes' own DOFs; one between two unlike
+DOFs (different components, or directions of different frames) is a scalar spring
+(``fe.elements.scalar_spring``), which the reader adds to the built structure.
+
 A PBUSH's K line gives the six stiffnesses along the element axes (CID's, or x from GA to GB);
 its M line (MSC: one MASS, the lumped mass of the CBUSH) is translational mass, (1 - S) MASS
 at GA and S MASS at GB (QRG PBUSH remark 13); its B and GE lines (damping) do not change real normal
@@ -30,9 +34,11 @@ def add(ctx: Context) -> None:
 
 
 def _add_celas(ctx: Context, e) -> None:
-    """CELAS1-4: k on the two ends' DOF (``scalar.ends``), which must be one axis (the same
-    component in the same CD frame, or two frames' components along one axis): the spring acts
-    along it on both nodes' own DOFs, k (e . u_A - e . u_B)^2; one end: grounded."""
+    """CELAS1-4: k on the two ends' DOFs (``scalar.ends``).  Two ends on one axis (the same
+    component in the same CD frame, or two frames' components along one axis), or one end, give
+    a spring along it on the nodes' own DOFs, k (e . u_A - e . u_B)^2; two unlike DOFs (C1 = 1
+    of one grid, C2 = 5 of another) give a scalar spring k (d_A . u_A - d_B . u_B)^2
+    (``fe.elements.scalar_spring``, collected in ``ctx.scalar_springs``)."""
     k = ctx.prop(e, ("PELAS",)).real("K") if e.name in ("CELAS1", "CELAS3") else e.real("K")
     if k < 0:
         e.fail(f"K = {k:g}: a negative spring is not supported")
@@ -41,16 +47,35 @@ def _add_celas(ctx: Context, e) -> None:
         e.fail("both ends are grounded: give a GRID or SPOINT at one end at least")
     a = points[0]
     b = points[1] if len(points) == 2 else None
-    if b is not None and not np.allclose(a.direction, b.direction):
-        e.fail(f"{a.label} and {b.label} are unlike DOFs: a spring between two axes "
-               "(k [[1, -1], [-1, 1]] on two directions) is not supported; give both ends one "
-               "direction")  # fmt: skip
-    if b is not None and a.node == b.node:
+    if b is not None and a.node == b.node and np.allclose(a.direction, b.direction):
         e.fail(f"both ends are {a.label} (MSC QRG: the two connection points must be distinct)")
+    if b is not None and not np.allclose(a.direction, b.direction):
+        ctx.scalar_springs.append((f"{e.name} {e.id()}", k, a, b))
+        return
     stiff = np.zeros(6)
     stiff[a.comp - 1] = k
     ctx.builder.add_spring(a.node, None if b is None else b.node, stiff, f"{e.name} {e.id()}",
                            frame=a.frame)  # fmt: skip
+
+
+def scalar_springs(records: list, parts: tuple):
+    """(``ScalarSprings``, the parts extended with their names) of ``ctx.scalar_springs``
+    records [(part name, k x 1, End A, End B)]; (None, parts) when there are none."""
+    from bayesupdate.fe.elements.scalar_spring import ScalarSprings
+
+    if not records:
+        return None, parts
+    names = list(parts)
+    for name, *_ in records:
+        if name not in names:
+            names.append(name)
+    springs = ScalarSprings(
+        nodes=np.array([(a.node, b.node) for _, _, a, b in records], dtype=np.int64),
+        direction=np.array([(a.direction, b.direction) for _, _, a, b in records]),
+        stiffness=np.array([k for _, k, _, _ in records], dtype=float),
+        part=np.array([names.index(name) for name, *_ in records], dtype=np.int64),
+    )
+    return springs, tuple(names)
 
 
 def pbush_lines(p) -> dict[str, list]:

@@ -229,6 +229,24 @@ def test_pbush_mass_is_split_by_s_and_damping_is_noted(tmp_path):
     assert any("PBUSH 8: B and GE (damping) ignored" in n for n in notes), notes
 
 
+@pytest.mark.parametrize("s, share", [("", 0.5), ("0.", 1.0), ("0.8", 0.2)])
+def test_pbush_mass_on_a_grounded_cbush(tmp_path, s, share):
+    """PBUSH M = 4 (x WTMASS 0.5) on a grounded CBUSH (CID 7) at S blank (0.5), 0 and 0.8: GB is a
+    grounded terminal (QRG CBUSH remark 6), so (1 - S) x 2 moves at GA (PBUSH remark 13),
+    the same in the three CID directions; K1-K3 = 100, 400, 900 and the rotations held give
+    f_i = sqrt(K_i / ((1 - S) 2)) / 2 pi, the model's mass (1 - S) 2, and a note."""
+    bulk = (f"PARAM,WTMASS,0.5\n{CORD7}GRID,1,,0.,0.,0.\nCBUSH,3,8,1,,,,,7\n,{s}\n"
+            "PBUSH,8,K,100.,400.,900.\n,,M,4.\nSPC1,1,456,1\n")  # fmt: skip
+    model = load_nastran_model(_write(tmp_path, _deck(bulk, 3)))
+    r = model.solve(n_modes=3)
+    m = 2.0 * share
+    assert r.frequencies_hz == pytest.approx(_hz(np.array([100.0, 400.0, 900.0]) / m), rel=1e-10)
+    assert r.mass_kg == pytest.approx(m, rel=1e-12)
+    notes = model.structure.metadata["nastran"]["notes"]
+    assert any(f"CBUSH 3 is grounded: (1 - S) = {share:g} of its PBUSH MASS" in n
+               for n in notes), notes  # fmt: skip
+
+
 # -- CONM1, CELAS1 + PELAS, CMASS1 + PMASS ------------------------------------------------------
 def test_conm1_general_6x6_mass_matrix(tmp_path):
     """CONM1 with M11 = 2, M22 = 3, M33 = 5 (no rigid body has that) and M51 = 0.5 coupling x

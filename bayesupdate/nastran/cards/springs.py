@@ -6,7 +6,8 @@ DOFs (different components, or directions of different frames) is a scalar sprin
 
 A PBUSH's K line gives the six stiffnesses along the element axes (CID's, or x from GA to GB);
 its M line (MSC: one MASS, the lumped mass of the CBUSH) is translational mass, (1 - S) MASS
-at GA and S MASS at GB (QRG PBUSH remark 13); its B and GE lines (damping) do not change real normal
+at GA and S MASS at GB (QRG PBUSH remark 13; a grounded CBUSH's GB is a grounded terminal, so
+only (1 - S) MASS moves); its B and GE lines (damping) do not change real normal
 modes and are listed once as ignored.
 
 A CBUSH whose ends are apart acts at its location (S along GA-GB, or S1-S3 in OCID) through
@@ -152,18 +153,24 @@ def _add_cbush(ctx: Context, e) -> None:
 
 
 def _add_bush_mass(ctx: Context, e, mass: float, a, b, part: str) -> None:
-    """PBUSH MASS as MSC places it (QRG PBUSH remark 13): translational, (1 - S) MASS at GA and
-    S MASS at GB.  A grounded CBUSH and an OCID offset (MSC splits by distances given as
-    formulas we have not checked) are refused rather than guessed."""
-    if b is None:
-        e.fail("PBUSH M on a grounded CBUSH is not supported (give the mass as a CONM2)")
+    """PBUSH MASS as MSC places it (QRG PBUSH remark 13): translational, the same in the three
+    element directions, (1 - S) MASS at GA and S MASS at GB.  A grounded CBUSH's GB is a
+    grounded terminal (QRG CBUSH remark 6: a point whose displacement is constrained to zero),
+    so only (1 - S) MASS moves, at GA (a note says so).  An OCID offset (MSC splits by
+    distances given as formulas we have not checked) is refused rather than guessed."""
     if e.int("OCID") != -1:
         e.fail("PBUSH M with an OCID offset is not supported (give the mass as a CONM2)")
     s = e.real("S")
     if not 0 <= s <= 1:
         e.fail(f"S = {s}: give 0 <= S <= 1")
     ctx.builder.add_point_mass(a, (1 - s) * mass, part)
-    ctx.builder.add_point_mass(b, s * mass, part)
+    if b is not None:
+        ctx.builder.add_point_mass(b, s * mass, part)
+        return
+    ctx.notes.append(
+        f"{e.where} CBUSH {e.id()} is grounded: (1 - S) = {1 - s:g} of its PBUSH MASS is at GA, "
+        "the rest on the grounded terminal (QRG PBUSH remark 13, CBUSH remark 6)"
+    )
 
 
 def _cbush_point(ctx: Context, e, x) -> np.ndarray:

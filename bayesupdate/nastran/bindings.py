@@ -24,6 +24,7 @@ PBARL DIMk      line (re-built)        the CBARs of that property, also NSM
 PBEAML DIMk     line (re-built)        the CBEAMs of that property (every station), NSM
 PROD A J NSM    line (re-built)        the CRODs of that property
 MAT1 E / RHO    (re-built)             also every line element (CONROD too) with that MID
+MAT1 G          line (re-built)        the line elements with that MID (not shells)
 ==============  =====================  ==========================================
 
 Line-element fields act on the bound elements as the reading of the edited deck does
@@ -48,7 +49,11 @@ _DIMS = {f"DIM{k}": ("line", "line") for k in range(1, 11)}
 #: card -> {field: (FE property, structure family)}
 FIELDS = {
     "PSHELL": {"T": ("thickness", "shell")},
-    "MAT1": {"E": ("youngs_modulus", "shell"), "RHO": ("density", "shell")},
+    "MAT1": {
+        "E": ("youngs_modulus", "shell"),
+        "RHO": ("density", "shell"),
+        "G": ("line", "line"),
+    },
     "CONM2": {"M": ("mass_factor", "mass")},
     "CELAS2": {"K": ("stiffness_factor", "spring")},
     "CELAS4": {"K": ("stiffness_factor", "spring")},
@@ -124,8 +129,9 @@ def parse_binding(text, name: str) -> DeckField:
 
 def _bindable() -> str:
     return (
-        "PSHELL T, MAT1 E/RHO, CONM2 M, CELAS2/CELAS4 K, PELAS K, PBUSH K1-K6 (or K scale), "
-        "PBAR/PBEAM A I1 I2 J NSM, PROD A J NSM, PBARL/PBEAML DIM1-DIM10 NSM"
+        "PSHELL T, MAT1 E/RHO (G: line elements), CONM2 M, CELAS2/CELAS4 K, PELAS K, "
+        "PBUSH K1-K6 (or K scale), PBAR/PBEAM A I1 I2 J NSM, PROD A J NSM, "
+        "PBARL/PBEAML DIM1-DIM10 NSM"
     )
 
 
@@ -274,6 +280,9 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
     )
     if f.card in LINE_PROPERTIES:
         return out
+    if f.card == "MAT1" and f.field == "G":
+        _refuse_shell_g(f, deck)
+        return out
     if f.card in ("PSHELL", "MAT1"):
         pids = f.ids if f.card == "PSHELL" else _pshells_of(deck, f)
         names = [parts.index(f"PSHELL {p}") for p in pids if f"PSHELL {p}" in parts]
@@ -311,6 +320,17 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
         raise BayesUpdateError(
             f"parameter binds {f.spec!r}: {', '.join(hit)} join(s) unlike DOFs (a scalar "
             "spring), whose K cannot be a parameter; bind the springs along one axis only"
+        )
+
+
+def _refuse_shell_g(f: DeckField, deck) -> None:
+    """MAT1 G acts on line elements only (beams and rods use E and G; a shell takes E and NU
+    here, and its MAT1 G would be left at the deck's value): refused on a shell material."""
+    shells = _pshells_of(deck, f)
+    if shells:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: PSHELL {', '.join(map(str, shells))} use(s) that MAT1, "
+            "whose G the shells do not take (they use E and NU); bind MAT1 E instead"
         )
 
 

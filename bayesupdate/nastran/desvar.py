@@ -8,9 +8,18 @@ are one binding, ``"PSHELL 3,5 T"``); the other DESVARs are listed in a note.  B
 XUB (a bound at Nastran's +-1e20 default, or a lower bound <= 0, takes ``model.DEFAULT_RANGE``
 of the deck's value instead).  The parameter's default is the card's value / COEF, which may
 differ from XINIT (``xinit_values``).
+
+Every relation, bindable or not (CBEAM offsets W1A-W3B, CONM2 X1-X3 and I11-I33, CMASS2 M,
+several COEFs for one DESVAR), is evaluated by ``design_cards``: the deck's cards with
+``C0 + sum(COEF_i x_i)`` written into each related field (bounded by the relation's PMIN / PMAX
+where the card gives them), which ``writer.write_design_deck`` writes as a deck: the model at
+any DESVAR values as SOL 200 builds it, by reading the cards again (no fast path).
 """
 
+import numpy as np
+
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.nastran.bulk import CardError, with_fields
 
 #: DVPREL1 field numbers of the bindable fields (MSC QRG: PSHELL T is field 4, PELAS K 3,
 #: PBAR A I1 I2 J NSM 4-8, PROD A J 4-5); names (PNAME) are read as they are
@@ -107,20 +116,104 @@ def _entry(desvars, desvar_id, key, pids) -> dict:
 
 
 def unbound_note(deck, parameters: dict) -> str | None:
-    """A note naming the DESVARs that did not become parameters (those acting through DVMREL1 /
-    DVCREL1 only, or through no relation), with their XINIT and bounds; None when all did."""
+    """One note naming each DESVAR that did not become a parameter, with its XINIT, bounds and
+    why, at the file:line of the relation that keeps it out (``unbound_reasons``); None when
+    all did.  Such a DESVAR stays at the cards' values; ``writer.write_design_deck`` writes the
+    deck with every relation evaluated at any DESVAR values."""
     used = {int(e["desvar"]) for e in parameters.values() if "desvar" in e}
     rest = [c for i, c in sorted(deck.table("DESVAR").items()) if i not in used]
     if not rest:
         return None
-    items = ", ".join(
-        f"{c['LABEL']} ({c.id()}: {c.real('XINIT'):g} in [{c.real('XLB'):g}, {c.real('XUB'):g}])"
+    why = unbound_reasons(deck)
+    items = "; ".join(
+        f"{c['LABEL']} ({c.id()}: {c.real('XINIT'):g} in [{c.real('XLB'):g}, {c.real('XUB'):g}]"
+        f"): {why.get(c.id(), 'no relation uses it')}"
         for c in rest
     )
-    return (
-        f"{len(rest)} DESVAR(s) not made parameters (a relation with C0, several DESVARs, or a "
-        f"field that cannot be bound: CBEAM offsets, CONM2 X/I, CMASS2 M): {items}"
-    )
+    return f"{len(rest)} DESVAR(s) not made parameters (they stay at the cards' values): {items}"
+
+
+def unbound_reasons(deck) -> dict[int, str]:
+    """{DESVAR id: 'file:line CARD id: why'} of the first relation that keeps each DESVAR from
+    being one binding (``desvar_parameters``): a field no binding acts on, C0 != 0, several
+    DESVARs in one relation, or COEFs / fields that differ between its relations."""
+    out, first = {}, {}
+    for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
+        ptype, name, c0, pairs = _relation(rel)
+        where = f"{rel.where} {rel.name} {rel.value(0)}"
+        for dvid, coef in pairs:
+            if dvid in out:
+                continue
+            if _field(rel, ptype, name) is None:
+                out[dvid] = f"{where}: {ptype} {name} is a field no binding acts on"
+            elif c0 != 0:
+                out[dvid] = f"{where}: C0 = {c0:g} (a binding is COEF x)"
+            elif len(pairs) > 1:
+                out[dvid] = f"{where}: {len(pairs)} DESVARs in one relation"
+            elif first.setdefault(dvid, (ptype, name, coef, where))[:3] != (ptype, name, coef):
+                t, n, c, w = first[dvid]
+                out[dvid] = (f"{where}: {ptype} {name} x {coef:g} beside {t} {n} x {c:g} at {w} "
+                             "(one binding has one field and one COEF)")  # fmt: skip
+    return out
+
+
+def design_values(deck, values=None) -> dict[int, float]:
+    """{DESVAR id: value}: ``values`` ({DESVAR id or label: value}) over the DESVARs' XINIT."""
+    out = {i: c.real("XINIT") for i, c in deck.table("DESVAR").items()}
+    labels = {_label(deck.table("DESVAR"), i).upper(): i for i in out}
+    for key, v in (values or {}).items():
+        i = key if isinstance(key, int) else labels.get(str(key).upper())
+        if i not in out:
+            raise BayesUpdateError(f"DESVAR {key!r}: the deck has no such design variable")
+        out[i] = float(v)
+    return out
+
+
+def design_cards(deck, values=None) -> dict:
+    """{(card name, id): the card with every DVPREL1 / DVMREL1 / DVCREL1 relation's field set to
+    C0 + sum(COEF_i x_i)} at the DESVAR values ``values`` (``design_values``: XINIT where not
+    given); the relation's PMIN / PMAX bound it where written on the card.  A PBEAM(L) field is
+    written at every station that gives it (``bindings.set_field``).  Relations whose card,
+    field or DESVAR does not exist are refused together, each with its file:line."""
+    x = design_values(deck, values)
+    changed, refused = {}, []
+    for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
+        try:
+            key, card = _apply(deck, rel, x, changed)
+        except (BayesUpdateError, CardError) as exc:
+            refused.append(f"{rel.where} {rel.name} {rel.value(0)}: {str(exc).split(': ')[-1]}")
+            continue
+        changed[key] = card
+    if refused:
+        raise BayesUpdateError(f"{len(refused)} design relation(s) refused: " + "; ".join(refused))
+    return changed
+
+
+def _apply(deck, rel, x: dict, changed: dict):
+    """((card name, id), the card with the relation's field written)."""
+    from bayesupdate.nastran.bindings import FIELDS, DeckField, set_field
+
+    ctype, name, c0, pairs = _relation(rel)
+    cid = rel.value(2)
+    card = changed.get((ctype, cid)) or deck.table(ctype).get(cid)
+    if card is None or card.name != ctype:
+        raise BayesUpdateError(f"no {ctype} {cid}")
+    missing = [d for d, _ in pairs if d not in x]
+    if missing or not pairs:
+        raise BayesUpdateError(f"no DESVAR {missing or '(no DVIDi)'}")
+    value = c0 + sum(coef * x[d] for d, coef in pairs)
+    low, high = (rel.value(k) for k in (4, 5))
+    value = float(np.clip(value, -np.inf if low is None else low, np.inf if high is None else high))
+    if not isinstance(name, str):  # a DVPREL1 field number: raw index number - 2
+        field = _FIELD_NUMBER.get((ctype, int(name or 0)))
+        if field is None:
+            return (ctype, cid), with_fields(card, {int(name) - 2: float(value)})
+        name = field
+    name = name.upper()
+    if name in FIELDS.get(ctype, {}):
+        f = DeckField(f"{ctype} {cid} {name}", ctype, (cid,), name, False)
+        return (ctype, cid), set_field(card, f, float(value), 0.0)
+    return (ctype, cid), with_fields(card, {card.position(name): float(value)})
 
 
 def xinit_values(deck, model) -> dict[str, float]:

@@ -37,6 +37,27 @@ def write_updated_deck(model, values, out) -> Path:
         if binding.desvar is not None:  # the design variable's start, as Nastran reads it
             dv = deck.table("DESVAR")[binding.desvar]
             changed[("DESVAR", binding.desvar)] = with_fields(dv, {dv.position("XINIT"): value})
+    return _write(deck, changed, out)
+
+
+def write_design_deck(path, out, values=None) -> Path:
+    """Write the deck at ``path`` with its DESVARs at ``values`` ({DESVAR id or label: value};
+    XINIT where not given) to ``out``: every DVPREL1 / DVMREL1 / DVCREL1 relation's field set to
+    C0 + sum(COEF_i x_i) (``desvar.design_cards``) and each DESVAR's XINIT to its value, so that
+    reading it gives the model SOL 200 builds at those values; the rest as ``write_updated_deck``
+    copies it."""
+    from bayesupdate.nastran.desvar import design_cards, design_values
+
+    deck = read_deck(path)
+    changed = design_cards(deck, values)
+    for i, value in design_values(deck, values).items():
+        dv = deck.table("DESVAR")[i]
+        changed[("DESVAR", i)] = with_fields(dv, {dv.position("XINIT"): float(value)})
+    return _write(deck, changed, out)
+
+
+def _write(deck, changed: dict, out) -> Path:
+    """The deck's text with the ``changed`` cards ({key: card}) written to ``out``."""
     out = Path(out)
     by_file = {}
     for card in changed.values():

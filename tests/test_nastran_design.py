@@ -1,0 +1,123 @@
+"""A deck's design model (MSC QRG DESVAR, DVPREL1, DVMREL1, DVCREL1) against the same deck with the
+related fields edited by hand: every relation evaluated (``writer.write_design_deck``: CBEAM
+offsets with COEF +1 and -1, MAT1 G, CMASS2 M with COEF 0.5 and 1, CONM2 X1 with C0, CONM2 I11),
+the bindable DESVAR (MAT1 G of line elements) as a parameter, and the note naming the others
+with their file:line."""
+
+import numpy as np
+import pytest
+
+from bayesupdate.nastran import load_nastran_model
+from bayesupdate.nastran.writer import write_design_deck
+
+#: a free frame: two CBEAMs (PBEAM 5, MAT1 1 with E and G), a CONM2 with offset and inertia at
+#: GRID 3, two CMASS2 rotary inertias; fields marked {name} are the design model's
+BULK = """EIGRL,1,,,8
+GRID,1,,0.,0.,0.
+GRID,2,,10.,0.,0.
+GRID,3,,20.,0.,0.
+CBEAM,11,5,1,2,0.,0.,1.
+,,,0.,{w11},0.,0.,{w11},0.
+CBEAM,12,5,2,3,0.,0.,1.
+,,,0.,{w12},0.,0.,{w12},0.
+PBEAM,5,1,0.5,0.02,0.01,,0.015
+MAT1,1,1.e7,{g},,0.1
+CONM2,31,3,,2.,{x1},0.,0.
+,{i11},,0.3,,,0.4
+CMASS2,21,{m21},1,4
+CMASS2,22,{m22},2,4
+"""
+DESIGN = """DESVAR,1,OFF,0.05,-1.,1.
+DESVAR,2,GMOD,4.e6,1.e6,1.e7
+DESVAR,3,ROT,0.2,0.01,1.
+DESVAR,4,XCG,0.,-1.,1.
+DESVAR,5,IXX,0.25,0.01,1.
+DVCREL1,101,CBEAM,11,W2A
+,1,1.
+DVCREL1,102,CBEAM,11,W2B
+,1,1.
+DVCREL1,103,CBEAM,12,W2A
+,1,-1.
+DVCREL1,104,CBEAM,12,W2B
+,1,-1.
+DVMREL1,201,MAT1,1,G
+,2,1.
+DVCREL1,301,CMASS2,21,M
+,3,0.5
+DVCREL1,302,CMASS2,22,M
+,3,1.
+DVCREL1,401,CONM2,31,X1,,,0.1
+,4,1.
+DVCREL1,501,CONM2,31,I11
+,5,2.
+"""
+#: the cards' own values (not the relations' at XINIT: SOL 200 replaces them)
+CARDS = dict(w11=0.0, w12=0.0, g=4.0e6, x1=0.1, i11=0.5, m21=0.1, m22=0.2)
+
+
+def _deck(tmp_path, name: str, fields: dict, design: bool) -> str:
+    text = BULK.format(**fields) + (DESIGN if design else "")
+    path = tmp_path / name
+    path.write_text(f"SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\n{text}ENDDATA\n")
+    return str(path)
+
+
+def _by_hand(x: dict) -> dict:
+    """The related fields at DESVAR values x, typed as a user edits the cards."""
+    return dict(w11=x["OFF"], w12=-x["OFF"], g=x["GMOD"], x1=0.1 + x["XCG"], i11=2 * x["IXX"],
+                m21=0.5 * x["ROT"], m22=x["ROT"])  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "x", [None, dict(OFF=0.3, GMOD=2.5e6, ROT=0.6, XCG=-0.4, IXX=0.05)], ids=["xinit", "moved"]
+)
+def test_the_design_deck_is_the_deck_edited_by_hand(tmp_path, x):
+    """At XINIT and at other DESVAR values: the deck ``write_design_deck`` writes (all nine
+    relations evaluated) has the modes of the deck edited by hand, and differs from the cards'
+    own values (the relations change the model)."""
+    values = x or dict(OFF=0.05, GMOD=4.0e6, ROT=0.2, XCG=0.0, IXX=0.25)
+    design = _deck(tmp_path, "design.bdf", CARDS, design=True)
+    written = write_design_deck(design, tmp_path / "written.bdf", x)
+    hand = _deck(tmp_path, "hand.bdf", _by_hand(values), design=False)
+    f_written = load_nastran_model(str(written), parameters={}).solve(n_modes=8).frequencies_hz
+    f_hand = load_nastran_model(hand).solve(n_modes=8).frequencies_hz
+    np.testing.assert_allclose(f_written, f_hand, rtol=1e-12)
+    f_cards = load_nastran_model(_deck(tmp_path, "cards.bdf", CARDS, False)).solve(n_modes=8)
+    assert np.max(np.abs(f_cards.frequencies_hz / f_hand - 1)) > 1e-3
+
+
+def test_mat1_g_desvar_is_a_parameter_and_the_rest_are_named(tmp_path):
+    """Of the five DESVARs only GMOD (DVMREL1 on MAT1 G, the beams' shear modulus) is one
+    binding (``MAT1 1 G``, bounds 1e6-1e7); the model at GMOD = 7e6 equals the cards with G
+    edited to 7e6 by hand; the note names the other four with the file:line of the relation
+    that keeps each out (CBEAM W2A, CMASS2 M, CONM2 X1, CONM2 I11)."""
+    model = load_nastran_model(_deck(tmp_path, "design.bdf", CARDS, design=True))
+    assert list(model.parameter_names) == ["GMOD"]
+    assert model.bindings["GMOD"].target == "MAT1 1 G"
+    assert tuple(model.default_bounds()["GMOD"]) == (1.0e6, 1.0e7)
+    f = model.solve({"GMOD": 7.0e6}, n_modes=8).frequencies_hz
+    hand = load_nastran_model(_deck(tmp_path, "hand.bdf", {**CARDS, "g": 7.0e6}, False))
+    np.testing.assert_allclose(f, hand.solve(n_modes=8).frequencies_hz, rtol=1e-9)
+    note = next(n for n in model.structure.metadata["nastran"]["notes"] if "DESVAR(s)" in n)
+    assert note.startswith("4 DESVAR(s) not made parameters"), note
+    for part in ("OFF (1: 0.05 in [-1, 1]): design.bdf:24 DVCREL1 101: CBEAM W2A",
+                 "ROT (3: 0.2 in [0.01, 1]): design.bdf:34 DVCREL1 301: CMASS2 M",
+                 "XCG (4: 0 in [-1, 1]): design.bdf:38 DVCREL1 401: CONM2 X1",
+                 "IXX (5: 0.25 in [0.01, 1]): design.bdf:40 DVCREL1 501: CONM2 I11"):  # fmt: skip
+        assert part in note, note
+
+
+def test_a_relation_to_a_missing_card_is_named(tmp_path):
+    """A DVCREL1 on a CBEAM the deck does not have and a DVMREL1 naming a DESVAR it does not
+    have: one message, each relation's file:line."""
+    from bayesupdate.errors import BayesUpdateError
+
+    bad = DESIGN + "DVCREL1,601,CBEAM,99,W1A\n,1,1.\nDVMREL1,602,MAT1,1,E\n,77,1.\n"
+    path = tmp_path / "bad.bdf"
+    path.write_text(f"SOL 103\nCEND\nBEGIN BULK\n{BULK.format(**CARDS)}{bad}ENDDATA\n")
+    with pytest.raises(BayesUpdateError) as err:
+        write_design_deck(path, tmp_path / "out.bdf")
+    text = str(err.value)
+    assert "2 design relation(s) refused" in text, text
+    assert "bad.bdf:41 DVCREL1 601: no CBEAM 99" in text, text
+    assert "bad.bdf:43 DVMREL1 602: no DESVAR [77]" in text, text

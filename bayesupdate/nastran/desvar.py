@@ -4,7 +4,10 @@ Used when the study names no parameters.  A relation sets ``field = C0 + sum(COE
 QRG DVPREL1, DVMREL1, DVCREL1); a DESVAR becomes a parameter named by its label, in its own
 units, when every relation using it is the linear form (one DESVAR, C0 = 0) on a field
 ``bindings`` can bind and all set the same card type and field with the same COEF (several ids
-are one binding, ``"PSHELL 3,5 T"``); the other DESVARs are listed in a note.  Bounds are XLB,
+are one binding, ``"PSHELL 3,5 T"``), or when all its relations (one DESVAR each) set the same
+line-element field of distinct cards with any C0_i and COEF_i (PBAR/PBEAM/PROD/PBARL/PBEAML
+fields, MAT1 G: re-built from the cards, ``lines``; ``DeckBinding.value_of``); the other
+DESVARs are listed in a note.  Bounds are XLB,
 XUB (a bound at Nastran's +-1e20 default, or a lower bound <= 0, takes ``model.DEFAULT_RANGE``
 of the deck's value instead).  The parameter's default is the card's value / COEF, which may
 differ from XINIT (``xinit_values``).
@@ -62,10 +65,13 @@ def design_refusals(deck) -> list[str]:
 
 
 def desvar_parameters(deck) -> dict:
-    """{label: {"binds", "bounds" (optional), "coefficient", "desvar"}} of the DESVARs whose every
-    relation (DVPREL1, DVMREL1, DVCREL1) sets one bindable field as COEF x (C0 = 0, one DESVAR):
-    one binding over their ids.  A DVPREL1 to a field that cannot be bound is refused (all of
-    them in one message); the other DESVARs are listed by ``unbound_note``."""
+    """{label: {"binds", "bounds" (optional), "coefficient" or "coefficients" and "offsets",
+    "desvar"}} of the DESVARs that are one binding: every relation (DVPREL1, DVMREL1, DVCREL1)
+    sets one bindable field as COEF x (C0 = 0, one DESVAR, one COEF), one binding over their
+    ids; or every relation sets the same line-element field (PBAR/PBEAM/PROD/... fields, MAT1
+    G: re-built, ``lines``) of distinct cards as C0_i + COEF_i x.  A DVPREL1 to a field that
+    cannot be bound is refused (all of them in one message); the other DESVARs are listed by
+    ``unbound_note``."""
     refused = design_refusals(deck)
     if refused:
         raise BayesUpdateError(f"{len(refused)} design relation(s) refused: " + "; ".join(refused))
@@ -73,18 +79,48 @@ def desvar_parameters(deck) -> dict:
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         field = _field(rel, ptype, name)
-        for dvid, _ in pairs:
-            ok = field is not None and len(pairs) == 1 and c0 == 0
-            key = (ptype, field, pairs[0][1]) if ok else None
-            relations.setdefault(dvid, []).append((key, int(rel.value(2))))
-    by_desvar = {}
-    for dvid, rels in sorted(relations.items()):
-        keys = {k for k, _ in rels}
-        if len(keys) == 1 and None not in keys:
-            by_desvar[dvid] = [keys.pop(), sorted({i for _, i in rels})]
+        for dvid, coef in pairs:
+            one = field is not None and len(pairs) == 1
+            relations.setdefault(dvid, []).append(
+                ((ptype, field) if one else None, coef, c0, int(rel.value(2)))
+            )
     desvars = deck.table("DESVAR")
-    return {_name(desvars, d, by_desvar): _entry(desvars, d, *v)
-            for d, v in sorted(by_desvar.items())}  # fmt: skip
+    out = {}
+    for dvid, rels in sorted(relations.items()):
+        entry = _one_binding(rels) or _line_combination(rels)
+        if entry is not None and dvid in desvars:
+            out[dvid] = entry
+    return {_name(desvars, d, out): _entry(desvars, d, e) for d, e in out.items()}
+
+
+def _one_binding(rels) -> dict | None:
+    """{"binds", "coefficient"} when every relation is one bindable field x one COEF, C0 = 0."""
+    keys = {(k, coef) for k, coef, c0, _ in rels if k is not None and c0 == 0}
+    if len(keys) != 1 or len(keys) != len({(k, coef, c0) for k, coef, c0, _ in rels}):
+        return None
+    (card, field), coef = keys.pop()
+    ids = sorted({i for *_, i in rels})
+    return {"binds": f"{card} {','.join(map(str, ids))} {field}", "coefficient": coef}
+
+
+def _line_combination(rels) -> dict | None:
+    """{"binds", "coefficients", "offsets"} when every relation sets the same line-element
+    field (re-built from the cards: any C0 and COEF) of distinct cards."""
+    from bayesupdate.nastran.bindings import FIELDS
+
+    keys = {k for k, *_ in rels}
+    ids = [i for *_, i in rels]
+    if len(keys) != 1 or None in keys or len(set(ids)) != len(ids):
+        return None
+    card, field = keys.pop()
+    if FIELDS[card][field] != ("line", "line") or any(coef == 0 for _, coef, _, _ in rels):
+        return None
+    rels = sorted(rels, key=lambda r: r[3])
+    return {
+        "binds": f"{card} {','.join(str(r[3]) for r in rels)} {field}",
+        "coefficients": [r[1] for r in rels],
+        "offsets": [r[2] for r in rels],
+    }
 
 
 def _label(desvars, d) -> str:
@@ -99,16 +135,9 @@ def _name(desvars, desvar_id, taken) -> str:
     return label if labels.count(label) == 1 else f"{label}_{desvar_id}"
 
 
-def _entry(desvars, desvar_id, key, pids) -> dict:
-    card, field, coefficient = key
-    dv = desvars.get(desvar_id)
-    if dv is None:
-        raise BayesUpdateError(f"DVPREL1 on {card} {pids[0]}: no DESVAR {desvar_id}")
-    out = {
-        "binds": f"{card} {','.join(str(p) for p in pids)} {field}",
-        "coefficient": coefficient,
-        "desvar": desvar_id,
-    }
+def _entry(desvars, desvar_id, entry: dict) -> dict:
+    dv = desvars[desvar_id]
+    out = {**entry, "desvar": desvar_id}
     low, high = dv.real("XLB"), dv.real("XUB")
     if low > 0 and high < _NO_BOUND and low < high:
         out["bounds"] = [low, high]

@@ -103,9 +103,9 @@ class LineRebuild:
             if values is None:
                 continue
             table = mats if b.field.card == "MAT1" else props
-            for i, nominal in zip(b.field.ids, b.nominal, strict=True):
+            for k, (i, nominal) in enumerate(zip(b.field.ids, b.nominal, strict=True)):
                 card = table.get(i) or _card(deck, b.field, i)
-                table[i] = set_field(card, b.field, float(values[name]) * b.coefficient, nominal)
+                table[i] = set_field(card, b.field, b.value_of(k, float(values[name])), nominal)
         return props, mats
 
     def structure_at(self, values):

@@ -259,7 +259,12 @@ def deck_bindings(parameters: Mapping, bdf, structure) -> tuple[dict, dict, dict
                 'e.g. binds = "PSHELL 3 T"'
             )
         b = resolve(parse_binding(entry["binds"], name), bdf, structure, name)
-        if "desvar" in entry:  # a DESVAR x: the field is COEF x (``desvar``)
+        if "coefficients" in entry:  # line fields set as C0_i + COEF_i x (``desvar``)
+            coefs, c0 = (tuple(float(v) for v in entry[k]) for k in ("coefficients", "offsets"))
+            x0 = [(n - o) / c for n, o, c in zip(b.nominal, c0, coefs, strict=True)]
+            b = replace(b, default=float(np.mean(x0)), coefficients=coefs, offsets=c0,
+                        desvar=int(entry["desvar"]))  # fmt: skip
+        elif "desvar" in entry:  # a DESVAR x: the field is COEF x (``desvar``)
             c = float(entry["coefficient"])
             b = replace(b, factor=b.factor * c, default=b.default / c, coefficient=c,
                         desvar=int(entry["desvar"]))  # fmt: skip

@@ -1,7 +1,7 @@
 """The user's deck written back with calibrated values in its bound fields (``--write-bdf``).
 
 The deck is read again and each bound card gets the parameter's value (or, for a ``scale``
-binding, the factor times the card's own value; for a DESVAR, COEF x its value, and the
+binding, the factor times the card's own value; for a DESVAR, C0 + COEF x its value, and the
 DESVAR's XINIT the value).  The deck's own text is then copied line for line with only those
 cards replaced, each by a large-field card (16-character fields, ``bulk.real16``: the shortest
 repr or 11-15 digits) of all its fields: comments, card order and every other card stay as they
@@ -30,10 +30,10 @@ def write_updated_deck(model, values, out) -> Path:
         if not isinstance(binding, DeckBinding) or name not in values:
             continue
         value = float(values[name])
-        for i, nominal in zip(binding.field.ids, binding.nominal, strict=True):
+        for k, (i, nominal) in enumerate(zip(binding.field.ids, binding.nominal, strict=True)):
             key = (binding.field.card, i)
             card = changed.get(key) or _card(deck, binding.field, i)
-            changed[key] = set_field(card, binding.field, value * binding.coefficient, nominal)
+            changed[key] = set_field(card, binding.field, binding.value_of(k, value), nominal)
         if binding.desvar is not None:  # the design variable's start, as Nastran reads it
             dv = deck.table("DESVAR")[binding.desvar]
             changed[("DESVAR", binding.desvar)] = with_fields(dv, {dv.position("XINIT"): value})

@@ -183,6 +183,19 @@ def test_celas1_between_a_scalar_point_and_a_rotation(tmp_path):
     assert "scalar_spring" in [f.family for f in model.structure.elements]
 
 
+def test_celas2_between_two_dofs_of_one_grid(tmp_path):
+    """CELAS2 k = 300 between x and ry of the same GRID (two distinct connection points, QRG
+    CELAS2 remark): the closed form of ``test_celas2_between_unlike_dofs_is_a_scalar_spring``
+    with both DOFs on one node."""
+    bulk = ("GRID,1,,0.,0.,0.\nCELAS2,1,300.,1,1,1,5\nCELAS2,2,500.,1,1\nCELAS2,3,200.,1,5\n"
+            "CMASS2,4,2.,1,1\nCMASS2,5,0.5,1,5\nSPC1,1,2346,1\n")  # fmt: skip
+    deck = _deck(bulk, 2).replace("CEND\n", "CEND\nSPC = 1\n")
+    r = load_nastran_model(_write(tmp_path, deck)).solve(n_modes=2)
+    lam = scipy.linalg.eigh([[800.0, -300.0], [-300.0, 500.0]], np.diag([2.0, 0.5]),
+                            eigvals_only=True)  # fmt: skip
+    assert r.frequencies_hz == pytest.approx(_hz(lam), rel=1e-12)
+
+
 def test_a_binding_on_a_scalar_spring_is_refused(tmp_path):
     """``binds = "CELAS2 1 K"`` on the spring between unlike DOFs: one message naming it."""
     path = _write(tmp_path, _x_to_ry())

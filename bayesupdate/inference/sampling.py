@@ -51,7 +51,7 @@ import numpy as np
 from bayesupdate.compute import progress
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference import walker_start
+from bayesupdate.inference import convergence, walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
@@ -259,21 +259,15 @@ def rhat_and_ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, ...]:
 
 
 def _rhat(post: np.ndarray) -> np.ndarray:
-    """(d,) ArviZ's rank-normalised split R-hat of a chain (n_draws, n_walkers, d)."""
-    import arviz_stats
-
-    by_chain = np.moveaxis(post, 1, 0)
-    rhat = arviz_stats.rhat(by_chain, chain_axis=0, draw_axis=1)
-    return np.atleast_1d(np.asarray(rhat)).astype(float)
+    """(d,) rank-normalised split R-hat of a chain (n_draws, n_walkers, d), walkers as chains
+    (``inference.convergence``: ArviZ's, without importing ArviZ)."""
+    return convergence.rank_rhat(post)
 
 
 def _ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """((d,) ArviZ's bulk ESS, (d,) emcee's n_draws * n_walkers / tau) of a chain
-    (n_draws, n_walkers, d)."""
-    import arviz_stats
-
-    by_chain = np.moveaxis(post, 1, 0)
-    ess = np.atleast_1d(np.asarray(arviz_stats.ess(by_chain, chain_axis=0, draw_axis=1)))
+    """((d,) bulk ESS (``inference.convergence``: ArviZ's), (d,) emcee's n_draws * n_walkers /
+    tau) of a chain (n_draws, n_walkers, d)."""
+    ess = convergence.bulk_ess(post)
     tau = np.asarray(tau, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         ess_tau = np.where(

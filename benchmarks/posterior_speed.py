@@ -292,7 +292,10 @@ def user_run(code: str) -> dict:
                "paper:ema", "--json"]  # fmt: skip
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    done = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
+    # run in the tree itself: ``python -m`` puts the working folder first on sys.path
+    done = subprocess.run(
+        command, env=env, capture_output=True, text=True, check=True, cwd=os.path.abspath(code)
+    )
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = json.loads(done.stdout)

@@ -5,6 +5,7 @@ BLAS is pinned to one thread (set below, before numpy is imported): on this 2-co
 small dense and banded kernels only lose time to threading, and a sampler runs one process per core.
 
 Run:  .venv/bin/python benchmarks/likelihood_speed.py [--repeats 30] [--validation 64]
+      .venv/bin/python benchmarks/likelihood_speed.py --mass   # the screen's mass polynomial
 
 Prints the median wall time per walker of the likelihood-relevant work (frequencies of 32 points
 plus the Gaussian log-likelihood of seed Table 2 on relative errors) for:
@@ -91,11 +92,57 @@ def uniform(rng, low, high, n):
     return low + rng.random((n, low.size)) * (high - low)
 
 
+def mass_rows(repeats: int) -> None:
+    """``--mass``: the posterior ``bayesupdate sample --model exhaust --data paper:ema`` samples
+    (the weighed mass in the likelihood), its exact and screening log-posteriors on a batch of
+    32 points: CPU ms per batch and of that the masses, with the model's per-point masses and
+    with the screen's verified polynomial (``LogPosterior.with_fitted_mass``), the fit's cost
+    and its largest relative error at its check points."""
+    from bayesupdate.config import StudyConfig, with_overrides
+    from bayesupdate.inference.likelihood import LogPosterior
+    from bayesupdate.pipelines.study import prepare
+    from bayesupdate.pipelines.surrogates import sampling_problem, screening_posterior
+
+    study = with_overrides(StudyConfig(), model__source="exhaust", data__source="paper:ema")
+    prepared = prepare(study)
+    cfg = prepared.study.sampler
+    problem, rom = sampling_problem(prepared.problem, None, cfg.reduced, cfg.reduced_tol)
+    exact = LogPosterior(problem, prepared.likelihood)
+    screen = screening_posterior(problem, rom, prepared.likelihood, cfg.reduced_tol)
+    c0 = time.process_time()
+    fitted = screen.with_fitted_mass()
+    fit_s = time.process_time() - c0
+    theta = uniform(np.random.default_rng(3), problem.lower, problem.upper, BATCH)
+    full = np.hstack([theta, np.tile(exact.fixed_values, (BATCH, 1))])
+    names = problem.names + exact.fixed_names
+
+    def cpu_ms(fn) -> float:
+        times = []
+        for _ in range(repeats):
+            c = time.process_time()
+            fn()
+            times.append(time.process_time() - c)
+        return 1e3 * float(np.median(times))
+
+    print(f"mass polynomial: fitted in {fit_s:.2f} s CPU, max relative error at its check "
+          f"points {fitted._mass_fit.max_rel_error:.1e}")  # fmt: skip
+    print(f"{'posterior, batch of 32':<34}{'call ms':>10}{'masses ms':>11}  (CPU, median)")
+    for label, post in ((f"exact (size {rom.size})", exact),
+                        ("screen, per-point masses", screen),
+                        ("screen, mass polynomial", fitted)):  # fmt: skip
+        call, mass = cpu_ms(lambda p=post: p(theta)), cpu_ms(lambda p=post: p._masses(full, names))
+        print(f"{label:<34}{call:>10.2f}{mass:>11.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=30)
     ap.add_argument("--validation", type=int, default=64)
+    ap.add_argument("--mass", action="store_true", help="the screen's mass polynomial only")
     args = ap.parse_args()
+    if args.mass:
+        mass_rows(args.repeats)
+        return
     fe = get_model("exhaust")
     names = fe.parameter_names
     rng = np.random.default_rng(12345)

@@ -22,6 +22,16 @@ model bounds, modes paired by shape for every walker (batched on the reduced mod
 in full).  Wall and CPU time count everything from building the model; the reduced run is
 checked in full at the posterior mean too.
 
+The user's command (``--user N``): ``bayesupdate sample --model exhaust --data paper:ema
+--json`` exactly as a user types it (the study's defaults: 32 walkers, R-hat <= 1.01, bulk ESS >=
+400, the weighed mass in the likelihood, sigma fixed), N cold runs in fresh processes, imports
+included, wall and CPU (the child's user + system time), steps, and the stop: which criterion
+held the run at the check before the stop (``diagnostics["stop"]``: "r_hat" means the ESS at
+the stop is what R-hat needed, not an overshoot of the checks) and the least bulk ESS at the
+stop over the ESS target.  ``--code DIR [DIR ...]``: one source tree per variant (PYTHONPATH),
+runs interleaved so that every variant sees the same machine load; e.g. before and after:
+  .venv/bin/python benchmarks/posterior_speed.py --user 3 --code /path/to/main .
+
 Timed runs (``--seeds`` / ``--seed-list``) print each set-up phase (model + reduced basis,
 optimum, screening basis; wall and CPU), then one JSON row per run: cold-start wall and CPU,
 steps, exact and screened evaluations, tau, acceptance, the sampler's own wall-time split
@@ -269,6 +279,63 @@ def table(rows: list[dict]) -> None:
             print(f"\nmedian {key}: de / mixture = {med['de'] / med['mixture']:.2f}")
 
 
+def user_run(code: str) -> dict:
+    """One ``bayesupdate sample --model exhaust --data paper:ema --json`` in a fresh process
+    on the source tree ``code``: wall and CPU [s] of the whole process, and its JSON's numbers."""
+    import json
+    import resource
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.path.abspath(code)}
+    command = [sys.executable, "-m", "bayesupdate", "sample", "--model", "exhaust", "--data",
+               "paper:ema", "--json"]  # fmt: skip
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    # run in the tree itself: ``python -m`` puts the working folder first on sys.path
+    done = subprocess.run(
+        command, env=env, capture_output=True, text=True, check=True, cwd=os.path.abspath(code)
+    )
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = json.loads(done.stdout)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    least_ess = min(p["ess_bulk"] for p in out["parameters"].values())
+    stop = out.get("stop") or {}
+    return dict(
+        code=code, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
+        walkers=out["walkers"], evaluations=out["evaluations"], converged=out["converged"],
+        min_ess=round(least_ess), ess_over_target=round(least_ess / 400.0, 2),
+        held_before=stop.get("held_before"), checks=stop.get("checks"),
+        screen_evaluations=(out.get("screen") or {}).get("evaluations"),
+        max_r_hat=round(max(p["r_hat"] for p in out["parameters"].values()), 4),
+        means={k: p["mean"] for k, p in out["parameters"].items()},
+        phases={k: round(v, 2) for k, v in (out.get("timings") or {}).items()},
+        load=round(os.getloadavg()[0], 1),
+    )  # fmt: skip
+
+
+def user_runs(n: int, codes: list[str]) -> None:
+    """``n`` rounds of ``user_run`` over the variants ``codes`` (interleaved), one JSON row per
+    run, then the medians per variant."""
+    import json
+
+    rows = []
+    for _ in range(n):
+        for code in codes:
+            rows.append(user_run(code))
+            print(json.dumps(rows[-1]), flush=True)
+    for code in codes:
+        mine = [r for r in rows if r["code"] == code]
+        keys = ("wall_s", "cpu_s", "steps", "evaluations", "min_ess", "ess_over_target")
+        med = {k: float(np.median([r[k] for r in mine])) for k in keys}
+        print(f"[{code}] {len(mine)} runs: median wall {med['wall_s']:.1f} s, CPU "
+              f"{med['cpu_s']:.1f} s, steps {med['steps']:.0f}, exact evaluations "
+              f"{med['evaluations']:.0f}, least ESS {med['min_ess']:.0f} "
+              f"({med['ess_over_target']:.1f} x the target 400); held before the stop: "
+              f"{[r['held_before'] for r in mine]}")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--full", action="store_true", help="full FE solves instead of the ROM")
@@ -292,11 +359,16 @@ def main() -> None:
     ap.add_argument(
         "--no-screen", action="store_true", help="no delayed acceptance (every proposal exact)"
     )
+    ap.add_argument("--user", type=int, default=0, help="N cold runs of the user's command")
+    ap.add_argument("--code", nargs="+", default=["."], help="with --user: source trees")
     ap.add_argument("--save", help="save means/sd/wall to this .npz")
     ap.add_argument("--compare", nargs=2, metavar=("ROM_NPZ", "FULL_NPZ"), help="compare runs")
     args = ap.parse_args()
     if args.compare:
         compare(*args.compare)
+        return
+    if args.user:
+        user_runs(args.user, args.code)
         return
     warnings.simplefilter("default")
     if args.seeds or args.seed_list:

@@ -20,6 +20,7 @@ from bayesupdate.inference.sampling import (
     CHECK_MIN_STEPS,
     _stop_rule,
     check_schedule,
+    stop_record,
 )
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
@@ -68,6 +69,26 @@ def test_run_stops_within_ten_percent_of_the_first_step_where_its_targets_hold()
         k for k in range(CHECK_MIN_STEPS, n + 1) if _stop_rule(post.chain[:k], k, settings)[1]
     )
     assert n <= max(np.ceil(CHECK_GROWTH * first), first + CHECK_MIN_STEPS)
+    # the stop record: the run's last check, its least ESS (the rule's own, recomputed here)
+    # over the target, and what held the run at the check before (one of the three criteria)
+    stop = post.diagnostics["stop"]
+    met, held, ess = _stop_rule(post.chain, n, settings)[1:]
+    assert met and held is None and stop["steps"] == n and stop["ess_at_stop"] == round(ess, 1)
+    assert stop["ess_over_target"] == round(ess / 800, 2) and stop["ess_over_target"] >= 1.0
+    assert stop["held_before"] in ("tau", "r_hat", "ess")
+    assert stop["checks"] == len([c for c in _checks(1000, 5000) if c <= n])
+
+
+def test_stop_record_says_what_held_the_run_before_the_stop():
+    checks = [(20, "tau", np.nan), (40, "r_hat", np.nan), (60, None, 1234.5)]
+    assert stop_record(checks, 400.0) == {
+        "checks": 3, "steps": 60, "held_before": "r_hat", "ess_at_stop": 1234.5,
+        "ess_over_target": 3.09,
+    }  # fmt: skip
+    # never stopped (the budget ended it): no ESS at a stop
+    never = stop_record(checks[:2], 400.0)
+    assert never["held_before"] is None and never["ess_at_stop"] is None and never["steps"] == 40
+    assert stop_record([(20, None, np.nan)], None)["ess_over_target"] is None
 
 
 @pytest.mark.parametrize("check_every", [100, 7])

@@ -55,6 +55,8 @@ error there exceeds enrich_above, a tenth of the likelihood's smallest relative 
 screen was not used (its error above the likelihood's smallest sd) | null,
 "pairing", "pair_differs_fraction", "moves": {"kind", "requested", "fallback", "components",
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
+"stop": {"checks", "steps", "held_before" (what held the run at the check before the stop:
+"tau", "r_hat" or "ess"), "ess_at_stop", "ess_over_target"},
 "compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
 "pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
 at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC
@@ -246,6 +248,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
             posterior.diagnostics.get("pair_differs_fraction")
         ),
         "moves": posterior.diagnostics.get("moves"),
+        "stop": posterior.diagnostics.get("stop"),
         "swap_fraction": None
         if not predictions or not np.isfinite(predictions["swap_fraction"])
         else float(predictions["swap_fraction"]),

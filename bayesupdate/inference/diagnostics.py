@@ -1,4 +1,5 @@
-"""Convergence diagnostics (ArviZ 1.x) and posterior predictive frequencies.
+"""Convergence diagnostics (ArviZ 1.x's, ``inference.convergence``) and posterior predictive
+frequencies.
 
 Walkers as chains: after the warm-up, each emcee walker is passed to ArviZ as one chain, so the
 rank-normalised split R-hat (Vehtari et al. 2021) compares the walkers with each other - a walker
@@ -10,6 +11,7 @@ chains, can be optimistic; we therefore also report emcee's ESS = n_draws * n_wa
 
 import numpy as np
 
+from bayesupdate.inference import convergence
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.sampling import PosteriorResult, rhat_and_ess
 
@@ -17,19 +19,13 @@ from bayesupdate.inference.sampling import PosteriorResult, rhat_and_ess
 def summarise(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
     """Per parameter: mean, sd, hdi_low, hdi_high, r_hat, ess_bulk, ess_tail, ess_arviz_bulk,
     ess_autocorr.  Uses the post-burn-in chain, walkers as chains (module docstring)."""
-    # imported here: ArviZ's import takes seconds, and every command imports this module
-    import arviz_stats
-
     post = result.chain[result.burn :]  # (draws, walkers, d)
-    by_chain = np.moveaxis(post, 1, 0)  # (walkers, draws, d)
     rhat, ess_b, ess_tau = rhat_and_ess(post, result.autocorr_time)
-    ess_t = np.atleast_1d(
-        arviz_stats.ess(by_chain, method="tail", prob=(0.05, 0.95), chain_axis=0, draw_axis=1)
-    )
+    ess_t = convergence.tail_ess(post, (0.05, 0.95))
     flat = post.reshape(-1, post.shape[-1])
     out = {}
     for j, name in enumerate(result.names):
-        low, high = np.asarray(arviz_stats.hdi(flat[:, j], prob=hdi_prob), dtype=float)
+        low, high = convergence.hdi_nearest(flat[:, j], hdi_prob)
         out[name] = {
             "mean": float(np.mean(flat[:, j])),
             "sd": float(np.std(flat[:, j], ddof=1)),

@@ -137,6 +137,7 @@ class LogPosterior:
         self.pair_differs = 0
         # fixed (not calibrated) parameters go to the batch call too: its defaults may differ
         self.fixed_names = tuple(k for k in problem.fixed if k in problem.model.parameter_names)
+        self._mass_fit = None  # a verified mass polynomial (``with_fitted_mass``)
         self.fixed_values = np.array([problem.fixed[k] for k in self.fixed_names], dtype=float)
         self.evaluations = 0
         self.failed = 0
@@ -206,13 +207,47 @@ class LogPosterior:
         masses = np.full(theta.shape[0], np.nan)
         if self.spec.mass_sd_rel is None:
             return masses
+        rows = np.arange(theta.shape[0])
+        fit = self._mass_fit
+        if fit is not None:
+            d = fit.low.size
+            inside = np.all((theta[:, :d] >= fit.low) & (theta[:, :d] <= fit.high), axis=1)
+            masses[inside] = fit(theta[inside, :d])
+            rows = np.flatnonzero(~inside)
         mass_of = mass_function(self.problem.model)
-        for k, row in enumerate(theta):
+        for k in rows:
+            row = theta[k]
             try:
                 masses[k] = mass_of(dict(zip(names, map(float, row), strict=True)))
             except BayesUpdateError:
                 continue
         return masses
+
+    def with_fitted_mass(self, seed: int = 0) -> "LogPosterior":
+        """This posterior with its mass term's masses from a verified polynomial over the
+        parameter box (``inference.mass_fit``; the model's own masses outside the box), or
+        itself when there is no mass term, the masses come per point anyway (``mode``
+        "points") or the fit does not verify.  For a delayed-acceptance screen: the chain's
+        target stays exact whatever the screen is (``inference.mass_fit`` module docstring)."""
+        import copy
+
+        from bayesupdate.inference.mass_fit import fit_mass_polynomial
+
+        mass_of = mass_function(self.problem.model)
+        if self.spec.mass_sd_rel is None or not self.batched or mass_of is None:
+            return self
+        names = self.problem.names + self.fixed_names
+
+        def mass_at(row: np.ndarray) -> float:
+            values = np.concatenate([row, self.fixed_values])
+            return mass_of(dict(zip(names, map(float, values), strict=True)))
+
+        fit = fit_mass_polynomial(mass_at, self.problem.lower, self.problem.upper, seed)
+        if fit is None:
+            return self
+        fitted = copy.copy(self)
+        fitted._mass_fit = fit
+        return fitted
 
     def _shape_paired(self, theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
         """Frequencies (B, n_test) paired by batched MAC against the reference shapes."""

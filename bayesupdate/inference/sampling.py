@@ -33,10 +33,13 @@ fixed ratio end a run at most 10 % of its length past it, for a number of checks
 the logarithm of the length (28 up to 1,000 steps, of which the ~12 after 50 tau compute
 R-hat: about 0.1-0.5 s each on the exhaust's 32 x 750 x 5 chain, against 0.06-0.24 s a step).
 R-hat, the costlier diagnostic and the one that binds on the exhaust, is computed first and the
-ESS only when it holds.  Checkpoints are written at the multiples of ``check_every`` only.  All
-block boundaries depend on the step count alone, and the emcee random state is saved with each
-checkpoint, so an interrupted run resumed with ``resume=`` ends with exactly the chain of an
-uninterrupted run.
+ESS only when it holds.  What held the run at each check, and the ESS at the stop over its
+target, are in ``diagnostics["stop"]`` (``stop_record``).  With R-hat <= 1.01 binding, the ESS
+at the stop (~100 per walker: about 50 independent draws per split half-walker for R-hat - 1 <=
+0.01) is what R-hat needs, not an overshoot of the checks.  Checkpoints are written at the
+multiples of ``check_every`` only.  All block boundaries depend on the step count alone, and the
+emcee random state is saved with each checkpoint, so an interrupted run resumed with
+``resume=`` ends with exactly the chain of an uninterrupted run.
 """
 
 import logging
@@ -51,7 +54,7 @@ import numpy as np
 from bayesupdate.compute import progress
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference import walker_start
+from bayesupdate.inference import convergence, walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
@@ -259,21 +262,15 @@ def rhat_and_ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, ...]:
 
 
 def _rhat(post: np.ndarray) -> np.ndarray:
-    """(d,) ArviZ's rank-normalised split R-hat of a chain (n_draws, n_walkers, d)."""
-    import arviz_stats
-
-    by_chain = np.moveaxis(post, 1, 0)
-    rhat = arviz_stats.rhat(by_chain, chain_axis=0, draw_axis=1)
-    return np.atleast_1d(np.asarray(rhat)).astype(float)
+    """(d,) rank-normalised split R-hat of a chain (n_draws, n_walkers, d), walkers as chains
+    (``inference.convergence``: ArviZ's, without importing ArviZ)."""
+    return convergence.rank_rhat(post)
 
 
 def _ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """((d,) ArviZ's bulk ESS, (d,) emcee's n_draws * n_walkers / tau) of a chain
-    (n_draws, n_walkers, d)."""
-    import arviz_stats
-
-    by_chain = np.moveaxis(post, 1, 0)
-    ess = np.atleast_1d(np.asarray(arviz_stats.ess(by_chain, chain_axis=0, draw_axis=1)))
+    """((d,) bulk ESS (``inference.convergence``: ArviZ's), (d,) emcee's n_draws * n_walkers /
+    tau) of a chain (n_draws, n_walkers, d)."""
+    ess = convergence.bulk_ess(post)
     tau = np.asarray(tau, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         ess_tau = np.where(
@@ -383,6 +380,9 @@ def _screened(screen: LogPosterior | None, d: int, guarded, guard) -> ScreenedLo
         return None
     if screen.ndim != d:
         raise BayesUpdateError("sampler: the screening posterior has other parameters")
+    # its mass term from a verified polynomial (``inference.mass_fit``): a screen only
+    # decides which proposals get an exact evaluation, so the target stays exact
+    screen = screen.with_fitted_mass(seed=0)
     return ScreenedLogDensity(guard(screen, key="screen_s"), guarded)
 
 
@@ -411,6 +411,9 @@ class _Run:
     t0: float = 0.0
     moves_info: dict | None = None
     clock: dict = field(default_factory=lambda: dict.fromkeys(TIMED, 0.0))
+    #: this process's stop-rule checks: (step, what held the run: "tau", "r_hat", "ess" or
+    #: None when the rule held, the least bulk ESS where computed, else NaN)
+    checks: list = field(default_factory=list)
 
     @property
     def done(self) -> int:
@@ -563,24 +566,47 @@ def check_schedule(done: int, check_every: int, steps: int) -> int:
 
 
 def _stop_rule(chain: np.ndarray, done: int, settings: SamplerSettings):
-    """(tau (d,) [steps], converged): steps >= min_autocorr_times * max(tau) and the
+    """(tau (d,) [steps], converged, what held the run: "tau", "r_hat", "ess" or None, the least
+    bulk ESS or NaN where not computed): steps >= min_autocorr_times * max(tau) and the
     convergence targets of ``settings`` hold for the chain (n_steps, n_walkers, d) after its
     ``burn_in``: R-hat first, then the bulk ESS (the smaller of ArviZ's and emcee's: walkers of
     an ensemble are not independent) only where R-hat holds."""
     tau = _autocorr(chain)
     converged = bool(np.all(np.isfinite(tau)) and done >= settings.min_autocorr_times * np.max(tau))
     target_rhat, target_ess = settings.target_rhat, settings.target_ess
-    if not converged or (target_rhat is None and target_ess is None):
-        return tau, converged
+    if not converged:
+        return tau, False, "tau", np.nan
+    if target_rhat is None and target_ess is None:
+        return tau, True, None, np.nan
     post = chain[burn_in(chain.shape[0], tau) :]
     if post.shape[0] < 4:
-        return tau, False
+        return tau, False, "tau", np.nan
     if target_rhat is not None and not np.all(_rhat(post) <= target_rhat):
-        return tau, False
+        return tau, False, "r_hat", np.nan
     if target_ess is not None:
         ess, ess_tau = _ess(post, tau)
-        return tau, bool(np.all(np.minimum(ess, np.nan_to_num(ess_tau, nan=0.0)) >= target_ess))
-    return tau, True
+        least = float(np.min(np.minimum(ess, np.nan_to_num(ess_tau, nan=0.0))))
+        return tau, least >= target_ess, None if least >= target_ess else "ess", least
+    return tau, True, None, np.nan
+
+
+def stop_record(checks: list, target_ess: float | None) -> dict:
+    """``diagnostics["stop"]`` of a run's stop-rule checks ((step, what held, least ESS)):
+    {"checks", "steps", "held_before" (what held the run at the check before the stop: "tau",
+    "r_hat", "ess"; None when the first check stopped it or it never stopped), "ess_at_stop"
+    (least bulk ESS at the stop, None when the rule never held or had no ESS target),
+    "ess_over_target" (that / target_ess)}.  The stop lands at most ``CHECK_GROWTH`` past the
+    step the rule first holds (``check_schedule``); when "r_hat" held the run before, the ESS
+    at the stop is what R-hat <= target needed, not an overshoot of the checks."""
+    stopped = bool(checks) and checks[-1][1] is None
+    ess = checks[-1][2] if stopped and np.isfinite(checks[-1][2]) else None
+    return {
+        "checks": len(checks),
+        "steps": int(checks[-1][0]) if checks else 0,
+        "held_before": checks[-2][1] if stopped and len(checks) > 1 else None,
+        "ess_at_stop": None if ess is None else round(ess, 1),
+        "ess_over_target": None if ess is None or not target_ess else round(ess / target_ess, 2),
+    }
 
 
 def _sample_blocks(
@@ -627,7 +653,10 @@ def _blocks_until_stop(
             if interrupted:
                 break
             t0 = time.perf_counter()
-            tau, converged = _stop_rule(np.concatenate(run.chain_parts), run.done, settings)
+            tau, converged, held, ess = _stop_rule(
+                np.concatenate(run.chain_parts), run.done, settings
+            )
+            run.checks.append((run.done, held, ess))
             run.clock["check_s"] += time.perf_counter() - t0
             finished = converged or run.done >= steps
             if checkpoint is not None and (finished or run.done % check_every == 0):
@@ -654,6 +683,7 @@ def _posterior_result(
     outcome: tuple[bool, bool, np.ndarray],
     seed: int,
     screened: ScreenedLogDensity | None,
+    target_ess: float | None = None,
 ) -> PosteriorResult:
     """The PosteriorResult of a finished or interrupted run; ``outcome`` is
     ``_sample_blocks``'s (interrupted, converged, tau)."""
@@ -680,6 +710,7 @@ def _posterior_result(
         diagnostics={
             "moves": _public(run.moves_info),
             "timings": {k: round(v, 3) for k, v in run.clock.items()},
+            "stop": stop_record(run.checks, target_ess),
         },
         screen_evaluations=0 if screened is None else screened.screen_evaluations,
     )
@@ -859,8 +890,12 @@ def sample_posterior(
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
         _raise_failure(request)
         outcome = (True, False, np.full(d, np.inf))
-        return _posterior_result(run, log_posterior, outcome, settings.seed, screened)
+        return _posterior_result(
+            run, log_posterior, outcome, settings.seed, screened, settings.target_ess
+        )
     sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
     outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
     _raise_failure(request, run, checkpoint, log_posterior)
-    return _posterior_result(run, log_posterior, outcome, settings.seed, screened)
+    return _posterior_result(
+        run, log_posterior, outcome, settings.seed, screened, settings.target_ess
+    )

@@ -88,8 +88,8 @@ class Assembler:
         # no parameter acts on the other families: their matrices are computed once
         self.families = tuple(FamilyMatrices.of(f, s.nodes, settings) for f in families_of(s))
         self._memos: dict[str, _Memo] = {}
-        blocks = [f.dofs() for f in self.parametric.values()] + [f.dofs for f in self.families]
-        positions = self._build_pattern(blocks)
+        self._dofs = {name: f.dofs() for name, f in self.parametric.items()}
+        positions = self._build_pattern([*self._dofs.values(), *(f.dofs for f in self.families)])
         self._positions = dict(zip(self.parametric, positions, strict=False))
         self._family_K = self._scatter_families("K", positions[len(self.parametric) :])
         self._family_M = self._scatter_families("M", positions[len(self.parametric) :])
@@ -190,16 +190,9 @@ class Assembler:
         for X in (K, M, *data):
             if X is not None:
                 X.flags.writeable = False
-        mats = FamilyMatrices(family.family, self._dofs(family), K, M, family.part)
+        mats = FamilyMatrices(family.family, self._dofs[family.family], K, M, family.part)
         memo = self._memos[family.family] = _Memo(key.copy(), mats, *data)
         return memo
-
-    def _dofs(self, family) -> np.ndarray:
-        """The family's DOF map, computed once."""
-        dofs = self.__dict__.setdefault("_dof_maps", {})
-        if family.family not in dofs:
-            dofs[family.family] = family.dofs()
-        return dofs[family.family]
 
     def _scatter(self, positions, element_matrices):
         """Sum element entries into the (nnz,) CSR data (float even for no elements)."""

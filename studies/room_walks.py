@@ -19,6 +19,13 @@ model is 500 events) and as call sites (distinct pairs of calling function and c
 the same loop is one site).  The walk's shape is the call sites; the events say how hot each
 site is.
 
+A climb is either *named* (the lower room's code names the higher function: it imports it,
+perhaps late, which is a cycle the layer contracts would refuse at the top of a module) or a
+*callback* (the function object was handed down: the caller's frame holds it in a local or
+closure variable, e.g. the ``fn`` an executor's ``map`` was given, or the residual function a
+fit was given).  A callback keeps the lower room ignorant of the higher one (dependency
+inversion); the table gives both, and the site list marks each climb ``UP`` (named) or ``cb``.
+
 Runs, through the CLI in this process (the user's path):
 - ``discover`` of the exhaust against the paper's test frequencies (``paper:ema``), added masses
   only, one baseline start, three quick refits, one full refit (``tests/test_parallel_executor``'s
@@ -105,6 +112,8 @@ class WalkTracer:
         self._rooms: dict = {}
         self.events: Counter = Counter()
         self.sites: dict[tuple[str, str], set] = {}
+        #: climbing sites whose callee the caller was handed (module docstring)
+        self.callbacks: set = set()
 
     def _room(self, code) -> str | None:
         room = self._rooms.get(code, False)
@@ -129,6 +138,19 @@ class WalkTracer:
             self.events[key] += 1
             site = (_name(caller.f_code), _name(frame.f_code))
             self.sites.setdefault(key, set()).add(site)
+            if climbs(key) and _handed(caller, frame.f_code):
+                self.callbacks.add(site)
+
+
+def _handed(caller, code) -> bool:
+    """Whether ``caller``'s frame holds, in a local or closure variable, the function whose code
+    is ``code`` (a plain function, a bound method or a ``functools.partial`` of one)."""
+    for value in caller.f_locals.values():
+        func = getattr(value, "func", value)  # functools.partial
+        func = getattr(func, "__func__", func)  # bound method
+        if getattr(func, "__code__", None) is code:
+            return True
+    return False
 
 
 def _name(code) -> str:
@@ -156,9 +178,9 @@ def climbs(key: tuple[str, str]) -> bool:
     return LAYERS.get(key[1], 8) > LAYERS.get(key[0], 8)
 
 
-def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int]]:
+def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int, int]]:
     """Per room entered: (room, entering sites, entering events, climbing sites, climbing
-    events), rooms by layer."""
+    events, named climbing sites: those not callbacks), rooms by layer."""
     rooms = sorted({to for _, to in tracer.events}, key=lambda r: (LAYERS.get(r, 8), r))
     rows = []
     for room in rooms:
@@ -170,6 +192,7 @@ def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int]]:
             sum(tracer.events[k] for k in keys),
             sum(len(tracer.sites[k]) for k in up),
             sum(tracer.events[k] for k in up),
+            sum(len(tracer.sites[k] - tracer.callbacks) for k in up),
         ))  # fmt: skip
     return rows
 
@@ -178,16 +201,17 @@ def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     rows = table(tracer)
     print(f"\n{name}: rooms entered {len(rows)}")
     print(f"{'room':<12} {'enter sites':>11} {'enter events':>13} {'climb sites':>11} "
-          f"{'climb events':>13}")  # fmt: skip
-    for room, n_sites, n_events, up_sites, up_events in rows:
-        print(f"{room:<12} {n_sites:>11} {n_events:>13} {up_sites:>11} {up_events:>13}")
-    totals = [sum(r[i] for r in rows) for i in range(1, 5)]
-    print(f"{'all':<12} {totals[0]:>11} {totals[1]:>13} {totals[2]:>11} {totals[3]:>13}")
+          f"{'climb events':>13} {'named climbs':>12}")  # fmt: skip
+    for room, *counts in [*rows, ("all", *(sum(r[i] for r in rows) for i in range(1, 6)))]:
+        a, b, c, d, e = counts
+        print(f"{room:<12} {a:>11} {b:>13} {c:>11} {d:>13} {e:>12}")
     listed = sorted(k for k in tracer.sites if sites or climbs(k))
     print("crossing sites" if sites else "climbing sites (a lower room calls a higher one)")
     for key in listed:
-        arrow = "UP" if climbs(key) else "  "
         for caller, callee in sorted(tracer.sites[key]):
+            arrow = (
+                "  " if not climbs(key) else "cb" if (caller, callee) in tracer.callbacks else "UP"
+            )
             print(f"  {arrow} {key[0]} -> {key[1]}: {caller} -> {callee}")
 
 

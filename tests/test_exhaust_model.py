@@ -166,7 +166,7 @@ def test_design_variables_act_on_their_parts(model):
     sec = section_properties(
         s.beam_shape[im], s.beam_width[im], s.beam_height[im], s.beam_thickness[im], s.beam_nu[im]
     )
-    shell_volume = float(np.sum(sec["A"] * model.assembler.lengths[im]))
+    shell_volume = float(np.sum(sec["A"] * model.assembler.parametric["beam"].lengths[im]))
     assert heavier.mass_kg - base.mass_kg == pytest.approx(10e3 * shell_volume, rel=1e-9)
     assert thicker.mass_kg > base.mass_kg + 0.5
     assert np.all(heavier.frequencies_hz[:2] < base.frequencies_hz[:2])

@@ -10,7 +10,7 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, FEModel, StructureBuilder, circular_tube
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
+from bayesupdate.fe.assembly import GeneralAssembler
 
 SEC = circular_tube(0.045, 1.5e-3)
 

@@ -68,7 +68,7 @@ def test_general_section_reproduces_tube_beam():
 
     old, new = build(False), build(True)
     a = Assembler(old)
-    K0, M0 = a.beam_matrices(a.default_properties())
+    K0, M0 = a.matrices("beam", a.default_properties())
     ((_, K1, M1),) = line_matrices(new)
     assert np.abs(K1 - K0).max() <= 1e-12 * np.abs(K0).max()
     assert np.abs(M1 - M0).max() <= 1e-12 * np.abs(M0).max()

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.standard_sections import general_section
 from bayesupdate.fe.structure import Material, StructureBuilder
 

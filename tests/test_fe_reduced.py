@@ -245,18 +245,18 @@ def test_affine_terms_reproduce_the_linear_parameters(fe):
     for t in terms.parameters:
         if t.family == "beam" and t.enters == "M":
             exact, unit = (
-                a.beam_matrices(props, t.elements)[1],
-                a.beam_matrices(terms.unit, t.elements)[1],
+                a.matrices("beam", props, t.elements)[1],
+                a.matrices("beam", terms.unit, t.elements)[1],
             )
         elif t.family == "mass":
             exact, unit = (
-                a.mass_matrices(props)[t.elements],
-                a.mass_matrices(terms.unit)[t.elements],
+                a.matrices("mass", props)[1][t.elements],
+                a.matrices("mass", terms.unit)[1][t.elements],
             )
         elif t.family == "spring":
             exact, unit = (
-                a.spring_matrices(props)[t.elements],
-                a.spring_matrices(terms.unit)[t.elements],
+                a.matrices("spring", props)[0][t.elements],
+                a.matrices("spring", terms.unit)[0][t.elements],
             )
         else:
             continue

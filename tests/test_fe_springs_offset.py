@@ -39,7 +39,8 @@ def test_rigid_motion_gives_no_force_and_forces_balance(seed):
     k = rng.uniform(1e3, 1e5, 6)
     for location in (rng.normal(size=3) * 3, 0.3 * xa + 0.7 * xb, xa):
         s = _two_bodies(xa, xb, k, _rotation(seed), location)
-        Ke = Assembler(s).spring_matrices(Assembler(s).default_properties())[0]
+        a = Assembler(s)
+        Ke = a.matrices("spring", a.default_properties())[0][0]
         # every rigid motion of the two nodes: zero force, whatever the location
         R = rigid_body_basis(s.nodes)
         assert np.abs(Ke @ R).max() < 1e-10 * np.abs(Ke).max()
@@ -59,7 +60,7 @@ def test_springs_see_the_relative_motion_at_the_location():
     xa, xb, p = np.zeros(3), np.array([1.0, 0, 0]), np.array([1.4, 0, 0])
     s = _two_bodies(xa, xb, [0, 2e4, 0, 0, 0, 0], None, p)
     a = Assembler(s)
-    Ke = a.spring_matrices(a.default_properties())[0]
+    Ke = a.matrices("spring", a.default_properties())[0][0]
     q = np.zeros(12)
     q[6 + 5] = 1e-3
     f = Ke @ q  # the node loads that hold this deformation
@@ -170,7 +171,8 @@ def test_coincident_location_is_bit_for_bit_the_zero_length_spring():
     s = built[0]
     a = Assembler(s)
     props = a.default_properties()
-    assert np.array_equal(a.spring_matrices(props), _old_spring_matrices(s, props.spring_scale))
+    K = a.matrices("spring", props)[0]
+    assert np.array_equal(K, _old_spring_matrices(s, props.spring_scale))
 
 
 def test_modify_keeps_offsets_in_step_and_bad_location_is_named():

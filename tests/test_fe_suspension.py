@@ -16,7 +16,7 @@ import pytest
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import FEModel, Material, StructureBuilder, circular_tube
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
+from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.sparse_modal import ModalSettings
 
 AL = Material(70e9, 0.33, 2700.0, "aluminium")

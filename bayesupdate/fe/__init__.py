@@ -1,7 +1,7 @@
 """Finite-element layer: build a 3D structure (beams, shells, point masses, springs, supports,
 rigid elements), assemble K(theta), M(theta), solve its modes.  Knows nothing of tests or
 statistics.  ``StructureBuilder.add_shells`` / ``add_support`` / ``add_rbe2`` / ``add_rbe3``
-make a structure that ``FEModel`` solves on the sparse path (``fe.sparse_assembly``).
+make a structure that ``FEModel`` solves on the sparse path (``fe.assembly``).
 
 Public names: ``StructureBuilder``, ``Structure``, ``Material``, ``STEEL``, sections
 (``circular_tube``, ``oval_tube``, ``solid_round``), ``FEModel``, ``Binding``, ``FEResult``,

@@ -36,34 +36,29 @@ class ModalEnergies:
     shell_kinetic_density: np.ndarray | None = None
 
 
-def _family_energies(strain, kinetic, assembler, shapes) -> None:
-    """Add the registered element families' strain and kinetic energies (``fe.elements.base``:
-    general beams, rods, scalar masses, ...) to ``strain``, ``kinetic`` (n_parts, m) by part,
-    in place."""
-    for f in assembler.families:
-        np.add.at(strain, f.part, 0.5 * quadratic_forms(f.K, f.dofs, shapes))
-        np.add.at(kinetic, f.part, 0.5 * quadratic_forms(f.M, f.dofs, shapes))
+def _family_energies(strain, kinetic, elements, shapes) -> dict:
+    """Add every family's strain and kinetic energies (``elements``: the ``FamilyMatrices`` of
+    ``Assembler.assemble``) to ``strain``, ``kinetic`` (n_parts, m) by part, in place; returns
+    {family: (n_e, m) element strain energies}."""
+    by_element = {}
+    for f in elements:
+        if f.K is not None:
+            u = by_element[f.family] = 0.5 * quadratic_forms(f.K, f.dofs, shapes)
+            np.add.at(strain, f.part, u)
+        if f.M is not None:
+            np.add.at(kinetic, f.part, 0.5 * quadratic_forms(f.M, f.dofs, shapes))
+    return by_element
 
 
-def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> ModalEnergies:
+def modal_energies(assembler, elements: tuple, shapes: np.ndarray) -> ModalEnergies:
     """Energy shares of modes ``shapes`` (n_dof, m).
 
-    ``element_matrices`` is the dict returned by ``Assembler.assemble``.
+    ``elements`` is the tuple of ``FamilyMatrices`` returned by ``Assembler.assemble``.
     """
     s = assembler.structure
-    n_parts = len(s.parts)
-    m = shapes.shape[1]
-    ub = 0.5 * quadratic_forms(element_matrices["beam_K"], assembler.beam_dofs, shapes)
-    us = 0.5 * quadratic_forms(element_matrices["spring_K"], assembler.spring_dofs, shapes)
-    tb = 0.5 * quadratic_forms(element_matrices["beam_M"], assembler.beam_dofs, shapes)
-    tm = 0.5 * quadratic_forms(element_matrices["mass_M"], assembler.mass_dofs, shapes)
-    strain = np.zeros((n_parts, m))
-    kinetic = np.zeros((n_parts, m))
-    np.add.at(strain, s.beam_part, ub)
-    np.add.at(strain, s.spring_part, us)
-    np.add.at(kinetic, s.beam_part, tb)
-    np.add.at(kinetic, s.mass_part, tm)
-    _family_energies(strain, kinetic, assembler, shapes)
+    strain = np.zeros((len(s.parts), shapes.shape[1]))
+    kinetic = np.zeros_like(strain)
+    ub = _family_energies(strain, kinetic, elements, shapes)["beam"]  # the tube beams
     total_u = np.maximum(strain.sum(axis=0), 1e-300)
     total_t = np.maximum(kinetic.sum(axis=0), 1e-300)
     return ModalEnergies(
@@ -74,27 +69,18 @@ def modal_energies(assembler, element_matrices: dict, shapes: np.ndarray) -> Mod
     )
 
 
-def general_energies(g, element_matrices: dict, shell_props, modes) -> ModalEnergies:
-    """Energy shares of a general structure's modes (``fe.sparse_assembly.GeneralAssembler`` ``g``):
-    beams, springs, point masses and the registered element families as ``modal_energies``, plus
-    every shell element (direct
-    element matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs
-    of rigid elements included), so the element energies sum to the mode's lambda / 2."""
+def general_energies(g, elements: tuple, shell_props, modes) -> ModalEnergies:
+    """Energy shares of a general structure's modes (``fe.assembly.GeneralAssembler`` ``g``):
+    every element family as ``modal_energies``, plus every shell element (direct element
+    matrices at ``shell_props`` = (t, E, rho)).  The shapes are full-DOF (dependent DOFs of
+    rigid elements included), so the element energies sum to the mode's lambda / 2."""
     s = g.structure
     shapes = modes.shapes
     m = shapes.shape[1]
     quad = quadratic_forms
-    b = g.beams
     strain = np.zeros((len(s.parts), m))
     kinetic = np.zeros((len(s.parts), m))
-    ub = 0.5 * quad(element_matrices["beam_K"], b.beam_dofs, shapes)
-    np.add.at(strain, s.beam_part, ub)
-    np.add.at(
-        strain, s.spring_part, 0.5 * quad(element_matrices["spring_K"], b.spring_dofs, shapes)
-    )
-    np.add.at(kinetic, s.beam_part, 0.5 * quad(element_matrices["beam_M"], b.beam_dofs, shapes))
-    np.add.at(kinetic, s.mass_part, 0.5 * quad(element_matrices["mass_M"], b.mass_dofs, shapes))
-    _family_energies(strain, kinetic, b, shapes)
+    ub = _family_energies(strain, kinetic, elements, shapes)["beam"]  # the tube beams
     fields = {}
     if s.shells is not None:
         n_sh = s.shells.n_elements

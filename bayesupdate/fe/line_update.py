@@ -11,7 +11,7 @@ pattern at positions found once:
 
     K(theta) = K(deck) + sum_e P_e^T (K_e(theta) - K_e(deck)) P_e,   M likewise,
 
-P_e the element's place in the CSR data of ``sparse_assembly.GeneralAssembler`` (``delta`` returns
+P_e the element's place in the CSR data of ``assembly.GeneralAssembler`` (``delta`` returns
 the
 (nnz,) data of the sum).  The elements' new values are whole ``GeneralBeams`` / ``Rods`` records
 of the chosen elements (``beams`` / ``rods`` hold the deck's; ``dataclasses.replace`` the fields
@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.assembly import _block_keys
 from bayesupdate.fe.elements.general_beam import _subset, general_beam_matrices
 from bayesupdate.fe.elements.rod import Rods, rod_matrices
-from bayesupdate.fe.sparse_assembly import _block_keys
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,7 @@ class PointMassValues:
 class LineUpdate:
     """(dK, dM) on a general assembler's pattern from new values of chosen elements.
 
-    g : ``sparse_assembly.GeneralAssembler``; beams, rods, masses : indices (into the structure's
+    g : ``assembly.GeneralAssembler``; beams, rods, masses : indices (into the structure's
     ``general_beams``, ``rods`` and point masses) of the elements that may change."""
 
     def __init__(self, g, beams=(), rods=(), masses=()):
@@ -68,9 +68,9 @@ class LineUpdate:
             self.rods = Rods(**{k: getattr(r, k)[self.rod_index] for k in r.__dataclass_fields__})
             self._pos_rod = _positions(keys, g.n_dof, self.rods.dofs())
         if self.mass_index.size:
-            dofs = g.beams.mass_dofs[self.mass_index]
-            self._pos_mass = _positions(keys, g.n_dof, dofs)
-            self._mass_T = g.beams._mass_T[self.mass_index]  # noqa: SLF001 - same element
+            masses = g.beams.parametric["mass"]
+            self._pos_mass = _positions(keys, g.n_dof, masses.dofs()[self.mass_index])
+            self._mass_T = masses.link[self.mass_index]
         #: (K, M) (nnz,) of the chosen elements at the structure's values
         self.base = self._data(self.beams, self.rods, self.masses())
 

@@ -18,9 +18,9 @@ bend_factor        extra factor dividing EI of a named bend     -         K non-
 =================  ==========================================  ========  =====================
 
 On a part with shells, thickness, density, youngs_modulus and modulus_factor act on its shells as
-well (shell K and M are exact sums of powers of the thickness, ``fe.sparse_assembly``).  A
+well (shell K and M are exact sums of powers of the thickness, ``fe.assembly``).  A
 structure with
-shells, supports or rigid elements is solved on the sparse path (``fe.sparse_assembly``: constraints
+shells, supports or rigid elements is solved on the sparse path (``fe.assembly``: constraints
 eliminated exactly, shift-invert Lanczos, rigid-body modes the supports allow removed exactly);
 a beam structure without them keeps the banded Krylov path (``method="sparse"`` forces the
 sparse one).
@@ -34,11 +34,10 @@ from types import MappingProxyType
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.assembly import Assembler, ElementProperties
+from bayesupdate.fe.assembly import Assembler, ElementProperties, GeneralAssembler
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
 from bayesupdate.fe.rotations import rigid_body_basis
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction
@@ -141,7 +140,7 @@ class AffineTerms:
         point-mass and spring scales 1, the non-linear ones (thickness, bend factor) at their
         defaults.  A linear parameter's element matrices assembled from ``unit`` times
         value x ``scale`` are its exact contribution to K or M.
-    Shells are not covered (their thickness terms are ``fe.sparse_assembly``'s): the reduced model,
+    Shells are not covered (their thickness terms are ``fe.assembly``'s): the reduced model,
     which builds on this, applies to beam structures only (``FEModel.assembler``).
     """
 
@@ -432,7 +431,7 @@ class FEModel:
         """Full modal analysis: first ``n_modes`` elastic modes, mass, CoG, optional energies.
 
         method : "krylov" (banded, beam structures), "dense" (LAPACK, checks) or "sparse"
-        (``fe.sparse_assembly``; the only path for shells, supports and rigid elements)."""
+        (``fe.assembly``; the only path for shells, supports and rigid elements)."""
         p = self.full_parameters(params)
         props = self.element_properties(p)
         if self._general is not None or method == "sparse":

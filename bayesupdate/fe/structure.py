@@ -77,7 +77,7 @@ class Structure:
     on both axes where > 0 (a Nastran PBARL ROD has 0.9, not Cowper's value).
     shells : ``ShellElements`` or None; constraints : supports and rigid elements
     (``constraints.Constraints``) or None.  A structure with either is solved on the sparse path
-    (``fe.sparse_assembly``); without them it is the beam structure of before, solved as before.
+    (``fe.assembly``); without them it is the beam structure of before, solved as before.
     general_beams : ``general_beam.GeneralBeams`` (arbitrary sections, offsets, pin flags) or
     None; rods : ``rod.Rods`` or None; either also puts the structure on the sparse path.
     dampers : ``damper.Dampers`` or None: viscous dampers as data (normal modes ignore them).

@@ -34,7 +34,7 @@ Design variables (seed Table 3): ``t_hot_pipe``/``t_cold_pipe`` -> the pipes' be
 ``t_main_muffler`` -> every sheet of the main muffler (mantle and baffles at it, the caps at a
 fixed fitted ratio of it: ``fe``'s per-element ``thickness_factor``);
 ``rho_catalyst``/``rho_intermediate_muffler`` -> the density of those bodies' shells (mantle and
-caps).  Shell thickness and density enter K and M as exact sums of powers (``fe.sparse_assembly``).
+caps).  Shell thickness and density enter K and M as exact sums of powers (``fe.assembly``).
 """
 
 from dataclasses import replace

@@ -2,7 +2,7 @@
 parameters, and only their matrices are computed again.
 
 A binding to a PBAR/PBARL/PBEAM/PBEAML/PROD field, or to the MAT1 E or RHO of a line property,
-acts on CBAR/CBEAM/CROD/CONROD elements, which ``fe.sparse_assembly`` assembles once.  Two ways give
+acts on CBAR/CBEAM/CROD/CONROD elements, which ``fe.assembly`` assembles once.  Two ways give
 their matrices at new values, both the reading of the deck written with them:
 
 * ``LineRebuild`` (the reference): copies of the bound cards get the parameters' values
@@ -41,8 +41,8 @@ from dataclasses import field as _field
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
-from bayesupdate.fe.sparse_assembly import GeneralAssembler
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bindings import _card, set_field

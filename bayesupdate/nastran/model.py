@@ -3,7 +3,7 @@
 Parameters are in the deck's units (``bindings``); each ``DeckBinding`` acts on element masks
 of the structure, and the FE value is ``factor`` x the parameter (WTMASS on densities, 1 / the
 deck's value for a spring or mass bound absolutely).  Everything else is ``FEModel``'s: shell
-thickness enters K and M as exact powers (``fe.sparse_assembly``), so the reduced basis applies; so
+thickness enters K and M as exact powers (``fe.assembly``), so the reduced basis applies; so
 does a line-element field that enters K and M linearly (``lines.affine_line_terms``).
 """
 

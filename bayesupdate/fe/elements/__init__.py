@@ -10,21 +10,36 @@ element matrices vectorised over elements (SI units, global axes).
 * ``scalar_mass``: scalar masses (CMASS1/CMASS2);
 * ``damper``: viscous dampers (data: normal modes ignore them).
 
-``base`` holds the interface of a family without design parameters (``ElementFamily``) and the
-registry (``FAMILIES``, ``register``) that assembly, modal energies, the total mass and the
-reduced basis loop over (``families_of``).
+``base`` holds the two interfaces: a family whose properties are design parameters
+(``ParametricFamily``: tube beams, point masses, springs; registry ``PARAMETRIC``,
+``register_parametric``) and a family without them (``ElementFamily``: general beams, rods,
+scalar masses; registry ``FAMILIES``, ``register``).  Assembly, modal energies, the total mass
+and the reduced basis loop over both (``parametric_of``, ``families_of``).
 """
 
-# importing the families registers them (``base.register``), in this order of assembly
+# importing the families registers them (``base.register``, ``base.register_parametric``), in
+# this order of assembly: the parametric families first, then the others
+from bayesupdate.fe.elements import beam, point_mass, spring  # noqa: F401, E402, I001
 from bayesupdate.fe.elements import general_beam, rod, scalar_mass  # noqa: F401, E402
 from bayesupdate.fe.elements.base import (  # noqa: E402
     ElementFamily,
     ElementSettings,
+    ParametricFamily,
     families_of,
+    parametric_of,
     register,
+    register_parametric,
 )
 
-__all__ = ["ElementFamily", "ElementSettings", "families_of", "register"]
+__all__ = [
+    "ElementFamily",
+    "ElementSettings",
+    "ParametricFamily",
+    "families_of",
+    "parametric_of",
+    "register",
+    "register_parametric",
+]
 
 # scalar springs between any two DOFs or to ground (CELAS1/CELAS2): registered last, held in
 # ``Structure.elements``

@@ -1,29 +1,38 @@
-"""The interface of an element family and the registry that assembly, energies, the total mass
-and the reduced basis loop over.
+"""The two interfaces of an element family and the registries that assembly, energies, the
+total mass and the reduced basis loop over.
 
-An element family (``ElementFamily``) is a frozen dataclass of element arrays, one row per
-element, with its global DOF map and its element matrices at its own properties, vectorised over
-elements.  A registered family (``register``) is then, with no other edit:
+An element family is a frozen dataclass of element arrays, one row per element, with its global
+DOF map and its element matrices vectorised over elements.  Two kinds:
+
+* ``ParametricFamily`` (registry ``PARAMETRIC``, ``register_parametric``): its properties are
+  design parameters (tube beams, point masses, springs).  Its element matrices are taken at an
+  ``fe.assembly.ElementProperties`` record, of which it reads the arrays named in ``fields``;
+  ``linear`` names the matrix that is linear in its factor (point masses: "M", springs: "K"),
+  or "" when the matrices must be recomputed (tube beams: wall thickness and bend factor).
+  ``fe.model.PROPERTY_TERMS`` binds a property to its ``family`` name and field.
+* ``ElementFamily`` (registry ``FAMILIES``, ``register``): no design parameter acts on it
+  (general beams, rods, scalar masses, a user's family); its (K, M) are computed once.
+
+A registered family is then, with no other edit:
 
 * assembled into K and M on both solution paths (``fe.assembly.Assembler``: its blocks join the
-  sparse pattern, its (K, M) are scattered once and added to every assembly);
+  sparse pattern, its (K, M) are scattered into every assembly);
 * counted in the modal strain and kinetic energies per part (``fe.energy``):
   U_e = 1/2 phi_e^T K_e phi_e, T_e = 1/2 lambda phi_e^T M_e phi_e (seed eq. 3 over the element);
-* counted in the total mass and centre of gravity (``rigid_mass``: the rigid-body functional of
-  its M, exact for any mass matrix);
-* taken into the constant term of the reduced basis's affine split (``fe.reduced.affine``):
-  no design parameter acts on a registered family, so its affine split in the design parameters
-  is K(theta) = K_e, M(theta) = M_e for every theta.
+* counted in the total mass and centre of gravity (a parametric family's ``masses``; for the
+  others ``rigid_mass``: the rigid-body functional of its M, exact for any mass matrix);
+* taken into the reduced basis's affine split (``fe.reduced.affine``): an ``ElementFamily``
+  into the constant term (K(theta) = K_e, M(theta) = M_e for every theta), a linear parametric
+  family as one term per parameter acting on it, the tube beams' groups interpolated.
 
-The families whose properties are design parameters (tube beams, point masses, springs and
-shells: ``fe.model.PROPERTY_TERMS``) keep their element maths in their own files of this package
-but are bound, assembled and split by ``FEModel``, ``Assembler`` and ``fe.reduced`` by name
-(their affine split needs the parameter bindings).
+Shells (``elements.shell``, ``shell_tria``) are assembled by ``fe.assembly.GeneralAssembler`` in
+parameter groups whose K and M are exact powers of the thickness (``fe.shell_model``).
 
-A structure holds the registered families' instances in its named fields (``general_beams``,
-``rods``, ``scalar_masses``) or, for any other registered family, in ``Structure.elements``;
-each class's ``of(structure)`` finds its instance.  Units: SI in, SI out; K [N/m, N m/rad], M
-[kg, kg m^2]; DOF numbers 6 * node + (ux, uy, uz, rx, ry, rz).
+A structure holds the parametric families' arrays in its ``beam_*``, ``mass_*`` and
+``spring_*`` columns (each class's ``of(structure)`` gathers them), the other registered
+families' instances in its named fields (``general_beams``, ``rods``, ``scalar_masses``) or,
+for any other registered family, in ``Structure.elements``.  Units: SI in, SI out; K [N/m,
+N m/rad], M [kg, kg m^2]; DOF numbers 6 * node + (ux, uy, uz, rx, ry, rz).
 """
 
 from dataclasses import dataclass
@@ -79,8 +88,62 @@ class ElementFamily(Protocol):
         ...
 
 
+class ParametricFamily(Protocol):
+    """One element family whose properties are design parameters (tube beams, point masses,
+    springs): its element matrices at an ``fe.assembly.ElementProperties`` record, of which it
+    reads the (n,) arrays named in ``fields``.
+
+    family : the name ``fe.model.PROPERTY_TERMS`` and ``ParameterTerm.family`` give it; linear :
+    the matrix ("K" or "M") that is linear in its one field (a factor on every element), or ""
+    when the matrices must be recomputed (``fe.reduced.affine`` interpolates them).
+    """
+
+    family: ClassVar[str]
+    fields: ClassVar[tuple[str, ...]]
+    linear: ClassVar[str]
+    nodes: np.ndarray
+    part: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        """Number of elements n."""
+        ...
+
+    def dofs(self) -> np.ndarray:
+        """(n, d) global DOF numbers of each element's matrix rows."""
+        ...
+
+    def matrices(
+        self, props: Any, settings: ElementSettings, elements: np.ndarray | None = None
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Global-axis (K, M), each (n_e, d, d) or None (the family adds nothing to that
+        matrix), of ``elements`` (index array, default all) at ``props``."""
+        ...
+
+    def masses(self, props: Any, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) element masses [kg] and (n, 3) their centres [m] at ``props`` on nodes xyz
+        (N, 3) [m] (the total mass and centre of gravity)."""
+        ...
+
+    @classmethod
+    def of(cls, structure: Any) -> "ParametricFamily":
+        """The structure's elements of this family (possibly none)."""
+        ...
+
+
 #: family name -> class, in registration order (the order of assembly)
 FAMILIES: dict[str, type] = {}
+#: the parametric families (``ParametricFamily``), in the order of assembly
+PARAMETRIC: dict[str, type] = {}
+
+
+def register_parametric(cls: type) -> type:
+    """Register a ``ParametricFamily`` class (a class decorator); returns the class.  Its
+    parameters are bound by ``fe.model`` (``PROPERTY_TERMS`` names the family and the field)."""
+    if not isinstance(getattr(cls, "family", None), str):
+        raise BayesUpdateError(f"{cls.__name__}: an element family needs a class name `family`")
+    PARAMETRIC[cls.family] = cls
+    return cls
 
 
 def register(cls: type) -> type:
@@ -89,6 +152,12 @@ def register(cls: type) -> type:
         raise BayesUpdateError(f"{cls.__name__}: an element family needs a class name `family`")
     FAMILIES[cls.family] = cls
     return cls
+
+
+def parametric_of(structure: Any) -> tuple:
+    """The structure's parametric families (``PARAMETRIC`` order), one instance per registered
+    class, empty ones included (a parameter's element indices refer to them)."""
+    return tuple(cls.of(structure) for cls in PARAMETRIC.values())
 
 
 def in_elements(cls: type, structure: Any):
@@ -112,7 +181,8 @@ def families_of(structure: Any) -> tuple:
 
 @dataclass(frozen=True)
 class FamilyMatrices:
-    """One family's element matrices at its properties: dofs (n, d), K, M (n, d, d), part (n,)."""
+    """One family's element matrices at its properties: dofs (n, d), K, M (n, d, d) (None: the
+    family adds nothing to that matrix), part (n,)."""
 
     family: str
     dofs: np.ndarray
@@ -124,6 +194,31 @@ class FamilyMatrices:
     def of(cls, family: ElementFamily, xyz: np.ndarray, settings: ElementSettings):
         K, M = family.matrices(xyz, settings)
         return cls(family.family, family.dofs(), K, M, family.part)
+
+
+class LineElements:
+    """The shared part of the two-node line families (general beams, rods): n_elements, their
+    12 DOFs and ``has_mass`` from ``mass_per_length`` (n,) [kg/m], which each family defines
+    (a general beam whose mass kind is "none" carries none)."""
+
+    nodes: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        """Number of elements n."""
+        return int(self.nodes.shape[0])
+
+    def dofs(self) -> np.ndarray:
+        """(n, 12) global DOF numbers, end a then end b."""
+        return line_dofs(self.nodes)
+
+    def has_mass(self) -> bool:
+        """True if some element carries mass of its own."""
+        return bool(np.any(self.mass_per_length() > 1e-200))
+
+    def mass_per_length(self) -> np.ndarray:
+        """(n,) mass per unit length [kg/m] (each line family's own)."""
+        raise NotImplementedError
 
 
 def line_dofs(nodes: np.ndarray) -> np.ndarray:

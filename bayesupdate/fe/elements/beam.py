@@ -12,12 +12,12 @@ columns) and gives their global K and M at given wall thickness, density, modulu
 factor: the design parameters of ``fe.model`` act on these four arrays.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings
-from bayesupdate.fe.sections import section_properties
+from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register_parametric
+from bayesupdate.fe.sections import section_areas, section_properties
 
 # bending in the x-y plane uses (v, rz) = local DOFs 1, 5, 7, 11; x-z plane uses (w, ry) = 2, 4, 8,
 # 10 with ry = -dw/dx, hence the sign pattern below.
@@ -160,14 +160,24 @@ def bend_flexibility_factor(thickness, bend_radius, outer_diameter):
         return np.where(bend_radius > 0, np.maximum(1.0, 1.65 / h), 1.0)
 
 
+@register_parametric
 @dataclass(frozen=True)
 class TubeBeams:
     """Tube beams (circular, oval, solid round sections: ``fe.sections``) as element arrays of
-    what no design parameter changes: frames (n, 3, 3) (rows local x, y, z), lengths (n,) [m],
-    shape (n,) section codes, width, height (n,) [m], nu (n,), shear_factor (n,) (> 0: the shear
-    area is shear_factor x A; None: the sections' own), elbow (n,) bool (ASME B31.3 factor
-    applies), bend_radius (n,) [m]."""
+    what no design parameter changes: nodes (n, 2), part (n,), frames (n, 3, 3) (rows local x,
+    y, z), lengths (n,) [m], shape (n,) section codes, width, height (n,) [m], nu (n,),
+    shear_factor (n,) (> 0: the shear area is shear_factor x A; None: the sections' own), elbow
+    (n,) bool (ASME B31.3 factor applies), bend_radius (n,) [m].  An
+    ``elements.base.ParametricFamily`` whose four fields (wall thickness, density, modulus, bend
+    factor) are design parameters; the thickness and bend factor enter non-linearly."""
 
+    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` fields; no linear matrix
+    family = "beam"
+    fields = ("beam_thickness", "beam_rho", "beam_E", "beam_bend_factor")
+    linear = ""
+
+    nodes: np.ndarray
+    part: np.ndarray
     frames: np.ndarray
     lengths: np.ndarray
     shape: np.ndarray
@@ -177,6 +187,38 @@ class TubeBeams:
     shear_factor: np.ndarray | None
     elbow: np.ndarray
     bend_radius: np.ndarray
+    #: the last (thickness, areas): a calibration asks the mass at the same walls many times
+    _areas: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @classmethod
+    def of(cls, structure) -> "TubeBeams":
+        s = structure
+        x1, x2 = s.nodes[s.beam_nodes[:, 0]], s.nodes[s.beam_nodes[:, 1]]
+        frames, lengths = element_frames(x1, x2, s.beam_up)
+        return cls(
+            s.beam_nodes, s.beam_part, frames, lengths, s.beam_shape, s.beam_width,
+            s.beam_height, s.beam_nu, s.beam_shear_factor, s.beam_elbow, s.beam_bend_radius,
+        )  # fmt: skip
+
+    @property
+    def n_elements(self) -> int:
+        return int(self.nodes.shape[0])
+
+    def dofs(self) -> np.ndarray:
+        """(n, 12) global DOF numbers."""
+        return line_dofs(self.nodes)
+
+    def masses(self, props, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) rho A(t) L [kg] at the element midpoints (n, 3) [m] of nodes xyz (N, 3)."""
+        t = props.beam_thickness
+        memo = self._areas.get("last")
+        if memo is None or not np.array_equal(memo[0], t):
+            memo = self._areas["last"] = (
+                t.copy(),
+                section_areas(self.shape, self.width, self.height, t),
+            )
+        mid = 0.5 * (xyz[self.nodes[:, 0]] + xyz[self.nodes[:, 1]])
+        return props.beam_rho * memo[1] * self.lengths, mid
 
     def matrices(self, props, settings: ElementSettings, elements=None):
         """Global-axis (K, M) (n_e, 12, 12) of ``elements`` (index array, default all) at

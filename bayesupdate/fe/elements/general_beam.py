@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.constraints import rigid_link
-from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
+from bayesupdate.fe.elements.base import ElementSettings, LineElements, register
 from bayesupdate.fe.elements.beam import (
     _XY,
     _XZ,
@@ -46,7 +46,7 @@ MASS_KINDS = ("consistent", "lumped", "none")
 
 @register
 @dataclass(frozen=True)
-class GeneralBeams:
+class GeneralBeams(LineElements):
     """General beam elements as arrays (n elements).
 
     nodes (n, 2), part (n,); E, G [Pa], rho [kg/m^3]; area [m^2], iy, iz, iyz, torsion [m^4],
@@ -79,18 +79,10 @@ class GeneralBeams:
     pins: np.ndarray
     mass: np.ndarray
 
-    @property
-    def n_elements(self) -> int:
-        return int(self.nodes.shape[0])
-
-    def dofs(self) -> np.ndarray:
-        """(n, 12) global DOF numbers."""
-        return line_dofs(self.nodes)
-
-    def has_mass(self) -> bool:
-        """True if some element carries mass of its own (mass kind not 'none')."""
+    def mass_per_length(self) -> np.ndarray:
+        """(n,) rho A + nsm [kg/m], 0 where the mass kind is "none"."""
         carries = np.asarray(MASS_KINDS)[self.mass] != "none"
-        return bool(np.any(carries & (self.rho * self.area + self.nsm > 1e-200)))
+        return np.where(carries, self.rho * self.area + self.nsm, 0.0)
 
     def matrices(self, xyz: np.ndarray, settings: ElementSettings):
         """Global (K, M) (n, 12, 12) on nodes xyz (N, 3) [m] (``general_beam_matrices``)."""

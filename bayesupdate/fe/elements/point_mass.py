@@ -12,9 +12,62 @@ m and J together (``fe.model``), so M_e is linear in the factor: the affine spli
 ``fe.reduced.affine`` takes the matrices at factor 1.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from bayesupdate.fe.elements.base import ElementSettings, register_parametric
 from bayesupdate.fe.rotations import skew
+
+
+@register_parametric
+@dataclass(frozen=True)
+class PointMasses:
+    """Point masses (P): nodes (P, 1), part (P,), mass (P,) [kg], inertia (P, 3, 3) [kg m^2]
+    about each centre, offset (P, 3) [m] from the node to the centre, link (P, 6, 6) its
+    ``offset_link``.  An ``elements.base.ParametricFamily``: M is linear in the factor
+    ``mass_scale`` (the parameters ``mass`` and ``mass_factor``), K is none."""
+
+    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` field; the linear matrix
+    family = "mass"
+    fields = ("mass_scale",)
+    linear = "M"
+
+    nodes: np.ndarray
+    part: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    offset: np.ndarray
+    link: np.ndarray
+
+    @classmethod
+    def of(cls, structure) -> "PointMasses":
+        s = structure
+        return cls(
+            s.mass_node[:, None], s.mass_part, s.mass_value, s.mass_inertia, s.mass_offset,
+            offset_link(s.mass_offset),
+        )  # fmt: skip
+
+    @property
+    def n_elements(self) -> int:
+        return int(self.nodes.shape[0])
+
+    def dofs(self) -> np.ndarray:
+        """(P, 6) global DOF numbers of each mass's node."""
+        return 6 * self.nodes + np.arange(6)
+
+    def matrices(self, props, settings: ElementSettings, elements=None):
+        """(None, M (n_e, 6, 6)) at the factors ``props.mass_scale`` (P,)."""
+        e = slice(None) if elements is None else elements
+        scale = props.mass_scale[e]
+        M = point_mass_matrices(
+            self.link[e], self.mass[e] * scale, self.inertia[e] * scale[:, None, None]
+        )
+        return None, M
+
+    def masses(self, props, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(P,) masses m x factor [kg] and (P, 3) their centres [m] on nodes xyz (N, 3)."""
+        return self.mass * props.mass_scale, xyz[self.nodes[:, 0]] + self.offset
 
 
 def offset_link(offset: np.ndarray) -> np.ndarray:

@@ -14,12 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
+from bayesupdate.fe.elements.base import ElementSettings, LineElements, register
 
 
 @register
 @dataclass(frozen=True)
-class Rods:
+class Rods(LineElements):
     """Rod elements (n): nodes (n, 2), part (n,), E, G [Pa], rho [kg/m^3], area [m^2],
     torsion J [m^4] (0: no twist stiffness), nsm [kg/m], lumped (n,) bool.  An
     ``elements.base.ElementFamily`` (``Structure.rods``)."""
@@ -37,17 +37,9 @@ class Rods:
     nsm: np.ndarray
     lumped: np.ndarray
 
-    @property
-    def n_elements(self) -> int:
-        return int(self.nodes.shape[0])
-
-    def dofs(self) -> np.ndarray:
-        """(n, 12) global DOF numbers."""
-        return line_dofs(self.nodes)
-
-    def has_mass(self) -> bool:
-        """True if some rod carries mass of its own."""
-        return bool(np.any(self.rho * self.area + self.nsm > 1e-200))
+    def mass_per_length(self) -> np.ndarray:
+        """(n,) rho A + nsm [kg/m]."""
+        return self.rho * self.area + self.nsm
 
     def matrices(self, xyz: np.ndarray, settings: ElementSettings):
         """Global (K, M) (n, 12, 12) on nodes xyz (N, 3) [m] (``rod_matrices``; a rod has no

@@ -23,9 +23,64 @@ K_e is the zero-length spring [[kg, -kg], [-kg, kg]], kg = R6^T k R6, computed b
 operations.  Units: SI in, SI out; arrays (n, 12, 12) on [node A DOFs, node B DOFs] in global axes.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from bayesupdate.fe.constraints import rigid_link
+from bayesupdate.fe.elements.base import ElementSettings, register_parametric
+
+
+@register_parametric
+@dataclass(frozen=True)
+class Springs:
+    """Six-component springs (S): nodes (S, 2) (second -1: grounded), part (S,), k (S, 6)
+    [N/m, N m/rad] along the rows of frame (S, 3, 3), offsets (S, 2, 3) [m] from each node to
+    the spring's location.  An ``elements.base.ParametricFamily``: K is linear in the factor
+    ``spring_scale`` (the parameter ``stiffness_factor``), M is none."""
+
+    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` field; the linear matrix
+    family = "spring"
+    fields = ("spring_scale",)
+    linear = "K"
+
+    nodes: np.ndarray
+    part: np.ndarray
+    k: np.ndarray
+    frame: np.ndarray
+    offsets: np.ndarray
+
+    @classmethod
+    def of(cls, structure) -> "Springs":
+        s = structure
+        return cls(s.spring_nodes, s.spring_part, s.spring_k, s.spring_frame, s.spring_offsets())
+
+    @property
+    def n_elements(self) -> int:
+        return int(self.nodes.shape[0])
+
+    @property
+    def grounded(self) -> np.ndarray:
+        return self.nodes[:, 1] < 0
+
+    def dofs(self) -> np.ndarray:
+        """(S, 12) global DOF numbers [node A, node B]; a grounded spring repeats node A (its B
+        blocks are zero)."""
+        b = np.where(self.grounded, self.nodes[:, 0], self.nodes[:, 1])
+        return np.concatenate(
+            [6 * self.nodes[:, :1] + np.arange(6), 6 * b[:, None] + np.arange(6)], axis=1
+        )
+
+    def matrices(self, props, settings: ElementSettings, elements=None):
+        """(K (n_e, 12, 12), None) at the factors ``props.spring_scale`` (S,)
+        (``two_node_matrices``)."""
+        e = slice(None) if elements is None else elements
+        k = self.k[e] * props.spring_scale[e, None]
+        return two_node_matrices(k, self.frame[e], self.grounded[e], self.offsets[e]), None
+
+    def masses(self, props, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """No mass: (0,) and (0, 3)."""
+        return np.zeros(0), np.zeros((0, 3))
 
 
 def frame_values(values: np.ndarray, frame: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import ElementProperties
+from bayesupdate.fe.elements.base import PARAMETRIC
 from bayesupdate.fe.model import AffineTerms, FEModel
 from bayesupdate.fe.reduced.interpolation import (
     barycentric_weights_columns,
@@ -146,7 +147,7 @@ def decompose(
     for key in sorted({k for k in keys if k}):
         elements = np.array([i for i, k in enumerate(keys) if k == key], dtype=int)
         group, Kn, Mn = _interpolated_group(fe, terms, elements, key, (low, high), interp_tol)
-        dofs = fe.beam_assembler.beam_dofs[elements]
+        dofs = fe.beam_assembler.parametric["beam"].dofs()[elements]
         k_col = 1 + group.k_scale if group.k_scale >= 0 else 0
         m_col = 1 + group.m_scale if group.m_scale >= 0 else 0
         for n in range(Kn.shape[0]):
@@ -204,7 +205,7 @@ def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
                 "reduced model: two parameters set the same property of one beam; "
                 "use the full model (--full)"
             )
-    for family in ("mass", "spring"):
+    for family in (c.family for c in PARAMETRIC.values() if c.linear):
         idx = np.concatenate(
             [t.elements for t in terms.parameters if t.family == family] + [np.zeros(0, int)]
         )
@@ -217,39 +218,49 @@ def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
 
 
 def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
-    """The constant term (beams without parameters at the defaults, unbound masses and springs,
-    the registered element families: no parameter acts on them, ``fe.elements.base``) and one
-    linear term per point-mass or spring parameter: (k_stacks, m_stacks, k_entries,
-    m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``."""
-    s, a = fe.structure, fe.beam_assembler
-    props0, unit = terms.defaults, terms.unit
-    point = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "mass"]
-    spring = [(j, t) for j, t in enumerate(terms.parameters) if t.family == "spring"]
+    """The constant term and one linear term per parameter of a linear parametric family
+    (``ParametricFamily.linear``: point masses, springs): (k_stacks, m_stacks, k_entries,
+    m_entries), entries (feature a, feature b, factor c) as in ``AffineDecomposition``.  The
+    constant term holds the tube beams without parameters at the defaults, the elements of the
+    linear families that no parameter scales, and every other registered family (no parameter
+    acts on them, ``fe.elements.base``)."""
+    a = fe.beam_assembler
     free_beams = np.array([i for i, k in enumerate(keys) if not k], dtype=int)
-    bound_masses = np.concatenate([t.elements for _, t in point] + [np.zeros(0, int)])
-    bound_springs = np.concatenate([t.elements for _, t in spring] + [np.zeros(0, int)])
-    free_masses = np.setdiff1d(np.arange(len(s.mass_node)), bound_masses)
-    free_springs = np.setdiff1d(np.arange(len(s.spring_part)), bound_springs)
-    mM, sK = a.mass_matrices(props0), a.spring_matrices(props0)
-    mM_unit, sK_unit = a.mass_matrices(unit), a.spring_matrices(unit)
-    bK0, bM0 = (
-        a.beam_matrices(props0, elements=free_beams)
+    beams = a.parametric["beam"]
+    K0, M0 = (
+        a.matrices("beam", terms.defaults, free_beams)
         if free_beams.size
         else (np.zeros((0, 12, 12)),) * 2
     )
-    k_stacks = [[(a.beam_dofs[free_beams], bK0), (a.spring_dofs[free_springs], sK[free_springs])]]
-    m_stacks = [[(a.beam_dofs[free_beams], bM0), (a.mass_dofs[free_masses], mM[free_masses])]]
+    dofs = beams.dofs()[free_beams]
+    k_stacks, m_stacks = [[(dofs, K0)]], [[(dofs, M0)]]
+    k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
+    for family in a.parametric.values():
+        if family.linear:
+            k = family.linear == "K"
+            stacks, entries = (k_stacks, k_entries) if k else (m_stacks, m_entries)
+            _linear_family(a, family, terms, stacks, entries)
     for f in a.families:
         k_stacks[0].append((f.dofs, f.K))
         m_stacks[0].append((f.dofs, f.M))
-    k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
-    for j, t in point:
-        m_stacks.append([(a.mass_dofs[t.elements], mM_unit[t.elements])])
-        m_entries.append((1 + j, 0, t.scale))
-    for j, t in spring:
-        k_stacks.append([(a.spring_dofs[t.elements], sK_unit[t.elements])])
-        k_entries.append((1 + j, 0, t.scale))
     return k_stacks, m_stacks, k_entries, m_entries
+
+
+def _linear_family(a, family, terms: AffineTerms, stacks: list, entries: list) -> None:
+    """Append the linear ``family``'s unscaled elements (at the defaults) to the constant term
+    of ``stacks`` and one term (its elements at factor 1, coefficient theta_j x scale) per
+    parameter j acting on it, in place."""
+    bound = [(j, t) for j, t in enumerate(terms.parameters) if t.family == family.family]
+    taken = np.concatenate([t.elements for _, t in bound] + [np.zeros(0, int)])
+    free = np.setdiff1d(np.arange(family.n_elements), taken)
+    which = 0 if family.linear == "K" else 1
+    X0 = a.matrices(family.family, terms.defaults)[which]
+    X_unit = a.matrices(family.family, terms.unit)[which]
+    dofs = family.dofs()
+    stacks[0].append((dofs[free], X0[free]))
+    for j, t in bound:
+        stacks.append([(dofs[t.elements], X_unit[t.elements])])
+        entries.append((1 + j, 0, t.scale))
 
 
 def _gather(entries) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -304,7 +315,7 @@ class _GroupMatrices:
         """points (n, len(fields)) -> K, M (n, n_e, 12, 12)."""
         Ks, Ms = [], []
         for row in points:
-            K, M = self.fe.beam_assembler.beam_matrices(self._props(row), elements=self.elements)
+            K, M = self.fe.beam_assembler.matrices("beam", self._props(row), self.elements)
             Ks.append(K)
             Ms.append(M)
         return np.array(Ks), np.array(Ms)

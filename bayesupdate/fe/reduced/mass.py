@@ -7,9 +7,9 @@ M_g = M_nsm + rho_g sum_p theta_g^p M_p, so
 
     m(theta) = m_beams(theta) + sum_g [m(M_nsm,g) + rho_g sum_p theta_g^p m(M_p,g)],
 
-the scalars m(.) computed once.  The beams, point masses and registered element families
-(general beams, rods, scalar masses) keep their own exact formula (rho A(t) L, the point masses
-and the families' rigid-body mass, ``Assembler.total_mass``), equal to the functional of their
+the scalars m(.) computed once.  Every registered element family keeps its own exact formula
+(``Assembler.total_mass``, a loop over the families: a parametric family's ``masses`` such as
+rho A(t) L of a tube beam, the other families' rigid-body mass), equal to the functional of its
 assembled M: a rigid translation carries an element's mass alone.  One evaluation is a few
 array operations on the shells' property arrays instead of an assembly of the full K and M.
 """

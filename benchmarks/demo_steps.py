@@ -1,7 +1,8 @@
 """Where the CPU seconds of ``bayesupdate demo`` go: each step of ``pipelines.demo.run_demo``,
 the side by side and the report, timed in one process (CPU and wall), then the import of the
-package and the seed posterior's own split (``diagnostics["timings"]``: adaptation stages, exact
-and screening log-posterior calls, convergence checks).
+package and the posteriors' own split (``diagnostics["timings"]``: adaptation stages, exact and
+screening log-posterior calls, convergence checks), each optimum's evaluations and wall seconds
+and discovery's own timings.
 
 The reduced bases come from ``BAYESUPDATE_CACHE_DIR`` as in a user's run: give an empty folder
 for a fresh clone's first run, the same folder again for a second run.  BLAS is pinned to one
@@ -77,6 +78,27 @@ def main() -> None:
             f"evaluations; wall split {json.dumps(posterior.diagnostics.get('timings'))}; "
             f"reference {judged}"
         )
+    _print_inner_splits(results)
+
+
+def _print_inner_splits(results) -> None:
+    """The optimisers' and discovery's own records: where a step's seconds went inside it (each
+    optimum's evaluations and wall seconds, of which the Nelder-Mead polish of every start is
+    most when polished; discovery's ``timings``)."""
+    optima = (
+        ("seed case (shell) optimum", results.seed_optimum.calibration),
+        ("beam exhaust optimum", results.beam_optimum.calibration),
+        ("virtual test optimum", results.virtual.run.calibration),
+    )
+    for label, c in optima:
+        print(
+            f"{label}: {c.evaluations} evaluations in {c.wall_s:.1f} s wall, "
+            f"{c.converged_starts}/{c.starts} starts at the best, Expr {c.expr:.6f}"
+        )
+    for label, part in (("seed", results.seed_discovery), ("virtual", results.virtual_discovery)):
+        if part is not None:
+            timings = {k: round(v, 1) for k, v in part.run.result.timings.items()}
+            print(f"{label} discovery wall split: {json.dumps(timings)}")
 
 
 if __name__ == "__main__":

@@ -870,8 +870,7 @@ def sample_posterior(
     steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
     """
     settings.check_walkers(log_posterior.ndim)
-    # the run's one stop record: a signal (the command's handler), a Ctrl-C met inside the
-    # model, or an error a density call met (``_guard``)
+    # one stop record: a signal (the handler), a Ctrl-C in the model or a density's error
     request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
 
@@ -890,12 +889,10 @@ def sample_posterior(
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
         _raise_failure(request)
         outcome = (True, False, np.full(d, np.inf))
-        return _posterior_result(
-            run, log_posterior, outcome, settings.seed, screened, settings.target_ess
-        )
-    sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
-    outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
-    _raise_failure(request, run, checkpoint, log_posterior)
+    else:
+        sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
+        outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
+        _raise_failure(request, run, checkpoint, log_posterior)
     return _posterior_result(
         run, log_posterior, outcome, settings.seed, screened, settings.target_ess
     )

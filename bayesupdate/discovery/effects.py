@@ -324,6 +324,21 @@ def effect_locations(model: FEModel, kind: str) -> list[str]:
     return list(EFFECT_KINDS[kind].locations(model))
 
 
+#: kinds placed at the model node of a sensor point (``_sensor_node``): two test points read
+#: on one node (e.g. a leading- and a trailing-edge accelerometer paired with one beam node)
+#: give one and the same extended model
+_AT_SENSOR_NODE = ("added_mass", "boundary_spring")
+
+
+def effect_site(model: FEModel, effect: Effect) -> tuple:
+    """(kind, where it acts): equal for two effects whose extended models are the same
+    structure up to the names of the effect's part and parameters (the same kind at one model
+    node); a kind placed elsewhere acts at its location (every location its own)."""
+    if effect.kind in _AT_SENSOR_NODE:
+        return effect.kind, "node", _sensor_node(model, effect.location)
+    return effect.kind, "location", effect.location
+
+
 def extend_model(model: FEModel, effect: Effect) -> FEModel:
     """``model`` with ``effect`` added: new parameters ``KIND@LOCATION:NAME`` whose defaults are
     the effect's given values (else the kind's defaults) and whose bounds are the kind's."""

@@ -68,8 +68,8 @@ import numpy as np
 from scipy import stats
 from scipy.special import logsumexp
 
-from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
+from bayesupdate.discovery import twins
 from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
 from bayesupdate.discovery.effects import Effect
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
@@ -80,6 +80,7 @@ from bayesupdate.discovery.localization import (
     candidate_problem,
     localize,
     score_candidate,
+    score_task,
     screen_grid,
 )
 from bayesupdate.discovery.reduced_candidates import (
@@ -412,9 +413,34 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
         )
 
 
-def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None):
+@dataclass(frozen=True)
+class DiscoveryPairing:
+    """How discovery pairs the test modes, as ``calibrate`` does (``pipelines.study.prepare``).
+
+    method : "auto" | "mac" | "order" | "tracked" ("auto": ``discover`` says how it resolves).
+    rules : a MAC pairing's ``inference.pairing.PairingRules`` (the study's ``[pairing]``; None:
+    every test mode is paired).  extra_modes : model modes computed beyond the highest test mode
+    (the study's ``[pairing] extra_modes``), >= 0.  test_modes : (m,) 1-based number of each
+    test mode of the data in its source (a study's ``[data] modes``; () : 1..m).  The model
+    computes up to mode max(test_modes) + extra_modes: test mode k of a source lies near model
+    mode k, so a selection such as GVT modes [1, 7, 10] must reach past model mode 3."""
+
+    method: str = "auto"
+    rules: object = None
+    extra_modes: int = 2
+    test_modes: tuple[int, ...] = ()
+
+    def __post_init__(self):
+        if int(self.extra_modes) < 0:
+            raise BayesUpdateError(f"pairing.extra_modes: {self.extra_modes}; must be >= 0")
+
+
+def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None, **choice):
     """(calibration problem, pairing record): the problem discovery calibrates and compares
-    its candidates on, set up with one reference solve (``inference.problem.build_problem``).
+    its candidates on, set up with one reference solve (``inference.problem.build_problem``,
+    with the test modes' source numbers and extra modes of ``DiscoveryPairing``: ``choice``
+    holds its ``extra_modes`` and ``test_modes``), so that discovery pairs what ``calibrate``
+    and ``correlate`` pair on the same study.
 
     ``pairing`` "auto" is resolved as ``discover`` says.  A MAC pairing with ``rules``
     (``inference.pairing.PairingRules``: the study's ``[pairing]``) refuses, at the reference
@@ -423,9 +449,14 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
     problems (``localization.candidate_problem``) pair without a frequency window, so the
     baseline's drops it too: both sides of every Bayes factor pair alike.  The record is {}
     when no rules applied (no rules, no test shapes, or a pairing other than MAC)."""
-    if pairing == "auto":
-        pairing = "mac" if data.shapes is not None else "order"
-    problem = build_problem(model, data, parameters, pairing=pairing, rules=rules)
+    choice = DiscoveryPairing(pairing, rules, **choice)
+    method = choice.method
+    if method == "auto":
+        method = "mac" if data.shapes is not None else "order"
+    problem = build_problem(
+        model, data, parameters, pairing=method, extra_modes=choice.extra_modes, rules=rules,
+        test_modes=tuple(choice.test_modes),
+    )  # fmt: skip
     if problem.pairing.rules is None:
         return problem, {}
     record = problem.pairing.to_dict()
@@ -436,12 +467,15 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
 def _prepare(
     model, data, settings: DiscoverySettings, parameters, baseline, pairing, say, executor
 ) -> tuple[object, list, object, dict]:
-    """The calibration problem and its pairing record (``discovery_problem``; ``pairing``:
-    (method, rules); on the design variables' certified basis for a large model,
+    """The calibration problem and its pairing record (``discovery_problem``; ``pairing``: a
+    ``DiscoveryPairing``); on the design variables' certified basis for a large model,
     ``reduced_candidates``), the library's effects and the baseline ``CalibrationResult``
     (calibrated here from ``baseline_starts`` starts, seeded by ``seed``, on ``executor``, when
     none is given)."""
-    problem, record = discovery_problem(model, data, parameters, *pairing)
+    problem, record = discovery_problem(
+        model, data, parameters, pairing.method, pairing.rules,
+        extra_modes=pairing.extra_modes, test_modes=pairing.test_modes,
+    )  # fmt: skip
     check_enough_modes(problem)
     if use_reduced(model):
         say("certified reduced basis of the design variables")
@@ -513,7 +547,13 @@ def _localize(
         scored = _reduced_scores(model, effects, args, settings)
         return localize(*args, [], model_modes, flags.flagged, scored=scored)
     candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
-    return localize(*args, candidates, model_modes, flags.flagged, executor)
+    # candidates that are one model (``twins``) are scored once
+    with phase(CANDIDATES_PHASE, twins.count_once(candidates), "candidates") as shown:
+        scored = twins.map_once(
+            executor, score_task, candidates, candidates, args, twins.twin_score,
+            shown.progress_callback(),
+        )  # fmt: skip
+    return localize(*args, [], model_modes, flags.flagged, scored=scored)
 
 
 def _reduced_scores(model, effects: list, args: tuple, settings: DiscoverySettings) -> list:
@@ -575,10 +615,12 @@ def _quick_refits(
     each ``quick_nfev`` iterations from its best ``_candidate_starts`` start, best evidence
     first (fits on ``executor``)."""
     chosen = _select(scores, settings)
-    with phase("discovery: quick refits", len(chosen), "fits") as shown:
-        fits = executor_or_serial(executor).map(
-            _quick_refit, chosen, (base_fit, settings), shown.progress_callback()
-        )
+    candidates = [score.candidate for score in chosen]
+    with phase("discovery: quick refits", twins.count_once(candidates), "fits") as shown:
+        fits = twins.map_once(
+            executor, _quick_refit, chosen, candidates, (base_fit, settings), twins.twin_fit,
+            shown.progress_callback(),
+        )  # fmt: skip
     quick = list(zip(fits, chosen, strict=True))
     quick.sort(key=lambda item: -item[0].log_evidence)
     return quick
@@ -604,11 +646,20 @@ def _full_refits(
     (on ``executor``); the rest keep their quick fit.  All fits, best evidence first."""
     shared = (_box_centre(base_fit.space.problem), len(base_fit.space.axes), settings)
     best = [fit for fit, _ in quick[: settings.refit.max_refits]]
+    candidates = [score.candidate for _, score in quick[: settings.refit.max_refits]]
     say("full refits: " + ", ".join(fit.label for fit in best))
     fits = [f for f, _ in quick[settings.refit.max_refits :]]
-    with phase("discovery: full refits", len(best), "fits") as shown:
+    with phase("discovery: full refits", twins.count_once(candidates), "fits") as shown:
         fits.extend(
-            executor_or_serial(executor).map(_full_refit, best, shared, shown.progress_callback())
+            twins.map_once(
+                executor,
+                _full_refit,
+                best,
+                candidates,
+                shared,
+                twins.twin_fit,
+                shown.progress_callback(),
+            )  # fmt: skip
         )
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
@@ -700,7 +751,7 @@ def discover(
     settings: DiscoverySettings | None = None,
     parameters=None,
     baseline=None,
-    pairing: str = "auto",
+    pairing: "str | DiscoveryPairing" = "auto",
     predictive_rel_var: np.ndarray | None = None,
     progress=None,
     executor=None,
@@ -718,14 +769,18 @@ def discover(
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
     frequencies against the model's sorted ones: the honest likelihood without shapes; shape
     tracking, the calibration default, puts a wall in the objective where a hidden effect
-    reorders two close modes, and a refit stalls there).  rules : a MAC pairing's
-    ``PairingRules`` (None: every test mode is paired): test modes refused at the reference
-    design are left out and named in the result's ``pairing`` (``discovery_problem``).
+    reorders two close modes, and a refit stalls there); or a ``DiscoveryPairing`` (method,
+    rules, extra modes and the test modes' source numbers: a study's selection of modes).
+    rules : a MAC pairing's ``PairingRules`` (None: every test mode is paired; with a
+    ``DiscoveryPairing`` its own rules are used): test modes refused at the reference design
+    are left out and named in the result's ``pairing`` (``discovery_problem``).
     """
+    if isinstance(pairing, str):
+        pairing = DiscoveryPairing(pairing, rules)
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
     problem, effects, baseline, record = _prepare(
-        model, data, settings, parameters, baseline, (pairing, rules), say, executor
+        model, data, settings, parameters, baseline, pairing, say, executor
     )
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)

@@ -20,6 +20,8 @@ fields of ``settings.DiscoverySettings``' records):
    starts (the quick end point, and the box centre with the quick fit's effect value).  All
    are compared by Laplace evidence (quick fits keep their quick value, a lower bound in
    practice, and are marked ``stage: quick``); the best few also by PSIS-LOO;
+   Candidates that are one model (the same kind at one model node: two test points read on
+   one node) are scored and refitted once, each keeping its own name (``twins``).
 5. the verdict (``decide``):
 
    * ``explained``: the posterior log odds of the best candidate against the baseline,
@@ -97,6 +99,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
+from bayesupdate.inference.pairing import PairingRules
 from bayesupdate.inference.problem import build_problem
 
 
@@ -426,7 +429,7 @@ class DiscoveryPairing:
     mode k, so a selection such as GVT modes [1, 7, 10] must reach past model mode 3."""
 
     method: str = "auto"
-    rules: object = None
+    rules: PairingRules | None = None
     extra_modes: int = 2
     test_modes: tuple[int, ...] = ()
 
@@ -659,7 +662,7 @@ def _full_refits(
                 shared,
                 twins.twin_fit,
                 shown.progress_callback(),
-            )  # fmt: skip
+            )
         )
     fits.sort(key=lambda f: -f.log_evidence)
     return fits

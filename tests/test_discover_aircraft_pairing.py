@@ -186,3 +186,19 @@ def _with_sensor(structure, point: str, node: int):
     return dataclasses.replace(
         structure, sensor_labels=labels, sensor_node=nodes, sensor_direction=dirs
     )
+
+
+def test_flagged_modes_are_named_by_their_number_in_the_source():
+    """A study's selection of GVT modes 1, 7, 10 with the last two flagged: "7" and "10" (the
+    problem's 2 and 3 before), in the summary and the verdict's reason alike."""
+    from types import SimpleNamespace
+
+    from bayesupdate.discovery.flagging import ModeFlags
+    from bayesupdate.discovery.workflow import source_modes
+
+    flagged = np.array([False, True, True])
+    flags = ModeFlags(*(np.zeros(3),) * 4, flagged, 0.05, 9.0, 3, 0.03)
+    problem = SimpleNamespace(mode_numbers=np.array([1, 7, 10]))
+    fit = SimpleNamespace(space=SimpleNamespace(problem=problem))
+    assert flags.flagged_modes == [2, 3]
+    assert source_modes(flags, fit) == [7, 10]

@@ -168,6 +168,17 @@ def _within_noise(flags: ModeFlags, sigma: float, inferred: bool, s: VerdictThre
     )
 
 
+def source_modes(flags: ModeFlags, fit: ModelFit) -> list[int]:
+    """The flagged modes of ``flags`` by their number in the data source (a study's selection
+    of GVT modes 1, 7, 10 flags "7" and "10", not the problem's 2 and 3), from the problem
+    of ``fit``; the problem's own numbers where it has none."""
+    problem = getattr(getattr(fit, "space", None), "problem", None)
+    numbers = getattr(problem, "mode_numbers", None)
+    if numbers is None:
+        return flags.flagged_modes
+    return [int(numbers[i - 1]) for i in flags.flagged_modes]
+
+
 def _below_threshold(
     best: ModelFit,
     ln_bf: float,
@@ -192,7 +203,7 @@ def _below_threshold(
         )
     return (
         "unexplained",
-        f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
+        f"misfit remains (flagged modes {source_modes(flags, best)}) and no library effect "
         f"beats the baseline clearly (best {best.label}: {odds})",
         None,
         [],
@@ -285,8 +296,8 @@ def decide(
         return (
             "unexplained",
             f"{best.label} improves the fit (ln BF {ln_bf:.2f}) but misfit remains "
-            f"(modes {after.flagged_modes}, chi2 p {after.chi2_p:.2g}); nothing in the library "
-            "explains it all",
+            f"(modes {source_modes(after, best)}, chi2 p {after.chi2_p:.2g}); nothing in the "
+            "library explains it all",
             None,
             [],
         )
@@ -788,7 +799,7 @@ def discover(
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)
     flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)
-    say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
+    say(f"flagged modes {source_modes(flags, base_fit)}; scanning {len(effects)} candidates")
     with _stopwatch(timings, "localization_s"):
         where = _localize(model, effects, base_fit, baseline, flags, settings, executor)
     with _stopwatch(timings, "refits_s"):

@@ -73,13 +73,14 @@ from scipy.special import logsumexp
 from bayesupdate.compute.progress import phase
 from bayesupdate.discovery import twins
 from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
-from bayesupdate.discovery.effects import Effect
+from bayesupdate.discovery.effects import EFFECT_KINDS, Effect, si_per_model_unit
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
 from bayesupdate.discovery.flagging import ModeFlags, ShapeTests, flag_modes
 from bayesupdate.discovery.localization import (
     CANDIDATES_PHASE,
     Localization,
     candidate_problem,
+    full_model,
     localize,
     score_candidate,
     score_task,
@@ -149,10 +150,17 @@ class DiscoveryResult:
 
     @property
     def effects(self) -> list[str]:
-        """Spec list of the extended model (empty when nothing was named)."""
+        """Spec list of the extended model (empty when nothing was named); values in SI, as a
+        spec is read (the fit's are in the model's units: a deck's own)."""
         if self.named is None:
             return []
-        return [Effect(self.named.kind, self.named.location, self.named.effect_parameters).spec()]
+        model = full_model(self.baseline.space.problem.model)
+        units = {p.name: p.unit for p in EFFECT_KINDS[self.named.kind].parameters}
+        values = {
+            k: v * si_per_model_unit(model, units[k])
+            for k, v in self.named.effect_parameters.items()
+        }
+        return [Effect(self.named.kind, self.named.location, values).spec()]
 
     @property
     def final(self) -> ModelFit:

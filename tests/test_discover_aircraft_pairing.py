@@ -123,8 +123,8 @@ def test_a_candidate_takes_over_the_decks_line_records_and_solves_as_if_found_ag
 
 @pytest.mark.slow
 def test_two_test_points_on_one_node_are_one_candidate_for_the_deck(tmp_path, modes_h5):
-    """On v3.3 the GVT's accelerometers 17 and 18 (leading and trailing edge) read on one
-    beam node (``effects.effect_site``): one extended model; 17 and 15 do not."""
+    """On v3.3 the GVT's accelerometers 17 and 18 read on one beam node
+    (``effects.effect_site``): one extended model; 17 and 15 do not."""
     from bayesupdate.config import load_study
     from bayesupdate.discovery.effects import Effect, effect_site
     from bayesupdate.pipelines.model_source import study_model

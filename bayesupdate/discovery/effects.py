@@ -368,7 +368,7 @@ def model_parameters(model: FEModel, kind: str) -> tuple[EffectParameter, ...]:
 
 
 #: kinds placed at the model node of a sensor point (``_sensor_node``): two test points read
-#: on one node (e.g. a leading- and a trailing-edge accelerometer paired with one beam node)
+#: on one node (e.g. the mAEWing1's accelerometers 17 and 18, on one beam node of v3.3)
 #: give one and the same extended model
 _AT_SENSOR_NODE = ("added_mass", "boundary_spring")
 

@@ -2,8 +2,8 @@
 
 Two library effects can extend the model into the same structure: an added mass or a ground
 spring is placed at the model node of a test point (``effects.effect_site``), and test points
-read on one node (the mAEWing1's leading- and trailing-edge accelerometers, paired with one
-beam node each) give one model under two names.  Their score tests and refits are then the
+read on one node (the mAEWing1's accelerometers 1/2, 3/4, ..., 19/20: each pair reads on one
+beam node of v3.3) give one model under two names.  Their score tests and refits are then the
 same computation, so each is made once, for the first candidate of its site, and its result
 is given to the others under their own names (``twin_score``, ``twin_fit``).  Nothing else
 changes: every name stays a candidate of the scan (its count sets the prior odds), is ranked,

@@ -26,8 +26,11 @@ by Laplace evidence (Bayes factors vs the baseline) and PSIS-LOO, and a verdict:
 
 --json prints {"verdict", "flagged_modes", "named_effect": {"kind", "location", "parameters"},
 "candidates": [{"kind", "location", "log_evidence", "loo", ...}], "gap_before", "gap_after",
-...} (gaps: seed eq. 19 Expr).  Noise: the data's frequency sd when given, else --sigma, else
-inferred from the frequency-only baseline's residuals (robust), and held fixed.  When the data
+...} (gaps: seed eq. 19 Expr; flagged_modes: test modes by their number in the data source,
+a study's [data] modes selection included; an effect's parameters in the model's units: a
+Nastran deck's own, e.g. lbf s^2/in for a mass, while --effect specs are SI).  Noise: the
+data's frequency sd when given, else --sigma, else inferred from the frequency-only baseline's
+residuals (robust), and held fixed.  When the data
 have mode shapes (an identified test, paired by MAC), each mode's shape residual is evidence too,
 at a level fixed the same way: its stated sd (identification estimates one; floored at 1 %),
 raised to its misfit at the baseline where that misfit rejects it, so no single mode can drag the

@@ -18,7 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.discovery.effects import EFFECT_KINDS, Effect, effect_locations, extend_model
+from bayesupdate.discovery.effects import (
+    EFFECT_KINDS,
+    Effect,
+    effect_locations,
+    extend_model,
+    model_parameters,
+)
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
@@ -45,11 +51,10 @@ NULL_VALUES: dict[str, Callable] = {
 
 def null_values(model, effect: Effect) -> dict[str, float]:
     """Null value of each effect parameter, clipped into its bounds."""
-    kind = EFFECT_KINDS[effect.kind]
     given = NULL_VALUES.get(effect.kind)
     values = given(model, effect.location) if given else {}
     out = {}
-    for p in kind.parameters:
+    for p in model_parameters(model, effect.kind):
         v = values.get(p.name, p.bounds[0])
         out[p.name] = float(np.clip(v, *p.bounds))
     return out
@@ -82,10 +87,9 @@ class Candidate:
 def make_candidate(model, effect: Effect) -> Candidate:
     """Extend ``model`` by ``effect`` and describe the effect's parameters."""
     extended = extend_model(model, effect)
-    kind = EFFECT_KINDS[effect.kind]
     nulls = null_values(model, effect)
     axes = []
-    for p in kind.parameters:
+    for p in model_parameters(model, effect.kind):  # in the model's units (a deck's own)
         full = f"{effect.tag}:{p.name}"
         prior = prior_from_mapping(p.prior, p.bounds, full)
         axes.append(ParameterSpec(full, p.bounds, prior, nulls[p.name]))

@@ -32,7 +32,7 @@ A user adds a kind with ``register_effect_kind``.  Extended models name their ex
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -324,9 +324,68 @@ def effect_locations(model: FEModel, kind: str) -> list[str]:
     return list(EFFECT_KINDS[kind].locations(model))
 
 
+#: SI unit of an effect parameter -> its dimension (mass, length) exponents; time is in s in
+#: every consistent unit system a deck uses
+_DIMENSIONS = {"kg": (1, 0), "N/m": (1, 0), "N m/rad": (1, 2)}
+
+
+def si_per_model_unit(model: FEModel, unit: str) -> float:
+    """SI value of one model unit of an effect parameter whose SI unit is ``unit`` ("kg",
+    "N/m", "N m/rad"; 1 for a factor): a Nastran deck's own units (its ``units`` record, e.g.
+    lbf s^2/in: 175.1 kg; lbf/in: 175.1 N/m), 1 for a built-in model (SI) or a deck whose
+    units are not recognised."""
+    from bayesupdate.inference.mass_properties import model_units
+
+    record = model.structure.metadata.get("nastran", {}).get("units")
+    if record is None or unit not in _DIMENSIONS:
+        return 1.0
+    units = model_units(record)
+    mass, length = units.factor("mass"), units.factor("length")
+    if mass is None or length is None:
+        return 1.0
+    a, b = _DIMENSIONS[unit]
+    return float(mass**a * length**b)
+
+
+def model_parameters(model: FEModel, kind: str) -> tuple[EffectParameter, ...]:
+    """The parameters of effect ``kind`` in ``model``'s units: the library's SI defaults,
+    bounds and prior (a lognormal's median) divided by ``si_per_model_unit``.  On the
+    mAEWing1 deck (lbf s^2/in) a point mass of 0-2 kg is 0-0.0114 lbf s^2/in; taken as deck
+    units, the same numbers would allow 350 kg and widen the prior, and so lower every
+    candidate's evidence, by ln 175 = 5.2."""
+    out = []
+    for p in EFFECT_KINDS[kind].parameters:
+        f = 1.0 / si_per_model_unit(model, p.unit)
+        if f == 1.0:
+            out.append(p)
+            continue
+        prior = dict(p.prior)
+        if prior.get("kind") == "lognormal":
+            prior["mu"] = float(prior["mu"]) + float(np.log(f))
+        bounds = (p.bounds[0] * f, p.bounds[1] * f)
+        out.append(replace(p, default=p.default * f, bounds=bounds, prior=prior))
+    return tuple(out)
+
+
+#: kinds placed at the model node of a sensor point (``_sensor_node``): two test points read
+#: on one node (e.g. the mAEWing1's accelerometers 17 and 18, on one beam node of v3.3)
+#: give one and the same extended model
+_AT_SENSOR_NODE = ("added_mass", "boundary_spring")
+
+
+def effect_site(model: FEModel, effect: Effect) -> tuple:
+    """(kind, where it acts): equal for two effects whose extended models are the same
+    structure up to the names of the effect's part and parameters (the same kind at one model
+    node); a kind placed elsewhere acts at its location (every location its own)."""
+    if effect.kind in _AT_SENSOR_NODE:
+        return effect.kind, "node", _sensor_node(model, effect.location)
+    return effect.kind, "location", effect.location
+
+
 def extend_model(model: FEModel, effect: Effect) -> FEModel:
     """``model`` with ``effect`` added: new parameters ``KIND@LOCATION:NAME`` whose defaults are
-    the effect's given values (else the kind's defaults) and whose bounds are the kind's."""
+    the effect's given values (else the kind's defaults) and whose bounds are the kind's, in
+    the model's units (``model_parameters``: a deck's own)."""
     if effect.kind not in EFFECT_KINDS:
         raise BayesUpdateError(
             f"unknown effect kind {effect.kind!r}; kinds: {sorted(EFFECT_KINDS)}"
@@ -339,10 +398,12 @@ def extend_model(model: FEModel, effect: Effect) -> FEModel:
         )
     structure, short_bindings = kind.extend(model, effect.location, effect.tag)
     bindings, defaults, bounds = {}, {}, {}
-    for p in kind.parameters:
+    for p in model_parameters(model, effect.kind):
         full = f"{effect.tag}:{p.name}"
         bindings[full] = short_bindings[p.name]
-        defaults[full] = float(effect.parameters.get(p.name, p.default))
+        given = effect.parameters.get(p.name)  # SI, as the spec says
+        si = si_per_model_unit(model, p.unit)
+        defaults[full] = float(p.default if given is None else given / si)
         bounds[full] = p.bounds
     return model.with_structure(
         structure, bindings, defaults, bounds, name=f"{model.name}+{effect.tag}"

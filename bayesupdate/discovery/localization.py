@@ -88,13 +88,17 @@ def candidate_problem(baseline_problem, design_theta, candidate: Candidate):
         )
         + candidate.axes
     )
+    # the same test modes (source numbers) and model modes as the baseline's: a candidate
+    # pairs what the baseline pairs
+    numbers = baseline_problem.mode_numbers
     return build_problem(
         candidate.model,
         baseline_problem.data,
         specs,
         pairing=baseline_problem.pairing.method,
-        extra_modes=baseline_problem.pairing.n_model - baseline_problem.pairing.n_test,
+        extra_modes=baseline_problem.pairing.n_model - int(numbers.max()),
         objective=baseline_problem.objective,
+        test_modes=tuple(int(n) for n in numbers),
     )
 
 
@@ -269,7 +273,7 @@ def shape_comac(problem, theta, evaluation) -> dict:
     return dict(zip(data.dof_labels, map(float, values), strict=True))
 
 
-def _score_task(shared, candidate):
+def score_task(shared, candidate):
     """``score_candidate`` of one candidate (an executor task; shared: the baseline problem,
     design theta, design Jacobian and residuals_fn)."""
     return score_candidate(*shared, candidate)
@@ -294,7 +298,7 @@ def localize(
     if scored is None:
         with phase(CANDIDATES_PHASE, len(candidates), "candidates") as shown:
             scored = executor_or_serial(executor).map(
-                _score_task, candidates, shared, shown.progress_callback()
+                score_task, candidates, shared, shown.progress_callback()
             )
     scores = list(scored)
     scores.sort(key=lambda s: -s.delta_chi2)

@@ -102,7 +102,10 @@ def _shape_noise_summary(fit) -> dict | None:
 
 def discovery_summary(result) -> dict:
     """The summary of a ``workflow.DiscoveryResult``:
-    stored as the result file's ``summary_json`` and printed by ``discover --json``."""
+    stored as the result file's ``summary_json`` and printed by ``discover --json``
+    (``flagged_modes``: the flagged test modes by their number in the data source)."""
+    from bayesupdate.discovery.workflow import source_modes
+
     scores = {s.label: s.delta_chi2 for s in result.localization.scores}
     probability = np.exp(result.log_posterior_probabilities())
     named, final, baseline = result.named, result.final, result.baseline
@@ -114,7 +117,7 @@ def discovery_summary(result) -> dict:
         } | ({} if named.model_error is None else {"model_error": float(named.model_error)})
     return {
         "verdict": result.verdict,
-        "flagged_modes": result.flags.flagged_modes,
+        "flagged_modes": source_modes(result.flags, result.baseline),
         "named_effect": named,
         "candidates": [
             _candidate_summary(result, f, probability[k + 1], scores.get(f.label, np.nan))

@@ -20,6 +20,8 @@ fields of ``settings.DiscoverySettings``' records):
    starts (the quick end point, and the box centre with the quick fit's effect value).  All
    are compared by Laplace evidence (quick fits keep their quick value, a lower bound in
    practice, and are marked ``stage: quick``); the best few also by PSIS-LOO;
+   Candidates that are one model (the same kind at one model node: two test points read on
+   one node) are scored and refitted once, each keeping its own name (``twins``).
 5. the verdict (``decide``):
 
    * ``explained``: the posterior log odds of the best candidate against the baseline,
@@ -68,18 +70,20 @@ import numpy as np
 from scipy import stats
 from scipy.special import logsumexp
 
-from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
+from bayesupdate.discovery import twins
 from bayesupdate.discovery.candidates import Candidate, enumerate_effects, make_candidate
-from bayesupdate.discovery.effects import Effect
+from bayesupdate.discovery.effects import EFFECT_KINDS, Effect, si_per_model_unit
 from bayesupdate.discovery.evidence import FitSpace, ModelFit, fit_model, laplace_loo
 from bayesupdate.discovery.flagging import ModeFlags, ShapeTests, flag_modes
 from bayesupdate.discovery.localization import (
     CANDIDATES_PHASE,
     Localization,
     candidate_problem,
+    full_model,
     localize,
     score_candidate,
+    score_task,
     screen_grid,
 )
 from bayesupdate.discovery.reduced_candidates import (
@@ -96,6 +100,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.likelihood_blocks import NoiseModel, noise_model, relative_errors
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
+from bayesupdate.inference.pairing import PairingRules
 from bayesupdate.inference.problem import build_problem
 
 
@@ -145,10 +150,17 @@ class DiscoveryResult:
 
     @property
     def effects(self) -> list[str]:
-        """Spec list of the extended model (empty when nothing was named)."""
+        """Spec list of the extended model (empty when nothing was named); values in SI, as a
+        spec is read (the fit's are in the model's units: a deck's own)."""
         if self.named is None:
             return []
-        return [Effect(self.named.kind, self.named.location, self.named.effect_parameters).spec()]
+        model = full_model(self.baseline.space.problem.model)
+        units = {p.name: p.unit for p in EFFECT_KINDS[self.named.kind].parameters}
+        values = {
+            k: v * si_per_model_unit(model, units[k])
+            for k, v in self.named.effect_parameters.items()
+        }
+        return [Effect(self.named.kind, self.named.location, values).spec()]
 
     @property
     def final(self) -> ModelFit:
@@ -162,6 +174,17 @@ def _within_noise(flags: ModeFlags, sigma: float, inferred: bool, s: VerdictThre
     return not flags.flagged_modes and (
         sigma <= s.max_noise_rel if inferred else flags.chi2_p > s.adequacy_p
     )
+
+
+def source_modes(flags: ModeFlags, fit: ModelFit) -> list[int]:
+    """The flagged modes of ``flags`` by their number in the data source (a study's selection
+    of GVT modes 1, 7, 10 flags "7" and "10", not the problem's 2 and 3), from the problem
+    of ``fit``; the problem's own numbers where it has none."""
+    problem = getattr(getattr(fit, "space", None), "problem", None)
+    numbers = getattr(problem, "mode_numbers", None)
+    if numbers is None:
+        return flags.flagged_modes
+    return [int(numbers[i - 1]) for i in flags.flagged_modes]
 
 
 def _below_threshold(
@@ -188,7 +211,7 @@ def _below_threshold(
         )
     return (
         "unexplained",
-        f"misfit remains (flagged modes {flags.flagged_modes}) and no library effect "
+        f"misfit remains (flagged modes {source_modes(flags, best)}) and no library effect "
         f"beats the baseline clearly (best {best.label}: {odds})",
         None,
         [],
@@ -281,8 +304,8 @@ def decide(
         return (
             "unexplained",
             f"{best.label} improves the fit (ln BF {ln_bf:.2f}) but misfit remains "
-            f"(modes {after.flagged_modes}, chi2 p {after.chi2_p:.2g}); nothing in the library "
-            "explains it all",
+            f"(modes {source_modes(after, best)}, chi2 p {after.chi2_p:.2g}); nothing in the "
+            "library explains it all",
             None,
             [],
         )
@@ -412,9 +435,34 @@ def check_enough_modes(problem, n_extra: int = 1) -> None:
         )
 
 
-def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None):
+@dataclass(frozen=True)
+class DiscoveryPairing:
+    """How discovery pairs the test modes, as ``calibrate`` does (``pipelines.study.prepare``).
+
+    method : "auto" | "mac" | "order" | "tracked" ("auto": ``discover`` says how it resolves).
+    rules : a MAC pairing's ``inference.pairing.PairingRules`` (the study's ``[pairing]``; None:
+    every test mode is paired).  extra_modes : model modes computed beyond the highest test mode
+    (the study's ``[pairing] extra_modes``), >= 0.  test_modes : (m,) 1-based number of each
+    test mode of the data in its source (a study's ``[data] modes``; () : 1..m).  The model
+    computes up to mode max(test_modes) + extra_modes: test mode k of a source lies near model
+    mode k, so a selection such as GVT modes [1, 7, 10] must reach past model mode 3."""
+
+    method: str = "auto"
+    rules: PairingRules | None = None
+    extra_modes: int = 2
+    test_modes: tuple[int, ...] = ()
+
+    def __post_init__(self):
+        if int(self.extra_modes) < 0:
+            raise BayesUpdateError(f"pairing.extra_modes: {self.extra_modes}; must be >= 0")
+
+
+def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None, **choice):
     """(calibration problem, pairing record): the problem discovery calibrates and compares
-    its candidates on, set up with one reference solve (``inference.problem.build_problem``).
+    its candidates on, set up with one reference solve (``inference.problem.build_problem``,
+    with the test modes' source numbers and extra modes of ``DiscoveryPairing``: ``choice``
+    holds its ``extra_modes`` and ``test_modes``), so that discovery pairs what ``calibrate``
+    and ``correlate`` pair on the same study.
 
     ``pairing`` "auto" is resolved as ``discover`` says.  A MAC pairing with ``rules``
     (``inference.pairing.PairingRules``: the study's ``[pairing]``) refuses, at the reference
@@ -423,9 +471,14 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
     problems (``localization.candidate_problem``) pair without a frequency window, so the
     baseline's drops it too: both sides of every Bayes factor pair alike.  The record is {}
     when no rules applied (no rules, no test shapes, or a pairing other than MAC)."""
-    if pairing == "auto":
-        pairing = "mac" if data.shapes is not None else "order"
-    problem = build_problem(model, data, parameters, pairing=pairing, rules=rules)
+    choice = DiscoveryPairing(pairing, rules, **choice)
+    method = choice.method
+    if method == "auto":
+        method = "mac" if data.shapes is not None else "order"
+    problem = build_problem(
+        model, data, parameters, pairing=method, extra_modes=choice.extra_modes, rules=rules,
+        test_modes=tuple(choice.test_modes),
+    )  # fmt: skip
     if problem.pairing.rules is None:
         return problem, {}
     record = problem.pairing.to_dict()
@@ -436,12 +489,15 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
 def _prepare(
     model, data, settings: DiscoverySettings, parameters, baseline, pairing, say, executor
 ) -> tuple[object, list, object, dict]:
-    """The calibration problem and its pairing record (``discovery_problem``; ``pairing``:
-    (method, rules); on the design variables' certified basis for a large model,
+    """The calibration problem and its pairing record (``discovery_problem``; ``pairing``: a
+    ``DiscoveryPairing``); on the design variables' certified basis for a large model,
     ``reduced_candidates``), the library's effects and the baseline ``CalibrationResult``
     (calibrated here from ``baseline_starts`` starts, seeded by ``seed``, on ``executor``, when
     none is given)."""
-    problem, record = discovery_problem(model, data, parameters, *pairing)
+    problem, record = discovery_problem(
+        model, data, parameters, pairing.method, pairing.rules,
+        extra_modes=pairing.extra_modes, test_modes=pairing.test_modes,
+    )  # fmt: skip
     check_enough_modes(problem)
     if use_reduced(model):
         say("certified reduced basis of the design variables")
@@ -513,7 +569,13 @@ def _localize(
         scored = _reduced_scores(model, effects, args, settings)
         return localize(*args, [], model_modes, flags.flagged, scored=scored)
     candidates: list[Candidate] = [make_candidate(model, e) for e in effects]
-    return localize(*args, candidates, model_modes, flags.flagged, executor)
+    # candidates that are one model (``twins``) are scored once
+    with phase(CANDIDATES_PHASE, twins.count_once(candidates), "candidates") as shown:
+        scored = twins.map_once(
+            executor, score_task, candidates, candidates, args, twins.twin_score,
+            shown.progress_callback(),
+        )  # fmt: skip
+    return localize(*args, [], model_modes, flags.flagged, scored=scored)
 
 
 def _reduced_scores(model, effects: list, args: tuple, settings: DiscoverySettings) -> list:
@@ -575,10 +637,12 @@ def _quick_refits(
     each ``quick_nfev`` iterations from its best ``_candidate_starts`` start, best evidence
     first (fits on ``executor``)."""
     chosen = _select(scores, settings)
-    with phase("discovery: quick refits", len(chosen), "fits") as shown:
-        fits = executor_or_serial(executor).map(
-            _quick_refit, chosen, (base_fit, settings), shown.progress_callback()
-        )
+    candidates = [score.candidate for score in chosen]
+    with phase("discovery: quick refits", twins.count_once(candidates), "fits") as shown:
+        fits = twins.map_once(
+            executor, _quick_refit, chosen, candidates, (base_fit, settings), twins.twin_fit,
+            shown.progress_callback(),
+        )  # fmt: skip
     quick = list(zip(fits, chosen, strict=True))
     quick.sort(key=lambda item: -item[0].log_evidence)
     return quick
@@ -604,11 +668,20 @@ def _full_refits(
     (on ``executor``); the rest keep their quick fit.  All fits, best evidence first."""
     shared = (_box_centre(base_fit.space.problem), len(base_fit.space.axes), settings)
     best = [fit for fit, _ in quick[: settings.refit.max_refits]]
+    candidates = [score.candidate for _, score in quick[: settings.refit.max_refits]]
     say("full refits: " + ", ".join(fit.label for fit in best))
     fits = [f for f, _ in quick[settings.refit.max_refits :]]
-    with phase("discovery: full refits", len(best), "fits") as shown:
+    with phase("discovery: full refits", twins.count_once(candidates), "fits") as shown:
         fits.extend(
-            executor_or_serial(executor).map(_full_refit, best, shared, shown.progress_callback())
+            twins.map_once(
+                executor,
+                _full_refit,
+                best,
+                candidates,
+                shared,
+                twins.twin_fit,
+                shown.progress_callback(),
+            )
         )
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
@@ -700,7 +773,7 @@ def discover(
     settings: DiscoverySettings | None = None,
     parameters=None,
     baseline=None,
-    pairing: str = "auto",
+    pairing: "str | DiscoveryPairing" = "auto",
     predictive_rel_var: np.ndarray | None = None,
     progress=None,
     executor=None,
@@ -718,19 +791,23 @@ def discover(
     pairing : "auto" pairs by MAC when the test has shapes and *by order* otherwise (sorted test
     frequencies against the model's sorted ones: the honest likelihood without shapes; shape
     tracking, the calibration default, puts a wall in the objective where a hidden effect
-    reorders two close modes, and a refit stalls there).  rules : a MAC pairing's
-    ``PairingRules`` (None: every test mode is paired): test modes refused at the reference
-    design are left out and named in the result's ``pairing`` (``discovery_problem``).
+    reorders two close modes, and a refit stalls there); or a ``DiscoveryPairing`` (method,
+    rules, extra modes and the test modes' source numbers: a study's selection of modes).
+    rules : a MAC pairing's ``PairingRules`` (None: every test mode is paired; with a
+    ``DiscoveryPairing`` its own rules are used): test modes refused at the reference design
+    are left out and named in the result's ``pairing`` (``discovery_problem``).
     """
+    if isinstance(pairing, str):
+        pairing = DiscoveryPairing(pairing, rules)
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
     problem, effects, baseline, record = _prepare(
-        model, data, settings, parameters, baseline, (pairing, rules), say, executor
+        model, data, settings, parameters, baseline, pairing, say, executor
     )
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)
     flags = _flag_baseline(base_fit, baseline, predictive_rel_var, settings)
-    say(f"flagged modes {flags.flagged_modes}; scanning {len(effects)} candidates")
+    say(f"flagged modes {source_modes(flags, base_fit)}; scanning {len(effects)} candidates")
     with _stopwatch(timings, "localization_s"):
         where = _localize(model, effects, base_fit, baseline, flags, settings, executor)
     with _stopwatch(timings, "refits_s"):

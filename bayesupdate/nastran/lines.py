@@ -77,6 +77,13 @@ class LineRebuild:
         self._base = None
 
     @property
+    def probe0(self):
+        """The bound elements re-built at the deck's values (``structure_at(None)``), once."""
+        if getattr(self, "_probe0", None) is None:
+            self._probe0 = self.structure_at(None)
+        return self._probe0
+
+    @property
     def base(self) -> tuple[np.ndarray, np.ndarray]:
         """(K, M) (nnz,) of the bound elements at the deck's values."""
         if self._base is None:
@@ -264,6 +271,44 @@ def _same_layout(structure, probe, rows) -> bool:
     )
 
 
+def _matched_rows(s, probe0) -> tuple | str:
+    """The rows of the probe's (``LineRebuild.structure_at(None)``) elements in the structure
+    ``s`` (``_bound_rows``), checked: same layout and the same values as read from the deck;
+    else the reason they are not."""
+    rows = _bound_rows(s, probe0)
+    if rows is None or not _same_layout(s, probe0, rows):
+        return "the re-built elements do not match the read ones one to one"
+    read = dict(beam=s.general_beams, rod=s.rods,
+                mass=PointMassValues(s.mass_value, s.mass_inertia))  # fmt: skip
+    for f, r in zip(("beam", "rod", "mass"), rows, strict=True):
+        if r.size and any(
+            not np.array_equal(getattr(_rows(read[f], r), x), getattr(_values(probe0, f), x))
+            for x in _fields(f)
+        ):
+            return "the re-built elements' values differ from the read ones"
+    return rows
+
+
+def reused_fields(known: LineFields, probe0, g) -> "LineFields | None":
+    """``known`` (the ``LineFields`` of the same deck and bindings on another structure, e.g.
+    the model before an effect was added) on the assembler ``g`` of an extended structure, or
+    None when ``line_fields`` could find other ones there: the bound elements must sit at the
+    same rows with the same layout and deck values (``_matched_rows`` against ``probe0``, the
+    bound elements re-built at the deck's values).  The records, slopes and cross terms depend
+    only on the bound cards and those elements, so they are the ones ``line_fields`` would find
+    again (six re-builds of the cards, ~0.1 s each on the mAEWing1 deck); only the positions
+    in the new pattern (``LineUpdate``) are new.  An effect appends masses, springs or
+    elements of its own, so this holds for the discovery library's candidates."""
+    rows = _matched_rows(g.structure, probe0)
+    if isinstance(rows, str):
+        return None
+    if any(not np.array_equal(a, b) for a, b in zip(rows, (known.beams, known.rods,
+                                                          known.masses), strict=True)):  # fmt: skip
+        return None
+    update = LineUpdate(g, beams=rows[0], rods=rows[1], masses=rows[2])
+    return replace(known, update=update)
+
+
 def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields | None", str]:
     """(``LineFields`` of the bound elements, "") or (None, the reason) when their records are
     not affine in the parameters (then ``LineRebuild`` re-converts the cards at every solve).
@@ -273,20 +318,10 @@ def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields 
     theta0 = np.array([float(defaults[n]) for n in names])
     low, high = (np.array([float(bounds[n][k]) for n in names]) for k in (0, 1))
     s = g.structure
-    probe0 = rebuild.structure_at(None)
-    rows = _bound_rows(s, probe0)
-    if rows is None or not _same_layout(s, probe0, rows):
-        return None, "the re-built elements do not match the read ones one to one"
+    rows = _matched_rows(s, rebuild.probe0)
+    if isinstance(rows, str):
+        return None, rows
     families = [f for f, r in zip(("beam", "rod", "mass"), rows, strict=True) if r.size]
-    rec0 = {f: _values(probe0, f) for f in families}
-    read = dict(beam=s.general_beams, rod=s.rods,
-                mass=PointMassValues(s.mass_value, s.mass_inertia))  # fmt: skip
-    for f, r in zip(("beam", "rod", "mass"), rows, strict=True):
-        if f in families and any(
-            not np.array_equal(getattr(_rows(read[f], r), x), getattr(rec0[f], x))
-            for x in _fields(f)
-        ):
-            return None, "the re-built elements' values differ from the read ones"
     # the records at theta0 anchor the slopes: an absolute value bound on cards whose deck
     # values differ (one I1 for seven PBEAMs) writes theta0 into all of them, not the deck's
     at0 = rebuild.structure_at(dict(zip(names, theta0, strict=True)))
@@ -436,9 +471,12 @@ class LineAssembler(GeneralAssembler):
 
     fast : False keeps ``LineRebuild`` at every solve (the reference, for checks).  The
     ``LineFields`` are found at the first point away from the deck's values (a ``modes`` run at
-    the deck's values converts nothing again)."""
+    the deck's values converts nothing again).  known : the ``LineAssembler`` of the same deck
+    and bindings on the structure this one extends (``NastranModel.with_structure``): its
+    ``LineFields`` are taken over where they hold (``reused_fields``), not found again."""
 
-    def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True):
+    def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True,
+                 known=None):  # fmt: skip
         super().__init__(structure, shell_keys)
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
         # not ``lines``: that is the base class's list of line-element matrices (``fe.energy``)
@@ -446,11 +484,17 @@ class LineAssembler(GeneralAssembler):
         self.values = None
         self._box = (defaults, bounds)
         self._fields = None if fast else (None, "the reference path was asked for")
+        self._known = known if fast and _same_box(known, self.rebuild, self._box) else None
 
     @property
     def fields(self) -> "LineFields | None":
         """The bound elements' ``LineFields``; None when their records are not affine in the
         parameters (``fields_note`` says why) or the reference path was asked for."""
+        if self._fields is None and self._known is not None and self._known.fields is not None:
+            known = self._known.rebuild.probe0
+            reused = reused_fields(self._known.fields, known, self)
+            self._fields = None if reused is None else (reused, "")
+        self._known = None  # taken over or not: the other model is not held
         if self._fields is None:
             self._fields = line_fields(self, self.rebuild, *self._box)
         return self._fields[0]
@@ -483,6 +527,21 @@ class LineAssembler(GeneralAssembler):
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM
         return K, M, elem
+
+
+def _same_box(known, rebuild: LineRebuild, box) -> bool:
+    """``known`` (a ``LineAssembler`` or None) reads the same deck with the same line bindings:
+    the same bound fields (in the same order, with their coefficients, deck values and
+    elements), defaults and bounds."""
+    if known is None or known.rebuild.deck is not rebuild.deck:
+        return False
+
+    def key(assembler_bindings, defaults, bounds):
+        return [(n, b.field, b.coefficient, tuple(b.nominal), tuple(b.lines),
+                 float(defaults[n]), tuple(map(float, bounds[n])))
+                for n, b in assembler_bindings.items()]  # fmt: skip
+
+    return key(rebuild.bindings, *box) == key(known.rebuild.bindings, *known._box)  # noqa: SLF001
 
 
 @dataclass(frozen=True, eq=False)

@@ -32,7 +32,10 @@ class NastranModel(FEModel):
     #: mAEWing1 deck's 354 (``fe.eigen_small``; ``benchmarks/deck_eigen_routes.py``)
     small_method = "krylov"
 
-    def __init__(self, structure, bindings, defaults, bounds, name="deck", deck="", bdf=None):
+    def __init__(self, structure, bindings, defaults, bounds, name="deck", deck="", bdf=None,
+                 lines_from=None):  # fmt: skip
+        """``lines_from``: the ``LineAssembler`` of the model this one extends
+        (``with_structure``), whose line records are taken over where they hold."""
         self.deck, self.bdf = str(deck), bdf
         super().__init__(structure, bindings, defaults, bounds, name=name)
         if any(getattr(b, "lines", ()) for b in self.bindings.values()):
@@ -46,6 +49,7 @@ class NastranModel(FEModel):
                 self.deck,
                 self._defaults,
                 self._bounds,
+                known=lines_from,
             )
             self._assembler = self._general.beams
 
@@ -219,9 +223,13 @@ class NastranModel(FEModel):
         b.update(bindings or {})
         d = dict(self._defaults, **(defaults or {}))
         bo = dict(self._bounds, **(bounds or {}))
-        return NastranModel(
-            structure, b, d, bo, name=name or self.name, deck=self.deck, bdf=self.bdf
-        )
+        from bayesupdate.nastran.lines import LineAssembler
+
+        # an effect leaves the deck's bound line elements as they are: their records are
+        # not found again for each candidate (``lines.reused_fields`` checks that they hold)
+        known = self._general if isinstance(self._general, LineAssembler) else None
+        return NastranModel(structure, b, d, bo, name=name or self.name, deck=self.deck,
+                            bdf=self.bdf, lines_from=known)  # fmt: skip
 
 
 def _without(share: np.ndarray, mass: float, cog) -> tuple[float, np.ndarray]:

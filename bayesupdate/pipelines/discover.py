@@ -12,7 +12,7 @@ from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
 from bayesupdate.config import StudyConfig
 from bayesupdate.discovery.results_io import extend_with_specs
 from bayesupdate.discovery.settings import DiscoverySettings
-from bayesupdate.discovery.workflow import DiscoveryResult, discover
+from bayesupdate.discovery.workflow import DiscoveryPairing, DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data, select_modes
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
@@ -47,6 +47,15 @@ class DiscoveryRun:
     pairing: dict = field(default_factory=dict)
 
 
+def study_pairing(study: StudyConfig, numbers: tuple[int, ...]) -> DiscoveryPairing:
+    """The study's ``[pairing]`` (method, rules, extra modes) with the source numbers of its
+    selected test modes (``inference.data.select_modes``): the pairing ``calibrate`` builds
+    (``pipelines.study.prepare``), so discover pairs the modes that calibrate and correlate
+    pair on the same study file."""
+    cfg = study.pairing
+    return DiscoveryPairing(cfg.method, cfg.rules(), cfg.extra_modes, tuple(numbers))
+
+
 def discover_study(
     study: StudyConfig,
     request: DiscoveryRequest = DiscoveryRequest(),
@@ -54,7 +63,7 @@ def discover_study(
 ) -> DiscoveryRun:
     """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
     cfg = study.data
-    data, _ = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
+    data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
     if not hasattr(model, "structure"):
         raise BayesUpdateError(
@@ -69,10 +78,9 @@ def discover_study(
             data,
             request.settings,
             parameters=problem_parameters(study.parameters) or None,
-            pairing=study.pairing.method,
+            pairing=study_pairing(study, numbers),
             progress=progress,
             executor=executor,
-            rules=study.pairing.rules(),
         )
     posterior = None
     if request.posterior_steps > 0:

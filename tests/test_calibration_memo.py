@@ -34,7 +34,7 @@ def first():
     search, rom = sampling_problem(prepared.problem, None)
     settings = pipeline.CalibrationSettings(starts=2, seed=0, polish=False)
     run = pipeline.calibrate_on_exact_basis(prepared.problem, search, rom, settings)
-    return prepared, rom, run, memo.memo_key(prepared.problem, rom, settings), settings
+    return prepared, rom, run, memo.memo_key(prepared.problem, rom.tol, settings), settings
 
 
 def test_a_kept_calibration_is_recalled_with_the_same_full_numbers(first, tmp_path):
@@ -56,11 +56,19 @@ def test_a_kept_calibration_is_recalled_with_the_same_full_numbers(first, tmp_pa
 
 def test_other_data_or_settings_is_another_entry(first):
     prepared, rom, _, key, settings = first
-    assert memo.memo_key(prepared.problem, rom, settings) == key
-    assert memo.memo_key(prepared.problem, rom, replace(settings, seed=1)) != key
+    assert memo.memo_key(prepared.problem, rom.tol, settings) == key
+    assert memo.memo_key(prepared.problem, rom.tol, replace(settings, seed=1)) != key
+    assert memo.memo_key(prepared.problem, 2 * rom.tol, settings) != key
     data = prepared.problem.data
     moved = replace(data, frequencies_hz=data.frequencies_hz * (1 + 1e-6))
-    assert memo.memo_key(replace(prepared.problem, data=moved), rom, settings) != key
+    assert memo.memo_key(replace(prepared.problem, data=moved), rom.tol, settings) != key
+
+
+def test_the_key_holds_the_basis_the_calibration_searches_on(first):
+    """The basis enters the key by its own content key, computed without a build: that of the
+    basis ``sampling_problem`` builds (the same box, modes, tolerance and seed)."""
+    prepared, rom = first[0], first[1]
+    assert memo.basis_of(prepared.problem, rom.tol).content_key() == rom.content_key()
 
 
 def test_an_optimum_a_full_solve_does_not_reproduce_is_not_used(first, tmp_path):
@@ -78,13 +86,16 @@ def test_the_second_run_does_not_search(first, tmp_path, monkeypatch):
     monkeypatch.setenv("BAYESUPDATE_CACHE_DIR", str(tmp_path))
     monkeypatch.setenv("BAYESUPDATE_NO_CACHE", "0")
     monkeypatch.setattr(pipeline, "large_model", lambda rom: True)
+    monkeypatch.setattr(pipeline, "large_fe_model", lambda model: True)
     prepared = _prepared("--no-polish")
     once = pipeline.run_calibration(prepared)
 
     def searched(*args, **kwargs):
         raise AssertionError("the kept calibration was not recalled")
 
+    # neither the search nor the basis (its load and check at fresh points) is needed
     monkeypatch.setattr(pipeline, "calibrate_on_exact_basis", searched)
+    monkeypatch.setattr(pipeline, "sampling_problem", searched)
     twice = pipeline.run_calibration(prepared)
     np.testing.assert_array_equal(twice.theta, once.theta)
     assert twice.objective == once.objective

@@ -32,27 +32,38 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     check the ends on the full model (module docstring), so the reported optimum is the full
     model's; ``sampler.reduced = false`` (``--full``) searches on full solves.  The reduced
     basis's full solves, the starts and the polishes run on ``executor``
-    (``compute.executors``; None: here)."""
+    (``compute.executors``; None: here).  A large model's calibration is kept on disk and the
+    same command again recalls it, checked by one full solve (``pipelines.calibration_memo``;
+    off with the cache)."""
     opt = prepared.study.optimizer
     cfg = prepared.study.sampler
-    search, rom = sampling_problem(
-        prepared.problem, None, cfg.reduced, cfg.reduced_tol, executor=executor
-    )
+    problem = prepared.problem
     settings = CalibrationSettings(
         starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=opt.polish
     )
+    kept = cfg.reduced and large_fe_model(problem.model)
+    store = ArrayStore.from_environment() if kept else ArrayStore(None)
+    key = memo.memo_key(problem, cfg.reduced_tol, settings) if store.enabled else ""
+    recalled = memo.recalled(problem, store.load(key), cfg.reduced_tol) if key else None
+    if recalled is not None:
+        return recalled
+    search, rom = sampling_problem(problem, None, cfg.reduced, cfg.reduced_tol, executor=executor)
     if rom is None:
         return calibrate(search, settings, executor=executor)
     if not large_model(rom):
-        return calibrate(search, settings, refine=prepared.problem, executor=executor)
-    store = ArrayStore.from_environment()
-    key = memo.memo_key(prepared.problem, rom, settings) if store.enabled else ""
-    recalled = memo.recalled(prepared.problem, store.load(key), rom.tol) if key else None
-    if recalled is not None:
-        return recalled
-    run = calibrate_on_exact_basis(prepared.problem, search, rom, settings, executor)
+        return calibrate(search, settings, refine=problem, executor=executor)
+    run = calibrate_on_exact_basis(problem, search, rom, settings, executor)
     memo.keep(store, key, run.result, run.error_at_optimum)
     return run.result
+
+
+def large_fe_model(model) -> bool:
+    """Whether ``model`` is an ``FEModel`` of ``fe.reduced.settings.LARGE_MODEL_DOFS`` DOFs or
+    more (its calibration is kept on disk: ``pipelines.calibration_memo``)."""
+    from bayesupdate.fe.model import FEModel
+    from bayesupdate.fe.reduced.settings import LARGE_MODEL_DOFS
+
+    return isinstance(model, FEModel) and model.structure.n_dof >= LARGE_MODEL_DOFS
 
 
 def large_model(rom) -> bool:

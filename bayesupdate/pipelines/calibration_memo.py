@@ -31,16 +31,34 @@ MEMO_FORMAT = "calibration-1"
 RECALL_AGREES = 1e-9
 
 
-def memo_key(problem: CalibrationProblem, rom, settings: CalibrationSettings) -> str:
-    """The content key of the calibration of ``problem`` (the exact one) on the certified basis
-    ``rom`` with ``settings`` (module docstring).  Parameters enter by name, bounds and start
-    (their priors do not move the optimum)."""
+def memo_key(problem: CalibrationProblem, tol: float, settings: CalibrationSettings) -> str:
+    """The content key of the calibration of ``problem`` (the exact one, on an ``FEModel``) on
+    its certified basis of tolerance ``tol`` with ``settings`` (module docstring), computed
+    without building or loading the basis: the basis enters by its own key
+    (``ReducedFEModel.content_key``).  Parameters enter by name, bounds and start (their priors
+    do not move the optimum)."""
     parameters = tuple((p.name, p.bounds, p.start) for p in problem.parameters)
     return content_key(
-        MEMO_FORMAT, __version__, rom.certification.basis.V, rom.settings, rom.bounds,
-        problem.names, parameters, problem.data, problem.pairing, problem.objective,
-        problem.fixed, problem.reference, problem.test_modes, settings,
+        MEMO_FORMAT, __version__, basis_of(problem, tol).content_key(), problem.names,
+        parameters, problem.data, problem.pairing, problem.objective, problem.fixed,
+        problem.reference, problem.test_modes, settings,
     )  # fmt: skip
+
+
+def basis_of(problem: CalibrationProblem, tol: float):
+    """The (unbuilt) ``ReducedFEModel`` that ``pipelines.surrogates.sampling_problem`` builds
+    for ``problem`` with tolerance ``tol``: the calibrated parameters' bounds, fixed ones in a
+    +-0.1 % box around their value, the modes the pairing needs, seed 0
+    (``tests/test_calibration_memo.py`` holds the two to the same key)."""
+    from bayesupdate.fe.reduced import ReducedFEModel, ReducedSettings
+
+    model = problem.model
+    bounds = {p.name: p.bounds for p in problem.parameters}
+    for name, value in problem.fixed.items():
+        if name in model.parameter_names and value > 0:
+            bounds[name] = (value * (1 - 1e-3), value * (1 + 1e-3))
+    settings = ReducedSettings(n_modes=problem.pairing.n_model, tol=tol, seed=0)
+    return ReducedFEModel(model, bounds, settings)
 
 
 def memo_arrays(result: CalibrationResult, basis_error: float) -> dict[str, np.ndarray]:

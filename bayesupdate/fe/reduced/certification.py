@@ -202,6 +202,13 @@ _RECHECK_SEED = 7919
 _CACHE_FORMAT = "reduced-basis-1"
 
 
+def basis_key(model) -> str:
+    """The key a certified basis of ``model`` (built or not) is kept under by ``build``: the
+    content of everything it depends on (``_cache_key``), without building it."""
+    centre = model.mapping(model.centre())
+    return _cache_key(model, decompose(model.fe, model.bounds, model.settings.interp_tol), centre)
+
+
 def _cache_key(model, decomposition, centre) -> str:
     """Everything the basis depends on: the affine terms (hence K(theta), M(theta)), the matrices
     and rigid motions at the centre, the box, the settings, the sensors and the package."""

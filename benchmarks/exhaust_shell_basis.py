@@ -47,6 +47,8 @@ number to compare) and wall time, in a cache folder of its own (``BAYESUPDATE_CA
 Medians per kind, the objectives and the largest difference of the optimum's frequencies
 between the runs.
   .venv/bin/python benchmarks/exhaust_shell_basis.py --calibrate-runs 3
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --calibrate-runs 3 --first-runs 0 \
+      --cache-dir ~/.cache/bayesupdate   # a folder a first run filled: cached runs only
 """
 
 import os
@@ -268,7 +270,7 @@ def calibrate_runs(args) -> dict:
     import shutil
     import tempfile
 
-    folder = tempfile.mkdtemp(prefix="bayesupdate-bench-cache-")
+    folder = args.cache_dir or tempfile.mkdtemp(prefix="bayesupdate-bench-cache-")
     env = {**os.environ, "BAYESUPDATE_CACHE_DIR": folder, "BAYESUPDATE_NO_CACHE": "0"}
     kinds = {"first": [], "cached": [], "basis cached": []}
     try:
@@ -282,10 +284,14 @@ def calibrate_runs(args) -> dict:
             kinds["basis cached"].append(_timed_run(["--seed", str(i + 1)], env))
             print(f"[basis cached] {_row(kinds['basis cached'][-1])}", flush=True)
     finally:
-        shutil.rmtree(folder, ignore_errors=True)
-    reference = np.array(kinds["first"][0]["json"]["frequencies_hz"])
+        if not args.cache_dir:
+            shutil.rmtree(folder, ignore_errors=True)
+    first = next(runs[0] for runs in kinds.values() if runs)
+    reference = np.array(first["json"]["frequencies_hz"])
     out = {}
     for kind, runs in kinds.items():
+        if not runs:
+            continue
         diff = max(np.max(np.abs(np.array(r["json"]["frequencies_hz"]) / reference - 1))
                    for r in runs)  # fmt: skip
         out[kind] = dict(
@@ -298,7 +304,7 @@ def calibrate_runs(args) -> dict:
         print(
             f"[{kind}] {len(runs)} runs: median CPU {out[kind]['median_cpu_s']:.1f} s, wall "
             f"{out[kind]['median_wall_s']:.1f} s; optimum's frequencies within "
-            f"{diff:.1e} of the first run's",
+            f"{diff:.1e} of the first run's (or, with no first run, the first cached one's)",
             flush=True,
         )
     return out
@@ -329,6 +335,11 @@ def main() -> None:
         help="the calibration runs only: cached runs of each kind (0: none)",
     )
     ap.add_argument("--first-runs", type=int, default=1, help="first runs (empty cache)")
+    ap.add_argument(
+        "--cache-dir",
+        help="the calibration runs' cache folder, kept (default: a new "
+        "temporary one, removed); with --first-runs 0, one a first run filled",
+    )
     args = ap.parse_args()
     warnings.simplefilter("default")
     print(f"load average at start: {os.getloadavg()}", flush=True)

@@ -6,12 +6,16 @@ cheap (beam models: milliseconds) the ends near the best are polished on full so
 large model (``fe.reduced.settings.LARGE_MODEL_DOFS`` DOFs or more: the shell exhaust's
 28,386 DOFs cost ~1.5 s of CPU per solve) that polish, 60 d Nelder-Mead evaluations per end,
 would be thousands of full solves; there the basis is instead made exact at the best end (its
-full modes join the basis, ``ReducedFEModel.certify_at``, every checked point re-verified), the
-ends are polished on that basis, and the optimum is evaluated by one full solve, which gives the
-reported objective, frequencies and table, and the basis's error there (a warning above its
-tolerance).  This is the trust-region idea of reduced-basis optimisation: optimise on the
-surrogate, make it exact at the iterate and check it there in full (Yue & Meerbergen, SIAM J.
-Optim. 23 (2013) 1344; Qian, Grepl, Veroy & Willcox, SIAM J. Sci. Comput. 39 (2017) S434).
+full modes join the basis, ``ReducedFEModel.certify_at``, every checked point re-verified:
+``basis_made_exact``), the ends are polished on that basis, and the optimum is evaluated by one
+full solve, which gives the reported objective, frequencies and table, and the basis's error
+there (a warning above its tolerance: ``evaluated_in_full``).  A full solve that fails at the
+best end or at the optimum gives a one-line warning naming the point.  The whole step
+(``calibrate_on_exact_basis``) is pure functions and frozen records; its result is kept on disk
+and recalled by the same command again (``pipelines.calibration_memo``).  This is the
+trust-region idea of reduced-basis optimisation: optimise on the surrogate, make it exact at the
+iterate and check it there in full (Yue & Meerbergen, SIAM J. Optim. 23 (2013) 1344; Qian,
+Grepl, Veroy & Willcox, SIAM J. Sci. Comput. 39 (2017) S434).
 """
 
 import warnings

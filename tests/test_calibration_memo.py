@@ -100,3 +100,26 @@ def test_the_second_run_does_not_search(first, tmp_path, monkeypatch):
     np.testing.assert_array_equal(twice.theta, once.theta)
     assert twice.objective == once.objective
     np.testing.assert_array_equal(twice.table.model_hz, once.table.model_hz)
+
+
+def test_a_model_without_a_reduced_form_keeps_nothing():
+    """Two parameters on one shell property have no affine decomposition: the calibration runs
+    on full solves (``sampling_problem`` warns), and nothing is kept for it (key "")."""
+    from test_reduced_shells import box_model
+
+    from bayesupdate.fe import Binding, FEModel
+    from bayesupdate.inference import build_problem
+    from bayesupdate.inference.problem import ObjectiveSpec
+    from bayesupdate.modal_data import ModalData
+
+    box = box_model()
+    fe = FEModel(
+        box.structure,
+        {"a": Binding("lids", "thickness"), "b": Binding("lids", "thickness")},
+        {"a": 2e-3, "b": 2e-3},
+        {"a": (1e-3, 3e-3), "b": (1e-3, 3e-3)},
+    )
+    data = ModalData(box.predict(None, 4).frequencies_hz)
+    problem = build_problem(fe, data, None, "order", extra_modes=0, objective=ObjectiveSpec())
+    settings = pipeline.CalibrationSettings(starts=1)
+    assert memo.memo_key(problem, 1e-4, settings) == ""

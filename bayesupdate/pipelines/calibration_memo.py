@@ -21,6 +21,7 @@ import numpy as np
 from bayesupdate import __version__
 from bayesupdate.compute.cache import ArrayStore, content_key
 from bayesupdate.compute.progress import phase
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings
 from bayesupdate.inference.problem import CalibrationProblem
 
@@ -36,12 +37,17 @@ def memo_key(problem: CalibrationProblem, tol: float, settings: CalibrationSetti
     its certified basis of tolerance ``tol`` with ``settings`` (module docstring), computed
     without building or loading the basis: the basis enters by its own key
     (``ReducedFEModel.content_key``).  Parameters enter by name, bounds and start (their priors
-    do not move the optimum)."""
+    do not move the optimum).  "" (nothing is kept) for a model without a reduced form: its
+    calibration runs on full solves, with the warning ``sampling_problem`` gives."""
     parameters = tuple((p.name, p.bounds, p.start) for p in problem.parameters)
+    try:
+        basis = basis_of(problem, tol).content_key()
+    except BayesUpdateError:
+        return ""
     return content_key(
-        MEMO_FORMAT, __version__, basis_of(problem, tol).content_key(), problem.names,
-        parameters, problem.data, problem.pairing, problem.objective, problem.fixed,
-        problem.reference, problem.test_modes, settings,
+        MEMO_FORMAT, __version__, basis, problem.names, parameters, problem.data,
+        problem.pairing, problem.objective, problem.fixed, problem.reference, problem.test_modes,
+        settings,
     )  # fmt: skip
 
 

@@ -33,6 +33,22 @@ build: full solves (snapshots, greedy, validation), wall and CPU time, size, cer
 the ratios to "plain".
   .venv/bin/python benchmarks/exhaust_shell_basis.py --compare-build
   .venv/bin/python benchmarks/exhaust_shell_basis.py --compare-build --mesh-density 16
+
+Calibration runs (``--calibrate-runs N``; no posterior): the user's command
+``bayesupdate calibrate --model exhaust_shell --data paper:ema --json``, each run a fresh process,
+its CPU (user + system, the process and its children: the machine is shared, so CPU is the
+number to compare) and wall time, in a cache folder of its own (``BAYESUPDATE_CACHE_DIR``):
+  "first"        the folder empty: the basis is built, the calibration kept (``--first-runs``
+                 times, the folder emptied before each; default 1: a build costs minutes);
+  "cached"       the same command again: the basis loaded and re-checked, the optimum recalled
+                 and checked by one full solve (N times);
+  "basis cached" ``--seed 1`` (other starts, the same basis): the basis loaded, the search and
+                 the refine step run (N times, each with a new seed so that no optimum is kept).
+Medians per kind, the objectives and the largest difference of the optimum's frequencies
+between the runs.
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --calibrate-runs 3
+  .venv/bin/python benchmarks/exhaust_shell_basis.py --calibrate-runs 3 --first-runs 0 \
+      --cache-dir ~/.cache/bayesupdate   # a folder a first run filled: cached runs only
 """
 
 import os
@@ -231,6 +247,74 @@ def compare_builds(args) -> dict:
     return rows
 
 
+def _timed_run(extra: list[str], env: dict) -> dict:
+    """One ``bayesupdate calibrate`` process: CPU [s] (user + system of the child), wall [s],
+    its --json output."""
+    import resource
+    import subprocess
+    import sys
+
+    command = [sys.executable, "-m", "bayesupdate", "calibrate", "--model", "exhaust_shell",
+               "--data", "paper:ema", "--json", *extra]  # fmt: skip
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return dict(cpu_s=cpu, wall_s=wall, json=json.loads(done.stdout.strip().splitlines()[-1]))
+
+
+def calibrate_runs(args) -> dict:
+    """The calibration runs of the module docstring: {kind: {"runs": [...], medians}}."""
+    import shutil
+    import tempfile
+
+    folder = args.cache_dir or tempfile.mkdtemp(prefix="bayesupdate-bench-cache-")
+    env = {**os.environ, "BAYESUPDATE_CACHE_DIR": folder, "BAYESUPDATE_NO_CACHE": "0"}
+    kinds = {"first": [], "cached": [], "basis cached": []}
+    try:
+        for _ in range(args.first_runs):
+            shutil.rmtree(folder, ignore_errors=True)
+            kinds["first"].append(_timed_run([], env))
+            print(f"[first] {_row(kinds['first'][-1])}", flush=True)
+        for i in range(args.calibrate_runs):
+            kinds["cached"].append(_timed_run([], env))
+            print(f"[cached] {_row(kinds['cached'][-1])}", flush=True)
+            kinds["basis cached"].append(_timed_run(["--seed", str(i + 1)], env))
+            print(f"[basis cached] {_row(kinds['basis cached'][-1])}", flush=True)
+    finally:
+        if not args.cache_dir:
+            shutil.rmtree(folder, ignore_errors=True)
+    first = next(runs[0] for runs in kinds.values() if runs)
+    reference = np.array(first["json"]["frequencies_hz"])
+    out = {}
+    for kind, runs in kinds.items():
+        if not runs:
+            continue
+        diff = max(np.max(np.abs(np.array(r["json"]["frequencies_hz"]) / reference - 1))
+                   for r in runs)  # fmt: skip
+        out[kind] = dict(
+            runs=[{k: v for k, v in r.items() if k != "json"} | {"objective": r["json"][
+                "objective"], "timings": r["json"].get("timings")} for r in runs],
+            median_cpu_s=float(np.median([r["cpu_s"] for r in runs])),
+            median_wall_s=float(np.median([r["wall_s"] for r in runs])),
+            max_rel_frequency_diff_to_first=float(diff),
+        )  # fmt: skip
+        print(
+            f"[{kind}] {len(runs)} runs: median CPU {out[kind]['median_cpu_s']:.1f} s, wall "
+            f"{out[kind]['median_wall_s']:.1f} s; optimum's frequencies within "
+            f"{diff:.1e} of the first run's (or, with no first run, the first cached one's)",
+            flush=True,
+        )
+    return out
+
+
+def _row(run: dict) -> str:
+    return (f"CPU {run['cpu_s']:.1f} s, wall {run['wall_s']:.1f} s, objective "
+            f"{run['json']['objective']:.6g}, timings {run['json'].get('timings')}")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh-density", type=int, default=32, help="shell mesh density (32)")
@@ -244,9 +328,28 @@ def main() -> None:
     ap.add_argument("--save", help="write the numbers to this JSON file")
     ap.add_argument("--compare-build", action="store_true", help="the build comparison only")
     ap.add_argument("--workers", type=int, default=2, help="local workers of the comparison")
+    ap.add_argument(
+        "--calibrate-runs",
+        type=int,
+        default=0,
+        help="the calibration runs only: cached runs of each kind (0: none)",
+    )
+    ap.add_argument("--first-runs", type=int, default=1, help="first runs (empty cache)")
+    ap.add_argument(
+        "--cache-dir",
+        help="the calibration runs' cache folder, kept (default: a new "
+        "temporary one, removed); with --first-runs 0, one a first run filled",
+    )
     args = ap.parse_args()
     warnings.simplefilter("default")
     print(f"load average at start: {os.getloadavg()}", flush=True)
+    if args.calibrate_runs:
+        rows = calibrate_runs(args)
+        print(f"load average at end: {os.getloadavg()}", flush=True)
+        if args.save:
+            with open(args.save, "w") as fh:
+                json.dump(rows, fh, indent=1, default=float)
+        return
     if args.compare_build:
         rows = compare_builds(args)
         print(f"load average at end: {os.getloadavg()}", flush=True)

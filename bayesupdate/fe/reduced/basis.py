@@ -171,7 +171,7 @@ def full_solves(
     (``compute.progress``): (B, n_modes) frequencies [Hz] (NaN rows on failure) and the
     (n_dof, k) mode shapes of the points that solved, side by side, each point's modes followed
     by their design-sensitivity vectors when ``sensitivities`` (the model's decomposition) is
-    given (``reduced.sensitivity``)."""
+    given (``reduced.sensitivity``); (n_dof, 0) when no point solved."""
     shared = (fe, names, n_modes, sensitivities)
     with phase(what, theta.shape[0], "solves") as running:
         solved = executor_or_serial(executor).map(
@@ -185,6 +185,8 @@ def full_solves(
         if point is not None:
             freqs[i] = point[0]
             shapes.append(point[1])
+    if not shapes:
+        return freqs, np.zeros((fe.structure.n_dof, 0))
     return freqs, np.concatenate(shapes, axis=1)
 
 

@@ -202,6 +202,13 @@ _RECHECK_SEED = 7919
 _CACHE_FORMAT = "reduced-basis-1"
 
 
+def basis_key(model) -> str:
+    """The key a certified basis of ``model`` (built or not) is kept under by ``build``: the
+    content of everything it depends on (``_cache_key``), without building it."""
+    centre = model.mapping(model.centre())
+    return _cache_key(model, decompose(model.fe, model.bounds, model.settings.interp_tol), centre)
+
+
 def _cache_key(model, decomposition, centre) -> str:
     """Everything the basis depends on: the affine terms (hence K(theta), M(theta)), the matrices
     and rigid motions at the centre, the box, the settings, the sensors and the package."""
@@ -300,23 +307,32 @@ def certify_points(
     model, theta: np.ndarray, enrich: bool = True, enrich_above=None
 ) -> tuple[Certification, float]:
     """``model``'s certification checked at theta (k, n_params) inside its box (all parameters,
-    SI): (new certification, largest relative frequency error at the points).  A miss (error >
-    tol, or > ``enrich_above`` when that is smaller) with ``enrich``: their shapes join the basis
-    and every checked point is re-verified; if the tolerance still fails or the size limit is
-    hit, the result is uncertified (a warning)."""
+    SI): (new certification, largest relative frequency error at the points; NaN, and the
+    certification unchanged, when no full solve there succeeds).  A miss (error > tol, or >
+    ``enrich_above`` when that is smaller) with ``enrich``: their shapes join the basis and every
+    checked point is re-verified; if the tolerance still fails or the size limit is hit, the
+    result is uncertified (a warning).  One full solve per point: with ``enrich`` it gives the
+    ``extra_modes`` the enrichment needs as well (Lanczos's lowest modes do not depend on how
+    many more are asked for, to its tolerance)."""
     c, st = model.certification, model.settings
-    f_full = full_solves(model.fe, model.parameter_names, theta, st.n_modes)[0]
+    n_solve = st.n_modes + (st.extra_modes if enrich else 0)
+    f_all, shapes = full_solves(model.fe, model.parameter_names, theta, n_solve)
+    ok = np.all(np.isfinite(f_all), axis=1)
+    if not np.any(ok):
+        return c, float("nan")
+    theta, f_full = theta[ok], f_all[ok, : st.n_modes]
     cert = compare(c.basis, theta, f_full, st.n_modes)
     threshold = st.tol if enrich_above is None else min(st.tol, float(enrich_above))
     if cert.max_rel_error > threshold and enrich:
-        return _enriched(model, theta, f_full)
+        return _enriched(model, theta, f_full, shapes)
     max_err = max(c.max_rel_error, cert.max_rel_error)
     return _with_checked(c, c.basis, max_err, cert, (theta, f_full)), cert.max_rel_error
 
 
-def _enriched(model, theta: np.ndarray, f_full: np.ndarray):
+def _enriched(model, theta: np.ndarray, f_full: np.ndarray, extra: np.ndarray):
+    """``certify_points``' enrichment: the shapes ``extra`` (n_dof, k) of the full solves at
+    theta (frequencies f_full) join the basis, and every checked point is re-verified."""
     c, st, fe = model.certification, model.settings, model.fe
-    extra = full_solves(fe, model.parameter_names, theta, st.n_modes + st.extra_modes)[1]
     snaps = np.concatenate([c.basis.V[:, c.basis.n_rigid :], extra], axis=1)
     centre = model.mapping(model.centre())
     basis = pod_basis(fe, c.basis.decomposition, centre, snaps, 0.0, st.n_modes)

@@ -184,6 +184,12 @@ class ReducedFEModel:
         checked, err = certification.certify_points(self, full, enrich, enrich_above)
         return replace(self, certification=checked), err
 
+    def content_key(self) -> str:
+        """SHA-256 (hex) of everything this model's certified basis depends on (the FE model's
+        terms and matrices, the box, the settings, the sensors, the package version): the key
+        ``build`` keeps the basis under (``compute.cache``); computed without a build."""
+        return certification.basis_key(self)
+
     def coarsened(self, tol=5e-3, n_train=128, n_check=64, min_size=None) -> "ReducedFEModel":
         """A smaller model inside this basis for screening proposals (``reduced.coarsening``)."""
         return coarsening.coarsened(self, tol, n_train, n_check, min_size)

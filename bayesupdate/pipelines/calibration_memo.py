@@ -1,0 +1,154 @@
+"""A large model's calibration kept on disk: the same command on the same model, data and
+settings recalls its optimum instead of searching again, and checks it by one full solve.
+
+The optimum of ``pipelines.calibrate`` is a pure function of the certified basis (its vectors),
+the problem (data, parameters and their bounds and starts, pairing, objective, fixed values, the
+reference prediction) and the optimiser's settings; the entry's key is the SHA-256 of all of them
+and the package version (``compute.cache.content_key``), in the same store as the bases
+(``compute.cache.ArrayStore``: ``BAYESUPDATE_CACHE_DIR``, ``--no-cache``, atomic writes,
+checksums, least recently used out).  A recalled optimum is evaluated by one full solve, as a
+fresh one is (``calibrate.evaluated_in_full``), and used only when that full objective reproduces
+the stored one to ``RECALL_AGREES``; otherwise the calibration runs again (with a note).
+Only the large-model path uses it: there a search costs tens of seconds, a beam model's one less
+than the full solve that checks a recalled optimum would.
+"""
+
+import time
+import warnings
+
+import numpy as np
+
+from bayesupdate import __version__
+from bayesupdate.compute.cache import ArrayStore, content_key
+from bayesupdate.compute.progress import phase
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings
+from bayesupdate.inference.problem import CalibrationProblem
+
+#: format of a kept calibration; bump when the stored arrays change meaning
+MEMO_FORMAT = "calibration-1"
+#: relative agreement of a recalled optimum's full objective with the stored one: the same
+#: full solve on the same machine gives the same bits; another BLAS build differs by ~1e-13
+RECALL_AGREES = 1e-9
+
+
+def memo_key(problem: CalibrationProblem, tol: float, settings: CalibrationSettings) -> str:
+    """The content key of the calibration of ``problem`` (the exact one, on an ``FEModel``) on
+    its certified basis of tolerance ``tol`` with ``settings`` (module docstring), computed
+    without building or loading the basis: the basis enters by its own key
+    (``ReducedFEModel.content_key``).  Parameters enter by name, bounds and start (their priors
+    do not move the optimum).  "" (nothing is kept) for a model without a reduced form: its
+    calibration runs on full solves, with the warning ``sampling_problem`` gives."""
+    parameters = tuple((p.name, p.bounds, p.start) for p in problem.parameters)
+    try:
+        basis = basis_of(problem, tol).content_key()
+    except BayesUpdateError:
+        return ""
+    return content_key(
+        MEMO_FORMAT, __version__, basis, problem.names, parameters, problem.data,
+        problem.pairing, problem.objective, problem.fixed, problem.reference, problem.test_modes,
+        settings,
+    )  # fmt: skip
+
+
+def basis_of(problem: CalibrationProblem, tol: float):
+    """The (unbuilt) ``ReducedFEModel`` that ``pipelines.surrogates.sampling_problem`` builds
+    for ``problem`` with tolerance ``tol``: the calibrated parameters' bounds, fixed ones in a
+    +-0.1 % box around their value, the modes the pairing needs, seed 0
+    (``tests/test_calibration_memo.py`` holds the two to the same key)."""
+    from bayesupdate.fe.reduced import ReducedFEModel, ReducedSettings
+
+    model = problem.model
+    bounds = {p.name: p.bounds for p in problem.parameters}
+    for name, value in problem.fixed.items():
+        if name in model.parameter_names and value > 0:
+            bounds[name] = (value * (1 - 1e-3), value * (1 + 1e-3))
+    settings = ReducedSettings(n_modes=problem.pairing.n_model, tol=tol, seed=0)
+    return ReducedFEModel(model, bounds, settings)
+
+
+def memo_arrays(result: CalibrationResult, basis_error: float) -> dict[str, np.ndarray]:
+    """What is kept of ``result`` (the full model's optimum) and the basis's relative frequency
+    error there: the optimum, the starts and ends, the counts and the full objective."""
+    return {
+        "theta": result.theta,
+        "objective": np.array(result.objective),
+        "basis_error": np.array(basis_error),
+        "start_points": result.start_points,
+        "end_points": result.end_points,
+        "end_objectives": result.end_objectives,
+        "distinct_optima": np.array(result.distinct_optima, dtype=int),
+        "counts": np.array(
+            [result.starts, result.converged_starts, result.failed_evaluations, result.evaluations]
+        ),
+        "method": np.array(result.method),
+    }
+
+
+def recalled(
+    problem: CalibrationProblem, arrays: dict[str, np.ndarray] | None, tol: float
+) -> CalibrationResult | None:
+    """The kept calibration ``arrays`` (``memo_arrays``) as a result of ``problem``, its
+    objective, frequencies, mass and table from one full solve at the optimum; None when there
+    is nothing kept, or (with a note) when the entry is unreadable or that full objective does
+    not reproduce the stored one.  The basis's error at the optimum is warned about again
+    when it exceeds ``tol``, as in the run that stored it."""
+    if arrays is None:
+        return None
+    t0 = time.perf_counter()
+    try:
+        theta = np.asarray(arrays["theta"], dtype=float)
+        stored, basis_error = float(arrays["objective"]), float(arrays["basis_error"])
+        starts, converged, failed, evaluations = map(int, arrays["counts"])
+        ends = (arrays["start_points"], arrays["end_points"], arrays["end_objectives"])
+        distinct = tuple(int(i) for i in arrays["distinct_optima"])
+        method = str(arrays["method"])
+    except (KeyError, ValueError, TypeError) as exc:
+        warnings.warn(f"kept calibration unreadable ({exc}); calibrating again", RuntimeWarning,
+                      stacklevel=2)  # fmt: skip
+        return None
+    with phase("calibration: kept optimum, full solve", 1, "solves"):
+        evaluation = problem.evaluate(theta) if theta.shape == (len(problem.names),) else None
+    objective = np.nan if evaluation is None or not evaluation.ok else (
+        float(np.sum(problem.residual_vector(evaluation) ** 2)))  # fmt: skip
+    if not abs(objective - stored) <= RECALL_AGREES * abs(stored):
+        warnings.warn(
+            f"kept calibration not reproduced by a full solve at its optimum (objective "
+            f"{objective:.6g} against {stored:.6g}); calibrating again",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return None
+    if not basis_error <= tol:
+        warnings.warn(
+            f"reduced basis off by {basis_error:.2e} at the optimum (tol {tol:g}): the ends "
+            "were polished on it; rerun with --full for a polish on full solves",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return CalibrationResult(
+        names=problem.names,
+        theta=theta,
+        objective=objective,
+        expr=float(problem.expr(evaluation.frequencies_hz)),
+        mass_kg=evaluation.mass_kg,
+        frequencies_hz=evaluation.frequencies_hz,
+        table=problem.table(evaluation),
+        starts=starts,
+        converged_starts=converged,
+        start_points=ends[0],
+        end_points=ends[1],
+        end_objectives=ends[2],
+        distinct_optima=distinct,
+        failed_evaluations=failed,
+        evaluations=evaluations,
+        method=method,
+        wall_s=time.perf_counter() - t0,
+    )
+
+
+def keep(store: ArrayStore, key: str, result: CalibrationResult, basis_error: float) -> None:
+    """``result`` with its basis error stored under ``key`` in ``store`` (a no-op when the
+    store is disabled or the key empty; a folder that cannot be written gives one warning)."""
+    if key and np.isfinite(result.objective):
+        store.save(key, memo_arrays(result, basis_error))

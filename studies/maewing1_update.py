@@ -27,6 +27,7 @@ calibrated and held-out modes, the mass properties against the authors' measured
 discover names, and the time of each command.
 
 Run: python studies/maewing1_update.py [--out DIR] [--seed 103] [--data DIR] [--quick]
+    [--skip-discover]
 """
 
 import argparse
@@ -93,6 +94,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=103)
     ap.add_argument("--data", default=str(DATA), help="folder of run_Run1..10.mat")
     ap.add_argument("--quick", action="store_true", help="the demo's quick settings")
+    ap.add_argument("--skip-discover", action="store_true", help="the chain without discover")
     args = ap.parse_args()
     if not (Path(args.data) / "run_Run1.mat").is_file():
         raise SystemExit(f"GVT time signals not found in {args.data} (give --data DIR)")
@@ -101,7 +103,7 @@ def main() -> None:
         out.mkdir(parents=True, exist_ok=True)
         chain = SubprocessChain()
         runs = make_frfs(chain, Path(args.data), out / "frf")
-        settings = AircraftSettings(out, args.quick, args.seed)
+        settings = AircraftSettings(out, args.quick, args.seed, not args.skip_discover)
         result = run_aircraft(settings, lambda line: print(line, flush=True), chain, runs)
         print()
         print(report_markdown(result))

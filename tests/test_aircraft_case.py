@@ -88,6 +88,11 @@ def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_p
     assert list(study.parameters) == list(ac.PARAMETERS)
     assert study.data.mass == "13.76 lb" and study.data.inertia["iyy"] == "1643.0 lb in^2"
     assert study.test.geometry.endswith("gvt_geometry.unv")
+    # the case's own settings (``aircraft.STARTS``, ``WALKERS``): the sampler's least walkers
+    # (2 per parameter), full solves, no polish
+    assert study.sampler.walkers == 2 * len(study.parameters) and not study.sampler.reduced
+    assert study.optimizer.starts == 4 and not study.optimizer.polish
+    assert not study.sampler.screen
 
 
 def test_parameters_bind_one_outer_section_and_the_foam_masses_alone():

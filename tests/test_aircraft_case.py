@@ -88,6 +88,11 @@ def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_p
     assert list(study.parameters) == list(ac.PARAMETERS)
     assert study.data.mass == "13.76 lb" and study.data.inertia["iyy"] == "1643.0 lb in^2"
     assert study.test.geometry.endswith("gvt_geometry.unv")
+    # the case's own settings (``aircraft.STARTS``, ``WALKERS``): the sampler's least walkers
+    # (2 per parameter), full solves, no polish
+    assert study.sampler.walkers == 2 * len(study.parameters) and not study.sampler.reduced
+    assert study.optimizer.starts == 4 and not study.optimizer.polish
+    assert not study.sampler.screen
 
 
 def test_parameters_bind_one_outer_section_and_the_foam_masses_alone():
@@ -145,3 +150,45 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     # with one outer section; v4.2 is within 3 % (the docs page says why we still lose)
     assert rows[10]["held_out"] and abs(rows[10]["ours_hz"] / rows[10]["test_hz"] - 1) < 0.3
     assert all(r["ours_in_range"] for r in out["mass_properties"])
+
+
+def test_an_evaluation_assembles_once_and_its_mass_properties_are_unchanged(monkeypatch):
+    """A fit evaluation (eigen-solve, then the mass properties) assembles K and M once
+    (``nastran.lines.LineAssembler`` keeps the last assembly); the mass properties it gives are
+    those of a model that assembles afresh (the same bits), and a move of a line field
+    (``I1_wing``) or of a property array alone (``m_foam``: CONM2 M) is not served stale."""
+    from bayesupdate.fe.sparse_assembly import GeneralAssembler
+    from bayesupdate.nastran import load_nastran_model
+
+    tables = {n: {"binds": b, "bounds": list(bd)} for n, (b, bd) in ac.PARAMETERS.items()}
+    cached = load_nastran_model(ac.data_folder() / ac.V33_DECK, tables)
+    fresh = load_nastran_model(ac.data_folder() / ac.V33_DECK, tables)
+    calls = []
+    assemble = GeneralAssembler.assemble
+
+    def counted(self, *args, **kwargs):
+        calls.append(self)
+        return assemble(self, *args, **kwargs)
+
+    monkeypatch.setattr(GeneralAssembler, "assemble", counted)
+    points = [
+        {"EI_root": 1.05, "I1_wing": 0.1047, "m_foam": 0.971, "rho_wing": 1.022},
+        {"EI_root": 1.05, "I1_wing": 0.0800, "m_foam": 0.971, "rho_wing": 1.022},
+        {"EI_root": 1.05, "I1_wing": 0.0800, "m_foam": 0.500, "rho_wing": 1.022},
+    ]
+    for p in points:
+        calls.clear()
+        cached.solve(p, n_modes=6)
+        props = [cached.mass_properties(p) for _ in range(2)]  # the fit's and the likelihood's
+        assert sum(c is cached.general for c in calls) == 1
+        fresh.general._last = (None, None)  # forget: an assembly of its own
+        expected = fresh.mass_properties(p)
+        for got in props:
+            assert got.mass == expected.mass
+            np.testing.assert_array_equal(got.cg, expected.cg)
+            np.testing.assert_array_equal(got.inertia, expected.inertia)
+    # the three points differ: a stale assembly would repeat the first one's mass properties
+    # (I1 moves the beams' rotary inertia rho (I1 + I2) only: IXX, not the mass)
+    values = [fresh.mass_properties(p) for p in points]
+    assert values[0].mass == values[1].mass and values[0].inertia[0, 0] != values[1].inertia[0, 0]
+    assert values[2].mass < values[1].mass

@@ -37,6 +37,7 @@ the reduced model's ``interp_tol``, as the built-in models' non-linear beam para
 
 from dataclasses import dataclass, replace
 from dataclasses import field as _field
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
@@ -473,7 +474,13 @@ class LineAssembler(GeneralAssembler):
     ``LineFields`` are found at the first point away from the deck's values (a ``modes`` run at
     the deck's values converts nothing again).  known : the ``LineAssembler`` of the same deck
     and bindings on the structure this one extends (``NastranModel.with_structure``): its
-    ``LineFields`` are taken over where they hold (``reused_fields``), not found again."""
+    ``LineFields`` are taken over where they hold (``reused_fields``), not found again.
+
+    The last assembly is kept, keyed by the values and the property arrays it was made from:
+    an evaluation asks for K and M at one point up to three times (the eigen-solve, then the
+    mass properties of the fit's residuals and of the likelihood: ``model.mass_properties``),
+    and the bound elements' recomputation is most of an assembly.  The matrices returned are
+    shared between those callers, which only read them."""
 
     def __init__(self, structure, shell_keys, deck, bindings, path, defaults, bounds, fast=True,
                  known=None):  # fmt: skip
@@ -485,6 +492,7 @@ class LineAssembler(GeneralAssembler):
         self._box = (defaults, bounds)
         self._fields = None if fast else (None, "the reference path was asked for")
         self._known = known if fast and _same_box(known, self.rebuild, self._box) else None
+        self._last = (None, None)  # (key, (K, M, elem)) of the last assembly
 
     @property
     def fields(self) -> "LineFields | None":
@@ -519,6 +527,9 @@ class LineAssembler(GeneralAssembler):
         return K - K0, M - M0
 
     def assemble(self, props, shell_props=None):
+        key = _assembly_key(self.values, self.rebuild.bindings, props, shell_props)
+        if key == self._last[0]:
+            return self._last[1]
         K, M, elem = super().assemble(props, shell_props)
         defaults = self._box[0]
         if self.values is not None and any(self.values[n] != defaults[n]
@@ -526,6 +537,7 @@ class LineAssembler(GeneralAssembler):
             dK, dM = self.line_delta(self.values)
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM
+        self._last = (key, (K, M, elem))
         return K, M, elem
 
 
@@ -542,6 +554,14 @@ def _same_box(known, rebuild: LineRebuild, box) -> bool:
                 for n, b in assembler_bindings.items()]  # fmt: skip
 
     return key(rebuild.bindings, *box) == key(known.rebuild.bindings, *known._box)  # noqa: SLF001
+
+
+def _assembly_key(values, names, props, shell_props) -> tuple:
+    """What an assembly depends on: the bound line fields' values and the exact bytes of the
+    element property arrays (``fe.assembly.ElementProperties``, shell (t, E, rho))."""
+    line = None if values is None else tuple(float(values[n]) for n in names)
+    arrays = [getattr(props, f.name) for f in dataclass_fields(props)] + list(shell_props or ())
+    return line, tuple(np.ascontiguousarray(a).tobytes() for a in arrays)
 
 
 @dataclass(frozen=True, eq=False)

@@ -62,6 +62,18 @@ PARAMETERS = {
     "m_foam": (f"CONM2 {_FOAM} M scale", (0.05, 2.0)),
     "rho_wing": ("MAT1 903 RHO scale", (0.5, 8.0)),
 }
+#: the optimizer's starts (``calibrate --seed 0``: all 5 starts reach one optimum), without
+#: the Nelder-Mead polish, which costs about 5x the least-squares search in full solves
+STARTS = 4
+#: the sampler's walkers: 2 per parameter (emcee's least), so that its three adaptation
+#: stages of 250 steps cost 6,000 evaluations rather than the default 32 walkers' 24,000.
+#: Full solves (``[sampler] reduced = false``), about 19 ms of CPU an evaluation: the reduced
+#: basis of these four bound fields certifies (size 58, error 2.9e-5), but ``calibrate`` on
+#: it took 117 s CPU with the build and 77 s with the basis loaded from the cache (the line
+#: fields' interpolation over the 4-d box and the compression of its terms are redone on
+#: load: 58 + 149 s of a profiled load), against about 15 s in full solves; sample's screen
+#: would build a second one (``benchmarks/aircraft_commands.py --basis``)
+WALKERS = 8
 #: discover's design variable: one flap bending scale of the whole wing, so that the few paired
 #: modes can still decide between effects (discover needs more modes than parameters)
 DISCOVER_PARAMETERS = {
@@ -107,10 +119,8 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
     if calibration_modes is not None:
         lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
-    # full solves: the reduced basis of these four bound fields certifies (size 58, error
-    # 2.9e-5) but its build took 410 s CPU (non-affine line fields interpolated over a 4-d box),
-    # against 14-17 ms per full solve of the deck; sample's screen would build it too
-    lines += ["[sampler]", "reduced = false", "screen = false"]
+    lines += [f"[optimizer]\nstarts = {STARTS}\npolish = false",
+              f"[sampler]\nwalkers = {WALKERS}\nreduced = false\nscreen = false"]  # fmt: skip
     if parameters:
         for name, (binds, (low, high)) in parameters.items():
             lines += [f"[parameters.{name}]", f'binds = "{binds}"', f"bounds = [{low}, {high}]"]

@@ -157,7 +157,7 @@ def test_an_evaluation_assembles_once_and_its_mass_properties_are_unchanged(monk
     (``nastran.lines.LineAssembler`` keeps the last assembly); the mass properties it gives are
     those of a model that assembles afresh (the same bits), and a move of a line field
     (``I1_wing``) or of a property array alone (``m_foam``: CONM2 M) is not served stale."""
-    from bayesupdate.fe.sparse_assembly import GeneralAssembler
+    from bayesupdate.fe.assembly import GeneralAssembler
     from bayesupdate.nastran import load_nastran_model
 
     tables = {n: {"binds": b, "bounds": list(bd)} for n, (b, bd) in ac.PARAMETERS.items()}

@@ -382,7 +382,9 @@ def _screened(screen: LogPosterior | None, d: int, guarded, guard) -> ScreenedLo
         raise BayesUpdateError("sampler: the screening posterior has other parameters")
     # its mass term from a verified polynomial (``inference.mass_fit``): a screen only
     # decides which proposals get an exact evaluation, so the target stays exact
-    screen = screen.with_fitted_mass(seed=0)
+    # (a screen that is not a ``LogPosterior`` has no mass term to fit)
+    fitted = getattr(screen, "with_fitted_mass", None)
+    screen = screen if fitted is None else fitted(seed=0)
     return ScreenedLogDensity(guard(screen, key="screen_s"), guarded)
 
 

@@ -32,6 +32,14 @@ Runs, through the CLI in this process (the user's path):
   small discovery);
 - ``sample`` of the exhaust against the same data, 16 walkers, 60 steps, DE moves, 2 starts.
 
+Measured (this script): discover enters 11 rooms and climbs at 2 sites (26 events), both
+executor callbacks (``discovery.workflow:discovery_task``, ``inference.optimize:_fit_start``);
+sample enters 10 rooms and climbs at 2 sites (9 events), ``_fit_start`` and
+``fe.reduced.basis:_solve_point``.  Before discovery had one task entry and built its refits'
+residual function itself, discover climbed at 5 sites (388 events): three discovery task
+functions, ``_fit_start`` and inference's ``unit_box_residuals`` calling discovery's
+``residuals_at``.
+
 Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every crossing site)
 """
 

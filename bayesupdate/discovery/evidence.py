@@ -59,7 +59,8 @@ from bayesupdate.inference.parameter_space import (
     EvaluationCount,
     ParameterSpace,
     ParameterSpec,
-    unit_box_residuals,
+    failed_residuals,
+    screened_residuals,
 )
 
 
@@ -124,16 +125,24 @@ class FitSpace:
 
     def unit_box_residuals(self, count: EvaluationCount):
         """r(u) (size,): ``residual_vector`` at theta(u) for a least-squares fit in the unit box,
-        with the failure convention of ``parameter_space.unit_box_residuals``."""
+        with the failure convention of ``parameter_space.unit_box_residuals``
+        (``screened_residuals``).  The function is built here, not handed down to
+        ``parameter_space``, so the solver's calls stay in discovery's code."""
+        failed = failed_residuals(self.residual_units)
+        theta_from_u = self.parameter_space.theta_from_u
 
-        def residuals_at(theta):
-            e, evaluation = self.relative_errors(theta)
-            if not evaluation.ok:
-                return None
-            shapes = None if evaluation.paired is None else evaluation.paired.shapes
-            return self.residual_vector(e, shapes)
+        def residuals(u: np.ndarray) -> np.ndarray:
+            return screened_residuals(self._residuals_at(theta_from_u(u)), failed, count)
 
-        return unit_box_residuals(self.parameter_space, residuals_at, self.residual_units, count)
+        return residuals
+
+    def _residuals_at(self, theta) -> np.ndarray | None:
+        """``residual_vector`` (size,) at theta, None where the model failed."""
+        e, evaluation = self.relative_errors(theta)
+        if not evaluation.ok:
+            return None
+        shapes = None if evaluation.paired is None else evaluation.paired.shapes
+        return self.residual_vector(e, shapes)
 
     def relative_errors(self, theta) -> tuple[np.ndarray, object]:
         """e (m,) at theta and the problem's Evaluation (e NaN where the model failed)."""

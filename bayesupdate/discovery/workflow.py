@@ -572,7 +572,7 @@ def _localize(
     # candidates that are one model (``twins``) are scored once
     with phase(CANDIDATES_PHASE, twins.count_once(candidates), "candidates") as shown:
         scored = twins.map_once(
-            executor, score_task, candidates, candidates, args, twins.twin_score,
+            executor, discovery_task, candidates, candidates, ("score", args), twins.twin_score,
             shown.progress_callback(),
         )  # fmt: skip
     return localize(*args, [], model_modes, flags.flagged, scored=scored)
@@ -640,7 +640,8 @@ def _quick_refits(
     candidates = [score.candidate for score in chosen]
     with phase("discovery: quick refits", twins.count_once(candidates), "fits") as shown:
         fits = twins.map_once(
-            executor, _quick_refit, chosen, candidates, (base_fit, settings), twins.twin_fit,
+            executor, discovery_task, chosen, candidates, ("quick", (base_fit, settings)),
+            twins.twin_fit,
             shown.progress_callback(),
         )  # fmt: skip
     quick = list(zip(fits, chosen, strict=True))
@@ -675,16 +676,32 @@ def _full_refits(
         fits.extend(
             twins.map_once(
                 executor,
-                _full_refit,
+                discovery_task,
                 best,
                 candidates,
-                shared,
+                ("full", shared),
                 twins.twin_fit,
                 shown.progress_callback(),
             )
         )
     fits.sort(key=lambda f: -f.log_evidence)
     return fits
+
+
+#: the discovery's executor tasks by kind (``discovery_task``)
+_TASKS = {"score": score_task, "quick": _quick_refit, "full": _full_refit}
+
+
+def discovery_task(shared: tuple, item):
+    """The one function the discovery hands an executor (``compute.executors``: it calls
+    fn(shared, item) per item): shared = (kind, that task's shared data), kind "score"
+    (``localization.score_task``, item a Candidate), "quick" (``_quick_refit``, item a
+    CandidateScore) or "full" (``_full_refit``, item a quick ModelFit).  Every step's map
+    goes through this entry, so the executor calls into discovery at one place whatever the
+    step (the callback the lower room holds is one function), and the step's result is that
+    task's, unchanged.  Returns that task's result."""
+    kind, data = shared
+    return _TASKS[kind](data, item)
 
 
 def _refits(

@@ -251,14 +251,30 @@ def unit_box_residuals(
     or a non-finite residual gives FAILED_RELATIVE_ERROR / units (module docstring); ``count``
     counts evaluations and failures.
     """
-    failed = FAILED_RELATIVE_ERROR / np.asarray(units, dtype=float)
+    failed = failed_residuals(units)
 
     def residuals(u: np.ndarray) -> np.ndarray:
-        count.evaluations += 1
-        r = residuals_at(space.theta_from_u(u))
-        if r is None or not np.all(np.isfinite(r)):
-            count.failed += 1
-            return failed.copy()
-        return r
+        return screened_residuals(residuals_at(space.theta_from_u(u)), failed, count)
 
     return residuals
+
+
+def failed_residuals(units: np.ndarray) -> np.ndarray:
+    """(size,) the residual of a failed evaluation: FAILED_RELATIVE_ERROR / units (module
+    docstring), units (size,) each component's unit as a relative error."""
+    return FAILED_RELATIVE_ERROR / np.asarray(units, dtype=float)
+
+
+def screened_residuals(
+    r: np.ndarray | None, failed: np.ndarray, count: EvaluationCount
+) -> np.ndarray:
+    """One evaluation of a unit-box fit under the failure convention (module docstring): r
+    (size,), or a copy of ``failed`` (``failed_residuals``) where r is None or not finite.
+    Counts the evaluation, and the failure, in ``count``.  A caller that evaluates its own
+    model (discovery's ``FitSpace``) builds its r(u) from this and ``theta_from_u``, so the
+    fit's function stays in the caller's room."""
+    count.evaluations += 1
+    if r is None or not np.all(np.isfinite(r)):
+        count.failed += 1
+        return failed.copy()
+    return r

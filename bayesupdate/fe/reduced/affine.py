@@ -32,7 +32,12 @@ from bayesupdate.fe.reduced.interpolation import (
     piecewise_nodes,
     tensor_weights,
 )
-from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms, pattern_part
+from bayesupdate.fe.reduced.shell_terms import (
+    SparsePart,
+    general_terms,
+    pattern_part,
+    shell_parameters,
+)
 
 #: 1-D interpolation degrees tried in turn for each non-linear parameter
 DEGREES = (4, 6, 8, 12, 16, 24, 32)
@@ -179,6 +184,15 @@ def decompose(
         _gather(m_entries),
         _one_d_batches(groups),
     )
+
+
+def check_separable(fe: FEModel, terms: AffineTerms) -> None:
+    """Raise the ``BayesUpdateError`` of ``decompose`` when two parameters set the same property
+    of one element (beam, shell) or scale the same point mass or spring: the checks that need no
+    element matrix (the cache key of a basis is computed without decomposing)."""
+    _beam_keys(terms, len(fe.structure.beam_part))
+    if fe.structure.shells is not None:
+        shell_parameters(terms, fe.structure.shells.n_elements)
 
 
 def _line_groups(fe: FEModel, bounds, interp_tol: float) -> list:

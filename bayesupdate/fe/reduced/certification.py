@@ -20,7 +20,12 @@ from bayesupdate import __version__
 from bayesupdate.compute.cache import ArrayStore, content_key
 from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.reduced.affine import coefficient_arrays, coefficient_map, decompose
+from bayesupdate.fe.reduced.affine import (
+    check_separable,
+    coefficient_arrays,
+    coefficient_map,
+    decompose,
+)
 from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis
 from bayesupdate.fe.reduced.estimator import ResidualIndicator
 
@@ -209,7 +214,8 @@ _KEY_POINTS = 2
 
 def basis_key(model) -> str:
     """The key a certified basis of ``model`` (built or not) is kept under by ``build``: the
-    content of everything it depends on (``_cache_key``), without building it."""
+    content of everything it depends on (``_cache_key``), without building it.  Raises
+    ``BayesUpdateError`` for a model without a reduced form (``affine.check_separable``)."""
     return _cache_key(model, model.mapping(model.centre()))
 
 
@@ -225,12 +231,14 @@ def _cache_key(model, centre) -> str:
     check of a loaded basis (``_load``) guards the rest: a model that differs only away from
     those points gives frequencies the stored basis misses, and is rebuilt."""
     fe = model.fe
+    terms = fe.affine_terms()
+    check_separable(fe, terms)  # a model without a reduced form has no key (as no basis)
     u = qmc.Sobol(len(model.parameter_names), scramble=True, seed=_KEY_SEED).random(_KEY_POINTS)
     probes = [centre, *(model.mapping(row) for row in model.scale(u))]
     matrices = [fe.matrices(p) for p in probes]
     return content_key(
         _CACHE_FORMAT, __version__, type(fe).__qualname__, model.parameter_names, model.bounds,
-        model.settings, fe.affine_terms(), dict(getattr(fe, "bindings", {})),
+        model.settings, terms, dict(getattr(fe, "bindings", {})),
         fe.default_parameters(), matrices, fe.rigid_motions(), tuple(fe.structure.sensor_labels),
     )  # fmt: skip
 

@@ -15,7 +15,7 @@ second loads it from the cache.  Printed per command: wall time, CPU time of the
 phases it reports, and its headline (objective, convergence or verdict).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/aircraft_commands.py [--skip-discover]
-        [--basis]
+        [--basis | --basis-only]
 """
 
 import argparse
@@ -85,6 +85,9 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--skip-discover", action="store_true")
     parser.add_argument("--basis", action="store_true", help="time the reduced basis too")
+    parser.add_argument("--basis-only", action="store_true",
+                        help="time the reduced basis alone (no full-solve calibrate, sample, "
+                        "discover)")  # fmt: skip
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -95,15 +98,19 @@ def main() -> None:
         def first_line(out: str) -> str:
             return out.strip().splitlines()[0] if out.strip() else ""
 
-        timed = command(["calibrate", update, "--out", folder / "cal.h5", "--force"], env, folder)
-        report("calibrate, defaults (full solves)", timed, first_line)
-        if args.basis:
+        if not args.basis_only:
+            timed = command(["calibrate", update, "--out", folder / "cal.h5", "--force"], env,
+                            folder)  # fmt: skip
+            report("calibrate, defaults (full solves)", timed, first_line)
+        if args.basis or args.basis_only:
             reduced = folder / "update_reduced.toml"
             reduced.write_text(update.read_text().replace("reduced = false", "reduced = true"))
             for run in ("first run (basis built)", "second run (basis cached)"):
                 timed = command(["calibrate", reduced, "--out", folder / "cal_reduced.h5",
                                  "--force"], env, folder)  # fmt: skip
                 report(f"calibrate on the reduced basis, {run}", timed, first_line)
+        if args.basis_only:
+            return
         timed = command(["sample", update, "--out", folder / "post.h5", "--force"], env, folder)
         report("sample, defaults", timed, lambda out: _line_with(out, "walkers"))
         if not args.skip_discover:

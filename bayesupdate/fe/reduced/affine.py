@@ -32,7 +32,12 @@ from bayesupdate.fe.reduced.interpolation import (
     piecewise_nodes,
     tensor_weights,
 )
-from bayesupdate.fe.reduced.shell_terms import SparsePart, general_terms, pattern_part
+from bayesupdate.fe.reduced.shell_terms import (
+    SparsePart,
+    general_terms,
+    pattern_part,
+    shell_parameters,
+)
 
 #: 1-D interpolation degrees tried in turn for each non-linear parameter
 DEGREES = (4, 6, 8, 12, 16, 24, 32)
@@ -81,6 +86,11 @@ class AffineDecomposition:
     k_gather: tuple[np.ndarray, np.ndarray, np.ndarray]
     m_gather: tuple[np.ndarray, np.ndarray, np.ndarray]
     one_d: tuple
+
+    @property
+    def has_terms(self) -> bool:
+        """False for a coefficient map read from the cache (``coefficient_map``): no stacks."""
+        return bool(self.k_stacks)
 
     def coefficients(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(B, n_k_terms), (B, n_m_terms) coefficients at theta (B, n_params) (all names, SI)."""
@@ -174,6 +184,15 @@ def decompose(
         _gather(m_entries),
         _one_d_batches(groups),
     )
+
+
+def check_separable(fe: FEModel, terms: AffineTerms) -> None:
+    """Raise the ``BayesUpdateError`` of ``decompose`` when two parameters set the same property
+    of one element (beam, shell) or scale the same point mass or spring: the checks that need no
+    element matrix (the cache key of a basis is computed without decomposing)."""
+    _beam_keys(terms, len(fe.structure.beam_part))
+    if fe.structure.shells is not None:
+        shell_parameters(terms, fe.structure.shells.n_elements)
 
 
 def _line_groups(fe: FEModel, bounds, interp_tol: float) -> list:
@@ -443,3 +462,46 @@ def _rel_err(approx: np.ndarray, exact: np.ndarray) -> float:
     """Largest entry error of each element matrix relative to its largest entry."""
     scale = np.abs(exact).max(axis=(-2, -1))
     return float(np.max(np.abs(approx - exact).max(axis=(-2, -1)) / np.maximum(scale, 1e-300)))
+
+
+# -- the coefficient map alone (a cached basis) ---------------------------------------------------
+def coefficient_arrays(d: AffineDecomposition) -> dict[str, np.ndarray]:
+    """The arrays ``coefficients`` needs (groups, gathers), for storage (``coefficient_map``
+    reads them back); the term stacks are left out."""
+    out = {"names": np.array(d.names, dtype=str), "n_groups": np.array(len(d.groups))}
+    for which, (a, b, c) in (("k", d.k_gather), ("m", d.m_gather)):
+        out[f"{which}_gather_ab"] = np.array([a, b], dtype=np.int64).reshape(2, -1)
+        out[f"{which}_gather_c"] = np.asarray(c, float)
+    for g, group in enumerate(d.groups):
+        out[f"group_{g}_elements"] = np.asarray(group.elements, np.int64)
+        out[f"group_{g}_ints"] = np.array(
+            [group.k_scale, group.m_scale, len(group.nonaffine), *group.nonaffine, *group.degrees],
+            dtype=np.int64,
+        )
+        for i, piece in enumerate(group.pieces):
+            out[f"group_{g}_piece_{i}"] = np.asarray(piece, float)
+    return out
+
+
+def coefficient_map(arrays) -> AffineDecomposition:
+    """The ``AffineDecomposition`` stored by ``coefficient_arrays``: its ``coefficients`` are the
+    stored decomposition's, its ``k_stacks`` / ``m_stacks`` empty (``has_terms`` False: whoever
+    needs the terms decomposes again).  Raises KeyError / ValueError on a malformed entry."""
+    groups = []
+    for g in range(int(arrays["n_groups"])):
+        ints = [int(v) for v in arrays[f"group_{g}_ints"]]
+        k_scale, m_scale, n = ints[:3]
+        nonaffine, degrees = tuple(ints[3 : 3 + n]), tuple(ints[3 + n : 3 + 2 * n])
+        if len(degrees) != n:
+            raise ValueError(f"group {g}: {n} parameters, {len(degrees)} degrees")
+        pieces = tuple(np.asarray(arrays[f"group_{g}_piece_{i}"], float) for i in range(n))
+        elements = np.asarray(arrays[f"group_{g}_elements"], int)
+        groups.append(InterpolatedGroup(elements, nonaffine, pieces, degrees, k_scale, m_scale))
+    gathers = []
+    for which in ("k", "m"):
+        ab, c = arrays[f"{which}_gather_ab"], np.asarray(arrays[f"{which}_gather_c"], float)
+        if ab.shape != (2, c.size):
+            raise ValueError(f"{which} gather of shape {ab.shape} for {c.size} terms")
+        gathers.append((ab[0].astype(int), ab[1].astype(int), c))
+    names = tuple(str(n) for n in arrays["names"])
+    return AffineDecomposition(names, tuple(groups), (), (), *gathers, _one_d_batches(groups))

@@ -20,8 +20,13 @@ from bayesupdate import __version__
 from bayesupdate.compute.cache import ArrayStore, content_key
 from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.reduced.affine import decompose
-from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis, projected_basis
+from bayesupdate.fe.reduced.affine import (
+    check_separable,
+    coefficient_arrays,
+    coefficient_map,
+    decompose,
+)
+from bayesupdate.fe.reduced.basis import ReducedBasis, full_solves, pod_basis
 from bayesupdate.fe.reduced.estimator import ResidualIndicator
 
 # ``model`` below is a ``fe.reduced.model.ReducedFEModel``: not imported, not even for type
@@ -85,17 +90,18 @@ def build(model, executor=None, store: ArrayStore | None = None) -> Certificatio
     with its settings; warns and returns an uncertified result when ``max_size`` is reached.
     The snapshot and validation solves run on ``executor`` (None: in this process).  A certified
     basis is kept in ``store`` (``compute.cache``; None: the environment's) under the content of
-    the model's terms, box and settings, and a later build of the same content loads it and
-    re-certifies it at ``RECHECK_POINTS`` fresh points instead of building it again."""
+    the model's terms, box and settings (``_cache_key``), and a later build of the same content
+    reads the projected terms and their coefficient map back, neither decomposing nor projecting
+    again, and re-certifies them at ``RECHECK_POINTS`` fresh points (full solves)."""
     fe, st = model.fe, model.settings
     centre = model.mapping(model.centre())
     _check_free_free(fe, centre)
-    decomposition = decompose(fe, model.bounds, st.interp_tol)
     store = ArrayStore.from_environment() if store is None else store
-    key = _cache_key(model, decomposition, centre) if store.enabled else ""
-    cached = _load(model, decomposition, store.load(key), executor) if key else None
+    key = _cache_key(model, centre) if store.enabled else ""
+    cached = _load(model, store.load(key), executor) if key else None
     if cached is not None:
         return cached
+    decomposition = decompose(fe, model.bounds, st.interp_tol)
     result = _build(model, decomposition, centre, executor)
     if key and result.certified:
         store.save(key, _arrays(result))
@@ -199,56 +205,100 @@ RECHECK_POINTS = 4
 #: the seed offset of those points (the build's validation sets use seed + 1000 + round)
 _RECHECK_SEED = 7919
 #: format of a cached basis; bump when the stored arrays change meaning
-_CACHE_FORMAT = "reduced-basis-1"
+_CACHE_FORMAT = "reduced-basis-2"
+#: seed of the box points whose assembled K, M join the key (besides the centre)
+_KEY_SEED = 3571
+#: how many such points
+_KEY_POINTS = 2
 
 
 def basis_key(model) -> str:
     """The key a certified basis of ``model`` (built or not) is kept under by ``build``: the
-    content of everything it depends on (``_cache_key``), without building it."""
-    centre = model.mapping(model.centre())
-    return _cache_key(model, decompose(model.fe, model.bounds, model.settings.interp_tol), centre)
+    content of everything it depends on (``_cache_key``), without building it.  Raises
+    ``BayesUpdateError`` for a model without a reduced form (``affine.check_separable``)."""
+    return _cache_key(model, model.mapping(model.centre()))
 
 
-def _cache_key(model, decomposition, centre) -> str:
-    """Everything the basis depends on: the affine terms (hence K(theta), M(theta)), the matrices
-    and rigid motions at the centre, the box, the settings, the sensors and the package."""
+def _cache_key(model, centre) -> str:
+    """Everything the basis depends on, without decomposing: the package version and the entry
+    format; the parameter names, box and settings (``interp_tol`` included); the model's term
+    description ``fe.affine_terms()`` (which elements each parameter acts on, how it enters, the
+    element properties at the defaults and at unit values), its bindings (a deck binding names
+    its cards, fields, factor and line elements) and defaults; the assembled K, M at the centre
+    and at ``_KEY_POINTS`` seeded points of the box, which see every element, material and deck
+    value and the parameters' non-linear action on them (what the interpolated groups and a
+    deck's line fields are built from); the rigid motions and the sensors.  The fresh-point
+    check of a loaded basis (``_load``) guards the rest: a model that differs only away from
+    those points gives frequencies the stored basis misses, and is rebuilt."""
     fe = model.fe
-    K0, M0 = fe.matrices(centre)
+    terms = fe.affine_terms()
+    check_separable(fe, terms)  # a model without a reduced form has no key (as no basis)
+    u = qmc.Sobol(len(model.parameter_names), scramble=True, seed=_KEY_SEED).random(_KEY_POINTS)
+    probes = [centre, *(model.mapping(row) for row in model.scale(u))]
+    matrices = [fe.matrices(p) for p in probes]
     return content_key(
-        _CACHE_FORMAT, __version__, model.parameter_names, model.bounds, model.settings,
-        decomposition, K0, M0, fe.rigid_motions(), tuple(fe.structure.sensor_labels),
+        _CACHE_FORMAT, __version__, type(fe).__qualname__, model.parameter_names, model.bounds,
+        model.settings, terms, dict(getattr(fe, "bindings", {})),
+        fe.default_parameters(), matrices, fe.rigid_motions(), tuple(fe.structure.sensor_labels),
     )  # fmt: skip
 
 
 def _arrays(c: Certification) -> dict[str, np.ndarray]:
-    cert = c.certificate
+    """What a load needs: the basis and its sensor read-out, the projected compressed terms and
+    their coefficient map (``affine.coefficient_arrays``), the certificate, rounds, checked sets."""
+    cert, basis = c.certificate, c.basis
     history = [(h.round, h.size, h.max_rel_error, h.pod_tol) for h in c.history]
     arrays = {
-        "V": c.basis.V,
-        "n_rigid": np.array(c.basis.n_rigid),
+        "V": basis.V,
+        "V_sensor": basis.V_sensor,
+        "n_rigid": np.array(basis.n_rigid),
+        "rigid_energy": np.array(basis.rigid_energy),
+        "K_C": basis.K_terms[0],
+        "K_B": basis.K_terms[1],
+        "M_C": basis.M_terms[0],
+        "M_B": basis.M_terms[1],
         "certificate": np.array([cert.max_rel_error, cert.min_signed_error, cert.n_points]),
         "history": np.array(history, float).reshape(-1, 4),
     }
+    arrays.update({f"map_{k}": v for k, v in coefficient_arrays(basis.decomposition).items()})
     for i, (theta, f) in enumerate(c.checked):
         arrays[f"checked_theta_{i}"], arrays[f"checked_f_{i}"] = theta, f
     return arrays
 
 
-def _load(model, decomposition, arrays, executor) -> Certification | None:
-    """The stored certification rebuilt on ``decomposition`` and checked at fresh points; None
-    (with a note when the check fails) when there is nothing usable."""
+def _stored(model, arrays) -> tuple[ReducedBasis, tuple, tuple]:
+    """(basis, history, checked sets) of a stored entry; KeyError / ValueError when malformed.
+    The basis holds the stored coefficient map, without term stacks (``AffineDecomposition``
+    ``.has_terms``)."""
+    decomposition = coefficient_map({k[4:]: v for k, v in arrays.items() if k.startswith("map_")})
+    if decomposition.names != tuple(model.parameter_names):
+        raise ValueError(f"parameters {decomposition.names}, not {model.parameter_names}")
+    V, nr = arrays["V"], int(arrays["n_rigid"])
+    coupled = bool(arrays["rigid_energy"])
+    K_terms, M_terms = (arrays["K_C"], arrays["K_B"]), (arrays["M_C"], arrays["M_B"])
+    r_k = V.shape[1] if coupled else V.shape[1] - nr
+    if K_terms[1].shape[1] != r_k**2 or M_terms[1].shape[1] != V.shape[1] ** 2:
+        raise ValueError(f"stored terms do not fit a basis of size {V.shape[1]}")
+    basis = ReducedBasis(decomposition, V, arrays["V_sensor"], nr, K_terms, M_terms, coupled)
+    history = tuple(BuildRound(int(r), int(z), float(x), float(p)) for r, z, x, p in
+                    arrays["history"])  # fmt: skip
+    checked = tuple(
+        (arrays[f"checked_theta_{i}"], arrays[f"checked_f_{i}"])
+        for i in range(sum(k.startswith("checked_theta_") for k in arrays))
+    )
+    return basis, history, checked
+
+
+def _load(model, arrays, executor) -> Certification | None:
+    """The stored certification read back (no decomposition, no projection) and checked at
+    fresh points; None (with a note when the entry is unreadable or the check fails) when
+    there is nothing usable."""
     if arrays is None:
         return None
     st = model.settings
     try:
-        basis = projected_basis(model.fe, decomposition, arrays["V"], int(arrays["n_rigid"]))
+        basis, history, checked = _stored(model, arrays)
         e, s, n = arrays["certificate"]
-        history = tuple(BuildRound(int(r), int(z), float(x), float(p)) for r, z, x, p in
-                        arrays["history"])  # fmt: skip
-        checked = tuple(
-            (arrays[f"checked_theta_{i}"], arrays[f"checked_f_{i}"])
-            for i in range(sum(k.startswith("checked_theta_") for k in arrays))
-        )
     except (KeyError, ValueError) as exc:
         warnings.warn(f"cached reduced basis unreadable ({exc}); rebuilding", RuntimeWarning,
                       stacklevel=4)  # fmt: skip
@@ -335,7 +385,10 @@ def _enriched(model, theta: np.ndarray, f_full: np.ndarray, extra: np.ndarray):
     c, st, fe = model.certification, model.settings, model.fe
     snaps = np.concatenate([c.basis.V[:, c.basis.n_rigid :], extra], axis=1)
     centre = model.mapping(model.centre())
-    basis = pod_basis(fe, c.basis.decomposition, centre, snaps, 0.0, st.n_modes)
+    decomposition = c.basis.decomposition
+    if not decomposition.has_terms:  # a basis read from the cache holds its coefficients only
+        decomposition = decompose(fe, model.bounds, st.interp_tol)
+    basis = pod_basis(fe, decomposition, centre, snaps, 0.0, st.n_modes)
     errors = [compare(basis, t, f, st.n_modes) for t, f in [*c.checked, (theta, f_full)]]
     cert = errors[-1]
     worst = max(e.max_rel_error for e in errors)

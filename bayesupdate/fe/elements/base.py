@@ -226,6 +226,12 @@ def line_dofs(nodes: np.ndarray) -> np.ndarray:
     return (6 * nodes[:, :, None] + np.arange(6)).reshape(-1, 12)
 
 
+def grounded_line_dofs(nodes: np.ndarray) -> np.ndarray:
+    """(n, 12) global DOF numbers of two-node elements whose second node may be ground (-1):
+    a grounded element repeats node A there (its B block is zero)."""
+    return line_dofs(np.where(nodes >= 0, nodes, nodes[:, :1]))
+
+
 def quadratic_forms(mats: np.ndarray, dofs: np.ndarray, shapes: np.ndarray) -> np.ndarray:
     """(n_e, m) phi_e^T A_e phi_e of stacks A (n_e, k, k) with DOF maps (n_e, k) for shapes
     (n_dof, m): twice an element's strain energy (A = K) or its kinetic energy per unit

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register
+from bayesupdate.fe.elements.base import ElementSettings, grounded_line_dofs, register
 
 
 @register
@@ -43,14 +43,9 @@ class ScalarMasses:
     def n_elements(self) -> int:
         return int(self.nodes.shape[0])
 
-    @property
-    def grounded(self) -> np.ndarray:
-        return self.nodes[:, 1] < 0
-
     def dofs(self) -> np.ndarray:
-        """(n, 12) global DOF numbers; a grounded element repeats node A (its B block is 0)."""
-        nodes = np.where(self.nodes >= 0, self.nodes, self.nodes[:, :1])
-        return line_dofs(nodes)
+        """(n, 12) global DOF numbers (``base.grounded_line_dofs``)."""
+        return grounded_line_dofs(self.nodes)
 
     def matrices(self, xyz: np.ndarray, settings: ElementSettings):
         """(K, M) (n, 12, 12): K = 0 and M_e = m v v^T, v = (d_A, -d_B) (the node positions and

@@ -21,7 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, in_elements, line_dofs, register
+from bayesupdate.fe.elements.base import (
+    ElementSettings,
+    grounded_line_dofs,
+    in_elements,
+    register,
+)
 
 
 @register
@@ -44,9 +49,8 @@ class ScalarSprings:
         return int(self.nodes.shape[0])
 
     def dofs(self) -> np.ndarray:
-        """(n, 12) global DOF numbers; a grounded element repeats node A (its B block is 0)."""
-        nodes = np.where(self.nodes >= 0, self.nodes, self.nodes[:, :1])
-        return line_dofs(nodes)
+        """(n, 12) global DOF numbers (``base.grounded_line_dofs``)."""
+        return grounded_line_dofs(self.nodes)
 
     def matrices(self, xyz: np.ndarray, settings: ElementSettings):
         """(K, M) (n, 12, 12): K_e = k v v^T, v = (d_A, -d_B), and M = 0 (the node positions

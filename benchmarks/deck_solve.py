@@ -29,9 +29,10 @@ machine shared with other jobs (the wall time also counts waits for a core):
   of its refusals of the deck as published, then its frequencies on the flat deck
   ``nastran.flat`` writes for it (one file, large fields, CBEAM as CBAR + twist inertia, a held
   GRID for the grounded CBUSH, no SUPORT, CONM2 in basic axes with the inertia fields MYSTRAN's
-  product convention needs), beside MSC's f06 and this package's frequencies of that deck
-  (modes 7-20), and the wall and CPU time of a MYSTRAN run beside this package's load + solve
-  and solve alone (medians of ``min(repeats, 5)``).
+  product convention needs, EIGRL for EIGR), beside MSC's f06 and this package's frequencies
+  of that deck (modes 7-20; v4.2 and v4.2.1: MYSTRAN's largest difference), and the wall and
+  CPU time of a MYSTRAN run beside this package's load + solve and solve alone (medians of
+  ``min(repeats, 5)``).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/deck_solve.py [--repeats 20]
         [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY] [--deck-dir DIR]
@@ -64,6 +65,11 @@ MAIN = "sol103_mAEWing1_Hati_FEMv3p3.bdf"
 BINDS = {"i1_1003": "PBEAM 1003 I1", "i1_1004": "PBEAM 1004 I1", "a_1005": "PBEAM 1005 A"}
 FACTORS = ((1.1, 0.9, 1.25), (0.6, 1.8, 0.7), (1.9, 0.55, 1.4))
 GVT_HZ = (7.80, 19.07, 31.71)
+#: the authors' updated decks beside v3.3 (MYSTRAN's frequencies on their flat decks)
+UPDATED = (
+    ("v4.2_updated/sol103_mAEWing1_FEMv4p2.bdf", "sol103_maewing1_femv4p2.f06"),
+    ("v4.2.1_updated/sol103_mAEWing1_FEMv4p2p1.bdf", "sol103_maewing1_femv4p2p1.f06"),
+)
 N_MODES = 20
 
 
@@ -285,6 +291,16 @@ def mystran(folder: Path, repeats: int = 5, exe: Path | None = None) -> None:
     print("  mode   MSC f06 [Hz]   bayesupdate      MYSTRAN   MYSTRAN/MSC-1  ours/MSC-1")
     for k, (m, b, y) in enumerate(zip(msc, ours[:n], elastic, strict=False), start=7):
         print(f"  {k:4d} {m:12.5f} {b:12.5f} {y:12.5f}   {y / m - 1:+.1e}     {b / m - 1:+.1e}")
+    for deck, f06 in UPDATED:
+        path = folder.parent / deck
+        if path.is_file():
+            with tempfile.TemporaryDirectory() as tmp:
+                write_flat_deck(path, Path(tmp) / "flat.bdf", mystran=True)
+                hz = _mystran_hz(_mystran_run(exe, Path(tmp), "flat.bdf")[0])
+            msc = _msc_hz(path.parent, f06)[6 : 6 + n]
+            miss = np.abs(hz[hz > 1.0][:n] / msc - 1).max()
+            print(f"MYSTRAN on the flat deck of {deck}: modes 7-{6 + n} within {miss:.1e} of "
+                  f"its f06")  # fmt: skip
 
 
 def _ours_timed(deck: Path, repeats: int):
@@ -302,12 +318,12 @@ def _ours_timed(deck: Path, repeats: int):
     return hz, tuple(np.median(load, axis=0)), tuple(np.median(solve, axis=0))
 
 
-def _msc_hz(folder: Path) -> np.ndarray:
+def _msc_hz(folder: Path, f06: str = "sol103_maewing1_hati_femv3p3.f06") -> np.ndarray:
     """MSC's cycles of every mode in the deck's .f06 (``tests/test_nastran_maewing1``)."""
     sys.path.insert(0, str(ROOT / "tests"))
     from test_nastran_maewing1 import f06_table
 
-    return f06_table(folder / "sol103_maewing1_hati_femv3p3.f06")[0]
+    return f06_table(folder / f06)[0]
 
 
 def main() -> None:

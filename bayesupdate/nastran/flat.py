@@ -12,7 +12,9 @@ model as MSC reads it:
 1. the executive and case control are copied (tabs expanded); ``INCLUDE``d files are read in
    (``deck.read_deck``: case-insensitive names);
 2. every bulk card is written from its parsed fields as large-field lines
-   (``bulk.large_field_text``: 16-character fields, no tabs, no continuation markers);
+   (``bulk.large_field_text``: 16-character fields, no tabs, no continuation markers); a real
+   this module computes is written with a decimal point ("5.e-06": MYSTRAN refuses "5e-06",
+   "NO DECIMAL POINT WAS FOUND");
 3. a PBEAM of one section (no end-B station: end B is end A, QRG PBEAM) without warping, NSI,
    shear-relief or neutral-axis terms is the PBAR of the same beam (A, I1, I2, I12, J, NSM,
    and K1, K2, whose PBEAM default 1.0 is written: a PBAR's blank K is shear-rigid), and a
@@ -47,7 +49,17 @@ model as MSC reads it:
    0.667, 0.333) (``tests/test_flat_mystran.py``).  On mAEWing1 v3.3 (control-surface and
    flap masses in the hinge-line CORD2Rs 101-202) this is MYSTRAN's -32 % to +21 % on modes
    7-11: the CID rotation nearly all of it, the offset products up to 0.08 %;
-7. ``ENDDATA`` closes the file.
+7. (``mystran=True``, before edit 6) a grounded CMASS2 (G2 blank) on a GRID's rotation 4, 5
+   or 6 is a massless CONM2 with that inertia about the CD axis (MSC QRG CMASS2: a scalar
+   mass on that DOF): MYSTRAN 18 stops on v4.2's twelve in its mass assembly, "Index '949' of
+   dimension 1 of array 'j_mgg' above upper bound of 948";
+8. (``mystran=True``, a deck with SUPORT: a free structure) EIGR is written as EIGRL (V1 = F1
+   where positive, V2 = F2, ND): MYSTRAN's GIV factors KLL by Cholesky (LAPACK DPBSTF), which
+   a free structure without suspension springs (v4.2, v4.2.1) stops once SUPORT is dropped
+   ("*ERROR 989: THE FACTORIZATION OF THE MATRIX KLL COULD NOT BE COMPLETED"); its Lanczos
+   takes it, with the same modes (v3.3: GIV and Lanczos within 3e-7 of the f06).  A deck
+   without SUPORT keeps its EIGR (MYSTRAN's Lanczos wants more DOFs than modes);
+9. ``ENDDATA`` closes the file.
 """
 
 from pathlib import Path
@@ -68,13 +80,15 @@ EDITS = (
     "grounded CBUSH: GB a new GRID at GA's place with PS 123456 (for MYSTRAN)",
     "SUPORT dropped (for MYSTRAN: it solves the elastic modes held at the SUPORT DOFs)",
     "CONM2 in CID 0, basic offset, inertia fields for MYSTRAN's product convention (for MYSTRAN)",
+    "grounded CMASS2 on a rotation -> massless CONM2 (for MYSTRAN)",
+    "EIGR -> EIGRL where the deck has SUPORT (for MYSTRAN: its GIV needs a held structure)",
     "ENDDATA appended",
 )
 
 
 def write_flat_deck(path, out, mystran: bool = False) -> Path:
-    """Write the deck at ``path`` as one large-field file ``out`` (module docstring; edits 4,
-    5 and 6 only with ``mystran``); returns ``out``."""
+    """Write the deck at ``path`` as one large-field file ``out`` (module docstring; edits 4
+    to 8 only with ``mystran``); returns ``out``."""
     deck = read_deck(path)
     head = []
     for line in Path(deck.files[0]).read_text(errors="replace").splitlines():
@@ -84,7 +98,10 @@ def write_flat_deck(path, out, mystran: bool = False) -> Path:
     cards = _bars(deck, list(deck.cards))
     if mystran:
         cards = [c for c in _ground_grids(deck, cards) if c.name not in ("SUPORT", "SUPORT1")]
-        cards = _conm2_for_mystran(deck, cards)
+        grids = read_grids(deck, Refusals(deck.path))
+        free = any(c.name in ("SUPORT", "SUPORT1") for c in deck.cards)
+        cards = [_rotary_cmass2(grids, _eigrl(c) if free else c) for c in cards]
+        cards = [_conm2_basic(grids, c) if c.name == "CONM2" else c for c in cards]
     cards = [large_field_text(c) for c in cards]
     out = Path(out)
     out.write_text("\n".join(head) + "\n" + "".join(cards) + "ENDDATA\n")
@@ -127,20 +144,44 @@ def mystran_conm2_fields(mass: float, offset, inertia, frame) -> np.ndarray:
     return R.T @ N @ R - S
 
 
-def _conm2_for_mystran(deck, cards: list) -> list:
-    """``cards`` with each CONM2 written with CID 0, its offset in basic axes and the inertia
-    fields ``mystran_conm2_fields`` gives (module docstring, edit 6)."""
-    grids = read_grids(deck, Refusals(deck.path))
-    out = []
-    for c in cards:
-        if c.name == "CONM2":
-            c = _conm2_basic(grids, c)
-        out.append(c)
-    return out
+def _real(value: float) -> str:
+    """``real16`` with a decimal point always ('5e-06' -> '5.e-06'; module docstring, edit 2)."""
+    text = real16(value)
+    if "." in text:
+        return text
+    mantissa, e, exponent = text.partition("e")
+    return f"{mantissa}.{e}{exponent}"
+
+
+def _rotary_cmass2(grids, card: Card) -> Card:
+    """A grounded CMASS2 on a GRID rotation as the massless CONM2 (CID 0, basic axes) with its
+    inertia M e e^T about that CD axis e (module docstring, edit 7); any other card as it is."""
+    if card.name != "CMASS2" or card["G2"] not in (None, 0) or card["C1"] not in (4, 5, 6):
+        return card
+    if not np.any(grids.ids == card.int("G1")):
+        return card  # a scalar point: no rotation
+    row = int(grids.index([card.int("G1")], card)[0])
+    e = grids.frame[row][card.int("C1") - 4]
+    J = card.real("M") * np.outer(e, e)
+    fields = [_real(float(v)) for v in (J[0, 0], -J[1, 0], J[1, 1], -J[2, 0], -J[2, 1], J[2, 2])]
+    raw = (card.raw[0], str(card.int("G1")), "0", "0.", "", "", "", "", *fields)
+    return Card("CONM2", raw, card.file, card.line, card.end)
+
+
+def _eigrl(card: Card) -> Card:
+    """An EIGR as the EIGRL of the same range and number of modes (module docstring, edit 8)."""
+    if card.name != "EIGR":
+        return card
+    f1, f2, nd = card["F1"], card["F2"], card["ND"]
+    v1 = _real(float(f1)) if f1 is not None and float(f1) > 0 else ""
+    v2 = "" if f2 is None else _real(float(f2))
+    return Card("EIGRL", (card.raw[0], v1, v2, "" if nd is None else str(nd)), card.file,
+                card.line, card.end)  # fmt: skip
 
 
 def _conm2_basic(grids, card: Card) -> Card:
-    """One CONM2 as MYSTRAN needs it (``_conm2_for_mystran``); MSC QRG CONM2: X1-X3 offsets and
+    """One CONM2 written with CID 0, its offset in basic axes and the inertia fields
+    ``mystran_conm2_fields`` gives (module docstring, edit 6); MSC QRG CONM2: X1-X3 offsets and
     Iij in CID, or with CID -1 the centre's basic coordinates and basic axes."""
     row = int(grids.index([card.int("G", positive=True)], card)[0])
     cid = card.int("CID")
@@ -157,9 +198,9 @@ def _conm2_basic(grids, card: Card) -> Card:
     )
     J = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
     A = mystran_conm2_fields(card.real("M"), offset, axes.T @ J @ axes, grids.frame[row])
-    fields = [real16(float(v)) for v in (A[0, 0], A[1, 0], A[1, 1], A[2, 0], A[2, 1], A[2, 2])]
-    head = (card.raw[0], str(card.int("G")), "0", real16(card.real("M")))
-    raw = (*head, *(real16(float(v)) for v in offset), "", *fields)
+    fields = [_real(float(v)) for v in (A[0, 0], A[1, 0], A[1, 1], A[2, 0], A[2, 1], A[2, 2])]
+    head = (card.raw[0], str(card.int("G")), "0", _real(card.real("M")))
+    raw = (*head, *(_real(float(v)) for v in offset), "", *fields)
     return Card("CONM2", raw, card.file, card.line, card.end)
 
 
@@ -172,7 +213,7 @@ def _ground_grids(deck, cards: list) -> list:
     for c in cards:
         if c.name == "CBUSH" and not c["GB"]:
             row = int(grids.index([c.int("GA", positive=True)], c)[0])
-            xyz = [real16(float(v)) for v in grids.xyz[row]]
+            xyz = [_real(float(v)) for v in grids.xyz[row]]
             out.append(Card("GRID", (str(next_grid), "", *xyz, "", "123456"), c.file, c.line,
                             c.end))  # fmt: skip
             c = with_fields(c, {c.position("GB"): next_grid})
@@ -213,7 +254,10 @@ def _bars(deck, cards: list) -> list:
 def _twist(deck, grids, beam: Card, prop: Card, first_id: int) -> list:
     """Two CONM2 (M = 0) at a CBEAM's grids with half its lumped twist inertia each, rho (I1 +
     I2) L n n^T / 2 (n the axis GA-GB, basic), as ``cards.beams`` lumps a CBEAM's and not a
-    CBAR's: an inertia with no mass is the same at the grid as at an offset end."""
+    CBAR's: an inertia with no mass is the same at the grid as at an offset end.  1e-11 of its
+    trace is added on the diagonal: a 16-character field rounds a term by up to 5e-13 of it,
+    which can leave the rank-one n n^T with a negative eigenvalue (v4.2's CBEAMs 2000055,
+    2000056: -7.8e-16 of 7.8e-4, refused by ``cards.masses``)."""
     mat = deck.table("MAT1").get(prop["MID"])
     rho = 0.0 if mat is None else float(mat["RHO"])
     inertia = rho * (float(prop["I1"]) + float(prop["I2"]))
@@ -223,10 +267,10 @@ def _twist(deck, grids, beam: Card, prop: Card, first_id: int) -> list:
     x = grids.xyz[grids.index(ends, beam)]
     length = float(np.linalg.norm(x[1] - x[0]))
     n = (x[1] - x[0]) / length
-    J = 0.5 * inertia * length * np.outer(n, n)
+    J = 0.5 * inertia * length * (np.outer(n, n) + 1e-11 * np.eye(3))
     fields = [J[0, 0], -J[1, 0], J[1, 1], -J[2, 0], -J[2, 1], J[2, 2]]
     return [Card("CONM2", (str(first_id + k), str(g), "0", "0.", "", "", "", "",
-                           *(real16(float(v)) for v in fields)), beam.file, beam.line, beam.end)
+                           *(_real(float(v)) for v in fields)), beam.file, beam.line, beam.end)
             for k, g in enumerate(ends)]  # fmt: skip
 
 
@@ -241,6 +285,6 @@ def _pbar(card: Card) -> Card | None:
     raw = list(card.raw) + [""] * max(0, 16 - len(card.raw))
     a, i1, i2, i12, j, nsm = raw[2:8]
     stress = raw[8:16] if stations[0] and card.value(8) not in ("YES", "YESA", "NO") else [""] * 8
-    k = [real16(float(tail["K1"])), real16(float(tail["K2"])), i12]
+    k = [_real(float(tail["K1"])), _real(float(tail["K2"])), i12]
     return Card("PBAR", (*raw[:2], a, i1, i2, j, nsm, "", *stress, *k), card.file, card.line,
                 card.end)  # fmt: skip

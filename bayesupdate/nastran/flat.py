@@ -6,8 +6,10 @@ format (tab characters inside fields: its reader takes a tab as a character, "TO
 ENTRY", an integer with 15 digits; a PBEAM with no end-B station: "MUST BE YES, YESA OR NO",
 and a one-line PBEAM "REQUIRED CONTINUATION ... MISSING"), then, with those fixed, for the
 model: a grounded CBUSH stops it (ELMGM1_BUSH), and it has no CBEAM element ("CODE NOT WRITTEN
-FOR BEAM ELEMENT MATRICES AS YET").  The flat deck makes these edits, none of which changes the
-model as MSC reads it:
+FOR BEAM ELEMENT MATRICES AS YET").  The flat deck makes these edits.  Edits 1-3 leave the
+model as MSC reads it (to the 16-character rounding); edits 4-8 (``mystran=True``) write the
+deck so that MYSTRAN computes the model MSC reads from the original, and MSC (or this
+package) would read the CONM2 of edit 6 differently:
 
 1. the executive and case control are copied (tabs expanded); ``INCLUDE``d files are read in
    (``deck.read_deck``: case-insensitive names);
@@ -21,14 +23,15 @@ model as MSC reads it:
    CBEAM on it the CBAR with the same orientation, OFFT, pin flags and offsets (QRG CBAR,
    CBEAM: the same fields 2-17); with lumped mass (COUPMASS < 1) a CBEAM's lumped twist
    inertia rho (I1 + I2) L / 2 about its axis at each end, which a CBAR has not
-   (``cards.beams``), is written as two massless CONM2 (3.4 % on v3.3's mode 3 without them);
+   (``cards.beams``), is written as two massless CONM2 (3.4 % on v3.3's mode 3 without them;
+   ``_twist``: with 1e-11 of the trace on the diagonal, to stay PSD once rounded);
 4. (``mystran=True``) a grounded CBUSH (GB blank: MYSTRAN 18 stops in
    ELMGM1_BUSH, "Index '0' of dimension 1 of array 'grid'"; it refuses a grounded CELAS2 too,
    "INVALID COMPONENT NUMBER = 0 IN FIELD 7") gets a GB of its own, a new GRID at GA's place
    held by its PS field 123456 (QRG CBUSH remark 6: a grounded terminal is a point constrained
    to zero, so MSC reads the same model).  This reader takes a fully held GRID as a support, so
    that with SUPORT it finds no free rigid motion: it reads the deck written with
-   ``mystran=False`` (edits 4 and 5 left out) instead;
+   ``mystran=False`` (edits 4 to 8 left out) instead;
 5. (``mystran=True``) SUPORT is dropped: MYSTRAN computes the elastic modes of the structure
    held at the SUPORT DOFs (its L-set with the R-set removed: on mAEWing1 v3.3 the two wings
    then vibrate apart, in pairs from 3.70 Hz), where MSC gives those of the free structure
@@ -118,10 +121,9 @@ def mystran_conm2_fields(mass: float, offset, inertia, frame) -> np.ndarray:
     lines 173-248), moves them to the grid (``CONM2_PROC_2.f90`` line 132: I21 - m dy dx) and
     rotates them to the grid's CD frame (lines 216-220) as if they were the tensor's own
     off-diagonal terms (unchanged from release 17.0.0 to the 2026 source; MYSTRAN 18 computes
-    what they say, ``tests/test_flat_mystran.py``).  With N(X) =
-    2 diag(X) - X (the off-diagonal terms negated) its rotation block is N(R (A + S) R^T) for
-    fields A (CID 0), S = m (|d|^2 I - d d^T); the fields that give J_G = R (J + S) R^T are
-    A = R^T N(J_G) R - S.
+    what they say, ``tests/test_flat_mystran.py``).  With N(X) = 2 diag(X) - X (the
+    off-diagonal terms negated) its rotation block is N(R (A + S) R^T) for fields A (CID 0),
+    S = m (|d|^2 I - d d^T); the fields that give J_G = R (J + S) R^T are A = R^T N(J_G) R - S.
 
     Parameters
     ----------

@@ -87,7 +87,10 @@ def desvar_parameters(deck) -> dict:
     desvars = deck.table("DESVAR")
     out = {}
     for dvid, rels in sorted(relations.items()):
-        entry = _one_binding(rels) or _line_combination(rels)
+        if any(k is not None and _family(k) == "card" for k, *_ in rels):
+            entry = _card_relations(rels)
+        else:
+            entry = _one_binding(rels) or _line_combination(rels) or _card_relations(rels)
         if entry is not None and dvid in desvars:
             out[dvid] = entry
     return {_name(desvars, d, out): _entry(desvars, d, e) for d, e in out.items()}
@@ -123,6 +126,34 @@ def _line_combination(rels) -> dict | None:
     }
 
 
+def _family(key) -> str:
+    from bayesupdate.nastran.bindings import FIELDS
+
+    return FIELDS[key[0]][key[1]][1]
+
+
+def _card_relations(rels) -> dict | None:
+    """{"binds", "relations"} when every relation sets a field of the element cards
+    themselves (``bindings.CARD_FIELDS``: CBAR/CBEAM offsets, CONM2 offset, inertia and M,
+    CMASS2 M), one DESVAR each, of one card type, each (card, field) once: C0_i + COEF_i x is
+    written into each card, which is converted again (``lines.LineRebuild``)."""
+    keys = {k for k, *_ in rels}
+    if None in keys or len({c for c, _ in keys}) != 1:
+        return None
+    card = next(iter(keys))[0]
+    if any(_family(k) != "card" and k != ("CONM2", "M") for k in keys):
+        return None
+    targets = [(i, k[1]) for k, _, _, i in rels]
+    if len(set(targets)) != len(targets) or any(coef == 0 for _, coef, _, _ in rels):
+        return None
+    rels = sorted(rels, key=lambda r: (r[3], r[0][1]))
+    ids = list(dict.fromkeys(r[3] for r in rels))
+    return {
+        "binds": f"{card} {','.join(map(str, ids))} {rels[0][0][1]}",
+        "relations": [[card, r[3], r[0][1], r[2], r[1]] for r in rels],
+    }
+
+
 def _label(desvars, d) -> str:
     card = desvars.get(d)
     label = "" if card is None else str(card["LABEL"] or "").strip()
@@ -136,10 +167,17 @@ def _name(desvars, desvar_id, taken) -> str:
 
 
 def _entry(desvars, desvar_id, entry: dict) -> dict:
+    """The parameter's table: the DESVAR's XLB, XUB as its bounds where they are finite and
+    fit the field (> 0; an element card's inertia or mass >= 0, its offset any sign)."""
+    from bayesupdate.nastran.bindings import SIGNED_FIELDS
+
     dv = desvars[desvar_id]
     out = {**entry, "desvar": desvar_id}
     low, high = dv.real("XLB"), dv.real("XUB")
-    if low > 0 and high < _NO_BOUND and low < high:
+    rel = entry.get("relations", ())
+    signed = bool(rel) and all(r[2] in SIGNED_FIELDS for r in rel)
+    fits = low > -_NO_BOUND if signed else (low >= 0 if rel else low > 0)
+    if fits and high < _NO_BOUND and low < high:
         out["bounds"] = [low, high]
     return out
 

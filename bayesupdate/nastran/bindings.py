@@ -68,9 +68,13 @@ FIELDS = {
         "RHO": ("density", "shell"),
         "G": ("line", "line"),
     },
-    "CONM2": {"M": ("mass_factor", "mass"),
-              **{f: ("line", "card") for f in ("X1", "X2", "X3", "I11", "I21", "I22", "I31",
-                                                "I32", "I33")}},
+    "CONM2": {
+        "M": ("mass_factor", "mass"),
+        **{
+            f: ("line", "card")
+            for f in ("X1", "X2", "X3", "I11", "I21", "I22", "I31", "I32", "I33")
+        },
+    },
     "CMASS2": {"M": ("line", "card")},
     "CBAR": {f: ("line", "card") for f in _W},
     "CBEAM": {f: ("line", "card") for f in _W},
@@ -322,8 +326,8 @@ def _card_binding(f: DeckField, deck, masks, nominal, name: str) -> DeckBinding:
 def relation_default(deck, relations) -> float:
     """The parameter x at which ``relations`` ((card, id, field, C0, COEF), ...) give the
     cards' own values: the mean of (value - C0) / COEF (one x when the cards agree)."""
-    x = [(field_value(deck.table(c)[i], DeckField(f"{c} {i} {f}", c, (i,), f, False)) - c0) / k
-         for c, i, f, c0, k in relations]  # fmt: skip
+    fields = [(DeckField(f"{c} {i} {f}", c, (i,), f, False), c0, k) for c, i, f, c0, k in relations]
+    x = [(field_value(_card(deck, f, f.ids[0]), f) - c0) / k for f, c0, k in fields]
     return float(np.mean(x))
 
 
@@ -331,7 +335,8 @@ def write_relations(deck, b: DeckBinding, value: float, changed: dict) -> dict:
     """``changed`` ({(card, id): card}) with the element cards of ``b.relations`` given
     C0 + COEF x ``value`` in their fields (copies of the deck's cards where not yet changed)."""
     for card, i, field, c0, coef in b.relations:
-        old = changed.get((card, i)) or _card(deck, DeckField(b.target, card, (i,), field, False), i)
+        f = DeckField(b.target, card, (i,), field, False)
+        old = changed.get((card, i)) or _card(deck, f, i)
         changed[(card, i)] = with_fields(old, {old.position(field): float(c0 + coef * value)})
     return changed
 

@@ -19,6 +19,8 @@ where the card gives them), which ``writer.write_design_deck`` writes as a deck:
 any DESVAR values as SOL 200 builds it, by reading the cards again (no fast path).
 """
 
+import re
+
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
@@ -32,6 +34,17 @@ _FIELD_NUMBER = {
     ("PROD", 4): "A", ("PROD", 5): "J",
 }  # fmt: skip
 _NO_BOUND = 1e19
+#: a PBEAM / PBEAML property name of one station: "A(A)", "I1(B)", "DIM2(B)" (MSC QRG DVPREL1)
+_STATION = re.compile(r"^([A-Z0-9]+)\((A|B|\d+)\)$")
+
+
+def _station(ptype, name) -> tuple[object, str | None]:
+    """(field name, station "A" / "B" / "1".. or None) of a relation's PNAME: a PBEAM(L)'s name
+    with its station in parentheses; a bare name is end A's field (MSC QRG DVPREL1)."""
+    m = _STATION.match(name.upper()) if isinstance(name, str) else None
+    if m and ptype in ("PBEAM", "PBEAML"):
+        return m.group(1), m.group(2)
+    return name, None
 
 
 def _relation(rel) -> tuple[str, object, float, list[tuple[int, float]]]:
@@ -50,15 +63,23 @@ def _field(rel, ptype, name):
 
     if not isinstance(name, str):
         name = _FIELD_NUMBER.get((ptype, int(name or 0))) if rel.name == "DVPREL1" else None
+    if _station(ptype, name)[1] is not None:  # one station: a binding sets every station
+        return None
     return name.upper() if name and name.upper() in FIELDS.get(ptype, {}) else None
 
 
 def design_refusals(deck) -> list[str]:
     """'file:line DVPREL1 id: ...' of each DVPREL1 to a field that cannot be bound (the reader
-    adds them to the deck's other refusals when the DESVARs are to be the parameters)."""
+    adds them to the deck's other refusals when the DESVARs are to be the parameters); one
+    station of a PBEAM(L) field ("A(B)") is not refused (its DESVAR stays out, with a note)."""
+    from bayesupdate.nastran.bindings import FIELDS
+
     out = []
     for rel in deck.of("DVPREL1"):
         ptype, name, _, _ = _relation(rel)
+        base, station = _station(ptype, name)
+        if station is not None and str(base) in FIELDS.get(ptype, {}):
+            continue  # one station of a PBEAM(L): read and written, not a parameter
         if _field(rel, ptype, name) is None:
             out.append(f"{rel.where} DVPREL1 {rel.value(0)}: {ptype} field {name} cannot be bound")
     return out
@@ -79,6 +100,8 @@ def desvar_parameters(deck) -> dict:
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         field = _field(rel, ptype, name)
+        if field is not None and _stations_given(deck, ptype, rel.value(2), field):
+            field = None  # the relation sets end A alone; a binding sets every station
         for dvid, coef in pairs:
             one = field is not None and len(pairs) == 1
             relations.setdefault(dvid, []).append(
@@ -94,6 +117,18 @@ def desvar_parameters(deck) -> dict:
         if entry is not None and dvid in desvars:
             out[dvid] = entry
     return {_name(desvars, d, out): _entry(desvars, d, e) for d, e in out.items()}
+
+
+def _stations_given(deck, ptype, pid, field) -> bool:
+    """True if PBEAM(L) ``pid`` gives ``field`` explicitly at a station after end A (a bare
+    PNAME sets end A alone there, MSC QRG DVPREL1; a binding writes every station)."""
+    from bayesupdate.nastran.bindings import DeckField, _where
+
+    card = deck.table(ptype).get(pid) if ptype in ("PBEAM", "PBEAML") else None
+    if card is None or card.name != ptype:
+        return False
+    where = _where(card, DeckField(f"{ptype} {pid} {field}", ptype, (pid,), field, False))
+    return any(card.value(i) is not None for i in where[1:])
 
 
 def _one_binding(rels) -> dict | None:
@@ -211,7 +246,13 @@ def unbound_reasons(deck) -> dict[int, str]:
         for dvid, coef in pairs:
             if dvid in out:
                 continue
-            if _field(rel, ptype, name) is None:
+            if _station(ptype, name)[1] is not None or (
+                _field(rel, ptype, name) is not None
+                and _stations_given(deck, ptype, rel.value(2), _field(rel, ptype, name))
+            ):
+                out[dvid] = (f"{where}: sets one station of {ptype} {rel.value(2)} (a binding "
+                             "sets every station)")  # fmt: skip
+            elif _field(rel, ptype, name) is None:
                 out[dvid] = f"{where}: {ptype} {name} is a field no binding acts on"
             elif c0 != 0:
                 out[dvid] = f"{where}: C0 = {c0:g} (a binding is COEF x)"
@@ -276,11 +317,28 @@ def _apply(deck, rel, x: dict, changed: dict):
         if field is None:
             return (ctype, cid), with_fields(card, {int(name) - 2: float(value)})
         name = field
-    name = name.upper()
+    name, station = _station(ctype, name.upper())
+    if ctype in ("PBEAM", "PBEAML") and name in FIELDS[ctype]:
+        return (ctype, cid), with_fields(card, {_station_index(card, name, station): value})
     if name in FIELDS.get(ctype, {}):
         f = DeckField(f"{ctype} {cid} {name}", ctype, (cid,), name, False)
         return (ctype, cid), set_field(card, f, float(value), 0.0)
     return (ctype, cid), with_fields(card, {card.position(name): float(value)})
+
+
+def _station_index(card, name: str, station: str | None) -> int:
+    """Raw index of PBEAM(L) field ``name`` at ``station`` ("A" or None: end A, "B": end B, "k":
+    the k-th intermediate station; MSC QRG DVPREL1); a station the card does not give is
+    refused."""
+    from bayesupdate.nastran.bindings import DeckField, _where
+
+    where = _where(card, DeckField(f"{card.name} {card.id()} {name}", card.name, (card.id(),),
+                                   name, False))  # fmt: skip
+    k = {None: 0, "A": 0, "B": len(where) - 1}.get(station)
+    k = int(station) if k is None else k
+    if station == "B" and len(where) == 1 or not 0 <= k < len(where):
+        raise BayesUpdateError(f"{card.name} {card.id()} has no station {station} for {name}")
+    return where[k]
 
 
 def xinit_values(deck, model) -> dict[str, float]:

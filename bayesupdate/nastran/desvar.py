@@ -229,40 +229,64 @@ def unbound_note(deck, parameters: dict) -> str | None:
     why = unbound_reasons(deck)
     items = "; ".join(
         f"{c['LABEL']} ({c.id()}: {c.real('XINIT'):g} in [{c.real('XLB'):g}, {c.real('XUB'):g}]"
-        f"): {why.get(c.id(), 'no relation uses it')}"
+        f"): {why.get(c.id(), _unused(deck, c.id()))}"
         for c in rest
     )
     return f"{len(rest)} DESVAR(s) not made parameters (they stay at the cards' values): {items}"
 
 
+def _unused(deck, dvid: int) -> str:
+    """Why a DESVAR with no ``unbound_reasons`` entry is out: unused, or relations that mix
+    kinds of fields (a factor and a re-built field) or set one field twice."""
+    used = any(d == dvid for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1")
+               for d, _ in _relation(rel)[3])  # fmt: skip
+    if not used:
+        return "no relation uses it"
+    return "its relations mix kinds of fields or set one field twice"
+
+
 def unbound_reasons(deck) -> dict[int, str]:
     """{DESVAR id: 'file:line CARD id: why'} of the first relation that keeps each DESVAR from
-    being one binding (``desvar_parameters``): a field no binding acts on, C0 != 0, several
-    DESVARs in one relation, or COEFs / fields that differ between its relations."""
+    being a parameter (``desvar_parameters``): one PBEAM(L) station, a field no binding acts
+    on, several DESVARs in one relation, C0 != 0 or COEFs / fields that differ between its
+    relations on a field that is a factor (PSHELL T, MAT1 E/RHO of shells, springs), relations
+    on several card types (one parameter re-builds one kind of card)."""
     out, first = {}, {}
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         where = f"{rel.where} {rel.name} {rel.value(0)}"
+        field = _field(rel, ptype, name)
         for dvid, coef in pairs:
-            if dvid in out:
-                continue
-            if _station(ptype, name)[1] is not None or (
-                _field(rel, ptype, name) is not None
-                and _stations_given(deck, ptype, rel.value(2), _field(rel, ptype, name))
-            ):
-                out[dvid] = (f"{where}: sets one station of {ptype} {rel.value(2)} (a binding "
-                             "sets every station)")  # fmt: skip
-            elif _field(rel, ptype, name) is None:
-                out[dvid] = f"{where}: {ptype} {name} is a field no binding acts on"
-            elif c0 != 0:
-                out[dvid] = f"{where}: C0 = {c0:g} (a binding is COEF x)"
-            elif len(pairs) > 1:
-                out[dvid] = f"{where}: {len(pairs)} DESVARs in one relation"
-            elif first.setdefault(dvid, (ptype, name, coef, where))[:3] != (ptype, name, coef):
-                t, n, c, w = first[dvid]
-                out[dvid] = (f"{where}: {ptype} {name} x {coef:g} beside {t} {n} x {c:g} at {w} "
-                             "(one binding has one field and one COEF)")  # fmt: skip
+            if dvid not in out:
+                why = _reason(deck, rel, (ptype, name, field, c0, coef, len(pairs)), first, dvid)
+                if why:
+                    out[dvid] = f"{where}: {why}"
     return out
+
+
+def _reason(deck, rel, what, first: dict, dvid: int) -> str:
+    """Why relation ``rel`` keeps DESVAR ``dvid`` out ("" when it does not by itself)."""
+    ptype, name, field, c0, coef, n_pairs = what
+    if _station(ptype, name)[1] is not None or (
+        field is not None and _stations_given(deck, ptype, rel.value(2), field)
+    ):
+        return f"sets one station of {ptype} {rel.value(2)} (a binding sets every station)"
+    if field is None:
+        return f"{ptype} {name} is a field no binding acts on"
+    if n_pairs > 1:
+        return f"{n_pairs} DESVARs in one relation"
+    rebuilt = _family((ptype, field)) in ("line", "card")
+    t, n, c, w = first.setdefault(dvid, (ptype, field, coef, f"{rel.where} {rel.name}"))
+    if rebuilt and (t in ("CBAR", "CBEAM")) != (ptype in ("CBAR", "CBEAM")):
+        return f"{ptype} {field} beside {t} {n} at {w} (one parameter re-builds one card type)"
+    if rebuilt:
+        return ""
+    if c0 != 0:
+        return f"C0 = {c0:g} (a binding of {ptype} {field} is COEF x)"
+    if (t, n, c) != (ptype, field, coef):
+        return (f"{ptype} {field} x {coef:g} beside {t} {n} x {c:g} at {w} (one binding has one "
+                "field and one COEF)")  # fmt: skip
+    return ""
 
 
 def design_values(deck, values=None) -> dict[int, float]:

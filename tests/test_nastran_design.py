@@ -130,9 +130,8 @@ def test_a_desvar_that_is_not_one_binding_is_named(tmp_path):
     assert sorted(model.parameter_names) == ["GMOD", "OFF", "ROT"]
     note = next(n for n in model.structure.metadata["nastran"]["notes"] if "DESVAR(s)" in n)
     assert note.startswith("2 DESVAR(s) not made parameters"), note
-    for part in ("XCG (4: 0 in [-1, 1]): summed.bdf:38 DVCREL1 401: 2 DESVARs in one relation",
-                 "IXX (5: 0.25 in [0.01, 1]): summed.bdf:38 DVCREL1 401: 2 DESVARs in one"):  # fmt: skip
-        assert part in note, note
+    for part in ("XCG (4: 0 in [-1, 1]): ", "IXX (5: 0.25 in [0.01, 1]): "):
+        assert part + "summed.bdf:38 DVCREL1 401: 2 DESVARs in one relation" in note, note
 
 
 def test_a_relation_to_a_missing_card_is_named(tmp_path):

@@ -63,27 +63,42 @@ def _mass_cards(b) -> bool:
     return any(c in MASS_CARDS for c, *_ in getattr(b, "relations", ()))
 
 
+def _offset_elements(bindings) -> set:
+    """Ids of the CBAR / CBEAM elements whose own fields (offsets) a binding writes."""
+    return {i for b in bindings.values() for c, i, *_ in getattr(b, "relations", ())
+            if c in LINE_ELEMENTS}  # fmt: skip
+
+
 class LineRebuild:
     """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on, by
-    converting their cards again (module docstring); with ``masses``, of the CONM2 / CMASS2
-    cards whose own fields the bindings write (``DeckBinding.relations``) instead.
+    converting their cards again (module docstring).  ``part``: "line", the bound line elements
+    whose own cards no binding writes; "offset", those whose own cards (offsets) a binding
+    writes (``DeckBinding.relations``), with every binding acting on them; "mass", the CONM2 /
+    CMASS2 cards whose own fields a binding writes.  The three share no element, so their
+    changes add up.
 
     deck : the read deck (``deck.Deck``); structure : the structure read from it; bindings :
-    {parameter: DeckBinding}, those with ``lines`` (or mass-card ``relations``); keys : (nnz,)
-    row x n_dof + col of the assembled pattern the differences are added into (sorted)."""
+    {parameter: DeckBinding}; keys : (nnz,) row x n_dof + col of the assembled pattern the
+    differences are added into (sorted)."""
 
-    def __init__(self, deck, structure, bindings, keys, path, masses=False):
+    def __init__(self, deck, structure, bindings, keys, path, part="line"):
         self.deck, self.structure, self.path = deck, structure, str(path)
-        # an effect's parameters (``fe.model.Binding``: discovery) act on elements of their own
-        self.bindings = {k: b for k, b in bindings.items()
-                         if (_mass_cards(b) if masses else getattr(b, "lines", ()))}  # fmt: skip
-        if masses:
-            keys_ = {(c, i) for b in self.bindings.values() for c, i, *_ in b.relations}
+        offsets = _offset_elements(bindings)
+        if part == "mass":
+            self.bindings = {k: b for k, b in bindings.items() if _mass_cards(b)}
+            keys_ = {(c, i) for b in self.bindings.values() for c, i, *_ in b.relations
+                     if c in MASS_CARDS}  # fmt: skip
             self.elements = {k: deck.table(k[0])[k[1]] for k in sorted(keys_)}
         else:
-            eids = sorted({e for b in self.bindings.values() for e in b.lines})
+            # an effect's parameters (``fe.model.Binding``: discovery) act on elements of
+            # their own: no ``lines``
+            mine = (lambda e: e in offsets) if part == "offset" else (lambda e: e not in offsets)
+            self.bindings = {k: b for k, b in bindings.items()
+                             if any(mine(e) for e in getattr(b, "lines", ()))}  # fmt: skip
+            eids = {e for b in self.bindings.values() for e in b.lines if mine(e)}
             self.elements = {(c.name, c.id()): c for c in deck.of(*LINE_ELEMENTS, "CONROD")
                              if c.id() in eids}  # fmt: skip
+        self._last = (None, None)  # (values of its bindings, (dK, dM)) of the last ``delta``
         refusals = Refusals(self.path)
         self.grids = read_grids(deck, refusals)
         refusals.raise_all()
@@ -110,9 +125,13 @@ class LineRebuild:
         return self._base
 
     def delta(self, values) -> tuple[np.ndarray, np.ndarray]:
-        """(dK, dM) (nnz,) at the parameter values {name: deck units}."""
-        K, M = self._data(values)
-        return K - self.base[0], M - self.base[1]
+        """(dK, dM) (nnz,) at the parameter values {name: deck units}; the last one is kept
+        (a step of other parameters converts nothing again).  Callers only read it."""
+        key = tuple(float(values[n]) for n in self.bindings)
+        if key != self._last[0]:
+            K, M = self._data(values)
+            self._last = (key, (K - self.base[0], M - self.base[1]))
+        return self._last[1]
 
     def _tables(self, values):
         """(elements, properties, materials) {key: card} of the bound elements, the
@@ -511,10 +530,13 @@ class LineAssembler(GeneralAssembler):
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
         # not ``lines``: that is the base class's list of line-element matrices (``fe.energy``)
         self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
-        #: the CONM2 / CMASS2 cards whose own fields are bound, re-built apart: they share no
-        #: element with the line elements, so their change adds to theirs
-        self.masses = LineRebuild(deck, structure, bindings, keys, path, masses=True)
-        mine = {**self.rebuild.bindings, **self.masses.bindings}
+        #: the line elements whose offsets are bound and the CONM2 / CMASS2 cards whose own
+        #: fields are, converted again at every solve (their records are not affine: a beam's
+        #: lumped end masses follow its offset length); they share no element with ``rebuild``
+        self.cards = [LineRebuild(deck, structure, bindings, keys, path, part=part)
+                      for part in ("offset", "mass")]  # fmt: skip
+        self.cards = [r for r in self.cards if r.bindings]
+        mine = {k: b for r in (self.rebuild, *self.cards) for k, b in r.bindings.items()}
         #: {name: DeckBinding} of every parameter re-built here, in the model's order
         self.bindings = {n: b for n, b in bindings.items() if n in mine}
         self.values = None
@@ -553,8 +575,8 @@ class LineAssembler(GeneralAssembler):
             K, M = self.rebuild.base
         else:
             K, M = self.fields.update.contribution()
-        if self.masses.bindings:
-            K, M = K + self.masses.base[0], M + self.masses.base[1]
+        for part in self.cards:
+            K, M = K + part.base[0], M + part.base[1]
         return K, M
 
     def line_delta(self, values) -> tuple[np.ndarray, np.ndarray]:
@@ -568,9 +590,9 @@ class LineAssembler(GeneralAssembler):
             K, M = self.fields.contribution(self.fields.theta(values))
             K0, M0 = self.fields.update.base
             dK, dM = K - K0, M - M0
-        if self.masses.bindings:
-            mK, mM = self.masses.delta(values)
-            dK, dM = dK + mK, dM + mM
+        for part in self.cards:
+            cK, cM = part.delta(values)
+            dK, dM = dK + cK, dM + cM
         return dK, dM
 
     def assemble(self, props, shell_props=None):

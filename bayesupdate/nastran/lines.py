@@ -498,8 +498,8 @@ def _check_linear(lines: "LineAssembler", terms, theta, what: str) -> None:
         if miss > LINEAR_TOL:
             raise BayesUpdateError(
                 f"{what} the line elements' {'KM'[which]} linearly (relative miss {miss:.1e}; a "
-                "PBARL/PBEAML dimension, a shear-flexible beam's A or I, or E with A or I do not), "
-                "so the reduced basis does not cover it"
+                "PBARL/PBEAML dimension, a shear-flexible beam's A or I, E with A or I, a CONM2 "
+                "or beam offset do not), so the reduced basis does not cover it"
             )
 
 

@@ -92,3 +92,18 @@ def test_an_offset_needs_bounds_and_an_inertia_a_low_bound_of_0(tmp_path):
     assert model.solve({"j": 0.0}, n_modes=1).frequencies_hz[0] == pytest.approx(
         _hz(1000.0 / 0.5), rel=1e-12
     )
+
+
+def test_an_inertia_is_an_exact_affine_term_and_an_offset_is_named_non_linear(tmp_path):
+    """For the reduced basis (``NastranModel.line_terms``): CONM2 I33 and CMASS2 M enter M
+    linearly (exact affine terms, checked at seeded points to 1e-9); CONM2 X1 does not (m x^2)
+    and is named."""
+    linear = load_nastran_model(_deck(tmp_path, ARM), {"j": {"binds": "CONM2 31 I33"}})
+    assert [t.name for t in linear.line_terms()] == ["j"]
+    spring = load_nastran_model(_deck(tmp_path, SPRING), {"m": {"binds": "CMASS2 21 M"}})
+    (term,) = spring.line_terms()
+    assert np.abs(term.dM).sum() == pytest.approx(1.0, rel=1e-12)  # d(m)/dm on one DOF
+    offset = load_nastran_model(_deck(tmp_path, ARM), {"x": {"binds": "CONM2 31 X1",
+                                                             "bounds": [-1.0, 1.0]}})  # fmt: skip
+    assert offset.line_terms() == ()
+    assert "parameter x ('CONM2 31 X1') does not enter" in offset.line_nonlinear

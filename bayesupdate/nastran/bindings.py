@@ -40,13 +40,14 @@ linearly, but the Timoshenko shear parameter 12 EI / (k G A L^2) does not); a fi
 records are not affine (a PBARL's dimensions: A, I are powers of them) re-converts the bound
 cards from copies with the value written in.
 
-Fields of the element cards themselves (``CARD_FIELDS``: a CBAR/CBEAM offset, a CONM2 offset or
-inertia, a CMASS2 M) are written into copies of those cards (``DeckBinding.relations``: each
-card, field, C0 and COEF of a DESVAR's DVCREL1 relations, or C0 = 0, COEF = 1 for a study's
-binding), which are converted again at each solve (``lines.LineRebuild``): exact, whatever the
-field does (a CONM2 offset x enters M as m x and m x^2; a beam offset through the rigid link of
-its ends, MSC QRG CBEAM).  A CONM2 M bound beside another field of the same CONM2 is written
-the same way (its mass factor alone would miss the m x terms).
+Fields of the element cards themselves (``FIELDS`` family "card": a CBAR/CBEAM offset, a CONM2
+offset or inertia, a CMASS2 M) are written into copies of those cards
+(``DeckBinding.relations``: each card, field, C0 and COEF of a DESVAR's DVCREL1 relations, or C0
+= 0, COEF = 1 for a study's binding), which are converted again at each solve
+(``lines.LineRebuild``): exact, whatever the field does (a CONM2 offset x enters M as m x and m
+x^2; a beam offset through the rigid link of its ends, MSC QRG CBEAM). A CONM2 M bound beside
+another field of the same CONM2 is written the same way (its mass factor alone would miss the m
+x terms).
 """
 
 import re
@@ -91,10 +92,8 @@ FIELDS = {
     "PBARL": {**_DIMS, "NSM": ("line", "line")},
     "PBEAML": {**_DIMS, "NSM": ("line", "line")},
 }
-#: element-card fields written into the cards themselves (``relations``): their cards are
-#: converted again (``lines.LineRebuild``); the signed ones (offsets) take any bounds
-CARD_FIELDS = {c: tuple(f for f, (_, fam) in FIELDS[c].items() if fam == "card")
-               for c in ("CONM2", "CMASS2", "CBAR", "CBEAM")}  # fmt: skip
+#: element-card fields (``FIELDS`` family "card": written into the cards themselves,
+#: ``relations``, and converted again, ``lines.LineRebuild``) that take any sign: offsets
 SIGNED_FIELDS = {"X1", "X2", "X3", "I21", "I31", "I32", *_W}
 #: the cards whose own fields are re-built with the point masses (the others: line elements)
 MASS_CARDS = ("CONM2", "CMASS2")
@@ -128,7 +127,7 @@ class DeckBinding:
     lines : ids of the CBAR/CBEAM/CROD elements re-built with the field (``lines``).
     coefficients, offsets : per id (a DESVAR on line-element fields whose relations differ):
     field_i = offsets_i + coefficients_i x parameter (``value_of``); empty: ``coefficient``, 0.
-    relations : ((card, id, field, C0, COEF), ...) of an element-card binding (``CARD_FIELDS``,
+    relations : ((card, id, field, C0, COEF), ...) of an element-card binding (family "card",
     module docstring): each field = C0 + COEF x parameter, written into the card itself.
     """
 
@@ -300,7 +299,7 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
 
 
 def _card_binding(f: DeckField, deck, masks, nominal, name: str) -> DeckBinding:
-    """An element-card field (``CARD_FIELDS``) as relations C0 = 0, COEF = 1 (a ``scale``:
+    """An element-card field (``FIELDS`` family "card") as relations C0 = 0, COEF = 1 (a ``scale``:
     COEF = the card's value) on each id; a CMASS2 on a scalar point is refused (its ends are
     not re-built)."""
     if f.card == "CMASS2":

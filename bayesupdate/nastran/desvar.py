@@ -169,7 +169,7 @@ def _family(key) -> str:
 
 def _card_relations(rels) -> dict | None:
     """{"binds", "relations"} when every relation sets a field of the element cards
-    themselves (``bindings.CARD_FIELDS``: CBAR/CBEAM offsets, CONM2 offset, inertia and M,
+    themselves (``bindings.FIELDS`` family "card": CBAR/CBEAM offsets, CONM2 offset, inertia and M,
     CMASS2 M), one DESVAR each, of one card type, each (card, field) once: C0_i + COEF_i x is
     written into each card, which is converted again (``lines.LineRebuild``)."""
     keys = {k for k, *_ in rels}

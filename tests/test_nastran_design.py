@@ -1,8 +1,10 @@
 """A deck's design model (MSC QRG DESVAR, DVPREL1, DVMREL1, DVCREL1) against the same deck with the
 related fields edited by hand: every relation evaluated (``writer.write_design_deck``: CBEAM
 offsets with COEF +1 and -1, MAT1 G, CMASS2 M with COEF 0.5 and 1, CONM2 X1 with C0, CONM2 I11),
-the bindable DESVAR (MAT1 G of line elements) as a parameter, and the note naming the others
-with their file:line."""
+every DESVAR as a parameter (the element cards' own fields re-built), and the note naming a
+DESVAR that cannot be one (two DESVARs in one relation) with its file:line."""
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -86,25 +88,50 @@ def test_the_design_deck_is_the_deck_edited_by_hand(tmp_path, x):
     assert np.max(np.abs(f_cards.frequencies_hz / f_hand - 1)) > 1e-3
 
 
-def test_mat1_g_desvar_is_a_parameter_and_the_rest_are_named(tmp_path):
-    """Of the five DESVARs only GMOD (DVMREL1 on MAT1 G, the beams' shear modulus) is one
-    binding (``MAT1 1 G``, bounds 1e6-1e7); the model at GMOD = 7e6 equals the cards with G
-    edited to 7e6 by hand; the note names the other four with the file:line of the relation
-    that keeps each out (CBEAM W2A, CMASS2 M, CONM2 X1, CONM2 I11)."""
+def test_every_desvar_is_a_parameter_and_solves_as_the_deck_edited_by_hand(tmp_path):
+    """All five DESVARs are parameters: GMOD (DVMREL1 on MAT1 G), and the element cards' own
+    fields written into the cards (CBEAM W2A/W2B with COEF +1 and -1, CMASS2 M with COEF 0.5
+    and 1, CONM2 X1 with C0 = 0.1, CONM2 I11 with COEF 2), with the DESVAR bounds (XLB < 0
+    kept for the offsets); away from XINIT the bound model, and the deck ``--write-bdf``
+    writes from it, have the modes of the deck edited by hand."""
+    from bayesupdate.nastran.writer import write_updated_deck
+
     model = load_nastran_model(_deck(tmp_path, "design.bdf", CARDS, design=True))
-    assert list(model.parameter_names) == ["GMOD"]
+    assert sorted(model.parameter_names) == ["GMOD", "IXX", "OFF", "ROT", "XCG"]
     assert model.bindings["GMOD"].target == "MAT1 1 G"
-    assert tuple(model.default_bounds()["GMOD"]) == (1.0e6, 1.0e7)
-    f = model.solve({"GMOD": 7.0e6}, n_modes=8).frequencies_hz
-    hand = load_nastran_model(_deck(tmp_path, "hand.bdf", {**CARDS, "g": 7.0e6}, False))
-    np.testing.assert_allclose(f, hand.solve(n_modes=8).frequencies_hz, rtol=1e-9)
+    bounds = model.default_bounds()
+    assert tuple(bounds["GMOD"]) == (1.0e6, 1.0e7) and tuple(bounds["OFF"]) == (-1.0, 1.0)
+    assert model.bindings["OFF"].relations == (
+        ("CBEAM", 11, "W2A", 0.0, 1.0), ("CBEAM", 11, "W2B", 0.0, 1.0),
+        ("CBEAM", 12, "W2A", 0.0, -1.0), ("CBEAM", 12, "W2B", 0.0, -1.0))  # fmt: skip
+    # the cards' values: W2 = 0, CONM2 X1 = 0.1 (C0 0.1), I11 0.5 / 2, CMASS2 0.1 / 0.5, 0.2 / 1
+    assert model.default_parameters() == pytest.approx(
+        dict(OFF=0.0, GMOD=4.0e6, ROT=0.2, XCG=0.0, IXX=0.25), rel=1e-12
+    )
+    x = dict(OFF=0.3, GMOD=2.5e6, ROT=0.6, XCG=-0.4, IXX=0.05)
+    hand = load_nastran_model(_deck(tmp_path, "hand.bdf", _by_hand(x), design=False))
+    f_hand = hand.solve(n_modes=8).frequencies_hz
+    f = model.solve(x, n_modes=8).frequencies_hz
+    np.testing.assert_allclose(f, f_hand, rtol=1e-9)
+    written = write_updated_deck(model, x, tmp_path / "w.bdf")
+    again = load_nastran_model(str(written), parameters={}).solve(n_modes=8).frequencies_hz
+    np.testing.assert_allclose(again, f_hand, rtol=1e-12)
+
+
+def test_a_desvar_that_is_not_one_binding_is_named(tmp_path):
+    """A DVCREL1 that sums two DESVARs (CONM2 X1 = 0.1 + XCG + IXX) keeps both out (one
+    parameter is one DESVAR); the note names each with the file:line of that relation."""
+    summed = DESIGN.replace("DVCREL1,401,CONM2,31,X1,,,0.1\n,4,1.\n",
+                            "DVCREL1,401,CONM2,31,X1,,,0.1\n,4,1.,5,1.\n")  # fmt: skip
+    path = tmp_path / "summed.bdf"
+    path.write_text(f"SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\n{BULK.format(**CARDS)}{summed}"
+                    "ENDDATA\n")  # fmt: skip
+    model = load_nastran_model(str(path))
+    assert sorted(model.parameter_names) == ["GMOD", "OFF", "ROT"]
     note = next(n for n in model.structure.metadata["nastran"]["notes"] if "DESVAR(s)" in n)
-    assert note.startswith("4 DESVAR(s) not made parameters"), note
-    for part in ("OFF (1: 0.05 in [-1, 1]): design.bdf:24 DVCREL1 101: CBEAM W2A",
-                 "ROT (3: 0.2 in [0.01, 1]): design.bdf:34 DVCREL1 301: CMASS2 M",
-                 "XCG (4: 0 in [-1, 1]): design.bdf:38 DVCREL1 401: CONM2 X1",
-                 "IXX (5: 0.25 in [0.01, 1]): design.bdf:40 DVCREL1 501: CONM2 I11"):  # fmt: skip
-        assert part in note, note
+    assert note.startswith("2 DESVAR(s) not made parameters"), note
+    for part in ("XCG (4: 0 in [-1, 1]): ", "IXX (5: 0.25 in [0.01, 1]): "):
+        assert part + "summed.bdf:38 DVCREL1 401: 2 DESVARs in one relation" in note, note
 
 
 def test_a_relation_to_a_missing_card_is_named(tmp_path):
@@ -153,3 +180,56 @@ def test_a_desvar_on_line_fields_with_c0_and_different_coefs(tmp_path):
     written = write_updated_deck(model, {"AREA": 0.3}, tmp_path / "w.bdf")
     again = load_nastran_model(str(written), parameters={}).solve(n_modes=8).frequencies_hz
     np.testing.assert_allclose(again, hand.frequencies_hz, rtol=1e-12)
+
+
+#: a free frame of two CBEAMs on a tapered PBEAM 5 (end B given on its station line: A, I1, I2,
+#: J differ from end A's); fields marked {name} are the design model's
+TAPERED = """EIGRL,1,,,8
+PARAM,COUPMASS,1
+GRID,1,,0.,0.,0.
+GRID,2,,10.,0.,0.
+GRID,3,,20.,0.,5.
+CBEAM,11,5,1,2,0.,0.,1.
+CBEAM,12,5,2,3,0.,1.,0.
+PBEAM,5,1,{a_a},0.02,0.01,,0.015
+,NO,1.0,0.3,{i1_b},0.008,,0.01
+MAT1,1,1.e7,4.e6,,0.1
+"""
+TAPERED_DESIGN = """DESVAR,1,AREA,0.25,0.1,1.
+DESVAR,2,IB,0.006,0.001,0.1
+DVPREL1,11,PBEAM,5,A
+,1,2.
+DVPREL1,12,PBEAM,5,I1(B)
+,2,1.
+"""
+
+
+def test_a_tapered_pbeam_design_deck_sets_each_station(tmp_path):
+    """DVPREL1 PNAME "A" sets end A alone and "I1(B)" end B alone (MSC QRG DVPREL1): the deck
+    ``write_design_deck`` writes at AREA = 0.4, IB = 0.03 has the modes of the tapered deck
+    edited by hand at those two stations (end B's A and end A's I1 stay), and differs from
+    the deck made uniform.  Neither DESVAR is a parameter (a binding sets every station):
+    the note names both relations."""
+
+    def deck(name, a_a, i1_b, design):
+        text = TAPERED.format(a_a=a_a, i1_b=i1_b) + (TAPERED_DESIGN if design else "")
+        path = tmp_path / name
+        path.write_text(f"SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\n{text}ENDDATA\n")
+        return str(path)
+
+    def modes(path):
+        return load_nastran_model(path, parameters={}).solve(n_modes=8).frequencies_hz
+
+    written = write_design_deck(deck("d.bdf", 0.5, 0.012, True), tmp_path / "w.bdf",
+                                {"AREA": 0.4, "IB": 0.03})  # fmt: skip
+    hand = modes(deck("h.bdf", 0.8, 0.03, False))
+    np.testing.assert_allclose(modes(str(written)), hand, rtol=1e-12)
+    uniform = tmp_path / "u.bdf"  # both stations written: what a binding would do
+    uniform.write_text(Path(deck("u0.bdf", 0.8, 0.03, False)).read_text()
+                       .replace(",NO,1.0,0.3,", ",NO,1.0,0.8,"))  # fmt: skip
+    assert np.abs(modes(str(uniform)) / hand - 1).max() > 1e-3
+    model = load_nastran_model(deck("d2.bdf", 0.5, 0.012, True))
+    assert model.parameter_names == ()
+    note = next(n for n in model.structure.metadata["nastran"]["notes"] if "DESVAR(s)" in n)
+    assert "AREA (1: 0.25 in [0.1, 1]): d2.bdf:17 DVPREL1 11: sets one station of PBEAM 5" in note
+    assert "IB (2: 0.006 in [0.001, 0.1]): d2.bdf:19 DVPREL1 12: sets one station" in note

@@ -25,6 +25,11 @@ PBEAML DIMk     line (re-built)        the CBEAMs of that property (every statio
 PROD A J NSM    line (re-built)        the CRODs of that property
 MAT1 E / RHO    (re-built)             also every line element (CONROD too) with that MID
 MAT1 G          line (re-built)        the line elements with that MID (not shells)
+CBAR/CBEAM      line (card re-built)   those elements: the offsets W1A..W3B
+W1A..W3B
+CONM2 X1-X3,    line (card re-built)   that mass: offset, inertia (and M with them)
+I11..I33
+CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
 Line-element fields act on the bound elements as the reading of the edited deck does
@@ -34,6 +39,15 @@ the result is exact whatever the field (A, I, J, E, RHO enter the Euler-Bernoull
 linearly, but the Timoshenko shear parameter 12 EI / (k G A L^2) does not); a field whose
 records are not affine (a PBARL's dimensions: A, I are powers of them) re-converts the bound
 cards from copies with the value written in.
+
+Fields of the element cards themselves (``FIELDS`` family "card": a CBAR/CBEAM offset, a CONM2
+offset or inertia, a CMASS2 M) are written into copies of those cards
+(``DeckBinding.relations``: each card, field, C0 and COEF of a DESVAR's DVCREL1 relations, or C0
+= 0, COEF = 1 for a study's binding), which are converted again at each solve
+(``lines.LineRebuild``): exact, whatever the field does (a CONM2 offset x enters M as m x and m
+x^2; a beam offset through the rigid link of its ends, MSC QRG CBEAM). A CONM2 M bound beside
+another field of the same CONM2 is written the same way (its mass factor alone would miss the m
+x terms).
 """
 
 import re
@@ -45,6 +59,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.nastran.bulk import CardError, with_fields
 
 _BAR = ("A", "I1", "I2", "J", "NSM")
+_W = ("W1A", "W2A", "W3A", "W1B", "W2B", "W3B")
 _DIMS = {f"DIM{k}": ("line", "line") for k in range(1, 11)}
 #: card -> {field: (FE property, structure family)}
 FIELDS = {
@@ -54,7 +69,16 @@ FIELDS = {
         "RHO": ("density", "shell"),
         "G": ("line", "line"),
     },
-    "CONM2": {"M": ("mass_factor", "mass")},
+    "CONM2": {
+        "M": ("mass_factor", "mass"),
+        **{
+            f: ("line", "card")
+            for f in ("X1", "X2", "X3", "I11", "I21", "I22", "I31", "I32", "I33")
+        },
+    },
+    "CMASS2": {"M": ("line", "card")},
+    "CBAR": {f: ("line", "card") for f in _W},
+    "CBEAM": {f: ("line", "card") for f in _W},
     "CELAS2": {"K": ("stiffness_factor", "spring")},
     "CELAS4": {"K": ("stiffness_factor", "spring")},
     "PELAS": {"K": ("stiffness_factor", "spring")},
@@ -68,6 +92,11 @@ FIELDS = {
     "PBARL": {**_DIMS, "NSM": ("line", "line")},
     "PBEAML": {**_DIMS, "NSM": ("line", "line")},
 }
+#: element-card fields (``FIELDS`` family "card": written into the cards themselves,
+#: ``relations``, and converted again, ``lines.LineRebuild``) that take any sign: offsets
+SIGNED_FIELDS = {"X1", "X2", "X3", "I21", "I31", "I32", *_W}
+#: the cards whose own fields are re-built with the point masses (the others: line elements)
+MASS_CARDS = ("CONM2", "CMASS2")
 #: line properties (their elements are re-built: ``lines``)
 LINE_PROPERTIES = ("PBAR", "PBARL", "PBEAM", "PBEAML", "PROD")
 #: line elements and the property cards they take
@@ -98,6 +127,8 @@ class DeckBinding:
     lines : ids of the CBAR/CBEAM/CROD elements re-built with the field (``lines``).
     coefficients, offsets : per id (a DESVAR on line-element fields whose relations differ):
     field_i = offsets_i + coefficients_i x parameter (``value_of``); empty: ``coefficient``, 0.
+    relations : ((card, id, field, C0, COEF), ...) of an element-card binding (family "card",
+    module docstring): each field = C0 + COEF x parameter, written into the card itself.
     """
 
     target: str
@@ -114,6 +145,7 @@ class DeckBinding:
     lines: tuple[int, ...] = ()
     coefficients: tuple[float, ...] = ()
     offsets: tuple[float, ...] = ()
+    relations: tuple[tuple[str, int, str, float, float], ...] = ()
 
     def value_of(self, k: int, value: float) -> float:
         """The card value of id ``field.ids[k]`` at the parameter ``value``: C0_k + COEF_k x
@@ -142,7 +174,7 @@ def _bindable() -> str:
     return (
         "PSHELL T, MAT1 E/RHO (G: line elements), CONM2 M, CELAS2/CELAS4 K, PELAS K, "
         "PBUSH K1-K6 (or K scale), PBAR/PBEAM A I1 I2 J NSM, PROD A J NSM, "
-        "PBARL/PBEAML DIM1-DIM10 NSM"
+        "PBARL/PBEAML DIM1-DIM10 NSM, CONM2 X1-X3 I11-I33, CMASS2 M, CBAR/CBEAM W1A-W3B"
     )
 
 
@@ -237,6 +269,8 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     nominal = np.array([field_value(c, f) for c in cards])
     prop, family = FIELDS[f.card][f.field]
     masks = _masks(f, deck, structure, cards)
+    if family == "card":
+        return _card_binding(f, deck, masks, nominal, name)
     lines = line_elements(deck, f)
     if not any(m.any() for m in masks.values()) and not lines:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
@@ -264,6 +298,48 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     )  # fmt: skip
 
 
+def _card_binding(f: DeckField, deck, masks, nominal, name: str) -> DeckBinding:
+    """An element-card field (``FIELDS`` family "card") as relations C0 = 0, COEF = 1 (a ``scale``:
+    COEF = the card's value) on each id; a CMASS2 on a scalar point is refused (its ends are
+    not re-built)."""
+    if f.card == "CMASS2":
+        grids = deck.table("GRID")
+        for i in f.ids:
+            c = deck.table("CMASS2")[i]
+            ends = [c[g] for g in ("G1", "G2") if c.value(c.position(g)) is not None]
+            if any(g not in grids for g in ends):
+                raise BayesUpdateError(
+                    f"parameter {name}: binds {f.spec!r}: CMASS2 {i} ({c.where}) is on a scalar "
+                    "point, whose mass cannot be a parameter; bind a CMASS2 between GRIDs"
+                )
+    relations = tuple((f.card, i, f.field, 0.0, float(n) if f.scale else 1.0)
+                      for i, n in zip(f.ids, nominal, strict=True))  # fmt: skip
+    lines = f.ids if f.card in LINE_ELEMENTS else ()
+    return DeckBinding(
+        f.spec, "line", f, masks["shell"], masks["mass"], masks["spring"], 1.0,
+        tuple(nominal.tolist()), 1.0 if f.scale else float(nominal.mean()), lines=lines,
+        relations=relations,
+    )  # fmt: skip
+
+
+def relation_default(deck, relations) -> float:
+    """The parameter x at which ``relations`` ((card, id, field, C0, COEF), ...) give the
+    cards' own values: the mean of (value - C0) / COEF (one x when the cards agree)."""
+    fields = [(DeckField(f"{c} {i} {f}", c, (i,), f, False), c0, k) for c, i, f, c0, k in relations]
+    x = [(field_value(_card(deck, f, f.ids[0]), f) - c0) / k for f, c0, k in fields]
+    return float(np.mean(x))
+
+
+def write_relations(deck, b: DeckBinding, value: float, changed: dict) -> dict:
+    """``changed`` ({(card, id): card}) with the element cards of ``b.relations`` given
+    C0 + COEF x ``value`` in their fields (copies of the deck's cards where not yet changed)."""
+    for card, i, field, c0, coef in b.relations:
+        f = DeckField(b.target, card, (i,), field, False)
+        old = changed.get((card, i)) or _card(deck, f, i)
+        changed[(card, i)] = with_fields(old, {old.position(field): float(c0 + coef * value)})
+    return changed
+
+
 def line_elements(deck, f: DeckField) -> tuple[int, ...]:
     """Ids of the CBAR/CBEAM/CROD/CONROD elements a binding re-builds: those of its line
     properties, or (MAT1) of every line property or CONROD with that MID."""
@@ -289,7 +365,7 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
         mass=np.zeros(len(s.mass_part), bool),
         spring=np.zeros(len(s.spring_part), bool),
     )
-    if f.card in LINE_PROPERTIES:
+    if f.card in LINE_PROPERTIES or FIELDS[f.card][f.field][1] == "card":
         return out
     if f.card == "MAT1" and f.field == "G":
         _refuse_shell_g(f, deck)

@@ -19,6 +19,8 @@ where the card gives them), which ``writer.write_design_deck`` writes as a deck:
 any DESVAR values as SOL 200 builds it, by reading the cards again (no fast path).
 """
 
+import re
+
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
@@ -32,6 +34,17 @@ _FIELD_NUMBER = {
     ("PROD", 4): "A", ("PROD", 5): "J",
 }  # fmt: skip
 _NO_BOUND = 1e19
+#: a PBEAM / PBEAML property name of one station: "A(A)", "I1(B)", "DIM2(B)" (MSC QRG DVPREL1)
+_STATION = re.compile(r"^([A-Z0-9]+)\((A|B|\d+)\)$")
+
+
+def _station(ptype, name) -> tuple[object, str | None]:
+    """(field name, station "A" / "B" / "1".. or None) of a relation's PNAME: a PBEAM(L)'s name
+    with its station in parentheses; a bare name is end A's field (MSC QRG DVPREL1)."""
+    m = _STATION.match(name.upper()) if isinstance(name, str) else None
+    if m and ptype in ("PBEAM", "PBEAML"):
+        return m.group(1), m.group(2)
+    return name, None
 
 
 def _relation(rel) -> tuple[str, object, float, list[tuple[int, float]]]:
@@ -50,15 +63,23 @@ def _field(rel, ptype, name):
 
     if not isinstance(name, str):
         name = _FIELD_NUMBER.get((ptype, int(name or 0))) if rel.name == "DVPREL1" else None
+    if _station(ptype, name)[1] is not None:  # one station: a binding sets every station
+        return None
     return name.upper() if name and name.upper() in FIELDS.get(ptype, {}) else None
 
 
 def design_refusals(deck) -> list[str]:
     """'file:line DVPREL1 id: ...' of each DVPREL1 to a field that cannot be bound (the reader
-    adds them to the deck's other refusals when the DESVARs are to be the parameters)."""
+    adds them to the deck's other refusals when the DESVARs are to be the parameters); one
+    station of a PBEAM(L) field ("A(B)") is not refused (its DESVAR stays out, with a note)."""
+    from bayesupdate.nastran.bindings import FIELDS
+
     out = []
     for rel in deck.of("DVPREL1"):
         ptype, name, _, _ = _relation(rel)
+        base, station = _station(ptype, name)
+        if station is not None and str(base) in FIELDS.get(ptype, {}):
+            continue  # one station of a PBEAM(L): read and written, not a parameter
         if _field(rel, ptype, name) is None:
             out.append(f"{rel.where} DVPREL1 {rel.value(0)}: {ptype} field {name} cannot be bound")
     return out
@@ -79,6 +100,8 @@ def desvar_parameters(deck) -> dict:
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         field = _field(rel, ptype, name)
+        if field is not None and _stations_given(deck, ptype, rel.value(2), field):
+            field = None  # the relation sets end A alone; a binding sets every station
         for dvid, coef in pairs:
             one = field is not None and len(pairs) == 1
             relations.setdefault(dvid, []).append(
@@ -87,10 +110,25 @@ def desvar_parameters(deck) -> dict:
     desvars = deck.table("DESVAR")
     out = {}
     for dvid, rels in sorted(relations.items()):
-        entry = _one_binding(rels) or _line_combination(rels)
+        if any(k is not None and _family(k) == "card" for k, *_ in rels):
+            entry = _card_relations(rels)
+        else:
+            entry = _one_binding(rels) or _line_combination(rels) or _card_relations(rels)
         if entry is not None and dvid in desvars:
             out[dvid] = entry
     return {_name(desvars, d, out): _entry(desvars, d, e) for d, e in out.items()}
+
+
+def _stations_given(deck, ptype, pid, field) -> bool:
+    """True if PBEAM(L) ``pid`` gives ``field`` explicitly at a station after end A (a bare
+    PNAME sets end A alone there, MSC QRG DVPREL1; a binding writes every station)."""
+    from bayesupdate.nastran.bindings import DeckField, _where
+
+    card = deck.table(ptype).get(pid) if ptype in ("PBEAM", "PBEAML") else None
+    if card is None or card.name != ptype:
+        return False
+    where = _where(card, DeckField(f"{ptype} {pid} {field}", ptype, (pid,), field, False))
+    return any(card.value(i) is not None for i in where[1:])
 
 
 def _one_binding(rels) -> dict | None:
@@ -123,6 +161,34 @@ def _line_combination(rels) -> dict | None:
     }
 
 
+def _family(key) -> str:
+    from bayesupdate.nastran.bindings import FIELDS
+
+    return FIELDS[key[0]][key[1]][1]
+
+
+def _card_relations(rels) -> dict | None:
+    """{"binds", "relations"} when every relation sets a field of the element cards
+    themselves (``bindings.FIELDS`` family "card": CBAR/CBEAM offsets, CONM2 offset, inertia and M,
+    CMASS2 M), one DESVAR each, of one card type, each (card, field) once: C0_i + COEF_i x is
+    written into each card, which is converted again (``lines.LineRebuild``)."""
+    keys = {k for k, *_ in rels}
+    if None in keys or len({c for c, _ in keys}) != 1:
+        return None
+    card = next(iter(keys))[0]
+    if any(_family(k) != "card" and k != ("CONM2", "M") for k in keys):
+        return None
+    targets = [(i, k[1]) for k, _, _, i in rels]
+    if len(set(targets)) != len(targets) or any(coef == 0 for _, coef, _, _ in rels):
+        return None
+    rels = sorted(rels, key=lambda r: (r[3], r[0][1]))
+    ids = list(dict.fromkeys(r[3] for r in rels))
+    return {
+        "binds": f"{card} {','.join(map(str, ids))} {rels[0][0][1]}",
+        "relations": [[card, r[3], r[0][1], r[2], r[1]] for r in rels],
+    }
+
+
 def _label(desvars, d) -> str:
     card = desvars.get(d)
     label = "" if card is None else str(card["LABEL"] or "").strip()
@@ -136,10 +202,17 @@ def _name(desvars, desvar_id, taken) -> str:
 
 
 def _entry(desvars, desvar_id, entry: dict) -> dict:
+    """The parameter's table: the DESVAR's XLB, XUB as its bounds where they are finite and
+    fit the field (> 0; an element card's inertia or mass >= 0, its offset any sign)."""
+    from bayesupdate.nastran.bindings import SIGNED_FIELDS
+
     dv = desvars[desvar_id]
     out = {**entry, "desvar": desvar_id}
     low, high = dv.real("XLB"), dv.real("XUB")
-    if low > 0 and high < _NO_BOUND and low < high:
+    rel = entry.get("relations", ())
+    signed = bool(rel) and all(r[2] in SIGNED_FIELDS for r in rel)
+    fits = low > -_NO_BOUND if signed else (low >= 0 if rel else low > 0)
+    if fits and high < _NO_BOUND and low < high:
         out["bounds"] = [low, high]
     return out
 
@@ -156,34 +229,64 @@ def unbound_note(deck, parameters: dict) -> str | None:
     why = unbound_reasons(deck)
     items = "; ".join(
         f"{c['LABEL']} ({c.id()}: {c.real('XINIT'):g} in [{c.real('XLB'):g}, {c.real('XUB'):g}]"
-        f"): {why.get(c.id(), 'no relation uses it')}"
+        f"): {why.get(c.id(), _unused(deck, c.id()))}"
         for c in rest
     )
     return f"{len(rest)} DESVAR(s) not made parameters (they stay at the cards' values): {items}"
 
 
+def _unused(deck, dvid: int) -> str:
+    """Why a DESVAR with no ``unbound_reasons`` entry is out: unused, or relations that mix
+    kinds of fields (a factor and a re-built field) or set one field twice."""
+    used = any(d == dvid for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1")
+               for d, _ in _relation(rel)[3])  # fmt: skip
+    if not used:
+        return "no relation uses it"
+    return "its relations mix kinds of fields or set one field twice"
+
+
 def unbound_reasons(deck) -> dict[int, str]:
     """{DESVAR id: 'file:line CARD id: why'} of the first relation that keeps each DESVAR from
-    being one binding (``desvar_parameters``): a field no binding acts on, C0 != 0, several
-    DESVARs in one relation, or COEFs / fields that differ between its relations."""
+    being a parameter (``desvar_parameters``): one PBEAM(L) station, a field no binding acts
+    on, several DESVARs in one relation, C0 != 0 or COEFs / fields that differ between its
+    relations on a field that is a factor (PSHELL T, MAT1 E/RHO of shells, springs), relations
+    on several card types (one parameter re-builds one kind of card)."""
     out, first = {}, {}
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         where = f"{rel.where} {rel.name} {rel.value(0)}"
+        field = _field(rel, ptype, name)
         for dvid, coef in pairs:
-            if dvid in out:
-                continue
-            if _field(rel, ptype, name) is None:
-                out[dvid] = f"{where}: {ptype} {name} is a field no binding acts on"
-            elif c0 != 0:
-                out[dvid] = f"{where}: C0 = {c0:g} (a binding is COEF x)"
-            elif len(pairs) > 1:
-                out[dvid] = f"{where}: {len(pairs)} DESVARs in one relation"
-            elif first.setdefault(dvid, (ptype, name, coef, where))[:3] != (ptype, name, coef):
-                t, n, c, w = first[dvid]
-                out[dvid] = (f"{where}: {ptype} {name} x {coef:g} beside {t} {n} x {c:g} at {w} "
-                             "(one binding has one field and one COEF)")  # fmt: skip
+            if dvid not in out:
+                why = _reason(deck, rel, (ptype, name, field, c0, coef, len(pairs)), first, dvid)
+                if why:
+                    out[dvid] = f"{where}: {why}"
     return out
+
+
+def _reason(deck, rel, what, first: dict, dvid: int) -> str:
+    """Why relation ``rel`` keeps DESVAR ``dvid`` out ("" when it does not by itself)."""
+    ptype, name, field, c0, coef, n_pairs = what
+    if _station(ptype, name)[1] is not None or (
+        field is not None and _stations_given(deck, ptype, rel.value(2), field)
+    ):
+        return f"sets one station of {ptype} {rel.value(2)} (a binding sets every station)"
+    if field is None:
+        return f"{ptype} {name} is a field no binding acts on"
+    if n_pairs > 1:
+        return f"{n_pairs} DESVARs in one relation"
+    rebuilt = _family((ptype, field)) in ("line", "card")
+    t, n, c, w = first.setdefault(dvid, (ptype, field, coef, f"{rel.where} {rel.name}"))
+    if rebuilt and (t in ("CBAR", "CBEAM")) != (ptype in ("CBAR", "CBEAM")):
+        return f"{ptype} {field} beside {t} {n} at {w} (one parameter re-builds one card type)"
+    if rebuilt:
+        return ""
+    if c0 != 0:
+        return f"C0 = {c0:g} (a binding of {ptype} {field} is COEF x)"
+    if (t, n, c) != (ptype, field, coef):
+        return (f"{ptype} {field} x {coef:g} beside {t} {n} x {c:g} at {w} (one binding has one "
+                "field and one COEF)")  # fmt: skip
+    return ""
 
 
 def design_values(deck, values=None) -> dict[int, float]:
@@ -238,11 +341,28 @@ def _apply(deck, rel, x: dict, changed: dict):
         if field is None:
             return (ctype, cid), with_fields(card, {int(name) - 2: float(value)})
         name = field
-    name = name.upper()
+    name, station = _station(ctype, name.upper())
+    if ctype in ("PBEAM", "PBEAML") and name in FIELDS[ctype]:
+        return (ctype, cid), with_fields(card, {_station_index(card, name, station): value})
     if name in FIELDS.get(ctype, {}):
         f = DeckField(f"{ctype} {cid} {name}", ctype, (cid,), name, False)
         return (ctype, cid), set_field(card, f, float(value), 0.0)
     return (ctype, cid), with_fields(card, {card.position(name): float(value)})
+
+
+def _station_index(card, name: str, station: str | None) -> int:
+    """Raw index of PBEAM(L) field ``name`` at ``station`` ("A" or None: end A, "B": end B, "k":
+    the k-th intermediate station; MSC QRG DVPREL1); a station the card does not give is
+    refused."""
+    from bayesupdate.nastran.bindings import DeckField, _where
+
+    where = _where(card, DeckField(f"{card.name} {card.id()} {name}", card.name, (card.id(),),
+                                   name, False))  # fmt: skip
+    k = {None: 0, "A": 0, "B": len(where) - 1}.get(station)
+    k = int(station) if k is None else k
+    if station == "B" and len(where) == 1 or not 0 <= k < len(where):
+        raise BayesUpdateError(f"{card.name} {card.id()} has no station {station} for {name}")
+    return where[k]
 
 
 def xinit_values(deck, model) -> dict[str, float]:

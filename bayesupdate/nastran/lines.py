@@ -46,26 +46,59 @@ from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
-from bayesupdate.nastran.bindings import _card, set_field
+from bayesupdate.nastran.bindings import (
+    LINE_ELEMENTS,
+    MASS_CARDS,
+    _card,
+    set_field,
+    write_relations,
+)
+from bayesupdate.nastran.cards.masses import add as add_masses
 from bayesupdate.nastran.deck import Refusals
 from bayesupdate.nastran.frames import read_grids
 
 
+def _mass_cards(b) -> bool:
+    """True for a binding that writes point-mass cards (CONM2, CMASS2: ``bindings.MASS_CARDS``)."""
+    return any(c in MASS_CARDS for c, *_ in getattr(b, "relations", ()))
+
+
+def _offset_elements(bindings) -> set:
+    """Ids of the CBAR / CBEAM elements whose own fields (offsets) a binding writes."""
+    return {i for b in bindings.values() for c, i, *_ in getattr(b, "relations", ())
+            if c in LINE_ELEMENTS}  # fmt: skip
+
+
 class LineRebuild:
     """K_L(theta) - K_L(deck), M likewise, of the line elements that ``bindings`` act on, by
-    converting their cards again (module docstring).
+    converting their cards again (module docstring).  ``part``: "line", the bound line elements
+    whose own cards no binding writes; "offset", those whose own cards (offsets) a binding
+    writes (``DeckBinding.relations``), with every binding acting on them; "mass", the CONM2 /
+    CMASS2 cards whose own fields a binding writes.  The three share no element, so their
+    changes add up.
 
     deck : the read deck (``deck.Deck``); structure : the structure read from it; bindings :
-    {parameter: DeckBinding}, those with ``lines``; keys : (nnz,) row x n_dof + col of the
-    assembled pattern the differences are added into (sorted)."""
+    {parameter: DeckBinding}; keys : (nnz,) row x n_dof + col of the assembled pattern the
+    differences are added into (sorted)."""
 
-    def __init__(self, deck, structure, bindings, keys, path):
+    def __init__(self, deck, structure, bindings, keys, path, part="line"):
         self.deck, self.structure, self.path = deck, structure, str(path)
-        # an effect's parameters (``fe.model.Binding``: discovery) act on elements of their own
-        self.bindings = {k: b for k, b in bindings.items() if getattr(b, "lines", ())}
-        eids = sorted({e for b in self.bindings.values() for e in b.lines})
-        self.elements = {(c.name, c.id()): c for c in deck.of("CBAR", "CBEAM", "CROD", "CONROD")
-                         if c.id() in eids}  # fmt: skip
+        offsets = _offset_elements(bindings)
+        if part == "mass":
+            self.bindings = {k: b for k, b in bindings.items() if _mass_cards(b)}
+            keys_ = {(c, i) for b in self.bindings.values() for c, i, *_ in b.relations
+                     if c in MASS_CARDS}  # fmt: skip
+            self.elements = {k: deck.table(k[0])[k[1]] for k in sorted(keys_)}
+        else:
+            # an effect's parameters (``fe.model.Binding``: discovery) act on elements of
+            # their own: no ``lines``
+            mine = (lambda e: e in offsets) if part == "offset" else (lambda e: e not in offsets)
+            self.bindings = {k: b for k, b in bindings.items()
+                             if any(mine(e) for e in getattr(b, "lines", ()))}  # fmt: skip
+            eids = {e for b in self.bindings.values() for e in b.lines if mine(e)}
+            self.elements = {(c.name, c.id()): c for c in deck.of(*LINE_ELEMENTS, "CONROD")
+                             if c.id() in eids}  # fmt: skip
+        self._last = (None, None)  # (values of its bindings, (dK, dM)) of the last ``delta``
         refusals = Refusals(self.path)
         self.grids = read_grids(deck, refusals)
         refusals.raise_all()
@@ -92,29 +125,37 @@ class LineRebuild:
         return self._base
 
     def delta(self, values) -> tuple[np.ndarray, np.ndarray]:
-        """(dK, dM) (nnz,) at the parameter values {name: deck units}."""
-        K, M = self._data(values)
-        return K - self.base[0], M - self.base[1]
+        """(dK, dM) (nnz,) at the parameter values {name: deck units}; the last one is kept
+        (a step of other parameters converts nothing again).  Callers only read it."""
+        key = tuple(float(values[n]) for n in self.bindings)
+        if key != self._last[0]:
+            K, M = self._data(values)
+            self._last = (key, (K - self.base[0], M - self.base[1]))
+        return self._last[1]
 
     def _tables(self, values):
-        """(properties, materials) {id: card} of the bound elements, the parameters' values
-        written in."""
+        """(elements, properties, materials) {key: card} of the bound elements, the
+        parameters' values written in (element-card fields: ``bindings.write_relations``)."""
         deck = self.deck
         all_props, all_mats = deck.table(*cards.PROPERTIES), deck.table("MAT1")
-        props = {e["PID"]: all_props[e["PID"]]
-                 for e in self.elements.values() if e.name != "CONROD"}  # fmt: skip
+        lines = [e for e in self.elements.values() if e.name in LINE_ELEMENTS]
+        props = {e["PID"]: all_props[e["PID"]] for e in lines}
         mids = {p["MID"] for p in props.values()} | {
             e["MID"] for e in self.elements.values() if e.name == "CONROD"
         }
         mats = {m: all_mats[m] for m in mids if m in all_mats}
+        elements = dict(self.elements)
         for name, b in self.bindings.items():
             if values is None:
+                continue
+            if b.relations:
+                write_relations(deck, b, float(values[name]), elements)
                 continue
             table = mats if b.field.card == "MAT1" else props
             for k, (i, nominal) in enumerate(zip(b.field.ids, b.nominal, strict=True)):
                 card = table.get(i) or _card(deck, b.field, i)
                 table[i] = set_field(card, b.field, b.value_of(k, float(values[name])), nominal)
-        return props, mats
+        return elements, props, mats
 
     def structure_at(self, values):
         """The bound elements alone (and their lumped end masses) converted from their cards
@@ -127,12 +168,13 @@ class LineRebuild:
             builder.add_node(xyz)
         meta = s.metadata["nastran"]
         lumped = meta["coupmass"] < 1
-        props, mats = self._tables(values)
+        elements, props, mats = self._tables(values)
         refusals = Refusals(self.path)
-        ctx = cards.Context(self.elements, props, mats, self.grids, self.node, meta["wtmass"],
+        ctx = cards.Context(elements, props, mats, self.grids, self.node, meta["wtmass"],
                             lumped, builder, refusals)  # fmt: skip
         cards.add_beams(ctx)
         cards.add_rods(ctx)
+        add_masses(ctx)
         refusals.raise_all()
         return builder.build(check=False)
 
@@ -423,7 +465,7 @@ def affine_line_terms(lines: "LineAssembler", defaults, bounds) -> tuple[LineTer
     high)}, deck units).  Checked at seeded points of the box: each parameter alone (the others
     at the deck's values), then all together.  Raises ``BayesUpdateError`` naming the parameter
     (or the product) when the sum misses the re-built elements by more than ``LINEAR_TOL``."""
-    names = list(lines.rebuild.bindings)
+    names = list(lines.bindings)
     theta0 = np.array([defaults[n] for n in names])
     low, high = (np.array([bounds[n][k] for n in names]) for k in (0, 1))
     step = np.where(high > theta0, high, low) - theta0
@@ -437,7 +479,7 @@ def affine_line_terms(lines: "LineAssembler", defaults, bounds) -> tuple[LineTer
     where = low + u * (high - low)
     for j, name in enumerate(names):  # each alone, the others at the deck's values
         theta = np.where(np.arange(len(names)) == j, where[0], theta0)
-        what = f"parameter {name} ({lines.rebuild.bindings[name].target!r}) does not enter"
+        what = f"parameter {name} ({lines.bindings[name].target!r}) does not enter"
         _check_linear(lines, terms, theta, what)
     if len(names) > 1:
         for theta in where:
@@ -456,8 +498,8 @@ def _check_linear(lines: "LineAssembler", terms, theta, what: str) -> None:
         if miss > LINEAR_TOL:
             raise BayesUpdateError(
                 f"{what} the line elements' {'KM'[which]} linearly (relative miss {miss:.1e}; a "
-                "PBARL/PBEAML dimension, a shear-flexible beam's A or I, or E with A or I do not), "
-                "so the reduced basis does not cover it"
+                "PBARL/PBEAML dimension, a shear-flexible beam's A or I, E with A or I, a CONM2 "
+                "or beam offset do not), so the reduced basis does not cover it"
             )
 
 
@@ -488,10 +530,22 @@ class LineAssembler(GeneralAssembler):
         keys = self.rows.astype(np.int64) * self.n_dof + self.cols
         # not ``lines``: that is the base class's list of line-element matrices (``fe.energy``)
         self.rebuild = LineRebuild(deck, structure, bindings, keys, path)
+        #: the line elements whose offsets are bound and the CONM2 / CMASS2 cards whose own
+        #: fields are, converted again at every solve (their records are not affine: a beam's
+        #: lumped end masses follow its offset length); they share no element with ``rebuild``
+        self.cards = [LineRebuild(deck, structure, bindings, keys, path, part=part)
+                      for part in ("offset", "mass")]  # fmt: skip
+        self.cards = [r for r in self.cards if r.bindings]
+        mine = {k: b for r in (self.rebuild, *self.cards) for k, b in r.bindings.items()}
+        #: {name: DeckBinding} of every parameter re-built here, in the model's order
+        self.bindings = {n: b for n, b in bindings.items() if n in mine}
         self.values = None
         self._box = (defaults, bounds)
         self._fields = None if fast else (None, "the reference path was asked for")
-        self._known = known if fast and _same_box(known, self.rebuild, self._box) else None
+        if not self.rebuild.bindings:
+            self._fields = (None, "no line element is bound")
+        same = fast and _same_box(known, deck, self.bindings, self._box)
+        self._known = known if same else None
         self._last = (None, None)  # (key, (K, M, elem)) of the last assembly
 
     @property
@@ -513,27 +567,42 @@ class LineAssembler(GeneralAssembler):
         return "" if self.fields is not None else self._fields[1]
 
     def line_base(self) -> tuple[np.ndarray, np.ndarray]:
-        """(K, M) (nnz,) of the bound elements (and lumped masses) at the deck's values."""
-        if self.fields is None:
-            return self.rebuild.base
-        return self.fields.update.contribution()
+        """(K, M) (nnz,) of the bound elements (and lumped masses, and the bound mass cards)
+        at the deck's values."""
+        if not self.rebuild.bindings:
+            K, M = np.zeros(self.nnz), np.zeros(self.nnz)
+        elif self.fields is None:
+            K, M = self.rebuild.base
+        else:
+            K, M = self.fields.update.contribution()
+        for part in self.cards:
+            K, M = K + part.base[0], M + part.base[1]
+        return K, M
 
     def line_delta(self, values) -> tuple[np.ndarray, np.ndarray]:
-        """(dK, dM) (nnz,) of the bound elements from the deck's values to ``values``."""
-        if self.fields is None:
-            return self.rebuild.delta(values)
-        K, M = self.fields.contribution(self.fields.theta(values))
-        K0, M0 = self.fields.update.base
-        return K - K0, M - M0
+        """(dK, dM) (nnz,) of the bound elements (and mass cards) from the deck's values to
+        ``values``."""
+        if not self.rebuild.bindings:
+            dK, dM = np.zeros(self.nnz), np.zeros(self.nnz)
+        elif self.fields is None:
+            dK, dM = self.rebuild.delta(values)
+        else:
+            K, M = self.fields.contribution(self.fields.theta(values))
+            K0, M0 = self.fields.update.base
+            dK, dM = K - K0, M - M0
+        for part in self.cards:
+            cK, cM = part.delta(values)
+            dK, dM = dK + cK, dM + cM
+        return dK, dM
 
     def assemble(self, props, shell_props=None):
-        key = _assembly_key(self.values, self.rebuild.bindings, props, shell_props)
+        key = _assembly_key(self.values, self.bindings, props, shell_props)
         if key == self._last[0]:
             return self._last[1]
         K, M, elem = super().assemble(props, shell_props)
         defaults = self._box[0]
         if self.values is not None and any(self.values[n] != defaults[n]
-                                           for n in self.rebuild.bindings):  # fmt: skip
+                                           for n in self.bindings):  # fmt: skip
             dK, dM = self.line_delta(self.values)
             K.data += dK  # same positions: the pattern's data in its sorted order
             M.data += dM
@@ -541,19 +610,19 @@ class LineAssembler(GeneralAssembler):
         return K, M, elem
 
 
-def _same_box(known, rebuild: LineRebuild, box) -> bool:
+def _same_box(known, deck, bindings, box) -> bool:
     """``known`` (a ``LineAssembler`` or None) reads the same deck with the same line bindings:
     the same bound fields (in the same order, with their coefficients, deck values and
     elements), defaults and bounds."""
-    if known is None or known.rebuild.deck is not rebuild.deck:
+    if known is None or known.rebuild.deck is not deck:
         return False
 
     def key(assembler_bindings, defaults, bounds):
-        return [(n, b.field, b.coefficient, tuple(b.nominal), tuple(b.lines),
+        return [(n, b.field, b.coefficient, tuple(b.nominal), tuple(b.lines), b.relations,
                  float(defaults[n]), tuple(map(float, bounds[n])))
                 for n, b in assembler_bindings.items()]  # fmt: skip
 
-    return key(rebuild.bindings, *box) == key(known.rebuild.bindings, *known._box)  # noqa: SLF001
+    return key(bindings, *box) == key(known.bindings, *known._box)  # noqa: SLF001
 
 
 def _assembly_key(values, names, props, shell_props) -> tuple:
@@ -605,9 +674,11 @@ def interpolated_line_groups(lines: LineAssembler, defaults, bounds, tol: float)
     ``BayesUpdateError`` when no degree reaches ``tol``."""
     from bayesupdate.fe.reduced.affine import N_TEST, TEST_SEED
 
-    bindings = lines.rebuild.bindings
+    bindings = lines.bindings
     groups, rng = [], np.random.default_rng(TEST_SEED)
-    for names in _overlapping({n: set(b.lines) for n, b in bindings.items()}):
+    elements = {n: set(b.lines) | {(c, i) for c, i, *_ in b.relations}
+                for n, b in bindings.items()}  # fmt: skip
+    for names in _overlapping(elements):
         search = _GroupSearch(lines, defaults, names, bounds, tol, N_TEST)
         degrees = [search.axis_degree(i, rng) for i in range(len(names))]
         groups.append(search.tensor(degrees, rng))

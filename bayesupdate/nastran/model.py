@@ -15,7 +15,13 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.model import PROPERTY_TERMS, AffineTerms, FEModel
-from bayesupdate.nastran.bindings import DeckBinding, parse_binding, resolve
+from bayesupdate.nastran.bindings import (
+    SIGNED_FIELDS,
+    DeckBinding,
+    parse_binding,
+    relation_default,
+    resolve,
+)
 
 #: default bounds of a bound parameter without ``bounds``: this factor range on its default
 DEFAULT_RANGE = (0.5, 2.0)
@@ -38,7 +44,8 @@ class NastranModel(FEModel):
         (``with_structure``), whose line records are taken over where they hold."""
         self.deck, self.bdf = str(deck), bdf
         super().__init__(structure, bindings, defaults, bounds, name=name)
-        if any(getattr(b, "lines", ()) for b in self.bindings.values()):
+        if any(getattr(b, "lines", ()) or getattr(b, "relations", ())
+               for b in self.bindings.values()):  # fmt: skip
             from bayesupdate.nastran.lines import LineAssembler
 
             self._general = LineAssembler(
@@ -139,7 +146,13 @@ class NastranModel(FEModel):
         return out
 
     def element_properties(self, params=None):
-        return super().element_properties(self.fe_values(params))
+        values = self.fe_values(params)
+        # an element card's own field (an offset: any sign) sets no FE property; its cards
+        # check it when they are converted again (``lines.LineRebuild``)
+        for name, b in self.bindings.items():
+            if getattr(b, "relations", ()) and np.isfinite(values[name]):
+                values[name] = 1.0
+        return super().element_properties(values)
 
     def shell_properties(self, params=None):
         return super().shell_properties(self.fe_values(params))
@@ -190,7 +203,7 @@ class NastranModel(FEModel):
         self.line_terms()
         if not getattr(self, "line_nonlinear", ""):
             return ()
-        names = list(self._general.rebuild.bindings)
+        names = list(self._general.bindings)
         key = (tuple((n, *map(float, bounds[n])) for n in names), float(interp_tol))
         cache = self.__dict__.setdefault("_line_groups", {})
         if key not in cache:
@@ -214,7 +227,7 @@ class NastranModel(FEModel):
                 return float(sum((grp.weights(v) @ grp.dm)[0]
                                  for v, grp in zip(values, moving, strict=True)))  # fmt: skip
         g = self._general
-        dM = g.line_delta({n: params[n] for n in g.rebuild.bindings})[1]
+        dM = g.line_delta({n: params[n] for n in g.bindings})[1]
         return _translational_mass(g, np.arange(g.nnz), dM)
 
     def with_structure(self, structure, bindings=None, defaults=None, bounds=None, name=None):
@@ -267,7 +280,12 @@ def deck_bindings(parameters: Mapping, bdf, structure) -> tuple[dict, dict, dict
                 'e.g. binds = "PSHELL 3 T"'
             )
         b = resolve(parse_binding(entry["binds"], name), bdf, structure, name)
-        if "coefficients" in entry:  # line fields set as C0_i + COEF_i x (``desvar``)
+        if "relations" in entry:  # element-card fields set as C0_i + COEF_i x (``desvar``)
+            rel = tuple((str(c), int(i), str(f), float(c0), float(k))
+                        for c, i, f, c0, k in entry["relations"])  # fmt: skip
+            b = replace(b, relations=rel, default=relation_default(bdf, rel),
+                        desvar=int(entry["desvar"]))  # fmt: skip
+        elif "coefficients" in entry:  # line fields set as C0_i + COEF_i x (``desvar``)
             coefs, c0 = (tuple(float(v) for v in entry[k]) for k in ("coefficients", "offsets"))
             x0 = [(n - o) / c for n, o, c in zip(b.nominal, c0, coefs, strict=True)]
             b = replace(b, default=float(np.mean(x0)), coefficients=coefs, offsets=c0,
@@ -276,15 +294,51 @@ def deck_bindings(parameters: Mapping, bdf, structure) -> tuple[dict, dict, dict
             c = float(entry["coefficient"])
             b = replace(b, factor=b.factor * c, default=b.default / c, coefficient=c,
                         desvar=int(entry["desvar"]))  # fmt: skip
-        low, high = entry.get("bounds") or [b.default * f for f in DEFAULT_RANGE]
-        if not low > 0:
-            raise BayesUpdateError(
-                f"parameter {name}: bounds {[low, high]} for binds {b.target!r}: "
-                "the low bound must be > 0 (a thickness, modulus, density or mass)"
-            )
+        low, high = _bounds(name, entry, b)
         bindings[name], defaults[name], bounds[name] = b, b.default, (low, high)
+    bindings = _masses_with_cards(bindings, bdf)
     _check_overlaps(bindings)
     return bindings, defaults, bounds
+
+
+def _bounds(name: str, entry: Mapping, b: DeckBinding) -> tuple[float, float]:
+    """The study's bounds, or ``DEFAULT_RANGE`` x the default; a field that is > 0 in any
+    sensible deck (thickness, modulus, density, mass) needs low > 0, an inertia or scalar mass
+    low >= 0, an offset (``bindings.SIGNED_FIELDS``) explicit bounds low < high."""
+    signed = bool(b.relations) and all(f in SIGNED_FIELDS for _, _, f, _, _ in b.relations)
+    if signed and not entry.get("bounds"):
+        raise BayesUpdateError(
+            f"parameter {name}: binds {b.target!r} (an offset, any sign): give bounds = [low, high]"
+        )
+    low, high = entry.get("bounds") or [b.default * f for f in DEFAULT_RANGE]
+    if signed and not low < high:
+        raise BayesUpdateError(f"parameter {name}: bounds {[low, high]}: give low < high")
+    if not signed and not (low >= 0 if b.relations else low > 0):
+        raise BayesUpdateError(
+            f"parameter {name}: bounds {[low, high]} for binds {b.target!r}: "
+            + ("the low bound must be >= 0 (an inertia or mass)" if b.relations else
+               "the low bound must be > 0 (a thickness, modulus, density or mass)")
+        )  # fmt: skip
+    return float(low), float(high)
+
+
+def _masses_with_cards(bindings: dict, bdf) -> dict:
+    """The CONM2 M bindings (a mass factor) on CONM2s that another parameter re-builds (an
+    offset or inertia: ``relations``) written into the card too: a factor on the read mass
+    would miss the m x and m x^2 terms of the new offset (MSC QRG CONM2)."""
+    rebuilt = {(c, i) for b in bindings.values() for c, i, *_ in b.relations}
+    out = dict(bindings)
+    for name, b in bindings.items():
+        f = b.field
+        if b.relations or (f.card, f.field) != ("CONM2", "M"):
+            continue
+        if not any(("CONM2", i) in rebuilt for i in f.ids):
+            continue
+        coef = [n if f.scale else b.coefficient for n in b.nominal]
+        rel = tuple(("CONM2", i, "M", 0.0, float(k)) for i, k in zip(f.ids, coef, strict=True))
+        out[name] = replace(b, property="line", mass=np.zeros_like(b.mass), factor=1.0,
+                            relations=rel)  # fmt: skip
+    return out
 
 
 def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
@@ -293,16 +347,23 @@ def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
     items = list(bindings.items())
     for i, (a, ba) in enumerate(items):
         for b, bb in items[i + 1 :]:
-            same_card_field = (ba.field.card, ba.field.field) == (bb.field.card, bb.field.field)
+            same_card_field = bool(_targets(ba) & _targets(bb))
             same = (
                 (_COLUMN.get(ba.property, -1) == _COLUMN.get(bb.property, -2)
                  and (ba.shell & bb.shell).any())
                 or (ba.mass & bb.mass).any()
                 or (ba.spring & bb.spring).any()
-                or (same_card_field and bool(set(ba.field.ids) & set(bb.field.ids)))
+                or same_card_field
             )  # fmt: skip
             if same:
                 raise BayesUpdateError(
                     f"parameters {a} ({ba.target!r}) and {b} ({bb.target!r}) act on the same "
                     "elements' property; bind each element once"
                 )
+
+
+def _targets(b: DeckBinding) -> set:
+    """{(card, id, field)} a binding writes (its relations, or its field on each id)."""
+    if b.relations:
+        return {(c, i, f) for c, i, f, _, _ in b.relations}
+    return {(b.field.card, i, b.field.field) for i in b.field.ids}

@@ -1,20 +1,21 @@
 """The user's deck written back with calibrated values in its bound fields (``--write-bdf``).
 
 The deck is read again and each bound card gets the parameter's value (or, for a ``scale``
-binding, the factor times the card's own value; for a DESVAR, C0 + COEF x its value, and the
-DESVAR's XINIT the value).  The deck's own text is then copied line for line with only those
-cards replaced, each by a large-field card (16-character fields, ``bulk.real16``: the shortest
-repr or 11-15 digits) of all its fields: comments, card order and every other card stay as they
-were.  A bound card in an ``INCLUDE``d file is replaced in that file's text, which is written
-in place of its ``INCLUDE`` line (the output is one file); the other ``INCLUDE`` lines stay, with
-the file's absolute path when the output is written in another folder.
+binding, the factor times the card's own value; for a DESVAR, C0 + COEF x its value in each
+related field, element cards' own fields too, and the DESVAR's XINIT the value). The deck's own
+text is then copied line for line with only those cards replaced, each by a large-field card
+(16-character fields, ``bulk.real16``: the shortest repr or 11-15 digits) of all its fields:
+comments, card order and every other card stay as they were. A bound card in an ``INCLUDE``d
+file is replaced in that file's text, which is written in place of its ``INCLUDE`` line (the
+output is one file); the other ``INCLUDE`` lines stay, with the file's absolute path when the
+output is written in another folder.
 """
 
 from pathlib import Path
 
 from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.nastran.bindings import DeckBinding, _card, set_field
+from bayesupdate.nastran.bindings import DeckBinding, _card, set_field, write_relations
 from bayesupdate.nastran.bulk import large_field_text, with_fields
 from bayesupdate.nastran.deck import include_at, read_deck
 
@@ -30,14 +31,22 @@ def write_updated_deck(model, values, out) -> Path:
         if not isinstance(binding, DeckBinding) or name not in values:
             continue
         value = float(values[name])
-        for k, (i, nominal) in enumerate(zip(binding.field.ids, binding.nominal, strict=True)):
-            key = (binding.field.card, i)
-            card = changed.get(key) or _card(deck, binding.field, i)
-            changed[key] = set_field(card, binding.field, binding.value_of(k, value), nominal)
+        if binding.relations:  # element-card fields: C0 + COEF x on each card (``bindings``)
+            write_relations(deck, binding, value, changed)
+        else:
+            _write_field(deck, binding, value, changed)
         if binding.desvar is not None:  # the design variable's start, as Nastran reads it
             dv = deck.table("DESVAR")[binding.desvar]
             changed[("DESVAR", binding.desvar)] = with_fields(dv, {dv.position("XINIT"): value})
     return _write(deck, changed, out)
+
+
+def _write_field(deck, binding: DeckBinding, value: float, changed: dict) -> None:
+    """``changed`` with the binding's field at ``value`` on each of its cards."""
+    for k, (i, nominal) in enumerate(zip(binding.field.ids, binding.nominal, strict=True)):
+        key = (binding.field.card, i)
+        card = changed.get(key) or _card(deck, binding.field, i)
+        changed[key] = set_field(card, binding.field, binding.value_of(k, value), nominal)
 
 
 def write_design_deck(path, out, values=None) -> Path:

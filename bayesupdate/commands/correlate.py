@@ -18,11 +18,12 @@ mass-normalised, and the test shapes expanded to
 every model DOF (--out).  Test data without shapes (paper:ema, a frequency CSV) pair in order.
 
 Pairs follow the one rule calibrate, sample and discover keep pairs by (the study's [pairing]
-table): the assignment maximising the total MAC with a partner inside the frequency window
-first (Hungarian method); a test mode is refused when its MAC is below --mac-threshold (0.6),
-when its partner is outside --frequency-window (|f_model / f_test - 1| > 0.5), or when its
-best partner is taken by another test mode.  The model is solved for --extra-modes (2) modes
-beyond the test's highest.
+table, or the flags): a pair is admissible when its MAC reaches --mac-threshold (0.6) and
+|f_model / f_test - 1| <= --frequency-window (0.5); the pairs are the assignment of distinct
+model modes maximising the total MAC of the admissible pairs (Hungarian method).  Any other
+test mode is refused, named with its best MAC partner and the rule: mac (below the threshold),
+window (that partner outside the window) or taken (that partner paired with another test
+mode).  The model is solved for --extra-modes (2) modes beyond the test's highest.
 
 The test DOFs are mapped to the model as calibrate maps them: a built-in model's sensors, a
 Nastran deck's [model.test_points] (or --test-points FILE; default: test node = GRID id).

@@ -11,10 +11,15 @@ and reports every test mode: paired, or refused with the rule that refused it.
   packaged FRFs): ``correlate`` and ``calibrate`` keep the same pairs on v3.3 and v4.2, and
   GVT mode 5 (15.96 Hz), which MAC alone pairs with v3.3's 38.3 Hz mode (+140 %), is refused
   with that reason.
+- Bad input, one line and exit 2: a window of 0 or less (flag or study), a threshold outside
+  [0, 1], a ``[data] modes`` entry the file lacks, a weight for a mode not selected, and a
+  test point farther than ``pair_tolerance`` from the deck (named with its distance).
 """
 
 import json
+from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 
@@ -164,7 +169,8 @@ def test_a_window_on_the_study_or_the_flag_refuses_what_calibrate_refuses(
     assert out["modes"][5]["error_pct"] == pytest.approx(100 * (1 / 1.4 - 1))  # -28.57 %
     assert out["rules"] == {"mac_threshold": 0.6, "frequency_window": 0.5}
     narrow = _exhaust_study(tmp_path, h5, "[pairing]\nfrequency_window = 0.2\n")
-    by_flag = _correlate_json(capsys, [plain, "--frequency-window", "0.2"])
+    h5_out = tmp_path / "corr.h5"
+    by_flag = _correlate_json(capsys, [plain, "--frequency-window", "0.2", "--out", str(h5_out)])
     by_study = _correlate_json(capsys, [narrow])
     for out in (by_flag, by_study):
         assert [m["test"] for m in out["modes"]] == [1, 2, 3, 4, 5]
@@ -173,6 +179,12 @@ def test_a_window_on_the_study_or_the_flag_refuses_what_calibrate_refuses(
         assert refused["model_hz"] == pytest.approx(model_hz6, rel=1e-9)
         assert refused["error_pct"] == pytest.approx(-28.571, abs=1e-3)
         assert out["tests"][5]["status"] == "refused"
+    with h5py.File(h5_out, "r") as fh:
+        g = fh["correlation"]
+        assert g.attrs["frequency_window"] == 0.2 and g.attrs["mac_threshold"] == 0.6
+        assert g["refused/test"][()].tolist() == [6] and g["refused/model"][()].tolist() == [6]
+        assert g["refused/reason"].asstr()[()].tolist() == ["window"]
+        assert g["refused/error_pct"][0] == pytest.approx(-28.571, abs=1e-3)
     # calibrate's problem from the same study file keeps the same five and refuses mode 6
     problem = prepare(load_study(narrow)).problem
     assert problem.mode_numbers.tolist() == [1, 2, 3, 4, 5]
@@ -298,3 +310,38 @@ def test_the_default_window_refuses_v33s_pair_of_the_19_hz_mode_and_the_text_say
     assert rows[5].endswith("refused: +140.2 % outside +-50 %")
     kept, _ = _calibrate_pairs(path)
     assert kept == {1: 1, 10: 5}
+
+
+@pytest.mark.parametrize(
+    ("data", "needle"),
+    [
+        ("modes = [1, 9]", "data.modes: test mode 9 is not in"),
+        ("modes = [1, 9]", "which has 6 modes (numbered 1 to 6"),
+        (
+            "modes = [1, 2]\nweights = [1.0, 2.0, 3.0]",
+            "data.weights: 3 values for 2 selected test modes [1, 2]; give one per selected mode",
+        ),
+    ],
+)
+def test_a_mode_the_file_lacks_or_a_weight_for_an_unselected_mode_is_one_line(
+    shifted, tmp_path, capsys, data, needle
+):
+    h5, _ = shifted
+    study = tmp_path / "study.toml"
+    study.write_text(f'[model]\nsource = "exhaust"\n[data]\nsource = "{h5}"\n{data}\n')
+    for command in ("correlate", "sensitivity", "calibrate"):
+        assert main([command, str(study)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], (command, err)
+
+
+@pytest.mark.slow
+def test_a_test_point_beyond_the_tolerance_is_named_with_its_distance(tmp_path, gvt_modes, capsys):
+    path = _aircraft_study(tmp_path, "v3.3/sol103_mAEWing1_Hati_FEMv3p3.bdf", gvt_modes)
+    text = Path(path).read_text().replace('pair_tolerance = "5 in"', 'pair_tolerance = "0.5 in"')
+    Path(path).write_text(text)
+    assert main(["correlate", path]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    # the farthest accelerometer from v3.3's beams (3.47 in, studies/maewing1_correlate.py)
+    assert "test point 3 is 3.475 in (88.26 mm) from the model" in err
+    assert "beyond pair_tolerance 12.7 mm" in err

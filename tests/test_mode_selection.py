@@ -140,7 +140,7 @@ def test_a_planted_wrong_mode_is_refused_and_named(planted, tmp_path, capsys):
     assert refused["mac"] == pytest.approx(0.9992, abs=1e-4)
     line = (
         "pairing: test mode 6 (35.33 Hz): best model mode 1 at 8.96 Hz, MAC 1.00: refused "
-        "(-75 % off, outside the frequency window +-50 %)"
+        "(-74.6 % off, outside the frequency window +-50 %)"
     )
     assert line in captured.err.splitlines()
     assert result["test_modes"] == [1, 2, 3, 4, 5, 7]

@@ -112,14 +112,23 @@ def add_correlate_arguments(parser) -> None:
         type=float,
         default=None,
         metavar="X",
-        help="refuse pairs below this MAC (default 0.6)",
+        help="refuse pairs below this MAC (default: the study's [pairing] mac_threshold, 0.6)",
+    )
+    parser.add_argument(
+        "--frequency-window",
+        type=float,
+        default=None,
+        metavar="W",
+        help="refuse pairs with |f_model / f_test - 1| > W (default: the study's [pairing] "
+        "frequency_window, 0.5; inf: none)",
     )
     parser.add_argument(
         "--extra-modes",
         type=int,
-        default=4,
+        default=None,
         metavar="N",
-        help="model modes computed beyond the test's (default 4)",
+        help="model modes computed beyond the test's highest (default: the study's [pairing] "
+        "extra_modes, 2)",
     )
     parser.add_argument("--out", help="result file (HDF5)")
     parser.add_argument("--report", metavar="DIR", help="write DIR/report.html and DIR/report.md")
@@ -221,6 +230,22 @@ def correlate_study(args):
     cfg = study.data
     data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
     return study, data, numbers
+
+
+def correlate_settings(args, study):
+    """The ``pipelines.correlate.CorrelateSettings`` of ``correlate`` / ``sensitivity``: the
+    study's ``[pairing]`` mac_threshold, frequency_window and extra_modes (the rules and the
+    model modes ``calibrate``, ``sample`` and ``discover`` pair with), each overridden by its
+    flag; a bad flag value: one line naming the flag."""
+    from bayesupdate.inference.pairing import PairingRules, check_rules
+    from bayesupdate.pipelines.correlate import CorrelateSettings
+
+    cfg = study.pairing
+    threshold = cfg.mac_threshold if args.mac_threshold is None else args.mac_threshold
+    window = cfg.frequency_window if args.frequency_window is None else args.frequency_window
+    check_rules(threshold, window, ("--mac-threshold", "--frequency-window"))
+    extra = cfg.extra_modes if args.extra_modes is None else args.extra_modes
+    return CorrelateSettings(PairingRules(threshold, window), extra)
 
 
 def _with_geometry(study, args):

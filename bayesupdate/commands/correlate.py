@@ -1,16 +1,29 @@
 """``bayesupdate correlate``: the model against the test before any parameter moves."""
 
-from bayesupdate.commands._shared import add_correlate_arguments, correlate_study, emit
+from bayesupdate.commands._shared import (
+    add_correlate_arguments,
+    correlate_settings,
+    correlate_study,
+    emit,
+)
 
 NAME = "correlate"
 HELP = "frequency table, MAC matrix and mode pairs, COMAC, SEREP orthogonality: model vs test"
-DESCRIPTION = """Correlate a model with test modes before updating: the frequency table of the
-paired modes with % differences, the MAC matrix (test x model) and the test's AutoMAC, the pairs
-chosen by MAC (Hungarian assignment) above --mac-threshold with swaps, refused and unpaired modes
-named, COMAC per test DOF with the worst points named, and for an FE model a SEREP test-analysis
-model at the test DOFs (O'Callahan et al. 1989): the model's pseudo-orthogonality, the
-cross-orthogonality where the test's shapes are mass-normalised, and the test shapes expanded to
+DESCRIPTION = """Correlate a model with test modes before updating: a row per test mode, paired
+(model mode, % difference, MAC) or refused with the rule that refused it, the MAC matrix (test x
+model) and the test's AutoMAC, swaps and unpaired modes named, COMAC per test DOF with the worst
+points named, and for an FE model a SEREP test-analysis model at the test DOFs (O'Callahan et
+al. 1989): the model's pseudo-orthogonality, the cross-orthogonality where the test's shapes are
+mass-normalised, and the test shapes expanded to
 every model DOF (--out).  Test data without shapes (paper:ema, a frequency CSV) pair in order.
+
+Pairs follow the one rule calibrate, sample and discover keep pairs by (the study's [pairing]
+table, or the flags): a pair is admissible when its MAC reaches --mac-threshold (0.6) and
+|f_model / f_test - 1| <= --frequency-window (0.5); the pairs are the assignment of distinct
+model modes maximising the total MAC of the admissible pairs (Hungarian method).  Any other
+test mode is refused, named with its best MAC partner and the rule: mac (below the threshold),
+window (that partner outside the window) or taken (that partner paired with another test
+mode).  The model is solved for --extra-modes (2) modes beyond the test's highest.
 
 The test DOFs are mapped to the model as calibrate maps them: a built-in model's sensors, a
 Nastran deck's [model.test_points] (or --test-points FILE; default: test node = GRID id).
@@ -19,13 +32,17 @@ as in their source, as identify --json lists them).
 
   bayesupdate correlate --model exhaust --data paper:ema
   bayesupdate correlate --model exhaust --data modes.h5 --out corr.h5 --report corr --json
-  bayesupdate correlate study.toml --mac-threshold 0.8
+  bayesupdate correlate study.toml --mac-threshold 0.8 --frequency-window 0.3
 
---json prints {"model", "data", "pairing", "transform" {"matrix", "rms_residual"}, "points" [{"dof",
-"test_node", "model_node", "model_xyz", "direction", "distance"}], "modes" [{"test", "model",
-"test_hz", "model_hz", "error_pct", "mac"}] (modes numbered from 1), "mac", "test_auto_mac",
-"comac" [{"dof", "comac"}], "worst_points", "swapped", "refused", "unpaired_test",
-"unpaired_model", "pseudo_orthogonality", "cross_orthogonality", "notes"}."""
+--json prints {"model", "data", "pairing", "rules" {"mac_threshold", "frequency_window"},
+"transform" {"matrix", "rms_residual"}, "points" [{"dof", "test_node", "model_node",
+"model_xyz", "direction", "distance"}], "modes" [{"test", "model", "test_hz", "model_hz",
+"error_pct", "mac"}] (the pairs; modes numbered from 1), "tests" [{"test", "test_hz", "status"
+(paired | refused | unpaired), "model", "model_hz", "error_pct", "mac", "reason" (mac | window
+| taken)}] (every test mode), "mac", "test_auto_mac", "comac" [{"dof", "comac"}],
+"worst_points", "swapped", "refused" [{"test", "model", "test_hz", "model_hz", "error_pct",
+"mac", "reason", "other", "message"}], "unpaired_test", "unpaired_model",
+"pseudo_orthogonality", "cross_orthogonality", "notes"}."""
 
 
 def add_arguments(parser) -> None:
@@ -41,10 +58,17 @@ def correlation_json(result) -> dict:
     def matrix(a):
         return None if a is None else [[round(float(v), 6) for v in row] for row in a]
 
+    rules = result.rules
     return {
         "model": result.model,
         "data": result.data,
         "pairing": pairs.method,
+        "rules": None
+        if rules is None
+        else {
+            "mac_threshold": rules.mac_threshold,
+            "frequency_window": _finite(rules.frequency_window),
+        },
         "transform": {
             "matrix": matrix(result.mapping.transform),
             "rms_residual": result.mapping.rms_residual,
@@ -62,6 +86,7 @@ def correlation_json(result) -> dict:
             }
             for t, m, e, v in zip(pairs.test, pairs.model, result.error_pct, pairs.mac, strict=True)
         ],
+        "tests": test_mode_rows(result),
         "mac": matrix(result.mac),
         "test_auto_mac": matrix(result.test_auto_mac),
         "comac": None
@@ -72,9 +97,7 @@ def correlation_json(result) -> dict:
         ],  # fmt: skip
         "worst_points": [{"dof": d, "comac": c} for d, c in result.worst_points(3)],
         "swapped": [{"test": result.number(t), "model": m + 1} for t, m in pairs.swapped],
-        "refused": [
-            {"test": result.number(t), "model": m + 1, "mac": v} for t, m, v in pairs.refused
-        ],
+        "refused": [_refused_json(r, rules) for r in result.refused],
         "unpaired_test": [result.number(t) for t in pairs.unpaired_test],
         "unpaired_model": [m + 1 for m in pairs.unpaired_model],
         "pseudo_orthogonality": matrix(result.pseudo_orthogonality),
@@ -83,10 +106,53 @@ def correlation_json(result) -> dict:
     }
 
 
+def _finite(value: float) -> float | None:
+    """``value``, or None for an infinite one (JSON has no infinity)."""
+    return None if value == float("inf") else value
+
+
+def _refused_json(refused, rules) -> dict:
+    return {
+        "test": refused.number,
+        "model": refused.model_mode,
+        "test_hz": refused.test_hz,
+        "model_hz": refused.model_hz,
+        "error_pct": refused.error_pct,
+        "mac": refused.mac,
+        "reason": refused.reason,
+        "other": refused.other or None,
+        "message": refused.message(rules),
+    }
+
+
+def test_mode_rows(result) -> list[dict]:
+    """Every test mode of a ``Correlation``, in test order: {"test", "test_hz", "status"
+    (paired | refused | unpaired), "model", "model_hz", "error_pct", "mac" (a refused mode:
+    its best MAC partner; unpaired: null), "reason" (refused: mac | window | taken; else
+    null)}."""
+    pairs = result.pairs
+    paired = {int(t): k for k, t in enumerate(pairs.test)}
+    refused = {r.number: r for r in result.refused}
+    rows = []
+    for t, f in enumerate(result.test_hz):
+        row = {"test": result.number(t), "test_hz": float(f), "status": "unpaired"}
+        row.update(dict.fromkeys(("model", "model_hz", "error_pct", "mac", "reason")))
+        if t in paired:
+            k = paired[t]
+            m, v = int(pairs.model[k]), float(pairs.mac[k])
+            row.update(status="paired", model=m + 1, model_hz=float(result.model_hz[m]),
+                       error_pct=float(result.error_pct[k]), mac=None if v != v else v)  # fmt: skip
+        elif row["test"] in refused:
+            r = refused[row["test"]]
+            row.update(status="refused", model=r.model_mode, model_hz=r.model_hz,
+                       error_pct=r.error_pct, mac=r.mac, reason=r.reason)  # fmt: skip
+        rows.append(row)
+    return rows
+
+
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.pipelines.correlate import (
-        CorrelateSettings,
         correlate,
         study_correlation_model,
         write_correlation_h5,
@@ -94,13 +160,10 @@ def run(args) -> int:
     from bayesupdate.report.correlate_report import write_correlate_report
     from bayesupdate.report.identify_report import check_report_folder
 
-    settings = CorrelateSettings(
-        **({} if args.mac_threshold is None else {"mac_threshold": args.mac_threshold}),
-        extra_modes=args.extra_modes,
-    )
     if args.out:
         check_output_path(args.out, args.force)
     study, data, numbers = correlate_study(args)
+    settings = correlate_settings(args, study)
     labels = data.dof_labels if data.shapes is not None else ()
     model, mapping = study_correlation_model(study, labels)
     result = correlate(model, data, settings, str(study.model.source), mapping, numbers)
@@ -118,17 +181,15 @@ def format_correlation(result) -> str:
     import numpy as np
 
     pairs = result.pairs
-    lines = [
-        f"{result.model} vs {result.data}: {result.test_hz.size} test modes, "
-        f"{result.model_hz.size} model modes, paired by {pairs.method}",
-        "test  model   test_Hz   model_Hz   diff_%    MAC",
-    ]
-    for t, m, e, v in zip(pairs.test, pairs.model, result.error_pct, pairs.mac, strict=True):
-        mac = "  -  " if v != v else f"{v:.3f}"
-        lines.append(
-            f"{result.number(t):4d}  {m + 1:5d}  {result.test_hz[t]:8.3f}  "
-            f"{result.model_hz[m]:9.3f}  {e:+7.2f}  {mac}"
-        )
+    rules = result.rules
+    head = f"{result.model} vs {result.data}: {result.test_hz.size} test modes, "
+    head += f"{result.model_hz.size} model modes, paired by {pairs.method}"
+    if rules is not None:
+        head += f" (MAC >= {rules.mac_threshold:g} within +-{100 * rules.frequency_window:g} %)"
+    lines = [head, "test  model   test_Hz   model_Hz   diff_%    MAC  pair"]
+    refused = {r.number: r for r in result.refused}
+    for row in test_mode_rows(result):
+        lines.append(_table_line(row, refused.get(row["test"]), rules))
     if result.mac is not None:
         lines.append("MAC (rows: test modes, columns: model modes)")
         lines += [" ".join(f"{v:4.2f}" for v in row) for row in result.mac]
@@ -147,6 +208,19 @@ def format_correlation(result) -> str:
     lines += _orthogonality_lines(result)
     lines += [f"note: {n}" for n in result.notes]
     return "\n".join(lines)
+
+
+def _table_line(row: dict, refused, rules) -> str:
+    """One test mode's line of the table: its pair, or its best partner and why refused."""
+    start = f"{row['test']:4d}  "
+    if row["model"] is None:
+        return start + f"{'-':>5}  {row['test_hz']:8.3f}  {'-':>9}  {'-':>7}  {'-':>5}  unpaired"
+    mac = "  -  " if row["mac"] is None else f"{row['mac']:.3f}"
+    status = "paired" if refused is None else f"refused: {refused.why(rules)}"
+    return start + (
+        f"{row['model']:5d}  {row['test_hz']:8.3f}  {row['model_hz']:9.3f}  "
+        f"{row['error_pct']:+7.2f}  {mac}  {status}"
+    )
 
 
 def _orthogonality_lines(result) -> list[str]:

@@ -4,19 +4,25 @@ from dataclasses import replace
 
 import numpy as np
 
-from bayesupdate.commands._shared import add_correlate_arguments, correlate_study, emit
+from bayesupdate.commands._shared import (
+    add_correlate_arguments,
+    correlate_settings,
+    correlate_study,
+    emit,
+)
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sensitivity"
 HELP = "normalised sensitivities of the paired frequencies, what the test sees, a parameter set"
 DESCRIPTION = """Normalised sensitivities (d f / f) / (d p / p) of the model modes paired with the
-test (as 'correlate' pairs them) to every candidate parameter, at the model's defaults: by the
-eigenvalue derivative phi^T (dK - lambda dM) phi for FE models and decks (one modal solve), or by
-central differences in log-parameter (--method fd; with test shapes also d MAC / d ln p).  Then
-the singular values of the sensitivity matrix and their directions (those below --rank-tol x the
-largest are directions the test cannot see), groups of confounded parameters (columns parallel
-within --group-cos: they move the frequencies as one direction), and a suggested parameter set
-by QR with column pivoting (a rank-revealing choice: a suggestion, not a verdict).
+test (as 'correlate' and 'calibrate' pair them: the study's [pairing] rules) to every candidate
+parameter, at the model's defaults: by the eigenvalue derivative phi^T (dK - lambda dM) phi for
+FE models and decks (one modal solve), or by central differences in log-parameter (--method
+fd; with test shapes also d MAC / d ln p).  Then the singular values of the sensitivity matrix
+and their directions (those below --rank-tol x the largest are directions the test cannot see),
+groups of confounded parameters (columns parallel within --group-cos: they move the frequencies
+as one direction), and a suggested parameter set by QR with column pivoting (a rank-revealing
+choice: a suggestion, not a verdict).
 
 Candidates are the study's parameters, or for a Nastran deck --candidates: deck fields, with *
 for every card of that type ("PSHELL * T" is one candidate per PSHELL of the deck):
@@ -99,7 +105,7 @@ def candidate_model(args, study, data):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.pipelines.correlate import CorrelateSettings, correlate
+    from bayesupdate.pipelines.correlate import correlate
     from bayesupdate.pipelines.sensitivity import (
         SensitivityInput,
         SensitivitySettings,
@@ -110,13 +116,10 @@ def run(args) -> int:
     from bayesupdate.report.identify_report import check_report_folder
 
     settings = SensitivitySettings(args.method, args.step, args.rank_tol, args.group_cos)
-    pairing = CorrelateSettings(
-        **({} if args.mac_threshold is None else {"mac_threshold": args.mac_threshold}),
-        extra_modes=args.extra_modes,
-    )
     if args.out:
         check_output_path(args.out, args.force)
     study, data, numbers = correlate_study(args)
+    pairing = correlate_settings(args, study)  # the pairs correlate and calibrate keep
     model, base = candidate_model(args, study, data)
     corr = correlate(model, data, pairing, str(study.model.source), numbers=numbers)
     if not corr.pairs.test.size:

@@ -16,8 +16,11 @@ modes by MAC and frequency: Ewins, *Modal Testing: Theory, Practice and Applicat
 2000; Friswell & Mottershead, *Finite Element Model Updating in Structural Dynamics*, 1995): at
 the reference design a test mode is paired only with a model mode whose frequency lies within a
 relative window of its own (|f_model / f_test - 1| <= ``frequency_window``) and whose MAC
-reaches ``mac_threshold``; a test mode with no such partner is refused (``screen_test_modes``),
-named with its best MAC partner, and left out of the objective.  At other parameter points the
+reaches ``mac_threshold``; a test mode with no such partner is refused (``screen_pairs``),
+named with its best MAC partner and the rule that refused it, and left out of the objective.
+``correlate`` and ``sensitivity`` pair by the same function with the same rules (the study's
+``[pairing]`` table), so the pairs a user sees before updating are those ``calibrate``,
+``sample`` and ``discover`` keep.  At other parameter points the
 pairing is redone with the same window preferred (``window_scores``): a model mode inside it
 always wins over one outside, but a pair with no partner inside the window still counts, and is
 reported at the optimum.
@@ -57,28 +60,37 @@ class PairingRules:
     frequency_window: float = DEFAULT_FREQUENCY_WINDOW
 
     def __post_init__(self):
-        if not 0.0 <= self.mac_threshold <= 1.0:
-            raise BayesUpdateError(
-                f"pairing.mac_threshold: {self.mac_threshold}; give a MAC in [0, 1] (default "
-                f"{DEFAULT_MAC_THRESHOLD})"
-            )
-        if not self.frequency_window > 0:
-            raise BayesUpdateError(
-                f"pairing.frequency_window: {self.frequency_window}; give a relative window "
-                f"> 0, e.g. {DEFAULT_FREQUENCY_WINDOW} (model within +-50 % of the test)"
-            )
+        check_rules(self.mac_threshold, self.frequency_window)
+
+
+def check_rules(
+    mac_threshold: float,
+    frequency_window: float,
+    names: tuple[str, str] = ("pairing.mac_threshold", "pairing.frequency_window"),
+) -> None:
+    """One line naming the bad value of a ``PairingRules`` field, as ``names`` call them (the
+    study's keys, or a command's flags)."""
+    if not 0.0 <= mac_threshold <= 1.0:
+        raise BayesUpdateError(
+            f"{names[0]}: {mac_threshold}; give a MAC in [0, 1] (default {DEFAULT_MAC_THRESHOLD})"
+        )
+    if not frequency_window > 0:
+        raise BayesUpdateError(
+            f"{names[1]}: {frequency_window}; give a relative window > 0, e.g. "
+            f"{DEFAULT_FREQUENCY_WINDOW} (model within +-50 % of the test; inf: none)"
+        )
 
 
 @dataclass(frozen=True)
 class RefusedMode:
-    """A test mode left out at the reference design (``screen_test_modes``).
+    """A test mode left out at the reference design (``screen_pairs``).
 
     number : its 1-based number in the data source.  test_hz : its frequency [Hz].
     model_mode : 1-based model mode of its highest MAC.  model_hz : that mode's frequency [Hz].
     mac : that MAC [-].  reason : "mac" (below the threshold), "window" (outside the frequency
-    window) or "taken" (its best partner is paired with another test mode and no other model
-    mode inside the window reaches the threshold).  other : for "taken", the 1-based number of
-    that other test mode.
+    window) or "taken" (its best partner is paired with another test mode and no other
+    admissible partner is free for it).  other : for "taken", the 1-based number of that other
+    test mode.
     """
 
     number: int
@@ -99,15 +111,29 @@ class RefusedMode:
         if self.reason == "mac":
             return f"{head} (below {rules.mac_threshold:g})"
         if self.reason == "window":
-            off = 100.0 * (self.model_hz / self.test_hz - 1.0)
             return (
-                f"{head} ({off:+.0f} % off, outside the frequency window "
+                f"{head} ({self.error_pct:+.1f} % off, outside the frequency window "
                 f"+-{100 * rules.frequency_window:g} %)"
             )
         return (
             f"{head} (that mode is paired with test mode {self.other}; no other model mode "
-            f"within +-{100 * rules.frequency_window:g} % reaches MAC {rules.mac_threshold:g})"
+            f"within +-{100 * rules.frequency_window:g} % at MAC >= {rules.mac_threshold:g} is "
+            "free for it)"
         )
+
+    @property
+    def error_pct(self) -> float:
+        """The best partner's frequency less the test's, in % of the test's."""
+        return 100.0 * (self.model_hz / self.test_hz - 1.0)
+
+    def why(self, rules: PairingRules) -> str:
+        """The rule that refused it, short: "MAC < 0.6", "+140 % outside +-50 %", "model
+        mode 2 taken by test mode 1"."""
+        if self.reason == "mac":
+            return f"MAC < {rules.mac_threshold:g}"
+        if self.reason == "window":
+            return f"{self.error_pct:+.1f} % outside +-{100 * rules.frequency_window:g} %"
+        return f"model mode {self.model_mode} taken by test mode {self.other}"
 
     def to_dict(self, rules: PairingRules) -> dict:
         return {
@@ -115,8 +141,10 @@ class RefusedMode:
             "test_hz": self.test_hz,
             "model_mode": self.model_mode,
             "model_hz": self.model_hz,
+            "error_pct": self.error_pct,
             "mac": self.mac,
             "reason": self.reason,
+            "other": self.other or None,
             "message": self.message(rules),
         }
 
@@ -127,10 +155,77 @@ def window_scores(mac: np.ndarray, test_hz: np.ndarray, model_hz: np.ndarray, wi
     ``window`` None: the MAC itself."""
     if window is None:
         return mac
+    return mac - _OUTSIDE_WINDOW_PENALTY * ~inside_window(test_hz, model_hz, window)
+
+
+def inside_window(test_hz: np.ndarray, model_hz: np.ndarray, window: float) -> np.ndarray:
+    """(..., n_test, n_model) bool: |f_model / f_test - 1| <= ``window`` for every test mode
+    (test_hz (n_test,)) and model mode (model_hz (..., n_model)) [Hz]; NaN: outside."""
     ratio = np.asarray(model_hz, dtype=float)[..., None, :] / np.asarray(test_hz)[:, None]
     with np.errstate(invalid="ignore"):
-        outside = ~(np.abs(ratio - 1.0) <= window)
-    return mac - _OUTSIDE_WINDOW_PENALTY * outside
+        return np.abs(ratio - 1.0) <= window
+
+
+@dataclass(frozen=True)
+class ScreenedPairs:
+    """The verdict of the pairing rules on every test mode at one design (``screen_pairs``).
+
+    test, model : (k,) 0-based indices of the kept pairs (test ascending).  mac : (k,) their
+    MAC [-].  refused : the other test modes, each with its reason (``RefusedMode``).
+    """
+
+    test: np.ndarray
+    model: np.ndarray
+    mac: np.ndarray
+    refused: tuple[RefusedMode, ...]
+
+
+def screen_pairs(
+    mac: np.ndarray,
+    test_hz: np.ndarray,
+    model_hz: np.ndarray,
+    rules: PairingRules,
+    numbers: tuple[int, ...],
+) -> ScreenedPairs:
+    """The one pairing rule of ``correlate``, ``sensitivity``, ``calibrate``, ``sample`` and
+    ``discover`` (module docstring): which test modes a MAC pairing keeps, and why the others
+    are refused.
+
+    mac : (n_test, n_model) MAC matrix (``correlation.mac_matrix(test, model)``); test_hz :
+    (n_test,) [Hz]; model_hz : (n_model,) [Hz]; numbers : (n_test,) 1-based numbers of the test
+    modes in their source.  A pair is admissible when it lies inside the frequency window and
+    its MAC reaches the threshold; the pairs kept are the assignment of distinct model modes
+    maximising the total MAC of the admissible pairs (Hungarian method, Kuhn 1955), so a pair
+    that will be refused never takes the partner of one that is kept.  Returns
+    ``ScreenedPairs``.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    mac = np.asarray(mac, dtype=float)
+    model_hz = np.asarray(model_hz, dtype=float)
+    inside = inside_window(test_hz, model_hz, rules.frequency_window)
+    admissible = inside & (mac >= rules.mac_threshold)
+    rows, cols = linear_sum_assignment(-np.where(admissible, mac, 0.0))
+    partner = np.full(mac.shape[0], -1)
+    partner[rows] = cols
+    owner = {int(c): int(r) for r, c in zip(rows, cols, strict=True)}
+    kept, refused = [], []
+    for i, j in enumerate(partner):
+        if j >= 0 and admissible[i, j]:
+            kept.append(i)
+            continue
+        best = int(np.argmax(mac[i]))
+        if mac[i, best] < rules.mac_threshold:
+            reason, other = "mac", 0
+        elif not inside[i, best]:
+            reason, other = "window", 0
+        else:  # the best partner, admissible, went to a test mode it suits better
+            reason, other = "taken", numbers[owner[best]] if best in owner else 0
+        pair = (best + 1, float(model_hz[best]), float(mac[i, best]))
+        refused.append(RefusedMode(int(numbers[i]), float(test_hz[i]), *pair, reason, int(other)))
+    test = np.array(kept, dtype=int)
+    model = partner[test]
+    return ScreenedPairs(test, model, mac[test, model], tuple(refused))
 
 
 def screen_test_modes(
@@ -141,38 +236,13 @@ def screen_test_modes(
     rules: PairingRules,
     numbers: tuple[int, ...],
 ) -> tuple[np.ndarray, tuple[RefusedMode, ...]]:
-    """The test modes a MAC pairing keeps at the reference design (module docstring).
-
-    test_hz : (n_test,) [Hz]; test_shapes : (n_dof, n_test); model_hz : (n_model,) [Hz];
-    model_shapes : (n_dof, n_model) on the same DOFs; numbers : (n_test,) 1-based numbers of the
-    test modes in their source.  Pairs are the assignment maximising the total MAC over the
-    pairs inside the frequency window (Hungarian method, Kuhn 1955); a pair is kept when it is
-    inside the window and its MAC reaches the threshold.
-    Returns (kept (k,) 0-based indices of the test modes, refused modes).
-    """
-    from scipy.optimize import linear_sum_assignment
-
-    mac = mac_matrix(test_shapes, model_shapes)
-    score = window_scores(mac, test_hz, model_hz, rules.frequency_window)
-    rows, cols = linear_sum_assignment(-score)
-    partner = np.full(len(test_hz), -1)
-    partner[rows] = cols
-    owner = {int(c): int(r) for r, c in zip(rows, cols, strict=True)}
-    kept, refused = [], []
-    for i, j in enumerate(partner):
-        if j >= 0 and score[i, j] >= rules.mac_threshold:
-            kept.append(i)
-            continue
-        best = int(np.argmax(mac[i]))
-        if mac[i, best] < rules.mac_threshold:
-            reason, other = "mac", 0
-        elif score[i, best] < mac[i, best]:
-            reason, other = "window", 0
-        else:
-            reason, other = "taken", numbers[owner[best]]
-        pair = (best + 1, float(model_hz[best]), float(mac[i, best]))
-        refused.append(RefusedMode(int(numbers[i]), float(test_hz[i]), *pair, reason, int(other)))
-    return np.array(kept, dtype=int), tuple(refused)
+    """The test modes a MAC pairing keeps at the reference design (``screen_pairs`` on the MAC
+    of test_shapes (n_dof, n_test) and model_shapes (n_dof, n_model) on the same DOFs).
+    Returns (kept (k,) 0-based indices of the test modes, refused modes)."""
+    screened = screen_pairs(
+        mac_matrix(test_shapes, model_shapes), test_hz, model_hz, rules, numbers
+    )
+    return screened.test, screened.refused
 
 
 @dataclass(frozen=True)

@@ -101,7 +101,8 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
     """A study file (TOML text) on ``deck`` against the identified modes ``modes_h5`` with the
     packaged geometry, ``parameters`` ({name: (binding, bounds)}: ``PARAMETERS`` by default;
     None: none) bound, the data restricted to the 1-based test modes ``calibration_modes`` when
-    given (with the ``[pairing]`` window ``FREQUENCY_WINDOW``), and ``MEASURED`` as data."""
+    given, the ``[pairing]`` window ``FREQUENCY_WINDOW`` (every command pairs by it), and
+    ``MEASURED`` as data."""
     lines = ["[model]", f"source = {_toml_str(deck)}", "[data]", f"source = {_toml_str(modes_h5)}"]
     if calibration_modes is not None:
         lines.append(f"modes = {list(map(int, calibration_modes))}")
@@ -117,8 +118,7 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
     align = [list(row) for row in ALIGN]
     lines += ["[test]", f"geometry = {_toml_str(data_folder() / GEOMETRY)}", f"align = {align}",
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
-    if calibration_modes is not None:
-        lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]
+    lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]  # correlate's too
     lines += [f"[optimizer]\nstarts = {STARTS}\npolish = false",
               f"[sampler]\nwalkers = {WALKERS}\nreduced = false\nscreen = false"]  # fmt: skip
     if parameters:

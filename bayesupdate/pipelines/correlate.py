@@ -9,7 +9,10 @@ deck's ``[model.test_points]``: ``nastran.test_points``) and the transform is th
 test-geometry pairing fills the same record (test coordinates, distances, the fitted transform).
 
 ``correlate(model, data, mapping, settings)`` returns the frozen ``Correlation``: the paired
-modes (MAC and the Hungarian assignment with a threshold, or in order for frequencies only),
+modes (by ``inference.pairing.screen_pairs``, the one rule ``calibrate``, ``sample`` and
+``discover`` keep pairs by: a MAC threshold and a relative frequency window, the study's
+``[pairing]``; every other test mode refused with the rule that refused it; in order for
+frequencies only),
 the MAC matrix and the test's AutoMAC, COMAC per test DOF, and, for an FE model, the SEREP TAM
 of the model at the test DOFs (``correlation.serep_*``): the model's pseudo-orthogonality, the
 cross-orthogonality where the test's shapes are mass-normalised, and the test shapes expanded to
@@ -21,38 +24,43 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bayesupdate.correlation import (
-    DEFAULT_MAC_THRESHOLD,
     ModePairs,
     auto_mac,
     comac,
     cross_orthogonality,
     mac_matrix,
     pair_in_order,
-    pair_modes,
     pseudo_orthogonality,
     serep_expand,
     serep_mass,
     serep_transformation,
 )
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.pairing import label_rows
+from bayesupdate.inference.pairing import (
+    PairingRules,
+    RefusedMode,
+    ScreenedPairs,
+    label_rows,
+    screen_pairs,
+)
 from bayesupdate.modal_data import ModalData
 from bayesupdate.pipelines.model_source import paired_study_model, study_model
 
 
 @dataclass(frozen=True)
 class CorrelateSettings:
-    """mac_threshold : MAC below which a pair is refused, in (0, 1].  extra_modes : model modes
-    computed beyond the test's (so a test mode can pair past a swap), >= 0.  parameters : the
-    model's parameter point (SI, or a deck's units; empty: its defaults)."""
+    """rules : what a MAC pair must meet (``inference.pairing.PairingRules``: the study's
+    ``[pairing]`` mac_threshold and frequency_window, the rules ``calibrate`` keeps pairs by).
+    extra_modes : model modes computed beyond the test's highest mode number (so a test mode
+    can pair past a swap; the study's ``[pairing] extra_modes``, as ``calibrate`` computes
+    them), >= 0.  parameters : the model's parameter point (SI, or a deck's units; empty: its
+    defaults)."""
 
-    mac_threshold: float = DEFAULT_MAC_THRESHOLD
-    extra_modes: int = 4
+    rules: PairingRules = field(default_factory=PairingRules)
+    extra_modes: int = 2
     parameters: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if not 0.0 < self.mac_threshold <= 1.0:
-            raise BayesUpdateError(f"--mac-threshold {self.mac_threshold}: give a value in (0, 1]")
         if self.extra_modes < 0:
             raise BayesUpdateError(f"--extra-modes {self.extra_modes}: must be >= 0")
 
@@ -92,7 +100,8 @@ class Correlation:
     modes and the model's modes).
 
     model, data : names.  dof_labels (n_a,).  test_hz (m_t,), model_hz (m_m,) [Hz].
-    pairs : ``correlation.ModePairs``.  mac (m_t, m_m), test_auto_mac (m_t, m_t), comac (n_a,)
+    pairs : ``correlation.ModePairs`` (its ``refused``: (test, best model mode, MAC) of each
+    refused test mode).  mac (m_t, m_m), test_auto_mac (m_t, m_t), comac (n_a,)
     over the paired modes: None without test shapes.  mapping : ``SensorMapping``.
     test_shapes (n_a, m_t) real (realised) test shapes, model_shapes (n_a, m_m) model shapes at
     the test DOFs: None without test shapes.  pseudo_orthogonality (k, k) of the paired model
@@ -102,7 +111,9 @@ class Correlation:
     (n_nodes, 3) the model's node coordinates (its own units) for the report's picture of the
     test points on the model; None for a model without a structure.  test_numbers (m_t,) each
     test mode's 1-based number in its source (a study's ``[data] modes``; () : 1..m_t), the
-    number a reader is shown (``number``).
+    number a reader is shown (``number``).  rules : the pairing rules (None: paired in order,
+    frequencies only).  refused : each refused test mode with the rule that refused it, in
+    test order (``inference.pairing.RefusedMode``).
     """
 
     model: str
@@ -123,6 +134,8 @@ class Correlation:
     notes: tuple[str, ...] = ()
     model_nodes: np.ndarray | None = None
     test_numbers: tuple[int, ...] = ()
+    rules: PairingRules | None = None
+    refused: tuple[RefusedMode, ...] = ()
 
     def number(self, t: int) -> int:
         """The source's 1-based number of test mode ``t`` (0-based index here)."""
@@ -262,8 +275,10 @@ def correlate(
     rows = _rows(modes, data.dof_labels)
     model_at = modes.shapes[rows]
     mac = mac_matrix(data.shapes, model_at)
-    pairs = pair_modes(mac, settings.mac_threshold)
-    notes = _pair_notes(pairs, settings.mac_threshold, numbers)
+    rules = settings.rules
+    screened = screen_pairs(mac, data.frequencies_hz, modes.frequencies_hz, rules, numbers)
+    pairs = _mode_pairs(screened, numbers, mac.shape[1])
+    notes = _pair_notes(pairs, screened.refused, rules, numbers)
     base = Correlation(
         model=name,
         data=data.source,
@@ -281,8 +296,32 @@ def correlate(
         model_shapes=model_at,
         model_nodes=_nodes(model),
         test_numbers=_shown(numbers),
+        rules=rules,
+        refused=screened.refused,
     )
     return _with_serep(base, modes, rows, data, notes)
+
+
+def _mode_pairs(screened: ScreenedPairs, numbers: tuple[int, ...], n_model: int) -> ModePairs:
+    """The ``ModePairs`` of the pairs ``screen_pairs`` kept, its refused test modes as
+    (test, best model mode, MAC) (0-based), swaps and the modes of each set in no pair."""
+    index = {n: t for t, n in enumerate(numbers)}
+    test, model = screened.test, screened.model
+    order = np.argsort(model, kind="stable")
+    rank_model = np.empty_like(order)
+    rank_model[order] = np.arange(order.size)
+    out_of_order = rank_model != np.arange(test.size)
+    return ModePairs(
+        test=test,
+        model=model,
+        mac=screened.mac,
+        refused=tuple((index[r.number], r.model_mode - 1, r.mac) for r in screened.refused),
+        # a pair whose model mode's rank among the paired ones is not its test mode's
+        swapped=tuple((int(test[k]), int(model[k])) for k in np.flatnonzero(out_of_order)),
+        unpaired_test=tuple(int(t) for t in np.setdiff1d(np.arange(len(numbers)), test)),
+        unpaired_model=tuple(int(m) for m in np.setdiff1d(np.arange(n_model), model)),
+        method="mac",
+    )
 
 
 def _nodes(model) -> np.ndarray | None:
@@ -339,12 +378,10 @@ def _realise(shapes: np.ndarray) -> np.ndarray:
     return realise(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
 
 
-def _pair_notes(pairs: ModePairs, threshold: float, numbers: tuple[int, ...]) -> list[str]:
-    notes = [
-        f"test mode {numbers[t]} refused: its best model mode {m + 1} has MAC {v:.3f} < "
-        f"{threshold:g}"
-        for t, m, v in pairs.refused
-    ]
+def _pair_notes(
+    pairs: ModePairs, refused: tuple[RefusedMode, ...], rules: PairingRules, numbers
+) -> list[str]:
+    notes = [r.message(rules) for r in refused]
     if pairs.swapped:
         named = ", ".join(f"test {numbers[t]} - model {m + 1}" for t, m in pairs.swapped)
         notes.append(f"swapped (model modes out of the test's order): {named}")
@@ -392,11 +429,16 @@ def _with_serep(
 def write_correlation_h5(path, result: Correlation) -> None:
     """Write ``result`` to HDF5 atomically.  Layout (group ``/correlation``, attributes
     ``model``, ``data``, ``pairing`` (mac | order), ``mapping_source``, ``rms_residual`` of the
-    alignment (NaN: none fitted)):
+    alignment (NaN: none fitted), ``mac_threshold`` and ``frequency_window`` of the pairing
+    rules (NaN: paired in order)):
 
     - ``test_hz`` (m_t,), ``model_hz`` (m_m,) [Hz]; ``dof_labels`` (n_a,) strings;
       ``test_numbers`` (m_t,) each test mode's 1-based number in its source;
     - ``pairs/test``, ``pairs/model`` (k,) 0-based, ``pairs/mac`` (k,), ``pairs/error_pct`` (k,);
+    - ``refused/test`` (r,) 1-based numbers of the refused test modes, ``refused/model`` (r,)
+      1-based model mode of each one's best MAC, ``refused/mac`` (r,), ``refused/error_pct``
+      (r,), ``refused/reason`` (r,) strings: ``mac`` (below the threshold), ``window`` (outside
+      the frequency window) or ``taken`` (that model mode is paired with another test mode);
     - ``transform`` (4, 4) test -> model; ``points/model_node`` (n_a,) (-1: none),
       ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3), ``points/distance`` (n_a,)
       test point to its model point after the transform (NaN: none);
@@ -413,9 +455,12 @@ def write_correlation_h5(path, result: Correlation) -> None:
     with atomic_path(path, suffix=".h5") as tmp, h5py.File(tmp, "w") as fh:
         g = fh.create_group("correlation")
         rms = result.mapping.rms_residual
+        rules = result.rules
         g.attrs.update(model=result.model, data=result.data, pairing=result.pairs.method,
                        mapping_source=result.mapping.source,
                        rms_residual=np.nan if rms is None else rms)  # fmt: skip
+        g.attrs["mac_threshold"] = np.nan if rules is None else rules.mac_threshold
+        g.attrs["frequency_window"] = np.nan if rules is None else rules.frequency_window
         g["test_hz"], g["model_hz"] = result.test_hz, result.model_hz
         g["test_numbers"] = np.array([result.number(t) for t in range(result.test_hz.size)])
         g["dof_labels"] = np.array(result.dof_labels, dtype=h5py.string_dtype())
@@ -423,6 +468,12 @@ def write_correlation_h5(path, result: Correlation) -> None:
         pairs = g.create_group("pairs")
         pairs["test"], pairs["model"] = result.pairs.test, result.pairs.model
         pairs["mac"], pairs["error_pct"] = result.pairs.mac, result.error_pct
+        refused = g.create_group("refused")
+        refused["test"] = np.array([r.number for r in result.refused], dtype=int)
+        refused["model"] = np.array([r.model_mode for r in result.refused], dtype=int)
+        refused["mac"] = np.array([r.mac for r in result.refused], dtype=float)
+        refused["error_pct"] = np.array([r.error_pct for r in result.refused], dtype=float)
+        refused["reason"] = np.array([r.reason for r in result.refused], dtype=h5py.string_dtype())
         g["transform"] = result.mapping.transform
         points = g.create_group("points")
         points["model_node"] = np.array([-1 if p.model_node is None else p.model_node for p in pts])

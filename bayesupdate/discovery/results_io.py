@@ -89,7 +89,7 @@ def _shape_noise_summary(fit) -> dict | None:
     shapes = fit.space.shapes
     if shapes is None:
         return None
-    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :])
+    rejects = shapes.stated_rejections(fit.space.shape_residuals(fit.best.r))
     return {
         "source": shapes.source,
         "floor_sd_rel": SHAPE_SD_FLOOR_REL,

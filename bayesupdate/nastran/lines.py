@@ -46,7 +46,7 @@ from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
-from bayesupdate.nastran.bindings import _card, set_field
+from bayesupdate.nastran.bindings import _card, is_own_modulus, set_field, with_own_material
 from bayesupdate.nastran.deck import Refusals
 from bayesupdate.nastran.frames import read_grids
 
@@ -107,13 +107,20 @@ class LineRebuild:
             e["MID"] for e in self.elements.values() if e.name == "CONROD"
         }
         mats = {m: all_mats[m] for m in mids if m in all_mats}
+        if values is None:
+            return props, mats
+        own = {n: b for n, b in self.bindings.items() if is_own_modulus(b.field)}
         for name, b in self.bindings.items():
-            if values is None:
+            if name in own:
                 continue
             table = mats if b.field.card == "MAT1" else props
             for k, (i, nominal) in enumerate(zip(b.field.ids, b.nominal, strict=True)):
                 card = table.get(i) or _card(deck, b.field, i)
                 table[i] = set_field(card, b.field, b.value_of(k, float(values[name])), nominal)
+        # a property's own modulus last: its copy of the MAT1 takes the MAT1's bound values
+        for name, b in own.items():
+            for i in b.field.ids:
+                props[i], mats = with_own_material(props[i], mats, float(values[name]))
         return props, mats
 
     def structure_at(self, values):

@@ -35,7 +35,10 @@ have mode shapes (an identified test, paired by MAC), each mode's shape residual
 at a level fixed the same way: its stated sd (identification estimates one; floored at 1 %),
 raised to its misfit at the baseline where that misfit rejects it, so no single mode can drag the
 design away from what the frequencies say (bayesupdate.discovery.shape_evidence); the JSON's
-"noise" says which modes were raised."""
+"noise" says which modes were raised.  A study's measured mass properties ([data] mass,
+mass_sd, cg, inertia) are data as in calibrate: an effect that adds mass pays for the weight it
+adds (each candidate's "mass_z": model minus measured, in sds).  On a Nastran deck the library
+also scales the modulus of one line property's elements ("stiffness_change@PBEAM 1003")."""
 
 
 def add_arguments(parser) -> None:

@@ -227,7 +227,8 @@ def screen_grid(axis: ParameterSpec, z0: float) -> list[float]:
 
 
 def _position(structure, kind: str, location: str) -> np.ndarray:
-    """A representative point [m] of a location (sensor point, part, joint or bend)."""
+    """A representative point [m] of a location (sensor point, part, joint or bend; a deck's
+    line property: the mean of its elements' nodes)."""
     s = structure
     if kind in ("added_mass", "boundary_spring"):
         for label, node in zip(s.sensor_labels, s.sensor_node, strict=True):
@@ -238,8 +239,10 @@ def _position(structure, kind: str, location: str) -> np.ndarray:
         return s.nodes[np.unique(nodes)].mean(axis=0)
     if location in s.parts:
         pid = s.parts.index(location)
+        lines = [f.nodes[f.part == pid].ravel() for f in (s.general_beams, s.rods) if f is not None]
         nodes = np.concatenate(
             [s.beam_nodes[s.beam_part == pid].ravel(), s.spring_nodes[s.spring_part == pid].ravel()]
+            + lines
         )
         nodes = nodes[nodes >= 0]
         if nodes.size:

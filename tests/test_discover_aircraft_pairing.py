@@ -202,3 +202,39 @@ def test_flagged_modes_are_named_by_their_number_in_the_source():
     fit = SimpleNamespace(space=SimpleNamespace(problem=problem))
     assert flags.flagged_modes == [2, 3]
     assert source_modes(flags, fit) == [7, 10]
+
+
+@pytest.mark.slow
+def test_discover_takes_the_measured_mass_properties_as_calibrate_does(tmp_path, modes_h5):
+    """The demo's discover study with the authors' measured weight and inertias: discover's
+    objective and mass sd are calibrate's (``pipelines.study.prepare``), in the deck's units:
+    13.76 lb is 13.76 / 386.088 = 0.035640 lbf s^2/in, its sd 0.4 / 13.76 = 2.907 %."""
+    from bayesupdate.config import load_study
+    from bayesupdate.discovery.mass_block import MassBlock
+    from bayesupdate.inference.data import load_modal_data, select_modes
+    from bayesupdate.pipelines.discover import study_mass_properties
+    from bayesupdate.pipelines.model_source import study_model
+    from bayesupdate.pipelines.study import prepare
+
+    path = tmp_path / "discover.toml"
+    path.write_text(
+        ac.study_text(ac.data_folder() / ac.V33_DECK, modes_h5, MODES, ac.DISCOVER_PARAMETERS)
+    )
+    study = load_study(path)
+    data, _ = select_modes(load_modal_data(study.data.as_source()), study.data.selection(), "")
+    model = study_model(study, data.dof_labels)
+    data, objective = study_mass_properties(study, data, model)
+    prepared = prepare(study)
+    theirs = prepared.problem.objective
+    assert objective.mass_target_kg == pytest.approx(13.76 / 386.088, rel=1e-4)
+    assert objective.mass_target_kg == theirs.mass_target_kg
+    assert objective.mass_weight == theirs.mass_weight > 0
+    assert objective.mass_properties.names == theirs.mass_properties.names == ("ixx", "iyy")
+    np.testing.assert_array_equal(objective.mass_properties.values, theirs.mass_properties.values)
+    np.testing.assert_array_equal(objective.mass_properties.sd, theirs.mass_properties.sd)
+    assert data.mass_sd_rel == prepared.likelihood.mass_sd_rel == pytest.approx(0.4 / 13.76)
+    block = MassBlock.of(dataclasses.replace(prepared.problem, data=data))
+    assert block.names == ("mass", "ixx", "iyy")
+    # IXX 9560 lb in^2 in the deck's lbf s^2 in: / 386.088, its sd half the authors' range
+    assert block.targets.values[0] == pytest.approx(9560.0 / 386.088, rel=1e-4)
+    assert block.scale[1] == pytest.approx(239.0 / 386.088, rel=1e-4)

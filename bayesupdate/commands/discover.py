@@ -35,7 +35,10 @@ have mode shapes (an identified test, paired by MAC), each mode's shape residual
 at a level fixed the same way: its stated sd (identification estimates one; floored at 1 %),
 raised to its misfit at the baseline where that misfit rejects it, so no single mode can drag the
 design away from what the frequencies say (bayesupdate.discovery.shape_evidence); the JSON's
-"noise" says which modes were raised."""
+"noise" says which modes were raised.  A study's measured mass properties ([data] mass,
+mass_sd, cg, inertia) are data as in calibrate: an effect that adds mass pays for the weight it
+adds (each candidate's "mass_z": model minus measured, in sds).  On a Nastran deck the library
+also scales the modulus of one line property's elements ("stiffness_change@PBEAM 1003")."""
 
 
 def add_arguments(parser) -> None:
@@ -89,6 +92,10 @@ def run(args) -> int:
     from bayesupdate.pipelines.study import study_effects
 
     study = study_file(args)
+    if getattr(args, "no_mass", False):  # the measured mass properties left out, as calibrate's
+        from bayesupdate.config import with_overrides
+
+        study = with_overrides(study, objective__use_measured_mass=False)
     if args.out:
         check_output_path(args.out, args.force)
     if args.posterior_steps < 0:

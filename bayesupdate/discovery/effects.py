@@ -13,13 +13,16 @@ connection_        pipe-to-shell-body     k_rot [N m/rad] in [1e3, 1e8] of the s
 flexibility        connection ``a/b``     between pipe and spider, both planes
 bend_flexibility   a named bend           factor [-] in [1, 6] dividing EI              uniform
 boundary_spring    sensor point (1..20)   k [N/m] in [0, 1e5], 3 translations           uniform
-stiffness_change   a part (beams, or a    factor [-] on Young's modulus in [0.5, 1.5]   uniform
-                   shell body's sheets)
+stiffness_change   a part (beams, a       factor [-] on Young's modulus in [0.5, 1.5]   uniform
+                   shell body's sheets,
+                   a deck's PBEAM/PBAR)
 =================  =====================  ============================================  =========
 
 A stiffness change sits on a part with beams or shells (a shell body of ``exhaust_shell``; on a
-Nastran deck a PSHELL property, ``stiffness_change@PSHELL 3``), unless a parameter already sets
-the modulus of those shells.
+Nastran deck a PSHELL property, ``stiffness_change@PSHELL 3``, or a line property, the CBEAMs
+of one PBEAM, ``stiffness_change@PBEAM 1003``: E and G of those elements alone, the shear
+stiffness with them, so their K scales by the factor and their mass stays), unless a parameter
+already sets the modulus of those elements.
 
 Joints are the spring parts ``a/b`` of a beam model (``exhaust``); connections are the spring
 parts a model lists in ``structure.metadata["connections"]``: springs in series with a rigid
@@ -175,16 +178,25 @@ def _extend_bend(model, location, tag):
 
 def _stiffness_parts(model: FEModel) -> list[str]:
     """Parts with beams or shells (a modulus factor acts on both), in part order; a shell part
-    only where no parameter already sets its shells' modulus (a deck's MAT1 E binding)."""
+    only where no parameter already sets its shells' modulus (a deck's MAT1 E binding).  On a
+    Nastran deck also its line properties (``"PBEAM 1003"``: the elements of one PBEAM, PBAR,
+    PBARL, PBEAML or PROD, the model's ``line_parts``), whose E and G the factor scales for
+    those elements alone, unless a parameter already sets their modulus."""
     s = model.structure
-    if s.shells is None:
-        return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i)]
-    taken = np.zeros(s.shells.n_elements, bool)
-    for name, binding in model.bindings.items():
-        if binding.property in ("youngs_modulus", "modulus_factor"):
-            taken |= model.shells_of(name)
-    free = s.shells.part[~taken]
-    return [p for i, p in enumerate(s.parts) if np.any(s.beam_part == i) or np.any(free == i)]
+    line_parts = getattr(model, "line_parts", None)
+    lines = set(line_parts()) if callable(line_parts) else set()
+    free = np.zeros(0, int)
+    if s.shells is not None:
+        taken = np.zeros(s.shells.n_elements, bool)
+        for name, binding in model.bindings.items():
+            if binding.property in ("youngs_modulus", "modulus_factor"):
+                taken |= model.shells_of(name)
+        free = s.shells.part[~taken]
+    return [
+        p
+        for i, p in enumerate(s.parts)
+        if np.any(s.beam_part == i) or np.any(free == i) or p in lines
+    ]
 
 
 def _extend_stiffness(model, location, tag):

@@ -31,7 +31,9 @@ evidences summed (log-sum-exp); the same optimum found twice counts once.
 
 When the test has shapes, the residual vector also holds the shape residuals
 (``likelihood_blocks.ShapeBlock``, each mode with its own level fixed before the fit by
-``shape_evidence``), and H sums J_b^T J_b over the blocks.
+``shape_evidence``), and H sums J_b^T J_b over the blocks.  When the study measured mass
+properties (weight, CG, inertia), their residuals follow (``mass_block``: the terms ``calibrate``'s
+likelihood has), so an effect that adds mass is judged against the weight too.
 
 PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
 shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
@@ -48,6 +50,7 @@ from functools import cached_property
 import numpy as np
 from scipy import optimize, special, stats
 
+from bayesupdate.discovery.mass_block import MassBlock, WithMassBlock
 from bayesupdate.inference.likelihood_blocks import (
     LOG_2PI,
     FixedNoiseLikelihood,
@@ -73,10 +76,17 @@ class FitSpace:
     axes: tuple[ParameterSpec, ...]
     noise: NoiseModel
     shapes: ShapeBlock | None = None
+    mass: MassBlock | None = None
 
     @property
-    def likelihood(self) -> FixedNoiseLikelihood:
-        return FixedNoiseLikelihood(self.noise, self.shapes)
+    def likelihood(self) -> "FixedNoiseLikelihood | WithMassBlock":
+        inner = FixedNoiseLikelihood(self.noise, self.shapes)
+        return inner if self.mass is None else WithMassBlock(inner, self.mass)
+
+    def shape_residuals(self, r: np.ndarray) -> np.ndarray:
+        """The shape block's part of a residual vector r (size,) (empty without shapes)."""
+        n = self.n_frequency
+        return r[n : n + (0 if self.shapes is None else self.shapes.size)]
 
     @property
     def n_frequency(self) -> int:
@@ -118,10 +128,12 @@ class FitSpace:
     def residual_units(self) -> np.ndarray:
         """(size,) the noise sd each component of ``residual_vector`` is measured in: the
         frequency levels, then each mode's shape level once per DOF."""
-        units = self.noise.scale[self.noise.used]
-        if self.shapes is None:
-            return units
-        return np.concatenate([units, np.repeat(self.shapes.scale, self.shapes.n_dof)])
+        units = [self.noise.scale[self.noise.used]]
+        if self.shapes is not None:
+            units.append(np.repeat(self.shapes.scale, self.shapes.n_dof))
+        if self.mass is not None:
+            units.append(self.mass.scale)
+        return np.concatenate(units)
 
     def unit_box_residuals(self, count: EvaluationCount):
         """r(u) (size,): ``residual_vector`` at theta(u) for a least-squares fit in the unit box,
@@ -142,7 +154,14 @@ class FitSpace:
         if not evaluation.ok:
             return None
         shapes = None if evaluation.paired is None else evaluation.paired.shapes
-        return self.residual_vector(e, shapes)
+        return self.residual_vector(e, shapes, self.mass_values(evaluation))
+
+    def mass_values(self, evaluation) -> np.ndarray | None:
+        """(k,) the mass block's model values of a problem ``Evaluation`` (its total mass and
+        measured CG / inertia components); None without a mass block."""
+        if self.mass is None:
+            return None
+        return self.mass.values(evaluation.mass_kg, evaluation.mass_properties)
 
     def relative_errors(self, theta) -> tuple[np.ndarray, object]:
         """e (m,) at theta and the problem's Evaluation (e NaN where the model failed)."""
@@ -151,9 +170,14 @@ class FitSpace:
             evaluation.frequencies_hz, self.problem.data.frequencies_hz
         ), evaluation
 
-    def residual_vector(self, e: np.ndarray, model_shapes: np.ndarray | None) -> np.ndarray:
-        """(size,) residuals in noise units (``FixedNoiseLikelihood.residual_vector``)."""
-        return self.likelihood.residual_vector(e, model_shapes)
+    def residual_vector(
+        self, e: np.ndarray, model_shapes: np.ndarray | None, mass_values=None
+    ) -> np.ndarray:
+        """(size,) residuals in noise units (``FixedNoiseLikelihood.residual_vector``), then
+        the mass block's of ``mass_values`` (``MassBlock.values``) when there is one."""
+        if self.mass is None:
+            return self.likelihood.residual_vector(e, model_shapes)
+        return self.likelihood.residual_vector(e, model_shapes, mass_values)
 
 
 @dataclass

@@ -29,6 +29,7 @@ from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
 from bayesupdate.correlation import comac
 from bayesupdate.discovery.candidates import Candidate
+from bayesupdate.discovery.mass_block import MassBlock
 from bayesupdate.fe.reduced import ReducedFEModel
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.problem import build_problem
@@ -116,21 +117,28 @@ def _probe(axis: ParameterSpec, null: float) -> tuple[float, float]:
 
 
 def _paired_prediction(problem, model, params) -> tuple | None:
-    """(test-ordered frequencies (m,), paired model shapes (n_dof, m) on the test DOFs or None)
-    of ``model`` at ``params`` under ``problem``'s pairing; with "order" pairing a direct solve
-    (no calibration problem needed).  None where it fails."""
+    """(test-ordered frequencies (m,), paired model shapes (n_dof, m) on the test DOFs or None,
+    the mass block's values (``mass_block.MassBlock.at``) or None) of ``model`` at ``params``
+    under ``problem``'s pairing; with "order" pairing a direct solve (no calibration problem
+    needed).  None where it fails."""
     n_test = problem.data.n_modes
+    block = MassBlock.of(problem)
     try:
         if problem.pairing.method == "order":
-            f = np.asarray(model.predict(params, n_modes=n_test).frequencies_hz, dtype=float)
-            ok = f.size >= n_test and np.all(np.isfinite(f))
-            return (f[:n_test], None) if ok else None
-        from bayesupdate.inference.pairing import pair_modes
+            prediction = model.predict(params, n_modes=n_test)
+            f = np.asarray(prediction.frequencies_hz, dtype=float)
+            if not (f.size >= n_test and np.all(np.isfinite(f))):
+                return None
+            paired_f, shapes = f[:n_test], None
+        else:
+            from bayesupdate.inference.pairing import pair_modes
 
-        prediction = model.predict(params, n_modes=problem.pairing.n_model)
-        paired = pair_modes(prediction, problem.pairing)
-        f = np.asarray(prediction.frequencies_hz, dtype=float)[paired.model_index]
-        return f, paired.shapes
+            prediction = model.predict(params, n_modes=problem.pairing.n_model)
+            paired = pair_modes(prediction, problem.pairing)
+            paired_f = np.asarray(prediction.frequencies_hz, dtype=float)[paired.model_index]
+            shapes = paired.shapes
+        masses = None if block is None else block.at(problem, model, params, prediction.mass_kg)
+        return paired_f, shapes, masses
     except Exception:  # a failed probe scores zero; it is reported, not fatal
         return None
 
@@ -150,8 +158,9 @@ def _at_null(problem, candidate, design_theta, params) -> tuple | None:
 def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, candidate):
     """Score test of a candidate along its first parameter (module docstring, item 1).
 
-    residuals_fn(e, shapes) -> residuals in noise units (``FitSpace.residual_vector``) from the
-    relative frequency errors e (m,) and the paired model shapes (or None).
+    residuals_fn(e, shapes, masses) -> residuals in noise units (``FitSpace.residual_vector``)
+    from the relative frequency errors e (m,), the paired model shapes (or None) and the mass
+    block's values (or None: the study measured no mass properties).
     design_jac : (size, d) J_d of the same residuals.
     One model solve for kinds whose null value reproduces the model exactly (added mass, spring,
     factors), two for a joint (its null only approximates two different bending stiffnesses) and
@@ -164,8 +173,8 @@ def score_candidate(baseline_problem, design_theta, design_jac, residuals_fn, ca
     params.update(candidate.null)
 
     def residuals(paired):
-        f, shapes = paired
-        return residuals_fn((f - f_test) / f_test, shapes)
+        f, shapes, masses = paired
+        return residuals_fn((f - f_test) / f_test, shapes, masses)
 
     at_null = _at_null(baseline_problem, candidate, design_theta, params)
     z0, dz = _probe(axis, null)
@@ -218,7 +227,8 @@ def screen_grid(axis: ParameterSpec, z0: float) -> list[float]:
 
 
 def _position(structure, kind: str, location: str) -> np.ndarray:
-    """A representative point [m] of a location (sensor point, part, joint or bend)."""
+    """A representative point [m] of a location (sensor point, part, joint or bend; a deck's
+    line property: the mean of its elements' nodes)."""
     s = structure
     if kind in ("added_mass", "boundary_spring"):
         for label, node in zip(s.sensor_labels, s.sensor_node, strict=True):
@@ -229,8 +239,10 @@ def _position(structure, kind: str, location: str) -> np.ndarray:
         return s.nodes[np.unique(nodes)].mean(axis=0)
     if location in s.parts:
         pid = s.parts.index(location)
+        lines = [f.nodes[f.part == pid].ravel() for f in (s.general_beams, s.rods) if f is not None]
         nodes = np.concatenate(
             [s.beam_nodes[s.beam_part == pid].ravel(), s.spring_nodes[s.spring_part == pid].ravel()]
+            + lines
         )
         nodes = nodes[nodes >= 0]
         if nodes.size:

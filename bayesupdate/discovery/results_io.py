@@ -63,6 +63,24 @@ def _write_fit(group, fit) -> None:
     )
 
 
+def _design(fit) -> dict[str, float]:
+    """The design variables of a fit (its parameters less the effect's), model units."""
+    effect = set(fit.effect_parameters)
+    prefix = f"{fit.kind}@{fit.location}:"
+    return {k: v for k, v in fit.parameters.items() if k.removeprefix(prefix) not in effect}
+
+
+def mass_z(fit) -> dict[str, float] | None:
+    """{component: (model - measured) / sd} of the measured mass properties at the fit
+    (``mass_block``: the weight's relative error over its relative sd); None when the study
+    measured none."""
+    block = fit.space.mass
+    if block is None:
+        return None
+    r = fit.best.r[fit.space.likelihood.inner.size :]
+    return {name: float(v) for name, v in zip(block.names, r, strict=True)}
+
+
 def _candidate_summary(result, fit, probability: float, score_delta_chi2: float) -> dict:
     """One fitted candidate of ``discovery_summary``."""
     return {
@@ -75,6 +93,9 @@ def _candidate_summary(result, fit, probability: float, score_delta_chi2: float)
         "posterior_probability": float(probability),
         "expr": float(fit.expr),
         "parameters": fit.effect_parameters,
+        "design": _design(fit),
+        "error_pct": [float(v) for v in 100 * fit.residual_rel],
+        "mass_z": mass_z(fit),
         "score_delta_chi2": float(score_delta_chi2),
         "optima": len(fit.optima),
         "stage": fit.stage,
@@ -89,7 +110,7 @@ def _shape_noise_summary(fit) -> dict | None:
     shapes = fit.space.shapes
     if shapes is None:
         return None
-    rejects = shapes.stated_rejections(fit.best.r[fit.space.n_frequency :])
+    rejects = shapes.stated_rejections(fit.space.shape_residuals(fit.best.r))
     return {
         "source": shapes.source,
         "floor_sd_rel": SHAPE_SD_FLOOR_REL,
@@ -133,6 +154,7 @@ def discovery_summary(result) -> dict:
             "posterior_probability": float(probability[0]),
             "loo": None if baseline.loo is None else baseline.loo["elpd"],
             "parameters": baseline.parameters,
+            "mass_z": mass_z(baseline),
         },
         "design_after": final.parameters,
         "error_pct_before": [float(v) for v in 100 * baseline.residual_rel],

@@ -86,6 +86,7 @@ from bayesupdate.discovery.localization import (
     score_task,
     screen_grid,
 )
+from bayesupdate.discovery.mass_block import MassBlock
 from bayesupdate.discovery.reduced_candidates import (
     CandidateReducer,
     certified_fit,
@@ -355,7 +356,7 @@ def shape_tests(fit: ModelFit) -> ShapeTests | None:
     shapes = fit.space.shapes
     if shapes is None:
         return None
-    r = fit.best.r[fit.space.n_frequency :]
+    r = fit.space.shape_residuals(fit.best.r)
     m = fit.residual_rel.size
     p = np.full(m, np.nan)
     p[shapes.modes] = stats.chi2.sf(shapes.chi2(r), shapes.dof)
@@ -457,7 +458,9 @@ class DiscoveryPairing:
             raise BayesUpdateError(f"pairing.extra_modes: {self.extra_modes}; must be >= 0")
 
 
-def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None, **choice):
+def discovery_problem(
+    model, data, parameters, pairing: str = "auto", rules=None, objective=None, **choice
+):
     """(calibration problem, pairing record): the problem discovery calibrates and compares
     its candidates on, set up with one reference solve (``inference.problem.build_problem``,
     with the test modes' source numbers and extra modes of ``DiscoveryPairing``: ``choice``
@@ -470,14 +473,17 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
     and named in the record (``ModePairing.to_dict``: method, rules, refused).  The candidates'
     problems (``localization.candidate_problem``) pair without a frequency window, so the
     baseline's drops it too: both sides of every Bayes factor pair alike.  The record is {}
-    when no rules applied (no rules, no test shapes, or a pairing other than MAC)."""
+    when no rules applied (no rules, no test shapes, or a pairing other than MAC).
+    ``objective`` (``ObjectiveSpec``): the measured mass and CG / inertia, as ``calibrate``'s
+    problem has them (the baseline calibration's objective terms, and the ``mass_block`` of
+    every fit); None: frequencies (and shapes) only."""
     choice = DiscoveryPairing(pairing, rules, **choice)
     method = choice.method
     if method == "auto":
         method = "mac" if data.shapes is not None else "order"
     problem = build_problem(
-        model, data, parameters, pairing=method, extra_modes=choice.extra_modes, rules=rules,
-        test_modes=tuple(choice.test_modes),
+        model, data, parameters, pairing=method, extra_modes=choice.extra_modes,
+        objective=objective, rules=rules, test_modes=tuple(choice.test_modes),
     )  # fmt: skip
     if problem.pairing.rules is None:
         return problem, {}
@@ -487,15 +493,16 @@ def discovery_problem(model, data, parameters, pairing: str = "auto", rules=None
 
 
 def _prepare(
-    model, data, settings: DiscoverySettings, parameters, baseline, pairing, say, executor
-) -> tuple[object, list, object, dict]:
+    model, data, settings: DiscoverySettings, parameters, baseline, pairing, say, executor,
+    objective=None,
+) -> tuple[object, list, object, dict]:  # fmt: skip
     """The calibration problem and its pairing record (``discovery_problem``; ``pairing``: a
     ``DiscoveryPairing``); on the design variables' certified basis for a large model,
     ``reduced_candidates``), the library's effects and the baseline ``CalibrationResult``
     (calibrated here from ``baseline_starts`` starts, seeded by ``seed``, on ``executor``, when
     none is given)."""
     problem, record = discovery_problem(
-        model, data, parameters, pairing.method, pairing.rules,
+        model, data, parameters, pairing.method, pairing.rules, objective,
         extra_modes=pairing.extra_modes, test_modes=pairing.test_modes,
     )  # fmt: skip
     check_enough_modes(problem)
@@ -532,7 +539,7 @@ def _baseline_fit(problem, baseline, settings: DiscoverySettings) -> ModelFit:
         at_baseline = problem.evaluate(baseline.theta)
         if at_baseline.ok:
             shapes = shape_evidence(data, at_baseline.paired.shapes, noise.used)
-    base_space = FitSpace(problem, problem.parameters, noise, shapes)
+    base_space = FitSpace(problem, problem.parameters, noise, shapes, MassBlock.of(problem))
     starts = [baseline.theta, _box_centre(problem)]
     nfev = settings.refit.max_nfev
     fit = fit_model(base_space, starts, "baseline", max_nfev=nfev)
@@ -603,9 +610,7 @@ def _quick_refit(shared: tuple, score) -> ModelFit:
     base_fit, settings = shared
     problem, axes = base_fit.space.problem, base_fit.space.axes
     problem_c = candidate_problem(problem, base_fit.theta, score.candidate)
-    space = FitSpace(
-        problem_c, axes + score.candidate.axes, base_fit.space.noise, base_fit.space.shapes
-    )
+    space = replace(base_fit.space, problem=problem_c, axes=axes + score.candidate.axes)
     effect = score.candidate.effect
     fit = fit_model(
         space,
@@ -795,6 +800,7 @@ def discover(
     progress=None,
     executor=None,
     rules=None,
+    objective=None,
 ) -> DiscoveryResult:
     """Run discovery (module docstring).
 
@@ -813,13 +819,16 @@ def discover(
     rules : a MAC pairing's ``PairingRules`` (None: every test mode is paired; with a
     ``DiscoveryPairing`` its own rules are used): test modes refused at the reference design
     are left out and named in the result's ``pairing`` (``discovery_problem``).
+    objective : an ``inference.problem.ObjectiveSpec`` with the measured mass properties (as
+    ``calibrate`` builds it from a study); their terms enter every fit's likelihood
+    (``mass_block``).  None: none.
     """
     if isinstance(pairing, str):
         pairing = DiscoveryPairing(pairing, rules)
     settings, t0 = settings or DiscoverySettings(), time.perf_counter()
     say = progress or (lambda message: None)
     problem, effects, baseline, record = _prepare(
-        model, data, settings, parameters, baseline, pairing, say, executor
+        model, data, settings, parameters, baseline, pairing, say, executor, objective
     )
     timings = {"baseline_calibration_s": time.perf_counter() - t0}
     base_fit = _baseline_fit(problem, baseline, settings)

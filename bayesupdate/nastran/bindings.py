@@ -340,6 +340,62 @@ def write_relations(deck, b: DeckBinding, value: float, changed: dict) -> dict:
     return changed
 
 
+#: the field of a line property's own modulus (``modulus_binding``): not a card field, so not
+#: in ``FIELDS`` (a study cannot bind it); discovery's ``stiffness_change`` on a deck's part
+OWN_MODULUS = "E"
+
+
+def is_own_modulus(f: DeckField) -> bool:
+    """Whether ``f`` is a line property's own modulus (``modulus_binding``)."""
+    return f.card in LINE_PROPERTIES and f.field == OWN_MODULUS
+
+
+def modulus_binding(part: str, deck, structure) -> DeckBinding:
+    """A factor on E and G of the line elements of a property part (``"PBEAM 1003"``: the
+    CBEAMs of PBEAM 1003), those elements alone: re-built with their own copy of the property's
+    MAT1, E and G (where given) times the factor (``lines.LineRebuild``), so every stiffness of
+    theirs (EA, EI, GJ and the shear stiffness k G A) scales by it and their mass does not: the
+    ``modulus_factor`` of a built-in model's beams.  K is linear in the factor (the Timoshenko
+    shear parameter 12 EI / (k G A L^2) stays), M does not move."""
+    card_name, _, pid = part.partition(" ")
+    if card_name not in LINE_PROPERTIES or not pid.strip().isdigit():
+        raise BayesUpdateError(
+            f"stiffness of {part!r}: not a line property part (e.g. 'PBEAM 1003'); the parts with "
+            f"line elements are named '<PBAR|PBARL|PBEAM|PBEAML|PROD> <PID>'"
+        )
+    f = DeckField(f"{part} E scale", card_name, (int(pid),), OWN_MODULUS, True)
+    _card(deck, f, int(pid))
+    lines = line_elements(deck, f)
+    if not lines:
+        raise BayesUpdateError(f"stiffness of {part!r}: no element uses it")
+    n_shell = 0 if structure.shells is None else structure.shells.n_elements
+    zeros = (np.zeros(n_shell, bool), np.zeros(len(structure.mass_part), bool),
+             np.zeros(len(structure.spring_part), bool))  # fmt: skip
+    return DeckBinding(f.spec, "line", f, *zeros, 1.0, (1.0,), 1.0, lines=lines)
+
+
+def with_own_material(prop, mats: dict, factor: float) -> tuple:
+    """(property card, materials): ``prop`` pointing at its own copy of its MAT1 in ``mats``
+    ({MID: card}, completed), that copy's E and G (where given) times ``factor``.  The copy's
+    MID is ``_OWN_BASE`` + PID: above any MID a deck can hold (8 digits), one per property."""
+    mid = prop.int("MID", positive=True)
+    mat = mats.get(mid)
+    if mat is None:
+        prop.fail(f"material {mid} is not a MAT1 (only MAT1 is supported)")
+    own = _OWN_BASE + prop.id()
+    # the full repr, not a card's 16 characters: the copy is never written, and its records
+    # stay exactly affine in the factor (``lines.line_fields`` checks them to 1e-12)
+    changes = {mat.position(k): repr(float(mat.real(k)) * factor)
+               for k in ("E", "G") if not mat.is_blank(k)}  # fmt: skip
+    mats = dict(mats)
+    mats[own] = with_fields(mat, {**changes, 0: own})
+    return with_fields(prop, {prop.position("MID"): own}), mats
+
+
+#: offset of the private MAT1 ids of ``with_own_material`` (beyond any deck's: 8 digits)
+_OWN_BASE = 10**8
+
+
 def line_elements(deck, f: DeckField) -> tuple[int, ...]:
     """Ids of the CBAR/CBEAM/CROD/CONROD elements a binding re-builds: those of its line
     properties, or (MAT1) of every line property or CONROD with that MID."""

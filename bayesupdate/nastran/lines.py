@@ -50,7 +50,9 @@ from bayesupdate.nastran.bindings import (
     LINE_ELEMENTS,
     MASS_CARDS,
     _card,
+    is_own_modulus,
     set_field,
+    with_own_material,
     write_relations,
 )
 from bayesupdate.nastran.cards.masses import add as add_masses
@@ -145,8 +147,11 @@ class LineRebuild:
         }
         mats = {m: all_mats[m] for m in mids if m in all_mats}
         elements = dict(self.elements)
+        if values is None:
+            return elements, props, mats
+        own = {n: b for n, b in self.bindings.items() if is_own_modulus(b.field)}
         for name, b in self.bindings.items():
-            if values is None:
+            if name in own:
                 continue
             if b.relations:
                 write_relations(deck, b, float(values[name]), elements)
@@ -155,6 +160,10 @@ class LineRebuild:
             for k, (i, nominal) in enumerate(zip(b.field.ids, b.nominal, strict=True)):
                 card = table.get(i) or _card(deck, b.field, i)
                 table[i] = set_field(card, b.field, b.value_of(k, float(values[name])), nominal)
+        # a property's own modulus last: its copy of the MAT1 takes the MAT1's bound values
+        for name, b in own.items():
+            for i in b.field.ids:
+                props[i], mats = with_own_material(props[i], mats, float(values[name]))
         return elements, props, mats
 
     def structure_at(self, values):

@@ -43,9 +43,16 @@ class NastranModel(FEModel):
         """``lines_from``: the ``LineAssembler`` of the model this one extends
         (``with_structure``), whose line records are taken over where they hold."""
         self.deck, self.bdf = str(deck), bdf
+        bindings = {n: _own_modulus(b, bdf, structure) for n, b in bindings.items()}
         super().__init__(structure, bindings, defaults, bounds, name=name)
-        if any(getattr(b, "lines", ()) or getattr(b, "relations", ())
-               for b in self.bindings.values()):  # fmt: skip
+        # the re-built elements are the deck's at each binding's own deck value (a factor's 1,
+        # a relation's (value - C0) / COEF), whatever the parameter's default (an effect's
+        # start, e.g. 0.8)
+        rebuilt = {n: b for n, b in self.bindings.items()
+                   if getattr(b, "lines", ()) or getattr(b, "relations", ())}  # fmt: skip
+        self._line_defaults = dict(self._defaults)
+        self._line_defaults.update({n: b.default for n, b in rebuilt.items()})
+        if rebuilt:
             from bayesupdate.nastran.lines import LineAssembler
 
             self._general = LineAssembler(
@@ -54,11 +61,48 @@ class NastranModel(FEModel):
                 bdf,
                 self.bindings,
                 self.deck,
-                self._defaults,
+                self._line_defaults,
                 self._bounds,
                 known=lines_from,
             )
             self._assembler = self._general.beams
+
+    def line_parts(self) -> list[str]:
+        """The parts of line elements (``"PBEAM 1003"``: a property's CBARs, CBEAMs or CRODs)
+        whose modulus a ``modulus_factor`` binding (``Binding(part, "modulus_factor")``, e.g.
+        discovery's ``stiffness_change``) may scale (``bindings.modulus_binding``), in part
+        order; not those whose elements already follow a bound E or G (a MAT1 E / G binding,
+        or such a factor)."""
+        from bayesupdate.nastran.bindings import (
+            LINE_PROPERTIES,
+            DeckField,
+            is_own_modulus,
+            line_elements,
+        )
+
+        s = self.structure
+        if self.bdf is None:
+            return []
+        used = set()
+        for family in (s.general_beams, s.rods):
+            if family is not None:
+                used |= {s.parts[i] for i in np.unique(family.part)}
+        taken = set()
+        for b in self.bindings.values():
+            f = getattr(b, "field", None)
+            if f is not None and (
+                is_own_modulus(f) or (f.card == "MAT1" and f.field in ("E", "G"))
+            ):
+                taken |= set(b.lines)
+        out = []
+        for part in s.parts:
+            card, _, pid = part.partition(" ")
+            if part not in used or card not in LINE_PROPERTIES or not pid.isdigit():
+                continue
+            elements = line_elements(self.bdf, DeckField(part, card, (int(pid),), "E", True))
+            if elements and not taken & set(elements):
+                out.append(part)
+        return out
 
     def _mask(self, name, binding):
         if not isinstance(binding, DeckBinding):
@@ -188,7 +232,9 @@ class NastranModel(FEModel):
             return ()
         if getattr(self, "_line_terms", None) is None:
             try:
-                self._line_terms = affine_line_terms(self._general, self._defaults, self._bounds)
+                self._line_terms = affine_line_terms(
+                    self._general, self._line_defaults, self._bounds
+                )
             except BayesUpdateError as exc:
                 self._line_terms, self.line_nonlinear = (), str(exc)
         return self._line_terms
@@ -208,7 +254,9 @@ class NastranModel(FEModel):
         cache = self.__dict__.setdefault("_line_groups", {})
         if key not in cache:
             box = {n: bounds[n] for n in names}
-            cache[key] = interpolated_line_groups(self._general, self._defaults, box, interp_tol)
+            cache[key] = interpolated_line_groups(
+                self._general, self._line_defaults, box, interp_tol
+            )
         return cache[key]
 
     def line_mass_change(self, params) -> float:
@@ -243,6 +291,22 @@ class NastranModel(FEModel):
         known = self._general if isinstance(self._general, LineAssembler) else None
         return NastranModel(structure, b, d, bo, name=name or self.name, deck=self.deck,
                             bdf=self.bdf, lines_from=known)  # fmt: skip
+
+
+def _own_modulus(binding, bdf, structure):
+    """A plain ``Binding(part, "modulus_factor")`` on a part of line elements (``"PBEAM
+    1003"``: a discovery effect's) as the ``DeckBinding`` that scales their E and G
+    (``bindings.modulus_binding``); any other binding as it is."""
+    from bayesupdate.nastran.bindings import LINE_PROPERTIES, modulus_binding
+
+    if (
+        isinstance(binding, DeckBinding)
+        or bdf is None
+        or getattr(binding, "property", "") != "modulus_factor"
+        or str(binding.target).partition(" ")[0] not in LINE_PROPERTIES
+    ):
+        return binding
+    return modulus_binding(str(binding.target), bdf, structure)
 
 
 def _without(share: np.ndarray, mass: float, cog) -> tuple[float, np.ndarray]:

@@ -15,7 +15,13 @@ from pathlib import Path
 
 from bayesupdate.atomic import atomic_path
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.nastran.bindings import DeckBinding, _card, set_field, write_relations
+from bayesupdate.nastran.bindings import (
+    DeckBinding,
+    _card,
+    is_own_modulus,
+    set_field,
+    write_relations,
+)
 from bayesupdate.nastran.bulk import large_field_text, with_fields
 from bayesupdate.nastran.deck import include_at, read_deck
 
@@ -30,6 +36,12 @@ def write_updated_deck(model, values, out) -> Path:
     for name, binding in model.bindings.items():
         if not isinstance(binding, DeckBinding) or name not in values:
             continue
+        if is_own_modulus(binding.field):
+            raise BayesUpdateError(
+                f"--write-bdf: {name} scales the modulus of {binding.field.card} "
+                f"{binding.field.ids[0]}'s elements alone, which no card field holds; write the "
+                "deck without that effect"
+            )
         value = float(values[name])
         if binding.relations:  # element-card fields: C0 + COEF x on each card (``bindings``)
             write_relations(deck, binding, value, changed)

@@ -1,12 +1,14 @@
 """The discover pipeline: a study (model + test data) -> what physics the model is missing.
 
 The study's FE model, extended by the effects already known (``[effects]``, ``--effect``), runs
-``discovery.workflow.discover`` against the study's data; optionally the final model's
-posterior is sampled too (``discovery.posterior.sample_final``).
+``discovery.workflow.discover`` against the study's data, with the measured mass properties
+(``[data] mass / mass_sd / cg / inertia``) as data exactly as ``calibrate`` takes them
+(``study_mass_properties``); optionally the final model's posterior is sampled too
+(``discovery.posterior.sample_final``).
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
 from bayesupdate.config import StudyConfig
@@ -16,6 +18,13 @@ from bayesupdate.discovery.workflow import DiscoveryPairing, DiscoveryResult, di
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.data import load_modal_data, select_modes
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
+from bayesupdate.pipelines.study import (
+    _mass_property_targets,
+    _mass_with_units,
+    _study_units,
+    measured_mass,
+    objective_spec,
+)
 
 
 @dataclass(frozen=True)
@@ -56,6 +65,24 @@ def study_pairing(study: StudyConfig, numbers: tuple[int, ...]) -> DiscoveryPair
     return DiscoveryPairing(cfg.method, cfg.rules(), cfg.extra_modes, tuple(numbers))
 
 
+def study_mass_properties(study: StudyConfig, data, model) -> tuple:
+    """(data, ``ObjectiveSpec``): the study's measured mass properties as ``calibrate`` takes
+    them (``pipelines.study.prepare``: ``[data] mass / mass_sd`` in the model's units, the
+    ``[objective]`` mass term, ``[data] cg / inertia``), and ``[likelihood] mass_sd`` (a
+    relative sd) applied to the data's mass sd, which discovery's mass term reads
+    (``discovery.mass_block``), as calibrate's likelihood reads it from there."""
+    units = _study_units(model)
+    data = _mass_with_units(study, data, units)
+    sd_rel = study.likelihood.mass_sd
+    if sd_rel is not None and data.mass_kg is not None:
+        data = replace(data, mass_sd_kg=float(sd_rel) * data.mass_kg)
+    objective = replace(
+        objective_spec(study, data, units),
+        mass_properties=_mass_property_targets(study, model, units),
+    )
+    return data, objective
+
+
 def discover_study(
     study: StudyConfig,
     request: DiscoveryRequest = DiscoveryRequest(),
@@ -64,12 +91,14 @@ def discover_study(
     """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
     cfg = study.data
     data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
+    data = measured_mass(study, data)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
     if not hasattr(model, "structure"):
         raise BayesUpdateError(
             f"model {study.model.source!r}: discovery extends an FE model's structure; "
             "use a built-in FE model such as 'exhaust'"
         )
+    data, objective = study_mass_properties(study, data, model)
     model = extend_with_specs(model, request.effects)
     with open_executor(request.compute) as executor:
         compute = executor.describe()
@@ -81,6 +110,7 @@ def discover_study(
             pairing=study_pairing(study, numbers),
             progress=progress,
             executor=executor,
+            objective=objective,
         )
     posterior = None
     if request.posterior_steps > 0:

@@ -51,7 +51,7 @@ class NastranModel(FEModel):
                 self._bounds,
                 known=lines_from,
             )
-            self._assembler = self._general.beams
+            self._assembler = self._general
 
     def _mask(self, name, binding):
         if not isinstance(binding, DeckBinding):

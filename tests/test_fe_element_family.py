@@ -3,7 +3,10 @@
 The family below is written here, in the test, and registered with ``register``; no file of the
 package names it.  On a free-free spring-mass chain it is then assembled (closed-form
 frequencies), counted in the modal energies and the total mass, and taken into the reduced
-basis (a certified reduced model reproduces the closed form at a new parameter value).
+basis (a certified reduced model reproduces the closed form at a new parameter value).  The
+same holds for a family with a design parameter (``register_parametric``): the property it
+declares (``Bindable``) is bound, checked and split into the reduced basis's affine terms with
+no file of the package naming the family, its field or its property.
 
 Closed form: N equal masses m joined in a chain by N - 1 equal springs k, both ends free, have
 omega_j^2 = (4 k / m) sin^2(j pi / (2 N)), j = 1 .. N - 1 (Rayleigh, *Theory of Sound*, sec. 120;
@@ -233,6 +236,15 @@ def test_bindable_property_of_a_new_family_is_checked(parametric_registry):
         FEModel(
             _scaled_chain(), {"f": Binding("springs", PARAM_PROPERTY)}, {"f": 1.0}, {"f": (0.5, 2)}
         )
+    # registered but absent: a model without the family assembles as before, and its
+    # property binds nothing there
+    springs = replace(_chain(), elements=())
+    fe = _model(springs)
+    assert PARAM_FIELD not in fe.element_properties().values
+    K1, K2 = fe.matrices({"ks": 1.0})[0], fe.matrices({"ks": 2.0})[0]
+    np.testing.assert_allclose((K2 - 2 * K1).toarray(), 0.0, atol=1e-9 * abs(K1).max())
+    with pytest.raises(BayesUpdateError, match="part 'lumped' has nothing with a test_factor"):
+        FEModel(springs, {"f": Binding("lumped", PARAM_PROPERTY)}, {"f": 1.0}, {"f": (0.5, 2)})
     taken = base.Bindable("mass_factor", PARAM_FIELD, "M")
     clash = type("Clash", (ScaledLumpedMasses,), {"family": "test_clash", "properties": (taken,)})
     with pytest.raises(BayesUpdateError, match="already bound by family 'mass'"):

@@ -103,15 +103,17 @@ class ParameterTerm:
     """Where one parameter acts and how it enters K and M (``FEModel.affine_terms``).
 
     name, property : the parameter and its bound property (module table).
-    family : "beam", "mass" or "spring": the element family ``elements`` indexes.
-    elements : (n,) int, the beams / point masses / springs it acts on (structure order).
+    family : the parametric family (``elements.base.PARAMETRIC``: "beam", "mass", "spring", ...)
+        that declares the property, whose elements ``elements`` indexes.
+    elements : (n,) int, the family's elements it acts on (structure order).
     field : the ``ElementProperties`` array its value sets.
     enters : "K" or "M" when that matrix is exactly linear in the value: the parameter's term is
         value x ``scale`` x the element matrices assembled from ``AffineTerms.unit``;
         "nonlinear" (thickness, bend_factor) when the element matrices must be re-computed.
-    scale : factor on the value in a linear term: 1 / (nominal total of the part's point masses)
-        [1/kg] for "mass" (the value is the part's total mass), else 1.  On shells the element
-        value is ``scale`` x the value for every property (a deck's factor, ``NastranModel``).
+    scale : factor on the value in a linear term (``Bindable.scale``): 1 / (nominal total of the
+        part's point masses) [1/kg] for "mass" (the value is the part's total mass), else 1.  On
+        shells the element value is ``scale`` x the value for every property (a deck's factor,
+        ``NastranModel``).
     shells : (n,) int, the shells (``Structure.shells`` order) it acts on (empty: none).  Shell K
         and M are exact polynomials in it: thickness t enters K as t, t^2, t^3 and M as t, t^2,
         t^3 (``shell.power_matrices``), density M and modulus K linearly.
@@ -129,16 +131,17 @@ class ParameterTerm:
 
 @dataclass(frozen=True)
 class AffineTerms:
-    """K(theta), M(theta) of the beams, point masses and springs split by parameter.
+    """K(theta), M(theta) of the parametric families (beams, point masses, springs, ...) split
+    by parameter.
 
     parameters : one ``ParameterTerm`` per parameter, in ``parameter_names`` order.
     defaults : element properties at the default parameters (SI): elements that no parameter
         acts on keep these values for every theta.
     unit : ``defaults`` with every linearly entering parameter at its unit value where it acts
-        (density 1 kg/m^3, Young's modulus 1 Pa, modulus factor 1 i.e. the nominal E) and all
-        point-mass and spring scales 1, the non-linear ones (thickness, bend factor) at their
-        defaults.  A linear parameter's element matrices assembled from ``unit`` times
-        value x ``scale`` are its exact contribution to K or M.
+        (``Bindable.set_unit``: density 1 kg/m^3, Young's modulus 1 Pa, modulus factor 1 i.e.
+        the nominal E, point-mass and spring factors 1), the non-linear ones (thickness, bend
+        factor) at their defaults.  A linear parameter's element matrices assembled from
+        ``unit`` times value x ``scale`` are its exact contribution to K or M.
     Shells are not covered (their thickness terms are ``fe.assembly``'s): the reduced model,
     which builds on this, applies to beam structures only (``FEModel.assembler``).
     """
@@ -227,7 +230,8 @@ class FEModel:
             except BayesUpdateError as exc:
                 raise BayesUpdateError(f"parameter {name}: {exc}") from None
         part = s.part_index(binding.target)
-        mask = self._parametric[family].part == part if family else np.zeros(0, bool)
+        elements = self._parametric.get(family)  # None: the structure has none of the family
+        mask = elements.part == part if elements is not None else np.zeros(0, bool)
         if s.shells is not None and binding.property in SHELL_PROPERTIES:
             self._shell_masks[name] = s.shells.part == part
         if not np.any(mask) and not np.any(self._shell_masks.get(name, False)):

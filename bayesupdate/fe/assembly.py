@@ -248,25 +248,10 @@ class Assembler:
         return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)
 
     def total_mass(self, props: ElementProperties | None = None):
-        """Total mass [kg] and centre of gravity (3,) [m] of the element families (shells
-        apart: ``matrix_mass`` counts them): the parametric families' element masses
-        (``ParametricFamily.masses``) and the other families' rigid-body mass
-        (``elements.base.rigid_mass`` of their M)."""
+        """Total mass [kg] and centre of gravity (3,) [m] of the element families at ``props``
+        (None: nominal; shells apart: ``matrix_mass`` counts them), as ``element_mass``."""
         props = self.default_properties() if props is None else props
-        xyz = self.structure.nodes
-        total, moment = 0.0, np.zeros(3)
-        for family in self.parametric.values():
-            m, centre = family.masses(props, xyz)
-            total = total + m.sum()
-            moment = moment + m @ centre
-        for f in self.families:
-            # the rigid-body functional of ``matrix_mass``: trace / 3 of the translational
-            # block, the first moments from the translation-rotation coupling
-            Mr = rigid_mass(f.M, f.dofs, xyz)
-            total = total + np.trace(Mr[:3, :3]) / 3.0
-            moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
-        cog = moment / total
-        return float(total), cog
+        return _families_mass(self.parametric.values(), self.families, self.structure.nodes, props)
 
     # -- shells --------------------------------------------------------------------------------
     def _groups(self, shell_keys):
@@ -381,6 +366,37 @@ class Assembler:
 #: the name of the one ``Assembler`` when shells, supports and rigid elements had a class of
 #: their own (deprecated: use ``Assembler``)
 GeneralAssembler = Assembler
+
+
+def element_mass(structure: Structure, props: ElementProperties | None = None):
+    """Total mass [kg] and centre of gravity (3,) [m] of the structure's element families at
+    ``props`` (None: nominal), shells apart, without building an ``Assembler`` (its sparse
+    pattern and shell groups): the parametric families' element masses
+    (``ParametricFamily.masses``) and the other families' rigid-body mass
+    (``elements.base.rigid_mass`` of their M)."""
+    parametric = parametric_of(structure)
+    settings = ElementSettings(structure.shear, structure.rotary_inertia)
+    families = [FamilyMatrices.of(f, structure.nodes, settings) for f in families_of(structure)]
+    if props is None:
+        props = ElementProperties({k: v for f in parametric for k, v in f.nominal().items()})
+    return _families_mass(parametric, families, structure.nodes, props)
+
+
+def _families_mass(parametric, families, xyz: np.ndarray, props) -> tuple[float, np.ndarray]:
+    """(mass [kg], centre of gravity (3,) [m]) of parametric family instances at ``props`` and
+    of ``FamilyMatrices`` on nodes xyz (N, 3) [m]."""
+    total, moment = 0.0, np.zeros(3)
+    for family in parametric:
+        m, centre = family.masses(props, xyz)
+        total = total + m.sum()
+        moment = moment + m @ centre
+    for f in families:
+        # the rigid-body functional of ``Assembler.matrix_mass``: trace / 3 of the translational
+        # block, the first moments from the translation-rotation coupling
+        Mr = rigid_mass(f.M, f.dofs, xyz)
+        total = total + np.trace(Mr[:3, :3]) / 3.0
+        moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
+    return float(total), moment / total
 
 
 def _own(data: np.ndarray | None, nnz: int) -> np.ndarray:

@@ -144,3 +144,22 @@ def test_line_families_share_one_implementation():
     np.testing.assert_array_equal(rods.dofs()[1], np.arange(6, 18))
     assert rods.has_mass() and not beams.has_mass()
     np.testing.assert_allclose(rods.mass_per_length(), STEEL.density * 1e-4, rtol=1e-15)
+
+
+def test_property_table_is_the_families_declarations():
+    """The property table of ``fe.model``'s docstring is what the parametric families declare
+    (``Bindable``): name, what it acts on, unit and how it enters K and M, row for row."""
+    import bayesupdate.fe.model as fe_model
+
+    rows = [
+        r for r in fe_model.__doc__.splitlines() if r and r.split()[0] in fe_model.PROPERTY_TERMS
+    ]
+    assert len(rows) == len(base.bindable())
+    for row in rows:
+        name = row[:17].strip()
+        acts_on, unit, enters = row[19:63].strip(), row[63:73].strip(), row[73:].strip()
+        family, p = base.bindable()[name]
+        assert (acts_on, unit) == (p.acts_on, p.unit)
+        # a non-linear one may name the matrix it acts on ("K non-linear": the bend factor)
+        assert ("non-linear" in enters) if p.enters == "nonlinear" else enters.startswith(p.enters)
+        assert fe_model.PROPERTY_TERMS[name] == (family, p.field, p.enters)

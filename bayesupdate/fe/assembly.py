@@ -1,34 +1,36 @@
-"""Assembly of the global stiffness K and mass M, vectorised over elements, looping over the
-element families (``fe.elements``).
+"""Assembly of the global stiffness K and mass M of a structure, looping over the element
+families (``fe.elements``), and the solution of its constrained modes.
 
 ``Assembler`` precomputes everything that depends on geometry and connectivity only (the families'
-element arrays and DOF maps, the sparse pattern).  ``assemble(props)`` then builds K and M for any
-element property values in one pass with no per-element Python loop: each family's element
-matrices are (n_e, d, d) stacks scattered into the fixed CSR pattern by ``np.bincount``.
+element arrays and DOF maps, the shells' parameter groups, one sparse pattern for all of them,
+the supports' and rigid elements' transformation).  ``assemble(props, shell_props)`` then builds K
+and M for any element property values in one pass with no per-element Python loop: each family's
+element matrices are (n_e, d, d) stacks scattered into the fixed CSR pattern by ``np.bincount``.
 
 * The parametric families (``elements.base.ParametricFamily``: tube beams, point masses,
-  springs) are computed at the property record ``ElementProperties``; between two assemblies
-  only the elements whose properties changed are recomputed (a calibration changes a few parts at
-  a time), and a family none of whose elements changed is not scattered again.
+  springs, any registered one) are computed at the property record ``ElementProperties``, whose
+  fields the families declare; between two assemblies only the elements whose fields changed
+  are recomputed (a calibration changes a few parts at a time), and a family none of whose
+  elements changed is not scattered again.
 * The other registered families (``elements.base.ElementFamily``: general beams, rods, scalar
   masses, ...) carry no parameter: they are computed and scattered once.
+* Shells are grouped by their parameters; each group's K and M are exact sums of powers of the
+  thickness (``fe.shell_model``), so a thickness, modulus or density is a sum of stored terms.
 
 Density, Young's modulus, point masses and spring stiffnesses enter K and M linearly
 (``fe.model.AffineTerms`` gives the exact affine terms); wall thickness does not (area and second
 moments are polynomials in t and the Timoshenko shear parameter is rational in them), so those
-elements are recomputed.
-
-``GeneralAssembler`` adds the shells (grouped by their parameters, K and M exact sums of powers of
-the thickness), supports and rigid elements of a general structure to the families' assembly, on
-the union of both sparse patterns, and solves the constrained modes.
+elements are recomputed.  The assembler names no family: what a family binds, its nominal values
+and its limits are its own declarations (``elements.base``).
 """
 
 from dataclasses import dataclass, replace
+from functools import cached_property
+from types import MappingProxyType
 
 import numpy as np
 import scipy.sparse as sp
 
-from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.constraints import Constraints, constraint_transform
 from bayesupdate.fe.eigensolve import ModalSolution
 from bayesupdate.fe.elements import ElementSettings, families_of, parametric_of, shell
@@ -45,21 +47,34 @@ from bayesupdate.fe.sparse_modal import (
 from bayesupdate.fe.structure import Structure
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False, init=False)
 class ElementProperties:
-    """Per-element property values used by one assembly (all SI): the fields the parametric
-    families read (``ParametricFamily.fields``).
+    """Per-element property values of one assembly (all SI): one (n,) array per field that a
+    parametric family reads (``ParametricFamily.fields``), read as attributes.  The built-in
+    families' fields: beam_thickness, beam_rho, beam_E, beam_bend_factor (E,) (the last
+    multiplies the B31.3 factor, 1 = none); mass_scale (P,) factors on point masses;
+    spring_scale (S,) factors on springs.
 
-    beam_thickness, beam_rho, beam_E, beam_bend_factor : (E,) - the last multiplies the B31.3 factor
-    (1 = none); mass_scale : (P,) factors on point masses; spring_scale : (S,) factors on springs.
+    ``ElementProperties(beam_rho=..., ...)`` or ``ElementProperties({field: array})``;
+    ``dataclasses.replace(props, beam_rho=...)`` gives a copy with fields changed.
     """
 
-    beam_thickness: np.ndarray
-    beam_rho: np.ndarray
-    beam_E: np.ndarray
-    beam_bend_factor: np.ndarray
-    mass_scale: np.ndarray
-    spring_scale: np.ndarray
+    values: MappingProxyType
+
+    def __init__(self, values=None, **fields):
+        merged = {**(values or {}), **fields}
+        object.__setattr__(self, "values", MappingProxyType(merged))
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name.startswith("_"):  # copy and pickle probe for hooks before ``values`` is set
+            raise AttributeError(name)
+        try:
+            return self.values[name]
+        except KeyError:
+            raise AttributeError(f"ElementProperties has no field {name!r}") from None
+
+    def __reduce__(self):
+        return ElementProperties, (dict(self.values),)
 
 
 @dataclass(frozen=True)
@@ -73,14 +88,20 @@ class _Memo:
 
 
 class Assembler:
-    """Geometry-dependent precomputation for fast repeated assembly of one ``Structure``.
+    """Precomputation for repeated K(theta), M(theta) of one ``Structure``, and its modes.
 
-    parametric : {family name: ``ParametricFamily``} (tube beams, point masses, springs, in the
-    order of assembly); families : the other registered families' ``FamilyMatrices``, computed
-    once.
+    shell_keys : (n_shell, k) numbers that must be equal for shells to share a parameter group
+    (the FE model passes the indices of the parameters bound to each shell); None = one group
+    per distinct nominal (part, t, E, rho).
+
+    parametric : {family name: ``ParametricFamily``} (in the order of assembly); families : the
+    other registered families' ``FamilyMatrices``, computed once; shells : the shells'
+    ``ShellAssembly`` (None: none); rows, cols, indptr : the CSR pattern (nnz entries, every
+    diagonal included) of all of them; transform : the supports' and rigid elements'
+    ``constraints.constraint_transform``; rigid : the rigid motions they allow.
     """
 
-    def __init__(self, structure: Structure):
+    def __init__(self, structure: Structure, shell_keys=None):
         self.structure = s = structure
         self.n_dof = s.n_dof
         self._settings = settings = ElementSettings(s.shear, s.rotary_inertia)
@@ -89,15 +110,30 @@ class Assembler:
         self.families = tuple(FamilyMatrices.of(f, s.nodes, settings) for f in families_of(s))
         self._memos: dict[str, _Memo] = {}
         self._dofs = {name: f.dofs() for name, f in self.parametric.items()}
+        self.shells = None
+        if s.shells is not None:
+            unit = s.shells.mesh(s.nodes, rho=np.ones(s.shells.n_elements))  # per unit density
+            self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
         positions = self._build_pattern([*self._dofs.values(), *(f.dofs for f in self.families)])
         self._positions = dict(zip(self.parametric, positions, strict=False))
         self._family_K = self._scatter_families("K", positions[len(self.parametric) :])
         self._family_M = self._scatter_families("M", positions[len(self.parametric) :])
+        if self.shells is not None:
+            n_el = s.shells.n_elements
+            self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
+        if s.is_general:  # a bad support or rigid element is named when the model is built
+            _ = self.rigid
+
+    @property
+    def beams(self) -> "Assembler":
+        """The assembler itself: the name under which the families' assembly was reached when
+        it was a class of its own (deprecated; use the assembler)."""
+        return self
 
     # -- sparse pattern ------------------------------------------------------------------------
     def _build_pattern(self, blocks) -> list[np.ndarray]:
-        """Set the CSR pattern of the element blocks (DOF maps (n_e, d)) and every diagonal;
-        returns each block's positions in the CSR data (row-major entries)."""
+        """Set the CSR pattern of the element blocks (DOF maps (n_e, d)), every diagonal and the
+        shells' pattern; returns each block's positions in the CSR data (row-major entries)."""
         n = self.n_dof
         rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks])
         cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in blocks])
@@ -106,30 +142,35 @@ class Assembler:
         cols = np.concatenate([cols, np.arange(n)])
         key = rows.astype(np.int64) * n + cols
         uniq, inverse = np.unique(key, return_inverse=True)
+        if self.shells is not None:
+            pat = self.shells.pattern
+            shell_keys = pat.rows.astype(np.int64) * n + pat.cols
+            union = sorted_unique(np.concatenate([uniq, shell_keys]))
+            self._pos_shell = np.searchsorted(union, shell_keys)
+            inverse = np.searchsorted(union, uniq)[inverse]
+            uniq = union
         self.nnz = uniq.size
-        self.pattern_rows = (uniq // n).astype(np.int32)
-        self.pattern_cols = (uniq % n).astype(np.int32)
+        self.rows = (uniq // n).astype(np.int32)
+        self.cols = (uniq % n).astype(np.int32)
+        self.indptr = np.searchsorted(self.rows, np.arange(n + 1)).astype(np.int32)
         splits = np.cumsum([0] + [d.shape[0] * d.shape[1] ** 2 for d in blocks])
-        indptr = np.zeros(n + 1, dtype=np.int32)
-        np.add.at(indptr, self.pattern_rows + 1, 1)
-        self.indptr = np.cumsum(indptr).astype(np.int32)
         return [inverse[a:b] for a, b in zip(splits[:-1], splits[1:], strict=True)]
 
-    def to_csr(self, data: np.ndarray) -> sp.csr_matrix:
+    def csr(self, data: np.ndarray) -> sp.csr_matrix:
         """CSR matrix on the fixed pattern from its (nnz,) data."""
-        return sp.csr_matrix((data, self.pattern_cols, self.indptr), shape=(self.n_dof,) * 2)
+        return sp.csr_matrix((data, self.cols, self.indptr), shape=(self.n_dof,) * 2)
 
     # -- element matrices ----------------------------------------------------------------------
     def default_properties(self) -> ElementProperties:
-        s = self.structure
+        """Every parametric family's fields at their nominal values (``nominal``)."""
         return ElementProperties(
-            beam_thickness=s.beam_thickness.copy(),
-            beam_rho=s.beam_rho.copy(),
-            beam_E=s.beam_E.copy(),
-            beam_bend_factor=np.ones(len(s.beam_part)),
-            mass_scale=np.ones(len(s.mass_node)),
-            spring_scale=np.ones(len(s.spring_part)),
+            {k: v for f in self.parametric.values() for k, v in f.nominal().items()}
         )
+
+    def check(self, props: ElementProperties) -> None:
+        """Raise BayesUpdateError naming the part if a field of ``props`` is non-physical."""
+        for family in self.parametric.values():
+            family.check(props, self.structure.parts)
 
     def matrices(self, family: str, props: ElementProperties, elements=None):
         """Global-axis (K, M) (n_e, d, d) (None: none) of the parametric ``family``'s
@@ -148,14 +189,16 @@ class Assembler:
             data.flags.writeable = False  # added to every assembly, never changed
         return data
 
-    def assemble(self, props: ElementProperties | None = None):
+    def assemble(self, props: ElementProperties | None = None, shell_props=None):
         """Global K and M as CSR matrices, plus every family's element matrices (for energies).
 
-        Returns (K, M, elements): elements a tuple of ``FamilyMatrices``, the parametric
-        families' at ``props`` (read-only) then the other registered families'.
+        props : the families' fields (None: nominal); shell_props : the shells' (t [m], E [Pa],
+        rho [kg/m^3]) arrays (n_shell,) (None: nominal).  Returns (K, M, elements): elements a
+        tuple of ``FamilyMatrices``, the parametric families' at ``props`` (read-only) then the
+        other registered families'.
         """
         props = self.default_properties() if props is None else props
-        check_properties(self.structure, props)
+        self.check(props)
         K = M = None
         used = []
         for family in self.parametric.values():
@@ -164,7 +207,13 @@ class Assembler:
             K = _add(K, memo.K)
             M = _add(M, memo.M)
         K, M = _own(_add(K, self._family_K), self.nnz), _own(_add(M, self._family_M), self.nnz)
-        return self.to_csr(K), self.to_csr(M), (*used, *self.families)
+        if self.shells is not None:
+            sh = self.structure.shells
+            Ks, Ms = self.shell_data(*((sh.thickness, sh.E, sh.rho) if shell_props is None
+                                       else shell_props))  # fmt: skip
+            K += Ks
+            M += Ms
+        return self.csr(K), self.csr(M), (*used, *self.families)
 
     def _reusing(self, family, props: ElementProperties) -> _Memo:
         """The parametric ``family``'s matrices and scattered data at ``props``, recomputing only
@@ -199,108 +248,15 @@ class Assembler:
         return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)
 
     def total_mass(self, props: ElementProperties | None = None):
-        """Total mass [kg] and centre of gravity (3,) [m]: the parametric families' element
-        masses (``ParametricFamily.masses``) and the other families' rigid-body mass
-        (``elements.base.rigid_mass`` of their M)."""
+        """Total mass [kg] and centre of gravity (3,) [m] of the element families at ``props``
+        (None: nominal; shells apart: ``matrix_mass`` counts them), as ``element_mass``."""
         props = self.default_properties() if props is None else props
-        xyz = self.structure.nodes
-        total, moment = 0.0, np.zeros(3)
-        for family in self.parametric.values():
-            m, centre = family.masses(props, xyz)
-            total = total + m.sum()
-            moment = moment + m @ centre
-        for f in self.families:
-            # the rigid-body functional of ``GeneralAssembler.total_mass``: trace / 3 of the
-            # translational block, the first moments from the translation-rotation coupling
-            Mr = rigid_mass(f.M, f.dofs, xyz)
-            total = total + np.trace(Mr[:3, :3]) / 3.0
-            moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
-        cog = moment / total
-        return float(total), cog
+        return _families_mass(self.parametric.values(), self.families, self.structure.nodes, props)
 
-
-def _own(data: np.ndarray | None, nnz: int) -> np.ndarray:
-    """``data`` as an array the caller owns: zeros for None, a copy of a memo's (read-only)."""
-    if data is None:
-        return np.zeros(nnz)
-    return data if data.flags.writeable else data.copy()
-
-
-def _add(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
-    """a + b where None is nothing (a new array: the memos' data stay untouched)."""
-    if a is None:
-        return b
-    return a if b is None else a + b
-
-
-def check_properties(structure: Structure, props: ElementProperties) -> None:
-    """Raise BayesUpdateError naming the part if a property is non-physical."""
-    tube = structure.beam_shape != 2  # solid bars have no wall
-    checks = (
-        ("thickness", props.beam_thickness[tube], structure.beam_part[tube], True),
-        ("density", props.beam_rho, structure.beam_part, True),
-        ("Young's modulus", props.beam_E, structure.beam_part, True),
-        ("bend factor", props.beam_bend_factor, structure.beam_part, True),
-        ("point-mass factor", props.mass_scale, structure.mass_part, False),
-        ("spring factor", props.spring_scale, structure.spring_part, False),
-    )
-    for name, values, parts, strictly in checks:
-        bad = ~np.isfinite(values) | ((values <= 0) if strictly else (values < 0))
-        if np.any(bad):
-            part = structure.parts[parts[np.flatnonzero(bad)[0]]]
-            limit = "> 0" if strictly else ">= 0"
-            raise BayesUpdateError(
-                f"part {part!r}: {name} must be finite and {limit}, got "
-                f"{values[np.flatnonzero(bad)[0]]}"
-            )
-    too_thick = tube & (
-        2 * props.beam_thickness >= np.minimum(structure.beam_width, structure.beam_height)
-    )
-    if np.any(too_thick):
-        i = np.flatnonzero(too_thick)[0]
-        raise BayesUpdateError(
-            f"part {structure.parts[structure.beam_part[i]]!r}: wall thickness "
-            f"{props.beam_thickness[i]} m is not less than half the section size"
-        )
-
-
-class GeneralAssembler:
-    """Precomputation for repeated K(theta), M(theta) of a general structure.
-
-    shell_keys : (n_shell, k) numbers that must be equal for shells to share a parameter group
-    (the FE model passes the indices of the parameters bound to each shell); None = one group
-    per distinct nominal (part, t, E, rho).
-    """
-
-    def __init__(self, structure: Structure, shell_keys=None):
-        s = self.structure = structure
-        n = self.n_dof = s.n_dof
-        self.beams = Assembler(s)
-        b = self.beams
-        keys = [b.pattern_rows.astype(np.int64) * n + b.pattern_cols]
-        self.shells = None
-        if s.shells is not None:
-            n_el = s.shells.n_elements
-            unit = s.shells.mesh(s.nodes, rho=np.ones(n_el))  # mass per unit density
-            self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
-            pat = self.shells.pattern
-            keys.append(pat.rows.astype(np.int64) * n + pat.cols)
-        union = sorted_unique(np.concatenate(keys))
-        self.nnz = union.size
-        self.rows = (union // n).astype(np.int32)
-        self.cols = (union % n).astype(np.int32)
-        self.indptr = np.searchsorted(self.rows, np.arange(n + 1)).astype(np.int32)
-        self._pos_beam = np.searchsorted(union, keys[0])
-        if self.shells is not None:
-            self._pos_shell = np.searchsorted(union, keys[1])
-            self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
-        c = s.constraints if s.constraints is not None else Constraints()
-        self.transform = constraint_transform(s.nodes, c)
-        self.rigid = allowed_rigid(s.nodes, self.transform)
-        self._rigid_origin = rigid_body_basis(s.nodes, centre=np.zeros(3))
-
-    # -- shells ----------------------------------------------------------------------------------
+    # -- shells --------------------------------------------------------------------------------
     def _groups(self, shell_keys):
+        """Group the shells by ``shell_keys`` and their nominal part, E, rho and (unbound)
+        thickness; keep each group's K and M power terms on the pattern (``terms``)."""
         sh = self.structure.shells
         shell_keys = np.asarray(shell_keys, dtype=float).reshape(sh.n_elements, -1)
         # the first key column is the thickness parameter (-1: none): only then does the nominal
@@ -354,25 +310,24 @@ class GeneralAssembler:
             out.append((idx, dofs, shell.to_global(K, f.R), shell.to_global(M, f.R)))
         return out
 
-    # -- assembly and solution ------------------------------------------------------------------
-    def csr(self, data: np.ndarray) -> sp.csr_matrix:
-        return sp.csr_matrix((data, self.cols, self.indptr), shape=(self.n_dof, self.n_dof))
+    # -- supports and rigid elements -----------------------------------------------------------
+    @cached_property
+    def transform(self):
+        """The supports' and rigid elements' ``constraints.constraint_transform`` (built on
+        first use: a free beam structure on the banded path never needs it)."""
+        s = self.structure
+        c = s.constraints if s.constraints is not None else Constraints()
+        return constraint_transform(s.nodes, c)
 
-    def assemble(self, props: ElementProperties, shell_props=None):
-        """Full (K, M) CSR at beam properties ``props`` and shell (t, E, rho) arrays, plus the
-        beam assembler's element matrices (for energies)."""
-        Kb, Mb, elem = self.beams.assemble(props)
-        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
-        K[self._pos_beam] += Kb.data
-        M[self._pos_beam] += Mb.data
-        if self.shells is not None:
-            sh = self.structure.shells
-            t, E, rho = (sh.thickness, sh.E, sh.rho) if shell_props is None else shell_props
-            Ks, Ms = self.shell_data(t, E, rho)
-            K += Ks
-            M += Ms
-        K = self.csr(K)
-        return K, self.csr(M), elem
+    @cached_property
+    def rigid(self) -> np.ndarray:
+        """(n_ind, r) rigid motions the supports allow (``allowed_rigid``)."""
+        return allowed_rigid(self.structure.nodes, self.transform)
+
+    @cached_property
+    def _rigid_origin(self) -> np.ndarray:
+        """(n_dof, 6) rigid-body motions about the origin (``matrix_mass``)."""
+        return rigid_body_basis(self.structure.nodes, centre=np.zeros(3))
 
     def solve(self, K, M, n_modes: int, dense: bool = False, settings=None) -> ModalSolution:
         """First ``n_modes`` elastic modes of the constrained structure (full-DOF shapes).
@@ -398,13 +353,71 @@ class GeneralAssembler:
             rigid_frequencies_hz=np.sqrt(np.abs(lam_r)) / (2 * np.pi),
         )
 
-    def total_mass(self, M) -> tuple[float, np.ndarray]:
-        """Total mass [kg] and centre of gravity (3,) [m] from the full mass matrix: the rigid
-        translations give m I, the coupling with rotations about the origin m skew(c)."""
+    def matrix_mass(self, M) -> tuple[float, np.ndarray]:
+        """Total mass [kg] and centre of gravity (3,) [m] from the full mass matrix M (shells
+        included): the rigid translations give m I, the coupling with rotations about the
+        origin m skew(c)."""
         R = self._rigid_origin
         Mr = R.T @ (M @ R)
         m = float(np.trace(Mr[:3, :3]) / 3.0)
         return m, np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]]) / m
+
+
+#: the name of the one ``Assembler`` when shells, supports and rigid elements had a class of
+#: their own (deprecated: use ``Assembler``)
+GeneralAssembler = Assembler
+
+
+def element_mass(structure: Structure, props: ElementProperties | None = None):
+    """Total mass [kg] and centre of gravity (3,) [m] of the structure's element families at
+    ``props`` (None: nominal), shells apart, without building an ``Assembler`` (its sparse
+    pattern and shell groups): the parametric families' element masses
+    (``ParametricFamily.masses``) and the other families' rigid-body mass
+    (``elements.base.rigid_mass`` of their M)."""
+    parametric = parametric_of(structure)
+    settings = ElementSettings(structure.shear, structure.rotary_inertia)
+    families = [FamilyMatrices.of(f, structure.nodes, settings) for f in families_of(structure)]
+    if props is None:
+        props = ElementProperties({k: v for f in parametric for k, v in f.nominal().items()})
+    return _families_mass(parametric, families, structure.nodes, props)
+
+
+def _families_mass(parametric, families, xyz: np.ndarray, props) -> tuple[float, np.ndarray]:
+    """(mass [kg], centre of gravity (3,) [m]) of parametric family instances at ``props`` and
+    of ``FamilyMatrices`` on nodes xyz (N, 3) [m]."""
+    total, moment = 0.0, np.zeros(3)
+    for family in parametric:
+        m, centre = family.masses(props, xyz)
+        total = total + m.sum()
+        moment = moment + m @ centre
+    for f in families:
+        # the rigid-body functional of ``Assembler.matrix_mass``: trace / 3 of the translational
+        # block, the first moments from the translation-rotation coupling
+        Mr = rigid_mass(f.M, f.dofs, xyz)
+        total = total + np.trace(Mr[:3, :3]) / 3.0
+        moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
+    return float(total), moment / total
+
+
+def _own(data: np.ndarray | None, nnz: int) -> np.ndarray:
+    """``data`` as an array the caller owns: zeros for None, a copy of a memo's (read-only)."""
+    if data is None:
+        return np.zeros(nnz)
+    return data if data.flags.writeable else data.copy()
+
+
+def _add(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    """a + b where None is nothing (a new array: the memos' data stay untouched)."""
+    if a is None:
+        return b
+    return a if b is None else a + b
+
+
+def check_properties(structure: Structure, props: ElementProperties) -> None:
+    """Raise BayesUpdateError naming the part if a field of ``props`` is non-physical (each
+    parametric family's ``check``)."""
+    for family in parametric_of(structure):
+        family.check(props, structure.parts)
 
 
 def _nonzero_take(nnz: int, values):

@@ -2,7 +2,8 @@
 ``ParametricModel`` that inference calibrates (see ``bayesupdate.model_protocol``).
 
 A ``Binding(target, property)`` ties a parameter to every element of a part (or bend) that has the
-property:
+property.  Each parametric element family declares the properties it binds in its own file
+(``elements.base.Bindable``: name, field, how it enters K and M); the built-in ones are:
 
 =================  ==========================================  ========  =====================
 property           acts on                                      unit      enters K / M
@@ -27,54 +28,52 @@ sparse one).
 """
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from types import MappingProxyType
 
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe.assembly import Assembler, ElementProperties, GeneralAssembler
+from bayesupdate.fe.assembly import Assembler, ElementProperties
 from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_modes
+from bayesupdate.fe.elements import parametric_of
+from bayesupdate.fe.elements.base import bindable
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
 from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
 from bayesupdate.model_protocol import Prediction
 
-PROPERTIES = (
-    "thickness",
-    "density",
-    "youngs_modulus",
-    "modulus_factor",
-    "mass",
-    "mass_factor",
-    "stiffness_factor",
-    "bend_factor",
-)
-#: the properties that also act on a part's shells
+#: the properties that also act on a part's shells (shells are assembled apart, in groups whose
+#: K and M are exact powers of the thickness: ``fe.assembly``)
 SHELL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
 
 
-#: bound properties shared by beams and shells (``_set_material``)
-MATERIAL_PROPERTIES = ("thickness", "density", "youngs_modulus", "modulus_factor")
+def bindable_properties() -> tuple[str, ...]:
+    """Every property a ``Binding`` may name: the registered parametric families' declarations
+    (``elements.base.bindable``) and the shells'."""
+    return tuple(dict.fromkeys((*bindable(), *SHELL_PROPERTIES)))
 
-#: how each property enters K and M (the module table): (element family it acts on,
-#: ``ElementProperties`` array it sets, "K" / "M" when that matrix is exactly linear in the value,
-#: "nonlinear" when the element matrices must be re-computed: A, I are polynomials in the wall
-#: thickness, the Timoshenko shear parameter is rational and the B31.3 elbow factor has a kink)
-PROPERTY_TERMS = MappingProxyType(
-    {
-        "thickness": ("beam", "beam_thickness", "nonlinear"),
-        "density": ("beam", "beam_rho", "M"),
-        "youngs_modulus": ("beam", "beam_E", "K"),
-        "modulus_factor": ("beam", "beam_E", "K"),
-        "mass": ("mass", "mass_scale", "M"),
-        "mass_factor": ("mass", "mass_scale", "M"),
-        "stiffness_factor": ("spring", "spring_scale", "K"),
-        "bend_factor": ("beam", "beam_bend_factor", "nonlinear"),
-    }
-)
+
+class _PropertyTerms(Mapping):
+    """{property: (family, field, enters)} read from the registered families' declarations
+    each time (a family registered later is in it): the family a property acts on, the
+    ``ElementProperties`` array it sets, and "K" / "M" when that matrix is exactly linear in the
+    value or "nonlinear" when the element matrices must be re-computed."""
+
+    def __getitem__(self, name: str) -> tuple[str, str, str]:
+        family, p = bindable()[name]
+        return family, p.field, p.enters
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(bindable())
+
+    def __len__(self) -> int:
+        return len(bindable())
+
+
+#: how each property enters K and M (the module table), a view of the families' declarations
+PROPERTY_TERMS = _PropertyTerms()
 
 
 def _set_material(prop, value, mask, arrays, base_modulus) -> None:
@@ -104,15 +103,17 @@ class ParameterTerm:
     """Where one parameter acts and how it enters K and M (``FEModel.affine_terms``).
 
     name, property : the parameter and its bound property (module table).
-    family : "beam", "mass" or "spring": the element family ``elements`` indexes.
-    elements : (n,) int, the beams / point masses / springs it acts on (structure order).
+    family : the parametric family (``elements.base.PARAMETRIC``: "beam", "mass", "spring", ...)
+        that declares the property, whose elements ``elements`` indexes.
+    elements : (n,) int, the family's elements it acts on (structure order).
     field : the ``ElementProperties`` array its value sets.
     enters : "K" or "M" when that matrix is exactly linear in the value: the parameter's term is
         value x ``scale`` x the element matrices assembled from ``AffineTerms.unit``;
         "nonlinear" (thickness, bend_factor) when the element matrices must be re-computed.
-    scale : factor on the value in a linear term: 1 / (nominal total of the part's point masses)
-        [1/kg] for "mass" (the value is the part's total mass), else 1.  On shells the element
-        value is ``scale`` x the value for every property (a deck's factor, ``NastranModel``).
+    scale : factor on the value in a linear term (``Bindable.scale``): 1 / (nominal total of the
+        part's point masses) [1/kg] for "mass" (the value is the part's total mass), else 1.  On
+        shells the element value is ``scale`` x the value for every property (a deck's factor,
+        ``NastranModel``).
     shells : (n,) int, the shells (``Structure.shells`` order) it acts on (empty: none).  Shell K
         and M are exact polynomials in it: thickness t enters K as t, t^2, t^3 and M as t, t^2,
         t^3 (``shell.power_matrices``), density M and modulus K linearly.
@@ -130,16 +131,17 @@ class ParameterTerm:
 
 @dataclass(frozen=True)
 class AffineTerms:
-    """K(theta), M(theta) of the beams, point masses and springs split by parameter.
+    """K(theta), M(theta) of the parametric families (beams, point masses, springs, ...) split
+    by parameter.
 
     parameters : one ``ParameterTerm`` per parameter, in ``parameter_names`` order.
     defaults : element properties at the default parameters (SI): elements that no parameter
         acts on keep these values for every theta.
     unit : ``defaults`` with every linearly entering parameter at its unit value where it acts
-        (density 1 kg/m^3, Young's modulus 1 Pa, modulus factor 1 i.e. the nominal E) and all
-        point-mass and spring scales 1, the non-linear ones (thickness, bend factor) at their
-        defaults.  A linear parameter's element matrices assembled from ``unit`` times
-        value x ``scale`` are its exact contribution to K or M.
+        (``Bindable.set_unit``: density 1 kg/m^3, Young's modulus 1 Pa, modulus factor 1 i.e.
+        the nominal E, point-mass and spring factors 1), the non-linear ones (thickness, bend
+        factor) at their defaults.  A linear parameter's element matrices assembled from
+        ``unit`` times value x ``scale`` are its exact contribution to K or M.
     Shells are not covered (their thickness terms are ``fe.assembly``'s): the reduced model,
     which builds on this, applies to beam structures only (``FEModel.assembler``).
     """
@@ -195,14 +197,14 @@ class FEModel:
         self._defaults = {k: float(defaults[k]) for k in self.parameter_names}
         self._bounds = {k: (float(bounds[k][0]), float(bounds[k][1])) for k in self.parameter_names}
         self._shell_masks = {}
+        # the parametric families' instances: the elements a binding selects, a total's sum
+        self._parametric = {f.family: f for f in parametric_of(structure)}
         self._masks = {p: self._mask(p, b) for p, b in self.bindings.items()}
-        self._general = None
-        if structure.is_general:
-            self._general = GeneralAssembler(structure, self._shell_keys())
-            a = self._assembler = self._general.beams
-        else:
-            a = self._assembler = Assembler(structure)
-            self.banded = BandedShiftInvert(a.n_dof, a.pattern_rows, a.pattern_cols, a.indptr)
+        a = self._assembler = Assembler(structure, self._shell_keys())
+        # a structure with shells, supports or rigid elements is solved on the sparse path
+        self._general = a if structure.is_general else None
+        if self._general is None:
+            self.banded = BandedShiftInvert(a.n_dof, a.rows, a.cols, a.indptr)
         self.rigid_basis = rigid_body_basis(structure.nodes)
         self._rigid_mass_terms = None  # ``mass_properties_function``: built on first use
         self._base = a.default_properties()
@@ -212,26 +214,26 @@ class FEModel:
 
     # -- parameters --------------------------------------------------------------------------
     def _mask(self, name, binding: Binding):
+        """(n,) bool: the elements of the bound property's family that ``binding`` acts on (its
+        ``Bindable.select``, or the target part's); a shell property also keeps the part's
+        shells in ``_shell_masks``."""
         s = self.structure
-        if binding.property not in PROPERTIES:
+        if binding.property not in bindable_properties():
             raise BayesUpdateError(
-                f"parameter {name}: unknown property {binding.property!r}; use one of {PROPERTIES}"
+                f"parameter {name}: unknown property {binding.property!r}; use one of "
+                f"{bindable_properties()}"
             )
-        if binding.property == "bend_factor":
-            if binding.target not in s.bends:
-                raise BayesUpdateError(
-                    f"parameter {name}: unknown bend {binding.target!r}; bends are {list(s.bends)}"
-                )
-            return s.beam_bend == s.bends.index(binding.target)
+        family, prop = bindable().get(binding.property, (None, None))
+        if prop is not None and prop.select is not None:
+            try:
+                return prop.select(s, binding.target)
+            except BayesUpdateError as exc:
+                raise BayesUpdateError(f"parameter {name}: {exc}") from None
         part = s.part_index(binding.target)
-        if binding.property in ("mass", "mass_factor"):
-            mask = s.mass_part == part
-        elif binding.property == "stiffness_factor":
-            mask = s.spring_part == part
-        else:
-            mask = s.beam_part == part
-            if s.shells is not None and binding.property in SHELL_PROPERTIES:
-                self._shell_masks[name] = s.shells.part == part
+        elements = self._parametric.get(family)  # None: the structure has none of the family
+        mask = elements.part == part if elements is not None else np.zeros(0, bool)
+        if s.shells is not None and binding.property in SHELL_PROPERTIES:
+            self._shell_masks[name] = s.shells.part == part
         if not np.any(mask) and not np.any(self._shell_masks.get(name, False)):
             raise BayesUpdateError(
                 f"parameter {name}: part {binding.target!r} has nothing with a {binding.property}"
@@ -257,7 +259,8 @@ class FEModel:
 
     @property
     def assembler(self) -> Assembler:
-        """The beam ``Assembler`` of a beam structure (the banded path)."""
+        """The ``Assembler`` of a beam structure on the banded path (refused on the sparse path,
+        whose matrices ``matrices`` gives)."""
         if self._general is not None:
             raise BayesUpdateError(
                 f"model {self.name}: the structure has shells, supports or rigid elements; the "
@@ -267,14 +270,15 @@ class FEModel:
 
     @property
     def beam_assembler(self) -> Assembler:
-        """The ``Assembler`` of the structure's tube beams, point masses and springs (on both
-        paths; on the general one it is ``general.beams``)."""
+        """The ``Assembler``, on both paths (the name from when the element families had an
+        assembler of their own beside the shells')."""
         return self._assembler
 
     @property
-    def general(self) -> GeneralAssembler | None:
-        """The ``GeneralAssembler`` (shells, general beams, rods, constraints) of a general
-        structure; None on the banded beam path."""
+    def general(self) -> Assembler | None:
+        """The ``Assembler`` of a structure on the sparse path (shells, supports or rigid
+        elements, or a beam structure once solved with ``method="sparse"``); None on the
+        banded beam path."""
         return self._general
 
     def matrices(self, params: Mapping[str, float] | None = None):
@@ -299,7 +303,7 @@ class FEModel:
         """Total mass [kg] and centre of gravity (3,) [m] at ``params``."""
         if self._general is None:
             return self._assembler.total_mass(self.element_properties(params))
-        return self._general.total_mass(self.matrices(params)[1])
+        return self._general.matrix_mass(self.matrices(params)[1])
 
     def mass_properties(self, params: Mapping[str, float] | None = None):
         """Rigid-body mass properties (``fe.mass_properties.MassProperties``: mass, centre of
@@ -325,12 +329,10 @@ class FEModel:
     def affine_terms(self) -> AffineTerms:
         """The parameter-separable form of K(theta), M(theta) (``AffineTerms``): for each
         parameter the elements it acts on and whether it enters K or M linearly."""
-        s = self.structure
         terms = []
         for name, binding in self.bindings.items():
-            family, field, enters = PROPERTY_TERMS[binding.property]
+            family, prop = bindable()[binding.property]
             mask = self._masks[name]
-            scale = 1.0 / s.mass_value[mask].sum() if binding.property == "mass" else 1.0
             shells = np.flatnonzero(self._shell_masks.get(name, np.zeros(0, bool)))
             terms.append(
                 ParameterTerm(
@@ -338,29 +340,21 @@ class FEModel:
                     binding.property,
                     family,
                     np.flatnonzero(mask),
-                    field,
-                    enters,
-                    scale,
+                    prop.field,
+                    prop.enters,
+                    prop.scale(mask, self._parametric[family]),
                     shells,
                 )
             )
         defaults = self.element_properties(self._defaults)
-        t, rho = defaults.beam_thickness.copy(), defaults.beam_rho.copy()
-        E = defaults.beam_E.copy()
+        fields = {k: v.copy() for k, v in defaults.values.items()}
         for term in terms:
-            if term.enters != "nonlinear" and term.property in MATERIAL_PROPERTIES:
-                _set_material(
-                    term.property, 1.0, self._masks[term.name], (t, rho, E), self._base.beam_E
+            if term.enters != "nonlinear":
+                prop = bindable()[term.property][1]
+                prop.set_unit(
+                    fields[term.field], self._masks[term.name], self._base.values[term.field]
                 )
-        unit = ElementProperties(
-            t,
-            rho,
-            E,
-            defaults.beam_bend_factor.copy(),
-            np.ones_like(defaults.mass_scale),
-            np.ones_like(defaults.spring_scale),
-        )
-        return AffineTerms(tuple(terms), defaults, unit)
+        return AffineTerms(tuple(terms), defaults, ElementProperties(fields))
 
     def default_bounds(self) -> dict[str, tuple[float, float]]:
         return dict(self._bounds)
@@ -380,33 +374,21 @@ class FEModel:
     def element_properties(self, params: Mapping[str, float] | None = None) -> ElementProperties:
         """Per-element property arrays at ``params`` (vectorised masks, no element loop)."""
         p = self.full_parameters(params)
-        base = self._base
-        t, rho, E = base.beam_thickness.copy(), base.beam_rho.copy(), base.beam_E.copy()
-        bend = base.beam_bend_factor.copy()
-        ms, ss = base.mass_scale.copy(), base.spring_scale.copy()
-        s = self.structure
+        nominal = self._base.values
+        fields = {k: v.copy() for k, v in nominal.items()}
+        known = bindable()
         for name, binding in self.bindings.items():
-            value, mask = p[name], self._masks[name]
-            prop = binding.property
-            if (
-                not np.isfinite(value)
-                or value <= 0
-                and prop not in ("mass", "mass_factor", "stiffness_factor")
-            ):
+            value, prop = p[name], binding.property
+            family, spec = known.get(prop, (None, None))
+            strictly = spec is None or spec.positive
+            if not np.isfinite(value) or value <= 0 and strictly:
                 raise BayesUpdateError(f"parameter {name} = {value}: {prop} must be finite and > 0")
             if not np.isfinite(value) or value < 0:
                 raise BayesUpdateError(f"parameter {name} = {value}: {prop} must be >= 0")
-            if prop in MATERIAL_PROPERTIES:
-                _set_material(prop, value, mask, (t, rho, E), base.beam_E)
-            elif prop == "mass":
-                ms[mask] = value / s.mass_value[mask].sum()
-            elif prop == "mass_factor":
-                ms[mask] = value
-            elif prop == "stiffness_factor":
-                ss[mask] = value
-            elif prop == "bend_factor":
-                bend[mask] = value
-        return ElementProperties(t, rho, E, bend, ms, ss)
+            if spec is not None:
+                f = spec.field
+                spec.set(fields[f], self._masks[name], value, nominal[f], self._parametric[family])
+        return ElementProperties(fields)
 
     def shell_properties(self, params: Mapping[str, float] | None = None):
         """Per-shell (thickness [m], E [Pa], rho [kg/m^3]) arrays (n_shell,) at ``params``; a
@@ -452,8 +434,8 @@ class FEModel:
         )
 
     def _solve_general(self, p, props, n_modes, energies, method) -> FEResult:
-        if self._general is None:  # a beam structure on the sparse path, built on demand
-            self._general = GeneralAssembler(self.structure)
+        if self._general is None:  # a beam structure on the sparse path: the same assembler
+            self._general = self._assembler
         g = self._general
         shell_props = self.shell_properties(p) if self.structure.shells is not None else None
         K, M, elem = g.assemble(props, shell_props)
@@ -464,7 +446,7 @@ class FEModel:
             small_method=self.small_method,
         )
         modes = g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
-        mass, cog = g.total_mass(M)
+        mass, cog = g.matrix_mass(M)
         en = general_energies(g, elem, shell_props, modes) if energies else None
         return FEResult(
             p, modes, mass, cog, en, self.sensor_shapes(modes.shapes), self.structure.sensor_labels

@@ -43,7 +43,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import STEEL, FEModel, Material, StructureBuilder, circular_tube
-from bayesupdate.fe.assembly import Assembler
+from bayesupdate.fe.assembly import element_mass
 from bayesupdate.models import exhaust
 from bayesupdate.models.exhaust_paper import MEASURED_MASS_KG
 from bayesupdate.models.exhaust_shell_geometry import (
@@ -328,7 +328,7 @@ def _shell_areas(structure) -> np.ndarray:
 def _internal_mass(structure) -> float:
     """12.29 kg minus the beams, point masses and shells at the initial design [kg]."""
     sh = structure.shells
-    m_beams, _ = Assembler(structure).total_mass()
+    m_beams, _ = element_mass(structure)
     m_shells = float(np.sum(_shell_areas(structure) * (sh.rho * sh.thickness + sh.nsm)))
     return MEASURED_MASS_KG - m_beams - m_shells
 

@@ -37,7 +37,6 @@ the reduced model's ``interp_tol``, as the built-in models' non-linear beam para
 
 from dataclasses import dataclass, replace
 from dataclasses import field as _field
-from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
@@ -638,7 +637,7 @@ def _assembly_key(values, names, props, shell_props) -> tuple:
     """What an assembly depends on: the bound line fields' values and the exact bytes of the
     element property arrays (``fe.assembly.ElementProperties``, shell (t, E, rho))."""
     line = None if values is None else tuple(float(values[n]) for n in names)
-    arrays = [getattr(props, f.name) for f in dataclass_fields(props)] + list(shell_props or ())
+    arrays = [*props.values.values(), *(shell_props or ())]
     return line, tuple(np.ascontiguousarray(a).tobytes() for a in arrays)
 
 

@@ -65,7 +65,7 @@ class NastranModel(FEModel):
                 self._bounds,
                 known=lines_from,
             )
-            self._assembler = self._general.beams
+            self._assembler = self._general
 
     def line_parts(self) -> list[str]:
         """The parts of line elements (``"PBEAM 1003"``: a property's CBARs, CBEAMs or CRODs)

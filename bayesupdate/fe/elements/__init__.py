@@ -13,8 +13,10 @@ element matrices vectorised over elements (SI units, global axes).
 ``base`` holds the two interfaces: a family whose properties are design parameters
 (``ParametricFamily``: tube beams, point masses, springs; registry ``PARAMETRIC``,
 ``register_parametric``) and a family without them (``ElementFamily``: general beams, rods,
-scalar masses; registry ``FAMILIES``, ``register``).  Assembly, modal energies, the total mass
-and the reduced basis loop over both (``parametric_of``, ``families_of``).
+scalar masses; registry ``FAMILIES``, ``register``).  A parametric family declares the
+properties a parameter binds on it (``Bindable``: name, field, how it enters K and M) in its own
+file.  Assembly, modal energies, the total mass, the parameter bindings and the reduced basis
+loop over both (``parametric_of``, ``families_of``, ``base.bindable``).
 """
 
 # importing the families registers them (``base.register``, ``base.register_parametric``), in
@@ -22,6 +24,7 @@ and the reduced basis loop over both (``parametric_of``, ``families_of``).
 from bayesupdate.fe.elements import beam, point_mass, spring  # noqa: F401, E402, I001
 from bayesupdate.fe.elements import general_beam, rod, scalar_mass  # noqa: F401, E402
 from bayesupdate.fe.elements.base import (  # noqa: E402
+    Bindable,
     ElementFamily,
     ElementSettings,
     ParametricFamily,
@@ -32,6 +35,7 @@ from bayesupdate.fe.elements.base import (  # noqa: E402
 )
 
 __all__ = [
+    "Bindable",
     "ElementFamily",
     "ElementSettings",
     "ParametricFamily",

@@ -9,7 +9,10 @@ DOF map and its element matrices vectorised over elements.  Two kinds:
   ``fe.assembly.ElementProperties`` record, of which it reads the arrays named in ``fields``;
   ``linear`` names the matrix that is linear in its factor (point masses: "M", springs: "K"),
   or "" when the matrices must be recomputed (tube beams: wall thickness and bend factor).
-  ``fe.model.PROPERTY_TERMS`` binds a property to its ``family`` name and field.
+  It declares the properties a parameter may bind (``properties``: ``Bindable`` records, the
+  property name of ``fe.model.Binding``, the field it sets and how it enters K and M), its
+  fields' nominal values (``nominal``) and their physical limits (``check``):
+  ``fe.model`` binds, validates and splits parameters from these declarations alone.
 * ``ElementFamily`` (registry ``FAMILIES``, ``register``): no design parameter acts on it
   (general beams, rods, scalar masses, a user's family); its (K, M) are computed once.
 
@@ -25,7 +28,7 @@ A registered family is then, with no other edit:
   into the constant term (K(theta) = K_e, M(theta) = M_e for every theta), a linear parametric
   family as one term per parameter acting on it, the tube beams' groups interpolated.
 
-Shells (``elements.shell``, ``shell_tria``) are assembled by ``fe.assembly.GeneralAssembler`` in
+Shells (``elements.shell``, ``shell_tria``) are assembled by ``fe.assembly.Assembler`` apart, in
 parameter groups whose K and M are exact powers of the thickness (``fe.shell_model``).
 
 A structure holds the parametric families' arrays in its ``beam_*``, ``mass_*`` and
@@ -35,6 +38,7 @@ for any other registered family, in ``Structure.elements``.  Units: SI in, SI ou
 N m/rad], M [kg, kg m^2]; DOF numbers 6 * node + (ux, uy, uz, rx, ry, rz).
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
@@ -51,6 +55,71 @@ class ElementSettings:
 
     shear: bool = True
     rotary_inertia: bool = True
+
+
+@dataclass(frozen=True)
+class Bindable:
+    """A property of a ``ParametricFamily`` that a parameter binds (``fe.model.Binding``): the
+    family's own declaration, so that ``fe.model`` names no family.
+
+    name : the property name a ``Binding`` gives (``thickness``, ``mass``, ...).
+    field : the ``fe.assembly.ElementProperties`` array (one of the family's ``fields``) it sets.
+    enters : "K" or "M" when that matrix is exactly linear in the value, "nonlinear" when the
+        element matrices must be recomputed (``fe.reduced.affine`` interpolates them).
+    rule : how the value v sets the field f on the bound elements: "value" (f = v), "factor"
+        (f = nominal f x v) or "total" (f = v / the bound elements' sum of ``total_of``: v is the
+        bound elements' total, each scaled alike).
+    total_of : for "total", the family's (n,) attribute whose sum the value is (point masses:
+        ``mass`` [kg]).
+    positive : True when the value must be > 0, False when >= 0 (a factor may switch off).
+    select : (structure, target) -> (n,) bool, the elements a target name binds, raising
+        ``BayesUpdateError`` for an unknown one; None: the elements of the part named target.
+    unit, acts_on : the value's unit and what it acts on (the property table of ``fe.model``).
+    """
+
+    name: str
+    field: str
+    enters: str
+    rule: str = "value"
+    total_of: str = ""
+    positive: bool = True
+    select: Callable[[Any, str], np.ndarray] | None = None
+    unit: str = "-"
+    acts_on: str = ""
+
+    def __post_init__(self):
+        if self.enters not in ("K", "M", "nonlinear") or self.rule not in RULES:
+            raise BayesUpdateError(
+                f"bindable property {self.name}: enters must be K, M or nonlinear and rule one "
+                f"of {RULES}, got {self.enters!r}, {self.rule!r}"
+            )
+
+    def set(self, field: np.ndarray, mask: np.ndarray, value: float, nominal, family) -> None:
+        """Write ``value`` into the (n,) ``field`` where ``mask`` (in place) by ``rule``;
+        ``nominal`` (n,) is the field's nominal value, ``family`` the family instance."""
+        if self.rule == "value":
+            field[mask] = value
+        elif self.rule == "factor":
+            field[mask] = nominal[mask] * value
+        else:
+            field[mask] = value / getattr(family, self.total_of)[mask].sum()
+
+    def scale(self, mask: np.ndarray, family) -> float:
+        """Factor on the value in the parameter's linear term (``fe.model.ParameterTerm``):
+        1 / the bound elements' total for "total", else 1."""
+        if self.rule == "total":
+            return 1.0 / getattr(family, self.total_of)[mask].sum()
+        return 1.0
+
+    def set_unit(self, field: np.ndarray, mask: np.ndarray, nominal) -> None:
+        """Write the unit value of a linear term into ``field`` where ``mask`` (in place): 1
+        ("value": 1 kg/m^3, 1 Pa), the nominal ("factor" 1) or 1 ("total": the elements as
+        they are, the value's 1 / total going into ``scale``)."""
+        field[mask] = nominal[mask] * 1.0 if self.rule == "factor" else 1.0
+
+
+#: how a ``Bindable`` value sets its field
+RULES = ("value", "factor", "total")
 
 
 class ElementFamily(Protocol):
@@ -93,16 +162,27 @@ class ParametricFamily(Protocol):
     springs): its element matrices at an ``fe.assembly.ElementProperties`` record, of which it
     reads the (n,) arrays named in ``fields``.
 
-    family : the name ``fe.model.PROPERTY_TERMS`` and ``ParameterTerm.family`` give it; linear :
-    the matrix ("K" or "M") that is linear in its one field (a factor on every element), or ""
-    when the matrices must be recomputed (``fe.reduced.affine`` interpolates them).
+    family : the registry name (``fe.model.ParameterTerm.family``); linear : the matrix ("K" or
+    "M") that is linear in its one field (a factor on every element), or "" when the matrices
+    must be recomputed (``fe.reduced.affine`` interpolates them); properties : the ``Bindable``
+    properties a parameter may bind on it.
     """
 
     family: ClassVar[str]
     fields: ClassVar[tuple[str, ...]]
     linear: ClassVar[str]
+    properties: ClassVar[tuple[Bindable, ...]]
     nodes: np.ndarray
     part: np.ndarray
+
+    def nominal(self) -> dict[str, np.ndarray]:
+        """{field: (n,) array}: each of ``fields`` at the structure's own values (new arrays)."""
+        ...
+
+    def check(self, props: Any, parts: tuple[str, ...]) -> None:
+        """Raise ``BayesUpdateError`` naming the part (``parts``: the structure's part names)
+        when a field of ``props`` is non-physical (``check_fields``)."""
+        ...
 
     @property
     def n_elements(self) -> int:
@@ -139,11 +219,25 @@ PARAMETRIC: dict[str, type] = {}
 
 def register_parametric(cls: type) -> type:
     """Register a ``ParametricFamily`` class (a class decorator); returns the class.  Its
-    parameters are bound by ``fe.model`` (``PROPERTY_TERMS`` names the family and the field)."""
+    ``properties`` become bindable (``fe.model.Binding``); a property name another registered
+    family declares, or a field not among its ``fields``, is refused."""
     if not isinstance(getattr(cls, "family", None), str):
         raise BayesUpdateError(f"{cls.__name__}: an element family needs a class name `family`")
+    taken = {n: f for n, (f, _) in bindable().items() if f != cls.family}
+    for p in cls.properties:
+        if p.name in taken or p.field not in cls.fields:
+            raise BayesUpdateError(
+                f"{cls.__name__}: property {p.name!r} is already bound by family "
+                f"{taken.get(p.name)!r} or its field {p.field!r} is not in `fields`"
+            )
     PARAMETRIC[cls.family] = cls
     return cls
+
+
+def bindable() -> dict[str, tuple[str, Bindable]]:
+    """{property name: (family name, ``Bindable``)} of the registered parametric families, in
+    the order of registration (read each call: a family registered later is in it)."""
+    return {p.name: (name, p) for name, cls in PARAMETRIC.items() for p in cls.properties}
 
 
 def register(cls: type) -> type:
@@ -156,8 +250,26 @@ def register(cls: type) -> type:
 
 def parametric_of(structure: Any) -> tuple:
     """The structure's parametric families (``PARAMETRIC`` order), one instance per registered
-    class, empty ones included (a parameter's element indices refer to them)."""
-    return tuple(cls.of(structure) for cls in PARAMETRIC.values())
+    class, empty ones included (a parameter's element indices refer to them); a family held in
+    ``Structure.elements`` (``in_elements``) is left out when the structure has none."""
+    found = (cls.of(structure) for cls in PARAMETRIC.values())
+    return tuple(f for f in found if f is not None)
+
+
+def check_fields(checks, part: np.ndarray, parts: tuple[str, ...]) -> None:
+    """Raise ``BayesUpdateError`` naming the part of the first non-physical value.
+
+    checks : (label, values (n,), elements (n,) int or None: all, strictly) tuples: the values
+    must be finite and > 0 (strictly) or >= 0; part (n_family,) the family's part indices."""
+    for label, values, elements, strictly in checks:
+        bad = ~np.isfinite(values) | ((values <= 0) if strictly else (values < 0))
+        if np.any(bad):
+            i = np.flatnonzero(bad)[0]
+            e = i if elements is None else elements[i]
+            limit = "> 0" if strictly else ">= 0"
+            raise BayesUpdateError(
+                f"part {parts[part[e]]!r}: {label} must be finite and {limit}, got {values[i]}"
+            )
 
 
 def in_elements(cls: type, structure: Any):
@@ -167,13 +279,14 @@ def in_elements(cls: type, structure: Any):
 
 
 def families_of(structure: Any) -> tuple:
-    """The registered families' instances present in ``structure`` (registration order);
-    raises when ``structure.elements`` holds an instance of an unregistered class."""
+    """The registered ``ElementFamily`` instances present in ``structure`` (registration
+    order); raises when ``structure.elements`` holds an instance of an unregistered class."""
     for e in structure.elements:
-        if FAMILIES.get(getattr(e, "family", None)) is not type(e):
+        name = getattr(e, "family", None)
+        if type(e) not in (FAMILIES.get(name), PARAMETRIC.get(name)):
             raise BayesUpdateError(
                 f"element family {type(e).__name__} is not registered; decorate its class with "
-                "bayesupdate.fe.elements.base.register"
+                "bayesupdate.fe.elements.base.register (or register_parametric)"
             )
     found = (cls.of(structure) for cls in FAMILIES.values())
     return tuple(f for f in found if f is not None and f.n_elements)

@@ -16,7 +16,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, line_dofs, register_parametric
+from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.elements.base import (
+    Bindable,
+    ElementSettings,
+    check_fields,
+    line_dofs,
+    register_parametric,
+)
 from bayesupdate.fe.sections import section_areas, section_properties
 
 # bending in the x-y plane uses (v, rz) = local DOFs 1, 5, 7, 11; x-z plane uses (w, ry) = 2, 4, 8,
@@ -152,6 +159,13 @@ def to_global(K_local, R):
     return np.matmul(np.matmul(T.transpose(0, 2, 1), K_local), T)
 
 
+def bend_elements(structure, target: str) -> np.ndarray:
+    """(n,) bool: the tube beams of the bend named ``target`` (``Structure.bends``)."""
+    if target not in structure.bends:
+        raise BayesUpdateError(f"unknown bend {target!r}; bends are {list(structure.bends)}")
+    return structure.beam_bend == structure.bends.index(target)
+
+
 def bend_flexibility_factor(thickness, bend_radius, outer_diameter):
     """ASME B31.3 flexibility factor k = max(1, 1.65/h), h = t R / r^2 (r mean radius). (n,)"""
     r = 0.5 * (outer_diameter - thickness)
@@ -167,14 +181,28 @@ class TubeBeams:
     what no design parameter changes: nodes (n, 2), part (n,), frames (n, 3, 3) (rows local x,
     y, z), lengths (n,) [m], shape (n,) section codes, width, height (n,) [m], nu (n,),
     shear_factor (n,) (> 0: the shear area is shear_factor x A; None: the sections' own), elbow
-    (n,) bool (ASME B31.3 factor applies), bend_radius (n,) [m].  An
+    (n,) bool (ASME B31.3 factor applies), bend_radius (n,) [m]; and the nominal values of the
+    design fields: thickness (n,) [m], rho (n,) [kg/m^3], E (n,) [Pa].  An
     ``elements.base.ParametricFamily`` whose four fields (wall thickness, density, modulus, bend
-    factor) are design parameters; the thickness and bend factor enter non-linearly."""
+    factor) are design parameters; the thickness and bend factor enter non-linearly (A, I are
+    polynomials in the wall thickness, the Timoshenko shear parameter is rational and the B31.3
+    elbow factor has a kink)."""
 
-    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` fields; no linear matrix
+    #: registry name; the ``ElementProperties`` fields; no linear matrix
     family = "beam"
     fields = ("beam_thickness", "beam_rho", "beam_E", "beam_bend_factor")
     linear = ""
+    #: the properties a parameter binds (``fe.model.Binding``), on a part's beams or a bend's
+    properties = (
+        Bindable("thickness", "beam_thickness", "nonlinear", unit="m",
+                 acts_on="wall of the part's beams"),
+        Bindable("density", "beam_rho", "M", unit="kg/m^3", acts_on="the part's beams"),
+        Bindable("youngs_modulus", "beam_E", "K", unit="Pa", acts_on="the part's beams"),
+        Bindable("modulus_factor", "beam_E", "K", rule="factor",
+                 acts_on="factor on the nominal E of the part's beams"),
+        Bindable("bend_factor", "beam_bend_factor", "nonlinear", select=bend_elements,
+                 acts_on="extra factor dividing EI of a named bend"),
+    )  # fmt: skip
 
     nodes: np.ndarray
     part: np.ndarray
@@ -187,6 +215,9 @@ class TubeBeams:
     shear_factor: np.ndarray | None
     elbow: np.ndarray
     bend_radius: np.ndarray
+    thickness: np.ndarray
+    rho: np.ndarray
+    E: np.ndarray
     #: the last (thickness, areas): a calibration asks the mass at the same walls many times
     _areas: dict = field(default_factory=dict, compare=False, repr=False)
 
@@ -198,7 +229,40 @@ class TubeBeams:
         return cls(
             s.beam_nodes, s.beam_part, frames, lengths, s.beam_shape, s.beam_width,
             s.beam_height, s.beam_nu, s.beam_shear_factor, s.beam_elbow, s.beam_bend_radius,
+            s.beam_thickness, s.beam_rho, s.beam_E,
         )  # fmt: skip
+
+    def nominal(self) -> dict[str, np.ndarray]:
+        """The structure's wall thickness, density and modulus; bend factor 1 (none)."""
+        return {
+            "beam_thickness": self.thickness.copy(),
+            "beam_rho": self.rho.copy(),
+            "beam_E": self.E.copy(),
+            "beam_bend_factor": np.ones(self.n_elements),
+        }
+
+    def check(self, props, parts: tuple[str, ...]) -> None:
+        """Every field finite and > 0 (a solid bar's thickness is not read) and every wall
+        thinner than half its section."""
+        tube = np.flatnonzero(self.shape != 2)  # solid bars have no wall
+        check_fields(
+            (
+                ("thickness", props.beam_thickness[tube], tube, True),
+                ("density", props.beam_rho, None, True),
+                ("Young's modulus", props.beam_E, None, True),
+                ("bend factor", props.beam_bend_factor, None, True),
+            ),
+            self.part,
+            parts,
+        )
+        t = props.beam_thickness[tube]
+        too_thick = 2 * t >= np.minimum(self.width[tube], self.height[tube])
+        if np.any(too_thick):
+            i = np.flatnonzero(too_thick)[0]
+            raise BayesUpdateError(
+                f"part {parts[self.part[tube[i]]]!r}: wall thickness {t[i]} m is not less than "
+                "half the section size"
+            )
 
     @property
     def n_elements(self) -> int:

@@ -16,7 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, register_parametric
+from bayesupdate.fe.elements.base import (
+    Bindable,
+    ElementSettings,
+    check_fields,
+    register_parametric,
+)
 from bayesupdate.fe.rotations import skew
 
 
@@ -28,10 +33,17 @@ class PointMasses:
     ``offset_link``.  An ``elements.base.ParametricFamily``: M is linear in the factor
     ``mass_scale`` (the parameters ``mass`` and ``mass_factor``), K is none."""
 
-    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` field; the linear matrix
+    #: registry name; the ``ElementProperties`` field; the linear matrix
     family = "mass"
     fields = ("mass_scale",)
     linear = "M"
+    #: the properties a parameter binds (``fe.model.Binding``) on a part's point masses
+    properties = (
+        Bindable("mass", "mass_scale", "M", rule="total", total_of="mass", positive=False,
+                 unit="kg", acts_on="total of the part's point masses (scaled)"),
+        Bindable("mass_factor", "mass_scale", "M", rule="factor", positive=False,
+                 acts_on="factor on the part's point masses"),
+    )  # fmt: skip
 
     nodes: np.ndarray
     part: np.ndarray
@@ -51,6 +63,14 @@ class PointMasses:
     @property
     def n_elements(self) -> int:
         return int(self.nodes.shape[0])
+
+    def nominal(self) -> dict[str, np.ndarray]:
+        """Factor 1 on every mass."""
+        return {"mass_scale": np.ones(self.n_elements)}
+
+    def check(self, props, parts: tuple[str, ...]) -> None:
+        """Factors finite and >= 0."""
+        check_fields((("point-mass factor", props.mass_scale, None, False),), self.part, parts)
 
     def dofs(self) -> np.ndarray:
         """(P, 6) global DOF numbers of each mass's node."""

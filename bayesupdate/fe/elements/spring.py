@@ -28,7 +28,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.constraints import rigid_link
-from bayesupdate.fe.elements.base import ElementSettings, grounded_line_dofs, register_parametric
+from bayesupdate.fe.elements.base import (
+    Bindable,
+    ElementSettings,
+    check_fields,
+    grounded_line_dofs,
+    register_parametric,
+)
 
 
 @register_parametric
@@ -39,10 +45,15 @@ class Springs:
     the spring's location.  An ``elements.base.ParametricFamily``: K is linear in the factor
     ``spring_scale`` (the parameter ``stiffness_factor``), M is none."""
 
-    #: registry and ``PROPERTY_TERMS`` name; the ``ElementProperties`` field; the linear matrix
+    #: registry name; the ``ElementProperties`` field; the linear matrix
     family = "spring"
     fields = ("spring_scale",)
     linear = "K"
+    #: the property a parameter binds (``fe.model.Binding``) on a part's springs
+    properties = (
+        Bindable("stiffness_factor", "spring_scale", "K", rule="factor", positive=False,
+                 acts_on="factor on the part's springs"),
+    )  # fmt: skip
 
     nodes: np.ndarray
     part: np.ndarray
@@ -62,6 +73,14 @@ class Springs:
     @property
     def grounded(self) -> np.ndarray:
         return self.nodes[:, 1] < 0
+
+    def nominal(self) -> dict[str, np.ndarray]:
+        """Factor 1 on every spring."""
+        return {"spring_scale": np.ones(self.n_elements)}
+
+    def check(self, props, parts: tuple[str, ...]) -> None:
+        """Factors finite and >= 0."""
+        check_fields((("spring factor", props.spring_scale, None, False),), self.part, parts)
 
     def dofs(self) -> np.ndarray:
         """(S, 12) global DOF numbers [node A, node B] (``base.grounded_line_dofs``: a grounded

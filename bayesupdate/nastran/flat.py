@@ -24,7 +24,7 @@ package) would read the CONM2 of edit 6 differently:
    CBEAM: the same fields 2-17); with lumped mass (COUPMASS < 1) a CBEAM's lumped twist
    inertia rho (I1 + I2) L / 2 about its axis at each end, which a CBAR has not
    (``cards.beams``), is written as two massless CONM2 (3.4 % on v3.3's mode 3 without them;
-   ``_twist``: with 1e-11 of the trace on the diagonal, to stay PSD once rounded);
+   ``_twist``: the diagonal raised where rounding leaves it indefinite, ``_rounded_psd``);
 4. (``mystran=True``) a grounded CBUSH (GB blank: MYSTRAN 18 stops in
    ELMGM1_BUSH, "Index '0' of dimension 1 of array 'grid'"; it refuses a grounded CELAS2 too,
    "INVALID COMPONENT NUMBER = 0 IN FIELD 7") gets a GB of its own, a new GRID at GA's place
@@ -69,7 +69,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate.nastran.bulk import Card, large_field_text, real16, with_fields
+from bayesupdate.nastran.bulk import Card, large_field_text, parse_number, real16, with_fields
 from bayesupdate.nastran.cards.beams import pbeam_layout
 from bayesupdate.nastran.deck import Refusals, read_deck
 from bayesupdate.nastran.frames import coordinate, read_grids
@@ -256,10 +256,11 @@ def _bars(deck, cards: list) -> list:
 def _twist(deck, grids, beam: Card, prop: Card, first_id: int) -> list:
     """Two CONM2 (M = 0) at a CBEAM's grids with half its lumped twist inertia each, rho (I1 +
     I2) L n n^T / 2 (n the axis GA-GB, basic), as ``cards.beams`` lumps a CBEAM's and not a
-    CBAR's: an inertia with no mass is the same at the grid as at an offset end.  1e-11 of its
-    trace is added on the diagonal: a 16-character field rounds a term by up to 5e-13 of it,
-    which can leave the rank-one n n^T with a negative eigenvalue (v4.2's CBEAMs 2000055,
-    2000056: -7.8e-16 of 7.8e-4, refused by ``cards.masses``)."""
+    CBAR's: an inertia with no mass is the same at the grid as at an offset end.  A 16-character
+    field rounds a term by up to 5e-13 of it, which can leave the rank-one n n^T with a negative
+    eigenvalue (v4.2's CBEAMs 2000055, 2000056: -7.8e-16 of 7.8e-4, refused by
+    ``cards.masses``): only there is twice that eigenvalue added on the diagonal
+    (``_rounded_psd``), so a deck whose fields round harmlessly is written exactly."""
     mat = deck.table("MAT1").get(prop["MID"])
     rho = 0.0 if mat is None else float(mat["RHO"])
     inertia = rho * (float(prop["I1"]) + float(prop["I2"]))
@@ -269,11 +270,28 @@ def _twist(deck, grids, beam: Card, prop: Card, first_id: int) -> list:
     x = grids.xyz[grids.index(ends, beam)]
     length = float(np.linalg.norm(x[1] - x[0]))
     n = (x[1] - x[0]) / length
-    J = 0.5 * inertia * length * (np.outer(n, n) + 1e-11 * np.eye(3))
-    fields = [J[0, 0], -J[1, 0], J[1, 1], -J[2, 0], -J[2, 1], J[2, 2]]
-    return [Card("CONM2", (str(first_id + k), str(g), "0", "0.", "", "", "", "",
-                           *(_real(float(v)) for v in fields)), beam.file, beam.line, beam.end)
+    fields = _rounded_psd(0.5 * inertia * length * np.outer(n, n))
+    return [Card("CONM2", (str(first_id + k), str(g), "0", "0.", "", "", "", "", *fields),
+                 beam.file, beam.line, beam.end)
             for k, g in enumerate(ends)]  # fmt: skip
+
+
+def _conm2_inertia_fields(J: np.ndarray) -> list[str]:
+    """The six CONM2 inertia fields (I11, I21, I22, I31, I32, I33) of the (3, 3) inertia J
+    (MSC QRG CONM2: products entered negated), each as a 16-character real."""
+    return [_real(float(v)) for v in (J[0, 0], -J[1, 0], J[1, 1], -J[2, 0], -J[2, 1], J[2, 2])]
+
+
+def _rounded_psd(J: np.ndarray) -> list[str]:
+    """CONM2 inertia fields of the PSD (3, 3) J that read back PSD: where the rounded fields
+    have a negative eigenvalue, twice its size is added on J's diagonal and they are rounded
+    again."""
+    fields = _conm2_inertia_fields(J)
+    i11, i21, i22, i31, i32, i33 = (float(parse_number(f)) for f in fields)
+    low = np.linalg.eigvalsh(np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]]))[0]
+    if low >= 0:
+        return fields
+    return _conm2_inertia_fields(J - 2 * low * np.eye(3))
 
 
 def _pbar(card: Card) -> Card | None:

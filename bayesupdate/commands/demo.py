@@ -26,6 +26,11 @@ Writes into --out: report.html (self-contained), report.md, figures/, HDF5 resul
 --quick: fewer starts, walkers and steps, no discovery on the seed case; its posteriors are not
 expected to converge and say so.
 
+On 2 cores or more the parts run side by side in 2 worker processes (--workers N; --workers 1:
+one after the other in this process, with the sampler's progress bars); the numbers are the
+same bits.  Each step is announced as it starts, with the seconds since the start, and each
+part's figures are drawn as it finishes.
+
 --case aircraft runs a real case instead: the mAEWing1 flying wing's own Nastran model (v3.3)
 updated against its own ground vibration test, beside the authors' updated model (v4.2), on
 the data packaged with bayesupdate (identify, correlate, sensitivity, calibrate, sample,
@@ -51,8 +56,8 @@ def add_arguments(parser):
         "--workers",
         type=int,
         metavar="N",
-        help="run the demo's independent parts in N local processes (default: 2 where the "
-        "machine has 2 cores or more, else 1: serial); the results are the same bits",
+        help="run the demo's parts in N local processes (default: 2 where this process may "
+        "use 2 cores or more, else 1: serial); the results are the same bits",
     )
     parser.add_argument(
         "--case",
@@ -73,38 +78,50 @@ def run(args) -> int:
     if args.json:
         raise BayesUpdateError("demo --json: only with --case aircraft")
     from bayesupdate.compute.settings import ComputeSettings, open_executor
-    from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo, side_by_side
-    from bayesupdate.pipelines.exhaust_comparison import better_exhaust
-    from bayesupdate.report.demo_report import part_figures, summary_rows, write_demo_report
+    from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo
+    from bayesupdate.report.demo_report import part_figures
 
     compute = ComputeSettings(default_workers() if args.workers is None else args.workers)
     out = check_out_folder(Path(args.out), args.force)
     settings = DemoSettings(out=out, quick=args.quick, seed=args.seed, progress=sys.stderr.isatty())
-    t0 = time.time()
-    lines = StepLines(t0, (*demo_steps(settings), "the two exhausts side by side", "report"))
+    lines = StepLines(time.time(), (*demo_steps(settings), *_LAST_STEPS))
     if settings.quick:
         say(QUICK_NOTE.format(s=settings))
     if compute.workers > 1:
         say(f"{compute.workers} worker processes: the parts' steps are announced as they start")
     figures = {}
-
-    def on_part(task, record):
-        figures.update(part_figures(task, record, out))
-
     with open_executor(compute) as executor:
-        results = run_demo(settings, lines, executor, on_part)
-    lines("report", "the two exhausts side by side")
+        results = run_demo(
+            settings,
+            lines,
+            executor,
+            lambda task, part: figures.update(part_figures(task, part, out)),
+        )
+    _report(results, figures, lines)
+    return 0
+
+
+_LAST_STEPS = ("the two exhausts side by side", "report")
+
+
+def _report(results, figures: dict, lines) -> None:
+    """The side by side, the report (``figures``: drawn as the parts arrived) and the summary
+    on stdout."""
+    from bayesupdate.pipelines.demo import side_by_side
+    from bayesupdate.pipelines.exhaust_comparison import better_exhaust
+    from bayesupdate.report.demo_report import summary_rows, write_demo_report
+
+    lines("report", _LAST_STEPS[0])
     comparison = side_by_side(results)
-    lines("report", "report")
+    lines("report", _LAST_STEPS[1])
     files = write_demo_report(results, comparison, figures)
-    rows = summary_rows(results, time.time() - t0)
+    rows = summary_rows(results, time.time() - lines.t0)
     rows.insert(-1, ("beam or shell exhaust", better_exhaust(comparison)[1]))
     width = max(len(k) for k, _ in rows)
     print("\nsummary")
     for key, value in rows:
         print(f"  {key:<{width}}  {value}")
     print(f"\nreport: {files[0]}\n        {files[1]}")
-    return 0
 
 
 def default_workers() -> int:

@@ -15,7 +15,10 @@
 
 ``run_demo`` computes and writes the data files a user would keep (HDF5 results, the UFF file,
 the identified modes) into ``settings.out`` and returns frozen records; the figures and the
-report are made from them at the edge (``report.demo_report``).
+report are made from them at the edge (``report.demo_report``).  The two parts are
+independent: after the virtual test's FRFs and modes ("ema", a few seconds), they run as
+tasks (``demo_tasks``) on the executor seam (``compute.executors``: two local processes on two
+cores, the same bits as one after the other), each part's record handed back as it finishes.
 """
 
 import json
@@ -218,13 +221,15 @@ TASK_STEPS = {
 
 
 def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
-    """The independent tasks ``run_demo`` hands to its executor, in the order they start:
-    longest first, so that two workers finish close together (``benchmarks/demo_steps.py``:
-    the quick demo's shell seed case 35-50 s CPU, the virtual test's discovery 29 and its
-    calibration 28, the beam optimum 15, the FE part 1).  --quick keeps discovery where it has
-    something to find (the virtual test's hidden effect)."""
+    """The independent tasks ``run_demo`` hands to its executor, in the order they start.
+    On two workers the quick demo splits into {shell seed case, beam optimum, FE part} and the
+    virtual test's {calibration, discovery}, of about equal CPU (``benchmarks/demo_steps.py
+    --quick --workers 2``, cached bases: 38 + 17 + 1 s against 31 + 32 s); the virtual test's
+    discovery ends its worker's queue, as its figures are the fewest (drawn after the last
+    task).  --quick keeps discovery where it has something to find (the virtual test's hidden
+    effect)."""
     seed = () if settings.quick else ("seed_discovery",)
-    return (*seed, "shell", "virtual_discovery", "virtual_calibration", "beam", "fe")
+    return (*seed, "shell", "virtual_calibration", "virtual_discovery", "beam", "fe")
 
 
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:

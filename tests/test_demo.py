@@ -198,6 +198,8 @@ def test_the_quick_demo_gives_the_same_numbers_serial_and_on_two_worker_processe
     modes, discovery's evidence) the same bits."""
     from bayesupdate.compute.executors import ProcessExecutor
 
+    for folder in ("serial", "parallel"):
+        (tmp_path / folder).mkdir()
     serial = demo.run_demo(demo.DemoSettings(tmp_path / "serial", quick=True))
     with ProcessExecutor(2) as executor:
         settings = demo.DemoSettings(tmp_path / "parallel", quick=True)

@@ -221,15 +221,17 @@ TASK_STEPS = {
 
 
 def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
-    """The independent tasks ``run_demo`` hands to its executor, in the order they start.
-    On two workers the quick demo splits into {shell seed case, beam optimum, FE part} and the
-    virtual test's {calibration, discovery}, of about equal CPU (``benchmarks/demo_steps.py
-    --quick --workers 2``, cached bases: 38 + 17 + 1 s against 31 + 32 s); the virtual test's
-    discovery ends its worker's queue, as its figures are the fewest (drawn after the last
-    task).  --quick keeps discovery where it has something to find (the virtual test's hidden
-    effect)."""
-    seed = () if settings.quick else ("seed_discovery",)
-    return (*seed, "shell", "virtual_calibration", "virtual_discovery", "beam", "fe")
+    """The independent tasks ``run_demo`` hands to its executor, in the order they start (a
+    worker takes the next as it finishes one), chosen so that two workers end together
+    (``benchmarks/demo_steps.py --workers 2``, CPU seconds per task with cached bases).  Quick:
+    {shell seed case 38, beam optimum 17, FE part 1} against the virtual test's {calibration
+    31, discovery 32}, its discovery last as its figures are the fewest (drawn after the last
+    task).  Full: {seed discovery 58, virtual discovery 57, beam optimum 90, FE part} against
+    {shell seed case 104, virtual calibration 106}.  --quick keeps discovery where it has
+    something to find (the virtual test's hidden effect)."""
+    if settings.quick:
+        return ("shell", "virtual_calibration", "virtual_discovery", "beam", "fe")
+    return ("seed_discovery", "shell", "virtual_discovery", "virtual_calibration", "beam", "fe")
 
 
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:

@@ -153,3 +153,69 @@ def test_the_shell_seed_optimum_on_its_basis_and_at_the_default_mesh(tmp_path):
     # the same point solved at the default mesh 32: 0.0675 in the guide
     assert check.expr == pytest.approx(0.0675, abs=1e-3)
     assert np.max(np.abs(check.initial_hz / paper.TABLE1_FEA_HZ - 1)) < 0.03
+
+
+def test_the_demos_tasks_give_the_same_bits_serial_and_on_two_worker_processes(tmp_path, capfd):
+    """``run_tasks``: the virtual test's FRFs and identification ("ema", seeded noise) and the
+    FE part, once in this process and once on two spawned workers (``bayesupdate demo``'s
+    default on two cores): the same numbers to the bit, each part handed to ``on_part`` as it
+    arrives, and each step announced from the process it ran in (``commands.demo.StepLines``)."""
+    from bayesupdate.commands.demo import StepLines
+    from bayesupdate.compute.executors import ProcessExecutor
+
+    tasks = ("ema", "fe")
+    steps = demo.TASK_STEPS["ema"] + demo.TASK_STEPS["fe"]
+    for folder in ("serial", "parallel"):
+        (tmp_path / folder).mkdir()
+    serial = demo.run_tasks(demo.DemoSettings(tmp_path / "serial", quick=True), tasks)
+    arrived = []
+    with ProcessExecutor(2) as executor:
+        settings = demo.DemoSettings(tmp_path / "parallel", quick=True)
+        lines = StepLines(0.0, steps)
+        parallel = demo.run_tasks(
+            settings, tasks, lines, executor, lambda task, record: arrived.append(task)
+        )
+    assert sorted(arrived) == sorted(tasks)
+    a, b = serial["ema"].identified, parallel["ema"].identified
+    assert a.modes.n_modes == b.modes.n_modes >= 8
+    np.testing.assert_array_equal(a.modes.frequencies_hz, b.modes.frequencies_hz)
+    np.testing.assert_array_equal(a.modes.shapes, b.modes.shapes)
+    np.testing.assert_array_equal(a.frfs.frf, b.frfs.frf)
+    fa, fb = serial["fe"].result, parallel["fe"].result
+    np.testing.assert_array_equal(fa.frequencies_hz, fb.frequencies_hz)
+    assert serial["fe"].character == parallel["fe"].character
+    err = capfd.readouterr().err
+    for i, name in enumerate(steps, start=1):
+        assert f"[{i}/3] {name}" in err
+    assert "done: ema" in err and "done: fe" in err
+
+
+# the whole quick demo twice (about 4 minutes of CPU)
+@LONG
+def test_the_quick_demo_gives_the_same_numbers_serial_and_on_two_worker_processes(tmp_path):
+    """``bayesupdate demo --quick --workers 1`` against its default on two cores: every number
+    the report and summary print (optima, fronts, mesh check, posterior chains, identified
+    modes, discovery's evidence) the same bits."""
+    from bayesupdate.compute.executors import ProcessExecutor
+
+    for folder in ("serial", "parallel"):
+        (tmp_path / folder).mkdir()
+    serial = demo.run_demo(demo.DemoSettings(tmp_path / "serial", quick=True))
+    with ProcessExecutor(2) as executor:
+        settings = demo.DemoSettings(tmp_path / "parallel", quick=True)
+        parallel = demo.run_demo(settings, executor=executor)
+    for get in (
+        lambda r: r.seed_optimum.calibration.theta,
+        lambda r: [[p["expr"], p["mass_error_pct"]] for p in r.seed_optimum.front],
+        lambda r: r.shell_check.optimum_hz,
+        lambda r: r.beam_optimum.calibration.theta,
+        lambda r: [[p["expr"], p["mass_error_pct"]] for p in r.beam_optimum.front],
+        lambda r: r.seed.run.posterior.chain,
+        lambda r: r.identified.modes.frequencies_hz,
+        lambda r: r.virtual.run.calibration.theta,
+        lambda r: r.virtual.run.posterior.chain,
+        lambda r: [f.log_evidence for f in r.virtual_discovery.run.result.fits],
+        lambda r: [s.delta_chi2 for s in r.virtual_discovery.run.result.localization.scores],
+    ):
+        np.testing.assert_array_equal(get(serial), get(parallel))
+    assert serial.seed_optimum.calibration.expr == parallel.seed_optimum.calibration.expr

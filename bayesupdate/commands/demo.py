@@ -1,7 +1,9 @@
 """``bayesupdate demo``: the main job - the seed's whole story with a report."""
 
+import os
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from bayesupdate.atomic import make_writable_folder
@@ -18,11 +20,16 @@ DESCRIPTION = """Run the embedded default end to end and write a report:
       discovery.
 Writes into --out: report.html (self-contained), report.md, figures/, HDF5 results, the UFF file.
 
-  bayesupdate demo --out demo_out            # the whole run (about 7 minutes of CPU)
-  bayesupdate demo --out demo_out --quick    # a first look (about 2.5 minutes of CPU)
+  bayesupdate demo --out demo_out            # the whole run (about 7.5 minutes of CPU)
+  bayesupdate demo --out demo_out --quick    # a first look (about 2.5-3 minutes of CPU)
 
 --quick: fewer starts, walkers and steps, no discovery on the seed case; its posteriors are not
 expected to converge and say so.
+
+On 2 cores or more the parts run side by side in 2 worker processes (--workers N; --workers 1:
+one after the other in this process, with the sampler's progress bars); the numbers are the
+same bits.  Each step is announced as it starts, with the seconds since the start, and each
+part's figures are drawn as it finishes.
 
 --case aircraft runs a real case instead: the mAEWing1 flying wing's own Nastran model (v3.3)
 updated against its own ground vibration test, beside the authors' updated model (v4.2), on
@@ -46,6 +53,13 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
     parser.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="run the demo's parts in N local processes (default: 2 where this process may "
+        "use 2 cores or more, else 1: serial); the results are the same bits",
+    )
+    parser.add_argument(
         "--case",
         choices=("exhaust", "aircraft"),
         default="exhaust",
@@ -63,34 +77,74 @@ def run(args) -> int:
         return run_aircraft(args, check_out_folder(Path(args.out), args.force), say)
     if args.json:
         raise BayesUpdateError("demo --json: only with --case aircraft")
-    from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo, side_by_side
+    from bayesupdate.compute.settings import ComputeSettings, open_executor
+    from bayesupdate.pipelines.demo import DemoSettings, demo_steps, run_demo
+    from bayesupdate.report.demo_report import part_figures
+
+    compute = ComputeSettings(default_workers() if args.workers is None else args.workers)
+    out = check_out_folder(Path(args.out), args.force)
+    settings = DemoSettings(out=out, quick=args.quick, seed=args.seed, progress=sys.stderr.isatty())
+    lines = StepLines(time.time(), (*demo_steps(settings), *_LAST_STEPS))
+    if settings.quick:
+        say(QUICK_NOTE.format(s=settings))
+    if compute.workers > 1:
+        say(f"{compute.workers} worker processes: the parts' steps are announced as they start")
+    figures = {}
+    with open_executor(compute) as executor:
+        results = run_demo(
+            settings,
+            lines,
+            executor,
+            lambda task, part: figures.update(part_figures(task, part, out)),
+        )
+    _report(results, figures, lines)
+    return 0
+
+
+_LAST_STEPS = ("the two exhausts side by side", "report")
+
+
+def _report(results, figures: dict, lines) -> None:
+    """The side by side, the report (``figures``: drawn as the parts arrived) and the summary
+    on stdout."""
+    from bayesupdate.pipelines.demo import side_by_side
     from bayesupdate.pipelines.exhaust_comparison import better_exhaust
     from bayesupdate.report.demo_report import summary_rows, write_demo_report
 
-    out = check_out_folder(Path(args.out), args.force)
-    settings = DemoSettings(out=out, quick=args.quick, seed=args.seed, progress=sys.stderr.isatty())
-    steps = (*demo_steps(settings), "the two exhausts side by side", "report")
-    t0 = time.perf_counter()
-    counter = iter(range(1, len(steps) + 1))
-    if settings.quick:
-        say(QUICK_NOTE.format(s=settings))
-
-    def step(name):
-        say(f"[{next(counter)}/{len(steps)}] {name}  ({time.perf_counter() - t0:.0f} s)")
-
-    results = run_demo(settings, step)
-    step("the two exhausts side by side")
+    lines("report", _LAST_STEPS[0])
     comparison = side_by_side(results)
-    step("report")
-    files = write_demo_report(results, comparison)
-    rows = summary_rows(results, time.perf_counter() - t0)
+    lines("report", _LAST_STEPS[1])
+    files = write_demo_report(results, comparison, figures)
+    rows = summary_rows(results, time.time() - lines.t0)
     rows.insert(-1, ("beam or shell exhaust", better_exhaust(comparison)[1]))
     width = max(len(k) for k, _ in rows)
     print("\nsummary")
     for key, value in rows:
         print(f"  {key:<{width}}  {value}")
     print(f"\nreport: {files[0]}\n        {files[1]}")
-    return 0
+
+
+def default_workers() -> int:
+    """2 where this process may use 2 cores or more (the demo has two balanced halves), else 1."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return 2 if (cores or 1) >= 2 else 1
+
+
+@dataclass(frozen=True)
+class StepLines:
+    """The demo's step announcements on stderr: ``[i/n] step  (t s)`` as a step starts, ``done:
+    task`` as a task ends; t counts from ``t0`` (``time.time()``, the same clock in every
+    process).  A module-level frozen class: it is pickled to the worker processes."""
+
+    t0: float
+    steps: tuple[str, ...]
+
+    def __call__(self, task: str, name: str | None) -> None:
+        elapsed = f"({time.time() - self.t0:.0f} s)"
+        if name is None:
+            say(f"      done: {task}  {elapsed}")
+        else:
+            say(f"[{self.steps.index(name) + 1}/{len(self.steps)}] {name}  {elapsed}")
 
 
 def say(line: str) -> None:

@@ -15,7 +15,10 @@
 
 ``run_demo`` computes and writes the data files a user would keep (HDF5 results, the UFF file,
 the identified modes) into ``settings.out`` and returns frozen records; the figures and the
-report are made from them at the edge (``report.demo_report``).
+report are made from them at the edge (``report.demo_report``).  The two parts are
+independent: after the virtual test's FRFs and modes ("ema", a few seconds), they run as
+tasks (``demo_tasks``) on the executor seam (``compute.executors``: two local processes on two
+cores, the same bits as one after the other), each part's record handed back as it finishes.
 """
 
 import json
@@ -200,65 +203,205 @@ def demo_reference(case: str) -> dict:
     return json.loads(resources.files("bayesupdate").joinpath(name).read_text())
 
 
-def demo_steps(settings: DemoSettings) -> tuple[str, ...]:
-    """The steps ``run_demo`` announces, in order."""
-    steps = [
-        "shell exhaust vs seed Table 1",
+#: the steps of each task of the demo (``run_demo``); "ema" (the virtual test's FRFs and their
+#: identification) runs first in this process, as the virtual test's two tasks need its modes
+TASK_STEPS = {
+    "fe": ("shell exhaust vs seed Table 1",),
+    "shell": (
         "seed case (shell): certified basis, optimum and front vs Table 2",
         "seed case (shell): posterior",
         "seed case (shell): the optimum at mesh density 32",
-        "beam exhaust: optimum and front vs Table 2",
-    ]
-    # --quick keeps discovery where it has something to find (the virtual test's hidden effect)
-    if not settings.quick:
-        steps.append("beam exhaust vs Table 2: discovery")
-    steps += [
-        "virtual test (beam): simulate FRFs",
-        "virtual test: identify",
-        "virtual test: calibrate + posterior",
-        "virtual test: discovery",
-    ]
-    return tuple(steps)
+    ),
+    "beam": ("beam exhaust: optimum and front vs Table 2",),
+    "seed_discovery": ("beam exhaust vs Table 2: discovery",),
+    "ema": ("virtual test (beam): simulate FRFs", "virtual test: identify"),
+    "virtual_calibration": ("virtual test: calibrate + posterior",),
+    "virtual_discovery": ("virtual test: discovery",),
+}
+
+
+def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
+    """The independent tasks ``run_demo`` hands to its executor, in the order they start (a
+    worker takes the next as it finishes one), chosen so that two workers end together
+    (``benchmarks/demo_steps.py --workers 2``, CPU seconds per task with cached bases).  Quick:
+    {shell seed case 38, beam optimum 17, FE part 1} against the virtual test's {calibration
+    31, discovery 32}, its discovery last as its figures are the fewest (drawn after the last
+    task).  Full: {seed discovery 58, virtual discovery 57, beam optimum 90, FE part} against
+    {shell seed case 104, virtual calibration 106}.  --quick keeps discovery where it has
+    something to find (the virtual test's hidden effect)."""
+    if settings.quick:
+        return ("shell", "virtual_calibration", "virtual_discovery", "beam", "fe")
+    return ("seed_discovery", "shell", "virtual_discovery", "virtual_calibration", "beam", "fe")
+
+
+def demo_steps(settings: DemoSettings) -> tuple[str, ...]:
+    """The steps ``run_demo`` announces, in the order a serial run takes them ("ema" first,
+    then ``demo_tasks``)."""
+    return tuple(name for task in ("ema", *demo_tasks(settings)) for name in TASK_STEPS[task])
+
+
+def _silent(task: str, name: str | None) -> None:
+    return None
 
 
 def run_demo(
-    settings: DemoSettings, step: Callable[[str], None] = lambda name: None
+    settings: DemoSettings,
+    step: Callable[[str, str | None], None] = _silent,
+    executor=None,
+    on_part: Callable[[str, object], None] | None = None,
 ) -> DemoResults:
-    """Run both parts (module docstring); ``step(name)`` announces each of ``demo_steps``."""
-    out, names = settings.out, iter(demo_steps(settings))
+    """Run both parts (module docstring): "ema" in this process, then ``demo_tasks`` on
+    ``executor`` (``run_tasks``; None: serial, in this process).
+
+    step(task, name) : announces each step of ``TASK_STEPS`` as it starts and, with name None,
+    the task's end; called where the task runs (a worker process: it must pickle, e.g. a
+    module-level class, and may print to stderr only).  on_part(task, record) : called in this
+    process as each part's record arrives (in arrival order; "ema" with the first of the
+    others), e.g. to draw that part's figures while the other tasks run.  Each worker pins
+    BLAS to one thread (``compute.executors``) and reads the reduced bases from the one on-disk
+    cache (``compute.cache``); the sampler's progress bars are shown by a serial run only."""
+    from dataclasses import replace
+
+    from bayesupdate.compute.executors import executor_or_serial
+
+    executor = executor_or_serial(executor)
+    if executor.workers > 1:
+        settings = replace(settings, progress=False)  # bars of two processes would interleave
+    ema = {"ema": _run_task((settings, step), "ema")}
+    parts = run_tasks(settings, demo_tasks(settings), step, executor, on_part, ema)
+    return _assemble(settings, parts)
+
+
+def run_tasks(
+    settings: DemoSettings, tasks, step=_silent, executor=None, on_part=None, done=None
+) -> dict:
+    """{task: record} of ``tasks`` (names of ``TASK_STEPS``) run on ``executor`` (None:
+    serial) through ``executor.map``: each task a pure function of ``settings`` and the files
+    in ``settings.out``, so the records are the same bits on every executor.  ``step``,
+    ``on_part``: as ``run_demo``; ``done``: records computed before, handed to ``on_part``
+    with the first arrival and returned with the others."""
+    from bayesupdate.compute.executors import executor_or_serial
+
+    tasks = tuple(tasks)
+    parts = dict(done or {})
+    pending = list(parts)
+
+    def arrived(index, record):
+        parts[tasks[index]] = record
+        pending.append(tasks[index])
+        while pending and on_part is not None:
+            name = pending.pop(0)
+            on_part(name, parts[name])
+
+    executor_or_serial(executor).map(_run_task, tasks, (settings, step), progress=arrived)
+    return parts
+
+
+def _run_task(shared, task: str):
+    """One task of ``demo_tasks`` (or "ema"): its record; ``shared`` is (settings, step)."""
+    settings, step = shared
+    record = _TASKS[task](settings, iter(TASK_STEPS[task]), lambda name: step(task, name))
+    step(task, None)
+    return record
+
+
+def _fe_task(settings, names, step) -> FePart:
     step(next(names))
-    fe = fe_part(SHELL_MODEL)
+    return fe_part(SHELL_MODEL)
+
+
+@dataclass(frozen=True)
+class ShellPart:
+    """The shell seed case's task: the posterior, the optimum and the mesh check."""
+
+    seed: CalibrationPart
+    optimum: OptimumPart
+    check: ShellCheck
+
+
+def _shell_task(settings, names, step) -> ShellPart:
     step(next(names))
     prepared = prepare(seed_study(settings))
-    seed_optimum = optimum_part(prepared, polished=False)
+    optimum = optimum_part(prepared, polished=False)
     step(next(names))
+    path = settings.out / "seed_case.h5"
     options = SamplingOptions(
-        out=out / "seed_case.h5", progress=settings.progress, reference=demo_reference("seed_shell")
+        out=path, progress=settings.progress, reference=demo_reference("seed_shell")
     )
-    surrogate = (seed_optimum.search, seed_optimum.rom)
-    run = run_sampling(prepared, options, seed_optimum.calibration, surrogate)
-    seed = CalibrationPart(run, out / "seed_case.h5", prepared.problem)
+    run = run_sampling(prepared, options, optimum.calibration, (optimum.search, optimum.rom))
     step(next(names))
-    shell_check = check_at_density(prepared, seed_optimum.calibration)
+    check = check_at_density(prepared, optimum.calibration)
+    return ShellPart(CalibrationPart(run, path, prepared.problem), _light(optimum), check)
+
+
+def _light(optimum: OptimumPart) -> OptimumPart:
+    """``optimum`` without its search problem and basis (used inside its task only; they would
+    only add megabytes to the record a worker sends back)."""
+    from dataclasses import replace
+
+    return replace(optimum, search=None, rom=None)
+
+
+def _beam_task(settings, names, step) -> OptimumPart:
     step(next(names))
     beam = prepare(_study(settings, "paper:ema", BEAM_MODEL))
-    beam_optimum = optimum_part(beam, polished=True, exact=settings.exact_polish)
-    seed_discovery = None
-    if not settings.quick:
-        step(next(names))
-        seed_discovery = _discovery_part(settings, "paper:ema", out / "seed_discovery.h5")
+    return _light(optimum_part(beam, polished=True, exact=settings.exact_polish))
+
+
+def _seed_discovery_task(settings, names, step) -> DiscoveryPart:
     step(next(names))
-    virtual_test, uff = _virtual_test_part(settings)
+    return _discovery_part(settings, "paper:ema", settings.out / "seed_discovery.h5")
+
+
+@dataclass(frozen=True)
+class EmaPart:
+    """The virtual test's FRFs (the truth and the UFF file) and their identification."""
+
+    test: VirtualTest
+    uff: Path
+    identified: IdentifiedPart
+
+
+def _ema_task(settings, names, step) -> EmaPart:
     step(next(names))
-    identified = _identify_part(out, uff)
+    test, uff = _virtual_test_part(settings)
     step(next(names))
-    modes = str(out / "virtual_modes.h5")
-    virtual = _calibration_part(settings, modes, out / "virtual_case.h5")
+    return EmaPart(test, uff, _identify_part(settings.out, uff))
+
+
+def _virtual_modes(settings) -> str:
+    """The identified modes' file (written by the "ema" task), the virtual test's data source."""
+    return str(settings.out / "virtual_modes.h5")
+
+
+def _virtual_calibration_task(settings, names, step) -> CalibrationPart:
     step(next(names))
-    virtual_discovery = _discovery_part(settings, modes, out / "virtual_discovery.h5")
+    return _calibration_part(settings, _virtual_modes(settings), settings.out / "virtual_case.h5")
+
+
+def _virtual_discovery_task(settings, names, step) -> DiscoveryPart:
+    step(next(names))
+    path = settings.out / "virtual_discovery.h5"
+    return _discovery_part(settings, _virtual_modes(settings), path)
+
+
+_TASKS = {
+    "fe": _fe_task,
+    "shell": _shell_task,
+    "beam": _beam_task,
+    "seed_discovery": _seed_discovery_task,
+    "ema": _ema_task,
+    "virtual_calibration": _virtual_calibration_task,
+    "virtual_discovery": _virtual_discovery_task,
+}
+
+
+def _assemble(settings: DemoSettings, parts: dict) -> DemoResults:
+    shell, ema = parts["shell"], parts["ema"]
     return DemoResults(
-        settings, fe, seed, seed_optimum, shell_check, beam_optimum, seed_discovery,
-        virtual_test, uff, identified, virtual, virtual_discovery,
+        settings, parts["fe"], shell.seed, shell.optimum, shell.check, parts["beam"],
+        parts.get("seed_discovery"), ema.test, ema.uff, ema.identified,
+        parts["virtual_calibration"], parts.get("virtual_discovery"),
     )  # fmt: skip
 
 

@@ -13,10 +13,12 @@ from bayesupdate.pipelines.demo import (
     CalibrationPart,
     DemoResults,
     DiscoveryPart,
+    EmaPart,
     FePart,
     IdentifiedPart,
     OptimumPart,
     ShellCheck,
+    ShellPart,
 )
 from bayesupdate.pipelines.simulate import VirtualTest
 from bayesupdate.report.document import Alert, Document, Figure, Section, Table
@@ -443,24 +445,46 @@ def _discovery_figures(part: DiscoveryPart | None, folder: Path) -> list:
 
     if part is None:
         return []
-    # both discovery runs write into figures/ itself (the last run's plots are kept)
+    folder.mkdir(exist_ok=True)
     return save_plots(part.run.result, folder, part.run.model.structure)
 
 
-def demo_figures(results: DemoResults) -> dict:
-    """Write every figure into ``out/figures``; {part name: its figures}."""
-    figures = results.settings.out / "figures"
+def part_figures(task: str, record, out: Path) -> dict:
+    """The figures of one task of ``pipelines.demo.run_demo`` (its ``on_part(task, record)``:
+    drawn as each part arrives, while the other tasks run), written under ``out/figures``;
+    {part name: its figures} (the keys of ``demo_figures``)."""
+    figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
-    return {
-        "fe": _fe_figures(results.fe, figures),
-        "seed": _calibration_figures(results.seed, figures / "seed"),
-        "seed_discovery": _discovery_figures(results.seed_discovery, figures),
-        "identified": _identification_figures(
-            results.virtual_test, results.identified, figures / "ema"
-        ),
-        "virtual": _calibration_figures(results.virtual, figures / "virtual"),
-        "virtual_discovery": _discovery_figures(results.virtual_discovery, figures),
+    if task == "fe":
+        return {"fe": _fe_figures(record, figures)}
+    if task == "shell":
+        return {"seed": _calibration_figures(record.seed, figures / "seed")}
+    if task == "ema":
+        ema = figures / "ema"
+        return {"identified": _identification_figures(record.test, record.identified, ema)}
+    if task == "virtual_calibration":
+        return {"virtual": _calibration_figures(record, figures / "virtual")}
+    if task in ("seed_discovery", "virtual_discovery"):
+        return {task: _discovery_figures(record, figures / task)}
+    return {}  # the beam optimum: its front is drawn with the side by side
+
+
+def demo_figures(results: DemoResults) -> dict:
+    """Write every figure into ``out/figures`` (``part_figures`` of every part); {part name:
+    its figures}."""
+    r, out = results, results.settings.out
+    records = {
+        "fe": r.fe,
+        "shell": ShellPart(r.seed, r.seed_optimum, r.shell_check),
+        "ema": EmaPart(r.virtual_test, r.uff, r.identified),
+        "virtual_calibration": r.virtual,
+        "seed_discovery": r.seed_discovery,
+        "virtual_discovery": r.virtual_discovery,
     }
+    figures = {}
+    for task, record in records.items():
+        figures.update(part_figures(task, record, out))
+    return figures
 
 
 def _seed_sections(results: DemoResults, plots, out) -> list[Section]:
@@ -476,11 +500,14 @@ def _seed_sections(results: DemoResults, plots, out) -> list[Section]:
     return sections + _beam_sections(results.beam_optimum)
 
 
-def write_demo_report(results: DemoResults, comparison: dict | None = None) -> tuple[Path, Path]:
+def write_demo_report(
+    results: DemoResults, comparison: dict | None = None, figures: dict | None = None
+) -> tuple[Path, Path]:
     """Figures, then report.html and report.md in ``results.settings.out``; returns the two.
     ``comparison``: the two exhausts' records (``pipelines.exhaust_comparison``), shown after the
-    FE section when given."""
-    figures = demo_figures(results)
+    FE section when given.  ``figures``: {part name: its figures} already drawn (``part_figures``
+    as each part of the run arrived); None: drawn here (``demo_figures``)."""
+    figures = demo_figures(results) if figures is None else figures
     settings, out = results.settings, results.settings.out
     sections = [_fe_section(results.fe, figures["fe"], out)]
     if comparison is not None:

@@ -126,3 +126,12 @@ def test_the_exact_posterior_takes_its_masses_from_the_fit_only_to_round_off(pro
     # (1.5e-8 seen), where the log posterior is ~-1e4; within the posterior (|z| < 3) < 1e-9
     np.testing.assert_allclose(post(theta), model_masses(theta), rtol=0, atol=1e-7)
     assert not LogPosterior(problem, LikelihoodSpec(sigma=0.05)).use_fitted_mass()
+
+
+def test_the_monomials_are_the_term_by_term_powers_to_the_bit():
+    fit = fit_mass_polynomial(tube_mass, *BOX, seed=1)
+    rng = np.random.default_rng(3)
+    theta = BOX[0] + (BOX[1] - BOX[0]) * rng.random((32, 3))
+    u = 2.0 * (theta - BOX[0]) / (BOX[1] - BOX[0]) - 1.0
+    naive = np.array([[np.prod(row**e) for e in fit.exponents] for row in u])
+    assert np.array_equal(fit.design(theta), naive)

@@ -898,7 +898,7 @@ def sample_posterior(
     """
     settings.check_walkers(log_posterior.ndim)
     # the mass term's masses from their verified polynomial (in place; the target moves by
-    # < 3e-8 in log p, ``LogPosterior.use_fitted_mass``): a third of an exact batch otherwise
+    # < 3e-8 in log p, ``LogPosterior.use_fitted_mass``): an eighth of an exact batch otherwise
     fit_mass = getattr(log_posterior, "use_fitted_mass", None)
     if fit_mass is not None:
         fit_mass(seed=0)

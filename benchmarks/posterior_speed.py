@@ -31,6 +31,10 @@ the stop is what R-hat needed, not an overshoot of the checks) and the least bul
 stop over the ESS target.  ``--code DIR [DIR ...]``: one source tree per variant (PYTHONPATH),
 runs interleaved so that every variant sees the same machine load; e.g. before and after:
   .venv/bin/python benchmarks/posterior_speed.py --user 3 --code /path/to/main .
+then the paired CPU ratios against the first tree, of the whole run and per kept step.
+``--user-seeds S [S ...]``: each round runs these sampler seeds (``--seed``) too: a change that
+reorders the random draws changes where the R-hat stop lands, so one seed compares two chain
+lengths as much as two codes.
 
 Timed runs (``--seeds`` / ``--seed-list``) print each set-up phase (model + reduced basis,
 optimum, screening basis; wall and CPU), then one JSON row per run: cold-start wall and CPU,
@@ -279,9 +283,10 @@ def table(rows: list[dict]) -> None:
             print(f"\nmedian {key}: de / mixture = {med['de'] / med['mixture']:.2f}")
 
 
-def user_run(code: str) -> dict:
+def user_run(code: str, seed: int | None = None) -> dict:
     """One ``bayesupdate sample --model exhaust --data paper:ema --json`` in a fresh process
-    on the source tree ``code``: wall and CPU [s] of the whole process, and its JSON's numbers."""
+    on the source tree ``code`` (``--seed seed`` added when given): wall and CPU [s] of the
+    whole process, and its JSON's numbers."""
     import json
     import resource
     import subprocess
@@ -290,6 +295,8 @@ def user_run(code: str) -> dict:
     env = {**os.environ, "PYTHONPATH": os.path.abspath(code)}
     command = [sys.executable, "-m", "bayesupdate", "sample", "--model", "exhaust", "--data",
                "paper:ema", "--json"]  # fmt: skip
+    if seed is not None:
+        command += ["--seed", str(seed)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     # run in the tree itself: ``python -m`` puts the working folder first on sys.path
@@ -303,7 +310,7 @@ def user_run(code: str) -> dict:
     least_ess = min(p["ess_bulk"] for p in out["parameters"].values())
     stop = out.get("stop") or {}
     return dict(
-        code=code, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
+        code=code, seed=seed, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
         walkers=out["walkers"], evaluations=out["evaluations"], converged=out["converged"],
         min_ess=round(least_ess), ess_over_target=round(least_ess / 400.0, 2),
         held_before=stop.get("held_before"), checks=stop.get("checks"),
@@ -315,25 +322,39 @@ def user_run(code: str) -> dict:
     )  # fmt: skip
 
 
-def user_runs(n: int, codes: list[str]) -> None:
-    """``n`` rounds of ``user_run`` over the variants ``codes`` (interleaved), one JSON row per
-    run, then the medians per variant."""
+def user_runs(n: int, codes: list[str], seeds: list | None = None) -> None:
+    """``n`` rounds of ``user_run`` over the variants ``codes`` (interleaved; each round runs
+    every seed of ``seeds``, default the study's own), one JSON row per run, then the medians
+    per variant and, against the first variant, the paired CPU ratios (same round and seed):
+    of the whole run, and of its kept steps' share (CPU / kept steps; the kept chain's length
+    follows its random stream, which a change of the draws' order changes)."""
     import json
 
     rows = []
     for _ in range(n):
-        for code in codes:
-            rows.append(user_run(code))
-            print(json.dumps(rows[-1]), flush=True)
+        for seed in seeds or [None]:
+            for code in codes:
+                rows.append(user_run(code, seed))
+                print(json.dumps(rows[-1]), flush=True)
     for code in codes:
         mine = [r for r in rows if r["code"] == code]
-        keys = ("wall_s", "cpu_s", "steps", "evaluations", "min_ess", "ess_over_target")
+        keys = ("wall_s", "cpu_s", "steps", "evaluations", "min_ess", "ess_over_target", "load")
         med = {k: float(np.median([r[k] for r in mine])) for k in keys}
         print(f"[{code}] {len(mine)} runs: median wall {med['wall_s']:.1f} s, CPU "
               f"{med['cpu_s']:.1f} s, steps {med['steps']:.0f}, exact evaluations "
               f"{med['evaluations']:.0f}, least ESS {med['min_ess']:.0f} "
-              f"({med['ess_over_target']:.1f} x the target 400); held before the stop: "
+              f"({med['ess_over_target']:.1f} x the target 400), load average "
+              f"{med['load']:.1f}; held before the stop: "
               f"{[r['held_before'] for r in mine]}")  # fmt: skip
+    first = [r for r in rows if r["code"] == codes[0]]
+    for code in codes[1:]:
+        mine = [r for r in rows if r["code"] == code]
+        cpu = [b["cpu_s"] / a["cpu_s"] for a, b in zip(first, mine, strict=True)]
+        step = [(b["cpu_s"] / b["steps"]) / (a["cpu_s"] / a["steps"])
+                for a, b in zip(first, mine, strict=True)]  # fmt: skip
+        print(f"[{code}] / [{codes[0]}] paired CPU ratios {np.round(cpu, 3).tolist()} (median "
+              f"{np.median(cpu):.3f}); CPU per kept step {np.round(step, 3).tolist()} (median "
+              f"{np.median(step):.3f})")  # fmt: skip
 
 
 def main() -> None:
@@ -361,6 +382,9 @@ def main() -> None:
     )
     ap.add_argument("--user", type=int, default=0, help="N cold runs of the user's command")
     ap.add_argument("--code", nargs="+", default=["."], help="with --user: source trees")
+    ap.add_argument(
+        "--user-seeds", type=int, nargs="+", help="with --user: sampler seeds (--seed) per round"
+    )
     ap.add_argument("--save", help="save means/sd/wall to this .npz")
     ap.add_argument("--compare", nargs=2, metavar=("ROM_NPZ", "FULL_NPZ"), help="compare runs")
     args = ap.parse_args()
@@ -368,7 +392,7 @@ def main() -> None:
         compare(*args.compare)
         return
     if args.user:
-        user_runs(args.user, args.code)
+        user_runs(args.user, args.code, args.user_seeds)
         return
     warnings.simplefilter("default")
     if args.seeds or args.seed_list:

@@ -115,3 +115,46 @@ def test_interrupted_screened_run_resumes_to_the_identical_chain():
         resume=broken.state,
     )
     assert np.array_equal(resumed.chain, whole.chain)
+
+
+class _Model:
+    """What ``_two_stage`` reads of an emcee sampler: its random state and exact log-density."""
+
+    def __init__(self, exact, seed):
+        self.random = np.random.RandomState(seed)
+        self.compute_log_prob_fn = lambda x: (exact(x), None)
+
+
+def test_proposals_the_move_calls_impossible_are_not_screened():
+    """A proposal with log factor -inf (the independence move's draw outside the unit box) fails
+    stage 1 whatever the surrogate says: it is not screened, and the decisions and the random
+    stream are those of screening it."""
+    from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, _two_stage
+
+    rng = np.random.default_rng(4)
+    current, proposal = rng.normal(size=(12, 2)), rng.normal(size=(12, 2))
+    factors = np.where(np.arange(12) % 3 == 0, -np.inf, rng.normal(scale=0.3, size=12))
+    exact = Gaussian(MEAN, COV)
+    screened = []
+
+    def counting(x):
+        screened.append(np.atleast_2d(x).shape[0])
+        return Gaussian(MEAN + 0.2, COV)(x)
+
+    screen = ScreenedLogDensity(counting, exact)
+    screen.remember(current, screen(current))  # the walkers' values, as the move keeps them
+    screened.clear()
+    model = _Model(exact, seed=8)
+    ok, p = _two_stage(model, screen, current, proposal, factors, exact(current))
+    assert screened == [8]  # the 4 impossible proposals of 12 were not screened
+    # the same decisions as screening all 12 (stage 1 compares with -inf there)
+    q_all = Gaussian(MEAN + 0.2, COV)(proposal)
+    q_now = Gaussian(MEAN + 0.2, COV)(current)
+    reference = np.random.RandomState(8)
+    stage1 = factors + q_all - q_now > np.log(reference.rand(12))
+    p_all = np.where(stage1, exact(proposal), -np.inf)
+    with np.errstate(invalid="ignore"):
+        stage2 = p_all - exact(current) - (q_all - q_now) > np.log(reference.rand(12))
+    assert np.array_equal(ok, stage1 & stage2) and np.array_equal(p, p_all)
+    assert not np.any(ok[factors == -np.inf]) and np.any(ok)
+    assert np.array_equal(model.random.rand(3), reference.rand(3))  # the same stream after

@@ -102,3 +102,36 @@ def test_the_screened_exhaust_posterior_keeps_its_masses_and_values(problem):
 def test_without_a_mass_term_the_posterior_is_returned_as_it_is(problem):
     post = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
     assert post.with_fitted_mass() is post
+
+
+def test_the_exact_posterior_takes_its_masses_from_the_fit_only_to_round_off(problem):
+    """``LogPosterior.use_fitted_mass`` (what the sampler does with its exact posterior): in
+    place, only when the fit reproduces the model to EXACT_MASS_REL_TOL, and the log posterior
+    then moves by far less than the reduced basis's own error does."""
+    from bayesupdate.inference.likelihood import EXACT_MASS_REL_TOL
+
+    spec = LikelihoodSpec(sigma=0.05, mass_sd_rel=0.01)
+    post, model_masses = LogPosterior(problem, spec), LogPosterior(problem, spec)
+    assert post.use_fitted_mass() and post._mass_fit is not None
+    assert post._mass_fit.max_rel_error <= EXACT_MASS_REL_TOL
+    rng = np.random.default_rng(11)
+    theta = problem.lower + rng.random((200, 5)) * (problem.upper - problem.lower)
+    names = problem.names + post.fixed_names
+    full = np.hstack([theta, np.tile(post.fixed_values, (200, 1))])
+    # fresh points, not the fit's: the exhaust's masses to a few 1e-12 (2.3e-12 at 2000)
+    np.testing.assert_allclose(
+        post._masses(full, names), model_masses._masses(full, names), rtol=1e-11
+    )
+    # masses up to ~50 sds off the weighed one at the box's corners: |z| e / 1 % < 1e-7 there
+    # (1.5e-8 seen), where the log posterior is ~-1e4; within the posterior (|z| < 3) < 1e-9
+    np.testing.assert_allclose(post(theta), model_masses(theta), rtol=0, atol=1e-7)
+    assert not LogPosterior(problem, LikelihoodSpec(sigma=0.05)).use_fitted_mass()
+
+
+def test_the_monomials_are_the_term_by_term_powers_to_the_bit():
+    fit = fit_mass_polynomial(tube_mass, *BOX, seed=1)
+    rng = np.random.default_rng(3)
+    theta = BOX[0] + (BOX[1] - BOX[0]) * rng.random((32, 3))
+    u = 2.0 * (theta - BOX[0]) / (BOX[1] - BOX[0]) - 1.0
+    naive = np.array([[np.prod(row**e) for e in fit.exponents] for row in u])
+    assert np.array_equal(fit.design(theta), naive)

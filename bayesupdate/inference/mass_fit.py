@@ -15,9 +15,12 @@ drawn uniformly in the box, and used only when, at ``CHECK_POINTS`` fresh points
 model to ``REL_TOL`` relative: a polynomial of higher degree, or a mass that is not a
 polynomial, fails the check and the caller keeps the model's own per-point masses.
 
-Only the screen uses it (``LogPosterior.with_fitted_mass``): delayed acceptance leaves the
-chain's target the exact posterior whatever the surrogate is (Christen & Fox 2005), so even a
-fit that were off somewhere between the check points would cost acceptance, never accuracy.
+The screen uses it (``LogPosterior.with_fitted_mass``): delayed acceptance leaves the chain's
+target the exact posterior whatever the surrogate is (Christen & Fox 2005), so even a fit that
+were off somewhere between the check points would cost acceptance, never accuracy.  The exact
+posterior of a sampling run uses it only when it reproduces the model to round-off
+(``LogPosterior.use_fitted_mass``, ``likelihood.EXACT_MASS_REL_TOL``: 1e-10; the exhaust's
+1.3e-12), far below the reduced basis's own error in the target.
 """
 
 import itertools
@@ -69,7 +72,10 @@ class MassPolynomial:
     def design(self, theta: np.ndarray) -> np.ndarray:
         """(n, n_terms) monomials at theta (n, d)."""
         u = 2.0 * (np.atleast_2d(theta) - self.low) / (self.high - self.low) - 1.0
-        return np.prod(u[:, None, :] ** self.exponents[None, :, :], axis=2)
+        # each u_j^k once, then gathered: the same powers as u ** exponents term by term (to the
+        # bit), five times fewer of them (32 points, 126 monomials: 0.11 against 0.57 ms)
+        powers = u[:, :, None] ** np.arange(int(self.exponents.max(initial=0)) + 1)
+        return np.prod(powers[:, np.arange(u.shape[1]), self.exponents], axis=2)
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         """(n,) total masses [kg] at theta (n, d)."""

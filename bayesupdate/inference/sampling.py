@@ -8,7 +8,9 @@ under-estimate the exhaust posterior's sds by 4-10 % (docs/validation/posterior.
 mixture cannot be fitted (too few distinct points) or covers the posterior poorly (the coverage
 check before the kept run, ``moves.coverage``) and its refits do too (below
 ``moves.staged.LOW_COVERAGE`` or with walkers stuck) the run uses the DE moves and says so
-(``diagnostics["moves"]``).
+(``diagnostics["moves"]``).  A screened run's adaptation stages sample the delayed-acceptance
+surrogate alone (``_adaptation_stage``), and a posterior with a mass term takes its masses from
+their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not
@@ -800,13 +802,34 @@ def _adaptation_stage(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """An adaptation stage: n steps with ``step_moves`` from ``run.state``; nothing is kept but
     the walkers' positions (n, walkers, d) and log-densities (n, walkers) in the sampler's
-    coordinates, None when stopped.  Timed in ``run.clock``."""
+    coordinates, None when stopped.  Timed in ``run.clock``.
+
+    With a delayed-acceptance surrogate (``screened``) the stage samples the surrogate q itself,
+    with no exact evaluation, and its log-densities are q's: a stage only chooses the frozen
+    proposal and the kept run's starting points, and any fixed proposal and any start leave the
+    kept chain's target the exact p (``moves.staged``: the stages are a burn-in; the coverage
+    check's draws are q's already, ``_checked``).  On the exhaust (seed Table 2, the weighed
+    mass) the stages' exact solves were about half of their cost (``moves.staged``), the stages
+    half of the run's steps.  ``run.state`` holds the exact log p of its walkers again after
+    the stage."""
     t0 = time.perf_counter()
-    stage = _ensemble(walkers, d, guarded, step_moves, screened)
+    if screened is None:
+        stage = _ensemble(walkers, d, guarded, step_moves, None)
+    else:
+        stage = emcee.EnsembleSampler(walkers, d, screened, moves=step_moves, vectorize=True)
+        run.state = _rescored(run.state, screened)
     with progress.phase("sampling: adaptation stage", n, "steps") as shown:
         coords, lps, interrupted = _run_block(stage, run, n, request, _Tee(_NoBar(), shown))
+    if screened is not None:
+        run.state = _rescored(run.state, guarded)
     run.clock["adapt_s"] += time.perf_counter() - t0
     return None if interrupted else (np.array(coords), np.array(lps))
+
+
+def _rescored(state: emcee.State, density) -> emcee.State:
+    """``state`` with the log-densities of ``density`` at its walkers (its random state kept)."""
+    coords = state.coords.copy()
+    return emcee.State(coords, log_prob=density(coords), random_state=state.random_state)
 
 
 def _checked(density, request: StopRequest, x: np.ndarray) -> np.ndarray | None:
@@ -870,8 +893,15 @@ def sample_posterior(
     ``diagnostics["moves"]``.
     stop_request : the run's ``compute.stop.StopRequest`` (a signal handler sets it; checked between
     steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
+    A ``LogPosterior`` with a mass term takes its masses from their verified polynomial from
+    here on (``LogPosterior.use_fitted_mass``, set on the object given).
     """
     settings.check_walkers(log_posterior.ndim)
+    # the mass term's masses from their verified polynomial (in place; the target moves by
+    # < 3e-8 in log p, ``LogPosterior.use_fitted_mass``): an eighth of an exact batch otherwise
+    fit_mass = getattr(log_posterior, "use_fitted_mass", None)
+    if fit_mass is not None:
+        fit_mass(seed=0)
     # one stop record: a signal (the handler), a Ctrl-C in the model or a density's error
     request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None

@@ -861,6 +861,15 @@ def _first_run(log_posterior, calibration, initial, settings, space, resume, mov
     return _fresh_run(log_posterior, calibration, initial, settings, space)
 
 
+def _fit_masses(log_posterior) -> None:
+    """The mass term's masses from their verified polynomial, in place (the target moves by
+    < 3e-8 in log p, ``LogPosterior.use_fitted_mass``): an eighth of an exact batch otherwise;
+    a density without a mass term (a user's callable, a test's screen) is left as it is."""
+    fit_mass = getattr(log_posterior, "use_fitted_mass", None)
+    if fit_mass is not None:
+        fit_mass(seed=0)
+
+
 def sample_posterior(
     log_posterior: LogPosterior,
     calibration: CalibrationResult | None = None,
@@ -893,15 +902,10 @@ def sample_posterior(
     ``diagnostics["moves"]``.
     stop_request : the run's ``compute.stop.StopRequest`` (a signal handler sets it; checked between
     steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
-    A ``LogPosterior`` with a mass term takes its masses from their verified polynomial from
-    here on (``LogPosterior.use_fitted_mass``, set on the object given).
+    A mass term's masses come from their verified polynomial from here on (``_fit_masses``).
     """
     settings.check_walkers(log_posterior.ndim)
-    # the mass term's masses from their verified polynomial (in place; the target moves by
-    # < 3e-8 in log p, ``LogPosterior.use_fitted_mass``): an eighth of an exact batch otherwise
-    fit_mass = getattr(log_posterior, "use_fitted_mass", None)
-    if fit_mass is not None:
-        fit_mass(seed=0)
+    _fit_masses(log_posterior)
     # one stop record: a signal (the handler), a Ctrl-C in the model or a density's error
     request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
@@ -913,11 +917,9 @@ def sample_posterior(
     d = log_posterior.ndim
     screened = _screened(screen, d, guarded, guard)
     _start(run, guarded, request)
-    stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened)
+    stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, request=request)
     checked = partial(_checked, guarded if screened is None else screened, request)
-    kept = _kept_moves(
-        moves, settings, run, log_posterior, partial(stage, request=request), checked
-    )
+    kept = _kept_moves(moves, settings, run, log_posterior, stage, checked)
     if kept is None:  # stopped while adapting: an empty chain; a resume starts again
         _raise_failure(request)
         outcome = (True, False, np.full(d, np.inf))

@@ -33,8 +33,8 @@ BAND_DRAWS = 100
 class AircraftSettings:
     """out : output folder.  quick : fewer starts, a short chain and no discovery (the test's
     and a first look's variant); otherwise ``calibrate`` and ``sample`` run with the study
-    file's settings (``pipelines.aircraft.study_text``: 4 starts, 8 walkers, full solves) and
-    the sampler's own stop rule (R-hat, ESS).  seed : every random draw derives from it.
+    file's settings (``pipelines.aircraft.study_text``: 4 starts, 8 walkers, the reduced
+    basis) and the sampler's own stop rule (R-hat, ESS).  seed : every random draw derives from it.
     discover : run ``discover`` (not with ``quick``)."""
 
     out: Path

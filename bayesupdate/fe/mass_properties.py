@@ -123,6 +123,9 @@ class RigidMassTerms:
     D: np.ndarray
     pairs: tuple[tuple[int, int], ...] = ()
     C: np.ndarray | None = None
+    #: (d,) the model's defaults, where they are not theta0 (``rigid_mass_terms``): the values
+    #: of names a call leaves out
+    defaults: np.ndarray | None = None
 
     def __call__(self, params: Mapping[str, float] | None = None) -> MassProperties:
         return from_rigid_mass(self.rigid_mass(params))
@@ -135,7 +138,8 @@ class RigidMassTerms:
 def _affine(terms: RigidMassTerms, params: Mapping[str, float] | None) -> np.ndarray:
     """M_r at ``params`` (missing names: theta0) from the affine and pair terms."""
     values = params or {}
-    theta = np.array([float(values.get(n, t)) for n, t in zip(terms.names, terms.theta0,
+    missing = terms.theta0 if terms.defaults is None else terms.defaults
+    theta = np.array([float(values.get(n, t)) for n, t in zip(terms.names, missing,
                       strict=True)])  # fmt: skip
     d = theta - terms.theta0
     Mr = terms.Mr0 + np.tensordot(d, terms.D, axes=1)
@@ -184,32 +188,50 @@ def rigid_mass_terms(model) -> RigidMassTerms | None:
     a density and a section field of the same beams), the pair terms C_ij are each one mixed
     difference (``_pair_terms``) and the same point checks the bilinear sum; a product of three
     parameters still fails it (None).  A model the affine check accepts keeps no pairs, so its
-    terms are the affine ones exactly."""
+    terms are the affine ones exactly.
+
+    A model whose matrices at the defaults are not those of its parameters written there (a
+    Nastran deck's absolute binding of one value to cards that hold different ones, its
+    default their mean: the deck's own matrices at the defaults, one section everywhere else)
+    fails the checks about the defaults; the terms are then built about a point off them
+    (every parameter moved by a tenth of its step) and hold everywhere but at the defaults
+    themselves, where they give the written parameters' limit."""
     theta0 = model.default_parameters()
-    names = tuple(theta0)
     bounds = model.default_bounds()
+    steps = {n: 0.25 * (abs(t) if t != 0 else bounds[n][1] - bounds[n][0])
+             for n, t in theta0.items()}  # fmt: skip
     try:
-        Mr0 = _rigid(model, theta0)
-        steps, D = [], []
-        for name in names:
-            t0 = theta0[name]
-            h = 0.25 * (abs(t0) if t0 != 0 else bounds[name][1] - bounds[name][0])
-            one = _rigid(model, {**theta0, name: t0 + h}) - Mr0
-            two = _rigid(model, {**theta0, name: t0 + 2.0 * h}) - Mr0
-            if not _agrees(2.0 * one, two, Mr0):
-                return None
-            steps.append(h)
-            D.append(one / h)
-        terms = RigidMassTerms(names, np.array([theta0[n] for n in names]), Mr0, np.array(D))
-        if names:
-            moved = {n: theta0[n] + (0.6 + 0.4 * k / len(names)) * h
-                     for k, (n, h) in enumerate(zip(names, steps, strict=True))}  # fmt: skip
-            exact = _rigid(model, moved)
-            if _agrees(_affine(terms, moved), exact, Mr0):
-                return terms
-            terms = _pair_terms(model, terms, steps)
-            if not terms.pairs or not _agrees(_affine(terms, moved), exact, Mr0):
-                return None
+        terms = _terms_about(model, theta0, steps)
+        if terms is None and theta0:
+            off = {n: t + 0.1 * steps[n] for n, t in theta0.items()}
+            terms = _terms_about(model, off, steps)
+            if terms is not None:
+                terms = replace(terms, defaults=np.array(list(theta0.values())))
     except BayesUpdateError:
+        return None
+    return terms
+
+
+def _terms_about(model, theta0: dict, steps: dict) -> RigidMassTerms | None:
+    """``rigid_mass_terms`` about ``theta0`` with the steps ``steps`` ({name: h}), or None."""
+    names = tuple(theta0)
+    Mr0 = _rigid(model, theta0)
+    D = []
+    for name in names:
+        t0, h = theta0[name], steps[name]
+        one = _rigid(model, {**theta0, name: t0 + h}) - Mr0
+        two = _rigid(model, {**theta0, name: t0 + 2.0 * h}) - Mr0
+        if not _agrees(2.0 * one, two, Mr0):
+            return None
+        D.append(one / h)
+    terms = RigidMassTerms(names, np.array([theta0[n] for n in names]), Mr0, np.array(D))
+    if not names:
+        return terms
+    moved = {n: theta0[n] + (0.6 + 0.4 * k / len(names)) * steps[n] for k, n in enumerate(names)}
+    exact = _rigid(model, moved)
+    if _agrees(_affine(terms, moved), exact, Mr0):
+        return terms
+    terms = _pair_terms(model, terms, [steps[n] for n in names])
+    if not terms.pairs or not _agrees(_affine(terms, moved), exact, Mr0):
         return None
     return terms

@@ -6,16 +6,16 @@ The study is the one ``demo --case aircraft`` calibrates on (``aircraft.study_te
 modes v3.3 pairs below 20 Hz, the measured weight and inertias), made here by ``identify`` on
 the 10 packaged FRF files and ``correlate`` of v3.3; ``discover`` gets the demo's discovery
 study (``DISCOVER_PARAMETERS``, every paired mode).  The study files say ``[sampler] reduced
-= false`` (``aircraft.study_text`` says why), so ``calibrate`` and ``sample`` solve the deck in
-full at every evaluation.  ``--basis`` times the reduced basis those commands would build
-instead: ``calibrate`` on a copy of the study with ``reduced = true``, twice, into a fresh
-cache folder (``BAYESUPDATE_CACHE_DIR``): the first run builds and certifies the basis, the
-second loads it from the cache.  Printed per command: wall time, CPU time of the child
-(user + system; on a shared machine the wall time also counts waits for a core), the progress
-phases it reports, and its headline (objective, convergence or verdict).
+= true`` (``aircraft.REDUCED`` says why), and the commands share one fresh cache folder
+(``BAYESUPDATE_CACHE_DIR``): ``calibrate`` runs twice, the first run builds and certifies the
+basis, the second loads it, then ``sample`` loads it.  ``--full`` times ``calibrate`` and
+``sample`` on full solves too (a copy of the study with ``reduced = false``).  Printed per
+command: wall time, CPU time of the child (user + system; on a shared machine the wall time
+also counts waits for a core), the progress phases it reports, and its headline (objective,
+convergence or verdict).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/aircraft_commands.py [--skip-discover]
-        [--basis | --basis-only]
+        [--full] [--basis-only]
 """
 
 import argparse
@@ -84,10 +84,9 @@ def _line_with(text: str, word: str) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--skip-discover", action="store_true")
-    parser.add_argument("--basis", action="store_true", help="time the reduced basis too")
+    parser.add_argument("--full", action="store_true", help="time full solves too")
     parser.add_argument("--basis-only", action="store_true",
-                        help="time the reduced basis alone (no full-solve calibrate, sample, "
-                        "discover)")  # fmt: skip
+                        help="time calibrate's basis build and load alone")  # fmt: skip
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -98,21 +97,26 @@ def main() -> None:
         def first_line(out: str) -> str:
             return out.strip().splitlines()[0] if out.strip() else ""
 
-        if not args.basis_only:
+        def walkers_line(out: str) -> str:
+            return _line_with(out, "walkers")
+
+        for run in ("first run (basis built)", "second run (basis cached)"):
             timed = command(["calibrate", update, "--out", folder / "cal.h5", "--force"], env,
                             folder)  # fmt: skip
-            report("calibrate, defaults (full solves)", timed, first_line)
-        if args.basis or args.basis_only:
-            reduced = folder / "update_reduced.toml"
-            reduced.write_text(update.read_text().replace("reduced = false", "reduced = true"))
-            for run in ("first run (basis built)", "second run (basis cached)"):
-                timed = command(["calibrate", reduced, "--out", folder / "cal_reduced.h5",
-                                 "--force"], env, folder)  # fmt: skip
-                report(f"calibrate on the reduced basis, {run}", timed, first_line)
+            report(f"calibrate, defaults, {run}", timed, first_line)
         if args.basis_only:
             return
         timed = command(["sample", update, "--out", folder / "post.h5", "--force"], env, folder)
-        report("sample, defaults", timed, lambda out: _line_with(out, "walkers"))
+        report("sample, defaults (basis cached)", timed, walkers_line)
+        if args.full:
+            full = folder / "update_full.toml"
+            full.write_text(update.read_text().replace("reduced = true", "reduced = false"))
+            timed = command(["calibrate", full, "--out", folder / "cal_full.h5", "--force"], env,
+                            folder)  # fmt: skip
+            report("calibrate on full solves", timed, first_line)
+            timed = command(["sample", full, "--out", folder / "post_full.h5", "--force"], env,
+                            folder)  # fmt: skip
+            report("sample on full solves", timed, walkers_line)
         if not args.skip_discover:
             timed = command(["discover", discover], env, folder)
             report("discover, defaults", timed, first_line)

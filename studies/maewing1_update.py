@@ -26,6 +26,10 @@ mean with its 5-95 % band, held out or not), RMS frequency error and mean MAC pe
 calibrated and held-out modes, the mass properties against the authors' measured ranges, what
 discover names, and the time of each command.
 
+``calibrate`` builds the reduced basis of the study files (``pipelines.aircraft.REDUCED``)
+into the on-disk cache (``BAYESUPDATE_CACHE_DIR``, default the user cache folder) and ``sample``
+loads it; point ``BAYESUPDATE_CACHE_DIR`` at an empty folder to time a first run.
+
 Run: python studies/maewing1_update.py [--out DIR] [--seed 103] [--data DIR] [--quick]
     [--skip-discover]
 """

@@ -89,8 +89,9 @@ def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_p
     assert study.data.mass == "13.76 lb" and study.data.inertia["iyy"] == "1643.0 lb in^2"
     assert study.test.geometry.endswith("gvt_geometry.unv")
     # the case's own settings (``aircraft.STARTS``, ``WALKERS``): the sampler's least walkers
-    # (2 per parameter), full solves, no polish
-    assert study.sampler.walkers == 2 * len(study.parameters) and not study.sampler.reduced
+    # (2 per parameter), the reduced basis (its posterior is the full one: aircraft.REDUCED),
+    # no polish
+    assert study.sampler.walkers == 2 * len(study.parameters) and study.sampler.reduced
     assert study.optimizer.starts == 4 and not study.optimizer.polish
     assert not study.sampler.screen
 

@@ -33,8 +33,8 @@ BAND_DRAWS = 100
 class AircraftSettings:
     """out : output folder.  quick : fewer starts, a short chain and no discovery (the test's
     and a first look's variant); otherwise ``calibrate`` and ``sample`` run with the study
-    file's settings (``pipelines.aircraft.study_text``: 4 starts, 8 walkers, full solves) and
-    the sampler's own stop rule (R-hat, ESS).  seed : every random draw derives from it.
+    file's settings (``pipelines.aircraft.study_text``: 4 starts, 8 walkers, the reduced
+    basis) and the sampler's own stop rule (R-hat, ESS).  seed : every random draw derives from it.
     discover : run ``discover`` (not with ``quick``)."""
 
     out: Path
@@ -43,14 +43,16 @@ class AircraftSettings:
     discover: bool = True
 
     def calibrate_flags(self) -> list:
-        """Quick: 2 starts."""
-        return ["--starts", 2] if self.quick else []
+        """Quick: 2 starts on full solves (``--full``: a few hundred evaluations cost less than
+        building the reduced basis, about 90 s of CPU, that a first full run builds and caches
+        for the chain)."""
+        return ["--starts", 2, "--full"] if self.quick else []
 
     def sample_flags(self) -> list:
         """Quick: 2 starts and a 30-step chain of differential evolution alone (the mixture's
         three adaptation stages of 250 steps are 25 times a 30-step chain; a quick chain is not
-        expected to converge)."""
-        return ["--starts", 2, "--steps", 30, "--moves", "de"] if self.quick else []
+        expected to converge), on full solves as ``calibrate_flags``."""
+        return ["--starts", 2, "--steps", 30, "--moves", "de", "--full"] if self.quick else []
 
 
 class Chain:

@@ -21,7 +21,8 @@ e.g. lbf s^2/in, in and lbf s^2 in for an inch-lbf-s deck).
 """
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from itertools import combinations
 
 import numpy as np
 
@@ -107,27 +108,45 @@ AFFINE_TOL = 1e-9
 
 @dataclass(frozen=True)
 class RigidMassTerms:
-    """M_r(theta) = M_r0 + sum_i (theta_i - theta0_i) D_i: the rigid-body mass matrix of a
-    model whose mass matrix is affine in each parameter and additive over them (densities,
-    point masses, non-structural mass, beam section fields on their own elements), so that mass
-    properties cost a 6 x 6 sum instead of an assembly.  names (d,); theta0 (d,); Mr0 (6, 6);
-    D (d, 6, 6)."""
+    """M_r(theta) = M_r0 + sum_i d_i D_i + sum_(i,j) in pairs d_i d_j C_ij, d = theta - theta0:
+    the rigid-body mass matrix of a model whose mass matrix is affine in each parameter, so
+    that mass properties cost a 6 x 6 sum instead of an assembly.  Additive parameters
+    (densities, point masses, non-structural mass, beam section fields on their own elements)
+    need no pair; a product of two (a density times a section field of the same beams, as in a
+    lumped beam's twist inertia rho (I1 + I2) L / 2) is one C_ij.  names (d,); theta0 (d,);
+    Mr0 (6, 6); D (d, 6, 6); pairs ((i, j), ...) with i < j and C (n_pairs, 6, 6), empty for
+    an additive model."""
 
     names: tuple[str, ...]
     theta0: np.ndarray
     Mr0: np.ndarray
     D: np.ndarray
+    pairs: tuple[tuple[int, int], ...] = ()
+    C: np.ndarray | None = None
+    #: (d,) the model's defaults, where they are not theta0 (``rigid_mass_terms``): the values
+    #: of names a call leaves out
+    defaults: np.ndarray | None = None
 
     def __call__(self, params: Mapping[str, float] | None = None) -> MassProperties:
-        return from_rigid_mass(_affine(self, params))
+        return from_rigid_mass(self.rigid_mass(params))
+
+    def rigid_mass(self, params: Mapping[str, float] | None = None) -> np.ndarray:
+        """(6, 6) M_r about the origin at ``params`` (missing names: theta0)."""
+        return _affine(self, params)
 
 
 def _affine(terms: RigidMassTerms, params: Mapping[str, float] | None) -> np.ndarray:
-    """M_r at ``params`` (missing names: theta0) from the affine terms."""
+    """M_r at ``params`` (missing names: theta0) from the affine and pair terms."""
     values = params or {}
-    theta = np.array([float(values.get(n, t)) for n, t in zip(terms.names, terms.theta0,
+    missing = terms.theta0 if terms.defaults is None else terms.defaults
+    theta = np.array([float(values.get(n, t)) for n, t in zip(terms.names, missing,
                       strict=True)])  # fmt: skip
-    return terms.Mr0 + np.tensordot(theta - terms.theta0, terms.D, axes=1)
+    d = theta - terms.theta0
+    Mr = terms.Mr0 + np.tensordot(d, terms.D, axes=1)
+    if terms.pairs:
+        i, j = np.array(terms.pairs).T
+        Mr = Mr + np.tensordot(d[i] * d[j], terms.C, axes=1)
+    return Mr
 
 
 def _rigid(model, values: Mapping[str, float]) -> np.ndarray:
@@ -142,36 +161,77 @@ def _agrees(predicted: np.ndarray, exact: np.ndarray, Mr0: np.ndarray) -> bool:
     return bool(np.all(np.abs(predicted - exact) <= AFFINE_TOL * scale))
 
 
+def _pair_terms(model, terms: RigidMassTerms, steps: list[float]) -> RigidMassTerms:
+    """``terms`` with the pairs whose mixed difference
+    M_r(theta0 + h_i e_i + h_j e_j) - M_r0 - h_i D_i - h_j D_j = h_i h_j C_ij (exact for a
+    bilinear dependence) is not round-off (d (d - 1) / 2 assemblies)."""
+    theta0 = dict(zip(terms.names, terms.theta0, strict=True))
+    pairs, C = [], []
+    for i, j in combinations(range(len(terms.names)), 2):
+        (a, ha), (b, hb) = (terms.names[i], steps[i]), (terms.names[j], steps[j])
+        corner = _rigid(model, {**theta0, a: theta0[a] + ha, b: theta0[b] + hb})
+        mixed = corner - terms.Mr0 - ha * terms.D[i] - hb * terms.D[j]
+        if not _agrees(mixed, np.zeros((6, 6)), terms.Mr0):
+            pairs.append((i, j))
+            C.append(mixed / (ha * hb))
+    return replace(terms, pairs=tuple(pairs), C=np.array(C) if C else None)
+
+
 def rigid_mass_terms(model) -> RigidMassTerms | None:
     """``RigidMassTerms`` of an FE model about its default parameters, or None where its mass
-    matrix is not affine in some parameter or not additive over them (or a step leaves the
+    matrix is not affine in some parameter, or not bilinear over them (or a step leaves the
     physical range).
 
     Each D_i is a forward difference with a 25 % step (exact for an affine dependence), checked
     by a second step of twice the size and, for all parameters moved at once by 15-25 %, by the
-    exact M_r there (2 d + 2 assemblies): a product of two parameters (a density and a section
-    field of the same beams) fails it."""
+    exact M_r there (2 d + 2 assemblies).  Where that check fails (a product of two parameters:
+    a density and a section field of the same beams), the pair terms C_ij are each one mixed
+    difference (``_pair_terms``) and the same point checks the bilinear sum; a product of three
+    parameters still fails it (None).  A model the affine check accepts keeps no pairs, so its
+    terms are the affine ones exactly.
+
+    A model whose matrices at the defaults are not those of its parameters written there (a
+    Nastran deck's absolute binding of one value to cards that hold different ones, its
+    default their mean: the deck's own matrices at the defaults, one section everywhere else)
+    fails the checks about the defaults; the terms are then built about a point off them
+    (every parameter moved by a tenth of its step) and hold everywhere but at the defaults
+    themselves, where they give the written parameters' limit."""
     theta0 = model.default_parameters()
-    names = tuple(theta0)
     bounds = model.default_bounds()
+    steps = {n: 0.25 * (abs(t) if t != 0 else bounds[n][1] - bounds[n][0])
+             for n, t in theta0.items()}  # fmt: skip
     try:
-        Mr0 = _rigid(model, theta0)
-        steps, D = [], []
-        for name in names:
-            t0 = theta0[name]
-            h = 0.25 * (abs(t0) if t0 != 0 else bounds[name][1] - bounds[name][0])
-            one = _rigid(model, {**theta0, name: t0 + h}) - Mr0
-            two = _rigid(model, {**theta0, name: t0 + 2.0 * h}) - Mr0
-            if not _agrees(2.0 * one, two, Mr0):
-                return None
-            steps.append(h)
-            D.append(one / h)
-        terms = RigidMassTerms(names, np.array([theta0[n] for n in names]), Mr0, np.array(D))
-        if names:
-            moved = {n: theta0[n] + (0.6 + 0.4 * k / len(names)) * h
-                     for k, (n, h) in enumerate(zip(names, steps, strict=True))}  # fmt: skip
-            if not _agrees(_affine(terms, moved), _rigid(model, moved), Mr0):
-                return None
+        terms = _terms_about(model, theta0, steps)
+        if terms is None and theta0:
+            off = {n: t + 0.1 * steps[n] for n, t in theta0.items()}
+            terms = _terms_about(model, off, steps)
+            if terms is not None:
+                terms = replace(terms, defaults=np.array(list(theta0.values())))
     except BayesUpdateError:
+        return None
+    return terms
+
+
+def _terms_about(model, theta0: dict, steps: dict) -> RigidMassTerms | None:
+    """``rigid_mass_terms`` about ``theta0`` with the steps ``steps`` ({name: h}), or None."""
+    names = tuple(theta0)
+    Mr0 = _rigid(model, theta0)
+    D = []
+    for name in names:
+        t0, h = theta0[name], steps[name]
+        one = _rigid(model, {**theta0, name: t0 + h}) - Mr0
+        two = _rigid(model, {**theta0, name: t0 + 2.0 * h}) - Mr0
+        if not _agrees(2.0 * one, two, Mr0):
+            return None
+        D.append(one / h)
+    terms = RigidMassTerms(names, np.array([theta0[n] for n in names]), Mr0, np.array(D))
+    if not names:
+        return terms
+    moved = {n: theta0[n] + (0.6 + 0.4 * k / len(names)) * steps[n] for k, n in enumerate(names)}
+    exact = _rigid(model, moved)
+    if _agrees(_affine(terms, moved), exact, Mr0):
+        return terms
+    terms = _pair_terms(model, terms, [steps[n] for n in names])
+    if not terms.pairs or not _agrees(_affine(terms, moved), exact, Mr0):
         return None
     return terms

@@ -313,9 +313,10 @@ class FEModel:
         return model_mass_properties(self, params)
 
     def mass_properties_function(self):
-        """params -> ``mass_properties(params)``: a 6 x 6 affine sum where the mass matrix is
-        affine in each parameter and additive over them (``fe.mass_properties.rigid_mass_terms``,
-        checked once, then kept), else the assembly of ``mass_properties``."""
+        """params -> ``mass_properties(params)``: a 6 x 6 sum where the mass matrix is affine in
+        each parameter and additive over them or bilinear in pairs of them (a density times a
+        section field: ``fe.mass_properties.rigid_mass_terms``, checked once, then kept), else
+        the assembly of ``mass_properties``."""
         terms = self._rigid_mass_terms
         if terms is None:
             from bayesupdate.fe.mass_properties import rigid_mass_terms

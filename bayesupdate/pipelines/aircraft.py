@@ -66,14 +66,15 @@ PARAMETERS = {
 #: the Nelder-Mead polish, which costs about 5x the least-squares search in full solves
 STARTS = 4
 #: the sampler's walkers: 2 per parameter (emcee's least), so that its three adaptation
-#: stages of 250 steps cost 6,000 evaluations rather than the default 32 walkers' 24,000.
-#: Full solves (``[sampler] reduced = false``), about 19 ms of CPU an evaluation: the reduced
-#: basis of these four bound fields certifies (size 58, error 2.9e-5), but ``calibrate`` on
-#: it took 117 s CPU with the build and 77 s with the basis loaded from the cache (the line
-#: fields' interpolation over the 4-d box and the compression of its terms are redone on
-#: load: 58 + 149 s of a profiled load), against about 15 s in full solves; sample's screen
-#: would build a second one (``benchmarks/aircraft_commands.py --basis``)
+#: stages of 250 steps cost 6,000 evaluations rather than the default 32 walkers' 24,000
 WALKERS = 8
+#: ``calibrate`` and ``sample`` on the certified reduced basis of the four bound fields (size
+#: 53, built by the first command and loaded from the on-disk cache by the next): its
+#: posterior is the full-solve posterior, the log density ratio full / reduced within
+#: 1.2e-4 nats at 400 draws spread over the chain (importance weights, docs/guide/aircraft.md
+#: section 4), and an evaluation costs about half a full one (the mass properties, not the
+#: eigen-solve, are most of it)
+REDUCED = True
 #: discover's design variable: one flap bending scale of the whole wing, so that the few paired
 #: modes can still decide between effects (discover needs more modes than parameters)
 DISCOVER_PARAMETERS = {
@@ -120,7 +121,8 @@ def study_text(deck, modes_h5, calibration_modes: Sequence[int] | None = None,
               f'pair_tolerance = "{PAIR_TOLERANCE}"']  # fmt: skip
     lines += ["[pairing]", f"frequency_window = {FREQUENCY_WINDOW}"]  # correlate's too
     lines += [f"[optimizer]\nstarts = {STARTS}\npolish = false",
-              f"[sampler]\nwalkers = {WALKERS}\nreduced = false\nscreen = false"]  # fmt: skip
+              f"[sampler]\nwalkers = {WALKERS}\nscreen = false\n"
+              f"reduced = {str(REDUCED).lower()}"]  # fmt: skip
     if parameters:
         for name, (binds, (low, high)) in parameters.items():
             lines += [f"[parameters.{name}]", f'binds = "{binds}"', f"bounds = [{low}, {high}]"]

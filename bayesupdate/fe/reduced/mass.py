@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.assembly import check_properties
+from bayesupdate.fe.mass_properties import RigidMassTerms
 from bayesupdate.fe.model import FEModel
 
 
@@ -85,10 +86,28 @@ _TERMS: "weakref.WeakKeyDictionary[FEModel, ShellMassTerms]" = weakref.WeakKeyDi
 def total_mass(fe: FEModel, params) -> float:
     """Total mass [kg] of ``fe`` at ``params`` (name -> SI value, all names): ``FEModel.total_mass``
     on the banded beam path (no assembly there), the per-term masses on a general structure,
-    computed once per FE model (the reduced models of one FE model share them)."""
+    computed once per FE model (the reduced models of one FE model share them).  A deck's line
+    fields that do not enter linearly would convert their elements again at each call
+    (``line_mass_change``); where the model's rigid-body mass matrix is a certified 6 x 6 sum
+    (``fe.mass_properties.rigid_mass_terms``), the mass is trace(M_r[:3, :3]) / 3 of that sum
+    (the same functional of the same M, in the model's mass unit, WTMASS included)."""
     if fe.general is None:
         return fe.total_mass(params)[0]
     terms = _TERMS.get(fe)
     if terms is None:
         terms = _TERMS[fe] = ShellMassTerms.of(fe)
-    return terms.total_mass(fe, params)
+    rigid = _rigid_terms(fe)
+    if rigid is None:
+        return terms.total_mass(fe, params)
+    check_properties(fe.structure, fe.element_properties(params))
+    return float(np.trace(rigid.rigid_mass(params)[:3, :3]) / 3.0)
+
+
+def _rigid_terms(fe: FEModel) -> RigidMassTerms | None:
+    """The FE model's ``RigidMassTerms`` where its line fields need ``line_mass_change`` and the
+    terms hold (built once, kept by the model: ``FEModel.mass_properties_function``), else None
+    (the per-term masses are cheaper)."""
+    if not getattr(fe, "line_nonlinear", ""):
+        return None
+    rigid = fe.mass_properties_function()
+    return rigid if isinstance(rigid, RigidMassTerms) else None

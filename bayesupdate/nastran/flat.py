@@ -71,6 +71,7 @@ import numpy as np
 
 from bayesupdate.nastran.bulk import Card, large_field_text, parse_number, real16, with_fields
 from bayesupdate.nastran.cards.beams import pbeam_layout
+from bayesupdate.nastran.cards.masses import conm2_inertia
 from bayesupdate.nastran.deck import Refusals, read_deck
 from bayesupdate.nastran.frames import coordinate, read_grids
 from bayesupdate.nastran.reader import deck_settings
@@ -195,10 +196,7 @@ def _conm2_basic(grids, card: Card) -> Card:
         axes = coord.axes
     x = np.array([card.real(k) for k in ("X1", "X2", "X3")])
     offset = x - grids.xyz[row] if cid == -1 else axes.T @ x
-    i11, i21, i22, i31, i32, i33 = (
-        card.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33")
-    )
-    J = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    J = conm2_inertia([card.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33")])
     A = mystran_conm2_fields(card.real("M"), offset, axes.T @ J @ axes, grids.frame[row])
     fields = [_real(float(v)) for v in (A[0, 0], A[1, 0], A[1, 1], A[2, 0], A[2, 1], A[2, 2])]
     head = (card.raw[0], str(card.int("G")), "0", _real(card.real("M")))
@@ -287,8 +285,7 @@ def _rounded_psd(J: np.ndarray) -> list[str]:
     have a negative eigenvalue, twice its size is added on J's diagonal and they are rounded
     again."""
     fields = _conm2_inertia_fields(J)
-    i11, i21, i22, i31, i32, i33 = (float(parse_number(f)) for f in fields)
-    low = np.linalg.eigvalsh(np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]]))[0]
+    low = np.linalg.eigvalsh(conm2_inertia(parse_number(f) for f in fields))[0]
     if low >= 0:
         return fields
     return _conm2_inertia_fields(J - 2 * low * np.eye(3))

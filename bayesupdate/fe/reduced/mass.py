@@ -93,14 +93,14 @@ def total_mass(fe: FEModel, params) -> float:
     (the same functional of the same M, in the model's mass unit, WTMASS included)."""
     if fe.general is None:
         return fe.total_mass(params)[0]
+    rigid = _rigid_terms(fe)
+    if rigid is not None:
+        check_properties(fe.structure, fe.element_properties(params))
+        return float(np.trace(rigid.rigid_mass(params)[:3, :3]) / 3.0)
     terms = _TERMS.get(fe)
     if terms is None:
         terms = _TERMS[fe] = ShellMassTerms.of(fe)
-    rigid = _rigid_terms(fe)
-    if rigid is None:
-        return terms.total_mass(fe, params)
-    check_properties(fe.structure, fe.element_properties(params))
-    return float(np.trace(rigid.rigid_mass(params)[:3, :3]) / 3.0)
+    return terms.total_mass(fe, params)
 
 
 def _rigid_terms(fe: FEModel) -> RigidMassTerms | None:

@@ -33,13 +33,19 @@ def _mass_frame(ctx: Context, m):
     return coord.axes
 
 
+def conm2_inertia(fields) -> np.ndarray:
+    """(3, 3) inertia of a CONM2's six fields (I11, I21, I22, I31, I32, I33): the products are
+    entered negated (MSC QRG CONM2: [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]])."""
+    i11, i21, i22, i31, i32, i33 = (float(v) for v in fields)
+    return np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+
+
 def _add_conm2(ctx: Context, m) -> None:
     row = ctx.rows(m, ("G",))[0]
     R = _mass_frame(ctx, m)
     offset = np.array([m.real(k) for k in ("X1", "X2", "X3")])
     offset = offset - ctx.grids.xyz[row] if m.int("CID") == -1 else R.T @ offset
-    i11, i21, i22, i31, i32, i33 = (m.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33"))
-    J = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    J = conm2_inertia([m.real(k) for k in ("I11", "I21", "I22", "I31", "I32", "I33")])
     J = R.T @ J @ R * ctx.wtmass
     try:
         ctx.builder.add_point_mass(ctx.node[row], m.real("M") * ctx.wtmass, f"CONM2 {m.id()}",

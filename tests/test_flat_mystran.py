@@ -197,3 +197,25 @@ def test_flat_maewing1_reads_as_the_deck(tmp_path, name):
     assert load_nastran_model(str(flat)).solve(n_modes=20).frequencies_hz == pytest.approx(
         ref, rel=1e-10
     )
+
+
+#: a cantilever of four CBARs on a PBARL BAR 0.5 x 1.48 (the aircraft's), E / G = 5.32 (its
+#: MAT1 905: NU = 1.66 follows), a 0.5 CONM2 at the tip; short elements, so shear matters
+PBARL_BAR = (
+    "SOL 103\nCEND\nMETHOD = 1\nSPC = 1\nBEGIN BULK\nEIGRL,1,,,6\nPARAM,WTMASS,1.\n"
+    "MAT1,1,6.66+6,1.252+6,,.01\nSPC1,1,123456,1\n"
+    + "".join(f"GRID,{i},,{4.0 * (i - 1)},0.,0.\n" for i in range(1, 6))
+    + "PBARL,1,1,,BAR\n,0.5,1.48\n"
+    + "".join(f"CBAR,{i},1,{i},{i + 1},0.,1.,0.\n" for i in range(1, 5))
+    + "CONM2,9,5,,0.5\nENDDATA\n"
+)
+
+
+def test_pbarl_bar_shear_factor_is_mystran_and_msc_five_sixths(tmp_path):
+    """MYSTRAN writes a PBARL BAR as a PBAR with K1 = K2 = 5/6 (its F06); ours matches it
+    (with Cowper's factor at NU = 1.66, 0.879, omega^2 was up to 0.6 % high here)."""
+    deck = tmp_path / "bar.bdf"
+    deck.write_text(PBARL_BAR)
+    ours = (2 * np.pi * load_nastran_model(str(deck)).solve(n_modes=6).frequencies_hz) ** 2
+    theirs = _mystran_omega2(write_flat_deck(deck, tmp_path / "flat.bdf", mystran=True))
+    assert ours == pytest.approx(theirs[:6], rel=1e-6)

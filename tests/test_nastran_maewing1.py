@@ -59,6 +59,9 @@ def test_published_deck_matches_msc_f06_within_0_01_percent(name):
     r = model.solve(n_modes=20)
     rel = r.frequencies_hz / msc[6:26] - 1
     assert np.abs(rel).max() < 1e-4, rel
+    # closer still: the f06 prints 7 digits; with Cowper's shear factor on the PBARL BARs
+    # (NU = E / 2G - 1 = 1.66 there) instead of MSC's 5/6 this was 8.5e-6 (v3.3, mode 14)
+    assert np.abs(rel).max() < 2e-6, rel
     assert r.modes.n_rigid == 6
     info = model.structure.metadata["nastran"]
     assert info["units"]["system"] == "in, lbf, s"

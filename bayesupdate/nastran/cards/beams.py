@@ -220,7 +220,10 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
     """``BeamSection`` of a library shape with dimensions ``d``.  Nastran's figures have y_elem
     vertical: the shapes are built with their height along z and turned.  MSC's ROD uses the
     shear factor 0.9 (with it the beam_modes deck matches MSC to 2e-4 %; Cowper's 0.886 is 0.3 %
-    low on the 4th bending pair); the others use Cowper's (a note)."""
+    low on the 4th bending pair) and its BAR 5/6 whatever NU (MYSTRAN's PBARL writes the same;
+    with it the mAEWing1 decks' 20 modes match their f06 to 1.2e-6, with Cowper's
+    10 (1 + nu) / (12 + 11 nu) at their NU = E / 2G - 1 = 1.66 to 8.5e-6:
+    ``tests/test_nastran_maewing1.py``); the others use Cowper's (a note)."""
     pid = prop.id()
     if kind not in L_SECTIONS:
         card.fail(f"{prop.name} {pid} type {kind}: only {', '.join(L_SECTIONS)}")
@@ -232,11 +235,11 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
         if kind in ("TUBE", "TUBE2"):
             wall = d[0] - d[1] if kind == "TUBE" else d[1]
             return ss.tube_section(2 * d[0], wall, nu)
+        if kind == "BAR":
+            return replace(ss.bar_section(d[0], d[1], nu), shear_y=5 / 6, shear_z=5 / 6).swap_yz()
         note = f"{prop.name} {pid} {kind}: shear factors of Cowper (1966); Nastran's own may differ"
         if note not in ctx.notes:
             ctx.notes.append(note)
-        if kind == "BAR":
-            return ss.bar_section(d[0], d[1], nu).swap_yz()
         if kind == "BOX":
             return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz()
         return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz()

@@ -10,6 +10,9 @@ SUPORT, ``ModalSettings.rigid_set = "rigid_motions"``).  Dense LAPACK spends O(n
 
 * A = K - sigma M (sigma < 0, positive definite) is factored once as a band Cholesky (LAPACK
   dpbtrf) in reverse Cuthill-McKee order: O(n b^2) for a bandwidth b (24 on the mAEWing1 deck);
+  the order and the band positions depend on the pattern only (``BandLayout``, kept for the
+  last few patterns), and where K and M share one pattern (``general_plan``) A's data is
+  K's - sigma M's, without a sparse sum;
 * the operator is the constrained inverse y = A^-1 (M x - M Rm mu) with Rm^T M y = 0 (a bordered
   solve: Z = A^-1 M Rm, S = Rm^T M Z once, then y = w - Z S^-1 (M Rm)^T w for w = A^-1 M x),
   the shift-invert operator of the compressed pencil, so every Krylov vector lies in the

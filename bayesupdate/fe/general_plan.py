@@ -3,7 +3,8 @@ products: the solve route of small deck models (``FEModel.small_method`` "krylov
 
 ``Assembler.solve`` reduces K and M by the supports' and rigid elements' transformation T
 (``constraints.constraint_transform``, u = T u_ind) as T^T K T, two sparse products and a
-format conversion per matrix and per solve (~1.3 ms of a 354-DOF deck's solve).  T and the
+format conversion per matrix and per solve (1.3-1.6 ms CPU of the mAEWing1 v3.3 deck's solve,
+756 -> 354 DOFs; 0.16-0.3 ms this way: ``benchmarks/deck_solve.py --solve-only``).  T and the
 pattern of K and M (``Assembler.rows``, ``cols``: every family's and the shells' blocks) are
 fixed per model, and T^T K T is linear in K's (nnz,) data:
 

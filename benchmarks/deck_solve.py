@@ -7,6 +7,13 @@ The deck is ``../shared/data/gvt_maewing1/fem/v3.3_hati`` as published (README t
 (1.9, 0.55, 1.4).  Printed, each a median of ``--repeats`` runs of CPU (process) time, on a
 machine shared with other jobs (the wall time also counts waits for a core):
 
+* the route of the full solve (20 modes), before and after ``fe.general_plan`` (the reduction
+  T^T K T by sparse products at every solve, against one product of K's data on a pattern
+  shared by K and M, and the band order of K - sigma M found once), interleaved, the three
+  points solved in turn (the assembly is never the cached one), with the median CPU of each
+  stage of the solve (parameters, assembly and its bound elements and beam kernel, the
+  reduction both ways, the rigid set, the eigen-solve, expansion and mass); ``--solve-only``
+  prints only these;
 * the full solve (20 modes) per point: after (``nastran.lines.LineFields``: the bound elements'
   records written, their matrices recomputed in the vectorised kernels, added to the fixed
   part) and before (``LineAssembler(fast=False)``: the bound cards converted again into a
@@ -35,7 +42,8 @@ machine shared with other jobs (the wall time also counts waits for a core):
   ``min(repeats, 5)``).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/deck_solve.py [--repeats 20]
-        [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY] [--deck-dir DIR]
+        [--solve-only] [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY]
+        [--deck-dir DIR]
 """
 
 import argparse

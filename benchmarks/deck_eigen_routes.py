@@ -219,7 +219,7 @@ def krylov_parts(P: Pencil, repeats: int) -> str:
     t_vals = median_ms(lambda: es._shift_invert_values(V[:, :N_MODES], P.M, op, SIGMA), repeats)
     blocks = k // st.block
     return (
-        f"factor (K - sigma M as a sparse sum, band Cholesky, bandwidth "
+        f"factor (K - sigma M as a sparse sum, its band layout kept, band Cholesky, bandwidth "
         f"{chol.factor.shape[0] - 1}) {t_factor:.2f}, from the data on the shared pattern "
         f"(the solve's, eigen_small.shifted) {t_shared:.2f}, the band layout (RCM order, "
         f"found once per pattern) {t_layout:.2f}; border (Z, S) {t_border:.2f}; operator per "

@@ -110,7 +110,9 @@ class BandCholesky:
     def __init__(self, A: sp.csr_matrix, layout: BandLayout | None = None):
         A = sp.csr_matrix(A)
         if layout is None:
-            A.sum_duplicates()
+            if not A.has_canonical_format:  # sorted, summed on a copy: the caller's A stays
+                A = A.copy()
+                A.sum_duplicates()
             layout = layout_of(A)
         self.perm, self.inv = layout.perm, layout.inv
         self.factor, info = dpbtrf(layout.band(A.data), lower=1)

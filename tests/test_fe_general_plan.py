@@ -7,7 +7,9 @@ of K - sigma M formed from their data (``eigen_small.shifted``).
 * An entry that is zero at the first point and not at a later one is kept (the pattern grows).
 * Closed form: a free-free chain of N masses m on springs k, with a massless node inside every
   link (M singular there), given with K and M on one pattern (M storing zeros): the Krylov's
-  shared-pattern factorisation gives lambda_j = (4 k / m) sin^2(j pi / (2 N)).
+  shared-pattern factorisation gives lambda_j = (4 k / m) sin^2(j pi / (2 N)); and the whole
+  route (``GeneralPlan.solve``) does on the same chain with its first mass split over two DOFs
+  tied by T.
 * The deck with three wing fields bound, at two points: the route's modes equal
   ``Assembler.solve``'s (the sparse products) to 1e-11 in frequency and 1 - 1e-12 in MAC, and
   dense LAPACK's as ``tests/test_fe_eigen_small.py`` holds them.
@@ -93,6 +95,40 @@ def test_shared_pattern_chain_with_massless_links_matches_the_closed_form():
     j = np.arange(1, n_modes + 1)
     np.testing.assert_allclose(lam, 4 * k / m * np.sin(j * np.pi / (2 * n_mass)) ** 2, rtol=1e-10)
     np.testing.assert_allclose(phi.T @ (M @ phi), np.eye(n_modes), atol=1e-10)
+
+
+def test_route_on_a_tied_chain_with_massless_links_matches_the_closed_form():
+    """The whole route (reduction by T, shared pattern, rigid set, Krylov, expansion) on the
+    chain with massless links whose first mass is split over two DOFs tied by T (u_d = u_0,
+    half the mass each, no stiffness on d): T^T M T puts m back on DOF 0, and the free-free
+    chain's lambda_j = (4 k / m) sin^2(j pi / (2 N)) follow."""
+    from types import SimpleNamespace
+
+    n_mass, k, m, n_modes = 150, 2.0e6, 0.5, 12
+    n = 2 * (n_mass - 1) + 1  # independent DOFs; DOF n is the tied one
+    chain = sp.diags([np.r_[2 * k, np.full(n - 2, 4 * k), 2 * k], np.full(n - 1, -2 * k),
+                      np.full(n - 1, -2 * k)], [0, 1, -1], format="csr")  # fmt: skip
+    # DOF n has no stiffness, but its diagonal is stored (every diagonal is in a pattern)
+    indices = np.r_[chain.indices, n].astype(np.int32)
+    indptr = np.r_[chain.indptr, chain.nnz + 1].astype(np.int32)
+    K = sp.csr_matrix((np.r_[chain.data, 0.0], indices, indptr), shape=(n + 1, n + 1))
+    rows = np.repeat(np.arange(n + 1), np.diff(K.indptr)).astype(np.int32)
+    mass = np.zeros(n + 1)
+    mass[1:n:2] = 0.0
+    mass[2:n:2] = m
+    mass[[0, n]] = m / 2
+    M = sp.csr_matrix((np.where(rows == K.indices, mass[rows], 0.0), K.indices, K.indptr))
+    T = sp.vstack([sp.eye(n), sp.csr_matrix(([1.0], ([0], [0])), shape=(1, n))]).tocsr()
+    g = SimpleNamespace(transform=SimpleNamespace(T=T, independent=np.arange(n)), rows=rows,
+                        cols=K.indices, indptr=K.indptr, rigid=np.ones((n, 1)))  # fmt: skip
+    settings = ModalSettings(small_method="krylov")
+    modes = GeneralPlan(g).solve(K, M, n_modes, settings)
+    j = np.arange(1, n_modes + 1)
+    exact = 4 * k / m * np.sin(j * np.pi / (2 * n_mass)) ** 2
+    np.testing.assert_allclose(modes.eigenvalues, exact, rtol=1e-10)
+    assert modes.n_rigid == 1
+    np.testing.assert_array_equal(modes.shapes[n], modes.shapes[0])  # the tied DOF follows
+    np.testing.assert_allclose(modes.shapes.T @ (M @ modes.shapes), np.eye(n_modes), atol=1e-10)
 
 
 @pytest.mark.parametrize("factors", [(0.6, 1.8, 0.7), (1.9, 0.55, 1.4)])

@@ -7,6 +7,13 @@ The deck is ``../shared/data/gvt_maewing1/fem/v3.3_hati`` as published (README t
 (1.9, 0.55, 1.4).  Printed, each a median of ``--repeats`` runs of CPU (process) time, on a
 machine shared with other jobs (the wall time also counts waits for a core):
 
+* the route of the full solve (20 modes), before and after ``fe.general_plan`` (the reduction
+  T^T K T by sparse products at every solve, against one product of K's data on a pattern
+  shared by K and M, and the band order of K - sigma M found once), interleaved, the three
+  points solved in turn (the assembly is never the cached one), with the median CPU of each
+  stage of the solve (parameters, assembly and its bound elements and beam kernel, the
+  reduction both ways, the rigid set, the eigen-solve, expansion and mass); ``--solve-only``
+  prints only these;
 * the full solve (20 modes) per point: after (``nastran.lines.LineFields``: the bound elements'
   records written, their matrices recomputed in the vectorised kernels, added to the fixed
   part) and before (``LineAssembler(fast=False)``: the bound cards converted again into a
@@ -35,7 +42,8 @@ machine shared with other jobs (the wall time also counts waits for a core):
   ``min(repeats, 5)``).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/deck_solve.py [--repeats 20]
-        [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY] [--deck-dir DIR]
+        [--solve-only] [--calibrate] [--before-only] [--mystran-only] [--mystran BINARY]
+        [--deck-dir DIR]
 """
 
 import argparse
@@ -123,6 +131,129 @@ def before_after(fe, repeats: int) -> None:
           f"{np.round(t_dense, 1)}; frequencies vs the default "
           f"{dense_miss:.1e}")  # fmt: skip
     print(f"  frequencies after vs before: largest relative difference {miss:.1e}")
+
+
+def cycled_ms(solve, pts, repeats: int) -> float:
+    """Median CPU time [ms] of one ``solve(p)`` while the points are solved in turn (each
+    solve at another point than the one before: the assembly is never the cached one, as in
+    a sampler's or an optimiser's evaluation)."""
+    times = []
+    for k in range(repeats * len(pts)):
+        p = pts[k % len(pts)]
+        t = time.process_time()
+        solve(p)
+        times.append(time.process_time() - t)
+    return 1e3 * float(np.median(times))
+
+
+def route_before_after(fe, repeats: int) -> None:
+    """The full solve (20 modes) by the fixed-pattern route (``fe.general_plan``, after) and by
+    ``Assembler.solve`` (sparse products T^T K T and K - sigma M at every solve, before),
+    interleaved (after, before, after, ...: both under the same load) over the points in turn
+    (each solve at another point than the one before: the assembly is never the cached one, as
+    in a sampler's or an optimiser's evaluation), with the largest differences of their
+    answers."""
+    pts = points(fe)
+
+    def assembler_solve(g, K, M, n_modes, method, settings):
+        return g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
+
+    def solve(p, route):
+        if route == "before":  # the route before general_plan, on this instance
+            fe._general_modes = assembler_solve
+        try:
+            return fe.solve(p, N_MODES)
+        finally:
+            fe.__dict__.pop("_general_modes", None)
+
+    times = {"after": [], "before": []}
+    for k in range(2 * repeats * len(pts)):
+        route = ("after", "before")[k % 2]
+        t = time.process_time()
+        solve(pts[k % len(pts)], route)
+        times[route].append(time.process_time() - t)
+    t_after, t_before = (1e3 * float(np.median(times[r])) for r in ("after", "before"))
+    after = [solve(p, "after") for p in pts]
+    before = [solve(p, "before") for p in pts]
+    df = max(float(np.max(np.abs(a.frequencies_hz / b.frequencies_hz - 1)))
+             for a, b in zip(after, before, strict=True))  # fmt: skip
+    M = [fe.matrices(p)[1] for p in pts]
+    mac = min(float(np.min(_mac(a.modes.shapes, b.modes.shapes, m)))
+              for a, b, m in zip(after, before, M, strict=True))  # fmt: skip
+    print(f"full solve ({N_MODES} modes), the 3 points in turn, interleaved, median CPU per "
+          f"solve of {repeats * len(pts)} each [ms]: before (Assembler.solve: sparse products "
+          f"each solve) {t_before:.2f}, after (fe.general_plan) {t_after:.2f}; frequencies "
+          f"after vs before {df:.1e}, smallest MAC 1 - {1 - mac:.1e} "
+          f"(load average {os.getloadavg()[0]:.1f})")  # fmt: skip
+
+
+def _mac(a, b, M):
+    num = np.einsum("ij,ij->j", a, M @ b) ** 2
+    return num / (np.einsum("ij,ij->j", a, M @ a) * np.einsum("ij,ij->j", b, M @ b))
+
+
+def stages(fe, repeats: int) -> None:
+    """Median CPU [ms] of each stage of the route's solve, the points in turn: parameters and
+    element properties; the bound elements (records written, kernels, scatter); the assembly
+    in full; the reduction (sparse products before, ``general_plan`` after); the rigid set;
+    the eigen-solve (``eigen_small`` block Krylov); expansion, mass and sensor shapes."""
+    from bayesupdate.fe.elements.general_beam import general_beam_matrices
+    from bayesupdate.fe.sparse_modal import ModalSettings, _rigid_modes, solve_reduced_modes
+
+    pts = points(fe)
+    g = fe.general
+    fe.solve(pts[0], N_MODES)
+    plan, tr = fe._plan, g.transform
+    full = [fe.full_parameters(p) for p in pts]
+    props = fe.element_properties(full[0])
+    st = ModalSettings(rigid_set=fe.structure.metadata.get("rigid_set", "zero_energy"),
+                       small_method="krylov", n_modes=N_MODES)  # fmt: skip
+    s = fe.structure
+    mats = [fe.matrices(p)[:2] for p in pts]
+    red = [plan.map.reduce(K.data, M.data) for K, M in mats]
+    rigid = [_rigid_modes(Kf, Mf, g.rigid, st.zero_tol, st.rigid_set) for Kf, Mf in red]
+    modes = [solve_reduced_modes(Kf, Mf, g.rigid, st, plan.independent) for Kf, Mf in red]
+
+    def uncached(p):
+        g.values, g._last = p, (None, None)
+        return g.assemble(props)
+
+    def at(fn, items):
+        return cycled_ms(fn, list(range(len(items))), repeats)
+
+    t = {
+        "parameters and element properties": at(
+            lambda i: fe.element_properties(fe.full_parameters(pts[i])), pts),
+        "assembly in full (bound elements + the fixed part, CSR)": at(
+            lambda i: uncached(full[i]), pts),
+        "  of which the bound elements (records, kernels, scatter)": at(
+            lambda i: g.line_delta(full[i]), pts),
+        "    of which the beam kernel alone": 0.0,
+        "reduction before (sparse products T^T K T, T^T M T)": at(
+            lambda i: (tr.reduce(mats[i][0]), tr.reduce(mats[i][1])), pts),
+        "reduction after (general_plan: S @ data, shared pattern)": at(
+            lambda i: plan.map.reduce(mats[i][0].data, mats[i][1].data), pts),
+        "rigid set (6 SUPORT motions)": at(
+            lambda i: _rigid_modes(*red[i], g.rigid, st.zero_tol, st.rigid_set), pts),
+        "eigen-solve (solve_reduced_modes: block Krylov, checks)": at(
+            lambda i: solve_reduced_modes(*red[i], g.rigid, st, plan.independent), pts),
+        "expansion, mass, sensor shapes": at(
+            lambda i: (fe.sensor_shapes(plan.T @ modes[i][1]), g.matrix_mass(mats[i][1])), pts),
+    }  # fmt: skip
+    if g.fields is not None:
+        recs = [g.fields.records(g.fields.theta(p))[0] for p in full]
+        if recs[0] is not None:
+            t["    of which the beam kernel alone"] = at(
+                lambda i: general_beam_matrices(s.nodes, recs[i], s.shear, s.rotary_inertia),
+                pts,
+            )
+    del rigid
+    print(f"stages of the route's solve, the points in turn, median CPU [ms] "
+          f"(load average {os.getloadavg()[0]:.1f}):")  # fmt: skip
+    for name, ms in t.items():
+        print(f"  {name:58s} {ms:6.2f}")
+    after = [k for k in t if not k.startswith(" ") and "before" not in k]
+    print(f"  {'sum of the stages (after)':58s} {sum(t[k] for k in after):6.2f}")
 
 
 def parts(fe, repeats: int) -> None:
@@ -335,6 +466,9 @@ def main() -> None:
         action="store_true",
         help="only load and full solves (runs on a checkout from before LineFields)",
     )
+    parser.add_argument(
+        "--solve-only", action="store_true", help="only the route before/after and its stages"
+    )
     parser.add_argument("--mystran-only", action="store_true", help="only the MYSTRAN part")
     parser.add_argument("--mystran", type=Path, default=None, help="the MYSTRAN binary")
     parser.add_argument(
@@ -350,6 +484,11 @@ def main() -> None:
     if args.before_only:
         t = [median_ms(lambda p=p: fe.solve(p, N_MODES), args.repeats) for p in points(fe)]
         print(f"full solve ({N_MODES} modes) per point, median CPU [ms]: {np.round(t, 1)}")
+        return
+    print(f"load average {os.getloadavg()[0]:.1f} (1 min) on {os.cpu_count()} CPUs")
+    route_before_after(fe, args.repeats)
+    stages(fe, args.repeats)
+    if args.solve_only:
         return
     before_after(fe, args.repeats)
     parts(fe, args.repeats)

@@ -10,6 +10,9 @@ SUPORT, ``ModalSettings.rigid_set = "rigid_motions"``).  Dense LAPACK spends O(n
 
 * A = K - sigma M (sigma < 0, positive definite) is factored once as a band Cholesky (LAPACK
   dpbtrf) in reverse Cuthill-McKee order: O(n b^2) for a bandwidth b (24 on the mAEWing1 deck);
+  the order and the band positions depend on the pattern only (``BandLayout``, kept for the
+  last few patterns), and where K and M share one pattern (``general_plan``) A's data is
+  K's - sigma M's, without a sparse sum;
 * the operator is the constrained inverse y = A^-1 (M x - M Rm mu) with Rm^T M y = 0 (a bordered
   solve: Z = A^-1 M Rm, S = Rm^T M Z once, then y = w - Z S^-1 (M Rm)^T w for w = A^-1 M x),
   the shift-invert operator of the compressed pencil, so every Krylov vector lies in the
@@ -36,6 +39,7 @@ reports a singular K - sigma M or a mechanism as before.
 """
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
@@ -61,28 +65,73 @@ class KrylovSettings:
     ritz_from: float = 3.5
 
 
-class BandCholesky:
-    """Band Cholesky factor of a sparse symmetric positive definite A (n, n) in reverse
-    Cuthill-McKee order (LAPACK dpbtrf/dpbtrs), or ``ok`` False if A is not positive definite."""
+class BandLayout:
+    """Reverse Cuthill-McKee order and band positions of a symmetric CSR pattern (n, n):
+    ``band(data)`` is the (bandwidth + 1, n) lower band (LAPACK dpbtrf's layout) of a matrix
+    with this pattern in that order.  Found once per pattern (``layout_of``)."""
 
-    def __init__(self, A: sp.csr_matrix):
-        n = A.shape[0]
-        self.perm = reverse_cuthill_mckee(A, symmetric_mode=True).astype(np.intp)
+    def __init__(self, n: int, indices: np.ndarray, indptr: np.ndarray):
+        pattern = sp.csr_matrix((np.ones(indices.size), indices, indptr), shape=(n, n))
+        self.n = n
+        self.perm = reverse_cuthill_mckee(pattern, symmetric_mode=True).astype(np.intp)
         self.inv = np.empty(n, np.intp)
         self.inv[self.perm] = np.arange(n)
-        c = A.tocoo()
-        pr, pc = self.inv[c.row], self.inv[c.col]
-        lower = pr >= pc
-        bw = int(np.max(pr[lower] - pc[lower], initial=0))
-        band = np.zeros((bw + 1, n))
-        band[pr[lower] - pc[lower], pc[lower]] = c.data[lower]
-        self.factor, info = dpbtrf(band, lower=1)
+        pr = self.inv[np.repeat(np.arange(n), np.diff(indptr))]
+        pc = self.inv[indices]
+        self.lower = np.flatnonzero(pr >= pc)
+        offset = (pr - pc)[self.lower]
+        self.bandwidth = int(offset.max(initial=0))
+        self.flat = offset * n + pc[self.lower]
+
+    def band(self, data: np.ndarray) -> np.ndarray:
+        """(bandwidth + 1, n) lower band of the matrix with (nnz,) ``data`` on the pattern."""
+        band = np.zeros((self.bandwidth + 1) * self.n)
+        band[self.flat] = data[self.lower]
+        return band.reshape(self.bandwidth + 1, self.n)
+
+
+@lru_cache(maxsize=8)
+def _layout(n: int, indices: bytes, indptr: bytes) -> BandLayout:
+    return BandLayout(n, np.frombuffer(indices, np.int64), np.frombuffer(indptr, np.int64))
+
+
+def layout_of(A: sp.csr_matrix) -> BandLayout:
+    """The ``BandLayout`` of A's pattern (canonical CSR: sorted, no duplicates), kept for the
+    last few patterns: a model solved at many points has one."""
+    return _layout(A.shape[0], A.indices.astype(np.int64).tobytes(),
+                   A.indptr.astype(np.int64).tobytes())  # fmt: skip
+
+
+class BandCholesky:
+    """Band Cholesky factor of a sparse symmetric positive definite A (n, n) in reverse
+    Cuthill-McKee order (LAPACK dpbtrf/dpbtrs), or ``ok`` False if A is not positive definite.
+    layout : A's ``BandLayout`` (None: A's own, ``layout_of``)."""
+
+    def __init__(self, A: sp.csr_matrix, layout: BandLayout | None = None):
+        A = sp.csr_matrix(A)
+        if layout is None:
+            if not A.has_canonical_format:  # sorted, summed on a copy: the caller's A stays
+                A = A.copy()
+                A.sum_duplicates()
+            layout = layout_of(A)
+        self.perm, self.inv = layout.perm, layout.inv
+        self.factor, info = dpbtrf(layout.band(A.data), lower=1)
         self.ok = info == 0
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """A^-1 rhs for rhs (n,) or (n, k)."""
         x, _ = dpbtrs(self.factor, rhs[self.perm], lower=1)
         return x[self.inv]
+
+
+def shifted(Kf: sp.csr_matrix, Mf: sp.csr_matrix, sigma: float) -> BandCholesky:
+    """The band Cholesky factor of Kf - sigma Mf; where Kf and Mf share one pattern
+    (``general_plan.ReductionMap``) from their data on it, without a sparse sum."""
+    same = np.array_equal(Kf.indptr, Mf.indptr) and np.array_equal(Kf.indices, Mf.indices)
+    if not (same and Kf.has_canonical_format and Mf.has_canonical_format):
+        return BandCholesky((Kf - sigma * Mf).tocsr())
+    A = sp.csr_matrix((Kf.data - sigma * Mf.data, Kf.indices, Kf.indptr), shape=Kf.shape)
+    return BandCholesky(A, layout_of(Kf))
 
 
 def worthwhile(n: int, n_modes: int, n_rigid: int, settings: KrylovSettings) -> bool:
@@ -100,7 +149,7 @@ def krylov_modes(Kf, Mf, Rm, n_modes: int, sigma: float, settings: KrylovSetting
     [rad^2/s^2] ascending, phi (n, n_modes) mass-normalised), or None where the iteration does
     not resolve the pencil."""
     Kf, Mf = sp.csr_matrix(Kf), sp.csr_matrix(Mf)
-    chol = BandCholesky((Kf - sigma * Mf).tocsr())
+    chol = shifted(Kf, Mf, sigma)
     if not chol.ok:
         return None
     op = _constrained_inverse(chol, Mf, Rm)

@@ -39,6 +39,7 @@ from bayesupdate.fe.eigensolve import BandedShiftInvert, ModalSolution, solve_mo
 from bayesupdate.fe.elements import parametric_of
 from bayesupdate.fe.elements.base import bindable
 from bayesupdate.fe.energy import ModalEnergies, general_energies, modal_energies
+from bayesupdate.fe.general_plan import GeneralPlan
 from bayesupdate.fe.rotations import rigid_body_basis
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.fe.structure import Structure
@@ -446,12 +447,24 @@ class FEModel:
             rigid_set=self.structure.metadata.get("rigid_set", "zero_energy"),
             small_method=self.small_method,
         )
-        modes = g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
+        modes = self._general_modes(g, K, M, n_modes, method, settings)
         mass, cog = g.matrix_mass(M)
         en = general_energies(g, elem, shell_props, modes) if energies else None
         return FEResult(
             p, modes, mass, cog, en, self.sensor_shapes(modes.shapes), self.structure.sensor_labels
         )
+
+    def _general_modes(self, g, K, M, n_modes, method, settings) -> ModalSolution:
+        """The general path's modes: for a small model solved by the banded block Krylov
+        (``small_method`` "krylov") through ``general_plan.GeneralPlan`` (its reduction and
+        band layout found once per assembler), else ``Assembler.solve``."""
+        small = g.transform.independent.size < settings.dense_below
+        if method == "dense" or self.small_method != "krylov" or not small:
+            return g.solve(K, M, n_modes, dense=method == "dense", settings=settings)
+        plan = self.__dict__.get("_plan")
+        if plan is None or plan.assembler is not g:
+            plan = self._plan = GeneralPlan(g)
+        return plan.solve(K, M, n_modes, settings)
 
     def sensor_shapes(self, shapes: np.ndarray) -> np.ndarray:
         """Shapes (n_dof, m) read out at the sensors: (n_sensors, m) translations along each

@@ -36,3 +36,26 @@ def test_full_rank_terms_fall_back_to_the_plain_svd():
     C, B = compress_terms(T)
     assert C.shape[1] == 3 * SKETCH
     assert np.abs(C @ B - T).max() < 1e-12 * np.abs(T).max()
+
+
+def test_pattern_parts_hold_each_rows_matrix():
+    from types import SimpleNamespace
+
+    from bayesupdate.fe.reduced.shell_terms import pattern_parts
+
+    rng = np.random.default_rng(5)
+    n_dof = 30
+    dense = rng.random((n_dof, n_dof)) < 0.2
+    rows, cols = np.nonzero(dense)  # a CSR pattern: unique (row, col) pairs in order
+    g = SimpleNamespace(rows=rows, cols=cols)
+    data = rng.standard_normal((4, rows.size))
+    data[:, rng.random(rows.size) < 0.5] = 0.0  # entries no row touches
+    data[1, : rows.size // 3] = 0.0  # and entries one row does not touch
+    V = rng.standard_normal((n_dof, 3))
+    for row, part in zip(data, pattern_parts(g, data), strict=True):
+        full = np.zeros((n_dof, n_dof))
+        full[rows, cols] = row
+        sub = np.zeros((n_dof, n_dof))
+        sub[np.ix_(part.dofs, part.dofs)] = part.matrix.toarray()
+        assert np.array_equal(sub, full)
+        assert np.allclose(part.project(V), V.T @ full @ V, rtol=0, atol=1e-13)

@@ -264,15 +264,16 @@ def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     )  # fmt: skip
 
 
-def read_structure(path, design: bool = False) -> tuple:
+def read_structure(path, design: bool = False, deck=None) -> tuple:
     """(Structure, info, Deck) of the Nastran deck at ``path``; info records units, PARAMs,
     counts and notes (also in ``structure.metadata["nastran"]``).  Every refusal of the deck is
     raised together, as one ``BayesUpdateError`` (``deck.Refusals``); with ``design`` (the
-    DESVARs are to be the parameters) also each DVPREL1 to a field that cannot be bound."""
+    DESVARs are to be the parameters) also each DVPREL1 to a field that cannot be bound.
+    ``deck``: the cards of ``path`` already read (and edited: ``bindings.uniform_fields``)."""
     from bayesupdate.nastran.desvar import design_refusals
 
     refusals = Refusals(str(path))
-    deck = read_deck(path, refusals)
+    deck = read_deck(path, refusals) if deck is None else deck
     notes = check_cards(deck, refusals)
     if design and deck.of("DESVAR"):
         for message in design_refusals(deck):

@@ -22,7 +22,6 @@ def load_nastran_model(
     by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognised from WTMASS
     and the MAT1 moduli."""
     from bayesupdate.errors import BayesUpdateError
-    from bayesupdate.nastran.bindings import uniform_fields
     from bayesupdate.nastran.model import NastranModel, deck_bindings
     from bayesupdate.nastran.reader import read_structure
     from bayesupdate.nastran.test_points import with_test_points
@@ -30,10 +29,6 @@ def load_nastran_model(
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
     structure, info, deck = read_structure(path, design=not parameters)
-    uniform, notes = uniform_fields(parameters or {}, deck)
-    if notes:  # an absolute binding over cards that disagree: one value, the default too
-        structure, info, deck = read_structure(path, design=False, deck=uniform)
-        info["notes"].extend(notes)
     if units is not None:
         from bayesupdate.nastran.units import named_system
 

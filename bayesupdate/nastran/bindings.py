@@ -48,18 +48,10 @@ offset or inertia, a CMASS2 M) are written into copies of those cards
 x^2; a beam offset through the rigid link of its ends, MSC QRG CBEAM). A CONM2 M bound beside
 another field of the same CONM2 is written the same way (its mass factor alone would miss the m
 x terms).
-
-An absolute binding over several cards sets them all to one value, everywhere in its box: when
-the deck's cards disagree (seven PBEAM I1 of 0.0099-0.0563 in^4 bound as one outer-wing
-section), the model is read from the deck with those cards at their mean, the parameter's
-default (``uniform_fields``, with a note naming the cards and their spread), as MSC's SOL 200
-reads one DESVAR through DVPREL1 (C0 blank, COEF 1.0) on each of them.  Otherwise the default
-alone would be the deck and every other value one section: K would jump at the default.
 """
 
 import re
-from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -519,42 +511,3 @@ def _check_pbush(f: DeckField, cards) -> None:
                 f"parameter binds {f.spec!r}: PBUSH {c.id()} has other non-zero K; "
                 f"bind 'PBUSH {c.id()} K scale' (all six)"
             )
-
-
-#: study-table keys of a DESVAR's relations: per-id values by design, left as they are
-_DESIGN_KEYS = ("relations", "coefficients", "desvar")
-
-
-def uniform_fields(parameters: Mapping, deck) -> tuple[object, list[str]]:
-    """(deck, notes): ``deck`` with the fields of each absolute binding over cards that
-    disagree set to the cards' mean (at every PBEAM(L) station where given, ``set_field``), and
-    one note per such binding naming its cards and their spread; the same deck object and no
-    notes when there is none.  Only re-built fields count (line properties, MAT1: ``FIELDS``
-    family "line" or a MAT1 of line elements); a scale, a DESVAR's relations, one id or equal
-    values leave the deck as it is.  parameters : the study's ``{name: {binds, ...}}``."""
-    changed, notes = {}, []
-    for name, entry in parameters.items():
-        if "binds" not in entry or any(k in entry for k in _DESIGN_KEYS):
-            continue
-        f = parse_binding(entry["binds"], name)
-        if f.scale or len(f.ids) < 2 or FIELDS[f.card][f.field][1] == "card":
-            continue
-        if f.card not in LINE_PROPERTIES and not line_elements(deck, f):
-            continue
-        cards = [_card(deck, f, i) for i in f.ids]
-        values = np.array([field_value(c, f) for c in cards])
-        if not np.ptp(values) > 1e-12 * np.abs(values).max():
-            continue
-        mean = float(values.mean())
-        for c, v in zip(cards, values, strict=True):
-            changed[id(c)] = set_field(changed.get(id(c), c), f, mean, float(v))
-        notes.append(
-            f"parameter {name}: binds {f.spec!r}, one value on {len(f.ids)} cards whose "
-            f"{f.field} differ ({values.min():.4g}-{values.max():.4g}): read with their mean "
-            f"{mean:.4g} (the default), so the model at the default is not the deck; bind a "
-            "'scale' to keep the deck's distribution"
-        )
-    if not changed:
-        return deck, notes
-    cards = tuple(changed.get(id(c), c) for c in deck.cards)
-    return replace(deck, cards=cards, _index={}), notes

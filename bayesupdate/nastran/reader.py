@@ -264,16 +264,15 @@ def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     )  # fmt: skip
 
 
-def read_structure(path, design: bool = False, deck=None) -> tuple:
+def read_structure(path, design: bool = False) -> tuple:
     """(Structure, info, Deck) of the Nastran deck at ``path``; info records units, PARAMs,
     counts and notes (also in ``structure.metadata["nastran"]``).  Every refusal of the deck is
     raised together, as one ``BayesUpdateError`` (``deck.Refusals``); with ``design`` (the
-    DESVARs are to be the parameters) also each DVPREL1 to a field that cannot be bound.
-    ``deck``: the cards of ``path`` already read (and edited: ``bindings.uniform_fields``)."""
+    DESVARs are to be the parameters) also each DVPREL1 to a field that cannot be bound."""
     from bayesupdate.nastran.desvar import design_refusals
 
     refusals = Refusals(str(path))
-    deck = read_deck(path, refusals) if deck is None else deck
+    deck = read_deck(path, refusals)
     notes = check_cards(deck, refusals)
     if design and deck.of("DESVAR"):
         for message in design_refusals(deck):

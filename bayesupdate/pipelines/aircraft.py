@@ -56,10 +56,8 @@ _FOAM = ",".join(f"{side}{k:02d}" for k in range(1, 17) for side in ("1700", "18
 #: name -> (binding, bounds): see the module docstring
 PARAMETERS = {
     "EI_root": ("PBEAM 1002 I1 scale", (0.25, 16.0)),
-    # absolute [in^4]: one section for the seven segments, the default included (the deck is
-    # read with the mean of their seven I1, 0.0267: ``nastran.bindings.uniform_fields``, as the
-    # authors' SOL 200 DVPREL1s put one DESVAR on all seven); bounds 0.64 x the weakest
-    # (0.0099) to 7.1 x the stiffest (0.0563)
+    # absolute [in^4]: one section for the seven segments (default: the mean of their seven
+    # I1, 0.0267); bounds 0.64 x the weakest (0.0099) to 7.1 x the stiffest (0.0563)
     "I1_wing": ("PBEAM 1003,1004,1005,1006,1007,1008,1009 I1", (0.0063, 0.40)),
     "m_foam": (f"CONM2 {_FOAM} M scale", (0.05, 2.0)),
     "rho_wing": ("MAT1 903 RHO scale", (0.5, 8.0)),

@@ -35,7 +35,7 @@ from bayesupdate.fe.reduced.interpolation import (
 from bayesupdate.fe.reduced.shell_terms import (
     SparsePart,
     general_terms,
-    pattern_part,
+    pattern_parts,
     shell_parameters,
 )
 
@@ -203,8 +203,8 @@ def _line_groups(fe: FEModel, bounds, interp_tol: float) -> list:
     for line in getattr(fe, "line_groups", lambda *_: ())(bounds, interp_tol):
         params = tuple(fe.parameter_names.index(n) for n in line.names)
         group = InterpolatedGroup(np.zeros(0, int), params, line.log_pieces, line.degrees, -1, -1)
-        k_parts = [pattern_part(fe.general, d) for d in line.dK]
-        m_parts = [pattern_part(fe.general, d) for d in line.dM]
+        k_parts = pattern_parts(fe.general, line.dK)
+        m_parts = pattern_parts(fe.general, line.dM)
         out.append((group, k_parts, m_parts))
     return out
 

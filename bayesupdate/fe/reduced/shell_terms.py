@@ -43,15 +43,25 @@ class SparsePart:
         return Vd.T @ (self.matrix @ Vd)
 
 
-def pattern_part(g, data: np.ndarray) -> SparsePart:
-    """The ``SparsePart`` of (nnz,) ``data`` on the general CSR pattern of ``g``
-    (``GeneralAssembler``): its non-zero entries on the DOFs they touch."""
-    pos = np.flatnonzero(data)
-    rows, cols = g.rows[pos], g.cols[pos]
-    dofs, inverse = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+def pattern_parts(g, data: np.ndarray) -> list[SparsePart]:
+    """The ``SparsePart`` of each row of ``data`` (n, nnz) on the general CSR pattern of ``g``
+    (``GeneralAssembler``), on one shared sub-pattern: the union of the rows' non-zero entries
+    on the DOFs they touch (an entry that is zero in one row is stored as an explicit zero: the
+    same matrix).  The interpolation nodes of a deck's line group touch the same entries,
+    so the pattern is sorted once instead of once per node."""
+    pos = np.flatnonzero(np.any(data != 0, axis=0))
+    dofs, inverse = np.unique(np.concatenate([g.rows[pos], g.cols[pos]]), return_inverse=True)
     local = inverse.reshape(2, -1)
     m = dofs.size
-    return SparsePart(dofs, sp.csr_matrix((data[pos], (local[0], local[1])), shape=(m, m)))
+    # a CSR template whose entries are the 1-based indices into pos, in CSR order (the
+    # pattern's (row, col) pairs are unique, so nothing is summed)
+    where = np.arange(1, pos.size + 1, dtype=float)
+    template = sp.csr_matrix((where, (local[0], local[1])), shape=(m, m))
+    order = pos[template.data.astype(int) - 1]
+    return [
+        SparsePart(dofs, sp.csr_matrix((row[order], template.indices, template.indptr), (m, m)))
+        for row in data
+    ]
 
 
 def power_feature(j: int, p: int, n_params: int) -> int:

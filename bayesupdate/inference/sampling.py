@@ -77,6 +77,12 @@ CHECK_BATCH = 500
 CHECK_GROWTH = 1.1
 #: first check, and the least number of steps between checks (``emcee.autocorr`` needs 20)
 CHECK_MIN_STEPS = 20
+#: steps of each adaptation stage (``moves.staged``).  250 until 2026-11-29: the three stages
+#: (750 steps x 32 walkers of screen solves) were a third of ``sample --model exhaust --data
+#: paper:ema``'s CPU, and 100 steps a stage (1,600 points for the first fit, 3,200 for each
+#: refit) gave the same coverage check verdicts, kept-chain tau and reference accuracy
+#: (docs/validation/posterior.md, "Shorter adaptation stages")
+ADAPT_STEPS = 100
 
 
 def check_moves(kind: str) -> str:
@@ -293,7 +299,8 @@ class SamplerSettings:
     ``sampler_space``; the chain and log_prob are returned in theta all the same); a resume must
     use the same.  target_rhat, target_ess : convergence targets (None: not checked).
     progress : show a progress bar.  moves : "mixture" (default) or "de" (module docstring).
-    adapt_steps : steps of each of the two adaptation stages of "mixture" (not kept).
+    adapt_steps : steps of each of the three adaptation stages of "mixture" (not kept;
+    ``ADAPT_STEPS``).
     """
 
     walkers: int = 32
@@ -306,7 +313,7 @@ class SamplerSettings:
     target_ess: float | None = None
     progress: bool = False
     moves: str = "mixture"
-    adapt_steps: int = 250
+    adapt_steps: int = ADAPT_STEPS
 
     def __post_init__(self) -> None:
         check_moves(self.moves)

@@ -77,12 +77,13 @@ CHECK_BATCH = 500
 CHECK_GROWTH = 1.1
 #: first check, and the least number of steps between checks (``emcee.autocorr`` needs 20)
 CHECK_MIN_STEPS = 20
-#: steps of each adaptation stage (``moves.staged``).  250 until 2026-11-29: the three stages
-#: (750 steps x 32 walkers of screen solves) were a third of ``sample --model exhaust --data
-#: paper:ema``'s CPU, and 100 steps a stage (1,600 points for the first fit, 3,200 for each
-#: refit) gave the same coverage check verdicts, kept-chain tau and reference accuracy
-#: (docs/validation/posterior.md, "Shorter adaptation stages")
-ADAPT_STEPS = 100
+#: steps of each adaptation stage (``moves.staged``).  Tried on 2026-11-29 and not kept: 100
+#: (the three stages of 250 x 32 walkers of screen solves are a quarter of ``sample --model
+#: exhaust --data paper:ema``'s CPU).  The frozen proposals covered the posterior less well
+#: (importance ESS 0.41 against 0.49 on the user's command, 0.37 against 0.41 on the demo's
+#: seed case, seed 1 both) and the seed case's kept chain took 1,249 steps (tau 11.8) instead
+#: of 702 (tau 6.4), its sampling CPU 42 s against 38 s (docs/guide/calibrate-sample.md)
+ADAPT_STEPS = 250
 
 
 def check_moves(kind: str) -> str:

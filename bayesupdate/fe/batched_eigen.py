@@ -78,9 +78,8 @@ def _solve_chunk(K_ww: np.ndarray, M_full: np.ndarray, n_rigid: int, n_modes: in
     # raises LinAlgError for an indefinite reduced mass (a non-physical parameter point)
     L = np.linalg.cholesky(M_full)[:, nr:, nr:]
     L_inv = _triangular_inverse(L)
-    # symmetric to round-off; eigvalsh / eigh read its lower triangle only (LAPACK syevd
-    # UPLO="L"), so averaging it with its transpose would change nothing but round-off
     C = L_inv @ K_ww @ L_inv.transpose(0, 2, 1)
+    C = 0.5 * (C + C.transpose(0, 2, 1))
     if not vectors:
         return np.linalg.eigvalsh(C)[:, :n_modes]
     lam, Z = np.linalg.eigh(C)

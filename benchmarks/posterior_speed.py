@@ -34,7 +34,10 @@ runs interleaved so that every variant sees the same machine load; e.g. before a
 then the paired CPU ratios against the first tree, of the whole run and per kept step.
 ``--user-seeds S [S ...]``: each round runs these sampler seeds (``--seed``) too: a change that
 reorders the random draws changes where the R-hat stop lands, so one seed compares two chain
-lengths as much as two codes.
+lengths as much as two codes.  ``--overshoot`` (not for timing): each run also writes its result
+file, and the row says at which step (every 10th) the stop rule first held on the stored chain
+(``first_hold``) and the stop's steps over that (the checks' overshoot; the ESS's over its
+target is ``ess_over_target``).
 
 Timed runs (``--seeds`` / ``--seed-list``) print each set-up phase (model + reduced basis,
 optimum, screening basis; wall and CPU), then one JSON row per run: cold-start wall and CPU,
@@ -283,20 +286,44 @@ def table(rows: list[dict]) -> None:
             print(f"\nmedian {key}: de / mixture = {med['de'] / med['mixture']:.2f}")
 
 
-def user_run(code: str, seed: int | None = None) -> dict:
+def first_hold(path: str, stride: int = 10) -> int | None:
+    """The first step count (a multiple of ``stride``) at which the stop rule of an empty
+    ``[sampler]`` table (``pipelines.sample.sampler_settings(SamplerConfig())``) holds for the
+    chain stored in the result file ``path``, None when it never does: a prefix of the chain is
+    what the run had at that step, so the stop's overshoot is its step count over this one."""
+    from bayesupdate.config import SamplerConfig
+    from bayesupdate.inference.results import read_result
+    from bayesupdate.inference.sampling import _stop_rule
+    from bayesupdate.pipelines.sample import sampler_settings
+
+    chain = np.asarray(read_result(path)["posterior"]["chain"])
+    settings = sampler_settings(SamplerConfig())
+    for n in range(stride, chain.shape[0] + 1, stride):
+        if _stop_rule(chain[:n], n, settings)[1]:
+            return n
+    return None
+
+
+def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dict:
     """One ``bayesupdate sample --model exhaust --data paper:ema --json`` in a fresh process
     on the source tree ``code`` (``--seed seed`` added when given): wall and CPU [s] of the
-    whole process, and its JSON's numbers."""
+    whole process, and its JSON's numbers.  ``overshoot``: the run writes its result file
+    (``--out``, in a temporary folder: not the user's command, so not for timing) and the row
+    gets ``first_hold`` (``first_hold``) and ``overshoot`` = steps / first_hold."""
     import json
     import resource
     import subprocess
     import sys
+    import tempfile
 
     env = {**os.environ, "PYTHONPATH": os.path.abspath(code)}
     command = [sys.executable, "-m", "bayesupdate", "sample", "--model", "exhaust", "--data",
                "paper:ema", "--json"]  # fmt: skip
     if seed is not None:
         command += ["--seed", str(seed)]
+    if overshoot:
+        folder = tempfile.mkdtemp(prefix="posterior_speed_")
+        command += ["--out", os.path.join(folder, "run.h5")]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     # run in the tree itself: ``python -m`` puts the working folder first on sys.path
@@ -309,6 +336,11 @@ def user_run(code: str, seed: int | None = None) -> dict:
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     least_ess = min(p["ess_bulk"] for p in out["parameters"].values())
     stop = out.get("stop") or {}
+    held = None
+    if overshoot:
+        held = first_hold(command[-1])
+        os.remove(command[-1])
+        os.rmdir(os.path.dirname(command[-1]))
     return dict(
         code=code, seed=seed, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
         walkers=out["walkers"], evaluations=out["evaluations"], converged=out["converged"],
@@ -319,10 +351,11 @@ def user_run(code: str, seed: int | None = None) -> dict:
         means={k: p["mean"] for k, p in out["parameters"].items()},
         phases={k: round(v, 2) for k, v in (out.get("timings") or {}).items()},
         load=round(os.getloadavg()[0], 1),
+        first_hold=held, overshoot=None if not held else round(out["steps"] / held, 3),
     )  # fmt: skip
 
 
-def user_runs(n: int, codes: list[str], seeds: list | None = None) -> None:
+def user_runs(n: int, codes: list[str], seeds: list | None = None, overshoot: bool = False) -> None:
     """``n`` rounds of ``user_run`` over the variants ``codes`` (interleaved; each round runs
     every seed of ``seeds``, default the study's own), one JSON row per run, then the medians
     per variant and, against the first variant, the paired CPU ratios (same round and seed):
@@ -334,7 +367,7 @@ def user_runs(n: int, codes: list[str], seeds: list | None = None) -> None:
     for _ in range(n):
         for seed in seeds or [None]:
             for code in codes:
-                rows.append(user_run(code, seed))
+                rows.append(user_run(code, seed, overshoot))
                 print(json.dumps(rows[-1]), flush=True)
     for code in codes:
         mine = [r for r in rows if r["code"] == code]
@@ -385,6 +418,11 @@ def main() -> None:
     ap.add_argument(
         "--user-seeds", type=int, nargs="+", help="with --user: sampler seeds (--seed) per round"
     )
+    ap.add_argument(
+        "--overshoot", action="store_true",
+        help="with --user: write each run's result file and find where the stop rule first held"
+        " (not for timing: the user's command writes no file)",
+    )  # fmt: skip
     ap.add_argument("--save", help="save means/sd/wall to this .npz")
     ap.add_argument("--compare", nargs=2, metavar=("ROM_NPZ", "FULL_NPZ"), help="compare runs")
     args = ap.parse_args()
@@ -392,7 +430,7 @@ def main() -> None:
         compare(*args.compare)
         return
     if args.user:
-        user_runs(args.user, args.code, args.user_seeds)
+        user_runs(args.user, args.code, args.user_seeds, args.overshoot)
         return
     warnings.simplefilter("default")
     if args.seeds or args.seed_list:

@@ -10,7 +10,7 @@ from bayesupdate.cli import main
 from bayesupdate.inference import load_modal_data, read_result, to_datatree
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves.coverage import COVERAGE_DRAWS
-from bayesupdate.inference.sampling import check_schedule
+from bayesupdate.inference.sampling import ADAPT_STEPS, check_schedule
 from bayesupdate.models.exhaust_paper import TABLE2_EMA_HZ
 
 STUDY = """
@@ -124,11 +124,12 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
         assert row["hdi_low"] < row["mean"] < row["hdi_high"]
     assert result["sigma"] == {"fixed": 0.05}
     # one model call per proposal inside the bounds (+ the starting walkers), the three
-    # adaptation stages of the mixture moves (250 steps each) and the coverage check's draws
+    # adaptation stages of the mixture moves (ADAPT_STEPS each) and the coverage check's draws
     # included
-    assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == 750
+    adapt = 3 * ADAPT_STEPS
+    assert result["moves"]["kind"] == "mixture" and result["moves"]["adapt_steps"] == adapt
     check = COVERAGE_DRAWS
-    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + 750) * 16 + 3 * 16 + check
+    assert 0.5 * 400 * 16 < result["evaluations"] <= (400 + adapt) * 16 + 3 * 16 + check
     assert result["wall_s"] > 0
     assert len(result["autocorr_time"]) == 2
     assert result["compute"] == {"kind": "serial", "workers": 1}

@@ -77,6 +77,14 @@ CHECK_BATCH = 500
 CHECK_GROWTH = 1.1
 #: first check, and the least number of steps between checks (``emcee.autocorr`` needs 20)
 CHECK_MIN_STEPS = 20
+#: steps of each adaptation stage (``moves.staged``).  Tried on 2026-11-29 and not kept: 100
+#: (the three stages of 250 x 32 walkers of screen solves are a quarter of ``sample --model
+#: exhaust --data paper:ema``'s CPU).  The frozen proposals covered the posterior less well
+#: (importance ESS 0.41 against 0.49 on the user's command, 0.37 against 0.41 on the demo's
+#: seed case, seed 1 both); the seed case's kept chain took 1,249 steps (tau 11.8) instead
+#: of 702 (tau 6.4), and the user's command, seed 1, once ran its 5,000-step budget without
+#: converging (R-hat 1.013; 168 s CPU against 52 s) (docs/guide/calibrate-sample.md)
+ADAPT_STEPS = 250
 
 
 def check_moves(kind: str) -> str:
@@ -293,7 +301,8 @@ class SamplerSettings:
     ``sampler_space``; the chain and log_prob are returned in theta all the same); a resume must
     use the same.  target_rhat, target_ess : convergence targets (None: not checked).
     progress : show a progress bar.  moves : "mixture" (default) or "de" (module docstring).
-    adapt_steps : steps of each of the two adaptation stages of "mixture" (not kept).
+    adapt_steps : steps of each of the three adaptation stages of "mixture" (not kept;
+    ``ADAPT_STEPS``).
     """
 
     walkers: int = 32
@@ -306,7 +315,7 @@ class SamplerSettings:
     target_ess: float | None = None
     progress: bool = False
     moves: str = "mixture"
-    adapt_steps: int = 250
+    adapt_steps: int = ADAPT_STEPS
 
     def __post_init__(self) -> None:
         check_moves(self.moves)

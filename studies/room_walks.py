@@ -45,6 +45,8 @@ Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every cro
 
 import argparse
 import contextlib
+import functools
+import inspect
 import io
 import sys
 import tempfile
@@ -122,6 +124,8 @@ class WalkTracer:
         self.sites: dict[tuple[str, str], set] = {}
         #: climbing sites whose callee the caller was handed (module docstring)
         self.callbacks: set = set()
+        #: sites whose callee is a property getter: a record's field read, not work
+        self.reads: set = set()
 
     def _room(self, code) -> str | None:
         room = self._rooms.get(code, False)
@@ -148,6 +152,8 @@ class WalkTracer:
             self.sites.setdefault(key, set()).add(site)
             if climbs(key) and _handed(caller, frame.f_code):
                 self.callbacks.add(site)
+            if _is_property(frame):
+                self.reads.add(site)
 
 
 def _handed(caller, code) -> bool:
@@ -159,6 +165,19 @@ def _handed(caller, code) -> bool:
         if getattr(func, "__code__", None) is code:
             return True
     return False
+
+
+def _is_property(frame) -> bool:
+    """Whether the called frame runs a property getter of its ``self`` (``property`` or
+    ``functools.cached_property``): reading a field of a record handed down the walk."""
+    owner = frame.f_locals.get("self")
+    if owner is None:
+        return False
+    try:
+        attr = inspect.getattr_static(type(owner), frame.f_code.co_name)
+    except AttributeError:
+        return False
+    return isinstance(attr, property | functools.cached_property)
 
 
 def _name(code) -> str:
@@ -205,6 +224,28 @@ def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int, int]]:
     return rows
 
 
+def doors(tracer: WalkTracer) -> list[tuple[str, str, int, int]]:
+    """Per crossed pair of rooms (caller room -> callee room): (from, to, call sites, work
+    sites: those that are not a property read), most work sites first."""
+    rows = [(*key, len(found), len(found - tracer.reads)) for key, found in tracer.sites.items()]
+    return sorted(rows, key=lambda r: (-r[3], -r[2], r[0], r[1]))
+
+
+def report_doors(tracer: WalkTracer) -> None:
+    """The pairs of rooms crossed at more than two call sites (the reading of "enter each room
+    at most twice" in the module docstring)."""
+    rows = doors(tracer)
+    over = [r for r in rows if r[2] > 2]
+    over_work = [r for r in rows if r[3] > 2]
+    print(
+        f"room pairs crossed {len(rows)}; at more than 2 sites {len(over)} "
+        f"(more than 2 work sites: {len(over_work)}); sites {sum(r[2] for r in rows)}, "
+        f"work sites {sum(r[3] for r in rows)}"
+    )
+    for source, room, found, work in over:
+        print(f"  {source:>10} -> {room:<12} sites {found:3d}  work sites {work:3d}")
+
+
 def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     rows = table(tracer)
     print(f"\n{name}: rooms entered {len(rows)}")
@@ -213,12 +254,17 @@ def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     for room, *counts in [*rows, ("all", *(sum(r[i] for r in rows) for i in range(1, 6)))]:
         a, b, c, d, e = counts
         print(f"{room:<12} {a:>11} {b:>13} {c:>11} {d:>13} {e:>12}")
+    report_doors(tracer)
     listed = sorted(k for k in tracer.sites if sites or climbs(k))
     print("crossing sites" if sites else "climbing sites (a lower room calls a higher one)")
     for key in listed:
         for caller, callee in sorted(tracer.sites[key]):
             arrow = (
-                "  " if not climbs(key) else "cb" if (caller, callee) in tracer.callbacks else "UP"
+                ("rd" if (caller, callee) in tracer.reads else "  ")
+                if not climbs(key)
+                else "cb"
+                if (caller, callee) in tracer.callbacks
+                else "UP"
             )
             print(f"  {arrow} {key[0]} -> {key[1]}: {caller} -> {callee}")
 

@@ -32,6 +32,14 @@ Runs, through the CLI in this process (the user's path):
   small discovery);
 - ``sample`` of the exhaust against the same data, 16 walkers, 60 steps, DE moves, 2 starts.
 
+"Enter each room at most twice" is read here as: per run, each pair of rooms (caller room ->
+callee room) is crossed at no more than two call sites.  Per pair, not per room: the bottom
+rooms (``compute``, the core's ``modal_data``) are entered from every room above them by design,
+so a per-room total counts clients, while a caller that walks into one room many times to do
+one thing shows in its pair.  Sites, not events: a loop of 500 sampler steps is one site.  A
+site whose callee is a property getter (``ModalData.n_modes``, ``CalibrationProblem.names``) is
+a read of a record handed down, marked ``rd`` and counted apart: "work sites" leave it out.
+
 Measured (this script): discover enters 11 rooms and climbs at 2 sites (26 events), both
 executor callbacks (``discovery.workflow:discovery_task``, ``inference.optimize:_fit_start``);
 sample enters 10 rooms and climbs at 2 sites (9 events), ``_fit_start`` and
@@ -39,6 +47,24 @@ sample enters 10 rooms and climbs at 2 sites (9 events), ``_fit_start`` and
 residual function itself, discover climbed at 5 sites (388 events): three discovery task
 functions, ``_fit_start`` and inference's ``unit_box_residuals`` calling discovery's
 ``residuals_at``.
+
+Pairs crossed at more than two sites, before -> after the commands were thinned (the study's
+overrides in one ``config.with_overrides``, the move scheme checked in ``pipelines.study.prepare``,
+the mass properties at the posterior mean computed by the pipeline) and the mass keys got one
+reader (``pipelines.study.study_mass_terms``):
+- discover: 27 pairs crossed, 13 at more than two sites (12 at more than two work sites), 151
+  sites, 126 work sites; unchanged.  Worst: discovery -> inference 46 sites (31 work), models
+  -> fe 31, discovery -> compute 10, inference -> compute 7, inference -> fe 6; of the
+  pipelines' and commands' own pairs: pipelines -> compute 4 (open_executor and the executor's
+  ``with`` and ``describe``), pipelines -> inference 4, pipelines -> config 4 (3 work),
+  pipelines -> discovery 3, commands -> config 3.
+- sample: 24 pairs, 12 at more than two sites, 11 -> 10 at more than two work sites; 156 -> 154
+  sites, 123 -> 121 work sites.  commands -> config 5 -> 3 sites (``load_study``,
+  ``with_overrides``, ``compute_settings``), commands -> inference 5 -> 3 sites (3 -> 1 work:
+  ``ModePairing.to_dict``; the other two are property reads), pipelines -> inference 30 -> 32
+  sites (22 -> 24 work: the move check and the mass report moved there from the command).
+  Worst: models -> fe 31 (the exhaust's ``StructureBuilder`` calls), pipelines -> inference
+  32, inference -> fe 15, inference -> compute 14, pipelines -> fe 12 (4 work), fe -> compute 8.
 
 Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every crossing site)
 """

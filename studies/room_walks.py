@@ -32,6 +32,14 @@ Runs, through the CLI in this process (the user's path):
   small discovery);
 - ``sample`` of the exhaust against the same data, 16 walkers, 60 steps, DE moves, 2 starts.
 
+"Enter each room at most twice" is read here as: per run, each pair of rooms (caller room ->
+callee room) is crossed at no more than two call sites.  Per pair, not per room: the bottom
+rooms (``compute``, the core's ``modal_data``) are entered from every room above them by design,
+so a per-room total counts clients, while a caller that walks into one room many times to do
+one thing shows in its pair.  Sites, not events: a loop of 500 sampler steps is one site.  A
+site whose callee is a property getter (``ModalData.n_modes``, ``CalibrationProblem.names``) is
+a read of a record handed down, marked ``rd`` and counted apart: "work sites" leave it out.
+
 Measured (this script): discover enters 11 rooms and climbs at 2 sites (26 events), both
 executor callbacks (``discovery.workflow:discovery_task``, ``inference.optimize:_fit_start``);
 sample enters 10 rooms and climbs at 2 sites (9 events), ``_fit_start`` and
@@ -40,11 +48,31 @@ residual function itself, discover climbed at 5 sites (388 events): three discov
 functions, ``_fit_start`` and inference's ``unit_box_residuals`` calling discovery's
 ``residuals_at``.
 
+Pairs crossed at more than two sites, before -> after the commands were thinned (the study's
+overrides in one ``config.with_overrides``, the move scheme checked in ``pipelines.study.prepare``,
+the mass properties at the posterior mean computed by the pipeline) and the mass keys got one
+reader (``pipelines.study.study_mass_terms``):
+- discover: 27 pairs crossed, 13 at more than two sites (12 at more than two work sites), 151
+  sites, 126 work sites; unchanged.  Worst: discovery -> inference 46 sites (31 work), models
+  -> fe 31, discovery -> compute 10, inference -> compute 7, inference -> fe 6; of the
+  pipelines' and commands' own pairs: pipelines -> compute 4 (open_executor and the executor's
+  ``with`` and ``describe``), pipelines -> inference 4, pipelines -> config 4 (3 work),
+  pipelines -> discovery 3, commands -> config 3.
+- sample: 24 pairs, 12 at more than two sites, 11 -> 10 at more than two work sites; 156 -> 154
+  sites, 123 -> 121 work sites.  commands -> config 5 -> 3 sites (``load_study``,
+  ``with_overrides``, ``compute_settings``), commands -> inference 5 -> 3 sites (3 -> 1 work:
+  ``ModePairing.to_dict``; the other two are property reads), pipelines -> inference 30 -> 32
+  sites (22 -> 24 work: the move check and the mass report moved there from the command).
+  Worst: models -> fe 31 (the exhaust's ``StructureBuilder`` calls), pipelines -> inference
+  32, inference -> fe 15, inference -> compute 14, pipelines -> fe 12 (4 work), fe -> compute 8.
+
 Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every crossing site)
 """
 
 import argparse
 import contextlib
+import functools
+import inspect
 import io
 import sys
 import tempfile
@@ -122,6 +150,8 @@ class WalkTracer:
         self.sites: dict[tuple[str, str], set] = {}
         #: climbing sites whose callee the caller was handed (module docstring)
         self.callbacks: set = set()
+        #: sites whose callee is a property getter: a record's field read, not work
+        self.reads: set = set()
 
     def _room(self, code) -> str | None:
         room = self._rooms.get(code, False)
@@ -148,6 +178,8 @@ class WalkTracer:
             self.sites.setdefault(key, set()).add(site)
             if climbs(key) and _handed(caller, frame.f_code):
                 self.callbacks.add(site)
+            if _is_property(frame):
+                self.reads.add(site)
 
 
 def _handed(caller, code) -> bool:
@@ -159,6 +191,19 @@ def _handed(caller, code) -> bool:
         if getattr(func, "__code__", None) is code:
             return True
     return False
+
+
+def _is_property(frame) -> bool:
+    """Whether the called frame runs a property getter of its ``self`` (``property`` or
+    ``functools.cached_property``): reading a field of a record handed down the walk."""
+    owner = frame.f_locals.get("self")
+    if owner is None:
+        return False
+    try:
+        attr = inspect.getattr_static(type(owner), frame.f_code.co_name)
+    except AttributeError:
+        return False
+    return isinstance(attr, property | functools.cached_property)
 
 
 def _name(code) -> str:
@@ -205,6 +250,28 @@ def table(tracer: WalkTracer) -> list[tuple[str, int, int, int, int, int]]:
     return rows
 
 
+def doors(tracer: WalkTracer) -> list[tuple[str, str, int, int]]:
+    """Per crossed pair of rooms (caller room -> callee room): (from, to, call sites, work
+    sites: those that are not a property read), most work sites first."""
+    rows = [(*key, len(found), len(found - tracer.reads)) for key, found in tracer.sites.items()]
+    return sorted(rows, key=lambda r: (-r[3], -r[2], r[0], r[1]))
+
+
+def report_doors(tracer: WalkTracer) -> None:
+    """The pairs of rooms crossed at more than two call sites (the reading of "enter each room
+    at most twice" in the module docstring)."""
+    rows = doors(tracer)
+    over = [r for r in rows if r[2] > 2]
+    over_work = [r for r in rows if r[3] > 2]
+    print(
+        f"room pairs crossed {len(rows)}; at more than 2 sites {len(over)} "
+        f"(more than 2 work sites: {len(over_work)}); sites {sum(r[2] for r in rows)}, "
+        f"work sites {sum(r[3] for r in rows)}"
+    )
+    for source, room, found, work in over:
+        print(f"  {source:>10} -> {room:<12} sites {found:3d}  work sites {work:3d}")
+
+
 def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     rows = table(tracer)
     print(f"\n{name}: rooms entered {len(rows)}")
@@ -213,12 +280,17 @@ def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     for room, *counts in [*rows, ("all", *(sum(r[i] for r in rows) for i in range(1, 6)))]:
         a, b, c, d, e = counts
         print(f"{room:<12} {a:>11} {b:>13} {c:>11} {d:>13} {e:>12}")
+    report_doors(tracer)
     listed = sorted(k for k in tracer.sites if sites or climbs(k))
     print("crossing sites" if sites else "climbing sites (a lower room calls a higher one)")
     for key in listed:
         for caller, callee in sorted(tracer.sites[key]):
             arrow = (
-                "  " if not climbs(key) else "cb" if (caller, callee) in tracer.callbacks else "UP"
+                ("rd" if (caller, callee) in tracer.reads else "  ")
+                if not climbs(key)
+                else "cb"
+                if (caller, callee) in tracer.callbacks
+                else "UP"
             )
             print(f"  {arrow} {key[0]} -> {key[1]}: {caller} -> {callee}")
 

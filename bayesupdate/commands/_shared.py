@@ -182,32 +182,37 @@ def compute_from_args(args, study):
 
 def study_from_args(args):
     """StudyConfig from a study file and/or --model/--data flags (flags win); the optimizer's and
-    sampler's flags where the command has them."""
-    from bayesupdate.config import with_overrides
-
-    study = study_file(args)
-    changes = {
-        "optimizer__seed": args.seed,
-        "optimizer__starts": args.starts,
-        "sampler__seed": args.seed,
-        "sampler__steps": getattr(args, "steps", None),
-        "sampler__walkers": getattr(args, "walkers", None),
-        "sampler__reduced": False if getattr(args, "full", False) else None,
-        "optimizer__polish": False if getattr(args, "no_polish", False) else None,
-        "objective__use_measured_mass": False if getattr(args, "no_mass", False) else None,
-    }
-    return with_overrides(study, **changes)
+    sampler's flags (--seed, --starts, --steps, --walkers, --moves, --full, --no-polish) where
+    the command has them."""
+    return study_file(
+        args,
+        optimizer__seed=args.seed,
+        optimizer__starts=args.starts,
+        sampler__seed=args.seed,
+        sampler__steps=getattr(args, "steps", None),
+        sampler__walkers=getattr(args, "walkers", None),
+        sampler__moves=getattr(args, "moves", None),
+        sampler__reduced=False if getattr(args, "full", False) else None,
+        optimizer__polish=False if getattr(args, "no_polish", False) else None,
+    )
 
 
-def study_file(args):
-    """The study file (or the default study) with --model and --data (``discover``'s study);
+def study_file(args, **changes):
+    """The study file (or the default study) with --model, --data, --no-mass and ``changes``
+    (``config.with_overrides``: ``section__key=value``, None left out) applied in one step;
     --data replaces inline data of the study file entirely, with its choice of modes."""
     from bayesupdate.config import StudyConfig, load_study, with_overrides
 
     if args.study is None and args.model is None:
         raise BayesUpdateError(f"{args.command}: give a STUDY.toml or --model (and --data)")
     study = load_study(args.study) if args.study else StudyConfig()
-    study = with_overrides(study, model__source=args.model, data__source=args.data)
+    study = with_overrides(
+        study,
+        model__source=args.model,
+        data__source=args.data,
+        objective__use_measured_mass=False if getattr(args, "no_mass", False) else None,
+        **changes,
+    )
     if args.data is not None and study.data.frequencies_hz is not None:
         cleared = dict(frequencies_hz=None, weights=None, sd_hz=None, modes=None)
         study = replace(study, data=replace(study.data, **cleared))

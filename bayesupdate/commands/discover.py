@@ -91,11 +91,7 @@ def run(args) -> int:
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
 
-    study = study_file(args)
-    if getattr(args, "no_mass", False):  # the measured mass properties left out, as calibrate's
-        from bayesupdate.config import with_overrides
-
-        study = with_overrides(study, objective__use_measured_mass=False)
+    study = study_file(args)  # --no-mass leaves the measured mass properties out, as calibrate
     if args.out:
         check_output_path(args.out, args.force)
     if args.posterior_steps < 0:

@@ -90,15 +90,13 @@ def run(args) -> int:
     from bayesupdate.atomic import check_output_path
     from bayesupdate.pipelines.study import prepare
 
-    study = _with_moves(study_from_args(args), args.moves)
+    study = study_from_args(args)
     if args.resume and not args.out:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
     if args.out:
         check_output_path(args.out, force=args.force or args.resume)
     if args.write_bdf:
         check_output_path(args.write_bdf, force=args.force)
-    from bayesupdate.inference.mass_properties import mass_property_report
-
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
     report_refused(prepared.problem)
@@ -117,10 +115,8 @@ def run(args) -> int:
     out["warnings"] = list(run.warnings)
     report_warnings(run.warnings)
     out["timings"] = progress.timings()
+    out["mass_properties"] = list(run.mass_properties)
     means = {k: v["mean"] for k, v in out["parameters"].items()}
-    out["mass_properties"] = mass_property_report(
-        prepared.problem, {**prepared.problem.fixed, **means}
-    )
     write_bdf(args.write_bdf, prepared.problem.model, means)
     if not out["converged"]:  # said on every path, never implied by a number in a table
         reason = (out["convergence"] or {}).get("reason", "")
@@ -130,16 +126,6 @@ def run(args) -> int:
     else:
         _print_summary(out, run.summary, study.sampler)
     return 0
-
-
-def _with_moves(study, moves: str | None):
-    """The study with ``--moves`` applied, its move scheme checked before any model is built."""
-    from bayesupdate.config import with_overrides
-    from bayesupdate.inference.sampling import check_moves
-
-    study = with_overrides(study, sampler__moves=moves)
-    check_moves(study.sampler.moves)
-    return study
 
 
 def _sample_with_stop_handlers(prepared, args, compute):
@@ -274,7 +260,6 @@ def _finite_or_none(value) -> float | None:
 
 def _run_tmcmc(prepared, args) -> int:
     """``--sampler tmcmc``: ``pipelines.sample_tmcmc``; the JSON or a short table."""
-    from bayesupdate.inference.mass_properties import mass_property_report
     from bayesupdate.inference.tmcmc import TMCMCSettings
     from bayesupdate.pipelines.sample_tmcmc import sample_tmcmc, tmcmc_json
 
@@ -283,10 +268,6 @@ def _run_tmcmc(prepared, args) -> int:
     cfg = prepared.study.sampler
     settings = TMCMCSettings(particles=args.particles, seed=cfg.seed)
     out = tmcmc_json(sample_tmcmc(prepared, settings), cfg.hdi_prob)
-    means = {k: v["mean"] for k, v in out["parameters"].items() if k != "sigma"}
-    out["mass_properties"] = mass_property_report(
-        prepared.problem, {**prepared.problem.fixed, **means}
-    )
     out["timings"] = progress.timings()
     if args.json:
         print(json.dumps(out))

@@ -2,8 +2,8 @@
 
 The study's FE model, extended by the effects already known (``[effects]``, ``--effect``), runs
 ``discovery.workflow.discover`` against the study's data, with the measured mass properties
-(``[data] mass / mass_sd / cg / inertia``) as data exactly as ``calibrate`` takes them
-(``study_mass_properties``); optionally the final model's posterior is sampled too
+(``[data] mass / mass_sd / cg / inertia``) as data, read by the reader ``calibrate`` uses
+(``pipelines.study.study_mass_terms``); optionally the final model's posterior is sampled too
 (``discovery.posterior.sample_final``).
 """
 
@@ -16,15 +16,8 @@ from bayesupdate.discovery.results_io import extend_with_specs
 from bayesupdate.discovery.settings import DiscoverySettings
 from bayesupdate.discovery.workflow import DiscoveryPairing, DiscoveryResult, discover
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.inference.data import load_modal_data, select_modes
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
-from bayesupdate.pipelines.study import (
-    _mass_property_targets,
-    _mass_with_units,
-    _study_units,
-    measured_mass,
-    objective_spec,
-)
+from bayesupdate.pipelines.study import study_data, study_mass_terms
 
 
 @dataclass(frozen=True)
@@ -67,19 +60,16 @@ def study_pairing(study: StudyConfig, numbers: tuple[int, ...]) -> DiscoveryPair
 
 def study_mass_properties(study: StudyConfig, data, model) -> tuple:
     """(data, ``ObjectiveSpec``): the study's measured mass properties as ``calibrate`` takes
-    them (``pipelines.study.prepare``: ``[data] mass / mass_sd`` in the model's units, the
-    ``[objective]`` mass term, ``[data] cg / inertia``), and ``[likelihood] mass_sd`` (a
+    them (``pipelines.study.study_mass_terms``: ``[data] mass / mass_sd`` in the model's units,
+    the ``[objective]`` mass term, ``[data] cg / inertia``), and ``[likelihood] mass_sd`` (a
     relative sd) applied to the data's mass sd, which discovery's mass term reads
-    (``discovery.mass_block``), as calibrate's likelihood reads it from there."""
-    units = _study_units(model)
-    data = _mass_with_units(study, data, units)
+    (``discovery.mass_block``), as calibrate's likelihood reads it from there.  The CG and
+    inertia terms are scaled at ``model``, the model before the known effects are added
+    (``prepare`` scales them at the extended model; the same without effects)."""
+    data, objective = study_mass_terms(study, data, model)
     sd_rel = study.likelihood.mass_sd
     if sd_rel is not None and data.mass_kg is not None:
         data = replace(data, mass_sd_kg=float(sd_rel) * data.mass_kg)
-    objective = replace(
-        objective_spec(study, data, units),
-        mass_properties=_mass_property_targets(study, model, units),
-    )
     return data, objective
 
 
@@ -89,9 +79,7 @@ def discover_study(
     progress: Callable[[str], None] | None = None,
 ) -> DiscoveryRun:
     """Run discovery on ``study`` (module docstring); ``progress`` receives progress lines."""
-    cfg = study.data
-    data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
-    data = measured_mass(study, data)
+    data, numbers = study_data(study)
     model = study_model(study, data.dof_labels if data.shapes is not None else ())
     if not hasattr(model, "structure"):
         raise BayesUpdateError(

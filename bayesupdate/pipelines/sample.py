@@ -20,6 +20,7 @@ from bayesupdate.inference.diagnostics import (
     summarise,
 )
 from bayesupdate.inference.likelihood import LogPosterior
+from bayesupdate.inference.mass_properties import mass_property_report
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
 from bayesupdate.inference.reference_check import accuracy_against
 from bayesupdate.inference.results import ResultWriter, read_config, read_sampler_state
@@ -72,7 +73,9 @@ class SamplingRun:
     posterior predictive (``posterior_predictive``), {} when interrupted.  compute : where the
     independent work ran (the executor's ``describe()``: {"kind", "workers"[, "scheduler"]}).
     warnings : one-line warnings (``inference.checks.sampling_warnings``: a paired MAC below the
-    threshold at the optimum, the posterior piled at a bound).
+    threshold at the optimum, the posterior piled at a bound).  mass_properties : the measured
+    mass, CG and inertia against the model at the posterior mean (``mass_properties_at``), ()
+    when interrupted or nothing is measured.
     """
 
     calibration: CalibrationResult
@@ -81,6 +84,7 @@ class SamplingRun:
     predictions: dict
     compute: dict | None = None
     warnings: tuple[str, ...] = ()
+    mass_properties: tuple[dict, ...] = ()
 
 
 def run_sampling(
@@ -143,7 +147,19 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     predictions = posterior_predictive(log_post, posterior, cfg.predictive_draws, seed=cfg.seed)
     found = tuple(sampling_warnings(prepared.problem, calibration, posterior.samples()))
     writer.write(posterior=posterior, diagnostics=summary, predictions=predictions, warnings=found)
-    return SamplingRun(calibration, posterior, summary, predictions, warnings=found)
+    means = {name: summary[name]["mean"] for name in posterior.names if name != "sigma"}
+    masses = mass_properties_at(prepared, means)
+    return SamplingRun(
+        calibration, posterior, summary, predictions, warnings=found, mass_properties=masses
+    )
+
+
+def mass_properties_at(prepared: PreparedStudy, means: dict) -> tuple[dict, ...]:
+    """The study's measured mass, CG and inertia against the model's at the parameter values
+    ``means`` ({name: value}; the problem's fixed values fill the rest), model units
+    (``inference.mass_properties.mass_property_report``); () when nothing is measured."""
+    problem = prepared.problem
+    return tuple(mass_property_report(problem, {**problem.fixed, **means}))
 
 
 def _basis_at_optimum(problem, rom, likelihood, calibration) -> tuple:

@@ -13,6 +13,7 @@ import numpy as np
 
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.tmcmc import TMCMCResult, TMCMCSettings, tmcmc
+from bayesupdate.pipelines.sample import mass_properties_at
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import certify_rom, sampling_problem
 
@@ -21,13 +22,16 @@ from bayesupdate.pipelines.surrogates import certify_rom, sampling_problem
 class TMCMCRun:
     """names : parameter names (+ "sigma" when inferred), columns of ``result.samples``.
     result : the TMCMC result.  rom : reduced-model summary at the posterior mean (None on
-    full solves).  evaluations / failed : model evaluations, and those that failed."""
+    full solves).  evaluations / failed : model evaluations, and those that failed.
+    mass_properties : the measured mass, CG and inertia against the model at the posterior
+    mean (``pipelines.sample.mass_properties_at``)."""
 
     names: tuple[str, ...]
     result: TMCMCResult
     rom: dict | None
     evaluations: int
     failed: int
+    mass_properties: tuple[dict, ...] = ()
 
 
 def _prior_functions(log_post: LogPosterior):
@@ -68,13 +72,20 @@ def sample_tmcmc(prepared: PreparedStudy, settings: TMCMCSettings, progress=None
         names = problem.names
         mean = result.samples[:, : len(names)].mean(axis=0)
         summary = certify_rom(rom, mean[None, :], names, "the posterior mean")[1]
-    return TMCMCRun(log_post.names, result, summary, log_post.evaluations, log_post.failed)
+    means = {
+        name: float(result.samples[:, j].mean())
+        for j, name in enumerate(log_post.names)
+        if name != "sigma"
+    }
+    masses = mass_properties_at(prepared, means)
+    return TMCMCRun(log_post.names, result, summary, log_post.evaluations, log_post.failed, masses)
 
 
 def tmcmc_json(run: TMCMCRun, hdi_prob: float = 0.9) -> dict:
     """JSON-ready: {"sampler": "tmcmc", "parameters": {NAME: {"mean", "sd", "q_low",
     "q_high"}}, "log_evidence", "stages", "betas", "ess", "acceptance", "particles",
-    "evaluations", "failed", "rom"}; q_low / q_high the central ``hdi_prob`` interval."""
+    "evaluations", "failed", "rom", "mass_properties"}; q_low / q_high the central
+    ``hdi_prob`` interval."""
     samples = run.result.samples
     tail = 50.0 * (1.0 - hdi_prob)
     low, high = np.percentile(samples, [tail, 100.0 - tail], axis=0)
@@ -100,4 +111,5 @@ def tmcmc_json(run: TMCMCRun, hdi_prob: float = 0.9) -> dict:
         "evaluations": int(run.evaluations),
         "failed": int(run.failed),
         "rom": run.rom,
+        "mass_properties": list(run.mass_properties),
     }

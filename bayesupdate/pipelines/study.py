@@ -24,6 +24,7 @@ from bayesupdate.inference.mass_properties import (
 )
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, build_problem
+from bayesupdate.inference.sampling import check_moves
 from bayesupdate.modal_data import ModalData
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 
@@ -109,6 +110,33 @@ def _mass_property_targets(study: StudyConfig, model, units: ModelUnits):
     return build_targets(raw, about, units, function({}), weights, "data")
 
 
+def study_mass_terms(
+    study: StudyConfig, data: ModalData, model, reference=None
+) -> tuple[ModalData, ObjectiveSpec]:
+    """The study's measured mass properties, read once for every pipeline that fits them.
+
+    Parameters
+    ----------
+    study : the validated study (``[data] mass / mass_sd / cg / inertia``, ``[objective] mass /
+        mass_kg / mass_weight / cg_weight / inertia_weight / use_measured_mass``).
+    data : the test data (``study_data``); its measured mass in kg, or none.
+    model : the study's model before any effect is added: its units (a Nastran deck's own,
+        else SI) are the units of the keys without a unit.
+    reference : the model whose mass properties at its reference design scale the CG and
+        inertia terms (``inference.mass_properties.build_targets``); None: ``model``.
+
+    Returns
+    -------
+    (data, objective) : ``data`` with ``[data] mass / mass_sd`` applied in the model's mass
+    unit, and the fit objective's extra terms (``objective_spec``) with the measured CG and
+    inertia as ``mass_properties`` (None when none are given).
+    """
+    units = _study_units(model)
+    data = _mass_with_units(study, data, units)
+    targets = _mass_property_targets(study, model if reference is None else reference, units)
+    return data, replace(objective_spec(study, data, units), mass_properties=targets)
+
+
 def objective_spec(
     study: StudyConfig, data: ModalData, units: ModelUnits | None = None
 ) -> ObjectiveSpec:
@@ -175,20 +203,17 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
 
     effects : effect specs ``KIND@LOCATION[:name=value]`` added to the study's ``[effects]``
     (``study_effects``); the model is extended by all of them."""
+    check_moves(study.sampler.moves)  # a settings error before any model is built
     specs = study_effects(study, effects)
     data, numbers = study_data(study)
     # a Nastran deck reads its shapes at the test's DOF labels (``nastran.test_points``)
-    model = study_model(study, data.dof_labels if data.shapes is not None else ())
-    units = _study_units(model)
-    data = _mass_with_units(study, data, units)
+    base = study_model(study, data.dof_labels if data.shapes is not None else ())
+    model = base
     if specs:
         from bayesupdate.discovery.results_io import extend_with_specs
 
-        model = extend_with_specs(model, specs)
-    objective = replace(
-        objective_spec(study, data, units),
-        mass_properties=_mass_property_targets(study, model, units),
-    )
+        model = extend_with_specs(base, specs)
+    data, objective = study_mass_terms(study, data, base, model)
     problem = build_problem(
         model,
         data,

@@ -189,14 +189,15 @@ def _residual_function(
     return unit_box_residuals(unit_box(problem), residuals_at, np.ones(n_res), count)
 
 
-def _batch_residuals(problem: CalibrationProblem):
+def _batch_residuals(problem: CalibrationProblem, mass_fit=None):
     """theta (B, d) -> the weighted residuals (B, n_res) of ``problem.residual_vector``, NaN rows
     where the model failed, from one batched solve (``predict_batch_with_shapes``) and the
     batched MAC pairing (``pairing.pair_batch``: the assignment ``pair_modes`` makes per point);
     None unless the model gives batched sensor shapes and the problem pairs by shape (then
     ``problem.evaluate`` point by point).  Batched reduced solves agree with one-point ones to
     1e-12..2e-11 relative; a point costs ~0.6 ms batched against ~1.9 ms alone (the exhaust's
-    reduced model)."""
+    reduced model).  ``mass_fit``: the masses of points inside its box from this verified
+    polynomial (``_exact_mass_fit``) instead of one model call each."""
     model, pairing, spec = problem.model, problem.pairing, problem.objective
     labels = {label: i for i, label in enumerate(getattr(model, "sensor_labels", ()))}
     if (
@@ -223,7 +224,7 @@ def _batch_residuals(problem: CalibrationProblem):
         index, mac = pair_batch(reference, shapes[:, rows, :], window)
         parts = [sqrt_w * (np.take_along_axis(freqs, index, axis=1) - f_test) / f_test]
         if with_mass:
-            mass = np.array([_mass_or_nan(mass_of, names, row) for row in full])
+            mass = _masses(mass_of, mass_fit, names, theta, full)
             target = spec.mass_target_kg
             parts.append((np.sqrt(spec.mass_weight) * (mass - target) / target)[:, None])
         if spec.mass_properties is not None:  # measured CG / inertia: as ``residual_vector``
@@ -234,6 +235,42 @@ def _batch_residuals(problem: CalibrationProblem):
         return np.hstack(parts)
 
     return residuals
+
+
+def _masses(mass_of, mass_fit, names, theta: np.ndarray, full: np.ndarray) -> np.ndarray:
+    """(B,) masses [kg] at the points theta (B, d) (``full``: with the fixed values, in
+    ``names`` order): from the verified polynomial ``mass_fit`` inside its box, else (or without
+    one) the model's, NaN where it rejects the values."""
+    if mass_fit is not None and np.all((theta >= mass_fit.low) & (theta <= mass_fit.high)):
+        return mass_fit(theta)
+    return np.array([_mass_or_nan(mass_of, names, row) for row in full])
+
+
+def _exact_mass_fit(problem: CalibrationProblem, seed: int = 0):
+    """The verified polynomial of the problem's total mass over its bounds
+    (``inference.mass_fit``; fixed values held) when its mass term is on, the model has batched
+    shapes and the fit reproduces the model to ``likelihood.EXACT_MASS_REL_TOL`` (1e-10) at its
+    check points; else None.  Why: on the shell exhaust's basis a model mass is 0.74 ms of a
+    batched point's ~2.7 ms (one Python call into the 28,386-DOF model's property arrays), the
+    fit 442 of them once per calibration (``LogPosterior.use_fitted_mass`` takes the same fit
+    for the same reason; the exhaust's matches to ~1e-12)."""
+    from bayesupdate.inference.likelihood import EXACT_MASS_REL_TOL
+    from bayesupdate.inference.mass_fit import fit_mass_polynomial
+
+    spec, model = problem.objective, problem.model
+    if not (spec.mass_weight > 0 and spec.mass_target_kg is not None):
+        return None
+    mass_of = mass_function(model)
+    if mass_of is None or not hasattr(model, "predict_batch_with_shapes"):
+        return None
+    fixed = tuple(k for k in problem.fixed if k in model.parameter_names)
+    names, values = problem.names + fixed, [problem.fixed[k] for k in fixed]
+
+    def mass_at(row: np.ndarray) -> float:
+        return mass_of(dict(zip(names, map(float, np.concatenate([row, values])), strict=True)))
+
+    fit = fit_mass_polynomial(mass_at, problem.lower, problem.upper, seed)
+    return fit if fit is not None and fit.max_rel_error <= EXACT_MASS_REL_TOL else None
 
 
 def _properties_or_nan(problem: CalibrationProblem, names, row: np.ndarray) -> np.ndarray:
@@ -253,11 +290,11 @@ def _mass_or_nan(mass_of, names: tuple[str, ...], row: np.ndarray) -> float:
         return np.nan
 
 
-def _unit_box_batch(problem: CalibrationProblem, count: EvaluationCount, n_res: int):
+def _unit_box_batch(problem: CalibrationProblem, count: EvaluationCount, n_res: int, mass_fit=None):
     """u (B, d) in the unit box -> residuals (B, n_res) on the batched path (``_batch_residuals``;
     None without one), each failed point given ``unit_box_residuals``' failure value and counted
-    in ``count``."""
-    batch = _batch_residuals(problem)
+    in ``count`` (``mass_fit``: as ``_batch_residuals``)."""
+    batch = _batch_residuals(problem, mass_fit)
     if batch is None:
         return None
     box = unit_box(problem)
@@ -319,7 +356,7 @@ def _polish_together(
     if not which:
         return ends, values
     count = EvaluationCount()
-    batch = _unit_box_batch(job.problem, count, job.n_res)
+    batch = _unit_box_batch(job.problem, count, job.n_res, job.mass_fit)
 
     def objective(u: np.ndarray) -> np.ndarray:
         job.stop.check()
@@ -365,8 +402,10 @@ def _start_points(
 class _Fits:
     """The shared payload of the start tasks (sent to each worker once): the problem, its
     residual count, the least-squares budget (``max_nfev``; ``least_squares=False``: none, the
-    ends are only re-evaluated), the Nelder-Mead budget per parameter (0: no polish) and the
-    run's stop request (only the serial executor shares the object itself)."""
+    ends are only re-evaluated), the Nelder-Mead budget per parameter (0: no polish), the
+    run's stop request (only the serial executor shares the object itself), the polish's
+    (xatol, fatol) and the verified mass polynomial of the batched residuals (``_exact_mass_fit``;
+    None: the model's masses)."""
 
     problem: CalibrationProblem
     n_res: int
@@ -375,6 +414,7 @@ class _Fits:
     least_squares: bool = True
     stop: StopRequest = field(default_factory=StopRequest)
     tolerance: tuple[float, float] = (1e-7, 1e-10)
+    mass_fit: object = None
 
     def simplex(self, d: int) -> SimplexSettings:
         """The polish's stopping rules in d dimensions: ``tolerance`` (xatol, fatol) and the
@@ -391,7 +431,7 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple:
     u0, polish = item
     job.stop.check()  # a stop request a compiled extension swallowed (bayesupdate.compute.stop)
     count = EvaluationCount()
-    batch = _unit_box_batch(job.problem, count, job.n_res)
+    batch = _unit_box_batch(job.problem, count, job.n_res, job.mass_fit)
     residuals = _residual_function(job.problem, count, job.n_res, batch)
     d = u0.size
     if job.least_squares:
@@ -614,7 +654,7 @@ def calibrate(
     polish = 400 if settings.polish_ends else 0  # Nelder-Mead budget per parameter
     tolerance = SURROGATE_POLISH if refine is not None else (1e-7, 1e-10)
     job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest(),
-                tolerance=tolerance)  # fmt: skip
+                tolerance=tolerance, mass_fit=_exact_mass_fit(problem))  # fmt: skip
     ends, objectives = _local_fits(job, u_starts, counter, executor)
     if refine is not None:
         problem, ends, objectives = _with_refine(refine, problem, box, counter, ends, objectives,

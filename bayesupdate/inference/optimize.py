@@ -320,6 +320,74 @@ def _unit_box_batch(problem: CalibrationProblem, count: EvaluationCount, n_res: 
     return residuals
 
 
+def _analytic_jacobian(problem: CalibrationProblem, count: EvaluationCount, mass_fit=None):
+    """u (d,) -> the Jacobian (n_res, d) of the batched residuals (``_batch_residuals``) in the
+    unit box from the reduced basis's design derivatives (``inference.reduced_jacobian``: one
+    eigen-solve), None at a point the basis does not cover; or None when ``problem`` has no
+    such path.  The mass row: a forward difference of the masses with ``_forward_jacobian``'s
+    steps."""
+    from bayesupdate.inference.reduced_jacobian import eigen_derivatives, reduced_basis_of
+
+    found = reduced_basis_of(problem)
+    if found is None or _batch_residuals(problem) is None:
+        return None
+    model, basis = found
+    pairing, spec = problem.pairing, problem.objective
+    labels = {label: i for i, label in enumerate(model.sensor_labels)}
+    rows = np.array([labels[label] for label in pairing.dof_labels], dtype=int)
+    reference = pairing.test_shapes if pairing.method == "mac" else pairing.reference_shapes
+    fixed = tuple(k for k in problem.fixed if k in model.parameter_names)
+    names, fixed_values = problem.names + fixed, [problem.fixed[k] for k in fixed]
+    columns = [model.parameter_names.index(n) for n in problem.names]
+    weight = np.sqrt(problem.weights) / problem.data.frequencies_hz
+    with_mass = spec.mass_weight > 0 and spec.mass_target_kg is not None
+    mass_of = mass_function(model) if with_mass else None
+    box, span = unit_box(problem), problem.upper - problem.lower
+
+    def at(u: np.ndarray) -> np.ndarray:
+        return np.hstack([box.theta_from_u(u), np.tile(fixed_values, (u.shape[0], 1))])
+
+    def jacobian(u0: np.ndarray) -> np.ndarray | None:
+        full = model._theta_full(at(u0[None, :]), names)
+        if not (np.all(np.isfinite(full)) and model._inside(full)[0]):
+            return None
+        lam, y, dlam = eigen_derivatives(basis, full, columns, pairing.n_model)
+        count.evaluations += 1
+        f = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+        window = None if pairing.window is None else (pairing.test_hz, f[None, :], pairing.window)
+        index = pair_batch(reference, (basis.V_sensor @ y)[None, rows, :], window)[0][0]
+        df = dlam / (8 * np.pi**2 * f[:, None])  # d f / d theta [Hz per SI unit]
+        parts = [weight[:, None] * df[index] * span[None, :]]
+        if with_mass:
+            h = np.full(u0.size, np.sqrt(np.finfo(float).eps))
+            h = np.where(u0 + h > 1.0, -h, h)
+            u = np.vstack([u0, u0 + np.diag(h)])
+            m = _masses(mass_of, mass_fit, names, box.theta_from_u(u), at(u))
+            scale = np.sqrt(spec.mass_weight) / spec.mass_target_kg
+            parts.append(scale * ((m[1:] - m[0]) / ((u0 + h) - u0))[None, :])
+        out = np.vstack(parts)
+        return out if np.all(np.isfinite(out)) else None
+
+    return jacobian
+
+
+def _jacobian(problem: CalibrationProblem, count: EvaluationCount, batch, mass_fit=None):
+    """scipy's ``jac`` for the least squares: the analytic Jacobian on a reduced basis
+    (``_analytic_jacobian``), a batched forward difference where it has none (``batch``), or
+    scipy's "2-point" without a batched path."""
+    if batch is None:
+        return "2-point"
+    analytic = _analytic_jacobian(problem, count, mass_fit)
+    if analytic is None:
+        return partial(_forward_jacobian, batch)
+
+    def jacobian(u0: np.ndarray) -> np.ndarray:
+        out = analytic(u0)
+        return _forward_jacobian(batch, u0) if out is None else out
+
+    return jacobian
+
+
 def _forward_jacobian(batch, u0: np.ndarray) -> np.ndarray:
     """Forward-difference Jacobian (n_res, d) of the residuals at u0 (d,) in [0, 1]^d, its d + 1
     points as one batch (``batch``: u (B, d) -> (B, n_res)).  The steps are scipy's "2-point"
@@ -444,7 +512,7 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple:
         fit = optimize.least_squares(
             residuals,
             np.clip(u0, 0.0, 1.0),
-            jac="2-point" if batch is None else partial(_forward_jacobian, batch),
+            jac=_jacobian(job.problem, count, batch, job.mass_fit),
             bounds=(np.zeros(d), np.ones(d)),
             method="trf",
             x_scale=1.0,

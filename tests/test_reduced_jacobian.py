@@ -47,7 +47,7 @@ def test_analytic_jacobian_equals_central_differences(problem, seed):
     analytic = jacobian(u0)
     numeric = _central(batch, u0)
     # central differences carry ~h^2 truncation and 1e-11 / h rounding: 1e-6 of the largest
-    # entry (measured 3e-8..1.9e-7 at these seeds); the same pairing at u0 +- h (no kink within 1e-5)
+    # entry (measured 3e-8..1.9e-7 at these seeds); the same pairing at u0 +- h
     scale = np.max(np.abs(numeric))
     assert analytic.shape == numeric.shape == (n_res, len(problem.names))
     assert np.max(np.abs(analytic - numeric)) <= 1e-6 * scale

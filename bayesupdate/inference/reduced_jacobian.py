@@ -15,11 +15,15 @@ at the point (the residual's branch: on a kink the one-sided derivative, as a di
 give from one side), and the mass term's derivative is a forward difference of the masses
 (``optimize._masses``: the verified polynomial when there is one).  Other extra terms (MAC,
 measured CG / inertia) or points the basis does not cover: None, and the caller differences.
+
+The basis is reached through the reduced model's attributes (``certification.basis``: its
+``eigen``, ``matrices``' affine terms and ``decomposition.coefficients``), not imported:
+inference imports no fe (the layer contract); these functions belong beside
+``ReducedBasis.eigen`` in ``fe.reduced`` when that module next changes.
 """
 
 import numpy as np
 
-from bayesupdate.fe.batched_eigen import batched_elastic_eigenvalues
 from bayesupdate.inference.problem import CalibrationProblem
 
 #: relative step of the coefficients' central differences: their truncation error ~ step^2
@@ -46,7 +50,7 @@ def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int)
     """At one point full (1, P) of the basis's parameters (SI): (lambda (m,) [rad^2/s^2], y
     (r, m) mass-normalised reduced vectors, d lambda / d theta (m, len(columns)) for the
     parameters at ``columns``)."""
-    lam, y = batched_elastic_eigenvalues(*basis.matrices(full), basis.n_rigid, n_modes, True)
+    lam, y = basis.eigen(full, n_modes, vectors=True)
     lam, y = lam[0], y[0]
     h = STEP * np.abs(full[0, columns])
     steps = np.zeros((len(columns), full.shape[1]))

@@ -22,7 +22,9 @@ polished: there the simplex, started 5 % wide, spends ~300 evaluations to move t
 its ninth digit (14 of the shell exhaust's 17 ends), while an end on a kink shows a gradient of
 7e3..2e5 (the forward difference straddles the flip).  The polishes of a model with batched shapes
 run in lockstep, each round's points one batched solve (``inference.nelder_mead``: scipy's steps
-bit for bit).
+bit for bit).  On a certified reduced basis the least squares take the analytic Jacobian of the
+reduced pencil (``inference.reduced_jacobian``: one eigen-solve instead of d + 1), and the test
+for a smooth end still uses a forward difference at the end (``_end_optimality``).
 
 A cheap surrogate (the certified reduced basis) may do the search, with the exact problem given as
 ``refine``: every end point is then evaluated on the exact model, and polished there unless it is

@@ -43,7 +43,9 @@ number to compare) and wall time, in a cache folder of its own (``BAYESUPDATE_CA
   "cached"       the same command again: the basis loaded and re-checked, the optimum recalled
                  and checked by one full solve (N times);
   "basis cached" ``--seed 1`` (other starts, the same basis): the basis loaded, the search and
-                 the refine step run (N times, each with a new seed so that no optimum is kept).
+                 the refine step run (N times, each with a new seed so that no optimum is kept;
+                 ``--first-seed`` S: seeds S, S + 1, ...: in a kept folder, seeds not run
+                 there yet, or their optima are recalled).
 Medians per kind, the objectives and the largest difference of the optimum's frequencies
 between the runs.
   .venv/bin/python benchmarks/exhaust_shell_basis.py --calibrate-runs 3
@@ -281,7 +283,8 @@ def calibrate_runs(args) -> dict:
         for i in range(args.calibrate_runs):
             kinds["cached"].append(_timed_run([], env))
             print(f"[cached] {_row(kinds['cached'][-1])}", flush=True)
-            kinds["basis cached"].append(_timed_run(["--seed", str(i + 1)], env))
+            seed = str(args.first_seed + i)
+            kinds["basis cached"].append(_timed_run(["--seed", seed], env))
             print(f"[basis cached] {_row(kinds['basis cached'][-1])}", flush=True)
     finally:
         if not args.cache_dir:
@@ -335,6 +338,13 @@ def main() -> None:
         help="the calibration runs only: cached runs of each kind (0: none)",
     )
     ap.add_argument("--first-runs", type=int, default=1, help="first runs (empty cache)")
+    ap.add_argument(
+        "--first-seed",
+        type=int,
+        default=1,
+        help="seed of the first 'basis cached' run, the next ones +1 each (1); in a kept "
+        "--cache-dir, seeds not run there before, or their optima are recalled",
+    )
     ap.add_argument(
         "--cache-dir",
         help="the calibration runs' cache folder, kept (default: a new "

@@ -3,6 +3,7 @@ the check is deterministic, so sharing it changes no number, and its cost (up to
 solves per end) no longer grows with the number of starts that reach one corner of the box."""
 
 import numpy as np
+import pytest
 
 from bayesupdate.config import parse_study
 from bayesupdate.inference import CalibrationSettings, calibrate
@@ -31,7 +32,9 @@ def test_coinciding_ends_are_checked_once():
         settings = CalibrationSettings(starts=starts, seed=0)
         alone = calibrate(problem, settings)
         checked = calibrate(problem, settings, refine=problem)
-        assert checked.parameters == {"theta_1": 1.5, "theta_2": 1.5}
+        # the corner to the last bits: trust-region reflective keeps its iterates strictly
+        # inside the box (one ulp from it here), and an end at a smooth minimum is not polished
+        assert checked.parameters == pytest.approx({"theta_1": 1.5, "theta_2": 1.5}, abs=1e-12)
         assert checked.expr == alone.expr
         cost[starts] = checked.evaluations - alone.evaluations
     # the exact check of one shared end: the same whether 2 or 6 starts reached it

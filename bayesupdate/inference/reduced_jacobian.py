@@ -1,0 +1,68 @@
+"""The Jacobian of the fit residuals on a certified reduced basis from design derivatives.
+
+On a reduced basis the pencil is K_r(theta) = sum_t c_t(theta) K_t, M_r likewise
+(``fe.reduced.basis.ReducedBasis``), so an eigenvalue's design derivative needs no second solve:
+for a simple eigenvalue lambda_k with mass-normalised reduced vector y_k (Fox & Kapoor, AIAA J. 6
+(1968) 2426; Nelson, AIAA J. 14 (1976) 1201)
+
+    d lambda_k / d theta_j = y_k^T (dK_r/dtheta_j - lambda_k dM_r/dtheta_j) y_k,
+
+and f_k = sqrt(lambda_k) / (2 pi) gives d f_k = d lambda_k / (8 pi^2 f_k).  The coefficients c_t
+(monomials and, for non-affine fields, interpolation weights in log theta) are differentiated by
+central differences of the coefficients alone (microseconds; no eigen-solve), so a Jacobian costs
+one eigen-solve with vectors instead of the d + 1 of a forward difference.  The pairing is held
+at the point (the residual's branch: on a kink the one-sided derivative, as a difference would
+give from one side), and the mass term's derivative is a forward difference of the masses
+(``optimize._masses``: the verified polynomial when there is one).  Other extra terms (MAC,
+measured CG / inertia) or points the basis does not cover: None, and the caller differences.
+
+The basis is reached through the reduced model's attributes (``certification.basis``: its
+``eigen``, ``matrices``' affine terms and ``decomposition.coefficients``), not imported:
+inference imports no fe (the layer contract); these functions belong beside
+``ReducedBasis.eigen`` in ``fe.reduced`` when that module next changes.
+"""
+
+import numpy as np
+
+from bayesupdate.inference.problem import CalibrationProblem
+
+#: relative step of the coefficients' central differences: their truncation error ~ step^2
+STEP = 1e-6
+
+
+def reduced_basis_of(problem: CalibrationProblem):
+    """(the reduced model, its basis) when ``problem`` is on a certified reduced basis whose
+    stiffness is on the elastic block (no rigid-body energy) and every extra term is
+    differentiable here (module docstring); else None."""
+    model, spec = problem.model, problem.objective
+    certification = getattr(model, "certification", None)
+    basis = getattr(certification, "basis", None)
+    if basis is None or not getattr(model, "certified", False) or basis.rigid_energy:
+        return None
+    if spec.mac_weight > 0 or spec.mass_properties is not None:
+        return None
+    if problem.pairing.n_model > model.n_modes:
+        return None
+    return model, basis
+
+
+def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int):
+    """At one point full (1, P) of the basis's parameters (SI): (lambda (m,) [rad^2/s^2], y
+    (r, m) mass-normalised reduced vectors, d lambda / d theta (m, len(columns)) for the
+    parameters at ``columns``)."""
+    lam, y = basis.eigen(full, n_modes, vectors=True)
+    lam, y = lam[0], y[0]
+    h = STEP * np.abs(full[0, columns])
+    steps = np.zeros((len(columns), full.shape[1]))
+    steps[np.arange(len(columns)), columns] = h
+    cK_plus, cM_plus = basis.decomposition.coefficients(full + steps)
+    cK_minus, cM_minus = basis.decomposition.coefficients(full - steps)
+    dcK = (cK_plus - cK_minus) / (2 * h[:, None])
+    dcM = (cM_plus - cM_minus) / (2 * h[:, None])
+    r, nr = basis.size, basis.n_rigid
+    dK = ((dcK @ basis.K_terms[0]) @ basis.K_terms[1]).reshape(-1, r - nr, r - nr)
+    dM = ((dcM @ basis.M_terms[0]) @ basis.M_terms[1]).reshape(-1, r, r)
+    b = y[nr:]
+    k_part = np.einsum("im,pij,jm->mp", b, dK, b, optimize=True)
+    m_part = np.einsum("im,pij,jm->mp", y, dM, y, optimize=True)
+    return lam, y, k_part - lam[:, None] * m_part

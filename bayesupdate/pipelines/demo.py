@@ -231,10 +231,12 @@ TASK_STEPS = {
 def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
     """The independent tasks ``run_demo`` hands to its executor, in the order they start (a
     worker takes the next as it finishes one), chosen so that two workers end together
-    (``benchmarks/demo_steps.py --workers 2``, CPU seconds per task with cached bases).  Quick:
-    {shell seed case 38, beam optimum 17, FE part 1} against the virtual test's {calibration
-    31, discovery 32}, its discovery last as its figures are the fewest (drawn after the last
-    task).  Full: {seed discovery 58, virtual discovery 57, beam optimum 90, FE part} against
+    (``benchmarks/demo_steps.py``, CPU seconds per task with cached bases).  Quick (serial, on a
+    machine at load 20, 2026-11-29): {FE part 1.3, shell seed case 47, beam optimum 23} against
+    the virtual test's {calibration 24, discovery 37}, while this process draws the figures
+    (28) as parts arrive: the FE part first so that its figures are drawn early, the beam
+    optimum last as it has no figures (the last task's are drawn after it, on one core).
+    Full: {seed discovery 58, virtual discovery 57, beam optimum 90, FE part} against
     {shell seed case 104, virtual calibration 106}.  --quick keeps discovery where it has
     something to find (the virtual test's hidden effect)."""
     if settings.quick:

@@ -219,3 +219,53 @@ def test_the_quick_demo_gives_the_same_numbers_serial_and_on_two_worker_processe
     ):
         np.testing.assert_array_equal(get(serial), get(parallel))
     assert serial.seed_optimum.calibration.expr == parallel.seed_optimum.calibration.expr
+
+
+# the virtual test's optimum from 1 and 3 starts, discovery's baseline from 1 and 4 (about 40 s
+# of CPU)
+@LONG
+def test_the_quick_demos_fewer_virtual_starts_reach_the_optimum_of_more(tmp_path):
+    """A quick run calibrates the virtual test from ``DemoSettings.virtual_starts`` (1) starts
+    and discovery's baseline from 1 (``_discovery_part``), both besides the reference start:
+    the same optimum as the 3 starts of the quick run before (Expr 0.010142, the design values to
+    1e-6 relative) and discovery's default 4 starts (Expr 0.0042514)."""
+    from bayesupdate.config import parse_study
+    from bayesupdate.discovery.settings import DiscoverySettings
+    from bayesupdate.discovery.workflow import _prepare
+    from bayesupdate.inference.data import load_modal_data, select_modes
+    from bayesupdate.pipelines.discover import study_mass_properties, study_pairing
+    from bayesupdate.pipelines.model_source import study_model
+    from bayesupdate.pipelines.study import measured_mass
+
+    settings = demo.DemoSettings(tmp_path, quick=True)
+    assert settings.virtual_starts == 1 and demo.DemoSettings(tmp_path).virtual_starts == 12
+    demo._run_task((settings, demo._silent), "ema")
+    source = demo._virtual_modes(settings)
+    optima = []
+    for starts in (settings.virtual_starts, 3):
+        prepared = prepare(demo._study(settings, source, starts=starts))
+        part = demo.optimum_part(prepared, polished=True, weights=(), exact=False)
+        optima.append(part.calibration)
+    few, many = optima
+    assert few.starts == 2 and many.starts == 4
+    assert few.expr == pytest.approx(0.010142, abs=1e-6)
+    assert few.expr == pytest.approx(many.expr, rel=1e-6)
+    np.testing.assert_allclose(few.theta, many.theta, rtol=1e-5)
+
+    # discovery's own study of those modes, set up as ``discover_study`` sets it up
+    study = parse_study({"model": {"source": "exhaust"}, "data": {"source": source}}, "demo")
+    cfg = study.data
+    data, numbers = select_modes(load_modal_data(cfg.as_source()), cfg.selection(), cfg.label)
+    data = measured_mass(study, data)
+    model = study_model(study, data.dof_labels)
+    data, objective = study_mass_properties(study, data, model)
+    pairing = study_pairing(study, numbers)
+    baselines = []
+    for starts in (1, 4):
+        knobs = DiscoverySettings.from_flat(seed=0, baseline_starts=starts)
+        baseline = _prepare(model, data, knobs, None, None, pairing, print, None, objective)[2]
+        baselines.append(baseline)
+    one, four = baselines
+    assert one.expr == pytest.approx(0.0042514, abs=1e-7)
+    assert one.expr == pytest.approx(four.expr, rel=1e-9)
+    np.testing.assert_allclose(one.theta, four.theta, rtol=1e-7)

@@ -21,7 +21,7 @@ DESCRIPTION = """Run the embedded default end to end and write a report:
 Writes into --out: report.html (self-contained), report.md, figures/, HDF5 results, the UFF file.
 
   bayesupdate demo --out demo_out            # the whole run (about 8.5 minutes of CPU)
-  bayesupdate demo --out demo_out --quick    # a first look (about 2.5-3 minutes of CPU)
+  bayesupdate demo --out demo_out --quick    # a first look (about 2.5 minutes of CPU)
 
 --quick: fewer starts, walkers and steps, no discovery on the seed case; its posteriors are not
 expected to converge and say so.
@@ -42,8 +42,8 @@ v42_hz, ours_hz, mac_v33, mac_v42, mac_ours, ours_mean_hz, ours_band_hz (5-95 %)
 
 
 QUICK_NOTE = (
-    "quick run: {s.starts} starts, {s.walkers} walkers x {s.steps} steps (not expected to "
-    "converge), no discovery on the seed case"
+    "quick run: {s.starts} starts ({s.virtual_starts} on the virtual test), {s.walkers} walkers "
+    "x {s.steps} steps (not expected to converge), no discovery on the seed case"
 )
 
 

@@ -756,8 +756,7 @@ def calibrate(
     if refine is not None:
         problem, ends, objectives = _with_refine(refine, problem, box, counter, ends, objectives,
                                                  executor)  # fmt: skip
-    ends = np.array(ends)
-    objectives = np.array(objectives)
+    ends, objectives = np.array(ends), np.array(objectives)
     order = np.argsort(objectives, kind="stable")
     best, theta, evaluation = _best_evaluation(problem, box, ends, order, counter)
     best_obj = objectives[best]

@@ -1,6 +1,10 @@
 """CLI calibrate/sample: JSON keys, result file schema, reproducibility, Ctrl-C and --resume."""
 
+import contextlib
+import io
 import json
+from dataclasses import dataclass
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -33,13 +37,58 @@ predictive_draws = 50
 """
 
 
-@pytest.fixture
-def study(tmp_path):
-    csv = tmp_path / "freqs.csv"
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    """The study file (read only by the tests, so one for the module)."""
+    folder = tmp_path_factory.mktemp("study")
+    csv = folder / "freqs.csv"
     csv.write_text("# two floors\nmode,frequency_hz,weight\n1,4.30,1\n2,10.80,1\n")
-    path = tmp_path / "study.toml"
+    path = folder / "study.toml"
     path.write_text(STUDY.format(csv=csv))
     return path
+
+
+@dataclass(frozen=True)
+class SampleRun:
+    """One ``sample`` run of the study: its result file, the JSON it printed, its stderr and
+    the number of ``LogPosterior`` calls it made."""
+
+    out: Path
+    summary: dict
+    err: str
+    calls: int
+
+
+def _sample_run(study: Path, out: Path, *args: str) -> SampleRun:
+    """``sample`` the study into ``out`` (each run of the same seed is the same chain, so the
+    tests that only read a run share one: the chain's bits are checked against a second run in
+    test_sample_json_reproducible_file_and_datatree and tests/test_reproducibility.py)."""
+    original, calls = LogPosterior.__call__, [0]
+
+    def counted(self, theta):
+        calls[0] += 1
+        return original(self, theta)
+
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(LogPosterior, "__call__", counted)
+        with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+            code = main(["sample", str(study), "--out", str(out), "--json", *args])
+    assert code == 0, stderr.getvalue()
+    summary = json.loads(stdout.getvalue().splitlines()[-1])
+    return SampleRun(out, summary, stderr.getvalue(), calls[0])
+
+
+@pytest.fixture(scope="module")
+def reference(study, tmp_path_factory) -> SampleRun:
+    """The study's chain at its own seed, uninterrupted."""
+    return _sample_run(study, tmp_path_factory.mktemp("reference") / "ref.h5")
+
+
+@pytest.fixture(scope="module")
+def seed3(study, tmp_path_factory) -> SampleRun:
+    """The study's chain with ``--seed 3``."""
+    return _sample_run(study, tmp_path_factory.mktemp("seed3") / "post.h5", "--seed", "3")
 
 
 def test_csv_and_paper_data():
@@ -113,11 +162,11 @@ def test_bad_input_leaves_no_file(tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir()] == ["bad.toml"]
 
 
-def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
-    outs = [tmp_path / "a.h5", tmp_path / "b.h5"]
-    for out in outs:
-        assert main(["sample", str(study), "--out", str(out), "--json", "--seed", "3"]) == 0
+def test_sample_json_reproducible_file_and_datatree(study, seed3, tmp_path, capsys):
+    outs = [seed3.out, tmp_path / "b.h5"]
+    assert main(["sample", str(study), "--out", str(outs[1]), "--json", "--seed", "3"]) == 0
     result = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert result == {**seed3.summary, "wall_s": result["wall_s"], "timings": result["timings"]}
     assert set(result["parameters"]) == {"theta_1", "theta_2"}
     for row in result["parameters"].values():
         assert set(row) == {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}
@@ -144,10 +193,13 @@ def test_sample_json_reproducible_file_and_datatree(study, tmp_path, capsys):
     assert tree["posterior_predictive"]["frequencies_hz"].shape == (1, 50, 2)
 
 
-def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monkeypatch, capsys):
-    reference = tmp_path / "ref.h5"
+def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(
+    study, reference, tmp_path, monkeypatch, capsys
+):
     original = LogPosterior.__call__
-    calls = {"n": 0, "stop": None}
+    # stop 100 calls before the end of the reference run: inside the kept run (~480 calls; the
+    # mixture's adaptation stages take the first ~800)
+    calls = {"n": 0, "stop": reference.calls - 100}
 
     def interrupting(self, theta):
         calls["n"] += 1
@@ -156,10 +208,6 @@ def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monke
         return original(self, theta)
 
     monkeypatch.setattr(LogPosterior, "__call__", interrupting)
-    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
-    # stop 100 calls before the end: inside the kept run (~480 calls; the mixture's adaptation
-    # stages take the first ~800)
-    calls.update(n=0, stop=calls["n"] - 100)
     partial = tmp_path / "run.h5"
     assert main(["sample", str(study), "--out", str(partial), "--json"]) == 130
     with h5py.File(partial) as h5:
@@ -167,7 +215,7 @@ def test_ctrl_c_then_resume_gives_the_uninterrupted_chain(study, tmp_path, monke
         assert 0 < h5["posterior/chain"].shape[0] < 400
     monkeypatch.setattr(LogPosterior, "__call__", original)
     assert main(["sample", str(study), "--out", str(partial), "--resume", "--json"]) == 0
-    with h5py.File(partial) as a, h5py.File(reference) as b:
+    with h5py.File(partial) as a, h5py.File(reference.out) as b:
         assert a.attrs["status"] == "complete"
         assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])
     # resuming a finished run, or with other settings, is refused
@@ -199,18 +247,16 @@ def test_modal_data_from_ema_h5_with_shapes_pairs_by_mac(tmp_path):
     np.testing.assert_allclose(result.table.mac, 1.0, atol=1e-9)
 
 
-def test_plots_from_a_result_file(study, tmp_path, capsys):
+def test_plots_from_a_result_file(reference, tmp_path):
     from bayesupdate.inference.plots import save_all
 
-    out = tmp_path / "post.h5"
-    assert main(["sample", str(study), "--out", str(out), "--json"]) == 0
-    paths = save_all(read_result(out), tmp_path / "figs")
+    paths = save_all(read_result(reference.out), tmp_path / "figs")
     # no Table 3 names in the shear building: that figure is skipped
     assert sorted(p.stem for p in paths) == ["pair", "predictive", "residuals", "trace"]
     assert all(p.stat().st_size > 5000 for p in paths)
 
 
-def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
+def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, reference, tmp_path):
     import os
     import signal
     import subprocess
@@ -219,8 +265,6 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
 
     # 400 kept steps, checked every 100: after the first checkpoint 300 steps (~5,000 model
     # calls, seconds) remain, while the signal follows the checkpoint within the 50 ms poll
-    reference = tmp_path / "ref.h5"
-    assert main(["sample", str(study), "--out", str(reference), "--json"]) == 0
     out = tmp_path / "run.h5"
     cmd = [sys.executable, "-m", "bayesupdate", "sample", str(study), "--out", str(out), "--json"]
     proc = subprocess.Popen(
@@ -244,7 +288,7 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
         assert h5.attrs["status"] == "partial"
         assert h5["posterior/chain"].shape[0] < 400
     assert main(["sample", str(study), "--out", str(out), "--resume", "--json"]) == 0
-    with h5py.File(out) as a, h5py.File(reference) as b:
+    with h5py.File(out) as a, h5py.File(reference.out) as b:
         assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])
 
 
@@ -283,18 +327,15 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
     assert min(p["ess_bulk"] for p in result["parameters"].values()) >= 20
 
 
-def test_a_posterior_that_misses_its_targets_says_so_everywhere(study, tmp_path, capsys):
+def test_a_posterior_that_misses_its_targets_says_so_everywhere(study, seed3, tmp_path, capsys):
     """Issue 15 item 3: the step budget (400) ends the run before 1e9 tau: the terminal, the JSON
     and the HDF5 file say "not converged" and why; a converged run says nothing of the kind."""
-    out = tmp_path / "post.h5"
-    assert main(["sample", str(study), "--out", str(out), "--json", "--seed", "3"]) == 0
-    captured = capsys.readouterr()
-    result = json.loads(captured.out.splitlines()[-1])
+    result = seed3.summary
     assert result["converged"] is False
     reason = result["convergence"]["reason"]
     assert "400 steps < 1e+09 autocorrelation times" in reason and "step budget" in reason
-    assert "warning: the posterior did not converge: " + reason in captured.err
-    with h5py.File(out) as h5:
+    assert "warning: the posterior did not converge: " + reason in seed3.err
+    with h5py.File(seed3.out) as h5:
         assert not h5["posterior"].attrs["converged"]
         assert h5["posterior"].attrs["convergence_reason"] == reason
     met = tmp_path / "met.toml"

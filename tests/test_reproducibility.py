@@ -77,17 +77,34 @@ def assert_same_numbers(a: Path, b: Path, skip: frozenset = frozenset()) -> int:
     return len(na)
 
 
-@pytest.fixture
-def study(tmp_path):
-    path = tmp_path / "study.toml"
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    path = tmp_path_factory.mktemp("study") / "study.toml"
     path.write_text(STUDY)
     return path
 
 
+@pytest.fixture(scope="module")
+def in_process(study, tmp_path_factory):
+    """command -> the result file of its seed-11 run in this process, run once for the module
+    (the fresh-process comparison and the other-seed check read the same run)."""
+    runs = {}
+
+    def run(command: str) -> Path:
+        if command not in runs:
+            out = tmp_path_factory.mktemp(command) / "a.h5"
+            assert main([command, str(study), "--out", str(out), "--seed", "11", "--json"]) == 0
+            runs[command] = out
+        return runs[command]
+
+    return run
+
+
 @pytest.mark.parametrize("command", ["calibrate", "sample"])
-def test_seeded_run_in_process_and_in_a_fresh_process_are_identical(command, study, tmp_path):
-    a, b = tmp_path / "a.h5", tmp_path / "b.h5"
-    assert main([command, str(study), "--out", str(a), "--seed", "11", "--json"]) == 0
+def test_seeded_run_in_process_and_in_a_fresh_process_are_identical(
+    command, study, in_process, tmp_path
+):
+    a, b = in_process(command), tmp_path / "b.h5"
     proc = subprocess.run(
         [str(EXE), command, str(study), "--out", str(b), "--seed", "11", "--json"],
         capture_output=True,
@@ -104,10 +121,9 @@ def test_seeded_run_in_process_and_in_a_fresh_process_are_identical(command, stu
             assert np.unique(chain[-1, :, 0]).size == 12  # walkers moved apart: a real run
 
 
-def test_another_seed_gives_another_chain(study, tmp_path):
+def test_another_seed_gives_another_chain(study, in_process, tmp_path):
     # the equality above is not vacuous: the seed reaches the sampler
-    a, b = tmp_path / "a.h5", tmp_path / "b.h5"
-    assert main(["sample", str(study), "--out", str(a), "--seed", "11", "--json"]) == 0
+    a, b = in_process("sample"), tmp_path / "b.h5"
     assert main(["sample", str(study), "--out", str(b), "--seed", "12", "--json"]) == 0
     with h5py.File(a) as ha, h5py.File(b) as hb:
         assert not np.array_equal(ha["posterior/chain"][()], hb["posterior/chain"][()])

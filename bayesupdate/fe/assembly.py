@@ -79,7 +79,8 @@ class ElementProperties:
 
 @dataclass(frozen=True)
 class _Memo:
-    """A parametric family's last assembly: its fields (k, n), matrices and their (nnz,) data."""
+    """A parametric family's last assembly: its fields (k, n), matrices and their data at the
+    CSR positions the family touches (``Assembler._touched``)."""
 
     key: np.ndarray
     matrices: FamilyMatrices
@@ -115,7 +116,15 @@ class Assembler:
             unit = s.shells.mesh(s.nodes, rho=np.ones(s.shells.n_elements))  # per unit density
             self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
         positions = self._build_pattern([*self._dofs.values(), *(f.dofs for f in self.families)])
-        self._positions = dict(zip(self.parametric, positions, strict=False))
+        # each parametric family's data is kept at the positions it touches only: a family of a
+        # few beams or masses on a shell mesh would otherwise add a whole (nnz,) array per
+        # assembly (the same sums in the same order: the same bits)
+        touched = [np.unique(pos) for pos in positions[: len(self.parametric)]]
+        self._touched = dict(zip(self.parametric, touched, strict=True))
+        self._positions = {
+            name: np.searchsorted(t, pos)
+            for name, t, pos in zip(self.parametric, touched, positions, strict=False)
+        }
         self._family_K = self._scatter_families("K", positions[len(self.parametric) :])
         self._family_M = self._scatter_families("M", positions[len(self.parametric) :])
         if self.shells is not None:
@@ -199,14 +208,18 @@ class Assembler:
         """
         props = self.default_properties() if props is None else props
         self.check(props)
-        K = M = None
+        K, M = np.zeros(self.nnz), np.zeros(self.nnz)
         used = []
-        for family in self.parametric.values():
+        for name, family in self.parametric.items():
             memo = self._reusing(family, props)
             used.append(memo.matrices)
-            K = _add(K, memo.K)
-            M = _add(M, memo.M)
-        K, M = _own(_add(K, self._family_K), self.nnz), _own(_add(M, self._family_M), self.nnz)
+            at = self._touched[name]
+            for total, data in ((K, memo.K), (M, memo.M)):
+                if data is not None:
+                    total[at] += data
+        for total, data in ((K, self._family_K), (M, self._family_M)):
+            if data is not None:
+                total += data
         if self.shells is not None:
             sh = self.structure.shells
             Ks, Ms = self.shell_data(*((sh.thickness, sh.E, sh.rho) if shell_props is None
@@ -234,8 +247,8 @@ class Assembler:
                 M[changed] = Mc
         else:
             K, M = family.matrices(props, self._settings)
-        pos = self._positions[family.family]
-        data = [None if X is None else self._scatter(pos, X) for X in (K, M)]
+        pos, n = self._positions[family.family], self._touched[family.family].size
+        data = [None if X is None else self._scatter(pos, X, n) for X in (K, M)]
         for X in (K, M, *data):
             if X is not None:
                 X.flags.writeable = False
@@ -243,9 +256,11 @@ class Assembler:
         memo = self._memos[family.family] = _Memo(key.copy(), mats, *data)
         return memo
 
-    def _scatter(self, positions, element_matrices):
-        """Sum element entries into the (nnz,) CSR data (float even for no elements)."""
-        return np.bincount(positions, element_matrices.ravel(), self.nnz).astype(float, copy=False)
+    def _scatter(self, positions, element_matrices, size: int | None = None):
+        """Sum element entries into the (size,) data at ``positions`` (default: the (nnz,) CSR
+        data; float even for no elements)."""
+        size = self.nnz if size is None else size
+        return np.bincount(positions, element_matrices.ravel(), size).astype(float, copy=False)
 
     def total_mass(self, props: ElementProperties | None = None):
         """Total mass [kg] and centre of gravity (3,) [m] of the element families at ``props``
@@ -397,20 +412,6 @@ def _families_mass(parametric, families, xyz: np.ndarray, props) -> tuple[float,
         total = total + np.trace(Mr[:3, :3]) / 3.0
         moment = moment + np.array([Mr[1, 5], Mr[2, 3], Mr[0, 4]])
     return float(total), moment / total
-
-
-def _own(data: np.ndarray | None, nnz: int) -> np.ndarray:
-    """``data`` as an array the caller owns: zeros for None, a copy of a memo's (read-only)."""
-    if data is None:
-        return np.zeros(nnz)
-    return data if data.flags.writeable else data.copy()
-
-
-def _add(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
-    """a + b where None is nothing (a new array: the memos' data stay untouched)."""
-    if a is None:
-        return b
-    return a if b is None else a + b
 
 
 def check_properties(structure: Structure, props: ElementProperties) -> None:

@@ -42,8 +42,8 @@ v42_hz, ours_hz, mac_v33, mac_v42, mac_ours, ours_mean_hz, ours_band_hz (5-95 %)
 
 
 QUICK_NOTE = (
-    "quick run: {s.starts} starts ({s.virtual_starts} on the virtual test), {s.walkers} walkers "
-    "x {s.steps} steps (not expected to converge), no discovery on the seed case"
+    "quick run: {s.starts} starts, {s.walkers} walkers x {s.steps} steps (not expected to "
+    "converge), no discovery on the seed case"
 )
 
 

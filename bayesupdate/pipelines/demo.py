@@ -81,11 +81,11 @@ class DemoSettings:
 
     @property
     def virtual_starts(self) -> int:
-        """Starts of the virtual test's calibration (besides the reference start).  A quick run
-        takes 1: with its 3 starts all 4 polished ends reached one optimum (seed 0: Expr
-        0.010142; with 1 start the design values agree to 1e-6 relative) at twice the CPU
-        (14.1 s against 7.2 s, ``benchmarks/demo_steps.py``'s virtual test optimum)."""
-        return 1 if self.quick else self.starts
+        """Starts of the virtual test's calibration (besides the reference start): a quick run's
+        3.  One start is not enough since smooth ends are not Nelder-Mead polished
+        (``inference.optimize``): its two ends stop at a local optimum, Expr 0.010645 at seed 0,
+        where one of 3 starts' ends reaches the quick run's optimum, Expr 0.010142."""
+        return self.starts
 
     @property
     def exact_polish(self) -> bool:

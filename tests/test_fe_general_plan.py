@@ -15,29 +15,22 @@ of K - sigma M formed from their data (``eigen_small.shifted``).
   dense LAPACK's as ``tests/test_fe_eigen_small.py`` holds them.
 """
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_nastran_deck_solve import BINDS, bound_v33
 
 from bayesupdate.fe.eigen_small import KrylovSettings, krylov_modes, shifted
 from bayesupdate.fe.general_plan import GeneralPlan, ReductionMap
 from bayesupdate.fe.sparse_modal import ModalSettings
 
 SIGMA = ModalSettings().shift
-FEM = Path(__file__).resolve().parents[2] / "shared" / "data" / "gvt_maewing1" / "fem"
-V33 = FEM / "v3.3_hati" / "sol103_mAEWing1_Hati_FEMv3p3.bdf"
-BINDS = {"i1_1003": "PBEAM 1003 I1", "i1_1004": "PBEAM 1004 I1", "a_1005": "PBEAM 1005 A"}
 
 
 @pytest.fixture(scope="module")
 def bound():
-    from bayesupdate.nastran import load_nastran_model
-
-    if not V33.exists():
-        pytest.skip(f"shared data not found: {V33}")
-    return load_nastran_model(str(V33), {n: {"binds": b} for n, b in BINDS.items()})
+    """The bound v3.3 deck (three wing fields) of the deck-solve tests."""
+    return bound_v33()
 
 
 def point(model, factors):

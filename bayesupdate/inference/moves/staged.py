@@ -363,7 +363,8 @@ def resampled_refit(proposal: DefensiveProposal, log_density, points: np.ndarray
     log_p = log_density(y)
     if log_p is None:
         return None
-    log_w = np.where(np.isfinite(log_p), log_p - proposal.logpdf(y), -np.inf)
+    with np.errstate(invalid="ignore"):  # -inf - -inf where log_p is not finite: masked
+        log_w = np.where(np.isfinite(log_p), log_p - proposal.logpdf(y), -np.inf)
     if not np.any(np.isfinite(log_w)):
         return False
     w = np.exp(log_w - np.max(log_w))

@@ -271,7 +271,9 @@ def test_an_optimum_on_a_bound_is_warned(tmp_path, capsys):
     assert main(["calibrate", str(study), "--json"]) == 0
     captured = capsys.readouterr()
     result = json.loads(captured.out)
-    assert result["parameters"] == {"theta_1": 1.5, "theta_2": 1.5}
+    # least squares keep their ends strictly inside the box (trust-region reflective): one ulp
+    # below the bound now that a smooth end is not polished onto it
+    assert result["parameters"] == pytest.approx({"theta_1": 1.5, "theta_2": 1.5}, abs=1e-12)
     assert result["warnings"] == [
         f"{name} = 1.5 sits on its upper bound 1.5: the bounds, not the test, set it; widen "
         "the range or check the parameter"

@@ -266,18 +266,13 @@ class LogPosterior:
     def _fitted_mass(self, seed: int):
         """The verified ``inference.mass_fit.MassPolynomial`` of this posterior's masses, None
         when there is no mass term, the masses come per point, or the fit does not verify."""
-        from bayesupdate.inference.mass_fit import fit_mass_polynomial
+        from bayesupdate.inference.mass_fit import fit_problem_masses
 
         mass_of = mass_function(self.problem.model)
         if self.spec.mass_sd_rel is None or not self.batched or mass_of is None:
             return None
-        names = self.problem.names + self.fixed_names
-
-        def mass_at(row: np.ndarray) -> float:
-            values = np.concatenate([row, self.fixed_values])
-            return mass_of(dict(zip(names, map(float, values), strict=True)))
-
-        return fit_mass_polynomial(mass_at, self.problem.lower, self.problem.upper, seed)
+        names, p = self.problem.names + self.fixed_names, self.problem
+        return fit_problem_masses(mass_of, names, self.fixed_values, p.lower, p.upper, seed)
 
     def _shape_paired(self, theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
         """Frequencies (B, n_test) paired by batched MAC against the reference shapes."""

@@ -123,3 +123,22 @@ def fit_mass_polynomial(
     if not error <= REL_TOL:
         return None
     return MassPolynomial(low, high, exponents, coef, error)
+
+
+def fit_problem_masses(
+    mass_of: Callable[[dict[str, float]], float],
+    names: tuple[str, ...],
+    fixed_values,
+    low: np.ndarray,
+    high: np.ndarray,
+    seed: int = 0,
+) -> MassPolynomial | None:
+    """``fit_mass_polynomial`` of a problem's total mass over its free parameters' box [low,
+    high] with its fixed parameters held: ``mass_of`` takes {name: value} over ``names`` (the
+    free parameters, then the fixed ones, whose values are ``fixed_values``)."""
+    held = np.asarray(fixed_values, dtype=float)
+
+    def mass_at(row: np.ndarray) -> float:
+        return mass_of(dict(zip(names, map(float, np.concatenate([row, held])), strict=True)))
+
+    return fit_mass_polynomial(mass_at, low, high, seed)

@@ -263,7 +263,7 @@ def _exact_mass_fit(problem: CalibrationProblem, seed: int = 0):
     fit 442 of them once per calibration (``LogPosterior.use_fitted_mass`` takes the same fit
     for the same reason; the exhaust's matches to ~1e-12)."""
     from bayesupdate.inference.likelihood import EXACT_MASS_REL_TOL
-    from bayesupdate.inference.mass_fit import fit_mass_polynomial
+    from bayesupdate.inference.mass_fit import fit_problem_masses
 
     spec, model = problem.objective, problem.model
     if not (spec.mass_weight > 0 and spec.mass_target_kg is not None):
@@ -272,12 +272,10 @@ def _exact_mass_fit(problem: CalibrationProblem, seed: int = 0):
     if mass_of is None or not hasattr(model, "predict_batch_with_shapes"):
         return None
     fixed = tuple(k for k in problem.fixed if k in model.parameter_names)
-    names, values = problem.names + fixed, [problem.fixed[k] for k in fixed]
-
-    def mass_at(row: np.ndarray) -> float:
-        return mass_of(dict(zip(names, map(float, np.concatenate([row, values])), strict=True)))
-
-    fit = fit_mass_polynomial(mass_at, problem.lower, problem.upper, seed)
+    values = [problem.fixed[k] for k in fixed]
+    fit = fit_problem_masses(
+        mass_of, problem.names + fixed, values, problem.lower, problem.upper, seed
+    )
     return fit if fit is not None and fit.max_rel_error <= EXACT_MASS_REL_TOL else None
 
 

@@ -225,7 +225,7 @@ def test_the_quick_demo_gives_the_same_numbers_serial_and_on_two_worker_processe
 # of CPU)
 @LONG
 def test_the_quick_demos_starts_reach_the_optimum(tmp_path):
-    """A quick run calibrates the virtual test from ``DemoSettings.virtual_starts`` (3) starts
+    """A quick run calibrates the virtual test from ``DemoSettings.starts`` (3) starts
     and discovery's baseline from 1 (``_discovery_part``), both besides the reference start:
     the virtual test reaches the quick run's optimum of before smooth ends went unpolished
     (Expr 0.010142; 1 start stops at a local optimum, 0.010645, above it), and discovery's
@@ -239,11 +239,11 @@ def test_the_quick_demos_starts_reach_the_optimum(tmp_path):
     from bayesupdate.pipelines.study import measured_mass
 
     settings = demo.DemoSettings(tmp_path, quick=True)
-    assert settings.virtual_starts == 3 and demo.DemoSettings(tmp_path).virtual_starts == 12
+    assert settings.starts == 3 and demo.DemoSettings(tmp_path).starts == 12
     demo._run_task((settings, demo._silent), "ema")
     source = demo._virtual_modes(settings)
     optima = []
-    for starts in (1, settings.virtual_starts):
+    for starts in (1, settings.starts):
         prepared = prepare(demo._study(settings, source, starts=starts))
         part = demo.optimum_part(prepared, polished=True, weights=(), exact=False)
         optima.append(part.calibration)

@@ -73,19 +73,15 @@ class DemoSettings:
 
     @property
     def starts(self) -> int:
+        """Starts of each optimum (besides the reference start).  A quick run's 3 are the fewest
+        that reach the virtual test's optimum since smooth ends are not Nelder-Mead polished
+        (``inference.optimize``): from 1 start its two ends stop at a local optimum, Expr
+        0.010645 at seed 0, where one of 3 starts' ends reaches Expr 0.010142."""
         return 3 if self.quick else 12
 
     @property
     def walkers(self) -> int:
         return 16 if self.quick else 32
-
-    @property
-    def virtual_starts(self) -> int:
-        """Starts of the virtual test's calibration (besides the reference start): a quick run's
-        3.  One start is not enough since smooth ends are not Nelder-Mead polished
-        (``inference.optimize``): its two ends stop at a local optimum, Expr 0.010645 at seed 0,
-        where one of 3 starts' ends reaches the quick run's optimum, Expr 0.010142."""
-        return self.starts
 
     @property
     def exact_polish(self) -> bool:
@@ -525,7 +521,7 @@ def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
     default virtual test (it applies only when ``data_source`` holds that test's modes)."""
     from bayesupdate.pipelines.calibrate import run_calibration
 
-    prepared = prepare(_study(settings, data_source, starts=settings.virtual_starts))
+    prepared = prepare(_study(settings, data_source))
     reference = demo_reference("virtual")
     options = SamplingOptions(out=path, progress=settings.progress, reference=reference)
     if settings.exact_polish:

@@ -40,8 +40,8 @@ from bayesupdate.fe.shell_model import ShellAssembly
 from bayesupdate.fe.sparse_modal import (
     ModalSettings,
     _allowed_rigid,
+    constrained_modes,
     rigid_motions,
-    solve_reduced_modes,
     sorted_unique,
 )
 from bayesupdate.fe.structure import Structure
@@ -353,19 +353,8 @@ class Assembler:
         settings = replace(settings or ModalSettings(), n_modes=n_modes)
         if dense:
             settings = replace(settings, dense_below=tr.independent.size + 1, small_method="dense")
-        lam, phi, Rm, lam_r = solve_reduced_modes(
-            tr.reduce(K),
-            tr.reduce(M),
-            self.rigid,
-            settings,
-            tr.independent,
-        )
-        return ModalSolution(
-            frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),
-            eigenvalues=lam,
-            shapes=tr.expand(phi),
-            n_rigid=Rm.shape[1],
-            rigid_frequencies_hz=np.sqrt(np.abs(lam_r)) / (2 * np.pi),
+        return constrained_modes(
+            tr.reduce(K), tr.reduce(M), self.rigid, settings, tr.independent, tr.T
         )
 
     def matrix_mass(self, M) -> tuple[float, np.ndarray]:

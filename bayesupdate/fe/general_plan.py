@@ -24,7 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from bayesupdate.fe.eigensolve import ModalSolution
-from bayesupdate.fe.sparse_modal import ModalSettings, solve_reduced_modes
+from bayesupdate.fe.sparse_modal import ModalSettings, constrained_modes
 
 
 def _row_entries(A: sp.csr_matrix, rows: np.ndarray):
@@ -104,11 +104,4 @@ class GeneralPlan:
             return g.solve(K, M, n_modes, settings=settings)
         settings = replace(settings, n_modes=n_modes)
         Kf, Mf = self.map.reduce(K.data, M.data)
-        lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, self.rigid, settings, self.independent)
-        return ModalSolution(
-            frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),
-            eigenvalues=lam,
-            shapes=self.T @ phi,
-            n_rigid=Rm.shape[1],
-            rigid_frequencies_hz=np.sqrt(np.abs(lam_r)) / (2 * np.pi),
-        )
+        return constrained_modes(Kf, Mf, self.rigid, settings, self.independent, self.T)

@@ -47,6 +47,7 @@ import scipy.sparse.linalg as spla
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.eigen_small import KrylovSettings, krylov_modes, worthwhile
+from bayesupdate.fe.eigensolve import ModalSolution
 from bayesupdate.fe.node_pattern import NODE_DOF, node_blocks, node_pattern
 
 COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
@@ -277,6 +278,19 @@ def solve_sparse_modes(K, M, nodes, settings: ModalSettings, fixed_dofs=()) -> S
     rigid = np.zeros((n_dof, Rm.shape[1]))
     rigid[free] = Rm
     return SparseModes(np.sqrt(np.maximum(lam, 0)) / (2 * np.pi), lam, shapes, rigid, lam_r)
+
+
+def constrained_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, T) -> ModalSolution:
+    """``solve_reduced_modes`` of the constrained K, M (n_ind, n_ind) as a ``ModalSolution``
+    with full-DOF shapes T @ phi (T (n_dof, n_ind): the constraint transform)."""
+    lam, phi, Rm, lam_r = solve_reduced_modes(Kf, Mf, R, settings, dof_ids)
+    return ModalSolution(
+        frequencies_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi),
+        eigenvalues=lam,
+        shapes=T @ phi,
+        n_rigid=Rm.shape[1],
+        rigid_frequencies_hz=np.sqrt(np.abs(lam_r)) / (2 * np.pi),
+    )
 
 
 def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None):

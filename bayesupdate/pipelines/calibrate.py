@@ -9,7 +9,11 @@ would be thousands of full solves; there the basis is instead made exact at the 
 full modes join the basis, ``ReducedFEModel.certify_at``, every checked point re-verified:
 ``basis_made_exact``), the ends are polished on that basis, and the optimum is evaluated by one
 full solve, which gives the reported objective, frequencies and table, and the basis's error
-there (a warning above its tolerance: ``evaluated_in_full``).  A full solve that fails at the
+there (a warning above its tolerance: ``evaluated_in_full``).  When the optimum is the best end
+(to the polish's resolution, ``same_point``: the usual case, the ends of its basin differing in
+the objective's ninth digit), the best end's full solve is that solve: the point solved is
+reported, with the numbers of that solve (the basis's modes and its extra modes), and no second
+solve of 28,386 DOFs is made.  A full solve that fails at the
 best end or at the optimum gives a one-line warning naming the point.  The whole step
 (``calibrate_on_exact_basis``) is pure functions and frozen records; its result is kept on disk
 and recalled by the same command again (``pipelines.calibration_memo``).  This is the
@@ -243,7 +247,10 @@ def evaluated_in_full(
     the optimum's (its lowest modes, to the Lanczos tolerance of a solve of those modes alone)
     and no second solve is made."""
     full_problem = _full_problem(problem, result.theta, *solved)
-    with phase("calibration: full solve at the optimum", int(full_problem is problem), "solves"):
+    if full_problem is problem:
+        with phase("calibration: full solve at the optimum", 1, "solves"):
+            evaluation = problem.evaluate(result.theta)
+    else:  # the optimum is the point solved already: no solve, no phase
         evaluation = full_problem.evaluate(result.theta)
     if not evaluation.ok:
         warnings.warn(

@@ -7,8 +7,10 @@ reference prediction) and the optimiser's settings; the entry's key is the SHA-2
 and the package version (``compute.cache.content_key``), in the same store as the bases
 (``compute.cache.ArrayStore``: ``BAYESUPDATE_CACHE_DIR``, ``--no-cache``, atomic writes,
 checksums, least recently used out).  A recalled optimum is evaluated by one full solve, as a
-fresh one is (``calibrate.evaluated_in_full``), and used only when that full objective reproduces
-the stored one to ``RECALL_AGREES``; otherwise the calibration runs again (with a note).
+fresh one is (``calibrate.evaluated_in_full``; with as many modes as the solve that gave the
+stored numbers, ``solve_modes``, so that the same computation gives the same bits), and used
+only when that full objective reproduces the stored one to ``RECALL_AGREES``; otherwise the
+calibration runs again (with a note).
 Only the large-model path uses it: there a search costs tens of seconds, a beam model's one less
 than the full solve that checks a recalled optimum would.
 """

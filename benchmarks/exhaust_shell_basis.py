@@ -40,10 +40,12 @@ its CPU (user + system, the process and its children: the machine is shared, so 
 number to compare) and wall time, in a cache folder of its own (``BAYESUPDATE_CACHE_DIR``):
   "first"        the folder empty: the basis is built, the calibration kept (``--first-runs``
                  times, the folder emptied before each; default 1: a build costs minutes);
-  "cached"       the same command again: the basis loaded and re-checked, the optimum recalled
-                 and checked by one full solve (N times);
-  "basis cached" ``--seed 1`` (other starts, the same basis): the basis loaded, the search and
-                 the refine step run (N times, each with a new seed so that no optimum is kept;
+  "cached"       the same command again: the optimum recalled and checked by one full solve,
+                 no basis loaded (N times);
+  "basis cached" ``--seed 1`` (other starts, the same basis): the basis loaded and checked by
+                 one full solve at a fresh point, the search and the refine step run (one full
+                 solve at the best end, which gives the optimum's numbers when the optimum is
+                 that point) (N times, each with a new seed so that no optimum is kept;
                  ``--first-seed`` S: seeds S, S + 1, ...: in a kept folder, seeds not run
                  there yet, or their optima are recalled).
 Medians per kind, the objectives and the largest difference of the optimum's frequencies

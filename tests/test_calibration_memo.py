@@ -40,7 +40,7 @@ def first():
 def test_a_kept_calibration_is_recalled_with_the_same_full_numbers(first, tmp_path):
     prepared, rom, run, key, _ = first
     store = ArrayStore(tmp_path)
-    memo.keep(store, key, run.result, run.error_at_optimum)
+    memo.keep(store, key, run.result, run.error_at_optimum, run.solve_modes)
     again = memo.recalled(prepared.problem, store.load(key), rom.tol)
     result = run.result
     np.testing.assert_array_equal(again.theta, result.theta)
@@ -52,6 +52,26 @@ def test_a_kept_calibration_is_recalled_with_the_same_full_numbers(first, tmp_pa
         result.starts, result.converged_starts, result.evaluations,
     )  # fmt: skip
     assert again.distinct_optima == result.distinct_optima and again.method == result.method
+
+
+def test_an_optimum_from_the_best_ends_solve_is_recalled_to_the_bit(first, tmp_path):
+    """An optimum at the best end takes its numbers from that solve of the basis's modes and its
+    extra modes (``calibrate.evaluated_in_full``); the recall solves as many, so that the same
+    computation gives the same bits, where a solve of the pairing's 14 modes alone differs in
+    the objective's tenth digit, near ``RECALL_AGREES``."""
+    prepared, rom, run, key, _ = first
+    problem, exact = prepared.problem, run.made_exact
+    at_best = replace(run.result, theta=exact.point.copy())
+    result, error = pipeline.evaluated_in_full(
+        problem, exact.basis, at_best, (exact.point, exact.solution)
+    )
+    modes = exact.solution.frequencies_hz.size
+    assert modes == problem.pairing.n_model + rom.settings.extra_modes
+    store = ArrayStore(tmp_path)
+    memo.keep(store, key, result, error, modes)
+    again = memo.recalled(problem, store.load(key), rom.tol)
+    assert again.objective == result.objective and again.mass_kg == result.mass_kg
+    np.testing.assert_array_equal(again.frequencies_hz, result.frequencies_hz)
 
 
 def test_other_data_or_settings_is_another_entry(first):

@@ -9,7 +9,11 @@ would be thousands of full solves; there the basis is instead made exact at the 
 full modes join the basis, ``ReducedFEModel.certify_at``, every checked point re-verified:
 ``basis_made_exact``), the ends are polished on that basis, and the optimum is evaluated by one
 full solve, which gives the reported objective, frequencies and table, and the basis's error
-there (a warning above its tolerance: ``evaluated_in_full``).  A full solve that fails at the
+there (a warning above its tolerance: ``evaluated_in_full``).  When the optimum is the best end
+(to the polish's resolution, ``same_point``: the usual case, the ends of its basin differing in
+the objective's ninth digit), the best end's full solve is that solve: the point solved is
+reported, with the numbers of that solve (the basis's modes and its extra modes), and no second
+solve of 28,386 DOFs is made.  A full solve that fails at the
 best end or at the optimum gives a one-line warning naming the point.  The whole step
 (``calibrate_on_exact_basis``) is pure functions and frozen records; its result is kept on disk
 and recalled by the same command again (``pipelines.calibration_memo``).  This is the
@@ -24,7 +28,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bayesupdate.compute.cache import ArrayStore
-from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
+from bayesupdate.compute.progress import phase
+from bayesupdate.inference.optimize import (
+    SURROGATE_POLISH,
+    CalibrationResult,
+    CalibrationSettings,
+    calibrate,
+)
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.pipelines import calibration_memo as memo
 from bayesupdate.pipelines.study import PreparedStudy
@@ -57,7 +67,7 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     if not large_model(rom):
         return calibrate(search, settings, refine=problem, executor=executor)
     run = calibrate_on_exact_basis(problem, search, rom, settings, executor)
-    memo.keep(store, key, run.result, run.error_at_optimum)
+    memo.keep(store, key, run.result, run.error_at_optimum, run.solve_modes)
     return run.result
 
 
@@ -86,22 +96,29 @@ class BasisMadeExact:
     as built when the enlarged one misses its tolerance or size, or the full solve there fails).
     point : (d,) the best end (SI, in the problem's ``names`` order).  error : the relative
     frequency error of the basis as built at that point (NaN when its full solve failed).
+    solution : the full solve there (``fe.model.FEResult``, the basis's modes and its
+    ``extra_modes``), None when it failed; the optimum's numbers when the optimum is that point
+    (``evaluated_in_full``).
     """
 
     basis: object
     point: np.ndarray
     error: float
+    solution: object = None
 
 
 @dataclass(frozen=True)
 class ExactBasisCalibration:
     """A large model's calibration (``calibrate_on_exact_basis``): the result (the full model's
-    numbers at the optimum), the basis the ends were polished on, and that basis's relative
-    frequency error at the optimum against the full solve there (NaN when that solve failed)."""
+    numbers at the optimum), the basis the ends were polished on, that basis's relative
+    frequency error at the optimum against the full solve there (NaN when that solve failed),
+    and the modes that solve computed (the pairing's, or the best end's solve with the basis's
+    ``extra_modes`` when the optimum is that point: ``evaluated_in_full``)."""
 
     result: CalibrationResult
     made_exact: BasisMadeExact
     error_at_optimum: float
+    solve_modes: int = 0
 
 
 def calibrate_on_exact_basis(
@@ -118,8 +135,24 @@ def calibrate_on_exact_basis(
         return replace(problem, model=made[-1].basis)
 
     result = calibrate(search, settings, refine=refine, executor=executor)
-    result, error = evaluated_in_full(problem, made[-1].basis, result)
-    return ExactBasisCalibration(result, made[-1], error)
+    exact = made[-1]
+    if exact.solution is not None and same_point(problem, result.theta, exact.point):
+        # the optimum is the best end to the polish's resolution: report the point solved
+        result = replace(result, theta=exact.point.copy())
+    reused = exact.solution is not None and np.array_equal(result.theta, exact.point)
+    modes = exact.solution.frequencies_hz.size if reused else problem.pairing.n_model
+    result, error = evaluated_in_full(problem, exact.basis, result, (exact.point, exact.solution))
+    return ExactBasisCalibration(result, exact, error, modes)
+
+
+def same_point(problem: CalibrationProblem, theta: np.ndarray, other: np.ndarray) -> bool:
+    """Whether ``theta`` and ``other`` (d,) (SI) lie within the polish's resolution of each
+    other in the unit box of ``problem``'s bounds (``inference.optimize.SURROGATE_POLISH``'s
+    xatol, 1e-5: ~1e-6 in a frequency, far inside a certified basis's 1e-4).  Ends of one
+    basin polished on a basis made exact at one of them differ there by round-off in the
+    objective's ninth digit, and which of them is the lowest is that round-off."""
+    span = problem.upper - problem.lower
+    return bool(np.max(np.abs((theta - other) / span)) <= SURROGATE_POLISH[0])
 
 
 def basis_made_exact(
@@ -131,10 +164,10 @@ def basis_made_exact(
     tolerance or size, or when the full solve at that point fails (a one-line warning naming
     the point, either way)."""
     best = np.asarray(ends[int(np.argmin(objectives))], dtype=float)
-    point, names = full_point(problem, rom, best)
+    row, solution = solved_at(rom, *full_point(problem, rom, best))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        checked, error = rom.certify_at(point, names, enrich_above=0.0)
+        checked, error = _certified_at(rom, row, solution)
     where = _named(problem, best)
     if not np.isfinite(error):
         warnings.warn(
@@ -152,8 +185,41 @@ def basis_made_exact(
                 RuntimeWarning,
                 stacklevel=2,
             )
-        return BasisMadeExact(rom, best, error)
-    return BasisMadeExact(checked, best, error)
+        return BasisMadeExact(rom, best, error, solution)
+    return BasisMadeExact(checked, best, error, solution)
+
+
+def solved_at(rom, point: np.ndarray, names: tuple[str, ...]):
+    """((1, n_params) ``point`` (1, len(names)) with ``rom``'s defaults for its other
+    parameters (SI), the full solve there with the modes ``certify_points`` needs to check and
+    enrich the basis: an ``FEResult``, None when it fails or the point lies outside the basis's
+    box, where ``certify_at`` checks nothing)."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.fe.reduced.certification import solve_count
+
+    values = dict(rom.default_parameters())
+    values.update(zip(names, map(float, point[0]), strict=True))
+    row = np.array([[values[k] for k in rom.parameter_names]])
+    if not (np.all(row >= rom.low) and np.all(row <= rom.high)) or not rom.certified:
+        return row, None
+    try:
+        with phase("calibration: full solve at the best end", 1, "solves"):
+            return row, rom.fe.solve(values, solve_count(rom))
+    except (BayesUpdateError, np.linalg.LinAlgError):
+        return row, None
+
+
+def _certified_at(rom, row: np.ndarray, solution):
+    """``rom.certify_at(row, enrich_above=0)`` (its full modes join the basis) on the full
+    solve ``solution`` already made at ``row`` (1, n_params) (``solved_at``); NaN error and
+    ``rom`` unchanged when that solve failed."""
+    from bayesupdate.fe.reduced import certification
+
+    if solution is None:
+        return rom, float("nan")
+    solved = (solution.frequencies_hz[None, :], solution.modes.shapes)
+    checked, error = certification.certify_points(rom, row, True, 0.0, solved=solved)
+    return replace(rom, certification=checked), error
 
 
 def full_point(problem: CalibrationProblem, rom, theta: np.ndarray):
@@ -170,13 +236,22 @@ def _named(problem: CalibrationProblem, theta: np.ndarray) -> str:
 
 
 def evaluated_in_full(
-    problem: CalibrationProblem, basis, result: CalibrationResult
+    problem: CalibrationProblem, basis, result: CalibrationResult, solved=(None, None)
 ) -> tuple[CalibrationResult, float]:
     """(``result`` (found on ``basis``) with its objective, frequencies, mass and table from one
     full solve of ``problem`` at its optimum, the basis's relative frequency error there); a
     warning when that error exceeds the basis's tolerance.  When that full solve fails,
-    (``result`` as found on the basis, NaN), with a one-line warning naming the point."""
-    evaluation = problem.evaluate(result.theta)
+    (``result`` as found on the basis, NaN), with a one-line warning naming the point.
+    solved : (theta (d,), ``FEResult`` there or None): a full solve already made (the best
+    end's, ``basis_made_exact``); when the optimum is that point, bit for bit, its numbers are
+    the optimum's (its lowest modes, to the Lanczos tolerance of a solve of those modes alone)
+    and no second solve is made."""
+    full_problem = _full_problem(problem, result.theta, *solved)
+    if full_problem is problem:
+        with phase("calibration: full solve at the optimum", 1, "solves"):
+            evaluation = problem.evaluate(result.theta)
+    else:  # the optimum is the point solved already: no solve, no phase
+        evaluation = full_problem.evaluate(result.theta)
     if not evaluation.ok:
         warnings.warn(
             f"full solve failed at the optimum ({_named(problem, result.theta)}: "
@@ -205,3 +280,12 @@ def evaluated_in_full(
         evaluations=result.evaluations + 1,
     )
     return full, error
+
+
+def _full_problem(problem: CalibrationProblem, theta: np.ndarray, point, solution):
+    """``problem``, its model answering at ``theta`` (d,) from ``solution`` (the full solve at
+    ``point`` (d,)) when the two points are the same bits (``SolvedPoint``)."""
+    if solution is None or point is None or not np.array_equal(theta, point):
+        return problem
+    model = memo.SolvedPoint(problem.model, solution.parameters, solution)
+    return replace(problem, model=model)

@@ -7,14 +7,17 @@ reference prediction) and the optimiser's settings; the entry's key is the SHA-2
 and the package version (``compute.cache.content_key``), in the same store as the bases
 (``compute.cache.ArrayStore``: ``BAYESUPDATE_CACHE_DIR``, ``--no-cache``, atomic writes,
 checksums, least recently used out).  A recalled optimum is evaluated by one full solve, as a
-fresh one is (``calibrate.evaluated_in_full``), and used only when that full objective reproduces
-the stored one to ``RECALL_AGREES``; otherwise the calibration runs again (with a note).
+fresh one is (``calibrate.evaluated_in_full``; with as many modes as the solve that gave the
+stored numbers, ``solve_modes``, so that the same computation gives the same bits), and used
+only when that full objective reproduces the stored one to ``RECALL_AGREES``; otherwise the
+calibration runs again (with a note).
 Only the large-model path uses it: there a search costs tens of seconds, a beam model's one less
 than the full solve that checks a recalled optimum would.
 """
 
 import time
 import warnings
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -24,6 +27,7 @@ from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings
 from bayesupdate.inference.problem import CalibrationProblem
+from bayesupdate.model_protocol import Prediction
 
 #: format of a kept calibration; bump when the stored arrays change meaning
 MEMO_FORMAT = "calibration-1"
@@ -67,10 +71,14 @@ def basis_of(problem: CalibrationProblem, tol: float):
     return ReducedFEModel(model, bounds, settings)
 
 
-def memo_arrays(result: CalibrationResult, basis_error: float) -> dict[str, np.ndarray]:
+def memo_arrays(
+    result: CalibrationResult, basis_error: float, solve_modes: int = 0
+) -> dict[str, np.ndarray]:
     """What is kept of ``result`` (the full model's optimum) and the basis's relative frequency
-    error there: the optimum, the starts and ends, the counts and the full objective."""
+    error there: the optimum, the starts and ends, the counts, the full objective and the modes
+    of the full solve that gave it (``solve_modes``; 0: the pairing's)."""
     return {
+        "solve_modes": np.array(solve_modes, dtype=int),
         "theta": result.theta,
         "objective": np.array(result.objective),
         "basis_error": np.array(basis_error),
@@ -103,12 +111,13 @@ def recalled(
         ends = (arrays["start_points"], arrays["end_points"], arrays["end_objectives"])
         distinct = tuple(int(i) for i in arrays["distinct_optima"])
         method = str(arrays["method"])
+        modes = int(arrays.get("solve_modes", 0))
     except (KeyError, ValueError, TypeError) as exc:
         warnings.warn(f"kept calibration unreadable ({exc}); calibrating again", RuntimeWarning,
                       stacklevel=2)  # fmt: skip
         return None
     with phase("calibration: kept optimum, full solve", 1, "solves"):
-        evaluation = problem.evaluate(theta) if theta.shape == (len(problem.names),) else None
+        evaluation = _evaluated(problem, theta, modes)
     objective = np.nan if evaluation is None or not evaluation.ok else (
         float(np.sum(problem.residual_vector(evaluation) ** 2)))  # fmt: skip
     if not abs(objective - stored) <= RECALL_AGREES * abs(stored):
@@ -147,8 +156,53 @@ def recalled(
     )
 
 
-def keep(store: ArrayStore, key: str, result: CalibrationResult, basis_error: float) -> None:
-    """``result`` with its basis error stored under ``key`` in ``store`` (a no-op when the
+@dataclass(frozen=True, eq=False)
+class SolvedPoint:
+    """``fe`` (an ``FEModel``) whose prediction at ``parameters`` (all of them, SI) is the full
+    solve ``solution`` made there (an ``FEResult``, its lowest modes); every other point and
+    property is ``fe``'s own.  The model of the problem that evaluates an optimum solved
+    already (``evaluated_in_full``)."""
+
+    fe: object
+    parameters: dict
+    solution: object
+
+    def __getattr__(self, name):
+        if name in ("fe", "parameters", "solution"):  # not set yet (a copy, an unpickling)
+            raise AttributeError(name)
+        return getattr(self.fe, name)
+
+    def predict(self, params=None, n_modes: int = 12):
+        p = self.fe.full_parameters(params)
+        s = self.solution
+        if p != self.parameters or n_modes > s.frequencies_hz.size:
+            return self.fe.predict(params, n_modes)
+        shapes = s.sensor_shapes[:, :n_modes]
+        return Prediction(s.frequencies_hz[:n_modes], shapes, s.sensor_labels, s.mass_kg)
+
+
+def _evaluated(problem: CalibrationProblem, theta: np.ndarray, modes: int):
+    """``problem``'s evaluation at ``theta`` (d,) from one full solve of ``modes`` modes (the
+    pairing's when 0 or fewer), as the run that kept it made it, so that the same computation
+    gives the same bits; None when theta does not fit the problem or that solve fails."""
+    if theta.shape != (len(problem.names),):
+        return None
+    if modes <= problem.pairing.n_model:
+        return problem.evaluate(theta)
+    try:
+        solution = problem.model.solve(problem.as_mapping(theta), modes)
+    except (BayesUpdateError, np.linalg.LinAlgError):
+        return None
+    model = SolvedPoint(problem.model, solution.parameters, solution)
+    return replace(problem, model=model).evaluate(theta)
+
+
+def keep(
+    store: ArrayStore, key: str, result: CalibrationResult, basis_error: float,
+    solve_modes: int = 0,
+) -> None:  # fmt: skip
+    """``result`` with its basis error and the modes of the full solve that gave its numbers
+    (``solve_modes``; 0: the pairing's) stored under ``key`` in ``store`` (a no-op when the
     store is disabled or the key empty; a folder that cannot be written gives one warning)."""
     if key and np.isfinite(result.objective):
-        store.save(key, memo_arrays(result, basis_error))
+        store.save(key, memo_arrays(result, basis_error, solve_modes))

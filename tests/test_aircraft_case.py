@@ -150,9 +150,10 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     m = out["metrics"]
     assert m["ours"]["calibrated"]["rms_error_pct"] < m["v42"]["calibrated"]["rms_error_pct"]
     assert m["ours"]["calibrated"]["mean_mac"] > m["v42"]["calibrated"]["mean_mac"]
-    # the held-out 30.7 Hz mode: +53 % with v3.3's own I1 scaled (inner/outer), about +20 %
-    # with one outer section; v4.2 is within 3 % (the docs page says why we still lose)
-    assert rows[10]["held_out"] and abs(rows[10]["ours_hz"] / rows[10]["test_hz"] - 1) < 0.3
+    # the held-out 30.7 Hz mode: +27.7 % with one scale of v3.3's seven outer I1 and the
+    # masses free (+53 % without rho_wing; +19.7 % with one absolute outer section, which
+    # jumped at its default); v4.2 is within 3 % (the docs page says why we still lose)
+    assert rows[10]["held_out"] and 0.2 < rows[10]["ours_hz"] / rows[10]["test_hz"] - 1 < 0.3
     assert all(r["ours_in_range"] for r in out["mass_properties"])
 
 

@@ -96,11 +96,11 @@ def test_study_text_reads_as_a_study_with_the_parameters_and_measured_data(tmp_p
     assert not study.sampler.screen
 
 
-def test_parameters_bind_one_outer_section_and_the_foam_masses_alone():
-    """``I1_wing`` starts at the mean of the seven outer PBEAM I1 (0.0266516 in^4, from the
-    cards); ``m_foam`` acts on the 32 foam CONM2 M fields alone (3.4588688 lb summed from the
-    cards: at 0.05 the weight falls by 0.95 of it) and ``rho_wing`` on the wing beams only
-    (the foam's weight moved into them keeps the weight)."""
+def test_parameters_scale_the_outer_sections_and_the_foam_masses_alone():
+    """``EI_outer`` scales the seven outer PBEAM I1 as the deck has them (0.00994078 in^4 on
+    1003, from the cards), 1 at the default; ``m_foam`` acts on the 32 foam CONM2 M fields
+    alone (3.4588688 lb summed from the cards: at 0.05 the weight falls by 0.95 of it) and
+    ``rho_wing`` on the wing beams only (the foam's weight moved into them keeps the weight)."""
     from bayesupdate.nastran import load_nastran_model
 
     tables = {n: {"binds": b, "bounds": list(bd)} for n, (b, bd) in ac.PARAMETERS.items()}
@@ -110,7 +110,10 @@ def test_parameters_bind_one_outer_section_and_the_foam_masses_alone():
     def props(**p):
         return ac.weight_units(model.mass_properties(p), wtmass)
 
-    assert model.full_parameters(None)["I1_wing"] == pytest.approx(0.0266516, rel=1e-5)
+    assert model.full_parameters(None)["EI_outer"] == 1.0
+    outer = model.bindings["EI_outer"]
+    assert outer.field.scale and outer.nominal[0] == pytest.approx(0.00994078256, rel=1e-9)
+    assert np.ptp(outer.nominal) > 0.04  # v3.3's seven differ: 0.0099-0.0563 in^4
     base = props()
     assert base["mass"] == pytest.approx(14.0589, rel=1e-5)  # v3.3's f06
     assert props(m_foam=0.05)["mass"] == pytest.approx(base["mass"] - 0.95 * 3.4588688, rel=1e-7)
@@ -147,9 +150,10 @@ def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
     m = out["metrics"]
     assert m["ours"]["calibrated"]["rms_error_pct"] < m["v42"]["calibrated"]["rms_error_pct"]
     assert m["ours"]["calibrated"]["mean_mac"] > m["v42"]["calibrated"]["mean_mac"]
-    # the held-out 30.7 Hz mode: +53 % with v3.3's own I1 scaled (inner/outer), about +20 %
-    # with one outer section; v4.2 is within 3 % (the docs page says why we still lose)
-    assert rows[10]["held_out"] and abs(rows[10]["ours_hz"] / rows[10]["test_hz"] - 1) < 0.3
+    # the held-out 30.7 Hz mode: +27.7 % with one scale of v3.3's seven outer I1 and the
+    # masses free (+53 % without rho_wing; +19.7 % with one absolute outer section, which
+    # jumped at its default); v4.2 is within 3 % (the docs page says why we still lose)
+    assert rows[10]["held_out"] and 0.2 < rows[10]["ours_hz"] / rows[10]["test_hz"] - 1 < 0.3
     assert all(r["ours_in_range"] for r in out["mass_properties"])
 
 
@@ -157,7 +161,7 @@ def test_an_evaluation_assembles_once_and_its_mass_properties_are_unchanged(monk
     """A fit evaluation (eigen-solve, then the mass properties) assembles K and M once
     (``nastran.lines.LineAssembler`` keeps the last assembly); the mass properties it gives are
     those of a model that assembles afresh (the same bits), and a move of a line field
-    (``I1_wing``) or of a property array alone (``m_foam``: CONM2 M) is not served stale."""
+    (``EI_outer``) or of a property array alone (``m_foam``: CONM2 M) is not served stale."""
     from bayesupdate.fe.assembly import GeneralAssembler
     from bayesupdate.nastran import load_nastran_model
 
@@ -173,9 +177,9 @@ def test_an_evaluation_assembles_once_and_its_mass_properties_are_unchanged(monk
 
     monkeypatch.setattr(GeneralAssembler, "assemble", counted)
     points = [
-        {"EI_root": 1.05, "I1_wing": 0.1047, "m_foam": 0.971, "rho_wing": 1.022},
-        {"EI_root": 1.05, "I1_wing": 0.0800, "m_foam": 0.971, "rho_wing": 1.022},
-        {"EI_root": 1.05, "I1_wing": 0.0800, "m_foam": 0.500, "rho_wing": 1.022},
+        {"EI_root": 1.05, "EI_outer": 3.929, "m_foam": 0.971, "rho_wing": 1.022},
+        {"EI_root": 1.05, "EI_outer": 3.000, "m_foam": 0.971, "rho_wing": 1.022},
+        {"EI_root": 1.05, "EI_outer": 3.000, "m_foam": 0.500, "rho_wing": 1.022},
     ]
     for p in points:
         calls.clear()

@@ -83,8 +83,8 @@ def test_an_additive_model_keeps_no_pairs(tmp_path):
 @pytest.fixture(scope="module")
 def aircraft():
     """The mAEWing1 v3.3 deck with the aircraft study's four parameters: RHO of the wing beams
-    times their I1 in the twist inertia, and an absolute I1 on seven PBEAMs whose deck values
-    differ (its default their mean), so the matrices at the defaults are the deck's own."""
+    times their I1 in the twist inertia, and one scale on seven PBEAM I1 whose deck values
+    differ (1 the deck), so the matrices at the defaults are the deck's own."""
     from bayesupdate.pipelines import aircraft as ac
 
     spec = {k: {"binds": b, "bounds": list(bo)} for k, (b, bo) in ac.PARAMETERS.items()}
@@ -97,10 +97,11 @@ def test_the_aircraft_gets_two_density_pairs_and_its_total_mass_from_them(aircra
     terms = rigid_mass_terms(aircraft)
     assert terms is not None
     pairs = {(terms.names[i], terms.names[j]) for i, j in terms.pairs}
-    assert pairs == {("EI_root", "rho_wing"), ("I1_wing", "rho_wing")}
-    # built off the defaults (the deck's seven I1 there are not one section), which a call
-    # leaving names out still takes
-    assert terms.defaults is not None and np.all(terms.theta0 != terms.defaults)
+    assert pairs == {("EI_root", "rho_wing"), ("EI_outer", "rho_wing")}
+    # built at the defaults: every binding is continuous there (the seven I1 are scaled, not
+    # one absolute section), so the checks about the defaults pass
+    assert terms.defaults is None
+    np.testing.assert_array_equal(terms.theta0, list(aircraft.default_parameters().values()))
     assert terms({}).vector() == pytest.approx(terms(aircraft.default_parameters()).vector())
     aircraft.line_terms()  # the non-linear line fields the reduced basis interpolates
     assert reduced_mass._rigid_terms(aircraft) is not None

@@ -114,10 +114,10 @@ def test_two_parameters_on_one_card_field_are_refused():
                            {n: {"binds": b} for n, b in binds.items()})  # fmt: skip
 
 
-@pytest.mark.parametrize("point", [(1.05, 0.1047, 0.97, 1.02), (12.0, 0.3, 0.2, 6.5)])
+@pytest.mark.parametrize("point", [(1.05, 3.93, 0.97, 1.02), (12.0, 11.0, 0.2, 6.5)])
 def test_a_product_of_two_bound_fields_solves_through_bilinear_records(point, tmp_path):
-    """The aircraft case's parameters (``pipelines.aircraft.PARAMETERS``): one absolute I1 for
-    seven PBEAMs whose deck values differ, and the wing's MAT1 RHO, whose product is the twist
+    """The aircraft case's parameters (``pipelines.aircraft.PARAMETERS``): one scale of the I1
+    of seven PBEAMs whose deck values differ, and the wing's MAT1 RHO, whose product is the twist
     inertia rho (I1 + I2) and the lumped ends' inertia.  Their records are bilinear, not affine:
     with the pair terms the records path equals the deck written with the values and read
     again, and the card-converting reference, to 1e-12 of the largest entry (before: the

@@ -22,6 +22,7 @@ def load_nastran_model(
     by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognised from WTMASS
     and the MAT1 moduli."""
     from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.nastran.bindings import refuse_differing
     from bayesupdate.nastran.model import NastranModel, deck_bindings
     from bayesupdate.nastran.reader import read_structure
     from bayesupdate.nastran.test_points import with_test_points
@@ -46,6 +47,7 @@ def load_nastran_model(
         note = unbound_note(deck, parameters)
         if note:
             info["notes"].append(note)
+    refuse_differing(parameters or {}, deck)
     bindings, defaults, bounds = deck_bindings(parameters or {}, deck, structure)
     _refuse_tapered(bindings, deck)
     return NastranModel(

@@ -48,9 +48,19 @@ offset or inertia, a CMASS2 M) are written into copies of those cards
 x^2; a beam offset through the rigid link of its ends, MSC QRG CBEAM). A CONM2 M bound beside
 another field of the same CONM2 is written the same way (its mass factor alone would miss the m
 x terms).
+
+An absolute binding over several cards sets them all to one value.  When the deck's values of
+those cards differ (seven PBEAM I1 of 0.0099-0.0563 in^4 bound as one section), the parameter's
+default would be the deck and every other value one section: K would jump at the default, and
+an optimiser or a sampler near it would see a discontinuous model.  Such a binding is refused
+(``refuse_differing``) with the fix: a ``scale`` (1 = the deck, continuous, the distribution
+kept) or one card.  Reading the deck with their mean instead would move the model at the
+default off the deck, and with it every command's reference design (the pairing).  A DESVAR's
+relations (``nastran.desvar``) are per-id by design and left to their own defaults.
 """
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -511,3 +521,29 @@ def _check_pbush(f: DeckField, cards) -> None:
                 f"parameter binds {f.spec!r}: PBUSH {c.id()} has other non-zero K; "
                 f"bind 'PBUSH {c.id()} K scale' (all six)"
             )
+
+
+#: study-table keys of a DESVAR's relations (``nastran.desvar``): not a study's own binding
+_DESIGN_KEYS = ("relations", "coefficients", "desvar")
+
+
+def refuse_differing(parameters: Mapping, deck) -> None:
+    """Refuse each absolute binding (no ``scale``) of the study's ``{name: {binds, ...}}``
+    tables over several cards whose deck values differ (module docstring), with a one-line
+    ``BayesUpdateError`` naming the cards, their spread and the fix.  A DESVAR's relations
+    (``_DESIGN_KEYS``) are left as they are."""
+    for name, entry in parameters.items():
+        if "binds" not in entry or any(k in entry for k in _DESIGN_KEYS):
+            continue
+        f = parse_binding(entry["binds"], name)
+        if f.scale or len(f.ids) < 2:
+            continue
+        values = np.array([field_value(_card(deck, f, i), f) for i in f.ids])
+        if not np.ptp(values) > 1e-12 * np.abs(values).max():
+            continue
+        ids = ",".join(map(str, f.ids))
+        raise BayesUpdateError(
+            f"parameter {name}: binds {f.spec!r}: the {len(f.ids)} cards' {f.field} differ "
+            f"({values.min():.4g}-{values.max():.4g}), and one value on all would make the model "
+            f"jump at its default, the deck; bind '{f.card} {ids} {f.field} scale', or one card"
+        )

@@ -12,14 +12,18 @@ What is fixed here, and why:
 - ``PARAMETERS``: four parameters, from ``bayesupdate sensitivity`` on v3.3 and the physics of
   the authors' own update (v3.3 -> v4.2).  The paired modes see the wing's flap bending (PBEAM
   I1 of 1002-1009) and its masses, torsion (J) and the in-plane section (I2) at most 0.04 (log
-  sensitivities).  ``EI_root`` scales the root segment's I1 (PBEAM 1002); ``I1_wing`` sets one
-  I1 for the outer segments 1003-1009 (v3.3 has seven different ones, 0.0099-0.0563 in^4, its
-  1003 the weakest; v4.2 gives them one section, 0.138 in^4 at E 2.60e6 psi, and the spar is
-  one uniform spar); ``m_foam`` scales the wing's foam point masses (CONM2 170001-170016,
-  180001-180016: M only, their own I11-I33 stay) and ``rho_wing`` the density of the wing
-  beams (MAT1 903), so that mass can move between the foam lumps and the beams at the same
-  weight, as the authors moved it (v4.2 sets those CONM2 M to 0 and puts the foam into the
-  beams' RHO x A).  The measured weight and inertias decide the two masses' sum.
+  sensitivities).  ``EI_root`` scales the root segment's I1 (PBEAM 1002) and ``EI_outer``
+  the I1 of the outer segments 1003-1009 by one factor (v3.3 has seven different ones,
+  0.0099-0.0563 in^4; v4.2 gives them one section, 0.138 in^4 at E 2.60e6 psi, E I1 3.6e5 lb
+  in^2, beside a new uniform spar).  A scale, not one absolute I1 on the seven: the default
+  (1) is the deck and the model is continuous there (``nastran.bindings.refuse_differing``).
+  The authors' change of E I1 (with the spar) is x5.46 on the weakest segment (1003) and
+  x0.96 on the stiffest (1008), inside the bounds 0.25-16.  One factor keeps v3.3's irregular
+  spanwise distribution, which v4.2 replaced.  ``m_foam`` scales the wing's foam point masses (CONM2
+  170001-170016, 180001-180016: M only, their own I11-I33 stay) and ``rho_wing`` the density
+  of the wing beams (MAT1 903), so that mass can move between the foam lumps and the beams at
+  the same weight, as the authors moved it (v4.2 sets those CONM2 M to 0 and puts the foam
+  into the beams' RHO x A).  The measured weight and inertias decide the two masses' sum.
 - ``MEASURED``: the measured mass properties of the authors' SOL 200 deck
   (``sol200_full_model/DESVAR_mAEWing1_FULL_ALL.dat``, DEQATN 1300 and DCONSTR 90001): weight
   13.76 lb (range 13.4-14.2), IXX 9560 lb in^2 (9321-9799), IYY 1643 lb in^2 (1601-1684.1);
@@ -56,9 +60,8 @@ _FOAM = ",".join(f"{side}{k:02d}" for k in range(1, 17) for side in ("1700", "18
 #: name -> (binding, bounds): see the module docstring
 PARAMETERS = {
     "EI_root": ("PBEAM 1002 I1 scale", (0.25, 16.0)),
-    # absolute [in^4]: one section for the seven segments (default: the mean of their seven
-    # I1, 0.0267); bounds 0.64 x the weakest (0.0099) to 7.1 x the stiffest (0.0563)
-    "I1_wing": ("PBEAM 1003,1004,1005,1006,1007,1008,1009 I1", (0.0063, 0.40)),
+    # x v3.3's seven outer I1: v4.2's E I1 is x0.96 (1008) to x5.46 (1003) of v3.3's
+    "EI_outer": ("PBEAM 1003,1004,1005,1006,1007,1008,1009 I1 scale", (0.25, 16.0)),
     "m_foam": (f"CONM2 {_FOAM} M scale", (0.05, 2.0)),
     "rho_wing": ("MAT1 903 RHO scale", (0.5, 8.0)),
 }

@@ -28,10 +28,13 @@ for a smooth end still uses a forward difference at the end (``_end_optimality``
 
 A cheap surrogate (the certified reduced basis) may do the search, with the exact problem given as
 ``refine``: every end point is then evaluated on the exact model, and polished there unless it is
-at the best (within 1 %) and that value agrees with the surrogate's to 1 %.  An optimum on a kink
-is where a surrogate's small shape error matters most: at the exhaust's surrogate optimum the full
-model's tracked pairing of modes 6 and 7 flips (Expr 0.067 -> 0.078); 60 d exact Nelder-Mead
-evaluations from each end bring it back to the surrogate's value within 1 %.  Where the two agree
+at the best (within 1 %) and that value agrees with the surrogate's to 1 %.  There the least
+squares and the polish stop at the surrogate's resolution (``SURROGATE_LEAST_SQUARES``,
+``SURROGATE_POLISH``: ~1e-6 in a frequency, inside a certified basis's 1e-4), not at 1e-12.
+An optimum on a kink is where a surrogate's small shape error matters most: at the exhaust's
+surrogate optimum the full model's tracked pairing of modes 6 and 7 flips (Expr 0.067 -> 0.078);
+60 d exact Nelder-Mead evaluations from each end bring it back to the surrogate's value within
+1 %.  Where the two agree
 (the mAEWing1 deck: 15 ends on one optimum) the polish would cost 60 d full solves per end for a
 move of the size of the surrogate's error.
 

@@ -6,11 +6,12 @@ element, and on a Nastran deck with PSHELL T bindings."""
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import Binding, FEModel, Material, StructureBuilder
 from bayesupdate.fe import shell_mesh as sm
-from bayesupdate.fe.reduced import ReducedFEModel, ReducedSettings
+from bayesupdate.fe.reduced import ReducedFEModel, ReducedSettings, shell_terms
 from bayesupdate.fe.reduced.affine import decompose
 from bayesupdate.fe.shell_model import ShellAssembly
 
@@ -105,6 +106,36 @@ def test_decomposition_matches_direct_assembly(box):
         M_aff = np.tensordot(cM[i], Mt, axes=1)
         assert np.abs(K_aff - K).max() <= 1e-12 * np.abs(K).max()
         assert np.abs(M_aff - M).max() <= 1e-12 * np.abs(M).max()
+
+
+def test_shell_term_parts_equal_a_coordinate_format_sum(box):
+    # each feature pair's part, built on the CSR-ordered pattern without sorting, against the
+    # same values summed by scipy's coordinate format on the DOFs np.unique finds: the same
+    # DOFs, entries (the constant mass term sums both parts' non-structural and unit-density
+    # values on shared edges) and values to round-off
+    fe, g = box, box.general
+    n = len(fe.parameter_names)
+    f_ref = np.linspace(1.0, 2.0, 1 + 3 * n)
+    acc = shell_terms._Accumulator(g, f_ref)
+    for pos, _, m0, mp in g.terms:
+        acc.add((0, 0), pos, m0)
+        acc.add((1, 0), pos, mp[1])
+    parts = acc.parts()
+    for key, items in acc.items.items():
+        pos = np.concatenate([p for p, _ in items])
+        vals = np.concatenate([v for _, v in items]) * f_ref[key[0]] * f_ref[key[1]]
+        dofs, inverse = np.unique(np.concatenate([g.rows[pos], g.cols[pos]]), return_inverse=True)
+        local = inverse.reshape(2, -1)
+        ref = sp.coo_matrix((vals, (local[0], local[1])), shape=(dofs.size,) * 2).tocsr()
+        ref.sort_indices()
+        part = parts[key]
+        assert np.array_equal(part.dofs, dofs)
+        assert np.array_equal(part.matrix.indptr, ref.indptr)
+        assert np.array_equal(part.matrix.indices, ref.indices)
+        assert np.abs(part.matrix.data - ref.data).max() <= 1e-15 * np.abs(ref.data).max()
+    assert len(np.unique(np.concatenate([p for p, _ in acc.items[(0, 0)]]))) < sum(
+        len(p) for p, _ in acc.items[(0, 0)]
+    )  # the two parts share positions: the sum is tested
 
 
 def test_decomposition_has_offset_and_rotary_powers(box):

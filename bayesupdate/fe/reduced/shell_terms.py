@@ -143,14 +143,25 @@ class _Accumulator:
             self.items.setdefault(key, []).append((pos, values))
 
     def parts(self) -> dict[tuple[int, int], SparsePart]:
-        out = {}
-        for key, items in self.items.items():
-            pos = np.concatenate([p for p, _ in items])
-            vals = np.concatenate([v for _, v in items]) * (self.f_ref[key[0]] * self.f_ref[key[1]])
-            rows, cols = self.g.rows[pos], self.g.cols[pos]
-            dofs, inverse = np.unique(np.concatenate([rows, cols]), return_inverse=True)
-            m = dofs.size
-            local = inverse.reshape(2, -1)
-            X = sp.coo_matrix((vals, (local[0], local[1])), shape=(m, m)).tocsr()  # sums repeats
-            out[key] = SparsePart(dofs, X)
-        return out
+        """{feature pair: ``SparsePart``}: each pair's values summed per position of the pattern
+        and kept on the DOFs they touch.  The pattern is in CSR order (``GeneralAssembler``: its
+        (row, col) keys sorted), so the touched positions, in ascending order, are already a CSR
+        matrix's entries: no sort (a coordinate-format build sorted 2 x ~1e6 DOF numbers per
+        pair, ~1 s of the shell exhaust's ~1.2 s decomposition)."""
+        return {key: self._part(key, items) for key, items in self.items.items()}
+
+    def _part(self, key, items) -> SparsePart:
+        g, n_dof = self.g, self.g.n_dof
+        pos = np.concatenate([p for p, _ in items])
+        vals = np.concatenate([v for _, v in items]) * (self.f_ref[key[0]] * self.f_ref[key[1]])
+        where = np.flatnonzero(np.bincount(pos, minlength=g.rows.size))
+        summed = np.bincount(pos, weights=vals, minlength=g.rows.size)[where]
+        rows, cols = g.rows[where], g.cols[where]
+        touched = np.zeros(n_dof, dtype=bool)
+        touched[rows] = True
+        touched[cols] = True
+        local = np.cumsum(touched) - 1
+        m = int(local[-1]) + 1
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(local[rows], minlength=m))])
+        X = sp.csr_matrix((summed, local[cols], indptr), shape=(m, m))
+        return SparsePart(np.flatnonzero(touched), X)

@@ -123,7 +123,7 @@ def test_a_quick_demo_polishes_the_beam_optimum_on_its_basis_only(beam):
 def test_the_optimum_is_solved_in_full_once_run_sampling_solves_it(beam):
     """``optimum_part(certify=False)`` leaves the full solve at the optimum to ``run_sampling``
     (``pipelines.sample._basis_at_optimum``): that solve gives the error the demo's own check
-    gave, to the bit, and ``with_error_at_optimum`` carries it into the optimum's record."""
+    gave, to the bit, and ``_with_error_at_optimum`` carries it into the optimum's record."""
     from types import SimpleNamespace
 
     from bayesupdate.pipelines.sample import _basis_at_optimum
@@ -135,10 +135,10 @@ def test_the_optimum_is_solved_in_full_once_run_sampling_solves_it(beam):
     part = demo.optimum_part(prepared, polished=False, weights=(), certify=False)
     assert np.isnan(part.basis["error_at_optimum"]) and part.basis["certified"]
     run = SimpleNamespace(posterior=SimpleNamespace(diagnostics={"rom": note}))
-    carried = demo.with_error_at_optimum(part, run)
+    carried = demo._with_error_at_optimum(part, run)
     assert carried.basis == {**part.basis, "error_at_optimum": note["error_at_optimum"]}
     run = SimpleNamespace(posterior=SimpleNamespace(diagnostics={}))
-    assert demo.with_error_at_optimum(part, run) is part
+    assert demo._with_error_at_optimum(part, run) is part
 
 
 def test_the_fronts_one_start_finds_the_points_of_two(beam):

@@ -340,13 +340,13 @@ def _shell_task(settings, names, step) -> ShellPart:
         out=path, progress=settings.progress, reference=demo_reference("seed_shell")
     )
     run = run_sampling(prepared, options, optimum.calibration, (optimum.search, optimum.rom))
-    optimum = with_error_at_optimum(optimum, run)
+    optimum = _with_error_at_optimum(optimum, run)
     step(next(names))
     check = check_at_density(prepared, optimum.calibration)
     return ShellPart(CalibrationPart(run, path, prepared.problem), _light(optimum), check)
 
 
-def with_error_at_optimum(optimum: OptimumPart, run: SamplingRun) -> OptimumPart:
+def _with_error_at_optimum(optimum: OptimumPart, run: SamplingRun) -> OptimumPart:
     """``optimum`` (made with ``certify=False``) with its basis's "error_at_optimum" taken from
     ``run``: ``run_sampling`` full-solves the basis at the optimum it was given
     (``pipelines.sample._basis_at_optimum``, recorded in the posterior's ``diagnostics["rom"]``),
@@ -485,7 +485,7 @@ def optimum_part(
     polished on the basis, then on the full model; with ``exact=False`` on the basis only),
     else as ``run_sampling`` places its walkers (no polish).  ``certify``: the basis checked at
     the optimum by a full solve ("error_at_optimum"); False where ``run_sampling`` is handed
-    this optimum and solves there itself (``with_error_at_optimum``; NaN until then)."""
+    this optimum and solves there itself (``_with_error_at_optimum``; NaN until then)."""
     import time
 
     from bayesupdate.inference.optimize import (

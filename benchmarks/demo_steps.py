@@ -39,18 +39,24 @@ def _clocks() -> tuple[float, float]:
 
 class StepClock:
     """The demo's ``step(task, name)``: each step's CPU and wall seconds in the process it ran
-    in, printed as it ends and kept in ``rows`` (read back in a serial run only: a worker's
-    copy stays in the worker).  Module level: pickled to the workers."""
+    in, printed as it ends with that process's id and the seconds since ``t0`` at its end (the
+    workers' critical path: which task ends last, and on which worker), and kept in ``rows``
+    (read back in a serial run only: a worker's copy stays in the worker).  Module level:
+    pickled to the workers."""
 
-    def __init__(self):
-        self.rows, self.open = [], {}
+    def __init__(self, t0: float):
+        self.t0, self.rows, self.open = t0, [], {}
 
     def __call__(self, task: str, name: str | None) -> None:
         now = _clocks()
         if task in self.open:
             (label, w0, c0), (w1, c1) = self.open.pop(task), now
             self.rows.append((label, c1 - c0, w1 - w0))
-            print(f"  {c1 - c0:7.1f} s CPU  {w1 - w0:7.1f} s wall  {label}", file=sys.stderr)
+            where = f"pid {os.getpid()}, ends at {w1 - self.t0:6.1f} s"
+            print(
+                f"  {c1 - c0:7.1f} s CPU  {w1 - w0:7.1f} s wall  {label}  ({where})",
+                file=sys.stderr,
+            )
         if name is not None:
             self.open[task] = (name, *now)
 
@@ -71,7 +77,7 @@ def main() -> None:
     from bayesupdate.pipelines.demo import DemoSettings, run_demo, side_by_side
     from bayesupdate.report.demo_report import part_figures, write_demo_report
 
-    clock, figures, drawn = StepClock(), {}, []
+    clock, figures, drawn = StepClock(wall0), {}, []
     wall, cpu = _clocks()
     clock.rows.append(("import", cpu - cpu0, wall - wall0))
     settings = DemoSettings(out=out, quick=args.quick, seed=args.seed)
@@ -79,7 +85,7 @@ def main() -> None:
     def on_part(task, record):
         w0, c0 = _clocks()
         figures.update(part_figures(task, record, out))
-        drawn.append((task, time.process_time() - c0, time.time() - w0))
+        drawn.append((task, time.process_time() - c0, time.time() - w0, time.time() - wall0))
 
     with open_executor(ComputeSettings(args.workers)) as executor:
         results = run_demo(settings, clock, executor, on_part)
@@ -96,8 +102,8 @@ def main() -> None:
     print(f"demo{quick}, {args.workers} worker(s): CPU and wall seconds per step")
     for label, cpu, wall in clock.rows:  # a serial run's steps; with workers: this process's
         print(f"  {cpu:7.1f} s CPU  {wall:7.1f} s wall  {label}")
-    for task, cpu, wall in drawn:
-        print(f"  {cpu:7.1f} s CPU  {wall:7.1f} s wall  figures of {task}")
+    for task, cpu, wall, end in drawn:
+        print(f"  {cpu:7.1f} s CPU  {wall:7.1f} s wall  figures of {task} (ends at {end:.1f} s)")
     print(
         f"  {cpu1 - cpu0:7.1f} s CPU here + {workers_cpu:.1f} s CPU in workers, "
         f"{wall1 - wall0:7.1f} s wall  in all; load average {os.getloadavg()}"

@@ -120,6 +120,49 @@ def test_a_quick_demo_polishes_the_beam_optimum_on_its_basis_only(beam):
     assert exact.calibration.expr <= part.calibration.expr * (1 + 2e-4)
 
 
+def test_the_optimum_is_solved_in_full_once_run_sampling_solves_it(beam):
+    """``optimum_part(certify=False)`` leaves the full solve at the optimum to ``run_sampling``
+    (``pipelines.sample._basis_at_optimum``): that solve gives the error the demo's own check
+    gave, to the bit, and ``_with_error_at_optimum`` carries it into the optimum's record."""
+    from types import SimpleNamespace
+
+    from bayesupdate.pipelines.sample import _basis_at_optimum
+
+    prepared, certified = beam
+    rom, optimum = certified.rom, certified.calibration
+    note = _basis_at_optimum(certified.search, rom, prepared.likelihood, optimum)[2]
+    assert note["error_at_optimum"] == certified.basis["error_at_optimum"] > 0
+    part = demo.optimum_part(prepared, polished=False, weights=(), certify=False)
+    assert np.isnan(part.basis["error_at_optimum"]) and part.basis["certified"]
+    run = SimpleNamespace(posterior=SimpleNamespace(diagnostics={"rom": note}))
+    carried = demo._with_error_at_optimum(part, run)
+    assert carried.basis == {**part.basis, "error_at_optimum": note["error_at_optimum"]}
+    run = SimpleNamespace(posterior=SimpleNamespace(diagnostics={}))
+    assert demo._with_error_at_optimum(part, run) is part
+
+
+def test_the_fronts_one_start_finds_the_points_of_two(beam):
+    """``FRONT_STARTS`` (1 besides the reference start) gives the beam's front of 2 starts:
+    Expr to 8 digits, the mass error to 5 (seed 0)."""
+    from bayesupdate.inference.optimize import pareto_front_mass
+
+    prepared, part = beam
+    assert demo.FRONT_STARTS == 1
+    fronts = [
+        pareto_front_mass(
+            part.search, paper.MEASURED_MASS_KG, (1e-3, 10.0), starts, seed=0, polish=False
+        )
+        for starts in (demo.FRONT_STARTS, 2)
+    ]
+    for a, b in zip(*fronts, strict=True):
+        assert a["expr"] == pytest.approx(b["expr"], rel=1e-8)
+        assert a["mass_error_pct"] == pytest.approx(b["mass_error_pct"], abs=1e-4)
+    # docs/guide/exhaust-shell.md's beam front: -44.8 % at the weight 1e-3, -0.33 % at 10
+    light, heavy = fronts[0]
+    assert light["mass_error_pct"] == pytest.approx(-44.8, abs=0.5)
+    assert heavy["mass_error_pct"] == pytest.approx(-0.33, abs=0.05)
+
+
 def test_the_side_by_side_measures_both_models_with_the_runs_optima(beam):
     part = beam[1]
     shell = Calibrated(0.0639, 12.297, False, ((0.02, 0.0639),), "this run")
@@ -153,6 +196,23 @@ def test_the_shell_seed_optimum_on_its_basis_and_at_the_default_mesh(tmp_path):
     # the same point solved at the default mesh 32: 0.0675 in the guide
     assert check.expr == pytest.approx(0.0675, abs=1e-3)
     assert np.max(np.abs(check.initial_hz / paper.TABLE1_FEA_HZ - 1)) < 0.03
+
+
+def test_the_demos_tasks_start_with_the_fe_part_and_end_with_the_figureless_beam_optimum():
+    """``demo_tasks``: every part once, "ema" before them (the virtual test's tasks read its
+    modes); the FE part first so that its figures are drawn while the workers compute, the beam
+    optimum (the one part without figures) last so that no figures are drawn after the last
+    worker ends; a quick run leaves the seed case's discovery out."""
+    for quick in (True, False):
+        settings = demo.DemoSettings(Path("out"), quick=quick)
+        tasks = demo.demo_tasks(settings)
+        assert len(set(tasks)) == len(tasks) and "ema" not in tasks
+        assert set(tasks) | {"ema"} == set(demo.TASK_STEPS) - (
+            {"seed_discovery"} if quick else set()
+        )
+        assert (tasks[0], tasks[-1]) == ("fe", "beam")
+        steps = demo.demo_steps(settings)
+        assert steps[:2] == demo.TASK_STEPS["ema"] and steps[2] == demo.TASK_STEPS["fe"][0]
 
 
 def test_the_demos_tasks_give_the_same_bits_serial_and_on_two_worker_processes(tmp_path, capfd):

@@ -56,9 +56,12 @@ SHELL_MESH_DENSITY = 16
 SHELL_MODEL = {"source": "exhaust_shell", "options": {"mesh_density": SHELL_MESH_DENSITY}}
 BEAM_MODEL = {"source": "exhaust"}
 #: the fronts of Expr against the mass error: these weights of the mass term, each fit on the
-#: model's certified basis with this many starts, not polished
+#: model's certified basis with this many starts (besides the reference start), not polished.
+#: One start gives the 4 points of 2 starts on both exhausts (seed 0, quick demo's bases: Expr
+#: equal to 8 digits, the mass errors to 5) for 3.2 s CPU against 4.2 (beam), 4.2 against 5.1
+#: (shell) (``benchmarks/demo_steps.py``'s machine at load 5, 2026-11-29)
 FRONT_WEIGHTS = (1e-3, 0.1, 10.0, 1e3)
-FRONT_STARTS = 2
+FRONT_STARTS = 1
 
 
 @dataclass(frozen=True)
@@ -227,17 +230,19 @@ TASK_STEPS = {
 def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
     """The independent tasks ``run_demo`` hands to its executor, in the order they start (a
     worker takes the next as it finishes one), chosen so that two workers end together
-    (``benchmarks/demo_steps.py``, CPU seconds per task with cached bases).  Quick (serial, on a
-    machine at load 20, 2026-11-29): {FE part 1.3, shell seed case 47, beam optimum 23} against
-    the virtual test's {calibration 24, discovery 37}, while this process draws the figures
-    (28) as parts arrive: the FE part first so that its figures are drawn early, the beam
-    optimum last as it has no figures (the last task's are drawn after it, on one core).
-    Full: {seed discovery 58, virtual discovery 57, beam optimum 90, FE part} against
-    {shell seed case 104, virtual calibration 106}.  --quick keeps discovery where it has
-    something to find (the virtual test's hidden effect)."""
+    (``benchmarks/demo_steps.py --workers 2``, CPU seconds per task with cached bases, at load
+    5-9 on the 2 cores, 2026-11-29).  Quick: {FE part 1.2, virtual calibration 21, virtual
+    discovery 39} against {shell seed case 54, beam optimum 15}: 61 against 69, the beam
+    optimum taken by the first worker free; no split of these five ends closer.  This process
+    draws the figures (27 s) as the parts arrive: the FE part first so that its figures are
+    drawn early, the beam optimum last as it has no figures (the last task's are drawn after
+    it, on one core).  With an empty cache the shell's basis adds 23 s to its task: 77 against
+    76.  Full: {FE part 1.3, shell seed case 91, virtual discovery 69, beam optimum 75} against
+    {seed discovery 132, virtual calibration 99}: 236 against 231.  --quick keeps discovery
+    where it has something to find (the virtual test's hidden effect)."""
     if settings.quick:
         return ("fe", "shell", "virtual_calibration", "virtual_discovery", "beam")
-    return ("seed_discovery", "shell", "virtual_discovery", "virtual_calibration", "beam", "fe")
+    return ("fe", "seed_discovery", "shell", "virtual_discovery", "virtual_calibration", "beam")
 
 
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:
@@ -328,16 +333,31 @@ class ShellPart:
 def _shell_task(settings, names, step) -> ShellPart:
     step(next(names))
     prepared = prepare(seed_study(settings))
-    optimum = optimum_part(prepared, polished=False)
+    optimum = optimum_part(prepared, polished=False, certify=False)
     step(next(names))
     path = settings.out / "seed_case.h5"
     options = SamplingOptions(
         out=path, progress=settings.progress, reference=demo_reference("seed_shell")
     )
     run = run_sampling(prepared, options, optimum.calibration, (optimum.search, optimum.rom))
+    optimum = _with_error_at_optimum(optimum, run)
     step(next(names))
     check = check_at_density(prepared, optimum.calibration)
     return ShellPart(CalibrationPart(run, path, prepared.problem), _light(optimum), check)
+
+
+def _with_error_at_optimum(optimum: OptimumPart, run: SamplingRun) -> OptimumPart:
+    """``optimum`` (made with ``certify=False``) with its basis's "error_at_optimum" taken from
+    ``run``: ``run_sampling`` full-solves the basis at the optimum it was given
+    (``pipelines.sample._basis_at_optimum``, recorded in the posterior's ``diagnostics["rom"]``),
+    so the demo does not solve the same point in full a second time (a shell solve at mesh
+    density 16, about 0.7 s CPU).  Unchanged when the run has no basis record."""
+    from dataclasses import replace
+
+    rom = run.posterior.diagnostics.get("rom") or {}
+    if optimum.basis is None or "error_at_optimum" not in rom:
+        return optimum
+    return replace(optimum, basis={**optimum.basis, "error_at_optimum": rom["error_at_optimum"]})
 
 
 def _light(optimum: OptimumPart) -> OptimumPart:
@@ -453,14 +473,19 @@ def fe_part(model: dict) -> FePart:
 
 
 def optimum_part(
-    prepared: PreparedStudy, polished: bool, weights: tuple = FRONT_WEIGHTS, exact: bool = True
+    prepared: PreparedStudy,
+    polished: bool,
+    weights: tuple = FRONT_WEIGHTS,
+    exact: bool = True,
+    certify: bool = True,
 ) -> OptimumPart:
     """The optimum against the study's data and the front (one fit per mass-term weight in
     ``weights``), both on the certified basis that ``run_sampling`` builds for this study
     (``pipelines.surrogates.sampling_problem``).  ``polished``: as ``run_calibration`` (ends
     polished on the basis, then on the full model; with ``exact=False`` on the basis only),
-    else as ``run_sampling`` places its walkers (no polish, the basis checked at the optimum
-    by a full solve)."""
+    else as ``run_sampling`` places its walkers (no polish).  ``certify``: the basis checked at
+    the optimum by a full solve ("error_at_optimum"); False where ``run_sampling`` is handed
+    this optimum and solves there itself (``_with_error_at_optimum``; NaN until then)."""
     import time
 
     from bayesupdate.inference.optimize import (
@@ -482,7 +507,7 @@ def optimum_part(
     calibration = calibrate(search, fit, refine=refine)
     basis = None
     if rom is not None:
-        error = rom.certify_at(calibration.theta[None, :], search.names)[1]
+        error = rom.certify_at(calibration.theta[None, :], search.names)[1] if certify else np.nan
         basis = {**rom.summary(), **build, "error_at_optimum": float(error)}
     front = pareto_front_mass(
         search, paper.MEASURED_MASS_KG, tuple(weights), starts=FRONT_STARTS, seed=opt.seed,
@@ -527,7 +552,7 @@ def _calibration_part(settings, data_source, path: Path) -> CalibrationPart:
     if settings.exact_polish:
         run = run_sampling(prepared, options, calibration=run_calibration(prepared))
     else:
-        part = optimum_part(prepared, polished=True, weights=(), exact=False)
+        part = optimum_part(prepared, polished=True, weights=(), exact=False, certify=False)
         run = run_sampling(prepared, options, part.calibration, (part.search, part.rom))
     return CalibrationPart(run, path, prepared.problem)
 

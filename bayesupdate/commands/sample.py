@@ -128,6 +128,12 @@ def run(args) -> int:
     return 0
 
 
+def _asked_one_process(args, study) -> bool:
+    """Whether the user asked for this process alone (--workers 1, [compute] workers = 1)."""
+    table = study.extensions.get("compute")
+    return args.workers == 1 or (table is not None and table.workers == 1 and not table.scheduler)
+
+
 def _sample_with_stop_handlers(prepared, args, compute):
     """``pipelines.sample.run_sampling`` with SIGTERM/SIGINT turned into a checkpointed stop."""
     from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
@@ -139,6 +145,8 @@ def _sample_with_stop_handlers(prepared, args, compute):
         progress=not (args.json or args.no_progress),
         stop=stop,
         compute=compute,
+        # --workers 1 or [compute] workers = 1: this process alone, no worker of the sampler's
+        split=None if _asked_one_process(args, prepared.study) else "auto",
     )
     previous_hook, sys.unraisablehook = sys.unraisablehook, stop.quiet_unraisable
     previous_excepthook, sys.excepthook = sys.excepthook, stop.quiet_excepthook

@@ -47,6 +47,11 @@ class SerialExecutor:
     def share(self, obj):
         return obj
 
+    def submit(self, fn, item, shared=None) -> "Finished":
+        """``fn(shared, item)``, run now; its ``result()`` (the form of ``ProcessExecutor.
+        submit``, so a caller overlaps its own work with a task where there is a worker)."""
+        return Finished(fn(shared, item))
+
     def map(self, fn, items, shared=None, progress=None) -> list:
         results = []
         for i, item in enumerate(items):
@@ -67,6 +72,16 @@ class SerialExecutor:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+@dataclass(frozen=True)
+class Finished:
+    """A task already run: ``result()`` returns its value (``SerialExecutor.submit``)."""
+
+    value: object
+
+    def result(self):
+        return self.value
 
 
 @dataclass(frozen=True)
@@ -135,6 +150,13 @@ class ProcessExecutor(SerialExecutor):
                     "memory?); run with fewer --workers"
                 )
         return [results[i] for i in range(len(items))]
+
+    def submit(self, fn, item, shared=None):
+        """One task ``fn(shared, item)`` on a worker, not waited for: a
+        ``concurrent.futures.Future`` (its ``result()`` raises ``BrokenProcessPool`` when the
+        worker died; no retry here: the caller can run the task itself).  ``shared``: a handle
+        from ``share`` (sent once) or a payload sent with this task."""
+        return self._pool.submit(_run_task, fn, self.share(shared), item)
 
     def _attempt(self, fn, handle, items: list, results: dict, progress) -> bool:
         """Run the items not yet in ``results`` (filled in as they finish); False if the pool

@@ -31,7 +31,11 @@ the stop is what R-hat needed, not an overshoot of the checks) and the least bul
 stop over the ESS target.  ``--code DIR [DIR ...]``: one source tree per variant (PYTHONPATH),
 runs interleaved so that every variant sees the same machine load; e.g. before and after:
   .venv/bin/python benchmarks/posterior_speed.py --user 3 --code /path/to/main .
-then the paired CPU ratios against the first tree, of the whole run and per kept step.
+then the paired CPU ratios against the first tree, of the whole run and per kept step.  A
+variant may add arguments to the command after a colon, comma-separated: ``--code . .:--workers=1``
+runs the tree once as the user does (the walkers' batches split with a worker of the sampler's
+own when a core is free) and once in one process alone.  Each row has ``split``: the batches
+evaluated in two parts at once (0 in one process).
 ``--user-seeds S [S ...]``: each round runs these sampler seeds (``--seed``) too: a change that
 reorders the random draws changes where the R-hat stop lands, so one seed compares two chain
 lengths as much as two codes.  ``--overshoot`` (not for timing): each run also writes its result
@@ -316,9 +320,10 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
     import sys
     import tempfile
 
+    code, _, extra = code.partition(":")
     env = {**os.environ, "PYTHONPATH": os.path.abspath(code)}
     command = [sys.executable, "-m", "bayesupdate", "sample", "--model", "exhaust", "--data",
-               "paper:ema", "--json"]  # fmt: skip
+               "paper:ema", "--json", *[a for a in extra.split(",") if a]]  # fmt: skip
     if seed is not None:
         command += ["--seed", str(seed)]
     if overshoot:
@@ -342,7 +347,8 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
         os.remove(command[-1])
         os.rmdir(os.path.dirname(command[-1]))
     return dict(
-        code=code, seed=seed, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
+        code=code + (f":{extra}" if extra else ""), seed=seed, wall_s=round(wall, 2),
+        cpu_s=round(cpu, 2), steps=out["steps"],
         walkers=out["walkers"], evaluations=out["evaluations"], converged=out["converged"],
         min_ess=round(least_ess), ess_over_target=round(least_ess / 400.0, 2),
         held_before=stop.get("held_before"), checks=stop.get("checks"),
@@ -350,7 +356,7 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
         max_r_hat=round(max(p["r_hat"] for p in out["parameters"].values()), 4),
         means={k: p["mean"] for k, p in out["parameters"].items()},
         phases={k: round(v, 2) for k, v in (out.get("timings") or {}).items()},
-        load=round(os.getloadavg()[0], 1),
+        load=round(os.getloadavg()[0], 1), split=(out.get("split") or {}).get("batches", 0),
         first_hold=held, overshoot=None if not held else round(out["steps"] / held, 3),
     )  # fmt: skip
 

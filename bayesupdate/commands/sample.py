@@ -57,6 +57,9 @@ screen was not used (its error above the likelihood's smallest sd) | null,
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
 "stop": {"checks", "steps", "held_before" (what held the run at the check before the stop:
 "tau", "r_hat" or "ess"), "ess_at_stop", "ess_over_target"},
+"split": {"batches", "stopped"} | null (the walkers' batches evaluated in two parts at once, half
+on a worker process: with --workers N >= 2, or by default when a core is free and a batch costs
+enough; --workers 1 keeps one process; the chain is the same bits either way),
 "compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
 "pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
 at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC
@@ -243,6 +246,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
         ),
         "moves": posterior.diagnostics.get("moves"),
         "stop": posterior.diagnostics.get("stop"),
+        "split": posterior.diagnostics.get("split"),
         "swap_fraction": None
         if not predictions or not np.isfinite(predictions["swap_fraction"])
         else float(predictions["swap_fraction"]),

@@ -8,6 +8,8 @@ How a command fills the settings in (``--workers``, ``--scheduler``, the study f
 import os
 from dataclasses import dataclass
 
+from bayesupdate.compute.dask import DaskExecutor
+from bayesupdate.compute.executors import ProcessExecutor, SerialExecutor
 from bayesupdate.errors import BayesUpdateError
 
 
@@ -36,6 +38,16 @@ class ComputeSettings:
 
 
 SERIAL = ComputeSettings()
+
+
+def open_executor(settings: ComputeSettings = SERIAL):
+    """The executor of ``settings`` (a context manager; ``close`` it when done).  Dask: connects
+    to the scheduler and checks the workers' bayesupdate version (``compute.dask``)."""
+    if settings.kind == "dask":
+        return DaskExecutor(settings.scheduler, settings.retries)
+    if settings.kind == "processes":
+        return ProcessExecutor(settings.workers, settings.retries)
+    return SerialExecutor()
 
 
 def usable_cores() -> int:

@@ -18,6 +18,7 @@ walker order, so the chain is the serial chain bit for bit.
 """
 
 import os
+import pickle
 import time
 from collections.abc import Mapping
 from concurrent.futures.process import BrokenProcessPool
@@ -269,11 +270,18 @@ def split_densities(densities: tuple, executor) -> tuple:
     """Each of ``densities`` (vectorised log-densities, e.g. a run's exact posterior and its
     delayed-acceptance screen; None entries stay None) as a ``SplitDensity`` on ``executor``,
     all shared with the workers in one payload (a worker keeps one payload at a time).  The
-    densities as they are when the executor has no local worker processes.  Share them in their
+    densities as they are when the executor has no local worker processes, one of them sends
+    its points to the executor already (``LogPosterior.on_executor``), or they cannot be
+    pickled.  Share them in their
     final form: a worker evaluates the copy it was sent."""
     if executor is None or getattr(executor, "kind", "serial") != "processes":
         return densities
-    handle = executor.share(tuple(densities))
+    if any(getattr(d, "on_executor", False) for d in densities):
+        return densities  # its points are spread over the workers already
+    try:
+        handle = executor.share(tuple(densities))
+    except (pickle.PicklingError, TypeError, AttributeError):
+        return densities  # e.g. a user's model holding a lock or an open file: not sent
     ready = executor.submit(_loaded, None, handle)  # the worker starts while this one works on
     return tuple(
         None if d is None else SplitDensity(d, i, executor, handle, ready)

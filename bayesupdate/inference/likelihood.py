@@ -150,6 +150,11 @@ class LogPosterior:
         self.mass_targets = problem.objective.mass_properties
 
     @property
+    def on_executor(self) -> bool:
+        """Whether its points go to an executor already ("points" mode given one)."""
+        return self._remote is not None
+
+    @property
     def names(self) -> tuple[str, ...]:
         return self.problem.names + (("sigma",) if self.spec.infer_sigma else ())
 

@@ -163,3 +163,30 @@ def test_the_reduced_basis_split_is_the_whole_batch_bit_for_bit(
     np.testing.assert_array_equal(split(theta), whole)
     assert split.splits == 1 and split.stopped == ""
     assert np.all(np.isfinite(whole)) and np.ptp(whole) > 1.0
+
+
+def test_the_sampler_starts_a_worker_of_its_own_only_where_it_pays(
+    shear, exhaust_rom_posterior, monkeypatch
+):
+    """``pipelines.sample.split_executor`` on a serial run: a worker for the exhaust when a
+    core is free, none for a closed-form model, none when the user asked for one process
+    (``--workers 1``: ``split=None``), none when no core is free."""
+    from types import SimpleNamespace
+
+    from bayesupdate.compute.executors import SerialExecutor
+    from bayesupdate.pipelines import sample
+
+    serial, rom = SerialExecutor(), exhaust_rom_posterior
+    at_rom = SimpleNamespace(theta=0.5 * (rom.problem.lower + rom.problem.upper))
+    problem, optimum = shear
+    small = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    for free, options, density, point, expected in [
+        (True, sample.SamplingOptions(), rom, at_rom, "processes"),
+        (True, sample.SamplingOptions(), small, optimum, None),
+        (True, sample.SamplingOptions(split=None), rom, at_rom, None),
+        (False, sample.SamplingOptions(), rom, at_rom, None),
+    ]:
+        monkeypatch.setattr(sample, "a_core_is_free", lambda free=free: free)
+        with sample.split_executor(options, serial, density, point) as chosen:
+            assert (None if chosen is None else chosen.kind) == expected
+            assert chosen is None or chosen.workers == 1

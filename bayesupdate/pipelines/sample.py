@@ -5,6 +5,7 @@ every block while sampling, so an interrupted run (Ctrl-C, SIGTERM) leaves a val
 that ``resume`` continues.  Seeded: the same study gives the same chain, interrupted or not.
 """
 
+import multiprocessing
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -174,12 +175,16 @@ def split_executor(options: SamplingOptions, executor, log_post, calibration):
     """The executor the walkers' batches are split with (``sample_posterior``'s ``executor``):
     the run's own when it has local worker processes; else, with ``options.split`` "auto", one
     worker process of the sampler's own (closed on exit) when a core is free for it
-    (``compute.settings.a_core_is_free``) and a batch of the posterior costs enough to repay
-    the hand-off (``evaluators.split_pays``, at the optimum); else None (every batch here)."""
+    (``compute.settings.a_core_is_free``), this is not itself a worker process, and a batch of
+    the posterior costs enough to repay the hand-off (``evaluators.split_pays``, at the
+    optimum); else None (every batch here)."""
     if executor.kind == "processes":
         yield executor
         return
-    if executor.kind != "serial" or options.split != "auto" or not a_core_is_free():
+    # a worker process (the demo's parts run in two) never starts one of its own: its
+    # siblings hold the other cores, and the load average lags a minute behind them
+    in_worker = multiprocessing.parent_process() is not None
+    if executor.kind != "serial" or options.split != "auto" or in_worker or not a_core_is_free():
         yield None
         return
     theta = calibration.theta

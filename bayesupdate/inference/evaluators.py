@@ -15,6 +15,14 @@ non-finite values, so the evaluator is itself a ``BatchParametricModel`` (emcee
 (``LogPosterior(..., executor=...)``): ``problem.evaluate`` (predict and pair) at every walker of
 a step on the executor, the problem shared once for the whole run, the evaluations returned in
 walker order, so the chain is the serial chain bit for bit.
+
+``split_densities((exact, screen), executor)`` is what a sampler on a batched model uses with a
+local worker (``sampling.sample_posterior(..., executor=...)``): each batch of 16 walkers or
+more is cut in two at a multiple of 8 rows (``SPLIT_GRAIN``: where the batched BLAS products
+round every row as in the whole batch), the first part evaluated in this process while a worker
+evaluates the rest, the values back in row order and the worker's evaluations counted here, so
+the chain is the serial chain bit for bit.  ``split_pays``: whether a density's batches cost
+enough to repay the hand-off.
 """
 
 import os

@@ -10,7 +10,9 @@ check before the kept run, ``moves.coverage``) and its refits do too (below
 ``moves.staged.LOW_COVERAGE`` or with walkers stuck) the run uses the DE moves and says so
 (``diagnostics["moves"]``).  A screened run's adaptation stages sample the delayed-acceptance
 surrogate alone (``_adaptation_stage``), and a posterior with a mass term takes its masses from
-their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).
+their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).  Given an executor
+with local worker processes, batches of 16 walkers or more are evaluated half here, half on a
+worker, with the serial run's values bit for bit (``evaluators.split_densities``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not

@@ -215,7 +215,7 @@ def split_batches(args, repeats: int = 40) -> None:
     process's CPU per batch [ms], means over ``repeats`` calls, interleaved; the split values
     checked equal to the whole batch's.  On a loaded machine the wall times say little (the
     worker waits for a core); this process's CPU is what the split leaves on its core."""
-    from bayesupdate.compute.executors import ProcessExecutor
+    from bayesupdate.compute.executors import PartnerProcess, ProcessExecutor
     from bayesupdate.inference.evaluators import split_densities
 
     log_post, calibration, screen, _ = setup(args)
@@ -223,22 +223,29 @@ def split_batches(args, repeats: int = 40) -> None:
     p = log_post.problem
     theta = calibration.theta + 0.02 * (p.upper - p.lower) * rng.standard_normal((32, 5))
     theta = np.hstack([np.clip(theta, p.lower, p.upper), np.full((32, 1), 0.05)])
-    with ProcessExecutor(1) as executor:
-        split = split_densities((log_post, screen), executor)
-        for s in split:
-            s.wait_started()
-        for name, whole, parted in zip(("exact", "screen"), (log_post, screen), split, strict=True):
-            for n in (16, 24, 32):
-                x = theta[:n]
-                assert np.array_equal(whole(x), parted(x))
-                row = {"density": name, "points": n, "load": round(os.getloadavg()[0], 1)}
-                for label, f in (("whole", whole), ("split", parted)):
-                    t0, c0 = time.perf_counter(), time.process_time()
-                    for _ in range(repeats):
-                        f(x)
-                    row[f"{label}_wall_ms"] = round((time.perf_counter() - t0) / repeats * 1e3, 2)
-                    row[f"{label}_cpu_ms"] = round((time.process_time() - c0) / repeats * 1e3, 2)
-                print(row, flush=True)
+    for make in (PartnerProcess, lambda: ProcessExecutor(1)):
+        with make() as executor:
+            _split_rows(executor, split_densities((log_post, screen), executor), theta, repeats)
+
+
+def _split_rows(executor, split: tuple, theta: np.ndarray, repeats: int) -> None:
+    """``split_batches``' rows for one executor (a pipe partner or a one-process pool)."""
+    whole_densities = tuple(s.density for s in split)
+    for s in split:
+        s.wait_started()
+    for name, whole, parted in zip(("exact", "screen"), whole_densities, split, strict=True):
+        for n in (16, 24, 32):
+            x = theta[:n]
+            assert np.array_equal(whole(x), parted(x))
+            row = {"density": name, "points": n, "load": round(os.getloadavg()[0], 1),
+                   "hand_off": executor.kind}  # fmt: skip
+            for label, f in (("whole", whole), ("split", parted)):
+                t0, c0 = time.perf_counter(), time.process_time()
+                for _ in range(repeats):
+                    f(x)
+                row[f"{label}_wall_ms"] = round((time.perf_counter() - t0) / repeats * 1e3, 2)
+                row[f"{label}_cpu_ms"] = round((time.process_time() - c0) / repeats * 1e3, 2)
+            print(row, flush=True)
 
 
 def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> dict:

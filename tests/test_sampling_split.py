@@ -11,7 +11,11 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from bayesupdate.compute.executors import ProcessExecutor, SerialExecutor  # noqa: E402
+from bayesupdate.compute.executors import (  # noqa: E402
+    PartnerProcess,
+    ProcessExecutor,
+    SerialExecutor,
+)
 from bayesupdate.compute.settings import a_core_is_free  # noqa: E402
 from bayesupdate.inference import (  # noqa: E402
     CalibrationSettings,
@@ -38,10 +42,12 @@ def _square(_shared, x: int) -> int:
     return x * x
 
 
-@pytest.fixture(scope="module")
-def one_worker():
-    """One spawned local worker (it imports numpy and bayesupdate when it starts: seconds)."""
-    with ProcessExecutor(1) as ex:
+@pytest.fixture(scope="module", params=["partner", "pool"])
+def one_worker(request):
+    """One spawned local worker (it imports numpy and bayesupdate when it starts: seconds): a
+    partner process on a pipe (what ``sample`` starts of its own) or a pool of one process
+    (``--workers``)."""
+    with PartnerProcess() if request.param == "partner" else ProcessExecutor(1) as ex:
         # started here, so a short run does not spend itself waiting for the worker's imports
         # (until its warm-up ends, a run evaluates every batch in this process)
         assert ex.map(_square, [3]) == [9]
@@ -181,7 +187,7 @@ def test_the_sampler_starts_a_worker_of_its_own_only_where_it_pays(
     problem, optimum = shear
     small = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
     for free, options, density, point, expected in [
-        (True, sample.SamplingOptions(), rom, at_rom, "processes"),
+        (True, sample.SamplingOptions(), rom, at_rom, "partner"),
         (True, sample.SamplingOptions(), small, optimum, None),
         (True, sample.SamplingOptions(split=None), rom, at_rom, None),
         (False, sample.SamplingOptions(), rom, at_rom, None),
@@ -190,3 +196,36 @@ def test_the_sampler_starts_a_worker_of_its_own_only_where_it_pays(
         with sample.split_executor(options, serial, density, point) as chosen:
             assert (None if chosen is None else chosen.kind) == expected
             assert chosen is None or chosen.workers == 1
+
+
+def _fails_on_negative(_shared, x: int) -> int:
+    if x < 0:
+        raise ValueError(f"negative: {x}")
+    return 2 * x
+
+
+def test_a_partner_process_returns_in_order_raises_the_tasks_error_and_is_closed():
+    with PartnerProcess() as partner:
+        assert partner.map(_fails_on_negative, [1, 2, 3]) == [2, 4, 6]
+        with pytest.raises(ValueError, match="negative: -1"):
+            partner.submit(_fails_on_negative, -1).result()
+        assert partner.submit(_fails_on_negative, 5).result() == 10  # it goes on after an error
+        process = partner._process
+    assert not process.is_alive()
+
+
+def test_a_killed_partner_ends_the_splitting_with_the_same_values(shear):
+    problem, _ = shear
+    exact = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    rng = np.random.default_rng(1)
+    theta = problem.lower + rng.random((32, 2)) * (problem.upper - problem.lower)
+    expected = LogPosterior(problem, LikelihoodSpec(sigma=0.05))(theta)
+    with PartnerProcess() as partner:
+        (split,) = split_densities((exact,), partner)
+        split.wait_started()
+        np.testing.assert_array_equal(split(theta), expected)
+        partner._process.kill()
+        partner._process.join()
+        np.testing.assert_array_equal(split(theta), expected)  # this process did it all
+        np.testing.assert_array_equal(split(theta), expected)
+    assert split.splits == 1 and exact.evaluations == 3 * 32

@@ -251,11 +251,16 @@ class SplitDensity:
             self._ready.result()
 
     def _started(self) -> bool:
-        """Whether the worker has finished its warm-up (False while it is still starting)."""
+        """Whether the worker has finished its warm-up (False while it is still starting); its
+        reply is read here, before any batch is sent."""
         if self._ready is None:
             return True
         if not self._ready.done():
             return False
+        try:
+            self._ready.result()
+        except BrokenProcessPool:
+            self._executor = None
         self._ready = None
         return True
 
@@ -282,7 +287,7 @@ def split_densities(densities: tuple, executor) -> tuple:
     its points to the executor already (``LogPosterior.on_executor``), or they cannot be
     pickled.  Share them in their
     final form: a worker evaluates the copy it was sent."""
-    if executor is None or getattr(executor, "kind", "serial") != "processes":
+    if executor is None or getattr(executor, "kind", "serial") not in ("processes", "partner"):
         return densities
     if any(getattr(d, "on_executor", False) for d in densities):
         return densities  # its points are spread over the workers already

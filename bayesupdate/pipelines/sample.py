@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bayesupdate.compute.executors import ProcessExecutor
+from bayesupdate.compute.executors import PartnerProcess
 from bayesupdate.compute.settings import SERIAL, ComputeSettings, a_core_is_free, open_executor
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.config import SamplerConfig
@@ -193,7 +193,7 @@ def split_executor(options: SamplingOptions, executor, log_post, calibration):
     if not split_pays(log_post, theta):
         yield None
         return
-    with ProcessExecutor(1) as own:
+    with PartnerProcess() as own:
         yield own
 
 

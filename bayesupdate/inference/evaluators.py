@@ -151,9 +151,10 @@ SPLIT_MIN_POINTS = 2 * SPLIT_GRAIN
 
 
 #: the CPU a batch of ``SPLIT_MIN_POINTS`` must cost before a sampler splits its batches with a
-#: worker of its own (``split_pays``): the hand-off costs this process about 1 ms a batch on
-#: the loaded 2-core machine (the exhaust's screened batch of 16: 5.9 ms split against 7.1 ms
-#: whole), so a batch must cost several times that for its other half to repay it
+#: worker of its own (``split_pays``): the hand-off costs this process about 1-2 ms a batch on
+#: the loaded 2-core machine (the exhaust's screened batch of 16 on a partner process: 4.7 ms
+#: split against 7.0 ms whole, ``benchmarks/posterior_speed.py --split-batches``), so a batch
+#: must cost several times that for its other half to repay it
 SPLIT_PAYS_S = 5e-3
 
 

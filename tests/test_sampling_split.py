@@ -229,3 +229,21 @@ def test_a_killed_partner_ends_the_splitting_with_the_same_values(shear):
         np.testing.assert_array_equal(split(theta), expected)  # this process did it all
         np.testing.assert_array_equal(split(theta), expected)
     assert split.splits == 1 and exact.evaluations == 3 * 32
+
+
+def test_a_partner_killed_while_starting_ends_the_splitting_with_the_same_values(shear):
+    problem, _ = shear
+    exact = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
+    width = problem.upper - problem.lower
+    theta = problem.lower + np.random.default_rng(2).random((16, 2)) * width
+    expected = LogPosterior(problem, LikelihoodSpec(sigma=0.05))(theta)
+    with PartnerProcess() as partner:
+        partner._process.kill()
+        partner._process.join()
+        assert split_densities((exact,), partner) == (exact,)  # not split: nobody to split with
+    with PartnerProcess() as partner:
+        (split,) = split_densities((exact,), partner)
+        partner._process.kill()  # while it starts
+        partner._process.join()
+        np.testing.assert_array_equal(split(theta), expected)
+    assert split.splits == 0 and exact.evaluations == 16

@@ -223,7 +223,7 @@ class SplitDensity:
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         h = split_point(theta.shape[0]) if self._executor is not None else 0
-        if h == 0 or not self._started():
+        if h == 0 or not self._started() or self._executor is None:  # (a dead worker)
             return self.density(theta)
         try:
             future = self._executor.submit(_remote_part, (self._which, theta[h:]), self._handle)
@@ -296,7 +296,10 @@ def split_densities(densities: tuple, executor) -> tuple:
         handle = executor.share(tuple(densities))
     except (pickle.PicklingError, TypeError, AttributeError):
         return densities  # e.g. a user's model holding a lock or an open file: not sent
-    ready = executor.submit(_loaded, None, handle)  # the worker starts while this one works on
+    try:
+        ready = executor.submit(_loaded, None, handle)  # it starts while this one works on
+    except BrokenProcessPool:
+        return densities  # the worker is gone already
     return tuple(
         None if d is None else SplitDensity(d, i, executor, handle, ready)
         for i, d in enumerate(densities)

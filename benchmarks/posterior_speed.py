@@ -31,13 +31,21 @@ the stop is what R-hat needed, not an overshoot of the checks) and the least bul
 stop over the ESS target.  ``--code DIR [DIR ...]``: one source tree per variant (PYTHONPATH),
 runs interleaved so that every variant sees the same machine load; e.g. before and after:
   .venv/bin/python benchmarks/posterior_speed.py --user 3 --code /path/to/main .
-then the paired CPU ratios against the first tree, of the whole run and per kept step.
+then the paired CPU ratios against the first tree, of the whole run and per kept step.  A
+variant may add arguments to the command after a colon, comma-separated: ``--code . .:--workers=1``
+runs the tree once as the user does (the walkers' batches split with a worker of the sampler's
+own when a core is free) and once in one process alone.  Each row has ``split``: the batches
+evaluated in two parts at once (0 in one process).
 ``--user-seeds S [S ...]``: each round runs these sampler seeds (``--seed``) too: a change that
 reorders the random draws changes where the R-hat stop lands, so one seed compares two chain
 lengths as much as two codes.  ``--overshoot`` (not for timing): each run also writes its result
 file, and the row says at which step (every 10th) the stop rule first held on the stored chain
 (``first_hold``) and the stop's steps over that (the checks' overshoot; the ESS's over its
 target is ``ess_over_target``).
+
+``--split-batches``: the exhaust's exact and screen batches of 16, 24 and 32 points whole and
+split with one local worker process (``inference.evaluators.SplitDensity``, what ``sample`` does
+when a core is free): wall and this process's CPU per batch.
 
 Timed runs (``--seeds`` / ``--seed-list``) print each set-up phase (model + reduced basis,
 optimum, screening basis; wall and CPU), then one JSON row per run: cold-start wall and CPU,
@@ -201,6 +209,45 @@ def setup(args) -> tuple:
     return LogPosterior(problem, spec), calibration, screen, phases
 
 
+def split_batches(args, repeats: int = 40) -> None:
+    """The exhaust's exact and screen batches (16, 24, 32 points near the optimum) evaluated
+    whole and split with one local worker (``inference.evaluators.SplitDensity``): wall and this
+    process's CPU per batch [ms], means over ``repeats`` calls, interleaved; the split values
+    checked equal to the whole batch's.  On a loaded machine the wall times say little (the
+    worker waits for a core); this process's CPU is what the split leaves on its core."""
+    from bayesupdate.compute.executors import PartnerProcess, ProcessExecutor
+    from bayesupdate.inference.evaluators import split_densities
+
+    log_post, calibration, screen, _ = setup(args)
+    rng = np.random.default_rng(0)
+    p = log_post.problem
+    theta = calibration.theta + 0.02 * (p.upper - p.lower) * rng.standard_normal((32, 5))
+    theta = np.hstack([np.clip(theta, p.lower, p.upper), np.full((32, 1), 0.05)])
+    for make in (PartnerProcess, lambda: ProcessExecutor(1)):
+        with make() as executor:
+            _split_rows(executor, split_densities((log_post, screen), executor), theta, repeats)
+
+
+def _split_rows(executor, split: tuple, theta: np.ndarray, repeats: int) -> None:
+    """``split_batches``' rows for one executor (a pipe partner or a one-process pool)."""
+    whole_densities = tuple(s.density for s in split)
+    for s in split:
+        s.wait_started()
+    for name, whole, parted in zip(("exact", "screen"), whole_densities, split, strict=True):
+        for n in (16, 24, 32):
+            x = theta[:n]
+            assert np.array_equal(whole(x), parted(x))
+            row = {"density": name, "points": n, "load": round(os.getloadavg()[0], 1),
+                   "hand_off": executor.kind}  # fmt: skip
+            for label, f in (("whole", whole), ("split", parted)):
+                t0, c0 = time.perf_counter(), time.process_time()
+                for _ in range(repeats):
+                    f(x)
+                row[f"{label}_wall_ms"] = round((time.perf_counter() - t0) / repeats * 1e3, 2)
+                row[f"{label}_cpu_ms"] = round((time.process_time() - c0) / repeats * 1e3, 2)
+            print(row, flush=True)
+
+
 def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> dict:
     """One sampling run from the built problem, with the set-up's time added ("cold start")."""
     log_post, calibration, screen, phases = setup_parts
@@ -316,9 +363,10 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
     import sys
     import tempfile
 
+    code, _, extra = code.partition(":")
     env = {**os.environ, "PYTHONPATH": os.path.abspath(code)}
     command = [sys.executable, "-m", "bayesupdate", "sample", "--model", "exhaust", "--data",
-               "paper:ema", "--json"]  # fmt: skip
+               "paper:ema", "--json", *[a for a in extra.split(",") if a]]  # fmt: skip
     if seed is not None:
         command += ["--seed", str(seed)]
     if overshoot:
@@ -342,7 +390,8 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
         os.remove(command[-1])
         os.rmdir(os.path.dirname(command[-1]))
     return dict(
-        code=code, seed=seed, wall_s=round(wall, 2), cpu_s=round(cpu, 2), steps=out["steps"],
+        code=code + (f":{extra}" if extra else ""), seed=seed, wall_s=round(wall, 2),
+        cpu_s=round(cpu, 2), steps=out["steps"],
         walkers=out["walkers"], evaluations=out["evaluations"], converged=out["converged"],
         min_ess=round(least_ess), ess_over_target=round(least_ess / 400.0, 2),
         held_before=stop.get("held_before"), checks=stop.get("checks"),
@@ -350,7 +399,7 @@ def user_run(code: str, seed: int | None = None, overshoot: bool = False) -> dic
         max_r_hat=round(max(p["r_hat"] for p in out["parameters"].values()), 4),
         means={k: p["mean"] for k, p in out["parameters"].items()},
         phases={k: round(v, 2) for k, v in (out.get("timings") or {}).items()},
-        load=round(os.getloadavg()[0], 1),
+        load=round(os.getloadavg()[0], 1), split=(out.get("split") or {}).get("batches", 0),
         first_hold=held, overshoot=None if not held else round(out["steps"] / held, 3),
     )  # fmt: skip
 
@@ -423,6 +472,10 @@ def main() -> None:
         help="with --user: write each run's result file and find where the stop rule first held"
         " (not for timing: the user's command writes no file)",
     )  # fmt: skip
+    ap.add_argument(
+        "--split-batches", action="store_true",
+        help="exact and screen batches whole and split with one worker process (ms per batch)",
+    )  # fmt: skip
     ap.add_argument("--save", help="save means/sd/wall to this .npz")
     ap.add_argument("--compare", nargs=2, metavar=("ROM_NPZ", "FULL_NPZ"), help="compare runs")
     args = ap.parse_args()
@@ -431,6 +484,9 @@ def main() -> None:
         return
     if args.user:
         user_runs(args.user, args.code, args.user_seeds, args.overshoot)
+        return
+    if args.split_batches:
+        split_batches(args)
         return
     warnings.simplefilter("default")
     if args.seeds or args.seed_list:

@@ -131,12 +131,22 @@ def likelihood() -> LikelihoodSpec:
     return LikelihoodSpec(sigma=None, sigma_prior=sigma_prior)
 
 
-def exhaust_posterior(reduced: bool = True, starts: int = 4, max_nfev: int = 300):
+def exhaust_posterior(
+    reduced: bool = True, starts: int = 4, max_nfev: int = 300, user_start: bool = False
+):
     """(log posterior, calibration, screening posterior or None, rom or None) of the benchmark's
-    exhaust problem, as ``pipelines.sample.run_sampling`` builds it."""
+    exhaust problem, as ``pipelines.sample.run_sampling`` builds it.  ``user_start``: the optimum
+    as ``sample`` places the walkers with an empty ``[optimizer]`` table
+    (``pipelines.sample.walker_start_settings``), not ``starts`` / ``max_nfev``."""
+    from bayesupdate.config import OptimizerConfig
+    from bayesupdate.pipelines.sample import walker_start_settings
+
     problem = build_problem(get_model("exhaust"), paper_ema())
     problem, rom = sampling_problem(problem, reduced=reduced)
-    calibration = calibrate(problem, CalibrationSettings(starts=starts, seed=0, max_nfev=max_nfev))
+    settings = CalibrationSettings(starts=starts, seed=0, max_nfev=max_nfev)
+    if user_start:
+        settings = walker_start_settings(OptimizerConfig())
+    calibration = calibrate(problem, settings)
     if rom is not None:
         rom = rom.certify_at(calibration.theta[None, :], problem.names)[0]
         problem = replace(problem, model=rom)
@@ -326,39 +336,59 @@ def add_check_points(case: str, path: str) -> dict:
 
 
 def check(
-    ref: dict, seeds: list[int], moves: str, target_ess: int = 1000, user: bool = False
+    ref: dict,
+    seeds: list[int],
+    moves: str,
+    target_ess: int = 1000,
+    user: bool = False,
+    workers: int = 1,
+    user_start: bool = False,
 ) -> list[dict]:
     """The default sampler (or ``moves``) on the reference problem for ``seeds``, each to R-hat
     <= 1.01 and bulk ESS >= ``target_ess`` (1000: the benchmark's targets).  ``user``: instead
     the sampler settings a study gets when its ``[sampler]`` table is empty
     (``pipelines.sample.sampler_settings(SamplerConfig())``: 32 walkers, checks every 500 steps,
-    R-hat <= 1.01, bulk ESS >= 400, at least 50 tau, 5000 steps at most), only the seed set."""
+    R-hat <= 1.01, bulk ESS >= 400, at least 50 tau, 5000 steps at most), only the seed set.
+    ``workers`` >= 2: the walkers' batches split with a local worker process (``sample``'s
+    default on 2 cores; the chain is the serial one bit for bit).  ``user_start``: the walkers
+    start around the optimum ``sample`` finds (``exhaust_posterior``)."""
+    from bayesupdate.compute.settings import ComputeSettings, open_executor
     from bayesupdate.config import SamplerConfig
     from bayesupdate.pipelines.sample import sampler_settings
 
-    log_post, calibration, screen, _ = exhaust_posterior()
-    rows = []
-    for seed in seeds:
-        settings = SamplerSettings(
-            walkers=16, steps=20000, seed=seed, check_every=250, transform="logit",
-            target_rhat=1.01, target_ess=target_ess, moves=moves,
-        )  # fmt: skip
-        if user:
-            settings = replace(sampler_settings(SamplerConfig(moves=moves)), seed=seed)
-        c0, t0 = time.process_time(), time.perf_counter()
-        post = sample_posterior(log_post, calibration, settings, screen=screen)
-        row = {"seed": seed, "steps": int(post.chain.shape[0]), **compare(ref, post.samples())}
-        summary = summarise(post)
-        row.update(
-            ok=accurate(row), converged=bool(post.converged), walkers=settings.walkers,
-            max_rhat=max(v["r_hat"] for v in summary.values()),
-            min_ess=min(v["ess_bulk"] for v in summary.values()),
-            sampling_cpu_s=round(time.process_time() - c0, 1),
-            sampling_wall_s=round(time.perf_counter() - t0, 1), moves=post.diagnostics["moves"],
-        )  # fmt: skip
-        rows.append(row)
-        print(json.dumps(row))
-    return rows
+    log_post, calibration, screen, _ = exhaust_posterior(user_start=user_start)
+    with open_executor(ComputeSettings(workers)) as executor:
+        return [
+            _checked_seed(ref, seed, log_post, calibration, screen, executor, moves,
+                          target_ess, user, sampler_settings(SamplerConfig(moves=moves)))
+            for seed in seeds
+        ]  # fmt: skip
+
+
+def _checked_seed(
+    ref, seed, log_post, calibration, screen, executor, moves, target_ess, user, user_settings
+) -> dict:
+    """One seed of ``check``: its row (printed as JSON)."""
+    settings = SamplerSettings(
+        walkers=16, steps=20000, seed=seed, check_every=250, transform="logit",
+        target_rhat=1.01, target_ess=target_ess, moves=moves,
+    )  # fmt: skip
+    if user:
+        settings = replace(user_settings, seed=seed)
+    c0, t0 = time.process_time(), time.perf_counter()
+    post = sample_posterior(log_post, calibration, settings, screen=screen, executor=executor)
+    row = {"seed": seed, "steps": int(post.chain.shape[0]), **compare(ref, post.samples())}
+    summary = summarise(post)
+    row.update(
+        ok=accurate(row), converged=bool(post.converged), walkers=settings.walkers,
+        max_rhat=max(v["r_hat"] for v in summary.values()),
+        min_ess=min(v["ess_bulk"] for v in summary.values()),
+        sampling_cpu_s=round(time.process_time() - c0, 1),
+        sampling_wall_s=round(time.perf_counter() - t0, 1), moves=post.diagnostics["moves"],
+        split=post.diagnostics.get("split"),
+    )  # fmt: skip
+    print(json.dumps(row))
+    return row
 
 
 def coverage_check(seeds: list[int]) -> list[dict]:
@@ -461,6 +491,14 @@ def main() -> None:
         "--user-sampler", action="store_true",
         help="exhaust --check: the settings of an empty [sampler] table, not the benchmark's",
     )  # fmt: skip
+    ap.add_argument(
+        "--workers", type=int, default=1,
+        help="exhaust --check: 2 splits the walkers' batches with a local worker process",
+    )  # fmt: skip
+    ap.add_argument(
+        "--user-start", action="store_true",
+        help="exhaust --check: the walkers start at the optimum sample finds (its starts)",
+    )  # fmt: skip
     ap.add_argument("--coverage-seeds", type=int, nargs="*", help="exhaust: the check's numbers")
     ap.add_argument(
         "--add-check-points", action="store_true",
@@ -478,7 +516,10 @@ def main() -> None:
             ref = json.load(f)
         if args.case == "exhaust":
             seeds = args.check_seeds or list(range(1, args.check + 1))
-            check(ref, seeds, args.moves, args.target_ess, args.user_sampler)
+            check(
+                ref, seeds, args.moves, args.target_ess, args.user_sampler, args.workers,
+                args.user_start,
+            )  # fmt: skip
         elif args.from_result:
             check_result(args.case, ref, args.from_result)
         else:

@@ -57,6 +57,9 @@ screen was not used (its error above the likelihood's smallest sd) | null,
 "adapt_steps", "coverage", "stuck", "coordinates": per fit, "sampler" or "unit box"},
 "stop": {"checks", "steps", "held_before" (what held the run at the check before the stop:
 "tau", "r_hat" or "ess"), "ess_at_stop", "ess_over_target"},
+"split": {"batches", "stopped"} | null (the walkers' batches evaluated in two parts at once, half
+on a worker process: with --workers N >= 2, or by default when a core is free and a batch costs
+enough; --workers 1 keeps one process; the chain is the same bits either way),
 "compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
 "pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
 at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC
@@ -128,6 +131,12 @@ def run(args) -> int:
     return 0
 
 
+def _asked_one_process(args, study) -> bool:
+    """Whether the user asked for this process alone (--workers 1, [compute] workers = 1)."""
+    table = study.extensions.get("compute")
+    return args.workers == 1 or (table is not None and table.workers == 1 and not table.scheduler)
+
+
 def _sample_with_stop_handlers(prepared, args, compute):
     """``pipelines.sample.run_sampling`` with SIGTERM/SIGINT turned into a checkpointed stop."""
     from bayesupdate.pipelines.sample import SamplingOptions, run_sampling
@@ -139,6 +148,8 @@ def _sample_with_stop_handlers(prepared, args, compute):
         progress=not (args.json or args.no_progress),
         stop=stop,
         compute=compute,
+        # --workers 1 or [compute] workers = 1: this process alone, no worker of the sampler's
+        split=None if _asked_one_process(args, prepared.study) else "auto",
     )
     previous_hook, sys.unraisablehook = sys.unraisablehook, stop.quiet_unraisable
     previous_excepthook, sys.excepthook = sys.excepthook, stop.quiet_excepthook
@@ -235,6 +246,7 @@ def sample_json(posterior, summary: dict, likelihood, predictions: dict | None =
         ),
         "moves": posterior.diagnostics.get("moves"),
         "stop": posterior.diagnostics.get("stop"),
+        "split": posterior.diagnostics.get("split"),
         "swap_fraction": None
         if not predictions or not np.isfinite(predictions["swap_fraction"])
         else float(predictions["swap_fraction"]),

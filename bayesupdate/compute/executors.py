@@ -27,6 +27,7 @@ times.
 import multiprocessing
 import os
 import pickle
+import signal
 import tempfile
 import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -46,6 +47,11 @@ class SerialExecutor:
 
     def share(self, obj):
         return obj
+
+    def submit(self, fn, item, shared=None) -> "Finished":
+        """``fn(shared, item)``, run now; its ``result()`` (the form of ``ProcessExecutor.
+        submit``, so a caller overlaps its own work with a task where there is a worker)."""
+        return Finished(fn(shared, item))
 
     def map(self, fn, items, shared=None, progress=None) -> list:
         results = []
@@ -67,6 +73,16 @@ class SerialExecutor:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+@dataclass(frozen=True)
+class Finished:
+    """A task already run: ``result()`` returns its value (``SerialExecutor.submit``)."""
+
+    value: object
+
+    def result(self):
+        return self.value
 
 
 @dataclass(frozen=True)
@@ -136,6 +152,13 @@ class ProcessExecutor(SerialExecutor):
                 )
         return [results[i] for i in range(len(items))]
 
+    def submit(self, fn, item, shared=None):
+        """One task ``fn(shared, item)`` on a worker, not waited for: a
+        ``concurrent.futures.Future`` (its ``result()`` raises ``BrokenProcessPool`` when the
+        worker died; no retry here: the caller can run the task itself).  ``shared``: a handle
+        from ``share`` (sent once) or a payload sent with this task."""
+        return self._pool.submit(_run_task, fn, self.share(shared), item)
+
     def _attempt(self, fn, handle, items: list, results: dict, progress) -> bool:
         """Run the items not yet in ``results`` (filled in as they finish); False if the pool
         broke (a worker died).  A task that raised: the first such task's error in submission
@@ -172,3 +195,105 @@ class ProcessExecutor(SerialExecutor):
 def executor_or_serial(executor):
     """``executor``, or a serial one when None (library calls without an executor)."""
     return SerialExecutor() if executor is None else executor
+
+
+def _partner_loop(conn) -> None:
+    """A partner process's loop: (fn, shared handle, item) in, (True, result) or (False, error)
+    out, until None or the pipe closes.  Ctrl-C is the caller's to handle (a terminal sends it
+    to the whole process group): the caller stops, then closes this process."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        fn, handle, item = message
+        try:
+            reply = (True, fn(_load_shared(handle), item))
+        except Exception as exc:  # noqa: BLE001 - sent back, raised in the caller
+            reply = (False, exc)
+        try:
+            conn.send(reply)
+        except (pickle.PicklingError, TypeError, AttributeError):
+            conn.send((False, RuntimeError(f"{type(reply[1]).__name__}: {reply[1]}")))
+
+
+class _PipeTask:
+    """A task sent to a ``PartnerProcess``: ``result()`` waits for its reply (read once, kept);
+    ``done()`` whether the reply has come.  Replies come in the order the tasks were sent, so a
+    caller reads each task's result before it sends the next (``PartnerProcess.submit``)."""
+
+    def __init__(self, conn):
+        self._conn, self._reply = conn, None
+
+    def done(self) -> bool:
+        return self._reply is not None or self._conn.poll()
+
+    def result(self):
+        if self._reply is None:
+            try:
+                self._reply = self._conn.recv()
+            except (EOFError, OSError) as exc:
+                raise BrokenProcessPool(f"the partner process died: {exc}") from None
+        ok, value = self._reply
+        if not ok:
+            raise value
+        return value
+
+
+class PartnerProcess(ProcessExecutor):
+    """One spawned local process that runs one task at a time, sent over a pipe: the hand-off
+    for work split between this process and one other (a sampler's walker batches,
+    ``inference.evaluators.SplitDensity``).  A pool's hand-off goes through its management
+    thread, whose wake-ups cost this process 1-3 ms a task on a loaded machine; a pipe costs it
+    the two pickles.  BLAS pinned to one thread as in ``ProcessExecutor``; ``share`` as there.
+    ``map`` runs its tasks one after the other there."""
+
+    kind = "partner"
+
+    def __init__(self):
+        self.workers, self.retries = 1, 0
+        self._context = multiprocessing.get_context("spawn")
+        self._folder = tempfile.TemporaryDirectory(prefix="bayesupdate-shared-")
+        self._saved = {k: os.environ.get(k) for k in BLAS_THREAD_VARIABLES}
+        os.environ.update({k: "1" for k in BLAS_THREAD_VARIABLES})
+        self._conn, child = self._context.Pipe()
+        self._process = self._context.Process(target=_partner_loop, args=(child,), daemon=True)
+        self._process.start()
+        child.close()
+
+    def submit(self, fn, item, shared=None) -> _PipeTask:
+        """Send ``fn(shared, item)`` to the partner; read the returned task's ``result()``
+        before the next ``submit``.  Raises ``BrokenProcessPool`` when the partner is gone."""
+        try:
+            self._conn.send((fn, self.share(shared), item))
+        except (OSError, ValueError) as exc:
+            raise BrokenProcessPool(f"the partner process is gone: {exc}") from None
+        return _PipeTask(self._conn)
+
+    def map(self, fn, items, shared=None, progress=None) -> list:
+        handle = self.share(shared)
+        results = []
+        for i, item in enumerate(items):
+            results.append(self.submit(fn, item, handle).result())
+            if progress is not None:
+                progress(i, results[-1])
+        return results
+
+    def close(self) -> None:
+        try:
+            self._conn.send(None)
+        except (OSError, ValueError):
+            pass
+        self._process.join(timeout=10)
+        if self._process.is_alive():
+            self._process.kill()
+        self._conn.close()
+        self._folder.cleanup()
+        for k, v in self._saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v

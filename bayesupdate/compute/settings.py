@@ -5,6 +5,7 @@ How a command fills the settings in (``--workers``, ``--scheduler``, the study f
 ``[compute]`` table, ``BAYESUPDATE_SCHEDULER``): ``config.compute_settings``.
 """
 
+import os
 from dataclasses import dataclass
 
 from bayesupdate.compute.dask import DaskExecutor
@@ -47,3 +48,20 @@ def open_executor(settings: ComputeSettings = SERIAL):
     if settings.kind == "processes":
         return ProcessExecutor(settings.workers, settings.retries)
     return SerialExecutor()
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the platform has one)."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0)) or 1
+    return os.cpu_count() or 1
+
+
+def a_core_is_free(cores: int | None = None, load: float | None = None) -> bool:
+    """Whether a second process would find a core of its own: 2 usable cores or more and the
+    last minute's load average (``os.getloadavg``; the platform's, all processes) below
+    cores - 0.5.  cores, load: given, instead of this machine's (tests)."""
+    cores = usable_cores() if cores is None else int(cores)
+    if load is None:
+        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float(cores)
+    return cores >= 2 and load < cores - 0.5

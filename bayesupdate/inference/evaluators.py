@@ -15,10 +15,21 @@ non-finite values, so the evaluator is itself a ``BatchParametricModel`` (emcee
 (``LogPosterior(..., executor=...)``): ``problem.evaluate`` (predict and pair) at every walker of
 a step on the executor, the problem shared once for the whole run, the evaluations returned in
 walker order, so the chain is the serial chain bit for bit.
+
+``split_densities((exact, screen), executor)`` is what a sampler on a batched model uses with a
+local worker (``sampling.sample_posterior(..., executor=...)``): each batch of 16 walkers or
+more is cut in two at a multiple of 8 rows (``SPLIT_GRAIN``: where the batched BLAS products
+round every row as in the whole batch), the first part evaluated in this process while a worker
+evaluates the rest, the values back in row order and the worker's evaluations counted here, so
+the chain is the serial chain bit for bit.  ``split_pays``: whether a density's batches cost
+enough to repay the hand-off.
 """
 
 import os
+import pickle
+import time
 from collections.abc import Mapping
+from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
@@ -123,3 +134,173 @@ class PointEvaluator:
         chunks = np.array_split(theta, min(self._workers, theta.shape[0]))
         parts = self._executor.map(_evaluate_points, chunks, self._problem)
         return [evaluation for part in parts for evaluation in part]
+
+
+#: the counters of a ``LogPosterior`` that a worker's share of a batch adds to (``_remote_part``)
+SPLIT_COUNTERS = ("evaluations", "failed", "pair_checked", "pair_differs")
+#: rows per block of a split: a batched reduced solve's matrix products (BLAS gemm over the
+#: batch) round a row the same in any batch only where it falls in a full block of the
+#: kernel's unrolling (4 or 8 rows in OpenBLAS; the last n mod 8 rows go through edge
+#: kernels), so the batch is cut only at a multiple of 8 rows: each part's rows then fall in
+#: the same blocks as in the whole batch, and the values are those of the unsplit call, bit
+#: for bit (``split_check`` verifies it once per run for the BLAS at hand)
+SPLIT_GRAIN = 8
+#: the fewest points worth splitting: below two blocks the worker's hand-off (~0.3 ms: pickles
+#: and pipes) is not repaid
+SPLIT_MIN_POINTS = 2 * SPLIT_GRAIN
+
+
+#: the CPU a batch of ``SPLIT_MIN_POINTS`` must cost before a sampler splits its batches with a
+#: worker of its own (``split_pays``): the hand-off costs this process about 1-2 ms a batch on
+#: the loaded 2-core machine (the exhaust's screened batch of 16 on a partner process: 4.7 ms
+#: split against 7.0 ms whole, ``benchmarks/posterior_speed.py --split-batches``), so a batch
+#: must cost several times that for its other half to repay it
+SPLIT_PAYS_S = 5e-3
+
+
+def split_pays(density, theta: np.ndarray) -> bool:
+    """Whether a batch of ``SPLIT_MIN_POINTS`` copies of the point theta (d,) costs ``density``
+    at least ``SPLIT_PAYS_S`` of this process's CPU (the density's counters are left as they
+    were).  The exhaust's reduced posterior: about 15 ms; an analytic test model: microseconds.
+    """
+    batch = np.tile(np.asarray(theta, dtype=float), (SPLIT_MIN_POINTS, 1))
+    saved = {k: getattr(density, k) for k in SPLIT_COUNTERS if hasattr(density, k)}
+    c0 = time.process_time()
+    density(batch)
+    cost = time.process_time() - c0
+    for name, value in saved.items():
+        setattr(density, name, value)
+    return cost >= SPLIT_PAYS_S
+
+
+def split_point(n: int) -> int:
+    """Where a batch of n points is cut (its first part stays in this process): the multiple
+    of ``SPLIT_GRAIN`` nearest n / 2 (the larger when tied: this process also hands the other
+    part over and back); 0 (not split) below ``SPLIT_MIN_POINTS``."""
+    if n < SPLIT_MIN_POINTS:
+        return 0
+    return SPLIT_GRAIN * int(np.floor(n / (2 * SPLIT_GRAIN) + 0.5))
+
+
+def _loaded(densities, _item) -> int:
+    """Nothing but loading the shared densities (a worker's warm-up task)."""
+    return len(densities)
+
+
+def _remote_part(densities, item) -> tuple:
+    """(values (n,), counter increments, last error) of ``densities[which]`` at theta (n, d)
+    (an executor task; item: (which, theta))."""
+    which, theta = item
+    density = densities[which]
+    before = {k: getattr(density, k) for k in SPLIT_COUNTERS if hasattr(density, k)}
+    values = density(theta)
+    counts = {k: getattr(density, k) - v for k, v in before.items()}
+    return values, counts, getattr(density, "last_error", "")
+
+
+class SplitDensity:
+    """A vectorised log-density (n, d) -> (n,) whose larger batches are evaluated in two parts
+    at once: the first ``split_point(n)`` rows in this process, the rest on a local worker
+    process, values returned in row order.  The counters of the density (``SPLIT_COUNTERS``)
+    count the worker's points too.  Made by ``split_densities``; a worker that died (killed,
+    out of memory) ends the splitting: from then on every batch runs here, with the same
+    values."""
+
+    def __init__(self, density, which: int, executor, handle, ready=None):
+        self.density = density
+        self._which, self._executor, self._handle = which, executor, handle
+        # the worker's warm-up task (start, imports, the payload): until it is done every
+        # batch runs here, so the run never waits on a worker that is still starting
+        self._ready = ready
+        self.splits = 0
+        self.checked = False
+        self.stopped = ""
+
+    def __getattr__(self, name):
+        # everything else (names, ndim, problem, counters) is the density's own
+        return getattr(self.density, name)
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        h = split_point(theta.shape[0]) if self._executor is not None else 0
+        if h == 0 or not self._started() or self._executor is None:  # (a dead worker)
+            return self.density(theta)
+        try:
+            future = self._executor.submit(_remote_part, (self._which, theta[h:]), self._handle)
+        except BrokenProcessPool:
+            self._executor = None
+            return self.density(theta)
+        head = np.asarray(self.density(theta[:h]), dtype=float)
+        try:
+            tail, counts, error = future.result()
+        except BrokenProcessPool:
+            self._executor = None
+            return np.concatenate([head, self.density(theta[h:])])
+        for name, increment in counts.items():
+            setattr(self.density, name, getattr(self.density, name) + increment)
+        if error and hasattr(self.density, "last_error"):
+            self.density.last_error = error
+        values = np.concatenate([head, tail])
+        if not self.checked:
+            values = self._check(theta, values)
+        self.splits += 1
+        return values
+
+    def wait_started(self) -> None:
+        """Wait for the worker's warm-up (a caller that wants the next batch split)."""
+        if self._ready is not None:
+            self._ready.result()
+
+    def _started(self) -> bool:
+        """Whether the worker has finished its warm-up (False while it is still starting); its
+        reply is read here, before any batch is sent."""
+        if self._ready is None:
+            return True
+        if not self._ready.done():
+            return False
+        try:
+            self._ready.result()
+        except BrokenProcessPool:
+            self._executor = None
+        self._ready = None
+        return True
+
+    def _check(self, theta: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """The first split batch evaluated whole here too, uncounted: the same bits, or this
+        BLAS rounds a row by its place in the batch (``SPLIT_GRAIN``) and splitting stops
+        (``stopped`` says why); the whole batch's values either way."""
+        saved = {k: getattr(self.density, k) for k in SPLIT_COUNTERS if hasattr(self.density, k)}
+        whole = np.asarray(self.density(theta), dtype=float)
+        for name, value in saved.items():
+            setattr(self.density, name, value)
+        self.checked = True
+        if not np.array_equal(whole, values, equal_nan=True):
+            self._executor = None
+            self.stopped = "a split batch differs from the whole batch in the last bits"
+        return whole
+
+
+def split_densities(densities: tuple, executor) -> tuple:
+    """Each of ``densities`` (vectorised log-densities, e.g. a run's exact posterior and its
+    delayed-acceptance screen; None entries stay None) as a ``SplitDensity`` on ``executor``,
+    all shared with the workers in one payload (a worker keeps one payload at a time).  The
+    densities as they are when the executor has no local worker processes, one of them sends
+    its points to the executor already (``LogPosterior.on_executor``), or they cannot be
+    pickled.  Share them in their
+    final form: a worker evaluates the copy it was sent."""
+    if executor is None or getattr(executor, "kind", "serial") not in ("processes", "partner"):
+        return densities
+    if any(getattr(d, "on_executor", False) for d in densities):
+        return densities  # its points are spread over the workers already
+    try:
+        handle = executor.share(tuple(densities))
+    except (pickle.PicklingError, TypeError, AttributeError):
+        return densities  # e.g. a user's model holding a lock or an open file: not sent
+    try:
+        ready = executor.submit(_loaded, None, handle)  # it starts while this one works on
+    except BrokenProcessPool:
+        return densities  # the worker is gone already
+    return tuple(
+        None if d is None else SplitDensity(d, i, executor, handle, ready)
+        for i, d in enumerate(densities)
+    )

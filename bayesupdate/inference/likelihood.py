@@ -32,8 +32,9 @@ to get the paired frequencies (``mode``):
   support, a mass term on a model that cannot give its mass without a solve).  Given an
   executor (``LogPosterior(..., executor=...)``), the points of each call are evaluated on it
   (``parallel.PointEvaluator``: the problem sent to each worker once; evaluations back in point
-  order, so the chain is the serial one bit for bit).  The batched modes always run here: one
-  batched solve beats shipping points to workers.
+  order, so the chain is the serial one bit for bit).  The batched modes run here: one batched
+  solve beats shipping points to workers one by one; a sampler may split a large batch in two
+  with a worker (``evaluators.split_densities``), the same bits.
 
 With a mass term the batched modes take each point's mass from ``mass_function`` (the FE
 model's ``total_mass``, no solve; the reduced model's own predictions take it from there too):
@@ -148,6 +149,11 @@ class LogPosterior:
         self.last_error = ""
         self._joint_prior = JointPrior.of(self.priors)
         self.mass_targets = problem.objective.mass_properties
+
+    @property
+    def on_executor(self) -> bool:
+        """Whether its points go to an executor already ("points" mode given one)."""
+        return self._remote is not None
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -10,7 +10,9 @@ check before the kept run, ``moves.coverage``) and its refits do too (below
 ``moves.staged.LOW_COVERAGE`` or with walkers stuck) the run uses the DE moves and says so
 (``diagnostics["moves"]``).  A screened run's adaptation stages sample the delayed-acceptance
 surrogate alone (``_adaptation_stage``), and a posterior with a mass term takes its masses from
-their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).
+their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).  Given an executor
+with local worker processes, batches of 16 walkers or more are evaluated half here, half on a
+worker, with the serial run's values bit for bit (``evaluators.split_densities``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
 x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stretch move is not
@@ -47,7 +49,7 @@ emcee random state is saved with each checkpoint, so an interrupted run resumed 
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 
 import emcee
@@ -58,6 +60,7 @@ from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference import convergence, walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
+from bayesupdate.inference.evaluators import SplitDensity, split_densities
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
 from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
@@ -384,19 +387,37 @@ def _guard(
     return guarded
 
 
-def _screened(screen: LogPosterior | None, d: int, guarded, guard) -> ScreenedLogDensity | None:
-    """The delayed-acceptance surrogate (``inference.delayed_acceptance``) of a ``screen``
-    posterior, shared by every sampler of the run; None without one."""
+def _fitted_screen(screen: LogPosterior | None, d: int) -> LogPosterior | None:
+    """The ``screen`` posterior with its mass term from a verified polynomial
+    (``inference.mass_fit``): a screen only decides which proposals get an exact evaluation, so
+    the target stays exact (a screen that is not a ``LogPosterior`` has no mass term to fit);
+    None without one."""
     if screen is None:
         return None
     if screen.ndim != d:
         raise BayesUpdateError("sampler: the screening posterior has other parameters")
-    # its mass term from a verified polynomial (``inference.mass_fit``): a screen only
-    # decides which proposals get an exact evaluation, so the target stays exact
-    # (a screen that is not a ``LogPosterior`` has no mass term to fit)
     fitted = getattr(screen, "with_fitted_mass", None)
-    screen = screen if fitted is None else fitted(seed=0)
+    return screen if fitted is None else fitted(seed=0)
+
+
+def _screened(screen, guarded, guard) -> ScreenedLogDensity | None:
+    """The delayed-acceptance surrogate (``inference.delayed_acceptance``) of a ``screen``
+    posterior (``_fitted_screen``), shared by every sampler of the run; None without one."""
+    if screen is None:
+        return None
     return ScreenedLogDensity(guard(screen, key="screen_s"), guarded)
+
+
+def _split_record(densities: tuple) -> dict | None:
+    """``diagnostics["split"]``: {"batches": batches evaluated in two parts at once, "stopped":
+    why splitting stopped, or ""}; None when nothing was split (``evaluators.SplitDensity``)."""
+    split = [d for d in densities if isinstance(d, SplitDensity)]
+    if not split:
+        return None
+    return {
+        "batches": sum(d.splits for d in split),
+        "stopped": "; ".join(sorted({d.stopped for d in split if d.stopped})),
+    }
 
 
 def _ensemble(walkers: int, d: int, guarded, moves: list, screened: ScreenedLogDensity | None):
@@ -890,6 +911,7 @@ def sample_posterior(
     screen: LogPosterior | None = None,
     moves: list | None = None,
     stop_request: StopRequest | None = None,
+    executor=None,
 ) -> PosteriorResult:
     """Run emcee until steps >= min_autocorr_times * max(tau) and the convergence targets hold
     (``settings.target_rhat``, ``settings.target_ess``; None: not checked), or ``settings.steps``
@@ -902,6 +924,10 @@ def sample_posterior(
     resume : a SamplerState from an interrupted run with the same settings.
     Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
     ``interrupted=True`` and its ``state`` resumes it.
+    executor : where a batch of 16 walkers or more is evaluated in two parts at once, half here
+    and half on a local worker process (``evaluators.split_densities``; ``compute.executors``:
+    only an executor of local processes, else every batch runs here): the values, and so the
+    chain, are the serial run's bit for bit (``evaluators.SPLIT_GRAIN``).
     screen : a cheap surrogate of ``log_posterior`` (same parameters, e.g. on a coarser reduced
     basis): delayed acceptance (``inference.delayed_acceptance``) - proposals are screened with
     it and only the survivors get an exact evaluation; the chain still targets
@@ -919,12 +945,13 @@ def sample_posterior(
     request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
 
+    d = log_posterior.ndim
+    split = split_densities((log_posterior, _fitted_screen(screen, d)), executor)
     run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
     # a density -> its guarded batch function, timed in run.clock
     guard = partial(_guard, space=space, request=request, clock=run.clock)
-    guarded = guard(log_posterior)
-    d = log_posterior.ndim
-    screened = _screened(screen, d, guarded, guard)
+    guarded = guard(split[0])
+    screened = _screened(split[1], guarded, guard)
     _start(run, guarded, request)
     stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, request=request)
     checked = partial(_checked, guarded if screened is None else screened, request)
@@ -936,6 +963,10 @@ def sample_posterior(
         sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
         outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
         _raise_failure(request, run, checkpoint, log_posterior)
-    return _posterior_result(
+    result = _posterior_result(
         run, log_posterior, outcome, settings.seed, screened, settings.target_ess
     )
+    record = _split_record(split)
+    if record is None:
+        return result
+    return replace(result, diagnostics={**result.diagnostics, "split": record})

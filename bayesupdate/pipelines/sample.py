@@ -5,11 +5,16 @@ every block while sampling, so an interrupted run (Ctrl-C, SIGTERM) leaves a val
 that ``resume`` continues.  Seeded: the same study gives the same chain, interrupted or not.
 """
 
+import multiprocessing
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from bayesupdate.compute.settings import SERIAL, ComputeSettings, open_executor
+import numpy as np
+
+from bayesupdate.compute.executors import PartnerProcess
+from bayesupdate.compute.settings import SERIAL, ComputeSettings, a_core_is_free, open_executor
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.config import SamplerConfig
 from bayesupdate.errors import BayesUpdateError
@@ -19,6 +24,7 @@ from bayesupdate.inference.diagnostics import (
     posterior_predictive,
     summarise,
 )
+from bayesupdate.inference.evaluators import split_pays
 from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.mass_properties import mass_property_report
 from bayesupdate.inference.optimize import CalibrationResult, CalibrationSettings, calibrate
@@ -39,6 +45,13 @@ from bayesupdate.pipelines.surrogates import (
     screening_posterior,
 )
 
+#: least-squares evaluations per start of the optimum that places the walkers.  On ``sample
+#: --model exhaust --data paper:ema`` (17 starts on the certified basis, 2026-11-29): unbudgeted
+#: (about 90 a start) 5.4 s CPU, 40: 3.6 s with the same optimum (3e-8 relative in theta, Expr
+#: 0.0689867 both) and the same distinct optima the walkers start around; 20: 2.2 s, the optimum
+#: 1e-4 away.  The walkers then adapt for 750 steps before anything is kept.
+START_NFEV = 40
+
 
 @dataclass(frozen=True)
 class SamplingOptions:
@@ -50,6 +63,9 @@ class SamplingOptions:
     stop : the run's ``compute.stop.StopRequest`` (the command's signal handler sets it); None:
     the run cannot be stopped but by an exception.
     compute : where the independent work runs (``compute.executors``; ``run_sampling``).
+    split : "auto": on a serial ``compute``, the walkers' batches are split with a worker process
+    of the sampler's own when that pays (``split_executor``); None: never (``--workers 1``).
+    Local ``compute`` workers split them always; the chain is the serial one either way.
     reference : a stored reference of this posterior (``inference.reference_check``: "mean",
     "sd", "names", "check_points", "check_log_p"); given, the draws are judged by it when the
     posterior is the one it was made for (diagnostics "reference").
@@ -61,6 +77,7 @@ class SamplingOptions:
     stop: StopRequest | None = None
     compute: ComputeSettings = SERIAL
     reference: dict | None = field(default=None, repr=False)
+    split: str | None = "auto"
 
 
 @dataclass(frozen=True)
@@ -116,13 +133,9 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     else:
         (problem, rom), full_reason = surrogate, None
     if calibration is None:
-        opt = study.optimizer
-        # the optimum only places the walkers: no Nelder-Mead polish (calibrate's is ~5x the
-        # cost of the trust-region starts and moves the point along a kink by < 3 % in Expr)
-        settings = CalibrationSettings(
-            starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False
+        calibration = calibrate(
+            problem, walker_start_settings(study.optimizer), stop=options.stop, executor=executor
         )
-        calibration = calibrate(problem, settings, stop=options.stop, executor=executor)
     basis_note = {}
     if rom is not None:
         problem, rom, basis_note = _basis_at_optimum(problem, rom, prepared.likelihood, calibration)
@@ -132,7 +145,10 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     log_post = LogPosterior(problem, prepared.likelihood, executor=executor)
     screen, unscreened = _screen(problem, rom, prepared.likelihood, cfg, calibration)
     writer = ResultWriter(options.out, prepared.problem, calibration, config, "sample")
-    posterior = _sample(log_post, calibration, cfg, screen, options, writer.checkpoint, state)
+    with split_executor(options, executor, log_post, calibration) as splitting:
+        posterior = _sample(
+            log_post, calibration, cfg, screen, options, writer.checkpoint, state, splitting
+        )
     if posterior.interrupted:
         writer.write(state=posterior.state)
         return SamplingRun(calibration, posterior, {}, {})
@@ -152,6 +168,44 @@ def _run_sampling(prepared, options, calibration, executor, surrogate=None) -> S
     return SamplingRun(
         calibration, posterior, summary, predictions, warnings=found, mass_properties=masses
     )
+
+
+@contextmanager
+def split_executor(options: SamplingOptions, executor, log_post, calibration):
+    """The executor the walkers' batches are split with (``sample_posterior``'s ``executor``):
+    the run's own when it has local worker processes; else, with ``options.split`` "auto", one
+    worker process of the sampler's own (closed on exit) when a core is free for it
+    (``compute.settings.a_core_is_free``), this is not itself a worker process, and a batch of
+    the posterior costs enough to repay the hand-off (``evaluators.split_pays``, at the
+    optimum); else None (every batch here)."""
+    if executor.kind == "processes":
+        yield executor
+        return
+    # a worker process (the demo's parts run in two) never starts one of its own: its
+    # siblings hold the other cores, and the load average lags a minute behind them
+    in_worker = multiprocessing.parent_process() is not None
+    if executor.kind != "serial" or options.split != "auto" or in_worker or not a_core_is_free():
+        yield None
+        return
+    theta = calibration.theta
+    if log_post.spec.infer_sigma:
+        theta = np.append(theta, np.mean(log_post.spec.sigma_prior.bounds))
+    if not split_pays(log_post, theta):
+        yield None
+        return
+    with PartnerProcess() as own:
+        yield own
+
+
+def walker_start_settings(opt) -> CalibrationSettings:
+    """The optimum's settings when it only places the walkers (the study's ``[optimizer]``
+    ``opt``: starts, seed, method, design): no Nelder-Mead polish (calibrate's is ~5x the cost
+    of the trust-region starts and moves the point along a kink by < 3 % in Expr) and
+    ``START_NFEV`` evaluations per start."""
+    return CalibrationSettings(
+        starts=opt.starts, seed=opt.seed, method=opt.method, design=opt.design, polish=False,
+        max_nfev=START_NFEV,
+    )  # fmt: skip
 
 
 def mass_properties_at(prepared: PreparedStudy, means: dict) -> tuple[dict, ...]:
@@ -235,9 +289,12 @@ def sampler_settings(cfg: SamplerConfig, progress: bool = False) -> SamplerSetti
     )
 
 
-def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, checkpoint, state):
+def _sample(
+    log_post, calibration, cfg: SamplerConfig, screen, options, checkpoint, state, executor
+):
     """emcee with the study's sampler settings; ``checkpoint`` (``ResultWriter.checkpoint``)
-    after every block."""
+    after every block; the walkers' larger batches split with a local worker of ``executor``
+    (``sample_posterior``)."""
     return sample_posterior(
         log_post,
         calibration,
@@ -246,6 +303,7 @@ def _sample(log_post, calibration, cfg: SamplerConfig, screen, options, checkpoi
         checkpoint=checkpoint,
         resume=state,
         stop_request=options.stop,
+        executor=executor,
     )
 
 

@@ -166,7 +166,10 @@ def test_sample_json_reproducible_file_and_datatree(study, seed3, tmp_path, caps
     outs = [seed3.out, tmp_path / "b.h5"]
     assert main(["sample", str(study), "--out", str(outs[1]), "--json", "--seed", "3"]) == 0
     result = json.loads(capsys.readouterr().out.splitlines()[-1])
-    assert result == {**seed3.summary, "wall_s": result["wall_s"], "timings": result["timings"]}
+    # how the run was executed depends on the machine at its start (times; a split of the
+    # walkers' batches when a core is free): the rest, and the chain below, are the same bits
+    volatile = {k: result[k] for k in ("wall_s", "timings", "split")}
+    assert result == {**seed3.summary, **volatile}
     assert set(result["parameters"]) == {"theta_1", "theta_2"}
     for row in result["parameters"].values():
         assert set(row) == {"mean", "sd", "hdi_low", "hdi_high", "r_hat", "ess_bulk"}

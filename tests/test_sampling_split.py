@@ -84,7 +84,7 @@ def _run(problem, optimum, executor):
 
 def test_a_split_run_is_the_serial_run_bit_for_bit(shear, one_worker):
     problem, optimum = shear
-    serial_exact, serial = _run(problem, optimum, None)
+    _, serial = _run(problem, optimum, None)
     split_exact, split = _run(problem, optimum, one_worker)
     assert split.diagnostics["moves"]["kind"] == serial.diagnostics["moves"]["kind"] == "mixture"
     np.testing.assert_array_equal(split.chain, serial.chain)

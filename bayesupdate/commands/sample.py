@@ -59,7 +59,8 @@ screen was not used (its error above the likelihood's smallest sd) | null,
 "tau", "r_hat" or "ess"), "ess_at_stop", "ess_over_target"},
 "split": {"batches", "stopped"} | null (the walkers' batches evaluated in two parts at once, half
 on a worker process: with --workers N >= 2, or by default when a core is free and a batch costs
-enough; --workers 1 keeps one process; the chain is the same bits either way),
+enough, so that, like wall_s, it depends on the machine's load at the start; --workers 1 keeps
+one process; the chain is the same bits either way),
 "compute": {"kind", "workers"}, "test_modes" (each test mode's number in its source),
 "pairing_rules" ({"method", "mac_threshold", "frequency_window", "refused"}: test modes refused
 at the reference design, as calibrate), "warnings" (the posterior piled at a bound, a paired MAC

@@ -733,6 +733,22 @@ def _with_refine(refine, problem, box, counter, ends, objectives, executor):
     return refine, ends, objectives
 
 
+def _fits_job(
+    problem: CalibrationProblem, n_res: int, settings: CalibrationSettings, stop, surrogate: bool
+) -> "_Fits":
+    """The starts' task record: ``settings``' budget, a Nelder-Mead polish of 400 evaluations
+    per parameter when ``settings.polish_ends``, and on a ``surrogate`` whose ends are checked
+    on the exact model the tolerances of its resolution (``SURROGATE_POLISH``,
+    ``SURROGATE_LEAST_SQUARES``)."""
+    polish = 400 if settings.polish_ends else 0
+    job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest(),
+                mass_fit=_exact_mass_fit(problem))  # fmt: skip
+    if surrogate:
+        job = replace(job, tolerance=SURROGATE_POLISH,
+                      least_squares_tolerance=SURROGATE_LEAST_SQUARES)  # fmt: skip
+    return job
+
+
 def calibrate(
     problem: CalibrationProblem,
     settings: CalibrationSettings = CalibrationSettings(),
@@ -760,12 +776,7 @@ def calibrate(
     counter = EvaluationCount()
     n_res = _residual_count(problem)
     u_starts = _start_points(problem, box, _residual_function(problem, counter, n_res), settings)
-    polish = 400 if settings.polish_ends else 0  # Nelder-Mead budget per parameter
-    job = _Fits(problem, n_res, settings.max_nfev, polish, stop=stop or StopRequest(),
-                mass_fit=_exact_mass_fit(problem))  # fmt: skip
-    if refine is not None:  # the ends are checked on the exact model: stop at its resolution
-        job = replace(job, tolerance=SURROGATE_POLISH,
-                      least_squares_tolerance=SURROGATE_LEAST_SQUARES)  # fmt: skip
+    job = _fits_job(problem, n_res, settings, stop, surrogate=refine is not None)
     ends, objectives = _local_fits(job, u_starts, counter, executor)
     if refine is not None:
         problem, ends, objectives = _with_refine(refine, problem, box, counter, ends, objectives,

@@ -924,19 +924,17 @@ def sample_posterior(
     resume : a SamplerState from an interrupted run with the same settings.
     Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
     ``interrupted=True`` and its ``state`` resumes it.
-    executor : where a batch of 16 walkers or more is evaluated in two parts at once, half here
-    and half on a local worker process (``evaluators.split_densities``; ``compute.executors``:
-    only an executor of local processes, else every batch runs here): the values, and so the
-    chain, are the serial run's bit for bit (``evaluators.SPLIT_GRAIN``).
-    screen : a cheap surrogate of ``log_posterior`` (same parameters, e.g. on a coarser reduced
-    basis): delayed acceptance (``inference.delayed_acceptance``) - proposals are screened with
-    it and only the survivors get an exact evaluation; the chain still targets
-    ``log_posterior`` exactly.  ``evaluations`` counts exact evaluations,
-    ``screen_evaluations`` the surrogate's.  moves : emcee moves for the whole run (no
+    executor : local worker processes (``compute.executors``) that evaluate half of each batch
+    of 16 walkers or more while this process does the rest (``evaluators.split_densities``;
+    other executors: every batch here); the chain is the serial run's bit for bit.
+    screen : a cheap surrogate of ``log_posterior`` (same parameters; e.g. a coarser basis):
+    delayed acceptance (``inference.delayed_acceptance``), only the proposals it passes get an
+    exact evaluation, the chain still targets ``log_posterior`` exactly (``evaluations``:
+    exact ones, ``screen_evaluations``: the surrogate's).  moves : emcee moves for the whole run (no
     adaptation; default: ``settings.moves``, see the module docstring); the scheme used is in
     ``diagnostics["moves"]``.
-    stop_request : the run's ``compute.stop.StopRequest`` (a signal handler sets it; checked between
-    steps, and the checkpoint write is not cut in half); None: nobody can stop this run.
+    stop_request : the run's ``compute.stop.StopRequest`` (set by a signal handler, checked
+    between steps; a checkpoint write is not cut in half); None: nobody can stop this run.
     A mass term's masses come from their verified polynomial from here on (``_fit_masses``).
     """
     settings.check_walkers(log_posterior.ndim)
@@ -944,14 +942,10 @@ def sample_posterior(
     # one stop record: a signal (the handler), a Ctrl-C in the model or a density's error
     request = stop_request or StopRequest()
     space = sampler_space(log_posterior) if settings.transform == "logit" else None
-
     d = log_posterior.ndim
     split = split_densities((log_posterior, _fitted_screen(screen, d)), executor)
     run = _first_run(log_posterior, calibration, initial, settings, space, resume, moves)
-    # a density -> its guarded batch function, timed in run.clock
-    guard = partial(_guard, space=space, request=request, clock=run.clock)
-    guarded = guard(split[0])
-    screened = _screened(split[1], guarded, guard)
+    guarded, screened = _guarded(split, space, request, run.clock)
     _start(run, guarded, request)
     stage = partial(_adaptation_stage, run, settings.walkers, d, guarded, screened, request=request)
     checked = partial(_checked, guarded if screened is None else screened, request)
@@ -963,9 +957,23 @@ def sample_posterior(
         sampler = _ensemble(settings.walkers, d, guarded, kept, screened)
         outcome = _sample_blocks(sampler, run, log_posterior, settings, checkpoint, space, request)
         _raise_failure(request, run, checkpoint, log_posterior)
-    result = _posterior_result(
-        run, log_posterior, outcome, settings.seed, screened, settings.target_ess
-    )
+    result = _posterior_result(run, log_posterior, outcome, settings.seed, screened,
+                               settings.target_ess)  # fmt: skip
+    return _with_split_record(result, split)
+
+
+def _guarded(split: tuple, space, request: StopRequest, clock):
+    """(the exact density's guarded batch function, the screen's or None): each density of
+    ``split`` (exact, screen or None) wrapped by ``_guard`` (the sampler's space, the stop
+    request, timed in ``clock``)."""
+    guard = partial(_guard, space=space, request=request, clock=clock)
+    guarded = guard(split[0])
+    return guarded, _screened(split[1], guarded, guard)
+
+
+def _with_split_record(result: PosteriorResult, split) -> PosteriorResult:
+    """``result`` with the split batches' record (``_split_record``) in its diagnostics
+    ("split"), when the run split its batches."""
     record = _split_record(split)
     if record is None:
         return result

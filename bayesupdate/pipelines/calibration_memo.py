@@ -104,18 +104,11 @@ def recalled(
     if arrays is None:
         return None
     t0 = time.perf_counter()
-    try:
-        theta = np.asarray(arrays["theta"], dtype=float)
-        stored, basis_error = float(arrays["objective"]), float(arrays["basis_error"])
-        starts, converged, failed, evaluations = map(int, arrays["counts"])
-        ends = (arrays["start_points"], arrays["end_points"], arrays["end_objectives"])
-        distinct = tuple(int(i) for i in arrays["distinct_optima"])
-        method = str(arrays["method"])
-        modes = int(arrays.get("solve_modes", 0))
-    except (KeyError, ValueError, TypeError) as exc:
-        warnings.warn(f"kept calibration unreadable ({exc}); calibrating again", RuntimeWarning,
-                      stacklevel=2)  # fmt: skip
+    kept = _kept_fields(arrays)
+    if kept is None:
         return None
+    theta, stored, basis_error, (starts, converged, failed, evaluations), ends = kept[:5]
+    distinct, method, modes = kept[5:]
     with phase("calibration: kept optimum, full solve", 1, "solves"):
         evaluation = _evaluated(problem, theta, modes)
     objective = np.nan if evaluation is None or not evaluation.ok else (
@@ -154,6 +147,28 @@ def recalled(
         method=method,
         wall_s=time.perf_counter() - t0,
     )
+
+
+def _kept_fields(arrays: dict[str, np.ndarray]):
+    """The fields of a kept calibration (``memo_arrays``): (theta (d,), objective, basis error,
+    (starts, converged, failed, evaluations), (start points, end points, end objectives),
+    distinct optima, method, the solve's modes); None, with a note, when unreadable."""
+    try:
+        starts, converged, failed, evaluations = map(int, arrays["counts"])
+        return (
+            np.asarray(arrays["theta"], dtype=float),
+            float(arrays["objective"]),
+            float(arrays["basis_error"]),
+            (starts, converged, failed, evaluations),
+            (arrays["start_points"], arrays["end_points"], arrays["end_objectives"]),
+            tuple(int(i) for i in arrays["distinct_optima"]),
+            str(arrays["method"]),
+            int(arrays.get("solve_modes", 0)),
+        )
+    except (KeyError, ValueError, TypeError) as exc:
+        warnings.warn(f"kept calibration unreadable ({exc}); calibrating again", RuntimeWarning,
+                      stacklevel=3)  # fmt: skip
+        return None
 
 
 @dataclass(frozen=True, eq=False)

@@ -11,10 +11,10 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+from test_compute_cache import _counting_solves as _counted  # noqa: E402
 
 from bayesupdate.compute.cache import ArrayStore  # noqa: E402
 from bayesupdate.fe.reduced import ReducedFEModel, ReducedSettings, certification  # noqa: E402
-from bayesupdate.fe.reduced import basis as basis_module  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
 
 SETTINGS = ReducedSettings(n_modes=6, tol=1e-4, seed=0, n_snapshots=8, n_validation=8)
@@ -28,18 +28,6 @@ def stored(tmp_path_factory):
     built = certification.build(model, store=store)
     assert built.certified and store.info().entries == 1
     return model, store, certification.basis_key(model), built
-
-
-def _counted(monkeypatch) -> list:
-    points = []
-    real = basis_module.full_solves
-
-    def counted(fe, names, theta, n_modes, executor=None, what="full solves"):
-        points.append(theta.shape[0])
-        return real(fe, names, theta, n_modes, executor, what)
-
-    monkeypatch.setattr(certification, "full_solves", counted)
-    return points
 
 
 def test_a_loaded_basis_is_checked_by_one_full_solve(stored, monkeypatch):

@@ -185,11 +185,17 @@ class ProcessExecutor(SerialExecutor):
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
         self._folder.cleanup()
-        for k, v in self._saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+        _restore_environment(self._saved)
+
+
+def _restore_environment(saved: dict) -> None:
+    """The environment variables ``saved`` ({name: value, None where unset}) put back as they
+    were before an executor set the workers' BLAS threads."""
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
 
 
 def executor_or_serial(executor):
@@ -292,8 +298,4 @@ class PartnerProcess(ProcessExecutor):
             self._process.kill()
         self._conn.close()
         self._folder.cleanup()
-        for k, v in self._saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+        _restore_environment(self._saved)

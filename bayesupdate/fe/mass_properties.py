@@ -191,10 +191,11 @@ def rigid_mass_terms(model) -> RigidMassTerms | None:
     terms are the affine ones exactly.
 
     A model whose matrices at the defaults are not those of its parameters written there (a
-    Nastran deck's absolute binding of one value to cards that hold different ones, its
-    default their mean: the deck's own matrices at the defaults, one section everywhere else)
-    fails the checks about the defaults; the terms are then built about a point off them
-    (every parameter moved by a tenth of its step) and hold everywhere but at the defaults
+    Nastran DESVAR whose relations set cards that hold values the relations do not give, its
+    default the mean x: the deck's own matrices at the defaults, the relations' everywhere
+    else; a study's absolute binding of that kind is refused, ``nastran.bindings``) fails
+    the checks about the defaults; the terms are then built about a point off them (every
+    parameter moved by a tenth of its step) and hold everywhere but at the defaults
     themselves, where they give the written parameters' limit."""
     theta0 = model.default_parameters()
     bounds = model.default_bounds()

@@ -164,13 +164,23 @@ def split_pays(density, theta: np.ndarray) -> bool:
     were).  The exhaust's reduced posterior: about 15 ms; an analytic test model: microseconds.
     """
     batch = np.tile(np.asarray(theta, dtype=float), (SPLIT_MIN_POINTS, 1))
-    saved = {k: getattr(density, k) for k in SPLIT_COUNTERS if hasattr(density, k)}
     c0 = time.process_time()
-    density(batch)
-    cost = time.process_time() - c0
+    _uncounted(density, batch)
+    return time.process_time() - c0 >= SPLIT_PAYS_S
+
+
+def _counters(density) -> dict:
+    """{counter: value} of ``density``'s ``SPLIT_COUNTERS`` (those it has)."""
+    return {k: getattr(density, k) for k in SPLIT_COUNTERS if hasattr(density, k)}
+
+
+def _uncounted(density, theta: np.ndarray) -> np.ndarray:
+    """``density(theta)`` with its counters left as they were (a check, not a sampler's call)."""
+    saved = _counters(density)
+    values = np.asarray(density(theta), dtype=float)
     for name, value in saved.items():
         setattr(density, name, value)
-    return cost >= SPLIT_PAYS_S
+    return values
 
 
 def split_point(n: int) -> int:
@@ -192,7 +202,7 @@ def _remote_part(densities, item) -> tuple:
     (an executor task; item: (which, theta))."""
     which, theta = item
     density = densities[which]
-    before = {k: getattr(density, k) for k in SPLIT_COUNTERS if hasattr(density, k)}
+    before = _counters(density)
     values = density(theta)
     counts = {k: getattr(density, k) - v for k, v in before.items()}
     return values, counts, getattr(density, "last_error", "")
@@ -269,10 +279,7 @@ class SplitDensity:
         """The first split batch evaluated whole here too, uncounted: the same bits, or this
         BLAS rounds a row by its place in the batch (``SPLIT_GRAIN``) and splitting stops
         (``stopped`` says why); the whole batch's values either way."""
-        saved = {k: getattr(self.density, k) for k in SPLIT_COUNTERS if hasattr(self.density, k)}
-        whole = np.asarray(self.density(theta), dtype=float)
-        for name, value in saved.items():
-            setattr(self.density, name, value)
+        whole = _uncounted(self.density, theta)
         self.checked = True
         if not np.array_equal(whole, values, equal_nan=True):
             self._executor = None

@@ -23,7 +23,7 @@ cores, the same bits as one after the other), each part's record handed back as 
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -271,8 +271,6 @@ def run_demo(
     others), e.g. to draw that part's figures while the other tasks run.  Each worker pins
     BLAS to one thread (``compute.executors``) and reads the reduced bases from the one on-disk
     cache (``compute.cache``); the sampler's progress bars are shown by a serial run only."""
-    from dataclasses import replace
-
     from bayesupdate.compute.executors import executor_or_serial
 
     executor = executor_or_serial(executor)
@@ -352,8 +350,6 @@ def _with_error_at_optimum(optimum: OptimumPart, run: SamplingRun) -> OptimumPar
     (``pipelines.sample._basis_at_optimum``, recorded in the posterior's ``diagnostics["rom"]``),
     so the demo does not solve the same point in full a second time (a shell solve at mesh
     density 16, about 0.7 s CPU).  Unchanged when the run has no basis record."""
-    from dataclasses import replace
-
     rom = run.posterior.diagnostics.get("rom") or {}
     if optimum.basis is None or "error_at_optimum" not in rom:
         return optimum
@@ -363,8 +359,6 @@ def _with_error_at_optimum(optimum: OptimumPart, run: SamplingRun) -> OptimumPar
 def _light(optimum: OptimumPart) -> OptimumPart:
     """``optimum`` without its search problem and basis (used inside its task only; they would
     only add megabytes to the record a worker sends back)."""
-    from dataclasses import replace
-
     return replace(optimum, search=None, rom=None)
 
 
@@ -522,7 +516,6 @@ def check_at_density(prepared: PreparedStudy, calibration, density: int = 32) ->
     """The shell model of ``prepared`` rebuilt at ``density`` (full solves): Table 1's design
     and the optimum ``calibration`` evaluated with the same pairing (``ShellCheck``)."""
     import time
-    from dataclasses import replace
 
     from bayesupdate.models import get_model
 

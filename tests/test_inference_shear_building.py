@@ -60,6 +60,28 @@ def test_frequencies_match_generalised_eigenproblem():
     np.testing.assert_allclose(batch[0], np.sqrt(lam) / (2 * np.pi), rtol=1e-12)
 
 
+def test_batch_shapes_are_the_generalised_eigenvectors_and_pair_in_one_batch():
+    """``predict_batch_with_shapes``: the closed-form shapes are scipy's eigenvectors of
+    (K, M) up to scale (roof positive), a factor <= 0 gives NaN, and a likelihood that pairs by
+    shape takes the batched path (one call per walker batch, not one per point)."""
+    model = get_model("shear_building")
+    theta = np.array([[1.3, 0.7], [0.4, 2.5], [1.0, -1.0]])
+    freqs, shapes = model.predict_batch_with_shapes(theta, ("theta_1", "theta_2"), 2)
+    for row, f, phi in zip(theta[:2], freqs, shapes, strict=False):
+        k = row * 29.7e6
+        lam, vec = eigh(np.array([[k[0] + k[1], -k[1]], [-k[1], k[1]]]), np.diag([M1, M2]))
+        np.testing.assert_allclose(f, np.sqrt(lam) / (2 * np.pi), rtol=1e-12)
+        vec = vec * np.sign(vec[1])
+        np.testing.assert_allclose(phi / phi[1], vec / vec[1], rtol=1e-12)
+    assert np.all(np.isnan(freqs[2])) and np.all(np.isnan(shapes[2]))
+    data = ModalData(
+        frequencies_hz=freqs[0], shapes=shapes[0], dof_labels=model.sensor_labels, source="x"
+    )
+    posterior = LogPosterior(build_problem(model, data, BOUNDS), LikelihoodSpec(sigma=SIGMA))
+    assert posterior.mode == "shape-batch"
+    assert posterior(np.array([[1.3, 0.7], [1.2, 0.8]]))[0] > posterior(np.array([[1.2, 0.8]]))[0]
+
+
 def test_second_solution_reproduces_the_data():
     np.testing.assert_allclose(
         shear_building_frequencies(SECOND_MODE), shear_building_frequencies(np.ones(2)), rtol=1e-12

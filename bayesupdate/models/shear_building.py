@@ -56,7 +56,9 @@ class ShearBuildingModel:
     """ParametricModel (and BatchParametricModel) of the 2-DOF shear building.
 
     Parameters ``theta_1``, ``theta_2`` [-]; sensors ``"1"`` (first floor) and ``"2"`` (roof),
-    shapes mass-normalised.
+    shapes mass-normalised.  Its batch shapes (``predict_batch_with_shapes``) let a likelihood
+    that pairs by MAC evaluate a walker batch in one call (``inference.likelihood``'s
+    "shape-batch" mode) instead of one Python call per point.
     """
 
     masses_kg: tuple[float, float] = FLOOR_MASSES_KG
@@ -107,10 +109,13 @@ class ShearBuildingModel:
             mass_kg=float(sum(self.masses_kg)),
         )
 
-    def predict_frequencies_batch(
-        self, theta: np.ndarray, names: tuple[str, ...], n_modes: int = 2
-    ) -> np.ndarray:
-        """theta (n_points, len(names)) -> (n_points, n_modes) frequencies [Hz] (closed form)."""
+    @property
+    def sensor_labels(self) -> tuple[str, ...]:
+        """The rows of ``predict_batch_with_shapes``'s shapes (the floors)."""
+        return self.dof_labels
+
+    def _full_theta(self, theta: np.ndarray, names: tuple[str, ...], n_modes: int) -> np.ndarray:
+        """(n_points, 2) stiffness factors from theta (n_points, len(names)), the rest at 1."""
         if not 1 <= n_modes <= 2:
             raise BayesUpdateError(
                 f"shear_building: {n_modes} modes requested but the model has only 2"
@@ -121,8 +126,32 @@ class ShearBuildingModel:
             if name not in self.parameter_names:
                 raise BayesUpdateError(f"shear_building: unknown parameter {name!r}")
             full[:, self.parameter_names.index(name)] = theta[:, j]
+        return full
+
+    def predict_frequencies_batch(
+        self, theta: np.ndarray, names: tuple[str, ...], n_modes: int = 2
+    ) -> np.ndarray:
+        """theta (n_points, len(names)) -> (n_points, n_modes) frequencies [Hz] (closed form)."""
+        full = self._full_theta(theta, names, n_modes)
         f = shear_building_frequencies(full, self.masses_kg, self.k_nominal)
         return f[:, :n_modes]
+
+    def predict_batch_with_shapes(
+        self, theta: np.ndarray, names: tuple[str, ...], n_modes: int = 2
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Frequencies (n_points, n_modes) [Hz] and shapes (n_points, 2, n_modes) at floors 1, 2
+        (rows on ``sensor_labels``), closed form; failed points (a factor <= 0) give NaN.
+
+        The first row of (K - lambda M) phi = 0 gives phi = (k2, k1 + k2 - lambda m1) up to
+        scale (roof positive, as ``predict``; not normalised: a MAC ignores scale)."""
+        full = self._full_theta(theta, names, n_modes)
+        f = shear_building_frequencies(full, self.masses_kg, self.k_nominal)
+        k1, k2 = (full * self.k_nominal).T
+        lam = (2 * np.pi * f) ** 2
+        roof = (k1 + k2)[:, None] - lam * self.masses_kg[0]
+        shapes = np.stack([np.broadcast_to(k2[:, None], roof.shape), roof], axis=1)
+        shapes = shapes * np.sign(roof + (roof == 0))[:, None, :]
+        return f[:, :n_modes], shapes[:, :, :n_modes]
 
 
 def build_shear_building_model(

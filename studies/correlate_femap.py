@@ -88,15 +88,20 @@ def _cli_json(argv) -> dict:
     return json.loads(out.getvalue().strip().splitlines()[-1])
 
 
-def run(folder: Path) -> dict:
-    """The study's numbers (module docstring)."""
+def run(folder: Path, all_e: bool = True) -> dict:
+    """The study's numbers (module docstring); ``all_e`` False leaves out step 5 (a third read
+    and solve of the deck, which ``tests/test_correlate_femap.py`` does not check)."""
     study = write_study(folder)
     write_virtual_test(folder)
     corr = _cli_json(["correlate", str(study), "--json", "--out", str(folder / "corr.h5"),
                       "--report", str(folder / "corr"), "--force"])  # fmt: skip
     sens = _cli_json(["sensitivity", str(study), "--candidates", *CANDIDATES, "--json",
                       "--report", str(folder / "sens"), "--force"])  # fmt: skip
-    all_e = _cli_json(["sensitivity", str(study), "--candidates", *CANDIDATES_ALL_E, "--json"])
+    all_e = (
+        _cli_json(["sensitivity", str(study), "--candidates", *CANDIDATES_ALL_E, "--json"])
+        if all_e
+        else None
+    )
     xor = np.asarray(corr["cross_orthogonality"])
     return {
         "frequencies_hz": [m["model_hz"] for m in corr["modes"]],
@@ -113,10 +118,13 @@ def run(folder: Path) -> dict:
         "suggested": sens["suggested"],
         "sensitivity": sens["sensitivity"],
         "cosine_e2_rho2": _cosine(sens, "MAT1 2 E", "MAT1 2 RHO"),
-        "all_e": {
-            key: all_e[key] for key in ("singular_values", "rank", "unseen", "groups", "suggested")
-        },  # fmt: skip
+        "all_e": _kept(all_e, ("singular_values", "rank", "unseen", "groups", "suggested")),
     }
+
+
+def _kept(out: dict | None, keys: tuple[str, ...]) -> dict | None:
+    """The given keys of a command's JSON (None when the command was not run)."""
+    return None if out is None else {key: out[key] for key in keys}
 
 
 def _cosine(out: dict, a: str, b: str) -> float:

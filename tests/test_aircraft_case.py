@@ -9,11 +9,15 @@ explog.txt), v3.3's and v4.2's paired frequencies against their ``.f06`` (5.3772
 which modes are held out, and that the calibrated modes moved onto the test.
 """
 
+import contextlib
+import io
 import json
 
 import numpy as np
 import pytest
 
+from bayesupdate.commands._demo_aircraft import AircraftSettings, Chain, run_aircraft
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.pipelines import aircraft as ac
 
 
@@ -123,14 +127,38 @@ def test_parameters_scale_the_outer_sections_and_the_foam_masses_alone():
     assert moved["mass"] == pytest.approx(base["mass"], rel=1e-8)
 
 
-@pytest.mark.slow
-def test_demo_aircraft_quick_end_to_end(tmp_path, capsys):
-    from bayesupdate.cli import main
+class _InProcessChain(Chain):
+    """The demo's chain with each command run by ``cli.main`` in this process: the same
+    commands, arguments and seeds, without seven interpreter start-ups (``Chain`` itself is
+    checked on a child process below)."""
 
-    code = main(["demo", "--case", "aircraft", "--quick", "--out", str(tmp_path / "o"),
-                 "--json", "--quiet"])  # fmt: skip
-    out = json.loads(capsys.readouterr().out)
-    assert code == 0 and (tmp_path / "o" / "updated.bdf").is_file()
+    def execute(self, argv):
+        from bayesupdate.cli import main
+
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(argv)
+        return code, out.getvalue(), err.getvalue()
+
+
+def test_the_chain_runs_a_command_in_a_child_process_and_names_its_failure():
+    said = []
+    argv = ("modes", "--model", "exhaust", "--modes", "3")
+    out = Chain(said.append)("modes", *argv)
+    assert out == _InProcessChain(said.append)("modes", *argv)  # the child's numbers, to the bit
+    assert len(out["frequencies_hz"]) == 3 and said[0] == "bayesupdate " + " ".join(argv)
+    with pytest.raises(BayesUpdateError, match="demo aircraft: modes failed: .*'teleport'"):
+        Chain(said.append)("bad", "modes", "--model", "teleport")
+
+
+@pytest.mark.slow
+def test_demo_aircraft_quick_end_to_end(tmp_path):
+    """``demo --case aircraft --quick``'s chain (``run_aircraft``, as the command runs it)."""
+    settings = AircraftSettings(tmp_path / "o", quick=True, seed=0)
+    (tmp_path / "o").mkdir()
+    said = []
+    out = json.loads(json.dumps(run_aircraft(settings, said.append, _InProcessChain(said.append))))
+    assert (tmp_path / "o" / "updated.bdf").is_file()
     assert (tmp_path / "o" / "report.md").read_text().startswith("# mAEWing1")
     rows = {r["test"]: r for r in out["comparison"]}
     keys = {"test_hz", "v33_hz", "v42_hz", "ours_hz", "mac_v33", "mac_v42", "mac_ours",

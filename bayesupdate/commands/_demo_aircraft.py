@@ -65,17 +65,22 @@ class Chain:
 
     def __call__(self, key: str, *argv) -> dict:
         self.say(f"bayesupdate {' '.join(map(str, argv))}")
-        command = [sys.executable, "-m", "bayesupdate", *map(str, argv), "--json", "--quiet"]
         t0 = time.perf_counter()
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
+        code, stdout, stderr = self.execute([*map(str, argv), "--json", "--quiet"])
         self.times[key] = round(time.perf_counter() - t0, 2)
-        for line in dict.fromkeys(done.stderr.splitlines()):
+        for line in dict.fromkeys(stderr.splitlines()):
             if line.startswith("warning:"):
                 self.say(f"  {line}")
-        if done.returncode != 0:
-            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        if code != 0:
+            last = (stderr.strip().splitlines() or ["no message"])[-1]
             raise BayesUpdateError(f"demo aircraft: {argv[0]} failed: {last}")
-        return json.loads(done.stdout)
+        return json.loads(stdout)
+
+    def execute(self, argv: list[str]) -> tuple[int, str, str]:
+        """(exit code, stdout, stderr) of ``bayesupdate argv`` in a child process."""
+        command = [sys.executable, "-m", "bayesupdate", *argv]
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+        return done.returncode, done.stdout, done.stderr
 
 
 def run_aircraft(settings: AircraftSettings, say, chain=None, runs=None) -> dict:

@@ -72,6 +72,7 @@ Example::
     reduced_tol = 1e-4              # its relative frequency tolerance
     screen = true                   # delayed acceptance: proposals screened on a coarser basis
     transform = "logit"             # walk in unconstrained coordinates ("none": in theta)
+    adapt_steps = 250               # each of the mixture moves' three adaptation stages
 
     [effects]                       # effects the model is extended by before anything else
     add = ["joint_flexibility@cold_pipe/main_muffler:k_rot=2e3"]   # (an earlier discovery's)
@@ -317,6 +318,13 @@ class SamplerConfig:
     screen: bool = True
     transform: str = "logit"
     moves: str = "mixture"
+    #: steps of each of the mixture's three adaptation stages (None: the sampler's default,
+    #: ``inference.sampling.ADAPT_STEPS``)
+    adapt_steps: int | None = None
+
+    def __post_init__(self):
+        if self.adapt_steps is not None and self.adapt_steps < 20:
+            raise BayesUpdateError(f"sampler.adapt_steps: {self.adapt_steps}; use at least 20")
 
 
 @dataclass(frozen=True)

@@ -222,3 +222,8 @@ def test_an_empty_sampler_table_gives_the_documented_sampler_settings():
     assert (settings.moves, settings.transform, settings.progress) == ("mixture", "logit", False)
     no_ess = parse_study({"model": {"source": "exhaust"}, "sampler": {"target_ess": 0}})
     assert sampler_settings(no_ess.sampler).target_ess is None
+    assert settings.adapt_steps == 250  # the documented default of [sampler] adapt_steps
+    short = parse_study({"model": {"source": "exhaust"}, "sampler": {"adapt_steps": 60}})
+    assert sampler_settings(short.sampler).adapt_steps == 60
+    with pytest.raises(BayesUpdateError, match=r"sampler.adapt_steps: 19; use at least 20"):
+        parse_study({"model": {"source": "exhaust"}, "sampler": {"adapt_steps": 19}})

@@ -125,3 +125,21 @@ def test_calibration_posterior_adds_the_mass_block():
         2600.0 / 30000.0, scale=0.01
     )
     assert ll == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_proposal_of_density_zero_is_minus_inf_without_a_floating_point_warning():
+    """sigma = 0 (inside a half-normal prior's support) and a proposal far out (z^2 overflows)
+    have posterior density 0: -inf, and no RuntimeWarning reaches the user's terminal."""
+    import warnings
+
+    from bayesupdate.inference.priors import Prior
+
+    model = get_model("shear_building")
+    data = ModalData(frequencies_hz=np.array([4.3, 10.8]))
+    problem = build_problem(model, data, {"theta_1": {"bounds": [0.2, 3.0]}}, pairing="order")
+    halfnormal = Prior("halfnormal", (0.0, np.inf), (("scale", 0.1),), "sigma")
+    post = LogPosterior(problem, LikelihoodSpec(sigma=None, sigma_prior=halfnormal))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lp = post(np.array([[1.0, 0.0], [1.0, 1e200], [1.0, 0.05]]))
+    assert lp[0] == -np.inf and lp[1] == -np.inf and np.isfinite(lp[2])

@@ -206,3 +206,31 @@ def test_too_few_walkers_is_an_error(setup):
     problem, optimum = setup
     with pytest.raises(BayesUpdateError, match="too few"):
         _run(problem, optimum, walkers=3)
+
+
+def test_a_block_continues_from_walkers_an_adaptation_stage_left_on_one_point():
+    """emcee refuses to *start* from walkers that do not span the space; the sampler runs its
+    blocks from states it reached itself, and after an adaptation stage of independence
+    proposals several walkers can sit on one point (seed 12 of ``tests/test_reproducibility``'s
+    study with 60-step stages stopped with an internal error before).  The first block of a
+    run keeps emcee's check."""
+    import emcee
+
+    from bayesupdate.compute.stop import StopRequest
+    from bayesupdate.inference.sampling import _NoBar, _Run, _run_block
+
+    rng = np.random.default_rng(0)
+    coords = np.repeat(rng.normal(size=(1, 2)), 8, axis=0)  # 8 walkers on one point
+    coords[:3] += rng.normal(size=(1, 2))  # two distinct points: a line in 2 dimensions
+
+    def log_p(x):
+        return -0.5 * np.sum(x * x, axis=1)
+
+    sampler = emcee.EnsembleSampler(8, 2, log_p, vectorize=True)
+    run = _Run(emcee.State(coords, log_prob=log_p(coords)), [], [], np.zeros(8), 0.0)
+    with pytest.raises(ValueError, match="large condition number"):
+        _run_block(sampler, run, 5, StopRequest(), _NoBar())
+    run.stepped = True
+    out, lps, interrupted = _run_block(sampler, run, 5, StopRequest(), _NoBar())
+    assert len(out) == 5 and not interrupted
+    np.testing.assert_array_equal(run.state.log_prob, log_p(run.state.coords))

@@ -4,6 +4,7 @@ numbers: every dataset and every attribute of the HDF5 result, except wall-clock
 Covers calibrate + sample (shear building), simulate -> identify (exhaust virtual test).
 """
 
+import json
 import os
 import subprocess
 import sys
@@ -42,6 +43,7 @@ steps = 300
 check_every = 100
 min_autocorr_times = 1e9
 predictive_draws = 30
+adapt_steps = 60
 """
 
 
@@ -118,6 +120,8 @@ def test_seeded_run_in_process_and_in_a_fresh_process_are_identical(
         if command == "sample":
             chain = h5["posterior/chain"][()]
             assert chain.shape == (300, 12, 3)  # theta_1, theta_2, sigma
+            # the study's three adaptation stages of 60 steps ran (not the default 3 x 250)
+            assert json.loads(h5["posterior/state"].attrs["moves_json"])["adapt_steps"] == 180
             assert np.unique(chain[-1, :, 0]).size == 12  # walkers moved apart: a real run
 
 

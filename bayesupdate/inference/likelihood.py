@@ -335,12 +335,14 @@ class LogPosterior:
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         d = len(self.priors)
-        lp = self.log_prior(theta[:, :d])
-        if self.spec.infer_sigma:
-            sigma = theta[:, d]
-            lp = lp + self.spec.sigma_prior.logpdf(sigma)
-        else:
-            sigma = np.full(theta.shape[0], self.spec.sigma)
+        # a proposal far out (an overflowing z^2) or at sigma = 0 has density 0: -inf by intent
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            lp = self.log_prior(theta[:, :d])
+            if self.spec.infer_sigma:
+                sigma = theta[:, d]
+                lp = lp + self.spec.sigma_prior.logpdf(sigma)
+            else:
+                sigma = np.full(theta.shape[0], self.spec.sigma)
         inside = np.isfinite(lp)
         out = np.full(theta.shape[0], -np.inf)
         if not np.any(inside):
@@ -350,7 +352,8 @@ class LogPosterior:
         self.evaluations += int(np.sum(inside))
         failed = ~np.all(np.isfinite(freqs), axis=1)
         self.failed += int(np.sum(failed))
-        out[inside] = lp[inside] + self.log_likelihood(freqs, sigma[inside], mass, props)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            out[inside] = lp[inside] + self.log_likelihood(freqs, sigma[inside], mass, props)
         return out
 
 

@@ -448,6 +448,10 @@ class _Run:
     #: this process's stop-rule checks: (step, what held the run: "tau", "r_hat", "ess" or
     #: None when the rule held, the least bulk ESS where computed, else NaN)
     checks: list = field(default_factory=list)
+    #: whether a step was taken in this process: emcee's check that the walkers span the space
+    #: is for a chain's initial state; a state the run reached (an adaptation stage's end,
+    #: where the independence proposals may have left several walkers on one point) is not one
+    stepped: bool = False
 
     @property
     def done(self) -> int:
@@ -558,7 +562,10 @@ def _run_block(
         sampler.reset()
         if request.requested():  # arrived during the previous block's bookkeeping
             raise KeyboardInterrupt
-        for step in sampler.sample(run.state, iterations=block, store=True):
+        steps = sampler.sample(
+            run.state, iterations=block, store=True, skip_initial_state_check=run.stepped
+        )
+        for step in steps:
             if request.requested():
                 raise KeyboardInterrupt
             # emcee updates its state object in place during the next step, so a Ctrl-C
@@ -572,6 +579,7 @@ def _run_block(
                 run.state = emcee.State(
                     coords[-1].copy(), log_prob=lps[-1].copy(), random_state=step.random_state
                 )
+                run.stepped = True
             bar.update(1)
     except KeyboardInterrupt:
         return coords, lps, True

@@ -275,7 +275,9 @@ def _screen(problem, rom, likelihood, cfg: SamplerConfig, calibration) -> tuple:
 def sampler_settings(cfg: SamplerConfig, progress: bool = False) -> SamplerSettings:
     """The ``SamplerSettings`` a study's ``[sampler]`` table gives (``SamplerConfig()``: the
     defaults a user gets); ``target_ess = 0`` turns the ESS target off."""
+    adapt = {} if cfg.adapt_steps is None else {"adapt_steps": cfg.adapt_steps}
     return SamplerSettings(
+        **adapt,
         walkers=cfg.walkers,
         steps=cfg.steps,
         seed=cfg.seed,

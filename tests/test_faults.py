@@ -40,6 +40,7 @@ check_every = {check}
 min_autocorr_times = 1e9
 predictive_draws = 20
 seed = 5
+adapt_steps = 60
 """
 
 

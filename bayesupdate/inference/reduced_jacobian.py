@@ -46,11 +46,12 @@ def reduced_basis_of(problem: CalibrationProblem):
     return model, basis
 
 
-def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int):
+def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int, solved=None):
     """At one point full (1, P) of the basis's parameters (SI): (lambda (m,) [rad^2/s^2], y
     (r, m) mass-normalised reduced vectors, d lambda / d theta (m, len(columns)) for the
-    parameters at ``columns``)."""
-    lam, y = basis.eigen(full, n_modes, vectors=True)
+    parameters at ``columns``).  solved : ``basis.eigen(full, n_modes, vectors=True)`` when
+    the caller has it (``LastSolve``), else it is solved here."""
+    lam, y = basis.eigen(full, n_modes, vectors=True) if solved is None else solved
     lam, y = lam[0], y[0]
     h = STEP * np.abs(full[0, columns])
     steps = np.zeros((len(columns), full.shape[1]))
@@ -66,3 +67,38 @@ def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int)
     k_part = np.einsum("im,pij,jm->mp", b, dK, b, optimize=True)
     m_part = np.einsum("im,pij,jm->mp", y, dM, y, optimize=True)
     return lam, y, k_part - lam[:, None] * m_part
+
+
+class LastSolve:
+    """A reduced model's sensor predictions (``predict_batch_with_shapes``) that keep the
+    reduced eigen-solve of their last one-point call, so that the Jacobian at that point
+    (``eigen_derivatives(..., solved=...)``) does not solve it again.  scipy's trust-region
+    least squares asks for J(x) right after r(x) at every accepted step, so each Jacobian was a
+    second eigen-solve of a point just solved: on the shell exhaust's basis (r = 97) 382 of a
+    calibration's 1,244.  A point inside the basis's box is solved as
+    ``ReducedFEModel.predict_batch_with_shapes`` solves it (the same calls, the same bits);
+    any other call is that method's.  The one mutable record of a least-squares run: made per
+    start (``optimize._fit_start``), never shared between starts or processes.
+    """
+
+    def __init__(self, model, basis):
+        self.model, self.basis = model, basis
+        self._last: tuple = ()
+
+    def predict_batch_with_shapes(self, theta: np.ndarray, names: tuple[str, ...], n_modes: int):
+        """(frequencies (B, n_modes) [Hz], sensor shapes (B, n_sensors, n_modes)) at theta
+        (B, len(names)) (SI): ``ReducedFEModel.predict_batch_with_shapes``."""
+        model = self.model
+        full = model._theta_full(np.atleast_2d(np.asarray(theta, dtype=float)), tuple(names))
+        if full.shape[0] != 1 or not (model._usable(n_modes) and model._inside(full)[0]):
+            return model.predict_batch_with_shapes(theta, names, n_modes)
+        lam, y = self.basis.eigen(full, n_modes, vectors=True)
+        self._last = (full.tobytes(), n_modes, (lam, y))
+        return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), self.basis.V_sensor @ y
+
+    def solved(self, full: np.ndarray, n_modes: int):
+        """(lambda (1, n_modes), y (1, r, n_modes)) of the last one-point call when it was at
+        ``full`` (1, P) (the basis's parameters, bit for bit) with ``n_modes``; else None."""
+        if self._last and self._last[:2] == (full.tobytes(), n_modes):
+            return self._last[2]
+        return None

@@ -64,11 +64,8 @@ def eigen_derivatives(basis, full: np.ndarray, columns: list[int], n_modes: int,
     dK = ((dcK @ basis.K_terms[0]) @ basis.K_terms[1]).reshape(-1, r - nr, r - nr)
     dM = ((dcM @ basis.M_terms[0]) @ basis.M_terms[1]).reshape(-1, r, r)
     b = y[nr:]
-    # y_m^T A_p y_m as stacked products A_p Y (BLAS) and a column sum: 0.11 ms for the shell
-    # exhaust's basis (r = 97, 14 modes, 5 parameters) against 1.75 ms for the three-operand
-    # einsum with its path search (process_time over 2,000 calls; the two agree to 1e-15 relative)
-    k_part = np.einsum("im,pim->mp", b, dK @ b)
-    m_part = np.einsum("im,pim->mp", y, dM @ y)
+    k_part = np.einsum("im,pij,jm->mp", b, dK, b, optimize=True)
+    m_part = np.einsum("im,pij,jm->mp", y, dM, y, optimize=True)
     return lam, y, k_part - lam[:, None] * m_part
 
 

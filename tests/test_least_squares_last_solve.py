@@ -3,7 +3,8 @@ same point (``inference.reduced_jacobian.LastSolve``): scipy's trust-region meth
 right after r(x) at each accepted step.  On the beam exhaust's certified basis (seed Table 2
 data, mass kept, tracked pairing, 3 Sobol starts) the starts end at the same points with the
 same objectives and evaluation counts, bit for bit, as when every Jacobian solves again, and
-every Jacobian but none is served by the kept solve: one eigen-solve fewer per Jacobian."""
+every Jacobian is served by the kept solve: one eigen-solve fewer per Jacobian.  The einsum
+contraction orders found once per basis give the same bits as numpy's search on each call."""
 
 import os
 
@@ -44,10 +45,10 @@ def _starts(job, monkeypatch, keep: bool):
         solves.append(theta_full.shape[0])
         return eigen(self, theta_full, n_modes, vectors)
 
-    def counted_derivatives(basis, full, columns, n_modes, solved=None):
+    def counted_derivatives(basis, full, columns, n_modes, solved=None, paths=None):
         jacobians.append(1)
         served.extend([1] if solved is not None else [])
-        return derivatives(basis, full, columns, n_modes, solved)
+        return derivatives(basis, full, columns, n_modes, solved, paths)
 
     monkeypatch.setattr(reduced_basis.ReducedBasis, "eigen", counted_eigen)
     monkeypatch.setattr(reduced_jacobian, "eigen_derivatives", counted_derivatives)
@@ -70,3 +71,18 @@ def test_the_kept_solve_gives_the_same_ends_with_fewer_solves(job, monkeypatch):
     # each Jacobian follows the residuals at its point: all are served, one solve fewer each
     assert len(served1) == len(jac1)
     assert len(solves1) == len(solves0) - len(jac1)
+
+
+def test_the_contraction_orders_found_once_give_the_same_bits(job):
+    """``reduced_jacobian.contraction_paths``: einsum's own order, found once per basis, makes
+    the same products as the search on every call (``optimize=True``)."""
+    model, basis = reduced_jacobian.reduced_basis_of(job.problem)
+    columns = [model.parameter_names.index(n) for n in job.problem.names]
+    paths = reduced_jacobian.contraction_paths(basis, 14, len(columns))
+    u = np.random.default_rng(3).random((4, len(model.parameter_names)))
+    for full in model.scale(u):
+        searched = reduced_jacobian.eigen_derivatives(basis, full[None, :], columns, 14)
+        found = reduced_jacobian.eigen_derivatives(basis, full[None, :], columns, 14, None, paths)
+        for a, b in zip(searched, found, strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert np.all(np.abs(found[2]) > 0)  # every mode moves with every parameter

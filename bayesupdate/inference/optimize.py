@@ -337,7 +337,11 @@ def _analytic_jacobian(
     such path.  The mass row: a forward difference of the masses with ``_forward_jacobian``'s
     steps.  ``last``: the ``reduced_jacobian.LastSolve`` of the residuals, whose eigen-solve at
     the same point is used instead of solving again (None: always solved here)."""
-    from bayesupdate.inference.reduced_jacobian import eigen_derivatives, reduced_basis_of
+    from bayesupdate.inference.reduced_jacobian import (
+        contraction_paths,
+        eigen_derivatives,
+        reduced_basis_of,
+    )
 
     found = reduced_basis_of(problem)
     if found is None or _batch_residuals(problem) is None:
@@ -354,6 +358,7 @@ def _analytic_jacobian(
     with_mass = spec.mass_weight > 0 and spec.mass_target_kg is not None
     mass_of = mass_function(model) if with_mass else None
     box, span = unit_box(problem), problem.upper - problem.lower
+    paths = contraction_paths(basis, pairing.n_model, len(columns))
 
     def at(u: np.ndarray) -> np.ndarray:
         return np.hstack([box.theta_from_u(u), np.tile(fixed_values, (u.shape[0], 1))])
@@ -363,7 +368,7 @@ def _analytic_jacobian(
         if not (np.all(np.isfinite(full)) and model._inside(full)[0]):
             return None
         solved = None if last is None else last.solved(full, pairing.n_model)
-        lam, y, dlam = eigen_derivatives(basis, full, columns, pairing.n_model, solved)
+        lam, y, dlam = eigen_derivatives(basis, full, columns, pairing.n_model, solved, paths)
         count.evaluations += 1
         f = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
         window = None if pairing.window is None else (pairing.test_hz, f[None, :], pairing.window)

@@ -6,7 +6,7 @@ prediction at one parameter point and never raises for a failed model evaluation
 ``ok=False``; failures are counted by the callers).
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -28,6 +28,9 @@ from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.modal_data import ModalData
 from bayesupdate.model_protocol import ParametricModel, Prediction
+
+#: (model, all its parameters (SI), n_modes) -> the ``Prediction`` there (``build_problem``)
+ReferenceSolve = Callable[[ParametricModel, Mapping[str, float], int], Prediction]
 
 
 @dataclass(frozen=True)
@@ -290,15 +293,23 @@ def _reference_parameters(
 
 
 def _reference_prediction(
-    model: ParametricModel, reference_params: dict[str, float], n_test: int, extra_modes: int
+    model: ParametricModel,
+    reference_params: dict[str, float],
+    n_test: int,
+    extra_modes: int,
+    solve: ReferenceSolve | None = None,
 ) -> tuple[Prediction, int]:
     """(prediction, n_model): the model at the reference design with ``extra_modes`` modes
-    beyond ``n_test`` (the test's highest mode number) if it can, else exactly ``n_test``."""
+    beyond ``n_test`` (the test's highest mode number) if it can, else exactly ``n_test``;
+    ``solve`` as in ``build_problem``."""
     reference = None
     n_model = n_test
     for n_try in (n_test + max(int(extra_modes), 0), n_test):
         try:
-            reference = model.predict(reference_params, n_modes=n_try)
+            if solve is None:
+                reference = model.predict(reference_params, n_modes=n_try)
+            else:
+                reference = solve(model, reference_params, n_try)
         except BayesUpdateError as exc:
             if n_try == n_test:
                 raise BayesUpdateError(
@@ -385,6 +396,7 @@ def build_problem(
     fixed: Mapping[str, float] | None = None,
     rules: PairingRules | None = None,
     test_modes: tuple[int, ...] = (),
+    reference_solve: ReferenceSolve | None = None,
 ) -> CalibrationProblem:
     """Validate inputs and set up the pairing at the model's reference design.
 
@@ -397,7 +409,10 @@ def build_problem(
     without a pair meeting them at the reference design are refused (left out of the problem,
     listed in ``pairing.refused``), and the pairing is redone inside the window (None: every
     test mode is paired, with any model mode).  test_modes : (n_test,) 1-based numbers of
-    ``data``'s modes in their source (() : 1..n_test).
+    ``data``'s modes in their source (() : 1..n_test).  reference_solve : (model, all
+    parameters (SI), n_modes) -> the ``Prediction`` at the reference design, raising as
+    ``model.predict`` does (None: ``model.predict``); a pipeline gives one that recalls that
+    solve from disk (``pipelines.reference_memo``).
     """
     if pairing not in PAIRING_METHODS:
         raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
@@ -410,7 +425,9 @@ def build_problem(
     if len(numbers) != data.n_modes:
         raise ValueError(f"build_problem: {len(numbers)} test_modes for {data.n_modes} modes")
     # test mode k of a source is near model mode k: the model computes up to the highest one
-    reference, n_model = _reference_prediction(model, reference_params, max(numbers), extra_modes)
+    reference, n_model = _reference_prediction(
+        model, reference_params, max(numbers), extra_modes, reference_solve
+    )
     fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}
     refused: tuple = ()
     mac_rules = rules is not None and _resolved_method(pairing, data, reference) == "mac"

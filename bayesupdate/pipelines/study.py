@@ -27,6 +27,7 @@ from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, bui
 from bayesupdate.inference.sampling import check_moves
 from bayesupdate.modal_data import ModalData
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
+from bayesupdate.pipelines.reference_memo import remembered_solve
 
 #: weight of the mass term of the fit objective when the data carry a measured mass: on seed
 #: Table 2 it keeps the exhaust's mass within 0.4 % of the weighed 12.29 kg (the seed keeps its
@@ -223,6 +224,7 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
         objective,
         rules=study.pairing.rules(),
         test_modes=numbers,
+        reference_solve=remembered_solve,  # a large model's reference solve is kept on disk
     )
     likelihood = likelihood_spec(study, data)
     if likelihood.mass_sd_rel is not None and objective.mass_target_kg is None:

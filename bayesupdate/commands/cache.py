@@ -6,7 +6,8 @@ NAME = "cache"
 HELP = "show or clear the on-disk cache of reduced bases (info | clear)"
 DESCRIPTION = """The certified reduced basis of a model is kept on disk, keyed by everything it
 depends on (the model's matrices and terms, the parameter box, the basis settings, the package
-version), so that calibrate, sample and discover on the same model build it once.
+version), so that calibrate, sample and discover on the same model build it once.  A large
+model's calibration and its full solve at the reference design are kept there too.
 
 Folder: BAYESUPDATE_CACHE_DIR, else the platform's user cache folder (~/.cache/bayesupdate on
 Linux); cap: BAYESUPDATE_CACHE_MAX_MB (default 2048), least recently used entries go first.

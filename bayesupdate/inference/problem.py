@@ -409,11 +409,8 @@ def build_problem(
     without a pair meeting them at the reference design are refused (left out of the problem,
     listed in ``pairing.refused``), and the pairing is redone inside the window (None: every
     test mode is paired, with any model mode).  test_modes : (n_test,) 1-based numbers of
-    ``data``'s modes in their source (() : 1..n_test).  reference_solve : (model, all
-    parameters (SI), n_modes) -> the ``Prediction`` at the reference design, raising as
-    ``model.predict`` does (None: ``model.predict``); a pipeline gives one that recalls that
-    solve from disk (``pipelines.reference_memo``).
-    """
+    ``data``'s modes in their source (() : 1..n_test).  reference_solve : ``ReferenceSolve``,
+    raising as ``model.predict`` (None: ``model.predict``; ``pipelines.reference_memo``'s)."""
     if pairing not in PAIRING_METHODS:
         raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
     if not isinstance(parameters, tuple):

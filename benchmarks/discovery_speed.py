@@ -1,4 +1,4 @@
-"""Speed of one whole discovery run on the exhaust (issue 6: <= 2 min with >= 5 kinds x >= 6
+"""Speed of one whole discovery run on the exhaust (target <= 2 min with >= 5 kinds x >= 6
 locations).  Data: the true first 12 frequencies of the exhaust at the seed's Table 3 design with
 a hidden joint flexibility and 0.3 % noise, and its shapes at the 40 sensor DOFs with
 ``--shape-noise`` (default 3 % of each shape's RMS amplitude; 0: frequencies only).  Every effect

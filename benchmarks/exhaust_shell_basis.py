@@ -1,5 +1,5 @@
 """The certified reduced basis of the shell exhaust at its default mesh (density 32, 28,386 DOFs),
-and the posterior on it against the beam exhaust in the same run (issue 20, "Must show").
+and the posterior on it against the beam exhaust in the same run.
 
 BLAS is pinned to one thread (set below, before numpy is imported).
 

@@ -45,7 +45,7 @@ SIGMA = 0.05
 
 
 def log_likelihood(freqs: np.ndarray) -> np.ndarray:
-    """Gaussian on relative errors of the 12 Table 2 frequencies, sigma fixed (issue 4 item 5)."""
+    """Gaussian on relative errors of the 12 Table 2 frequencies, sigma fixed."""
     e = (freqs - TABLE2_EMA_HZ) / TABLE2_EMA_HZ
     ll = -0.5 * np.sum(e * e, axis=1) / SIGMA**2
     return np.where(np.isfinite(ll), ll, -np.inf)

@@ -1,8 +1,9 @@
 """Would a weighed test article reveal the hidden effects frequency-only discovery misses?
 
-Issue 6's study misses three added masses that the five design variables absorb, and it
-confidently names a joint for a longer tail pipe.  Here the hidden-effect "truths"
-(``hidden_effect_study.truth_model``) are solved at the true design (seed Table 3 optimum).
+The hidden-effect study (``studies/hidden_effect_study.py``) misses three added masses that
+the five design variables absorb, and it confidently names a joint for a longer tail pipe.
+Here the hidden-effect "truths" (``hidden_effect_study.truth_model``) are solved at the true
+design (seed Table 3 optimum).
 The baseline model's five design variables are then re-calibrated to the noise-free true
 frequencies twice: on frequencies alone, and with the true total mass as one more observation
 (0.3 % sd, a scale's accuracy; objective weight (noise / mass sd)^2, so both terms are in units of

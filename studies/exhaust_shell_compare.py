@@ -1,4 +1,4 @@
-"""The two exhausts side by side (issue 20): Table 1 and the speed of each (computed here), the
+"""The two exhausts side by side: Table 1 and the speed of each (computed here), the
 calibrated optimum and the front of each (read from files), and which one reproduces the paper
 better by the numbers (``pipelines.exhaust_comparison.better_exhaust``).  Writes report.html and
 report.md (``report.exhaust_comparison``) into --out.
@@ -46,7 +46,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     doc = Document(
         "The seed's exhaust: beam and shell models side by side",
-        "issue 20; Table 1 and speed computed in this run, calibrations read from files",
+        "Table 1 and speed computed in this run, calibrations read from files",
         (comparison_section(records, out),),
     )
     print("report:", *write_report(doc, out))

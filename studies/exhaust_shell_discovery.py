@@ -1,6 +1,6 @@
 """Discovery on the shell exhaust, the user's round: a virtual test of a "true" ``exhaust_shell``
 with a hidden connection flexibility (or none), ``bayesupdate identify`` on its FRFs, then
-``bayesupdate discover`` on a study file whose model is ``exhaust_shell`` (issue 20, item 3).
+``bayesupdate discover`` on a study file whose model is ``exhaust_shell``.
 
     PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python studies/exhaust_shell_discovery.py \\
         --out shell_disc \\

@@ -1,5 +1,5 @@
 """The calibrated optimum and the front of Expr against the mass error of one exhaust model, as a
-file the comparison of the two exhausts reads (``report.exhaust_comparison``, issue 20).
+file the comparison of the two exhausts reads (``report.exhaust_comparison``).
 
     PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python studies/exhaust_shell_front.py exhaust \\
         --out studies/out/front_exhaust.json

@@ -1,4 +1,4 @@
-"""Why the exhausts do not reach the paper's Expr 0.0406 (issue 20): the paper's own design
+"""Why the exhausts do not reach the paper's Expr 0.0406: the paper's own design
 change (seed Table 3, initial -> optimum), applied to our models, against what it did in the
 paper's model (seed Table 4 / Table 1) and what the test asks for (Table 2 / our initial
 design).  Each initial mode is tracked by MAC at the sensors (largest MAC among 20 modes at the

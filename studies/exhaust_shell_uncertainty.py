@@ -1,6 +1,6 @@
 """How far the shell exhaust's calibrated design variables move under the model-form spread of its
-geometry and of its connection stiffnesses (issue 20, "the uncertainty study on the shell
-model"; point optima only, the posterior version of ``studies/uncertainty_study.py`` is not run
+geometry and of its connection stiffnesses (the uncertainty study on the shell model;
+point optima only, the posterior version of ``studies/uncertainty_study.py`` is not run
 for the shell model).
 
     for g in 1 2 3; do PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python studies/exhaust_shell_front.py \\

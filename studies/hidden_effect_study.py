@@ -1,4 +1,4 @@
-"""Hidden-effect virtual tests for discovery (issue 6 item 9).
+"""Hidden-effect virtual tests for discovery.
 
 The "real" exhaust is the model at a true design (seed Table 3 optimum) with one effect hidden
 in it (each kind at several locations and magnitudes), or no effect, or a change the library
@@ -86,7 +86,7 @@ OUT_OF_LIBRARY = [
     "geometry:elbow_radius=0.11",
     "geometry:cold2_length=0.65",
 ]
-#: the CLI path's cases: (case, FRF noise); null cases are none#k (issue 15 "Must show")
+#: the CLI path's cases: (case, FRF noise); null cases are none#k (nothing hidden)
 CLI_CASES = [
     *[(f"none#{k}", noise) for noise in (0.003, 0.01, 0.03) for k in range(1, 9)],
     *[

@@ -1,4 +1,4 @@
-"""Worked example (issue 19): calibrate a Nastran deck nobody here wrote and write it back.
+"""Worked example: calibrate a Nastran deck nobody here wrote and write it back.
 
 The NX FEMAP exhaust (``../shared/data/nastran/femap_exhaust/exhaust.bdf``, 4,466 shells, inch-
 lbf-s units), on the user's path, the commands a user types (``bayesupdate.cli.main``):

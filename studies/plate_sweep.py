@@ -10,7 +10,7 @@ is reported with its mean and scatter (sample standard deviation / mean).  Side 
 sdypy-EMA's LSCE (optional peer) runs on the same FRF of the first repetition and its stable pole
 closest to each of our modes is listed.
 
-Band invariance (issue 16), the path a user takes: ``bayesupdate frf`` on the four view-0
+Band invariance, the path a user takes: ``bayesupdate frf`` on the four view-0
 repetitions averaged (rectangular window on each whole 2 s record: 0.5 Hz lines; the lines the
 force excites are written), then ``bayesupdate identify`` on the automatic band and on
 60:500, 100:480 and 80:470, with both estimators (LSCE, pLSCF): the five clear peaks (126, 214,

@@ -1,5 +1,5 @@
 """Importance-sampling references for the benchmark's exhaust posterior and the demo's two
-posteriors (issue 21).
+posteriors.
 
 ``--case exhaust`` (default): the exhaust model, seed Table 2 frequencies, five design variables
 + sigma (half-normal prior, scale 0.1), uniform priors on the model bounds, tracked pairing, the
@@ -234,7 +234,7 @@ def _proposal(y: np.ndarray, space, settings: dict, seed: int) -> DefensivePropo
     ``settings["components"]``), covariances x ``covariance_inflation``, the prior at
     ``prior_weight``."""
     mixture = fit_gaussian_mixture(y, settings.get("components", 4), seed)
-    # wider components: the pilot (DE) is known to under-spread the tails (issue 21)
+    # wider components: the pilot (DE) under-spreads the tails (docs/validation/posterior.md)
     mixture = replace(mixture, chols=mixture.chols * np.sqrt(settings["covariance_inflation"]))
     return DefensiveProposal(mixture, settings["prior_weight"], space, True)
 

@@ -1,4 +1,4 @@
-"""Every real dataset, both estimators, on the path a user takes (issue 16).
+"""Every real dataset, both estimators, on the path a user takes.
 
 Data (../shared/data beside the checkout, each folder's README gives source and references):
 - beam_frf_sdpy: one measured accelerance of the LADISK free beam (UFF 58, 1-10000 Hz); the

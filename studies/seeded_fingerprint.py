@@ -1,10 +1,10 @@
-"""Bit-identity of the seeded runs a user makes, before and after a refactor (issue 17).
+"""Bit-identity of the seeded runs a user makes, before and after a refactor.
 
 Runs, through the CLI with default settings and fixed seeds:
 - ``bayesupdate demo --quick --seed 0`` (seed case and virtual test: optimum, posterior, modes);
 - ``bayesupdate calibrate --model exhaust --data paper:ema --json`` (the default calibration);
 - ``bayesupdate simulate --effect added_mass@8:m=0.5 --noise 0.01 --seed 7`` ->
-  ``identify`` -> ``discover --json`` (a hidden effect) and the null case of issue 15 (seed 24).
+  ``identify`` -> ``discover --json`` (a hidden effect) and the null case (no effect, seed 24).
 
 Every HDF5 dataset and attribute and every ``--json`` field is reduced to a digest: the SHA-256
 of its bytes for arrays, the value itself for scalars and strings.  Wall times, creation

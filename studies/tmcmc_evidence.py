@@ -1,4 +1,4 @@
-"""TMCMC evidence against discovery's Laplace evidence on the exhaust (issue 21 item 3).
+"""TMCMC evidence against discovery's Laplace evidence on the exhaust.
 
 One hidden-effect case of ``hidden_effect_study`` (default ``added_mass@8:m=0.5``, fast path:
 12 frequencies with 0.3 % noise and 40-DOF shapes with 3 % noise, seed 0, as that study's

@@ -1,4 +1,4 @@
-"""Issue 4 checks on the exhaust (seed Table 2), run on the certified reduced model so they are
+"""Calibration checks on the exhaust (seed Table 2), run on the certified reduced model so they are
 fast: shape-tracked batched pairing, the mass-kept optimum, the joint nuisance option."""
 
 import os

@@ -1,4 +1,4 @@
-"""The demo's seed case on the shell exhaust (issue 20, item 4): its FE part against seed
+"""The demo's seed case on the shell exhaust: its FE part against seed
 Table 1 with the modes' characters, its study (Table 2, the mass kept), the beam exhaust's
 optimum and front beside it computed in the run, and the side by side of the two.
 

@@ -85,7 +85,7 @@ def test_simulate_geometry_changes_only_the_true_structure(tmp_path, capsys):
 
 @pytest.mark.parametrize("bad, words", [(np.nan, "shape_sd_rel contains NaN"), (0.0, "> 0")])
 def test_shape_sd_nan_or_zero_in_a_modes_file_is_a_one_line_error(tmp_path, capsys, bad, words):
-    """Issue 15 bad input: a shape uncertainty that is NaN or zero for one mode: exit 2, one
+    """Bad input: a shape uncertainty that is NaN or zero for one mode: exit 2, one
     line naming the field, before any model work."""
     import h5py
 
@@ -106,7 +106,7 @@ def test_shape_sd_nan_or_zero_in_a_modes_file_is_a_one_line_error(tmp_path, caps
 
 @pytest.mark.slow
 def test_user_path_null_case_names_nothing(tmp_path, capsys):
-    """Issue 15, the user's path with default settings: simulate (no effect, 1 % FRF noise, the
+    """The user's path with default settings: simulate (no effect, 1 % FRF noise, the
     issue's seed 24) -> identify -> discover.  Before the fix the baseline was dragged 0.03-0.05 %
     off by the shape block and every mode was flagged; now it stays within 0.01 % of the test
     and nothing is named."""

@@ -1,4 +1,4 @@
-"""Discovery on the shell exhaust (issue 20, item 3): its locations include the pipe-to-body
+"""Discovery on the shell exhaust: its locations include the pipe-to-body
 connections (``connection_flexibility``, a spring in series with each rigid spider) and the
 shell bodies' sheets (``stiffness_change``); on frequencies made by a "true" ``exhaust_shell``
 with a hidden soft connection, ``bayesupdate discover`` on a study file names it at its place,

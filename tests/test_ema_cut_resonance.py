@@ -1,4 +1,4 @@
-"""A resonance cut by an end of the analysed range (bayesupdate.ema.identify, issue 19): it enters
+"""A resonance cut by an end of the analysed range (``bayesupdate.ema.identify``): it enters
 the fit as a pole on the lines, with an extra pole beyond the end, so its neighbours are not
 biased by its flank; it is reported as cut, not as a mode.
 

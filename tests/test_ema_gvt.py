@@ -1,4 +1,4 @@
-"""The real mAEWing1 ground vibration test (../shared/data/gvt_maewing1, issue 16): a shaker sine
+"""The real mAEWing1 ground vibration test (../shared/data/gvt_maewing1): a shaker sine
 sweep of about 1-35 Hz, 10 accelerometers roved over 5 runs, no driving point.
 
 User path with default settings: ``bayesupdate frf`` per run, then one ``bayesupdate identify``

@@ -1,4 +1,4 @@
-"""Band invariance on the real plate (../shared/data/plate_sweep, issue 16).
+"""Band invariance on the real plate (../shared/data/plate_sweep).
 
 The user path with default settings: ``bayesupdate frf`` on the four view-0 repetitions (a sine
 sweep: one rectangular-window spectrum of each whole 2 s record, averaged: 0.5 Hz lines; the

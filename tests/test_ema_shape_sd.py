@@ -5,7 +5,7 @@ shape_sd_rel is meant to satisfy E[1 - MAC(identified, true)] ~ shape_sd_rel^2. 
 residue noise and model error (residual inflated by its correlation across lines), each test
 set's scale relative to the anchor set, and the part of a set too weak to be scaled (the V
 reference barely moves in mode 3, the H reference in mode 4: 1 - MAC ~ 6e-3 to 8e-3 there).
-Measured (issue 16): ratio realised / predicted over seeds 1-4 has median 1.46 and range
+Measured (real data): ratio realised / predicted over seeds 1-4 has median 1.46 and range
 0.35-6.3 (seeds 5-8, kept for confirmation: median 1.09, range 0.07-11.8); before the scale
 and correlation terms, median 16 and range 0.28-406.
 

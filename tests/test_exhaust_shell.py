@@ -2,7 +2,7 @@
 beam exhaust's 20 sensor points, the five design variables bound to the real sheets, the inlet
 collar, the per-element thickness factor, bad input.
 
-Tolerances: issue 20's Table 1 targets (RMS <= 3 %, every mode within 5 %) at the default mesh
+Tolerances: the Table 1 targets (RMS <= 3 %, every mode within 5 %) at the default mesh
 (density 32; measured RMS 1.46 %, max 2.84 %, with the main muffler's oval inlet collar fitted
 by studies/exhaust_shell_fit.py); every mode pairs with the same-numbered mode of the beam
 exhaust by MAC at the 40 sensor DOFs (measured diagonal 0.84-0.98).  The previous best (round
@@ -34,7 +34,7 @@ def shell():
 
 
 def test_table1_issue_target_at_the_default_mesh(shell):
-    """Issue 20: RMS <= 3 %, every mode within 5 % of seed Table 1 (measured 1.46 %, 2.84 %)."""
+    """RMS <= 3 %, every mode within 5 % of seed Table 1 (measured 1.46 %, 2.84 %)."""
     _, r = shell
     err = r.frequencies_hz / TABLE1_FEA_HZ - 1
     assert np.sqrt(np.mean(err**2)) <= 0.03

@@ -1,4 +1,4 @@
-"""Bad FE input (issue 18's list) through the public builder and ``FEModel``: each error names the
+"""Bad FE input through the public builder and ``FEModel``: each error names the
 node or element, each number in the message is checked against the input that caused it.
 
 - a node used by no element;

@@ -1,4 +1,4 @@
-"""Dampers as data (issue 18 item 4): a two-mass chain with a dashpot between the masses and one
+"""Dampers as data: a two-mass chain with a dashpot between the masses and one
 to ground gives the textbook damping matrix; a damper in a rotated frame transforms as
 R^T c R; normal modes ignore dampers; bad damping values are one-line errors."""
 

@@ -1,5 +1,5 @@
 """General beams (arbitrary sections, offsets, pin flags), standard sections, rods and trusses,
-node-local frames (issue 18 items 3-4), each against a closed form or an independent path.
+node-local frames, each against a closed form or an independent path.
 
 - general section = tube section: the same A, I, J, shear areas give the same element matrices
   as ``fe.elements.beam`` (to ~1e-16, asserted 1e-12) and the same modes;

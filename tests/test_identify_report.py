@@ -1,5 +1,5 @@
 """``bayesupdate identify --report DIR``: the report a user opens, on a virtual test and on the
-real mAEWing1 ground vibration test (issue 16)."""
+real mAEWing1 ground vibration test."""
 
 import re
 from pathlib import Path

@@ -331,7 +331,7 @@ def test_sample_exhaust_screens_proposals_and_stops_on_the_targets(tmp_path, cap
 
 
 def test_a_posterior_that_misses_its_targets_says_so_everywhere(study, seed3, tmp_path, capsys):
-    """Issue 15 item 3: the step budget (400) ends the run before 1e9 tau: the terminal, the JSON
+    """The step budget (400) ends the run before 1e9 tau: the terminal, the JSON
     and the HDF5 file say "not converged" and why; a converged run says nothing of the kind."""
     result = seed3.summary
     assert result["converged"] is False

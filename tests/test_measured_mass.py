@@ -1,4 +1,4 @@
-"""The measured mass is test data (issue 15 item 2): carried by ``ModalData``, read from
+"""The measured mass is test data: carried by ``ModalData``, read from
 paper:ema, CSV, inline study data and HDF5 results, used by the objective and the likelihood by
 default, switched off by ``--no-mass``."""
 

@@ -1,4 +1,4 @@
-"""``bayesupdate discover`` on a Nastran deck (issue 19): the user's path, through the CLI.
+"""``bayesupdate discover`` on a Nastran deck: the user's path, through the CLI.
 
 A free-free steel plate deck (two PSHELLs of different thickness, so no mirror symmetry) with
 six test points.  The "true" structure is the same deck with a CONM2 typed in at one test

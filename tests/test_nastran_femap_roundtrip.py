@@ -1,4 +1,4 @@
-"""The README's worked example (issue 19): the NX FEMAP exhaust (``shared/data/nastran/
+"""The README's worked example: the NX FEMAP exhaust (``shared/data/nastran/
 femap_exhaust``, 4,466 shells, inch-lbf-s), round-tripped through the commands a user types.
 
 A study binds PSHELL 3 T and PSHELL 9 T and maps 20 test points (the three hanger GRIDs and 17

@@ -3,7 +3,7 @@
 
 The reference (tests/data/posterior_reference_exhaust.json, made by
 studies/posterior_reference.py) has Monte Carlo errors of about 0.009 sd in the means and 0.6 %
-in the sds.  DE moves alone fail this check (sds 4-10 % small, issue 21; the study's pilot DE run
+in the sds.  DE moves alone fail this check (sds 4-10 % small; the study's pilot DE run
 is 5-9 % small).  One seed here; the study's ``--check 5`` and benchmarks/posterior_speed.py
 report five (docs/validation/posterior.md).
 """

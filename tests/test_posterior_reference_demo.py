@@ -1,4 +1,4 @@
-"""The demo's posteriors against their importance-sampling references (issue 21): the demo's
+"""The demo's posteriors against their importance-sampling references: the demo's
 default sampler (``run_sampling`` with the demo's study) gives means within 0.05 sd and sds
 within 5 % of the reference, every parameter.
 
@@ -6,8 +6,8 @@ The references (posterior_reference_demo_{seed,virtual,seed_shell}.json in tests
 last two in bayesupdate/data, made by
 studies/posterior_reference.py --case seed|virtual|seed-shell) are the posteriors ``bayesupdate
 demo`` shows (its seed case on the shell exhaust, ``seed-shell``; its virtual test on the beam
-exhaust; ``seed``: the beam exhaust's seed case, the demo's before issue 20 moved it), built with
-the demo's own study and the calls ``run_sampling`` makes.  The seed case's
+exhaust; ``seed``: the beam exhaust's seed case, the demo's before the shell exhaust took its
+place), built with the demo's own study and the calls ``run_sampling`` makes.  The seed case's
 lower rho_catalyst tail (logit down to about -5.6) is where the demo's mixture proposal fails
 its coverage check; the reference's defensive prior component and its refit on resampled draws
 reach it (its weighted 0.5 % quantile is stored with the pilot's).

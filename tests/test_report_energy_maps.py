@@ -1,4 +1,4 @@
-"""Strain-energy density maps on shells (issue 20, item 5; ``report.energy_maps``): the densities
+"""Strain-energy density maps on shells (``report.energy_maps``): the densities
 integrate to the mode's strain energy, sit where the analytic mode shape puts them, and are drawn
 (in the report and by ``bayesupdate modes --sed-map``)."""
 

@@ -1,5 +1,5 @@
-"""The two exhausts side by side (issue 20, item 4): the records, the choice by the issue's rule,
-the files read, and the report section."""
+"""The two exhausts side by side: the records, the choice by the rule of
+``report.exhaust_comparison``, the files read, and the report section."""
 
 import json
 

@@ -1,0 +1,174 @@
+"""Import time per CLI command: the median time to import the modules each command loads, over N
+fresh processes (no asserts: numbers to read, side by side with another checkout's).
+
+For each command, one recording run executes it through the CLI as a user types it and lists
+``sys.modules`` at its end (in the order the modules were first entered); then N fresh processes
+(``python -X importtime``) import that list in that order and nothing else.  Printed per command:
+the median wall time of those imports [s] (the interpreter's own start excluded), the number of
+modules, the median self time (``-X importtime``'s own figures) summed per package or
+``bayesupdate`` room, largest first, and whether the costly optional packages were loaded at all.
+
+The data some commands need (a UFF file and its identified modes) is made once by ``simulate``
+and ``identify`` in a temporary folder; every run gets its own cache folder
+(``BAYESUPDATE_CACHE_DIR``), so a cached basis never changes what is loaded.
+
+    python benchmarks/import_time.py --runs 5
+    python benchmarks/import_time.py --runs 5 --root /path/to/other/checkout   # before/after
+    python benchmarks/import_time.py --only sample,discover --runs 7
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+#: command name -> the CLI arguments ({tmp}: the folder holding the fixture files)
+COMMANDS = {
+    "demo --help": ["demo", "--help"],
+    "modes": ["modes", "--model", "exhaust", "--json"],
+    "identify": ["identify", "{tmp}/test.uff", "--out", "{tmp}/identified.h5", "--force"],
+    "correlate": ["correlate", "--model", "exhaust", "--data", "{tmp}/modes.h5", "--json"],
+    "calibrate": ["calibrate", "--model", "exhaust", "--data", "paper:ema", "--json"],
+    "sample": ["sample", "--model", "exhaust", "--data", "paper:ema", "--json", "--workers", "1"],
+    "discover": ["discover", "--model", "exhaust", "--data", "{tmp}/modes.h5", "--json"],
+    "calibrate_shell": ["calibrate", "--model", "exhaust_shell", "--data", "paper:ema", "--json"],
+}
+#: the shell calibration builds a reduced basis of ~100 full solves: on request only
+DEFAULT = [name for name in COMMANDS if name != "calibrate_shell"]
+#: packages whose import costs a second or more on their own: loaded or not, per command
+HEAVY = ["scipy.stats", "emcee", "arviz_base", "arviz", "h5py", "matplotlib", "tqdm", "dask"]
+
+RECORD = """
+import json, sys
+from bayesupdate.cli import main
+try:
+    code = main(sys.argv[2:])
+except SystemExit as exc:  # --help exits through argparse
+    code = exc.code or 0
+with open(sys.argv[1], "w") as f:
+    json.dump({"code": code, "modules": list(sys.modules)}, f)
+"""
+
+IMPORT = """
+import importlib, json, sys, time
+names = json.load(open(sys.argv[1]))
+t0 = time.perf_counter()
+failed = []
+for name in names:
+    try:
+        importlib.import_module(name)
+    except Exception:  # a name that only exists as an alias another module made
+        failed.append(name)
+print(json.dumps({"seconds": time.perf_counter() - t0, "failed": failed}))
+"""
+
+
+def environment(root: Path, cache: str) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(root), BAYESUPDATE_CACHE_DIR=cache)
+    env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    env.pop("BAYESUPDATE_NO_CACHE", None)
+    return env
+
+
+def cli(root: Path, arguments: list[str], tmp: str) -> None:
+    """A fixture-making CLI run; SystemExit when it fails."""
+    cmd = [sys.executable, "-m", "bayesupdate", *arguments, "--quiet"]
+    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed: {done.stderr.strip()[-2000:]}")
+
+
+def record(root: Path, arguments: list[str], tmp: str) -> list[str]:
+    """The modules one run of the command has loaded at its end, in first-entered order."""
+    listing = Path(tmp) / "modules.json"
+    argv = [a.format(tmp=tmp) for a in arguments]
+    if "--help" not in argv:
+        argv.append("--quiet")
+    with tempfile.TemporaryDirectory() as cache:
+        cmd = [sys.executable, "-c", RECORD, str(listing), *argv]
+        done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, cache))
+    if done.returncode != 0 or json.loads(listing.read_text())["code"] != 0:
+        raise SystemExit(f"bayesupdate {' '.join(argv)} failed: {done.stderr.strip()[-2000:]}")
+    return [m for m in json.loads(listing.read_text())["modules"] if m != "__main__"]
+
+
+def group(module: str) -> str:
+    """Where a module's time is counted: ``bayesupdate.<room>``, ``scipy.<subpackage>``, or
+    the top-level package."""
+    parts = module.split(".")
+    return ".".join(parts[:2]) if parts[0] in ("bayesupdate", "scipy") else parts[0]
+
+
+def self_times(stderr: str) -> dict:
+    """``-X importtime``'s own (self) microseconds of every import, summed per ``group``."""
+    out: dict = {}
+    for line in stderr.splitlines():
+        match = re.match(r"import time:\s+(\d+) \|\s+\d+ \| \s*(\S+)$", line)
+        if match:
+            key = group(match.group(2))
+            out[key] = out.get(key, 0) + int(match.group(1))
+    return out
+
+
+def time_imports(root: Path, modules: list[str], tmp: str, runs: int) -> dict:
+    """Median wall time of importing ``modules`` over ``runs`` fresh processes, the median
+    self time of each ``group`` of modules, and the names that failed to import."""
+    listing = Path(tmp) / "import.json"
+    listing.write_text(json.dumps(modules))
+    seconds, levels, failed = [], [], []
+    for _ in range(runs):
+        cmd = [sys.executable, "-X", "importtime", "-c", IMPORT, str(listing)]
+        done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
+        result = json.loads(done.stdout)
+        seconds.append(result["seconds"])
+        failed = result["failed"]
+        levels.append(self_times(done.stderr))
+    names = set().union(*levels)
+    by_group = {n: float(np.median([lv.get(n, 0) for lv in levels])) / 1e6 for n in names}
+    return {"median_s": float(np.median(seconds)), "all_s": seconds,
+            "groups_s": by_group, "failed": failed}  # fmt: skip
+
+
+def report(name: str, modules: list[str], timed: dict, top: int) -> None:
+    heavy = [h for h in HEAVY if h in modules]
+    runs = ", ".join(f"{s:.2f}" for s in timed["all_s"])
+    print(f"{name:16s} imports median {timed['median_s']:5.2f} s  ({len(modules)} modules; "
+          f"runs: {runs})")  # fmt: skip
+    print(f"{'':16s}   heavy packages loaded: {', '.join(heavy) or 'none'}")
+    largest = sorted(timed["groups_s"].items(), key=lambda kv: -kv[1])[:top]
+    print(f"{'':16s}   largest: " + ", ".join(f"{n} {s:.2f} s" for n, s in largest))
+    if timed["failed"]:
+        print(f"{'':16s}   not importable by name (left out): {', '.join(timed['failed'])}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", default=",".join(DEFAULT), help="comma-separated command names")
+    ap.add_argument("--runs", type=int, default=5, help="fresh import processes per command")
+    ap.add_argument("--root", type=Path, default=ROOT, help="checkout whose package is timed")
+    ap.add_argument("--top", type=int, default=5, help="groups of modules listed per command")
+    args = ap.parse_args()
+    wanted = [n.strip() for n in args.only.split(",") if n.strip()]
+    unknown = sorted(set(wanted) - set(COMMANDS))
+    if unknown or args.runs < 1:
+        raise SystemExit(f"--only: unknown {unknown}; commands are {list(COMMANDS)}; --runs >= 1")
+    root = args.root.resolve()
+    print(f"package from {root}; {os.cpu_count()} CPUs; load {os.getloadavg()[0]:.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        if {"identify", "correlate", "discover"} & set(wanted):
+            cli(root, ["simulate", "--noise", "0.01", "--seed", "24", "--out", f"{tmp}/test.uff"], tmp)
+            cli(root, ["identify", f"{tmp}/test.uff", "--out", f"{tmp}/modes.h5"], tmp)
+        for name in wanted:
+            modules = record(root, COMMANDS[name], tmp)
+            report(name, modules, time_imports(root, modules, tmp, args.runs), args.top)
+
+
+if __name__ == "__main__":
+    main()

@@ -7,13 +7,15 @@ For each command, one recording run executes it through the CLI as a user types 
 the median wall time of those imports [s] (the interpreter's own start excluded), the number of
 modules, the median self time (``-X importtime``'s own figures) summed per package or
 ``bayesupdate`` room, largest first, and whether the costly optional packages were loaded at all.
+With ``--root`` given more than once, each command is timed for every checkout, the checkouts
+taking turns run by run (a shared machine's load falls on all alike), printed one under another.
 
 The data some commands need (a UFF file and its identified modes) is made once by ``simulate``
 and ``identify`` in a temporary folder; every run gets its own cache folder
 (``BAYESUPDATE_CACHE_DIR``), so a cached basis never changes what is loaded.
 
     python benchmarks/import_time.py --runs 5
-    python benchmarks/import_time.py --runs 5 --root /path/to/other/checkout   # before/after
+    python benchmarks/import_time.py --runs 5 --root /path/to/main --root .   # before, after
     python benchmarks/import_time.py --only sample,discover --runs 7
 """
 
@@ -117,30 +119,42 @@ def self_times(stderr: str) -> dict:
     return out
 
 
-def time_imports(root: Path, modules: list[str], tmp: str, runs: int) -> dict:
-    """Median wall time of importing ``modules`` over ``runs`` fresh processes, the median
-    self time of each ``group`` of modules, and the names that failed to import."""
-    listing = Path(tmp) / "import.json"
-    listing.write_text(json.dumps(modules))
-    seconds, levels, failed = [], [], []
-    for _ in range(runs):
-        cmd = [sys.executable, "-X", "importtime", "-c", IMPORT, str(listing)]
-        done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
-        result = json.loads(done.stdout)
-        seconds.append(result["seconds"])
-        failed = result["failed"]
-        levels.append(self_times(done.stderr))
-    names = set().union(*levels)
-    by_group = {n: float(np.median([lv.get(n, 0) for lv in levels])) / 1e6 for n in names}
-    return {"median_s": float(np.median(seconds)), "all_s": seconds,
-            "groups_s": by_group, "failed": failed}  # fmt: skip
+def import_once(root: Path, listing: Path, tmp: str) -> tuple[float, dict, list[str]]:
+    """One fresh process importing the modules listed in ``listing``: (wall seconds of the
+    imports, self time per ``group`` [us], the names that failed to import)."""
+    cmd = [sys.executable, "-X", "importtime", "-c", IMPORT, str(listing)]
+    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
+    result = json.loads(done.stdout)
+    return result["seconds"], self_times(done.stderr), result["failed"]
 
 
-def report(name: str, modules: list[str], timed: dict, top: int) -> None:
+def time_imports(roots: list[Path], modules: list[list[str]], tmp: str, runs: int) -> list[dict]:
+    """Per root: the median wall time of importing its ``modules`` over ``runs`` fresh
+    processes, the median self time of each ``group`` of modules, and the names that failed to
+    import.  The roots take turns, run by run, so that a change in the machine's load falls on
+    all of them alike."""
+    listings = []
+    for k, names in enumerate(modules):
+        listings.append(Path(tmp) / f"import{k}.json")
+        listings[-1].write_text(json.dumps(names))
+    done = [[import_once(root, listing, tmp) for root, listing in zip(roots, listings, strict=True)]
+            for _ in range(runs)]  # fmt: skip
+    out = []
+    for k in range(len(roots)):
+        seconds = [run[k][0] for run in done]
+        levels = [run[k][1] for run in done]
+        names = set().union(*levels)
+        by_group = {n: float(np.median([lv.get(n, 0) for lv in levels])) / 1e6 for n in names}
+        out.append({"median_s": float(np.median(seconds)), "all_s": seconds,
+                    "groups_s": by_group, "failed": done[-1][k][2]})  # fmt: skip
+    return out
+
+
+def report(name: str, root: Path, modules: list[str], timed: dict, top: int) -> None:
     heavy = [h for h in HEAVY if h in modules]
     runs = ", ".join(f"{s:.2f}" for s in timed["all_s"])
-    print(f"{name:16s} imports median {timed['median_s']:5.2f} s  ({len(modules)} modules; "
-          f"runs: {runs})")  # fmt: skip
+    print(f"{name:16s} {str(root)[-28:]:>28s}  imports median {timed['median_s']:5.2f} s  "
+          f"({len(modules)} modules; runs: {runs})")  # fmt: skip
     print(f"{'':16s}   heavy packages loaded: {', '.join(heavy) or 'none'}")
     largest = sorted(timed["groups_s"].items(), key=lambda kv: -kv[1])[:top]
     print(f"{'':16s}   largest: " + ", ".join(f"{n} {s:.2f} s" for n, s in largest))
@@ -152,22 +166,26 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default=",".join(DEFAULT), help="comma-separated command names")
     ap.add_argument("--runs", type=int, default=5, help="fresh import processes per command")
-    ap.add_argument("--root", type=Path, default=ROOT, help="checkout whose package is timed")
+    ap.add_argument("--root", type=Path, action="append",
+                    help="checkout to time (repeat to compare; default: this one)")  # fmt: skip
     ap.add_argument("--top", type=int, default=5, help="groups of modules listed per command")
     args = ap.parse_args()
     wanted = [n.strip() for n in args.only.split(",") if n.strip()]
     unknown = sorted(set(wanted) - set(COMMANDS))
     if unknown or args.runs < 1:
         raise SystemExit(f"--only: unknown {unknown}; commands are {list(COMMANDS)}; --runs >= 1")
-    root = args.root.resolve()
-    print(f"package from {root}; {os.cpu_count()} CPUs; load {os.getloadavg()[0]:.2f}")
+    roots = [r.resolve() for r in (args.root or [ROOT])]
+    print(f"{os.cpu_count()} CPUs; load {os.getloadavg()[0]:.2f}; packages from {roots}")
     with tempfile.TemporaryDirectory() as tmp:
         if {"identify", "correlate", "discover"} & set(wanted):
-            cli(root, ["simulate", "--noise", "0.01", "--seed", "24", "--out", f"{tmp}/test.uff"], tmp)
-            cli(root, ["identify", f"{tmp}/test.uff", "--out", f"{tmp}/modes.h5"], tmp)
+            uff = f"{tmp}/test.uff"
+            cli(roots[0], ["simulate", "--noise", "0.01", "--seed", "24", "--out", uff], tmp)
+            cli(roots[0], ["identify", uff, "--out", f"{tmp}/modes.h5"], tmp)
         for name in wanted:
-            modules = record(root, COMMANDS[name], tmp)
-            report(name, modules, time_imports(root, modules, tmp, args.runs), args.top)
+            modules = [record(root, COMMANDS[name], tmp) for root in roots]
+            timed = time_imports(roots, modules, tmp, args.runs)
+            for root, names, result in zip(roots, modules, timed, strict=True):
+                report(name, root, names, result, args.top)
 
 
 if __name__ == "__main__":

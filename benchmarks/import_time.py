@@ -45,7 +45,8 @@ COMMANDS = {
 #: the shell calibration builds a reduced basis of ~100 full solves: on request only
 DEFAULT = [name for name in COMMANDS if name != "calibrate_shell"]
 #: packages whose import costs a second or more on their own: loaded or not, per command
-HEAVY = ["scipy.stats", "emcee", "arviz_base", "arviz", "h5py", "matplotlib", "tqdm", "dask"]
+HEAVY = ["bayesupdate.discovery.workflow", "scipy.stats", "scipy.optimize", "emcee", "h5py", "tqdm",
+         "arviz_base", "arviz_stats", "xarray", "pandas", "dask", "matplotlib"]  # fmt: skip
 
 RECORD = """
 import json, sys

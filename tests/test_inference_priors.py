@@ -102,9 +102,9 @@ def test_closed_form_cdf_is_scipys_cdf_to_the_bit(spec, bounds):
     importing scipy.stats: the same numbers inside, at and outside the support and bounds."""
     prior = prior_from_mapping(spec, bounds)
     grid = np.linspace(-4.0, 6.0, 1001)
-    x = np.concatenate([[-np.inf, -1.0, 0.0, 1e-300, *bounds, np.inf], grid, 10.0**grid])
+    x = np.concatenate([[-np.inf, -1.0, 0.0, 1e-300, *bounds, np.inf, np.nan], grid, 10.0**grid])
     dist = _scipy(prior)
-    assert np.array_equal([prior.cdf(v) for v in x], dist.cdf(x))
+    assert np.array_equal([prior.cdf(v) for v in x], dist.cdf(x), equal_nan=True)
     assert prior.cdf_range() == (dist.cdf(bounds[0]), dist.cdf(bounds[1]))
 
 

@@ -101,11 +101,13 @@ class Prior:
     def cdf(self, x: float) -> float:
         """The untruncated distribution's CDF at x (SI units of the parameter): scipy.stats'
         ``cdf`` in closed form, the same numbers (its ``_cdf((x - loc) / scale)`` inside the
-        open support, 1 at or above the support's top, 0 elsewhere) without importing
+        open support, 1 at or above the support's top, NaN at NaN, 0 elsewhere) without importing
         scipy.stats, which costs a command over a second (every calibration builds priors)."""
         loc, scale = self._location_scale()
         z = (np.float64(x) - loc) / scale
         bottom, top = _SUPPORT[self.kind]
+        if np.isnan(z):
+            return float("nan")
         if z >= top:
             return 1.0
         if not bottom < z < top:

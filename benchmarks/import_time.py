@@ -74,6 +74,8 @@ print(json.dumps({"seconds": time.perf_counter() - t0, "failed": failed}))
 
 
 def environment(root: Path, cache: str) -> dict:
+    """The children's environment: ``root``'s package first on the path (every child also runs
+    in a temporary folder, since ``python -c`` and ``-m`` put the working folder before it)."""
     env = dict(os.environ, PYTHONPATH=str(root), BAYESUPDATE_CACHE_DIR=cache)
     env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     env.pop("BAYESUPDATE_NO_CACHE", None)
@@ -83,7 +85,7 @@ def environment(root: Path, cache: str) -> dict:
 def cli(root: Path, arguments: list[str], tmp: str) -> None:
     """A fixture-making CLI run; SystemExit when it fails."""
     cmd = [sys.executable, "-m", "bayesupdate", *arguments, "--quiet"]
-    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
+    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp), cwd=tmp)
     if done.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed: {done.stderr.strip()[-2000:]}")
 
@@ -96,7 +98,9 @@ def record(root: Path, arguments: list[str], tmp: str) -> list[str]:
         argv.append("--quiet")
     with tempfile.TemporaryDirectory() as cache:
         cmd = [sys.executable, "-c", RECORD, str(listing), *argv]
-        done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, cache))
+        done = subprocess.run(
+            cmd, capture_output=True, text=True, env=environment(root, cache), cwd=cache
+        )
     if done.returncode != 0 or json.loads(listing.read_text())["code"] != 0:
         raise SystemExit(f"bayesupdate {' '.join(argv)} failed: {done.stderr.strip()[-2000:]}")
     return [m for m in json.loads(listing.read_text())["modules"] if m != "__main__"]
@@ -124,7 +128,7 @@ def import_once(root: Path, listing: Path, tmp: str) -> tuple[float, dict, list[
     """One fresh process importing the modules listed in ``listing``: (wall seconds of the
     imports, self time per ``group`` [us], the names that failed to import)."""
     cmd = [sys.executable, "-X", "importtime", "-c", IMPORT, str(listing)]
-    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp))
+    done = subprocess.run(cmd, capture_output=True, text=True, env=environment(root, tmp), cwd=tmp)
     result = json.loads(done.stdout)
     return result["seconds"], self_times(done.stderr), result["failed"]
 

@@ -19,6 +19,8 @@ _.propose  # inference/delayed_acceptance: emcee's Move API
 build_shear_building_model  # models/__init__ registry: "module:function" strings
 extended_model_from_result  # pipelines/model_source: public, named in results_io and README
 assemble_coo  # fe/sparse_modal: public assembly helper
+__getattr__  # inference/__init__, discovery/__init__: PEP 562, Python calls it for a lazy name
+__dir__  # inference/__init__, discovery/__init__: PEP 562, dir() of the package
 # the seed's tables (models/exhaust_paper.py holds them all; the README quotes them)
 TABLE3_OPTIMUM_PAPER
 EXPR_INITIAL_REPORTED

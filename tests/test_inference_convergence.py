@@ -62,3 +62,16 @@ def test_the_statistics_say_what_the_chains_are():
     constant = np.ones((40, 4, 1))
     assert convergence.bulk_ess(constant)[0] == 160
     assert arviz_stats.ess(np.moveaxis(constant, 1, 0), chain_axis=0, draw_axis=1)[0] == 160
+
+
+@pytest.mark.parametrize("kind", ["white", "sticky"])
+def test_average_ranks_are_scipys_rankdata_to_the_bit(kind):
+    """The z-scale's ranks (ties averaged; a NaN anywhere makes all NaN) are scipy.stats'
+    ``rankdata(method="average")`` without importing scipy.stats: the same numbers."""
+    from scipy.stats import rankdata
+
+    x = np.round(_chains(kind, seed=3)[:, :, 0], 2)  # rounded: many ties, sticky or not
+    x[5, 2], x[9, 4] = np.inf, -0.0
+    assert np.array_equal(convergence.average_ranks(x), rankdata(x).reshape(x.shape))
+    x[7, 1] = np.nan
+    assert np.array_equal(convergence.average_ranks(x), rankdata(x).reshape(x.shape), True)

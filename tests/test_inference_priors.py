@@ -11,6 +11,17 @@ X = np.linspace(0.55, 2.9, 9)
 BOUNDS = (0.5, 3.0)
 
 
+def _scipy(prior: Prior):
+    """The untruncated scipy.stats distribution a prior stands for."""
+    p, (low, high) = prior.params, prior.bounds
+    return {
+        "uniform": lambda: stats.uniform(loc=low, scale=high - low),
+        "normal": lambda: stats.norm(loc=p["mean"], scale=p["sd"]),
+        "lognormal": lambda: stats.lognorm(s=p["sigma"], scale=np.exp(p["mu"])),
+        "halfnormal": lambda: stats.halfnorm(scale=p["scale"]),
+    }[prior.kind]()
+
+
 def _truncated(dist, x, low, high):
     return dist.logpdf(x) - np.log(dist.cdf(high) - dist.cdf(low))
 
@@ -70,7 +81,31 @@ def test_closed_form_quantile_is_scipys_ppf_to_the_bit(spec, bounds):
     the same numbers, so the same chains, including the ends 0 and 1."""
     prior = prior_from_mapping(spec, bounds)
     u = np.concatenate([[0.0, 1e-300, 1e-12, 0.5, 1 - 1e-12, 1.0], np.linspace(0.001, 0.999, 999)])
-    assert np.array_equal(prior.quantile(u), prior._frozen().ppf(u))
+    assert np.array_equal(prior.quantile(u), _scipy(prior).ppf(u))
+
+
+@pytest.mark.parametrize(
+    "spec, bounds",
+    [
+        ({"kind": "uniform"}, BOUNDS),
+        ({"kind": "uniform"}, (-2.5e-3, 7.25e4)),
+        ({"kind": "normal", "mean": 1.0, "sd": 0.4}, BOUNDS),
+        ({"kind": "normal", "mean": -3.0, "sd": 1e-3}, (-np.inf, np.inf)),
+        ({"kind": "lognormal", "mu": 0.2, "sigma": 0.5}, BOUNDS),
+        ({"kind": "lognormal", "mu": -1.0, "sigma": 2.0}, (0.0, np.inf)),
+        ({"kind": "halfnormal", "scale": 0.1}, (0.0, np.inf)),
+        ({"kind": "halfnormal", "scale": 3.0}, (0.5, 4.0)),
+    ],
+)
+def test_closed_form_cdf_is_scipys_cdf_to_the_bit(spec, bounds):
+    """Prior.cdf (the truncation constant of every prior) is scipy.stats' cdf without
+    importing scipy.stats: the same numbers inside, at and outside the support and bounds."""
+    prior = prior_from_mapping(spec, bounds)
+    grid = np.linspace(-4.0, 6.0, 1001)
+    x = np.concatenate([[-np.inf, -1.0, 0.0, 1e-300, *bounds, np.inf, np.nan], grid, 10.0**grid])
+    dist = _scipy(prior)
+    assert np.array_equal([prior.cdf(v) for v in x], dist.cdf(x), equal_nan=True)
+    assert prior.cdf_range() == (dist.cdf(bounds[0]), dist.cdf(bounds[1]))
 
 
 def test_prior_with_no_support_inside_bounds_is_an_error():

@@ -28,13 +28,28 @@ Chains are rows: x (n_chains, n_draws) for one parameter; ``rank_rhat`` / ``bulk
 import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft
 from scipy.special import ndtri
-from scipy.stats import rankdata
+
+
+def average_ranks(x: np.ndarray) -> np.ndarray:
+    """Ranks 1..S of all S entries of x, ties given their mean rank, same shape as x; all NaN
+    if any entry is NaN.  ``scipy.stats.rankdata(x, method="average")`` (the same numbers: each
+    rank is an integer or half-integer, exact in float64) without importing scipy.stats."""
+    flat = np.ravel(x)
+    if np.isnan(flat).any():
+        return np.full(x.shape, np.nan)
+    order = np.argsort(flat, kind="stable")
+    ordered = flat[order]
+    starts = np.r_[True, ordered[1:] != ordered[:-1]]  # where a group of ties begins
+    first = np.flatnonzero(starts)  # each group's first place, 0-based
+    last = np.r_[first[1:], flat.size]  # its last place, 1-based
+    ranks = np.empty(flat.size)
+    ranks[order] = (0.5 * (first + 1 + last))[np.cumsum(starts) - 1]
+    return ranks.reshape(x.shape)
 
 
 def z_scale(x: np.ndarray) -> np.ndarray:
     """Rank-normalised draws, same shape as x: ranks over all of x, ties averaged."""
-    rank = rankdata(x, method="average").reshape(x.shape)
-    return ndtri((rank - 0.375) / (x.size + 0.25))
+    return ndtri((average_ranks(x) - 0.375) / (x.size + 0.25))
 
 
 def split_chains(x: np.ndarray) -> np.ndarray:

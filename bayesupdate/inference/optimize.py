@@ -49,7 +49,6 @@ from dataclasses import dataclass, field, replace
 from functools import partial
 
 import numpy as np
-from scipy import optimize, stats
 
 from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
@@ -155,6 +154,10 @@ def space_filling_starts(n_starts: int, n_dim: int, seed: int, design: str = "so
     """Seeded space-filling points in [0, 1]^d, (n_starts, n_dim) (scrambled Sobol or LHS)."""
     if n_starts < 1:
         raise BayesUpdateError(f"optimizer.starts: must be >= 1, got {n_starts}")
+    # imported here, not at the top: scipy.stats costs over a second, and a study file's
+    # [optimizer] table is checked (CalibrationSettings) by every command that reads one
+    from scipy import stats
+
     if design == "sobol":
         sampler = stats.qmc.Sobol(d=n_dim, scramble=True, seed=np.random.default_rng(seed))
         # Sobol balance needs a power of two; draw the next one and keep the first n_starts
@@ -478,6 +481,8 @@ def _start_points(
     if settings.include_start:
         u_starts = np.vstack([box.u_from_theta(problem.start), u_starts])
     if settings.method == "global":
+        from scipy import optimize  # here, not at the top: see space_filling_starts
+
         de = optimize.differential_evolution(
             lambda u: float(np.sum(residuals(u) ** 2)),
             bounds=[(0.0, 1.0)] * d,
@@ -529,6 +534,8 @@ def _fit_start(job: _Fits, item: tuple[np.ndarray, bool]) -> tuple:
     residuals = _residual_function(job.problem, count, job.n_res, batch)
     d = u0.size
     if job.least_squares:
+        from scipy import optimize  # here, not at the top: see space_filling_starts
+
         fit = optimize.least_squares(
             residuals,
             np.clip(u0, 0.0, 1.0),

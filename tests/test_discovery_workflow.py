@@ -327,3 +327,47 @@ def test_prior_odds_spread_over_the_library_set_the_bar(named_mass):
         np.exp(log_probability[1])
     )
     assert out["candidates"][0]["posterior_probability"] > 0.9
+
+
+def test_a_fit_solves_each_point_once():
+    """``fit_model`` asks for points again: the chosen start (picked by its chi^2, then the
+    solver's first call) and the end point's forward-difference points (TRF's last Jacobian,
+    then the evidence's own, with the same steps).  Each distinct point is solved once, and
+    ``evaluations`` counts solves: the fit's points, plus its own look at the optimum."""
+    from bayesupdate.discovery.evidence import FitSpace, fit_model
+    from bayesupdate.inference.likelihood_blocks import NoiseModel
+    from bayesupdate.inference.parameter_space import ParameterSpec
+    from bayesupdate.inference.priors import prior_from_mapping
+    from bayesupdate.inference.problem import Evaluation
+
+    truth = np.array([1.2, 0.4])
+    slopes = np.array([[0.10, 0.02], [0.05, 0.08], [0.02, 0.10], [0.07, 0.01]])
+
+    def frequencies(theta):  # a smooth, non-linear toy model [Hz]
+        return np.array([10.0, 20.0, 30.0, 40.0]) * np.sqrt(1 + slopes @ theta**2)
+
+    solved = []
+
+    class Problem:
+        data = ModalData(frequencies(truth))
+
+        def evaluate(self, theta):
+            solved.append(tuple(theta))
+            f = frequencies(theta)
+            return Evaluation(True, f, f)
+
+        def expr(self, f):
+            return float(np.sum(((f - self.data.frequencies_hz) / self.data.frequencies_hz) ** 2))
+
+    axes = tuple(
+        ParameterSpec(n, (0.0, 2.0), prior_from_mapping(None, (0.0, 2.0), n), axis="linear")
+        for n in ("a", "b")
+    )
+    noise = NoiseModel(np.full(4, 1e-3), np.ones(4), False, "fixed", 1e-3)
+    space = FitSpace(Problem(), axes, noise)
+    starts = [np.array([0.5, 0.5]), np.array([1.0, 0.6]), np.array([1.9, 1.9])]
+    fit = fit_model(space, starts, max_nfev=40, best_start_only=True)
+    np.testing.assert_allclose(fit.theta, truth, rtol=1e-4)
+    assert fit.evaluations == len(solved)
+    fitted = solved[:-1]  # the last: fit_model's look at its optimum (theta from z)
+    assert len(fitted) == len(set(fitted)) > len(starts) + 2 * len(axes)

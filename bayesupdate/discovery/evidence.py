@@ -139,12 +139,23 @@ class FitSpace:
         """r(u) (size,): ``residual_vector`` at theta(u) for a least-squares fit in the unit box,
         with the failure convention of ``parameter_space.unit_box_residuals``
         (``screened_residuals``).  The function is built here, not handed down to
-        ``parameter_space``, so the solver's calls stay in discovery's code."""
+        ``parameter_space``, so the solver's calls stay in discovery's code.
+
+        Each distinct u is solved once per function (``count`` counts solves): a fit asks
+        for the same points again, the chosen start (``_pick_starts``, then the solver's
+        first call) and the forward-difference points at the end point (TRF's last
+        Jacobian, then ``_forward_jacobian``'s, the same steps: 1e-4, flipped at the upper
+        bound), so a solve there would give the same bits again."""
         failed = failed_residuals(self.residual_units)
         theta_from_u = self.parameter_space.theta_from_u
+        solved: dict[bytes, np.ndarray] = {}
 
         def residuals(u: np.ndarray) -> np.ndarray:
-            return screened_residuals(self._residuals_at(theta_from_u(u)), failed, count)
+            key = np.asarray(u, dtype=float).tobytes()
+            if key not in solved:
+                r = self._residuals_at(theta_from_u(u))
+                solved[key] = screened_residuals(r, failed, count)
+            return solved[key].copy()
 
         return residuals
 

@@ -57,7 +57,8 @@ def add_arguments(parser) -> None:
     parser.add_argument(
         "--no-polish",
         action="store_true",
-        help="skip the Nelder-Mead polish of each start (faster; ends may stop on a kink)",
+        help="skip the Nelder-Mead polish of each start (faster; ends may stop on a kink); on a "
+        "reduced basis the ends near the best are still polished on the full model",
     )
 
 

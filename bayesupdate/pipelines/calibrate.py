@@ -37,6 +37,7 @@ from bayesupdate.inference.optimize import (
 )
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.pipelines import calibration_memo as memo
+from bayesupdate.pipelines.reference_memo import large_fe_model
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import sampling_problem
 
@@ -69,15 +70,6 @@ def run_calibration(prepared: PreparedStudy, executor=None) -> CalibrationResult
     run = calibrate_on_exact_basis(problem, search, rom, settings, executor)
     memo.keep(store, key, run.result, run.error_at_optimum, run.solve_modes)
     return run.result
-
-
-def large_fe_model(model) -> bool:
-    """Whether ``model`` is an ``FEModel`` of ``fe.reduced.settings.LARGE_MODEL_DOFS`` DOFs or
-    more (its calibration is kept on disk: ``pipelines.calibration_memo``)."""
-    from bayesupdate.fe.model import FEModel
-    from bayesupdate.fe.reduced.settings import LARGE_MODEL_DOFS
-
-    return isinstance(model, FEModel) and model.structure.n_dof >= LARGE_MODEL_DOFS
 
 
 def large_model(rom) -> bool:

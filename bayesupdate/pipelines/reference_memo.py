@@ -32,7 +32,7 @@ def remembered_solve(model, params: Mapping[str, float], n_modes: int) -> Predic
     parameter) with ``n_modes`` modes before, else solved and kept there.  Other models, or the
     store off: solved.  An error of the solve (``BayesUpdateError``) propagates as
     ``model.predict``'s does, and nothing is kept."""
-    store = ArrayStore.from_environment() if _large_fe_model(model) else ArrayStore(None)
+    store = ArrayStore.from_environment() if large_fe_model(model) else ArrayStore(None)
     if not store.enabled:
         return model.predict(params, n_modes=n_modes)
     key = solve_key(model, params, n_modes)
@@ -44,7 +44,10 @@ def remembered_solve(model, params: Mapping[str, float], n_modes: int) -> Predic
     return prediction
 
 
-def _large_fe_model(model) -> bool:
+def large_fe_model(model) -> bool:
+    """Whether ``model`` is an ``FEModel`` of ``fe.reduced.settings.LARGE_MODEL_DOFS`` DOFs or
+    more (its reference solve here, its calibration in ``pipelines.calibration_memo``, are
+    kept on disk)."""
     from bayesupdate.fe.model import FEModel
     from bayesupdate.fe.reduced.settings import LARGE_MODEL_DOFS
 

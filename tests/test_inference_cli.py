@@ -259,6 +259,31 @@ def test_plots_from_a_result_file(reference, tmp_path):
     assert all(p.stat().st_size > 5000 for p in paths)
 
 
+def test_the_pair_plot_draws_the_lower_triangle_with_shared_axes():
+    from bayesupdate.inference.plots import plot_pair
+
+    d = 4
+    chain = np.random.default_rng(3).normal(size=(60, 8, d)) * [1e-3, 1.0, 1e4, 0.1]
+    result = {"posterior": {"attrs": {"names": [f"p{k}" for k in range(d)], "burn": 10},
+                            "chain": chain}}  # fmt: skip
+    fig = plot_pair(result)
+    # d (d + 1) / 2 panels: no hidden axes above the diagonal
+    assert len(fig.axes) == d * (d + 1) // 2
+    grid = {(ax.get_subplotspec().rowspan.start, ax.get_subplotspec().colspan.start): ax
+            for ax in fig.axes}  # fmt: skip
+    assert set(grid) == {(i, j) for i in range(d) for j in range(i + 1)}
+    fig.canvas.draw()  # tick labels get their text when drawn
+    for j in range(d):  # a column shares x; only the bottom row labels its ticks
+        for i in range(j, d):
+            if i < d - 1:
+                assert grid[i, j].get_shared_x_axes().joined(grid[i, j], grid[d - 1, j])
+            labelled = any(t.get_visible() and t.get_text() for t in grid[i, j].get_xticklabels())
+            assert labelled == (i == d - 1)
+    for i in range(2, d):  # a row's scatters share y
+        assert grid[i, 1].get_shared_y_axes().joined(grid[i, 0], grid[i, i - 1])
+        assert not grid[i, i].get_shared_y_axes().joined(grid[i, 0], grid[i, i])
+
+
 def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, reference, tmp_path):
     import os
     import signal

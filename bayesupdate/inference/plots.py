@@ -48,27 +48,40 @@ def plot_trace(result: dict):
 
 
 def plot_pair(result: dict, max_points: int = 4000, seed: int = 0):
-    """Corner plot: histograms on the diagonal, scatter of post-burn-in draws below."""
+    """Corner plot: histograms on the diagonal, scatter of post-burn-in draws below; only the
+    lower triangle has axes, each column shares its x-axis and each row its y-axis, so tick
+    labels are drawn on the outer edge only (as corner plots are read)."""
+    from matplotlib.ticker import MaxNLocator
+
     names, chain, burn = _posterior(result)
     flat = chain[burn:].reshape(-1, chain.shape[-1])
     rng = np.random.default_rng(seed)
     pick = flat[rng.choice(flat.shape[0], size=min(max_points, flat.shape[0]), replace=False)]
     d = len(names)
-    fig, axes = plotting.subplots(d, d, figsize=(2.2 * d, 2.2 * d), squeeze=False)
+    fig = plotting.figure(figsize=(2.2 * d, 2.2 * d))
+    grid = fig.add_gridspec(d, d, left=0.09, right=0.98, bottom=0.08, top=0.98, hspace=0.1,
+                            wspace=0.1)  # fmt: skip
+    columns: dict = {}
     for i in range(d):
-        for j in range(d):
-            ax = axes[i, j]
-            if j > i:
-                ax.axis("off")
-            elif i == j:
+        row = None  # the row's first scatter: the row's y-axis
+        for j in range(i + 1):
+            ax = fig.add_subplot(grid[i, j], sharex=columns.get(j), sharey=row if j < i else None)
+            columns.setdefault(j, ax)
+            if i == j:
                 ax.hist(flat[:, i], bins=50, color="C0")
+                ax.tick_params(left=False, labelleft=False)  # counts: only the shape matters
             else:
                 ax.plot(pick[:, j], pick[:, i], ".", ms=1, alpha=0.3)
+                row = row or ax
+                ax.tick_params(labelleft=j == 0)
+                ax.yaxis.set_major_locator(MaxNLocator(4))
+                if j == 0:
+                    ax.set_ylabel(names[i])
+            ax.xaxis.set_major_locator(MaxNLocator(4))
+            ax.tick_params(labelbottom=i == d - 1)
             if i == d - 1:
                 ax.set_xlabel(names[j])
-            if j == 0 and i > 0:
-                ax.set_ylabel(names[i])
-    fig.tight_layout()
+                ax.tick_params(axis="x", labelrotation=30)
     return fig
 
 

@@ -98,3 +98,20 @@ def test_tmcmc_stays_the_function_when_its_module_is_imported_first():
         "assert callable(tmcmc) and tmcmc.__name__ == 'tmcmc', tmcmc"
     )
     assert "bayesupdate.inference.tmcmc" in loaded_after(code)
+
+
+@pytest.mark.parametrize("command", ["calibrate", "sample", "discover", "correlate", "sensitivity"])
+def test_an_output_in_the_way_is_refused_before_the_commands_heavy_imports(command, tmp_path):
+    """``--out`` naming an existing file (no ``--force``) is refused, exit 2, before the
+    command loads the pipelines, the model or scipy (seconds: a typo costs no wait)."""
+    out = tmp_path / "there.h5"
+    out.write_bytes(b"")
+    code = (
+        "import contextlib, io\nfrom bayesupdate.cli import main\nerr = io.StringIO()\n"
+        "with contextlib.redirect_stderr(err):\n"
+        f"    rc = main([{command!r}, '--model', 'exhaust', '--data', 'paper:ema', '--out', "
+        f"{str(out)!r}])\n"
+        "assert rc == 2 and 'already exists; use --force' in err.getvalue(), (rc, err.getvalue())"
+    )
+    loaded = loaded_after(code)
+    assert [n for n in ("bayesupdate.pipelines.study", "scipy.linalg", *HEAVY) if n in loaded] == []

@@ -90,6 +90,12 @@ def _g(value) -> str:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+
+    # before the imports below (seconds): a file in the way is said at once
+    if args.out:
+        check_output_path(args.out, args.force)
+    if args.write_bdf:
+        check_output_path(args.write_bdf, args.force)
     from bayesupdate.compute import progress
     from bayesupdate.compute.settings import open_executor
     from bayesupdate.inference.checks import calibration_warnings
@@ -98,10 +104,6 @@ def run(args) -> int:
     from bayesupdate.pipelines.study import prepare
 
     study = study_from_args(args)
-    if args.out:
-        check_output_path(args.out, args.force)
-    if args.write_bdf:
-        check_output_path(args.write_bdf, args.force)
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
     report_refused(prepared.problem)

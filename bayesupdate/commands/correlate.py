@@ -152,6 +152,9 @@ def test_mode_rows(result) -> list[dict]:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+
+    if args.out:  # before the imports below (seconds): a file in the way is said at once
+        check_output_path(args.out, args.force)
     from bayesupdate.pipelines.correlate import (
         correlate,
         study_correlation_model,
@@ -160,8 +163,6 @@ def run(args) -> int:
     from bayesupdate.report.correlate_report import write_correlate_report
     from bayesupdate.report.identify_report import check_report_folder
 
-    if args.out:
-        check_output_path(args.out, args.force)
     study, data, numbers = correlate_study(args)
     settings = correlate_settings(args, study)
     labels = data.dof_labels if data.shapes is not None else ()

@@ -86,14 +86,15 @@ def _settings(study, args):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+
+    if args.out:  # before the imports below (seconds): a file in the way is said at once
+        check_output_path(args.out, args.force)
     from bayesupdate.compute.progress import timings as phase_timings
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study
     from bayesupdate.pipelines.study import study_effects
 
     study = study_file(args)  # --no-mass leaves the measured mass properties out, as calibrate
-    if args.out:
-        check_output_path(args.out, args.force)
     if args.posterior_steps < 0:
         raise BayesUpdateError(f"--posterior-steps must be >= 0, got {args.posterior_steps}")
     specs = study_effects(study, tuple(args.effect))

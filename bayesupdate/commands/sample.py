@@ -92,15 +92,16 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
-    from bayesupdate.pipelines.study import prepare
 
-    study = study_from_args(args)
     if args.resume and not args.out:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
-    if args.out:
+    if args.out:  # before the imports below (seconds): a file in the way is said at once
         check_output_path(args.out, force=args.force or args.resume)
     if args.write_bdf:
         check_output_path(args.write_bdf, force=args.force)
+    from bayesupdate.pipelines.study import prepare
+
+    study = study_from_args(args)
     compute = compute_from_args(args, study)
     prepared = prepare(study, effects=tuple(args.effect))
     report_refused(prepared.problem)

@@ -105,6 +105,9 @@ def candidate_model(args, study, data):
 
 def run(args) -> int:
     from bayesupdate.atomic import check_output_path
+
+    if args.out:  # before the imports below (seconds): a file in the way is said at once
+        check_output_path(args.out, args.force)
     from bayesupdate.pipelines.correlate import correlate
     from bayesupdate.pipelines.sensitivity import (
         SensitivityInput,
@@ -116,8 +119,6 @@ def run(args) -> int:
     from bayesupdate.report.identify_report import check_report_folder
 
     settings = SensitivitySettings(args.method, args.step, args.rank_tol, args.group_cos)
-    if args.out:
-        check_output_path(args.out, args.force)
     study, data, numbers = correlate_study(args)
     pairing = correlate_settings(args, study)  # the pairs correlate and calibrate keep
     model, base = candidate_model(args, study, data)

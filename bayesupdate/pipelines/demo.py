@@ -237,12 +237,18 @@ def demo_tasks(settings: DemoSettings) -> tuple[str, ...]:
     draws the figures (27 s) as the parts arrive: the FE part first so that its figures are
     drawn early, the beam optimum last as it has no figures (the last task's are drawn after
     it, on one core).  With an empty cache the shell's basis adds 23 s to its task: 77 against
-    76.  Full: {FE part 1.3, shell seed case 91, virtual discovery 69, beam optimum 75} against
-    {seed discovery 132, virtual calibration 99}: 236 against 231.  --quick keeps discovery
-    where it has something to find (the virtual test's hidden effect)."""
+    76.  Full (``bayesupdate demo``'s own two workers, wall seconds of each task on a quiet
+    machine, 2026-11-29): {FE part 1, shell seed case 78-80 (96-97 building its basis), seed
+    discovery 41-46, virtual discovery 33-39} against {virtual calibration 77-88, beam optimum
+    57-69}; the virtual discovery, whose figures are the fewest, ends last.  The whole command:
+    164.7, 167.8, 173.1 s with cached bases (the order before, FE part, seed discovery, shell,
+    virtual discovery, virtual calibration, beam: 171.6, 168.8), 176.1 and 176.2 s from an empty
+    cache folder (before: 183.5, 182.8), its workers ending 10-13 s apart (before: 12-17).
+    --quick keeps discovery where it has something to find (the virtual test's hidden
+    effect)."""
     if settings.quick:
         return ("fe", "shell", "virtual_calibration", "virtual_discovery", "beam")
-    return ("fe", "seed_discovery", "shell", "virtual_discovery", "virtual_calibration", "beam")
+    return ("fe", "virtual_calibration", "shell", "seed_discovery", "beam", "virtual_discovery")
 
 
 def demo_steps(settings: DemoSettings) -> tuple[str, ...]:

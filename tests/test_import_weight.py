@@ -42,6 +42,10 @@ def loaded_after(code: str) -> set[str]:
         "prior_from_mapping({'kind': 'lognormal', 'mu': 0.0, 'sigma': 1.0}, (0.5, 2.0))\n"
         "CalibrationSettings(starts=4)",
         "from bayesupdate.inference import convergence",
+        # what calibrate loads: the study's move scheme is checked and an optimum written
+        # without the sampler (``inference.move_kinds``; ``results`` types it lazily)
+        "import bayesupdate.pipelines.calibrate, bayesupdate.inference.results\n"
+        "from bayesupdate.commands import calibrate",
     ],
 )
 def test_light_imports_load_no_heavy_package(code):

@@ -47,6 +47,7 @@ import platform
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import h5py
 import numpy as np
@@ -57,7 +58,9 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.mass_properties import mass_property_report
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.problem import CalibrationProblem
-from bayesupdate.inference.sampling import PosteriorResult, SamplerState
+
+if TYPE_CHECKING:  # the sampler and emcee load where a posterior is read, not for an optimum
+    from bayesupdate.inference.sampling import PosteriorResult, SamplerState
 
 SCHEMA = "bayesupdate-result/1"
 
@@ -85,7 +88,7 @@ class ResultWriter:
                 timings=progress.timings(), **parts,
             )  # fmt: skip
 
-    def checkpoint(self, state: SamplerState) -> None:
+    def checkpoint(self, state: "SamplerState") -> None:
         if not state.finished:
             self.write(state=state)
 
@@ -110,7 +113,7 @@ def _json_default(obj):
     return str(obj)
 
 
-def _write_state(group: h5py.Group, state: SamplerState) -> None:
+def _write_state(group: h5py.Group, state: "SamplerState") -> None:
     kind, keys, pos, has_gauss, cached = state.random_state
     group["coords"] = state.coords
     group["last_log_prob"] = state.last_log_prob
@@ -145,8 +148,8 @@ def write_result(
     problem: CalibrationProblem,
     calibration: CalibrationResult,
     config: dict | None = None,
-    posterior: PosteriorResult | None = None,
-    state: SamplerState | None = None,
+    posterior: "PosteriorResult | None" = None,
+    state: "SamplerState | None" = None,
     diagnostics: dict | None = None,
     predictions: dict | None = None,
     command: str = "",
@@ -265,7 +268,7 @@ def _write_optimum(opt: h5py.Group, calibration: CalibrationResult) -> None:
 
 
 def _write_posterior(
-    post: h5py.Group, posterior: PosteriorResult | None, state: SamplerState | None
+    post: h5py.Group, posterior: "PosteriorResult | None", state: "SamplerState | None"
 ) -> None:
     """The chain, the sampler state to resume from, and (finished runs) its summary attributes."""
     source = posterior.state if posterior is not None else state
@@ -307,8 +310,10 @@ def read_config(path: str | Path) -> tuple[dict, str]:
         return json.loads(h5.attrs["config_json"]), str(h5.attrs["status"])
 
 
-def read_sampler_state(path: str | Path) -> SamplerState:
+def read_sampler_state(path: str | Path) -> "SamplerState":
     """The sampler state of a (partial) posterior result, for ``sample_posterior(resume=...)``."""
+    from bayesupdate.inference.sampling import SamplerState
+
     with _open(path) as h5:
         if "posterior" not in h5:
             raise BayesUpdateError(

@@ -62,14 +62,13 @@ from bayesupdate.inference import convergence, walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.evaluators import SplitDensity, split_densities
 from bayesupdate.inference.likelihood import LogPosterior
+from bayesupdate.inference.move_kinds import check_moves
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
 from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
 from bayesupdate.inference.optimize import CalibrationResult
 from bayesupdate.inference.parameter_space import ParameterSpace, ParameterSpec
 from bayesupdate.inference.walker_start import axis_sd, uncounted
 
-#: the move schemes ``SamplerSettings.moves`` names (module docstring)
-MOVE_KINDS = ("mixture", "de")
 #: wall-time parts of a run in ``diagnostics["timings"]`` [s]: the adaptation stages (their
 #: evaluations count in the next two as well), exact and screening log-posterior calls, and
 #: the convergence checks
@@ -88,15 +87,6 @@ CHECK_MIN_STEPS = 20
 #: of 702 (tau 6.4), and the user's command, seed 1, once ran its 5,000-step budget without
 #: converging (R-hat 1.013; 168 s CPU against 52 s) (docs/guide/calibrate-sample.md)
 ADAPT_STEPS = 250
-
-
-def check_moves(kind: str) -> str:
-    """``kind`` if it names a move scheme, else BayesUpdateError (one line)."""
-    if kind not in MOVE_KINDS:
-        raise BayesUpdateError(
-            f"sampler.moves: unknown {kind!r}; use one of {', '.join(MOVE_KINDS)}"
-        )
-    return kind
 
 
 def default_moves() -> list:

@@ -22,9 +22,9 @@ from bayesupdate.inference.mass_properties import (
     model_units,
     parse_tables,
 )
+from bayesupdate.inference.move_kinds import check_moves
 from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, build_problem
-from bayesupdate.inference.sampling import check_moves
 from bayesupdate.modal_data import ModalData
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
 from bayesupdate.pipelines.reference_memo import remembered_solve

@@ -105,6 +105,7 @@ from bayesupdate.correlation import DEFAULT_MAC_THRESHOLD
 from bayesupdate.discovery.effects import parse_effect_spec
 from bayesupdate.discovery.settings import DiscoverySettings, flat_names
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.inference.move_kinds import check_adapt_steps
 from bayesupdate.inference.pairing import DEFAULT_FREQUENCY_WINDOW, PairingRules
 
 
@@ -323,8 +324,8 @@ class SamplerConfig:
     adapt_steps: int | None = None
 
     def __post_init__(self):
-        if self.adapt_steps is not None and self.adapt_steps < 20:
-            raise BayesUpdateError(f"sampler.adapt_steps: {self.adapt_steps}; use at least 20")
+        if self.adapt_steps is not None:
+            check_adapt_steps(self.adapt_steps)
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ from bayesupdate.inference import convergence, walker_start
 from bayesupdate.inference.delayed_acceptance import ScreenedLogDensity, delayed_acceptance_moves
 from bayesupdate.inference.evaluators import SplitDensity, split_densities
 from bayesupdate.inference.likelihood import LogPosterior
-from bayesupdate.inference.move_kinds import check_moves
+from bayesupdate.inference.move_kinds import check_adapt_steps, check_moves
 from bayesupdate.inference.moves import DefensiveProposal, mixture_moves, staged_proposal
 from bayesupdate.inference.moves.staged import REPAIR_ROUNDS
 from bayesupdate.inference.optimize import CalibrationResult
@@ -312,8 +312,7 @@ class SamplerSettings:
 
     def __post_init__(self) -> None:
         check_moves(self.moves)
-        if self.adapt_steps < 20:
-            raise BayesUpdateError(f"sampler.adapt_steps: {self.adapt_steps}; use at least 20")
+        check_adapt_steps(self.adapt_steps)
         if self.transform not in ("none", "logit"):
             raise BayesUpdateError(f"sampler.transform: {self.transform!r}; use 'none' or 'logit'")
         if self.walkers < 4:

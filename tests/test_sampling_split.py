@@ -1,8 +1,8 @@
 """The walkers' batches split with a local worker process (``inference.evaluators.SplitDensity``,
 ``sample_posterior(..., executor=...)``): the chain, its log-densities and the evaluation counts
 are the serial run's bit for bit, on a screened run with the default mixture moves and on the
-exhaust's reduced basis (whose batched matrix products round a row by its place in a block of
-the BLAS kernel: the cut is at a multiple of ``SPLIT_GRAIN`` rows)."""
+exhaust's reduced basis (whose products over the batch give each point the same bits in any
+batch, ``compute.batch_rows``, so a batch is cut anywhere)."""
 
 import os
 
@@ -27,7 +27,7 @@ from bayesupdate.inference import (  # noqa: E402
     sample_posterior,
 )
 from bayesupdate.inference.evaluators import (  # noqa: E402
-    SPLIT_GRAIN,
+    SPLIT_MIN_POINTS,
     SplitDensity,
     split_densities,
     split_pays,
@@ -63,11 +63,11 @@ def shear():
 
 
 @pytest.mark.parametrize(
-    "n, cut", [(1, 0), (15, 0), (16, 8), (17, 8), (23, 8), (24, 16), (32, 16), (500, 248)]
+    "n, cut", [(1, 0), (7, 0), (8, 4), (9, 5), (15, 8), (16, 8), (17, 9), (32, 16), (500, 250)]
 )
-def test_the_cut_is_the_multiple_of_the_grain_nearest_half_the_batch(n, cut):
+def test_the_cut_is_half_the_batch_the_larger_half_here(n, cut):
+    assert SPLIT_MIN_POINTS == 8
     assert split_point(n) == cut
-    assert cut % SPLIT_GRAIN == 0
 
 
 def _run(problem, optimum, executor):
@@ -151,13 +151,33 @@ def exhaust_rom_posterior():
     return LogPosterior(problem, LikelihoodSpec(sigma=0.05))
 
 
-@pytest.mark.parametrize("n", [16, 21, 29, 32])
+def test_every_point_of_the_reduced_posterior_is_the_same_bits_in_any_batch(
+    exhaust_rom_posterior,
+):
+    """A BLAS product over the batch rounds a row by its place in the kernel's block (OpenBLAS's
+    SkylakeX kernels: blocks of 12 rows, so a batch of 32 cut at 16 differed in rows 12-15 and
+    24-27, by up to 2e-10 in the log-density, and every split of the exhaust's posterior was
+    stopped); with the products in calls of a fixed size (``compute.batch_rows``) a batch cut
+    anywhere, or point by point, gives the whole batch's bits."""
+    log_post = exhaust_rom_posterior
+    problem = log_post.problem
+    rng = np.random.default_rng(11)
+    theta = problem.lower + rng.random((32, 5)) * (problem.upper - problem.lower)
+    whole = log_post(theta)
+    assert np.all(np.isfinite(whole)) and np.ptp(whole) > 1.0
+    for cut in (1, 5, 12, 16, 20, 27, 31):
+        np.testing.assert_array_equal(
+            np.concatenate([log_post(theta[:cut]), log_post(theta[cut:])]), whole
+        )
+    one_by_one = np.concatenate([log_post(theta[i : i + 1]) for i in range(0, 32, 3)])
+    np.testing.assert_array_equal(one_by_one, whole[::3])
+
+
+@pytest.mark.parametrize("n", [8, 13, 16, 21, 29, 32])
 def test_the_reduced_basis_split_is_the_whole_batch_bit_for_bit(
     exhaust_rom_posterior, one_worker, n
 ):
-    """The batched reduced solve's products round a row by its place in a BLAS block (here a
-    batch of 17 gave other last bits for its 17th row than a batch of 64): cut at a multiple of
-    8 rows, each part's rows keep their places."""
+    """A batch cut in halves (odd batches too), one on the worker: the whole batch's values."""
     log_post = exhaust_rom_posterior
     assert log_post.mode == "shape-batch"
     problem = log_post.problem
@@ -247,3 +267,21 @@ def test_a_partner_killed_while_starting_ends_the_splitting_with_the_same_values
         partner._process.join()
         np.testing.assert_array_equal(split(theta), expected)
     assert split.splits == 0 and exact.evaluations == 16
+
+
+def test_a_row_product_gives_each_row_the_same_bits_in_any_batch():
+    """``compute.batch_rows.row_product``: C @ T to round-off, and each row's bits whatever the
+    rows around it (batches cut anywhere, single rows, more rows than one call)."""
+    from bayesupdate.compute.batch_rows import PRODUCT_ROWS, row_product
+
+    rng = np.random.default_rng(3)
+    C, T = rng.standard_normal((PRODUCT_ROWS + 13, 24)), rng.standard_normal((24, 1764))
+    whole = row_product(C, T)
+    np.testing.assert_allclose(whole, C @ T, rtol=0, atol=1e-12 * np.abs(C @ T).max())
+    for cut in (1, 7, 12, 16, 29, PRODUCT_ROWS, PRODUCT_ROWS + 5):
+        np.testing.assert_array_equal(
+            np.vstack([row_product(C[:cut], T), row_product(C[cut:], T)]), whole
+        )
+    np.testing.assert_array_equal(row_product(C[9:10], T)[0], whole[9])
+    v = rng.standard_normal(24)
+    np.testing.assert_array_equal(row_product(C[5:8], v), row_product(C, v)[5:8])

@@ -17,12 +17,13 @@ a step on the executor, the problem shared once for the whole run, the evaluatio
 walker order, so the chain is the serial chain bit for bit.
 
 ``split_densities((exact, screen), executor)`` is what a sampler on a batched model uses with a
-local worker (``sampling.sample_posterior(..., executor=...)``): each batch of 16 walkers or
-more is cut in two at a multiple of 8 rows (``SPLIT_GRAIN``: where the batched BLAS products
-round every row as in the whole batch), the first part evaluated in this process while a worker
-evaluates the rest, the values back in row order and the worker's evaluations counted here, so
-the chain is the serial chain bit for bit.  ``split_pays``: whether a density's batches cost
-enough to repay the hand-off.
+local worker (``sampling.sample_posterior(..., executor=...)``): each batch of
+``SPLIT_MIN_POINTS`` walkers or more is cut in two halves, the first evaluated in this process
+while a worker evaluates the rest, the values back in row order and the worker's evaluations
+counted here, so the chain is the serial chain bit for bit: the reduced solve's products over
+the batch give each point the same bits in any batch (``compute.batch_rows``), and the first
+split batch of a run is checked against the whole batch.  ``split_pays``: whether a density's
+batches cost enough to repay the hand-off.
 """
 
 import os
@@ -138,20 +139,21 @@ class PointEvaluator:
 
 #: the counters of a ``LogPosterior`` that a worker's share of a batch adds to (``_remote_part``)
 SPLIT_COUNTERS = ("evaluations", "failed", "pair_checked", "pair_differs")
-#: rows per block of a split: a batched reduced solve's matrix products (BLAS gemm over the
-#: batch) round a row the same in any batch only where it falls in a full block of the
-#: kernel's unrolling (4 or 8 rows in OpenBLAS; the last n mod 8 rows go through edge
-#: kernels), so the batch is cut only at a multiple of 8 rows: each part's rows then fall in
-#: the same blocks as in the whole batch, and the values are those of the unsplit call, bit
-#: for bit (``split_check`` verifies it once per run for the BLAS at hand)
-SPLIT_GRAIN = 8
-#: the fewest points worth splitting: below two blocks the worker's hand-off (~0.3 ms: pickles
-#: and pipes) is not repaid
-SPLIT_MIN_POINTS = 2 * SPLIT_GRAIN
+#: the fewest points a batch is split at.  Until 2026-11-29 the cut had to fall at a multiple
+#: of 8 rows (where the earlier machine's OpenBLAS rounded a row as in the whole batch), so only
+#: batches of 16 or more were split; the SkylakeX kernels round rows in blocks of 12, which
+#: stopped every split of ``sample --model exhaust --data paper:ema`` at its first check.  With
+#: the products made independent of the batch (``compute.batch_rows``) any cut gives the whole
+#: batch's bits, and the delayed-acceptance batches that survive the screen (6-16 points of
+#: the exhaust's exact posterior, 0.46 ms each) are split too: that command took 14.7-15.0 s
+#: against 15.3-15.5 s with the least at 16 (3 runs each, alternated, the same chain)
+SPLIT_MIN_POINTS = 8
+#: points of the batch ``split_pays`` times
+SPLIT_PROBE_POINTS = 16
 
 
-#: the CPU a batch of ``SPLIT_MIN_POINTS`` must cost before a sampler splits its batches with a
-#: worker of its own (``split_pays``): the hand-off costs this process about 1-2 ms a batch on
+#: the CPU a batch of ``SPLIT_PROBE_POINTS`` must cost before a sampler splits its batches with
+#: a worker of its own (``split_pays``): the hand-off costs this process about 1-2 ms a batch on
 #: the loaded 2-core machine (the exhaust's screened batch of 16 on a partner process: 4.7 ms
 #: split against 7.0 ms whole, ``benchmarks/posterior_speed.py --split-batches``), so a batch
 #: must cost several times that for its other half to repay it
@@ -159,11 +161,11 @@ SPLIT_PAYS_S = 5e-3
 
 
 def split_pays(density, theta: np.ndarray) -> bool:
-    """Whether a batch of ``SPLIT_MIN_POINTS`` copies of the point theta (d,) costs ``density``
+    """Whether a batch of ``SPLIT_PROBE_POINTS`` copies of the point theta (d,) costs ``density``
     at least ``SPLIT_PAYS_S`` of this process's CPU (the density's counters are left as they
     were).  The exhaust's reduced posterior: about 15 ms; an analytic test model: microseconds.
     """
-    batch = np.tile(np.asarray(theta, dtype=float), (SPLIT_MIN_POINTS, 1))
+    batch = np.tile(np.asarray(theta, dtype=float), (SPLIT_PROBE_POINTS, 1))
     c0 = time.process_time()
     _uncounted(density, batch)
     return time.process_time() - c0 >= SPLIT_PAYS_S
@@ -184,12 +186,10 @@ def _uncounted(density, theta: np.ndarray) -> np.ndarray:
 
 
 def split_point(n: int) -> int:
-    """Where a batch of n points is cut (its first part stays in this process): the multiple
-    of ``SPLIT_GRAIN`` nearest n / 2 (the larger when tied: this process also hands the other
-    part over and back); 0 (not split) below ``SPLIT_MIN_POINTS``."""
-    if n < SPLIT_MIN_POINTS:
-        return 0
-    return SPLIT_GRAIN * int(np.floor(n / (2 * SPLIT_GRAIN) + 0.5))
+    """Where a batch of n points is cut (its first part stays in this process): half, the
+    larger half here when n is odd (this process also hands the other part over and back);
+    0 (not split) below ``SPLIT_MIN_POINTS``."""
+    return 0 if n < SPLIT_MIN_POINTS else (n + 1) // 2
 
 
 def _loaded(densities, _item) -> int:
@@ -277,8 +277,9 @@ class SplitDensity:
 
     def _check(self, theta: np.ndarray, values: np.ndarray) -> np.ndarray:
         """The first split batch evaluated whole here too, uncounted: the same bits, or this
-        BLAS rounds a row by its place in the batch (``SPLIT_GRAIN``) and splitting stops
-        (``stopped`` says why); the whole batch's values either way."""
+        density rounds a row by its place in the batch (a user's model with its own products
+        over the batch; ``compute.batch_rows``) and splitting stops (``stopped`` says why);
+        the whole batch's values either way."""
         whole = _uncounted(self.density, theta)
         self.checked = True
         if not np.array_equal(whole, values, equal_nan=True):

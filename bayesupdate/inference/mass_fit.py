@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.compute.batch_rows import row_product
 from bayesupdate.errors import BayesUpdateError
 
 #: total degree of the fitted monomials (a shell's rho theta^3 is degree 4)
@@ -78,8 +79,9 @@ class MassPolynomial:
         return np.prod(powers[:, np.arange(u.shape[1]), self.exponents], axis=2)
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
-        """(n,) total masses [kg] at theta (n, d)."""
-        return self.design(theta) @ self.coef
+        """(n,) total masses [kg] at theta (n, d), each point's the same bits in any batch
+        (``compute.batch_rows``)."""
+        return row_product(self.design(theta), self.coef)
 
 
 def _masses(mass_of: Callable[[np.ndarray], float], theta: np.ndarray) -> np.ndarray | None:

@@ -6,8 +6,9 @@ discarded POD energy then estimates the relative eigenvalue error of Rayleigh-Ri
 Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, ch. 6).  The six rigid-body motions are
 kept exactly as the first basis vectors.
 
-Online: reduced K and M for all points by one matrix product each over the projected affine
-terms, the rigid-body coordinates eliminated exactly (K R = 0 for a free body, so the elastic
+Online: reduced K and M for all points by matrix products over the projected affine terms
+(``compute.batch_rows.row_product``, so that a point's matrices are the same bits in any
+batch), the rigid-body coordinates eliminated exactly (K R = 0 for a free body, so the elastic
 pencil is K_ww x = lambda (M_ww - M_wr M_rr^-1 M_rw) x), then stacked Cholesky + ``eigvalsh``
 for all points, the batch split over threads (``fe.batched_eigen``).
 """
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bayesupdate.compute.batch_rows import row_product
 from bayesupdate.compute.executors import executor_or_serial
 from bayesupdate.compute.progress import phase
 from bayesupdate.errors import BayesUpdateError
@@ -58,15 +60,22 @@ class ReducedBasis:
     def matrices(self, theta_full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Reduced pencils at theta_full (B, n_params) (all parameters, SI): the elastic block of
         K (B, r_e, r_e) and the whole M (B, r, r), the first ``n_rigid`` coordinates being the
-        rigid-body motions.  Two matrix products over the projected affine terms."""
+        rigid-body motions.  Matrix products over the projected affine terms, each point's the
+        same bits in any batch (``compute.batch_rows``)."""
         cK, cM = self.decomposition.coefficients(theta_full)
         r, nr = self.size, self.n_rigid
-        M = ((cM @ self.M_terms[0]) @ self.M_terms[1]).reshape(-1, r, r)
+        M = self.combined(cM, self.M_terms).reshape(-1, r, r)
         if self.rigid_energy:
-            K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r, r)
+            K = self.combined(cK, self.K_terms).reshape(-1, r, r)
             return compressed_stiffness(K, M, nr), M
-        K = ((cK @ self.K_terms[0]) @ self.K_terms[1]).reshape(-1, r - nr, r - nr)
+        K = self.combined(cK, self.K_terms).reshape(-1, r - nr, r - nr)
         return K, M
+
+    @staticmethod
+    def combined(coefficients: np.ndarray, terms: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        """The projected terms ~= C @ B (``terms``) combined with ``coefficients`` (B, n_terms):
+        (B, B.shape[1]) flattened matrices, each row independent of the batch (``row_product``)."""
+        return row_product(row_product(coefficients, terms[0]), terms[1])
 
     def eigen(self, theta_full: np.ndarray, n_modes: int, vectors: bool = False):
         """(B, n_modes) elastic eigenvalues [rad^2/s^2] at theta_full (B, n_params) and, with

@@ -132,6 +132,60 @@ def test_a_signal_landing_in_the_step_bookkeeping_still_resumes_identically(setu
     assert np.array_equal(resumed.chain, full.chain)
 
 
+def test_a_signal_landing_in_emcees_code_around_a_model_call_prints_nothing(
+    setup, monkeypatch, capsys
+):
+    """emcee calls the log-density inside its own try, which prints "emcee: Exception while
+    calling your likelihood function" and a traceback for any exception, a KeyboardInterrupt
+    included.  A signal landing there (made here at the 500th call, before the guarded
+    model call starts: what a Ctrl-C did once under load) only records the stop: emcee's steps
+    run deferred and only the model call is interruptible (``StopRequest.interruptible``).
+    The run stops at the end of that step, silently, and resumes to the uninterrupted chain."""
+    from bayesupdate.compute.stop import StopRequest
+    from bayesupdate.inference import sampling
+
+    problem, optimum = setup
+    full = _run(problem, optimum)
+    request, calls = StopRequest(), []
+    guard = sampling._guard
+
+    def guard_then_signal(*args, **kwargs):
+        guarded = guard(*args, **kwargs)
+
+        def landing(x):
+            calls.append(1)
+            if len(calls) == 500:
+                request.handler(2, None)  # SIGINT lands in emcee's code, outside the model
+            return guarded(x)
+
+        return landing
+
+    monkeypatch.setattr(sampling, "_guard", guard_then_signal)
+    broken = _run(problem, optimum, stop_request=request)
+    monkeypatch.undo()
+    captured = capsys.readouterr()
+    assert "emcee" not in captured.out + captured.err and "Traceback" not in captured.err
+    assert broken.interrupted and 0 < broken.chain.shape[0] < 300
+    resumed = sample_posterior(
+        LogPosterior(problem, _spec()), optimum, _settings(), resume=broken.state
+    )
+    assert np.array_equal(resumed.chain, full.chain)
+
+
+def test_a_stop_request_raises_only_outside_deferred_blocks_or_inside_interruptible_ones():
+    from bayesupdate.compute.stop import StopRequest
+
+    request = StopRequest()
+    with request.deferred():
+        request.handler(2, None)  # recorded, not raised
+        with pytest.raises(KeyboardInterrupt), request.interruptible():
+            request.handler(2, None)
+        request.handler(2, None)  # deferred again after the interruptible block
+    assert request.requested()
+    with pytest.raises(KeyboardInterrupt):
+        request.handler(2, None)
+
+
 def test_stopped_while_adapting_resumes_to_the_identical_chain(setup):
     """A stop inside the adaptation stages leaves an empty chain and no proposal; the resume
     starts again from the seed and ends with the uninterrupted chain."""

@@ -10,7 +10,11 @@ calls ``PyErr_PrintEx``, i.e. ``sys.excepthook``, before the unraisable hook).
 
 Inside ``deferred()`` the handler only records the request: the sampler's bookkeeping between
 blocks and its checkpoint writes must not be cut in half (a stop landing there used to end the
-run with a bare "interrupted" and no resume hint, although the last checkpoint was valid).
+run with a bare "interrupted" and no resume hint, although the last checkpoint was valid).  The
+sampler's emcee steps run deferred too, and only its model calls inside them are
+``interruptible()``: a KeyboardInterrupt raised in emcee's own code around a model call made
+emcee print "Exception while calling your likelihood function" and a traceback (seen on a
+2-core machine under load, where the Ctrl-C test of ``sample`` landed there once in a suite).
 """
 
 import sys
@@ -58,6 +62,16 @@ class StopRequest:
         """While the block runs, ``handler`` records a stop request without raising; the caller
         checks ``requested()`` after the block."""
         previous, self._deferred = self._deferred, True
+        try:
+            yield
+        finally:
+            self._deferred = previous
+
+    @contextmanager
+    def interruptible(self):
+        """Inside ``deferred()``, a block where ``handler`` raises again: a long model call that
+        a stop may cut, inside a caller that catches the ``KeyboardInterrupt``."""
+        previous, self._deferred = self._deferred, False
         try:
             yield
         finally:

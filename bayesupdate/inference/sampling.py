@@ -361,9 +361,10 @@ def _guard(
         if not request.requested():
             t0 = time.perf_counter()
             try:
-                if space is None:
-                    return density(x)
-                return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
+                with request.interruptible():  # only here: emcee's code around it is deferred
+                    if space is None:
+                        return density(x)
+                    return density(space.theta_from_y(x)) + space.log_jacobian_y(x)
             except KeyboardInterrupt:
                 request.request()
             except BayesUpdateError as exc:  # e.g. the Dask scheduler lost: stop, then say it
@@ -554,22 +555,23 @@ def _run_block(
         steps = sampler.sample(
             run.state, iterations=block, store=True, skip_initial_state_check=run.stepped
         )
-        for step in steps:
-            if request.requested():
-                raise KeyboardInterrupt
-            # emcee updates its state object in place during the next step, so a Ctrl-C
-            # there would leave it half-updated: keep copies of each completed step.  The three
-            # records go together or not at all: a signal landing between them left the step
-            # in the chain but run.state one step behind, and the resume drew that step twice
-            # (a SIGTERM test failed so under load); deferred, the stop comes at the next step
-            with request.deferred():
+        # emcee's steps run deferred (a stop is recorded, the step's remaining model calls
+        # return -inf at once, ``_guard``, and the step ends); only the model calls themselves
+        # are cut where the signal lands (``StopRequest.interruptible``).  Each completed step
+        # is copied, with its three records together or not at all: emcee updates its state
+        # in place during the next step, and a signal landing between the records left the
+        # step in the chain but run.state one step behind (the resume drew that step twice)
+        with request.deferred():
+            for step in steps:
+                if request.requested():
+                    raise KeyboardInterrupt
                 coords.append(step.coords.copy())
                 lps.append(np.asarray(step.log_prob).copy())
                 run.state = emcee.State(
                     coords[-1].copy(), log_prob=lps[-1].copy(), random_state=step.random_state
                 )
                 run.stepped = True
-            bar.update(1)
+                bar.update(1)
     except KeyboardInterrupt:
         return coords, lps, True
     return coords, lps, False

@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from roundoff import frequency_roundoff, largest_eigenvalue
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import FEModel, Material, StructureBuilder, circular_tube
@@ -85,16 +86,22 @@ def test_dense_banded_and_sparse_paths_agree_on_suspension_modes(beams):
     """The same modes from the three solvers (each on a fresh model: a sparse solve makes the
     model's sparse path its default).  LAPACK on the full pencil and the banded Krylov carry an
     absolute eigenvalue round-off ~ eps x lambda_max(K, M) = 7e-6 rad^2/s^2 (the axial modes are at
-    3e10): 2.5e-7 of the bounce's eigenvalue, measured 1.4e-8 in its frequency; the sparse path
-    solves the shift-inverted pencil, so its low modes carry no such term."""
+    3e10): 2.5e-7 of the bounce's eigenvalue, measured 1.4e-8 in its frequency on the earlier
+    development machine and 6.2e-8 with OpenBLAS's SkylakeX kernels, inside the round-off scale of
+    tests/roundoff.py (2.6e-7); the sparse path solves the shift-inverted pencil, so its low modes
+    carry no such term.  Modes 3-8 agree to 1e-10, the iterative paths' convergence, above
+    their round-off (measured 7e-12)."""
     dense, sparse, banded = (
         FEModel(beams[1], {}, {}, {}).solve(n_modes=8, method=m)
         for m in ("dense", "sparse", "krylov")
     )
     assert dense.modes.n_rigid == sparse.modes.n_rigid == banded.modes.n_rigid == 4
+    K, M = FEModel(beams[1], {}, {}, {}).matrices()
+    scale = frequency_roundoff(K, M, sparse.modes.shapes, largest_eigenvalue(K, M))
+    assert 1e-7 < scale[0] < 1e-6  # the bounce: eps x lambda_max / lambda
+    tol = np.maximum(scale, 1e-10)
     for other in (dense, banded):
-        np.testing.assert_allclose(other.frequencies_hz[:2], sparse.frequencies_hz[:2], rtol=5e-8)
-        np.testing.assert_allclose(other.frequencies_hz[2:], sparse.frequencies_hz[2:], rtol=1e-10)
+        assert np.all(np.abs(other.frequencies_hz / sparse.frequencies_hz - 1.0) <= tol)
 
 
 def test_suport_rigid_set_takes_every_rigid_motion_as_a_rigid_mode(beams):

@@ -383,3 +383,36 @@ def test_a_binding_on_a_tapered_pbeaml_is_refused(tmp_path):
     with pytest.raises(BayesUpdateError, match=r"parameter d: binds 'PBEAML 5 DIM2': PBEAML 5 "
                        r"\(taperedl.bdf:10\) is tapered"):  # fmt: skip
         load_nastran_model(deck, parameters={"d": {"binds": "PBEAML 5 DIM2"}})
+
+
+_CORD1_GRIDS = ("GRID,1,,0.,0.,0.\nGRID,2,,0.,0.,1.\nGRID,3,,1.,1.,0.\n"
+                "GRID,4,,2.,0.,0.\nGRID,5,,2.,1.,0.\nGRID,6,,3.,0.,0.\n"
+                "GRID,10,5,1.,0.,0.\nGRID,11,6,1.,2.,3.\n")  # fmt: skip
+
+
+def test_a_cord1r_card_defines_two_systems(tmp_path):
+    """CORD1R's fields 6-9 (CIDB, G1B-G3B) are a second system (MSC QRG CORD1R): system 5 on
+    GRIDs 1-3 (origin 0, z basic z, x along (1, 1, 0)) and 6 on GRIDs 4-6 (origin (2, 0, 0), z
+    basic y, x basic x, so y = -basic z) on one card place GRID 10 (1, 0, 0 in 5) at
+    (1, 1, 0) / sqrt 2 and GRID 11 (1, 2, 3 in 6) at (3, 3, -2), as two cards do."""
+    from bayesupdate.nastran.deck import Refusals, read_deck
+    from bayesupdate.nastran.frames import read_grids
+
+    one = _write(tmp_path, "BEGIN BULK\nCORD1R,5,1,2,3,6,4,5,6\n" + _CORD1_GRIDS + "ENDDATA\n")
+    two = _write(tmp_path, "BEGIN BULK\nCORD1R,5,1,2,3\nCORD1R,6,4,5,6\n" + _CORD1_GRIDS
+                 + "ENDDATA\n", "two.bdf")  # fmt: skip
+    a, b = (read_grids(read_deck(p), Refusals("")) for p in (one, two))
+    xyz = {int(g): a.xyz[k] for k, g in enumerate(a.ids)}
+    np.testing.assert_allclose(xyz[10], [0.5**0.5, 0.5**0.5, 0.0], atol=1e-15)
+    np.testing.assert_allclose(xyz[11], [3.0, 3.0, -2.0], atol=1e-15)
+    np.testing.assert_allclose(a.coords[6].axes, [[1, 0, 0], [0, 0, -1], [0, 1, 0]], atol=1e-15)
+    np.testing.assert_array_equal(a.xyz, b.xyz)
+
+
+def test_a_cord1r_second_system_with_a_taken_id_is_refused(tmp_path):
+    from bayesupdate.errors import BayesUpdateError
+
+    bulk = "CORD2R,6,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\nCORD1R,5,1,2,3,6,4,5,6\n" + _CORD1_GRIDS
+    path = _write(tmp_path, _deck(bulk))
+    with pytest.raises(BayesUpdateError, match=r"deck.bdf:\d+ CORD1R 6: coordinate system 6 is"):
+        load_nastran_model(path)

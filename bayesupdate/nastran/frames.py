@@ -2,7 +2,8 @@
 
 MSC Nastran Quick Reference Guide, CORD1R/C/S, CORD2R/C/S and GRID: a CORD2x is given by its
 origin A, a point B on its z axis and a point C in its x-z plane, in the coordinates of its
-reference system RID; a CORD1x by three GRIDs (the same roles).  A GRID's position is in its
+reference system RID; a CORD1x by three GRIDs (the same roles), and a CORD1x card may define a
+second system in fields 6-9 (CIDB, G1B, G2B, G3B).  A GRID's position is in its
 CP system ((x, y, z), cylindrical (R, theta [deg], z) or spherical (R, theta [deg], phi [deg]),
 theta of a sphere from its z axis) and its displacements in its CD system.  Systems and grids
 that refer to one another are resolved in rounds until nothing changes; what is left refers to
@@ -10,7 +11,7 @@ a missing system or a cycle and is refused.  Each grid carries R (3, 3) whose ro
 axes in basic coordinates (for a cylindrical or spherical CD, the local axes at the grid).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -105,7 +106,7 @@ def read_grids(deck, refusals) -> Grids:
         if i is not None:
             grid_cards.setdefault(i, c)
     coords, xyz = {0: BASIC}, {}
-    pending_c = {c.id(): c for c in deck.of(*CORDS) if refusals.guard(c.id) is not None}
+    pending_c = _pending_systems(deck, refusals)
     pending_g = dict(grid_cards)
     progress = True
     while progress and (pending_c or pending_g):
@@ -142,12 +143,41 @@ def _coord(card, cid, coords, xyz):
         pts = np.array([[card.real(f"{p}{k}") for k in (1, 2, 3)] for p in "ABC"])
         a, b, c = coords[rid].to_basic(pts)
         return _from_points(card, cid, kind, a, b, c)
-    if card.value(4) is not None and card.value(4) != cid:
-        card.fail("a second system on one CORD1x card is not supported")
     gids = [card.int(k, positive=True) for k in ("G1A", "G2A", "G3A")]
     if not all(g in xyz for g in gids):
         return False
     return _from_points(card, cid, kind, *(xyz[g] for g in gids))
+
+
+def _pending_systems(deck, refusals) -> dict:
+    """{cid: card} of every system the deck's CORDxx cards define (``_systems``).  Two cards
+    with one id are refused by the deck's duplicate check; a CORD1x's second system sharing an
+    id with any other system is refused here, where that id is first seen."""
+    out, seconds = {}, set()
+    for c in deck.of(*CORDS):
+        for k, system in enumerate(refusals.guard(_systems, c) or ()):
+            cid = refusals.guard(system.id)
+            if cid is None:
+                continue
+            if cid in out and (k == 1 or cid in seconds):
+                refusals.card(system, f"coordinate system {cid} is defined twice")
+                continue
+            out[cid] = system
+            if k == 1:
+                seconds.add(cid)
+    return out
+
+
+def _systems(card) -> tuple:
+    """The systems a CORDxx card defines, each as a card of its own: a CORD2x one; a CORD1x one
+    or two, the second read from fields 6-9 as the first from fields 2-5 (its CIDB as its id,
+    the same file and line)."""
+    if not card.name.startswith("CORD1") or card.value(4) is None:
+        return (card,)
+    second = replace(card, raw=card.raw[4:8])
+    if second.id() == card.id():
+        card.fail(f"CIDB = CIDA = {card.id()}: coordinate system {card.id()} is defined twice")
+    return card, second
 
 
 def _grids(grid_cards, xyz, coords, refusals) -> Grids:

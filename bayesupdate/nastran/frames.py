@@ -152,7 +152,7 @@ def _coord(card, cid, coords, xyz):
 def _pending_systems(deck, refusals) -> dict:
     """{cid: card} of every system the deck's CORDxx cards define (``_systems``).  Two cards
     with one id are refused by the deck's duplicate check; a CORD1x's second system sharing an
-    id with any other system is refused here, where that id is first seen."""
+    id with any other system is refused here, at the card that repeats the id."""
     out, seconds = {}, set()
     for c in deck.of(*CORDS):
         for k, system in enumerate(refusals.guard(_systems, c) or ()):

@@ -34,6 +34,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
+from bayesupdate.compute.batch_rows import MIN_ROWS
 from bayesupdate.compute.executors import ProcessExecutor
 from bayesupdate.model_protocol import Prediction
 
@@ -143,11 +144,13 @@ SPLIT_COUNTERS = ("evaluations", "failed", "pair_checked", "pair_differs")
 #: of 8 rows (where the earlier machine's OpenBLAS rounded a row as in the whole batch), so only
 #: batches of 16 or more were split; the SkylakeX kernels round rows in blocks of 12, which
 #: stopped every split of ``sample --model exhaust --data paper:ema`` at its first check.  With
-#: the products made independent of the batch (``compute.batch_rows``) any cut gives the whole
-#: batch's bits, and the delayed-acceptance batches that survive the screen (6-16 points of
-#: the exhaust's exact posterior, 0.46 ms each) are split too: that command took 14.7-15.0 s
-#: against 15.3-15.5 s with the least at 16 (3 runs each, alternated, the same chain)
-SPLIT_MIN_POINTS = 8
+#: the products made independent of the batch (``compute.batch_rows``, for batches of
+#: ``MIN_ROWS`` = 5 rows or more: each part of a split batch has that many) any cut gives the
+#: whole batch's bits, and the delayed-acceptance batches that survive the screen (6-16 points
+#: of the exhaust's exact posterior, 0.46 ms each) are split too: with the least at 8 that
+#: command took 14.7-15.0 s against 15.3-15.5 s with the least at 16 (3 runs each,
+#: alternated, the same chain)
+SPLIT_MIN_POINTS = 2 * MIN_ROWS
 #: points of the batch ``split_pays`` times
 SPLIT_PROBE_POINTS = 16
 

@@ -11,7 +11,7 @@ check before the kept run, ``moves.coverage``) and its refits do too (below
 (``diagnostics["moves"]``).  A screened run's adaptation stages sample the delayed-acceptance
 surrogate alone (``_adaptation_stage``), and a posterior with a mass term takes its masses from
 their polynomial verified to round-off (``LogPosterior.use_fitted_mass``).  Given an executor
-with local worker processes, batches of 16 walkers or more are evaluated half here, half on a
+with local worker processes, batches of 10 walkers or more are evaluated half here, half on a
 worker, with the serial run's values bit for bit (``evaluators.split_densities``).
 "de": differential evolution (ter Braak 2006) 70 %, DE with gamma = 1 10 % (ter Braak's
 mode-jumping step: x_i + (x_j - x_k) carries a walker from one mode to the other exactly when x_j,
@@ -924,7 +924,7 @@ def sample_posterior(
     Ctrl-C (KeyboardInterrupt) ends the run after the last complete step: the result has
     ``interrupted=True`` and its ``state`` resumes it.
     executor : local worker processes (``compute.executors``) that evaluate half of each batch
-    of 16 walkers or more while this process does the rest (``evaluators.split_densities``;
+    of 10 walkers or more while this process does the rest (``evaluators.split_densities``;
     other executors: every batch here); the chain is the serial run's bit for bit.
     screen : a cheap surrogate of ``log_posterior`` (same parameters; e.g. a coarser basis):
     delayed acceptance (``inference.delayed_acceptance``), only the proposals it passes get an

@@ -9,12 +9,13 @@ process and a worker (``inference.evaluators.SplitDensity``) would not give the 
 
 ``row_product`` computes C @ T for a batch of ``MIN_ROWS`` rows or more in calls of exactly
 ``PRODUCT_ROWS`` rows, the last padded with zeros: every row then lies in a full block of a call
-of the same size, whatever the batch, on any kernel whose block of rows divides 48.  A smaller
+of the same size, whatever the batch, on any kernel whose block of rows divides 24.  A smaller
 batch takes one plain product: padding a calibration's residual calls of 1-4 points to 48 rows
 made ``sample --model exhaust --data paper:ema``'s 17 starts 1.74-1.90 s against 1.33-1.44 s,
 and such batches are never the parts of a split one (``inference.evaluators.SPLIT_MIN_POINTS``
 is twice ``MIN_ROWS``).  ``SplitDensity`` still checks the first split batch of a run against
-the whole batch, for a BLAS where the blocks do not divide 48.
+the whole batch, for a BLAS where the blocks do not divide 24 (one of 16 rows: the split stops,
+the values stay the serial run's).
 """
 
 import numpy as np
@@ -24,10 +25,11 @@ __all__ = ["MIN_ROWS", "PRODUCT_ROWS", "row_product"]
 #: the fewest rows computed in ``PRODUCT_ROWS``-row calls (module docstring)
 MIN_ROWS = 5
 
-#: rows of every call (a multiple of 2, 3, 4, 6, 8, 12, 16 and 24).  Measured on the exhaust's
-#: 74-vector basis (C (B, 24) @ T (24, 5476)): 0.36 ms for a batch of 16 against 0.12 ms in one
-#: call of 16 rows, beside that batch's reduced solve of about 8 ms
-PRODUCT_ROWS = 48
+#: rows of every call (a multiple of 2, 3, 4, 6, 8 and 12).  Not 48 (which 16 divides too): the
+#: padding costs a call's rows, and the demo's shell posterior (16 walkers, batches of 8, a
+#: 96-vector basis: C (8, 30) @ T (30, 9216) 0.19 ms in 8 rows, 0.36 ms in 24, 0.63 ms in 48)
+#: makes about 4,000 such products
+PRODUCT_ROWS = 24
 
 
 def row_product(C: np.ndarray, T: np.ndarray) -> np.ndarray:

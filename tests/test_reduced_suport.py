@@ -90,7 +90,9 @@ def test_basis_of_a_points_modes_reproduces_it_and_bounds_the_others(parameters)
     assert np.abs(_signed_errors(fe, basis, snap)).max() < scale
     other = rom.scale(np.array([[0.3, 0.7, 0.1], [0.75, 0.25, 0.9]])[:, : len(parameters)])
     err = _signed_errors(fe, basis, other)
-    assert err.min() > -1e-9  # Rayleigh-Ritz: never below
+    # Rayleigh-Ritz: never below, to round-off (-1.7e-8 on a mode here with OpenBLAS's
+    # SkylakeX kernels, where -1e-9 had held on the earlier machine)
+    assert err.min() > -scale
     assert err.max() > 1e-7  # the points differ: the bound is tested, not an identity
 
 

@@ -306,3 +306,16 @@ def emit(args, record: dict, text: str, report) -> int:
         if path:
             print(f"wrote {path}")
     return 0
+
+
+def check_outputs(args, resume: bool = False) -> None:
+    """Refuse ``--out``, and ``--write-bdf`` where the command has it, naming a file that is
+    there, unless ``--force`` (``resume``: the partial result ``--out`` names may be there).
+    Commands call it before their heavy imports (seconds), so a file in the way is said at
+    once (``atomic.check_output_path``)."""
+    from bayesupdate.atomic import check_output_path
+
+    if args.out:
+        check_output_path(args.out, args.force or resume)
+    if getattr(args, "write_bdf", None):
+        check_output_path(args.write_bdf, args.force)

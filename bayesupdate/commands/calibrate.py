@@ -8,6 +8,7 @@ from bayesupdate.commands._shared import (
     add_full_argument,
     add_study_arguments,
     add_write_bdf_argument,
+    check_outputs,
     compute_from_args,
     report_refused,
     report_warnings,
@@ -89,13 +90,7 @@ def _g(value) -> str:
 
 
 def run(args) -> int:
-    from bayesupdate.atomic import check_output_path
-
-    # before the imports below (seconds): a file in the way is said at once
-    if args.out:
-        check_output_path(args.out, args.force)
-    if args.write_bdf:
-        check_output_path(args.write_bdf, args.force)
+    check_outputs(args)  # before the imports below
     from bayesupdate.compute import progress
     from bayesupdate.compute.settings import open_executor
     from bayesupdate.inference.checks import calibration_warnings

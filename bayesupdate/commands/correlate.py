@@ -2,6 +2,7 @@
 
 from bayesupdate.commands._shared import (
     add_correlate_arguments,
+    check_outputs,
     correlate_settings,
     correlate_study,
     emit,
@@ -151,10 +152,7 @@ def test_mode_rows(result) -> list[dict]:
 
 
 def run(args) -> int:
-    from bayesupdate.atomic import check_output_path
-
-    if args.out:  # before the imports below (seconds): a file in the way is said at once
-        check_output_path(args.out, args.force)
+    check_outputs(args)  # before the imports below
     from bayesupdate.pipelines.correlate import (
         correlate,
         study_correlation_model,

@@ -6,6 +6,7 @@ import sys
 from bayesupdate.commands._shared import (
     add_compute_arguments,
     add_study_arguments,
+    check_outputs,
     compute_from_args,
     study_file,
 )
@@ -85,10 +86,7 @@ def _settings(study, args):
 
 
 def run(args) -> int:
-    from bayesupdate.atomic import check_output_path
-
-    if args.out:  # before the imports below (seconds): a file in the way is said at once
-        check_output_path(args.out, args.force)
+    check_outputs(args)  # before the imports below
     from bayesupdate.compute.progress import timings as phase_timings
     from bayesupdate.discovery.results_io import discovery_summary, write_discovery
     from bayesupdate.pipelines.discover import DiscoveryRequest, discover_study

@@ -12,6 +12,7 @@ from bayesupdate.commands._shared import (
     add_full_argument,
     add_study_arguments,
     add_write_bdf_argument,
+    check_outputs,
     compute_from_args,
     report_refused,
     report_warnings,
@@ -91,14 +92,9 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from bayesupdate.atomic import check_output_path
-
     if args.resume and not args.out:
         raise BayesUpdateError("--resume needs --out FILE (the partial result to continue)")
-    if args.out:  # before the imports below (seconds): a file in the way is said at once
-        check_output_path(args.out, force=args.force or args.resume)
-    if args.write_bdf:
-        check_output_path(args.write_bdf, force=args.force)
+    check_outputs(args, resume=args.resume)  # before the imports below
     from bayesupdate.pipelines.study import prepare
 
     study = study_from_args(args)

@@ -6,6 +6,7 @@ import numpy as np
 
 from bayesupdate.commands._shared import (
     add_correlate_arguments,
+    check_outputs,
     correlate_settings,
     correlate_study,
     emit,
@@ -104,10 +105,7 @@ def candidate_model(args, study, data):
 
 
 def run(args) -> int:
-    from bayesupdate.atomic import check_output_path
-
-    if args.out:  # before the imports below (seconds): a file in the way is said at once
-        check_output_path(args.out, args.force)
+    check_outputs(args)  # before the imports below
     from bayesupdate.pipelines.correlate import correlate
     from bayesupdate.pipelines.sensitivity import (
         SensitivityInput,

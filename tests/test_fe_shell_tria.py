@@ -12,6 +12,9 @@ Tolerances and why:
 - patch tests and rigid motions: exact to round-off (1e-9 relative).
 """
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -19,6 +22,9 @@ from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.elements import shell, shell_tria
 from bayesupdate.fe.shell_model import ShellAssembly, shell_mesh
 from bayesupdate.fe.sparse_modal import ModalSettings, solve_sparse_modes
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from pshell_ratios import Plate, plate_deck  # noqa: E402
 
 E, NU, RHO, A = 200e9, 0.3, 8000.0, 10.0
 #: the first eight (m, n) of the square plate in order of m^2 + n^2, each pair counted twice
@@ -53,18 +59,6 @@ def _kirchhoff(t, m, n, rotary=False):
     D = E * t**3 / (12 * (1 - NU**2))
     k2 = (np.pi / A) ** 2 * (m * m + n * n)
     return np.sqrt(D * k2**2 / (RHO * t * (1 + (t * t * k2 / 12 if rotary else 0.0)))) / (2 * np.pi)
-
-
-def _mindlin(t, m, n, kappa=5.0 / 6.0):
-    """Flexural root of the hard simply supported Mindlin plate with rotary inertia (Mindlin
-    1951): (s k^2 - rho t w^2)(D k^2 + s - I w^2) = s^2 k^2, s = kappa G t, I = rho t^3 / 12."""
-    G, D = E / (2 * (1 + NU)), E * t**3 / (12 * (1 - NU**2))
-    k2 = (np.pi / A) ** 2 * (m * m + n * n)
-    s, inertia = kappa * G * t, RHO * t**3 / 12
-    a2 = RHO * t * inertia
-    b = -(RHO * t * (D * k2 + s) + inertia * s * k2)
-    c = s * k2 * (D * k2 + s) - s**2 * k2
-    return np.sqrt((-b - np.sqrt(b * b - 4 * a2 * c)) / (2 * a2)) / (2 * np.pi)
 
 
 def _tria_plate(n, t, diagonals="same"):
@@ -109,7 +103,7 @@ def test_thick_plate_converges_to_the_rayleigh_plate_not_mindlin():
     forms differ by 2.7-14.3 %; at a/t = 20 by 0.7-4.3 %, at a/t = 50 by 0.1-0.7 %)."""
     t = A / 10
     rayleigh = np.array([_kirchhoff(t, m, n, rotary=True) for m, n in MODES_1_TO_8])
-    mindlin = np.array([_mindlin(t, m, n) for m, n in MODES_1_TO_8])
+    mindlin = np.array([Plate(A, E, NU, RHO).mindlin_hz(t, m, n) for m, n in MODES_1_TO_8])
     f = _frequencies(_tria_plate(32, t))
     np.testing.assert_allclose(f, rayleigh, rtol=0.01)
     np.testing.assert_allclose(f / mindlin, rayleigh / mindlin, rtol=0.01)
@@ -206,22 +200,10 @@ def test_triangle_matrices_are_exact_thickness_polynomials():
 
 
 def _ctria3_deck(path, n, t):
-    """A SOL 103 deck (SI) of the simply supported plate in n x n x 2 CTRIA3 (one diagonal)."""
-    nodes, quads, _ = sm.plate(A, A, n, n)
-    trias = sm.split_quads(quads, np.zeros(len(quads), bool))
-    x, y = nodes[:, 0], nodes[:, 1]
-    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
-    lines += [f"GRID,{i + 1},,{p[0]:.4f},{p[1]:.4f},0." for i, p in enumerate(nodes)]
-    lines += [f"CTRIA3,{e + 1},1,{a + 1},{b + 1},{c + 1}" for e, (a, b, c) in enumerate(trias)]
-    lines += [f"PSHELL,1,1,{t:.4f},1,,1", f"MAT1,1,{E:.3E},,{NU:.2f},{RHO:.1f}"]
-    held = {
-        "126": np.arange(len(nodes)),
-        "34": np.flatnonzero((x < 1e-9) | (x > A - 1e-9)),
-        "35": np.flatnonzero((y < 1e-9) | (y > A - 1e-9)),
-    }
-    lines += [f"SPC1,1,{c},{g + 1}" for c, ids in held.items() for g in ids]
-    path.write_text("\n".join([*lines, "ENDDATA", ""]))
-    return path
+    """A SOL 103 deck (SI) of the simply supported plate in n x n x 2 CTRIA3 (one diagonal),
+    written by ``studies/pshell_ratios.plate_deck``."""
+    pshell, mat1 = f"PSHELL,1,1,{t:.4f},1,,1", f"MAT1,1,{E:.3E},,{NU:.2f},{RHO:.1f}"
+    return plate_deck(path, n, t, pshell, triangles=True, a=A, mat1=mat1)
 
 
 def test_ctria3_deck_of_the_plate_through_modes(tmp_path, capsys):

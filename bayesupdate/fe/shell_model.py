@@ -31,7 +31,10 @@ class ShellMesh:
     """Shell elements as arrays (SI).  nodes (N, 3) [m]; quads (nq, 4), trias (nt, 3) node
     numbers; per element (nq + nt,), quads first: thickness [m], E [Pa], nu, rho [kg/m^3],
     offset [m] and offset_ratio [-] (reference plane at offset + offset_ratio t below the
-    mid-surface), nsm [kg/m^2] non-structural mass per area."""
+    mid-surface), nsm [kg/m^2] non-structural mass per area; bending_ratio and shear_ratio
+    (n_el,) or None: the bending inertia over t^3 / 12 (default 1) and the transverse shear
+    thickness over t (default 5/6; quads only, the DKT triangle is shear rigid), Nastran's
+    PSHELL 12I/T**3 and TS/T (``shell.local_pieces``)."""
 
     nodes: np.ndarray
     quads: np.ndarray
@@ -43,6 +46,8 @@ class ShellMesh:
     offset: np.ndarray
     offset_ratio: np.ndarray
     nsm: np.ndarray
+    bending_ratio: np.ndarray | None = None
+    shear_ratio: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -69,8 +74,11 @@ def shell_mesh(
     offset_ratio=0.0,
     nsm=0.0,
     warp_limit: float = WARP_LIMIT,
+    bending_ratio=None,
+    shear_ratio=None,
 ) -> ShellMesh:
-    """Validated ``ShellMesh``; scalars broadcast to every element.  Raises BayesUpdateError
+    """Validated ``ShellMesh``; scalars broadcast to every element (``bending_ratio`` and
+    ``shear_ratio``: None keeps the solid section's 1 and 5/6).  Raises BayesUpdateError
     naming the element or node at fault; warns (``ShellMeshWarning``) for warped quads."""
     nodes = np.asarray(nodes, dtype=float)
     q = np.zeros((0, 4), int) if quads is None else np.asarray(quads, dtype=np.int64)
@@ -83,9 +91,12 @@ def shell_mesh(
     if n_el == 0:
         raise BayesUpdateError("shell mesh: no elements")
     props = {}
-    for name, value in dict(
+    values = dict(
         thickness=thickness, E=E, nu=nu, rho=rho, offset=offset, offset_ratio=offset_ratio, nsm=nsm
-    ).items():
+    )
+    ratios = dict(bending_ratio=bending_ratio, shear_ratio=shear_ratio)
+    values.update({k: v for k, v in ratios.items() if v is not None})
+    for name, value in values.items():
         v = np.asarray(value, dtype=float)
         if v.ndim > 1 or (v.ndim == 1 and v.size != n_el):
             raise BayesUpdateError(f"shell mesh: {name} must be a scalar or one value per element")
@@ -138,6 +149,8 @@ def _check_properties(mesh: ShellMesh) -> None:
         ("offset", mesh.offset, lambda v: np.ones(v.shape, bool), "finite"),
         ("offset_ratio", mesh.offset_ratio, lambda v: np.ones(v.shape, bool), "finite"),
     )
+    ratios = ((n, getattr(mesh, n)) for n in ("bending_ratio", "shear_ratio"))
+    checks += tuple((n, v, lambda v: v > 0, "> 0") for n, v in ratios if v is not None)
     for name, v, ok, rule in checks:
         bad = ~np.isfinite(v) | ~ok(v)
         if np.any(bad):
@@ -201,8 +214,10 @@ class ShellAssembly:
                 continue
             x = mesh.nodes[conn]
             f = shell.quad_frames(x) if kind == "quad" else shell.tria_frames(x)
+            ratios = (None if r is None else r[idx]
+                      for r in (mesh.bending_ratio, mesh.shear_ratio))  # fmt: skip
             source = shell.PieceSource(
-                f.xy, f.height, mesh.E[idx], mesh.nu[idx], lumped, rotary_inertia
+                f.xy, f.height, mesh.E[idx], mesh.nu[idx], lumped, rotary_inertia, *ratios
             )
             self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
@@ -319,7 +334,8 @@ class ShellElements:
     rho [kg/m^3], offset [m], offset_ratio [-], nsm [kg/m^2] as in ``ShellMesh``;
     thickness_factor (nq + nt,) or None (all 1): the element's thickness over its part's
     thickness parameter, where one binds it (t_e = factor_e theta: caps of another gauge than the
-    mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep)."""
+    mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep);
+    bending_ratio, shear_ratio (nq + nt,) or None as in ``ShellMesh``."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -332,6 +348,8 @@ class ShellElements:
     offset_ratio: np.ndarray
     nsm: np.ndarray
     thickness_factor: np.ndarray | None = None
+    bending_ratio: np.ndarray | None = None
+    shear_ratio: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -346,7 +364,8 @@ class ShellElements:
     def mesh(self, nodes: np.ndarray, **changes) -> ShellMesh:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
         used by beams only are allowed here); ``changes`` replace property arrays."""
-        names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm")
+        names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm", "bending_ratio",
+                 "shear_ratio")  # fmt: skip
         props = {n: getattr(self, n) for n in names} | changes
         return ShellMesh(nodes, self.quads, self.trias, **props)
 

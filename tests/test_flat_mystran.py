@@ -219,3 +219,58 @@ def test_pbarl_bar_shear_factor_is_mystran_and_msc_five_sixths(tmp_path):
     ours = (2 * np.pi * load_nastran_model(str(deck)).solve(n_modes=6).frequencies_hz) ** 2
     theirs = _mystran_omega2(write_flat_deck(deck, tmp_path / "flat.bdf", mystran=True))
     assert ours == pytest.approx(theirs[:6], rel=1e-6)
+
+
+#: a tip-mass cantilever along CORD2R 7's skew x axis (GA in CD 7, v along its z), its offsets
+#: in the element's axes (OFFT GOO, ``test_nastran.test_offt_o_offsets_are_in_the_element_axes``)
+GOO_BAR = """SOL 103
+CEND
+SPC = 1
+METHOD = 1
+BEGIN BULK
+EIGR,1,GIV,,,,6
+MAT1,1,2.e11,,0.3,7800.
+PBAR,5,1,4.e-4,2.e-8,5.e-8,3.e-8
+CORD2R,7,,0.,0.,0.,0.3,0.4,0.866
+,1.,0.2,0.
+CONM2,9,2,,10.,,,,
+,2.,,2.,,,2.
+SPC1,1,123456,1
+GRID,1,,0.,0.,0.,7
+GRID,2,,{gb}
+CBAR,3,5,1,2,0.,0.,1.,GOO
+,,,0.,0.1,0.05,0.,-0.02,0.03
+ENDDATA
+"""
+
+
+def _goo_bar(tmp_path) -> Path:
+    # CORD2R 7's x axis: C - A with its part along z = B - A removed (QRG CORD2R)
+    z = np.array([0.3, 0.4, 0.866]) / np.linalg.norm([0.3, 0.4, 0.866])
+    c = np.array([1.0, 0.2, 0.0])
+    x7 = (c - (c @ z) * z) / np.linalg.norm(c - (c @ z) * z)
+    deck = tmp_path / "goo.bdf"
+    # 8 characters a free field (MYSTRAN 18 reads the deck as written too)
+    deck.write_text(GOO_BAR.replace("{gb}", ",".join(f"{v:.5f}" for v in 2.0 * x7)))
+    return deck
+
+
+def _hz(omega2) -> np.ndarray:
+    return np.sqrt(np.asarray(omega2, float)) / (2 * np.pi)
+
+
+def test_mystran_on_the_flat_deck_of_a_goo_bar_is_this_packages_model(tmp_path):
+    """MYSTRAN 18 reads no OFFT (its BD_CBAR takes field 9 as blank), so it reads a GOO bar's
+    element-axis offsets as CD-frame ones: 0.24-0.91 % off here (measured).  The flat deck
+    writes them as GGG (``nastran.flat`` edit 9), and MYSTRAN then gives this package's
+    frequencies to its f06's 7 digits (measured within 8e-8); the flat deck reads here as the
+    deck."""
+    deck = _goo_bar(tmp_path)
+    ours = load_nastran_model(str(deck)).solve(n_modes=6).frequencies_hz
+    flat = write_flat_deck(deck, tmp_path / "flat.bdf", mystran=True)
+    assert load_nastran_model(str(flat)).solve(n_modes=6).frequencies_hz == pytest.approx(
+        ours, rel=1e-10
+    )
+    as_written = _hz(_mystran_omega2(deck))
+    assert np.max(np.abs(as_written / ours - 1)) > 1e-3
+    assert _hz(_mystran_omega2(flat)) == pytest.approx(ours, rel=1e-6)

@@ -308,6 +308,66 @@ def test_cbar_offsets_equal_rigid_bars_to_the_offset_points(tmp_path, elem, prop
     np.testing.assert_allclose(f1, f2, rtol=1e-10)
 
 
+def _offset_frequencies(tmp_path, elem: str, grids: str, card: str) -> np.ndarray:
+    """The first 4 frequencies of OFFSET_COMMON's BOX bar with an isotropic tip mass (so that
+    turning the bar turns the whole model) on ``grids``, the element card ``card``."""
+    from bayesupdate.nastran import load_nastran_model
+
+    common = OFFSET_COMMON.replace(",1.,,2.,,,3.", ",2.,,2.,,,2.")
+    deck = tmp_path / f"deck{len(list(tmp_path.iterdir()))}.bdf"
+    prop = "PBARL" if elem == "CBAR" else "PBEAML"
+    deck.write_text(_deck(common.replace("PBARL", prop) + grids + card))
+    return load_nastran_model(deck).solve(n_modes=4).frequencies_hz
+
+
+@pytest.mark.parametrize("elem", ["CBAR", "CBEAM"])
+def test_offt_o_offsets_are_in_the_element_axes(tmp_path, elem):
+    """OFFT O (MSC QRG CBAR/CBEAM): an offset in the element's axes, the frame of the grids
+    GA -> GB (not the offset ends) and v.  A bar along basic x with v = basic z has element
+    axes x, y = z, z = -y (z = x cross v), so WA = (0, 0.1, 0.05) in element axes is
+    (0, -0.05, 0.1) in basic, by hand.  The same bar turned along CD frame 7's skew x axis (v
+    along its z, in GA's CD 7) is the first model turned, so it has the same frequencies with
+    the same element-axis offsets, where the same numbers as basic offsets do not."""
+    from bayesupdate.nastran.deck import Refusals, read_deck
+    from bayesupdate.nastran.frames import read_grids
+
+    card = f"{elem},3,5,1,2,0.,0.,1.,{{offt}}\n,,,{{wa}},{{wb}}\n"
+    wa, wb = "0.,0.1,0.05", "0.,-0.02,0.03"
+    straight = "GRID,1,,0.,0.,0.\nGRID,2,,2.,0.,0.\n"
+    f_o = _offset_frequencies(tmp_path, elem, straight, card.format(offt="GOO", wa=wa, wb=wb))
+    by_hand = card.format(offt="GBB", wa="0.,-0.05,0.1", wb="0.,-0.03,-0.02")
+    np.testing.assert_allclose(f_o, _offset_frequencies(tmp_path, elem, straight, by_hand),
+                               rtol=1e-10)  # fmt: skip
+    probe = tmp_path / "probe.bdf"
+    probe.write_text(_deck(OFFSET_COMMON + "GRID,1,,0.,0.,0.,7\n"))
+    x7 = read_grids(read_deck(probe), Refusals("")).coords[7].axes[0]
+    turned = f"GRID,1,,0.,0.,0.,7\nGRID,2,,{','.join(map(_num, 2.0 * x7))}\n"
+    f_turned = _offset_frequencies(tmp_path, elem, turned, card.format(offt="GOO", wa=wa, wb=wb))
+    np.testing.assert_allclose(f_turned, f_o, rtol=1e-9)
+    f_basic = _offset_frequencies(tmp_path, elem, turned, card.format(offt="GBB", wa=wa, wb=wb))
+    assert np.max(np.abs(f_basic / f_o - 1)) > 1e-3
+
+
+def test_cbeam_bit_is_ignored_as_msc_ignores_it_on_an_ordinary_cbeam(tmp_path):
+    """CBEAM field 9 as BIT (a real): the built-in twist of a beam p-element only (MSC QRG
+    CBEAM), so the offsets keep OFFT's default GGG (WA in GA's CD frame 7 here) and the model is
+    the one with OFFT blank, with a note for a BIT other than 0."""
+    from bayesupdate.nastran import load_nastran_model
+
+    models = {}
+    for name, field in (("bit", "0.3"), ("blank", "")):
+        deck = tmp_path / f"{name}.bdf"
+        deck.write_text(_deck(OFFSET_COMMON.replace("PBARL", "PBEAML")
+                              + "GRID,1,,0.,0.,0.,7\nGRID,2,,2.,0.5,0.\n"
+                              f"CBEAM,3,5,1,2,0.,0.,1.,{field}\n,,,0.05,0.1,-0.02\n"))  # fmt: skip
+        models[name] = load_nastran_model(deck)
+    f = {k: m.solve(n_modes=4).frequencies_hz for k, m in models.items()}
+    np.testing.assert_array_equal(f["bit"], f["blank"])
+    notes = models["bit"].structure.metadata["nastran"]["notes"]
+    assert any("BIT" in n and "p-elements only" in n for n in notes), notes
+    assert not any("BIT" in n for n in models["blank"].structure.metadata["nastran"]["notes"])
+
+
 @pytest.mark.parametrize(
     "elem, prop",
     [("CBAR", "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6"), ("CBEAM", "PBEAM,5,1,2.e-3,4.e-6,1.e-6,,2.e-6")],
@@ -380,8 +440,10 @@ def test_partial_spc_in_a_rotated_cd_frame_equals_the_rotated_deck(tmp_path):
     [
         ("PBARL,5,1,,HAT,,,,\n,0.1,0.05,0.005,0.02\nCBAR,7,5,1,2,0.,0.,1.\n",
          "CBAR 7: PBARL 5 type HAT"),
-        ("PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,7,5,1,2,0.,0.,1.,GOO\n,,,0.,0.,0.1\n",
-         "CBAR 7: OFFT GOO"),
+        ("PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,7,5,1,2,0.,0.,1.,GXO\n,,,0.,0.,0.1\n",
+         "CBAR 7: OFFT GXO: give three letters"),
+        ("PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,7,5,1,2,0.,0.,1.,0.5\n",
+         "CBAR 7: OFFT = 0.5: give a code"),
         ("PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,7,5,1,2,1.,0.,0.\n",
          "CBAR 7: the orientation vector is parallel to the axis"),
         ("PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,7,5,1,2,0.,0.,1.\n,1,1\n",

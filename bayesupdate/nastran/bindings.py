@@ -436,6 +436,8 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
     if f.card == "MAT1" and f.field == "G":
         _refuse_shell_g(f, deck)
         return out
+    if f.card == "MAT1" and f.field == "E":
+        _refuse_mixed_shells(f, deck)
     if f.card in ("PSHELL", "MAT1"):
         pids = f.ids if f.card == "PSHELL" else _pshells_of(deck, f)
         names = [parts.index(f"PSHELL {p}") for p in pids if f"PSHELL {p}" in parts]
@@ -484,6 +486,22 @@ def _refuse_shell_g(f: DeckField, deck) -> None:
         raise BayesUpdateError(
             f"parameter binds {f.spec!r}: PSHELL {', '.join(map(str, shells))} use(s) that MAT1, "
             "whose G the shells do not take (they use E and NU); bind MAT1 E instead"
+        )
+
+
+def _refuse_mixed_shells(f: DeckField, deck) -> None:
+    """A MAT1 E binding on a PSHELL whose MID2 or MID3 is another MAT1 (a sandwich): its shells
+    take the bending and shear moduli as ratios to MID1's (``nastran.reader._pshell``), so one
+    E would scale all three: refused, naming the PSHELLs."""
+    mixed = []
+    for i, p in deck.table("PSHELL").items():
+        mids = {p["MID1"], p["MID2"], p["MID3"]} - {None}
+        if len(mids) > 1 and mids & set(f.ids):
+            mixed.append(i)
+    if mixed:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: PSHELL {', '.join(map(str, mixed))} take(s) bending or "
+            "transverse shear from another MAT1 than MID1 (MID2/MID3), which one E cannot scale"
         )
 
 

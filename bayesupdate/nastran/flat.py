@@ -7,7 +7,7 @@ ENTRY", an integer with 15 digits; a PBEAM with no end-B station: "MUST BE YES, 
 and a one-line PBEAM "REQUIRED CONTINUATION ... MISSING"), then, with those fixed, for the
 model: a grounded CBUSH stops it (ELMGM1_BUSH), and it has no CBEAM element ("CODE NOT WRITTEN
 FOR BEAM ELEMENT MATRICES AS YET").  The flat deck makes these edits.  Edits 1-3 leave the
-model as MSC reads it (to the 16-character rounding); edits 4-8 (``mystran=True``) write the
+model as MSC reads it (to the 16-character rounding); edits 4-9 (``mystran=True``) write the
 deck so that MYSTRAN computes the model MSC reads from the original, and MSC (or this
 package) would read the CONM2 of edit 6 differently:
 
@@ -31,7 +31,7 @@ package) would read the CONM2 of edit 6 differently:
    held by its PS field 123456 (QRG CBUSH remark 6: a grounded terminal is a point constrained
    to zero, so MSC reads the same model).  This reader takes a fully held GRID as a support, so
    that with SUPORT it finds no free rigid motion: it reads the deck written with
-   ``mystran=False`` (edits 4 to 8 left out) instead;
+   ``mystran=False`` (edits 4 to 9 left out) instead;
 5. (``mystran=True``) SUPORT is dropped: MYSTRAN computes the elastic modes of the structure
    held at the SUPORT DOFs (its L-set with the R-set removed: on mAEWing1 v3.3 the two wings
    then vibrate apart, in pairs from 3.70 Hz), where MSC gives those of the free structure
@@ -62,7 +62,12 @@ package) would read the CONM2 of edit 6 differently:
    ("*ERROR 989: THE FACTORIZATION OF THE MATRIX KLL COULD NOT BE COMPLETED"); its Lanczos
    takes it, with the same modes (v3.3: GIV and Lanczos within 3e-7 of the f06).  A deck
    without SUPORT keeps its EIGR (MYSTRAN's Lanczos wants more DOFs than modes);
-9. ``ENDDATA`` closes the file.
+9. (``mystran=True``) a CBAR whose OFFT is not GGG (v in basic, an offset in basic or in the
+   element's axes, QRG CBAR) is written as GGG with the same v and offsets in the grids' CD
+   frames: MYSTRAN 18 reads no OFFT (its BD_CBAR takes field 9 as blank) and so took a GOO
+   bar's element-axis offsets as CD-frame ones (0.24-0.91 % on a skew tip-mass cantilever's
+   modes, ``tests/test_flat_mystran.py``);
+10. ``ENDDATA`` closes the file.
 """
 
 from pathlib import Path
@@ -70,7 +75,7 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate.nastran.bulk import Card, large_field_text, parse_number, real16, with_fields
-from bayesupdate.nastran.cards.beams import pbeam_layout
+from bayesupdate.nastran.cards.beams import in_grid_frames, pbeam_layout
 from bayesupdate.nastran.cards.masses import conm2_inertia
 from bayesupdate.nastran.deck import Refusals, read_deck
 from bayesupdate.nastran.frames import coordinate, read_grids
@@ -86,13 +91,14 @@ EDITS = (
     "CONM2 in CID 0, basic offset, inertia fields for MYSTRAN's product convention (for MYSTRAN)",
     "grounded CMASS2 on a rotation -> massless CONM2 (for MYSTRAN)",
     "EIGR -> EIGRL where the deck has SUPORT (for MYSTRAN: its GIV needs a held structure)",
+    "CBAR OFFT other than GGG -> GGG, v and offsets in the grids' CD frames (for MYSTRAN)",
     "ENDDATA appended",
 )
 
 
 def write_flat_deck(path, out, mystran: bool = False) -> Path:
     """Write the deck at ``path`` as one large-field file ``out`` (module docstring; edits 4
-    to 8 only with ``mystran``); returns ``out``."""
+    to 9 only with ``mystran``); returns ``out``."""
     deck = read_deck(path)
     head = []
     for line in Path(deck.files[0]).read_text(errors="replace").splitlines():
@@ -106,6 +112,7 @@ def write_flat_deck(path, out, mystran: bool = False) -> Path:
         free = any(c.name in ("SUPORT", "SUPORT1") for c in deck.cards)
         cards = [_rotary_cmass2(grids, _eigrl(c) if free else c) for c in cards]
         cards = [_conm2_basic(grids, c) if c.name == "CONM2" else c for c in cards]
+        cards = [_bar_ggg(grids, c) if c.name == "CBAR" else c for c in cards]
     cards = [large_field_text(c) for c in cards]
     out = Path(out)
     out.write_text("\n".join(head) + "\n" + "".join(cards) + "ENDDATA\n")
@@ -204,6 +211,19 @@ def _conm2_basic(grids, card: Card) -> Card:
     return Card("CONM2", raw, card.file, card.line, card.end)
 
 
+def _bar_ggg(grids, card: Card) -> Card:
+    """A CBAR with an OFFT other than GGG written as GGG: X1-X3 in GA's CD frame, each offset
+    in its grid's CD frame (``cards.beams.in_grid_frames``), field 9 blank (edit 9: MYSTRAN 18
+    reads no OFFT and takes every offset in its grid's CD frame)."""
+    if card["OFFT"] in (None, "GGG"):
+        return card
+    v, w = in_grid_frames(grids, card)
+    changes = {7: None} | {10 + k: float(x) for k, x in enumerate(w.ravel())}
+    if v is not None:
+        changes |= {4 + k: float(x) for k, x in enumerate(v)}
+    return with_fields(card, changes)
+
+
 def _ground_grids(deck, cards: list) -> list:
     """``cards`` with each grounded CBUSH given a GB of its own (module docstring, edit 4): a
     new GRID at GA's place held by PS 123456 (ids after the deck's largest)."""
@@ -226,8 +246,9 @@ def _bars(deck, cards: list) -> list:
     """``cards`` with each PBEAM of one section (no station after end A, or end B = end A) and
     no warping, shear-relief, NSI or neutral-axis terms written as the PBAR of the same beam
     (A, I1, I2, J, NSM, stress points, K1, K2, I12), and each CBEAM on one as a CBAR (the same
-    orientation, OFFT, pin flags and offsets W1A-W3B) plus, with lumped mass, the twist inertia
-    a CBEAM has and a CBAR has not (``_twist``); the other PBEAMs and CBEAMs stay."""
+    orientation, OFFT (blank for a BIT, which an ordinary CBEAM ignores), pin flags and offsets
+    W1A-W3B) plus, with lumped mass, the twist inertia a CBEAM has and a CBAR has not
+    (``_twist``); the other PBEAMs and CBEAMs stay."""
     bars = {}
     for c in cards:
         if c.name == "PBEAM":
@@ -246,7 +267,10 @@ def _bars(deck, cards: list) -> list:
                 twist = _twist(deck, grids, c, bars[c["PID"]][0], next_id)
                 out += twist
                 next_id += len(twist)
-            c = Card("CBAR", tuple(c.raw[:16]), c.file, c.line, c.end)
+            raw = list(c.raw[:16])
+            if isinstance(c["OFFT"], float):  # a CBEAM's BIT, which a CBAR has no field for
+                raw[7] = ""
+            c = Card("CBAR", tuple(raw), c.file, c.line, c.end)
         out.append(c)
     return out
 

@@ -91,9 +91,14 @@ def _pshell_table(ctx, pids, shells):
 
 
 def _pshell(ctx, p):
+    """(T, MID1, NSM, bending ratio, shear ratio) of a PSHELL: 12I/T**3 times E2 / E1 when the
+    bending material MID2 is another MAT1 with MID1's NU (a sandwich's faces), and TS/T times
+    G3 / G1 for a transverse shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's
+    own), so the plane-stress matrices stay MID1's (``shell.local_pieces``); the mass is
+    MID1's RHO (QRG PSHELL)."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
-    if mid2 not in (None, mid1) or mid3 not in (None, mid1) or p["MID4"]:
-        p.fail("MID2/MID3 must equal MID1 (or be blank) and MID4 blank")
+    if p["MID4"]:
+        p.fail("MID4 (membrane-bending coupling) is not supported")
     if mid2 is None:
         p.fail("a membrane-only shell (MID2 blank) is not supported")
     bending, shear = p.real("12IT3"), p.real("TST")
@@ -109,6 +114,17 @@ def _pshell(ctx, p):
     m = cards.mat1(ctx, mid1, p)
     if not -1 < m.NU < 0.5:
         p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    if mid2 != mid1:
+        m2 = cards.mat1(ctx, mid2, p)
+        if abs(m2.NU - m.NU) > 1e-9 * max(abs(m.NU), 1.0):
+            p.fail(f"MID2 {mid2} has NU = {m2.NU:.4g}, MID1 {mid1} {m.NU:.4g}: a bending "
+                   "material with another NU is not supported")  # fmt: skip
+        bending *= m2.E / m.E
+    if mid3 is not None and mid3 != mid1:
+        m3 = cards.mat1(ctx, mid3, p)
+        if not m3.G > 0:
+            p.fail(f"MID3 {mid3}: the transverse shear material needs G > 0")
+        shear *= m3.G / (m.E / (2 * (1 + m.NU)))
     return p.real("T"), int(mid1), p.real("NSM"), bending, shear
 
 

@@ -2,7 +2,8 @@
 
 A CBAR/CBEAM orientation vector v lies in the element's x-y plane, its section has I1 about z
 (plane 1, x-y) and I2 about y, and its offsets WA, WB run from the grids to the element's ends
-(OFFT G: the end grid's CD frame, B: basic); pin flags PA/PB release element-axis components.
+(OFFT G: the end grid's CD frame, B: basic, O: the element's axes); pin flags PA/PB release
+element-axis components.
 The elements are ``fe.elements.general_beam`` elements; lumped mass (COUPMASS < 1) at their ends.
 """
 
@@ -247,10 +248,10 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
         card.fail(f"{prop.name} {pid}: {exc}")
 
 
-def _orientation(ctx: Context, e, ga_row, offt: str = "GGG"):
+def _orientation(grids, e, ga_row, offt: str = "GGG"):
     """Orientation vector v (3,) in basic coordinates of a CBAR/CBEAM/CBUSH (X1-X3 in GA's CD
-    frame, or in basic for OFFT 'B..'; or from GA to G0)."""
-    g = ctx.grids
+    frame, or in basic for OFFT 'B..'; or from GA to G0); ``grids`` the deck's ``Grids``."""
+    g = grids
     x1 = e["X1"]
     if isinstance(x1, int):
         return g.xyz[g.index([x1], e)[0]] - g.xyz[ga_row]
@@ -258,26 +259,70 @@ def _orientation(ctx: Context, e, ga_row, offt: str = "GGG"):
     return v if offt[0] == "B" else g.frame[ga_row].T @ v
 
 
-def _offt(e) -> str:
-    """OFFT of a CBAR/CBEAM ('GGG' when blank); refuses CBEAM's BIT (a real) and bad flags."""
+def _offt(ctx: Context, e) -> str:
+    """OFFT of a CBAR/CBEAM ('GGG' when blank).  A CBEAM's field 9 may be BIT instead (a real),
+    the built-in twist of a beam p-element only (MSC QRG CBEAM), which an ordinary CBEAM
+    ignores: the offsets then take OFFT's default GGG, and a BIT other than 0 gets a note."""
     offt = e["OFFT"]
-    if not isinstance(offt, str):
-        e.fail("BIT / a numeric OFFT is not supported (OFFT GGG, BGG, ... only)")
-    return offt
+    if isinstance(offt, str):
+        return offt
+    if e.name != "CBEAM" or not isinstance(offt, float):
+        e.fail(f"OFFT = {offt}: give a code such as GGG or BOO")
+    if offt != 0.0:
+        note = ("CBEAM BIT (built-in twist) is for beam p-elements only (MSC QRG CBEAM) and "
+                "is ignored, as MSC ignores it on an ordinary CBEAM")  # fmt: skip
+        if note not in ctx.notes:
+            ctx.notes.append(note)
+    return "GGG"
 
 
-def _offsets(ctx: Context, e, rows, offt: str) -> np.ndarray:
-    """(2, 3) end offsets WA, WB in basic axes: OFFT 'G' = the end grid's CD frame, 'B' =
-    basic (MSC QRG, CBAR/CBEAM); 'O' (element axes) is not supported."""
+def offsets_in_basic(grids, e, rows, offt: str) -> np.ndarray:
+    """(2, 3) end offsets WA, WB of a CBAR/CBEAM ``e`` in basic axes: OFFT 'G' = the end grid's
+    CD frame, 'B' = basic, 'O' = the element's axes before its offsets (``_grid_axes``) (MSC
+    QRG, CBAR/CBEAM OFFT); ``grids`` the deck's ``Grids``, ``rows`` GA's and GB's rows."""
     w = np.array([[e.real(f"W{k}{end}") for k in (1, 2, 3)] for end in "AB"])
+    if len(offt) != 3 or offt[0] not in "GB" or any(c not in "GBO" for c in offt[1:]):
+        e.fail(f"OFFT {offt}: give three letters, G or B for the orientation vector and G, B or "
+               "O for each end's offset")  # fmt: skip
     if not np.any(w):
         return w
     for end in (0, 1):
-        if len(offt) != 3 or offt[1 + end] not in "GB":
-            e.fail(f"OFFT {offt}: offsets in element axes ('O') are not supported")
         if offt[1 + end] == "G":
-            w[end] = ctx.grids.frame[rows[end]].T @ w[end]
+            w[end] = grids.frame[rows[end]].T @ w[end]
+        elif offt[1 + end] == "O":
+            w[end] = _grid_axes(grids, e, rows, offt).T @ w[end]
     return w
+
+
+def in_grid_frames(grids, e) -> tuple[np.ndarray | None, np.ndarray]:
+    """A CBAR's (or CBEAM's, with an OFFT) orientation vector and offsets as OFFT GGG gives
+    them: (v (3,) in GA's CD frame, or None where G0 gives it; (2, 3) WA, WB in GA's and GB's
+    CD frames), the same element for any reader of the fields (``nastran.flat``)."""
+    rows = grids.index([e.int(g, positive=True) for g in ("GA", "GB")], e)
+    offt = e["OFFT"] if isinstance(e["OFFT"], str) else "GGG"
+    w = offsets_in_basic(grids, e, rows, offt)
+    w = np.stack([grids.frame[r] @ wi for r, wi in zip(rows, w, strict=True)])
+    if isinstance(e["X1"], int):
+        return None, w
+    return grids.frame[rows[0]] @ _orientation(grids, e, rows[0], offt), w
+
+
+def _grid_axes(grids, e, rows, offt: str) -> np.ndarray:
+    """(3, 3) rows x, y, z in basic of the frame that OFFT 'O' offsets are given in: x from GA
+    to GB (the grids, not the offset ends: the offsets cannot define the frame they are given
+    in), z along x cross v, y = z cross x, v the orientation vector (as pyNastran's
+    ``rotate_v_wa_wb`` reads the QRG)."""
+    xyz = grids.xyz[rows]
+    x = _unit(xyz[1] - xyz[0])
+    z = _unit(np.cross(x, _orientation(grids, e, rows[0], offt)))
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+        e.fail("OFFT 'O': GA and GB coincide, or the orientation vector is along GA-GB")
+    return np.stack([x, np.cross(z, x), z])
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else np.full(3, np.nan)
 
 
 def _pins(e):
@@ -307,12 +352,12 @@ def _add_beam(ctx: Context, e) -> None:
         section, nsm = _general_section(ctx, prop, e)
     else:
         section, nsm = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
-    offt = _offt(e)
-    off = _offsets(ctx, e, rows, offt)
+    offt = _offt(ctx, e)
+    off = offsets_in_basic(ctx.grids, e, rows, offt)
     x = ctx.grids.xyz[rows] + off
     length = np.linalg.norm(x[1] - x[0])
     axis = (x[1] - x[0]) / max(length, 1e-300)
-    up = np.cross(axis, _orientation(ctx, e, rows[0], offt))  # local z = x cross v
+    up = np.cross(axis, _orientation(ctx.grids, e, rows[0], offt))  # local z = x cross v
     a, b = ctx.node[rows]
     part = f"{prop.name} {prop.id()}"
     try:

@@ -134,7 +134,7 @@ def _add_cbush(ctx: Context, e) -> None:
         frame = coordinate(ctx.grids, int(cid), e).axes_at(x[:1])[0]
     elif apart:
         axis = (x[1] - x[0]) / np.linalg.norm(x[1] - x[0])
-        z = np.cross(axis, _orientation(ctx, e, rows[0]))
+        z = np.cross(axis, _orientation(ctx.grids, e, rows[0]))
         if np.linalg.norm(z) < 1e-12:
             e.fail("the orientation vector is parallel to GA-GB")
         z /= np.linalg.norm(z)

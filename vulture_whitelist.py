@@ -32,7 +32,7 @@ _.c4
 _.init_k_KC0
 _.init_k_M
 split_z  # ema.run_groups.RunGroups: the z-scores of the cuts between run groups, a result field
-_.writeable  # fe.assembly: numpy's ndarray.flags.writeable, set to make memoised arrays read-only
+_.writeable  # fe.assembly: numpy's ndarray.flags.writeable, set to make memoized arrays read-only
 mac_v33  # pipelines.aircraft.ComparisonRow: JSON fields of demo --case aircraft (asdict)
 mac_v42
 mac_ours

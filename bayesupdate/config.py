@@ -32,7 +32,7 @@ Example::
     scale = false                   # allow one uniform scale in the alignment
     pair_tolerance = "5 mm"         # farthest a test point may sit from the model (m or unit)
     length_unit = "mm"              # the geometry file's (a UFF 164 record must agree)
-    model_length_unit = "in"        # only for a deck whose units are not recognised
+    model_length_unit = "in"        # only for a deck whose units are not recognized
     pair_to = "element"             # or "node": nearest node only
     [pairing]
     method = "auto"                 # auto | order | tracked | mac
@@ -112,7 +112,7 @@ from bayesupdate.inference.pairing import DEFAULT_FREQUENCY_WINDOW, PairingRules
 @dataclass(frozen=True)
 class ModelConfig:
     """The ``[model]`` table.  units: a Nastran deck's own unit system by name ("in-lbf-s",
-    "si", ...: ``nastran.units``) where its WTMASS and moduli do not say it (None: recognised)."""
+    "si", ...: ``nastran.units``) where its WTMASS and moduli do not say it (None: recognized)."""
 
     source: str = "exhaust"
     options: dict = field(default_factory=dict)

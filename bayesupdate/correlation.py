@@ -6,7 +6,7 @@
 - Mode pairing by MAC (Hungarian assignment, Kuhn 1955) with a threshold, swaps and unpaired
   modes named (``pair_modes``); frequencies only: in order (``pair_in_order``).
 - SEREP (O'Callahan, Avitabile & Riemer 1989): the test-analysis model (TAM) of a model at the
-  test DOFs, cross-orthogonality of mass-normalised test shapes with the model's through it,
+  test DOFs, cross-orthogonality of mass-normalized test shapes with the model's through it,
   the model's pseudo-orthogonality, and test shapes expanded to every model DOF.
 """
 
@@ -63,7 +63,7 @@ def comac(shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
 
 
 def pair_by_mac(shapes_test: np.ndarray, shapes_model: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Pair each test mode with a distinct model mode maximising total MAC (Hungarian method).
+    """Pair each test mode with a distinct model mode maximizing total MAC (Hungarian method).
 
     Returns (model_index (m_test,), mac (m_test,)).  Needs m_model >= m_test.
     """
@@ -110,7 +110,7 @@ def _swaps(test: np.ndarray, model: np.ndarray) -> tuple[tuple[int, int], ...]:
 
 
 def pair_modes(mac: np.ndarray, threshold: float = DEFAULT_MAC_THRESHOLD) -> ModePairs:
-    """Pairs of test and model modes by MAC: the assignment maximising the total MAC (Hungarian
+    """Pairs of test and model modes by MAC: the assignment maximizing the total MAC (Hungarian
     method, Kuhn 1955, ``scipy.optimize.linear_sum_assignment``), then every pair whose MAC is
     below ``threshold`` refused.
 
@@ -176,7 +176,7 @@ def serep_tam(transformation: np.ndarray, stiffness, mass) -> tuple[np.ndarray, 
 
 
 def serep_mass(shapes_at_test: np.ndarray) -> np.ndarray:
-    """SEREP TAM mass M_a = (Phi_a^+)^T Phi_a^+ (n_a, n_a) of mass-normalised retained modes
+    """SEREP TAM mass M_a = (Phi_a^+)^T Phi_a^+ (n_a, n_a) of mass-normalized retained modes
     (Phi^T M Phi = I makes T^T M T reduce to this; O'Callahan et al. 1989)."""
     p = np.linalg.pinv(np.asarray(shapes_at_test, dtype=float))
     return p.T @ p
@@ -185,9 +185,9 @@ def serep_mass(shapes_at_test: np.ndarray) -> np.ndarray:
 def cross_orthogonality(
     test: np.ndarray, model: np.ndarray, mass_at_test: np.ndarray
 ) -> np.ndarray:
-    """Cross-orthogonality X = Psi_t^T M_a Phi_a (m_t, m_m) of mass-normalised real test shapes
+    """Cross-orthogonality X = Psi_t^T M_a Phi_a (m_t, m_m) of mass-normalized real test shapes
     and model shapes at the test DOFs through the TAM mass M_a (n_a, n_a).  Identical
-    mass-normalised sets give the identity; common acceptance levels are |X_ii| >= 0.9 and
+    mass-normalized sets give the identity; common acceptance levels are |X_ii| >= 0.9 and
     |X_ij| <= 0.1 (NASA-STD-5002, 1996, "Load analyses of spacecraft and payloads")."""
     return np.asarray(test, dtype=float).T @ mass_at_test @ np.asarray(model, dtype=float)
 

@@ -16,7 +16,7 @@ class Prediction:
     """What a model predicts at one parameter point.
 
     frequencies_hz : (m,) first m elastic natural frequencies [Hz], ascending.
-    shapes : (n_dof, m) real mode shapes at ``dof_labels`` (mass-normalised for FE models), or None.
+    shapes : (n_dof, m) real mode shapes at ``dof_labels`` (mass-normalized for FE models), or None.
     dof_labels : sensor DOF labels of the shape rows (e.g. ``"7V"``), empty if no shapes.
     mass_kg : total mass [kg] or None.
     """

@@ -23,11 +23,11 @@ LAPACK (the package's solver before ``fe.eigen_small``), at each point.  Routes:
 * the banded shift-invert block Krylov of ``fe.eigen_small`` (cold: a seeded random block),
   and warm-started from the modes of a point 1 % away (1.01, 0.99, 1.02 times the point), as
   block Krylov and as subspace iteration (X <- op(X), Rayleigh-Ritz, same residual test);
-* the parts of the cold block Krylov: factorisation (as a sparse sum K - sigma M, and as the
+* the parts of the cold block Krylov: factorization (as a sparse sum K - sigma M, and as the
   solve forms it from K's and M's data on their shared pattern, ``fe.general_plan``; the band
-  layout it finds once per pattern), operator per block, orthonormalisation per block, one
+  layout it finds once per pattern), operator per block, orthonormalization per block, one
   Rayleigh-Ritz step at its converged size, and its residual by basis size (the sum uses the
-  solve's factorisation).
+  solve's factorization).
 
 Accuracy: every eigenvalue is also compared with the extended-precision (numpy longdouble)
 Rayleigh quotient of the dense route's own vector, which shows the dense answer's round-off.
@@ -224,7 +224,7 @@ def krylov_parts(P: Pencil, repeats: int) -> str:
         f"(the solve's, eigen_small.shifted) {t_shared:.2f}, the band layout (RCM order, "
         f"found once per pattern) {t_layout:.2f}; border (Z, S) {t_border:.2f}; operator per "
         f"block of {st.block} {t_op:.2f} (of which band solve {t_solve:.2f}); "
-        f"orthonormalisation per block {t_orth:.2f}; Rayleigh-Ritz at {k} vectors {t_rr:.2f} "
+        f"orthonormalization per block {t_orth:.2f}; Rayleigh-Ritz at {k} vectors {t_rr:.2f} "
         f"(of which eigh {t_eigh:.2f}); "
         f"eigenvalues from the operator {t_vals:.2f} [ms]; sum for {blocks} blocks and one "
         f"Rayleigh-Ritz: "

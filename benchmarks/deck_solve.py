@@ -15,7 +15,7 @@ machine shared with other jobs (the wall time also counts waits for a core):
   reduction both ways, the rigid set, the eigen-solve, expansion and mass); ``--solve-only``
   prints only these;
 * the full solve (20 modes) per point: after (``nastran.lines.LineFields``: the bound elements'
-  records written, their matrices recomputed in the vectorised kernels, added to the fixed
+  records written, their matrices recomputed in the vectorized kernels, added to the fixed
   part) and before (``LineAssembler(fast=False)``: the bound cards converted again into a
   structure and assembler at every solve, as the package did before ``LineFields``; the old
   commit itself: ``--before-only`` with ``PYTHONPATH=<old checkout>``), and the largest
@@ -126,7 +126,7 @@ def before_after(fe, repeats: int) -> None:
     miss = max(float(np.max(np.abs(a / b - 1))) for a, b in zip(after, before, strict=True))
     print(f"full solve ({N_MODES} modes) per point, median CPU [ms]:")
     print(f"  before (cards re-converted each solve): {np.round(t_before, 1)}")
-    print(f"  after  (records + vectorised kernels):  {np.round(t_after, 1)}")
+    print(f"  after  (records + vectorized kernels):  {np.round(t_after, 1)}")
     print(f"  after, with dense LAPACK (the eigen-solve before fe.eigen_small): "
           f"{np.round(t_dense, 1)}; frequencies vs the default "
           f"{dense_miss:.1e}")  # fmt: skip
@@ -136,7 +136,7 @@ def before_after(fe, repeats: int) -> None:
 def cycled_ms(solve, pts, repeats: int) -> float:
     """Median CPU time [ms] of one ``solve(p)`` while the points are solved in turn (each
     solve at another point than the one before: the assembly is never the cached one, as in
-    a sampler's or an optimiser's evaluation)."""
+    a sampler's or an optimizer's evaluation)."""
     times = []
     for k in range(repeats * len(pts)):
         p = pts[k % len(pts)]
@@ -151,7 +151,7 @@ def route_before_after(fe, repeats: int) -> None:
     ``Assembler.solve`` (sparse products T^T K T and K - sigma M at every solve, before),
     interleaved (after, before, after, ...: both under the same load) over the points in turn
     (each solve at another point than the one before: the assembly is never the cached one, as
-    in a sampler's or an optimiser's evaluation), with the largest differences of their
+    in a sampler's or an optimizer's evaluation), with the largest differences of their
     answers."""
     pts = points(fe)
 

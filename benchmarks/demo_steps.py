@@ -128,7 +128,7 @@ def main() -> None:
 
 
 def _print_inner_splits(results) -> None:
-    """The optimisers' and discovery's own records: where a step's seconds went inside it (each
+    """The optimizers' and discovery's own records: where a step's seconds went inside it (each
     optimum's evaluations and wall seconds, of which the Nelder-Mead polish of every start is
     most when polished; discovery's ``timings``)."""
     optima = (

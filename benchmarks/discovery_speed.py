@@ -4,7 +4,7 @@ a hidden joint flexibility and 0.3 % noise, and its shapes at the 40 sensor DOFs
 ``--shape-noise`` (default 3 % of each shape's RMS amplitude; 0: frequencies only).  Every effect
 kind of the library at every admissible location is scanned (58 candidates: 20 points x 2 kinds,
 6 joints, 4 bends, 8 parts); the default settings refit the promising ones.  Prints wall times
-per run, their median, and the split into baseline / localisation / refits / LOO.
+per run, their median, and the split into baseline / localization / refits / LOO.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/discovery_speed.py [--repeats 3]
         [--shape-noise 0.03]

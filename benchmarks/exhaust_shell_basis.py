@@ -68,7 +68,7 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from bayesupdate.inference.diagnostics import summarise  # noqa: E402
+from bayesupdate.inference.diagnostics import summarize  # noqa: E402
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noqa: E402
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
@@ -162,7 +162,7 @@ def posterior(problem, rom, args) -> dict:
     )  # fmt: skip
     post = sample_posterior(log_post, calibration, settings, screen=screen)
     t_sample = clock.lap()
-    summary = summarise(post)
+    summary = summarize(post)
     return dict(
         expr=float(calibration.expr), theta=[float(v) for v in calibration.theta],
         error_at_optimum=None if error_at_optimum is None else float(error_at_optimum),

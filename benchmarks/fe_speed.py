@@ -30,7 +30,7 @@ Run:  .venv/bin/python benchmarks/fe_speed.py [--repeats 200] [--shell-repeats 3
 --dofs N (alone): size scaling.  A free square steel plate (NAFEMS FV12: 10 x 10 x 0.05 m) of
     MITC4 quads with about N DOFs, one thickness parameter, through ``StructureBuilder`` /
     ``FEModel``: structure build, model set-up, re-assembly, ``FEModel.solve`` of the first 20
-    elastic modes (default factorisation), each timed once (wall and process CPU time), and the
+    elastic modes (default factorization), each timed once (wall and process CPU time), and the
     process's peak RSS after the set-up and at the end.  Run one size per process so that the RSS
     is that size's.
 

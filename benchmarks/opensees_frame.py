@@ -219,12 +219,12 @@ def build_opensees(
 
 
 def well_posed_solver(n_rigid: int) -> str:
-    """OpenSees eigen solver that does not factorise a singular K.
+    """OpenSees eigen solver that does not factorize a singular K.
 
     OpenSees' ARPACK runs in shift-invert mode at shift 0, so on a free body (``n_rigid`` > 0)
-    it factorises the singular stiffness: whether the zero pivot is caught (``aii <
+    it factorizes the singular stiffness: whether the zero pivot is caught (``aii <
     minDiagTol``) or turns into garbage eigenvalues depends on round-off, i.e. on the BLAS and
-    the numbering.  Its dense generalized LAPACK solver (QZ) needs no factorisation of K and is
+    the numbering.  Its dense generalized LAPACK solver (QZ) needs no factorization of K and is
     exact for free bodies; a supported structure keeps the banded ARPACK solver."""
     return "-fullGenLapack" if n_rigid else "-genBandArpack"
 

@@ -66,7 +66,7 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from bayesupdate.inference.diagnostics import summarise  # noqa: E402
+from bayesupdate.inference.diagnostics import summarize  # noqa: E402
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior  # noqa: E402
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate  # noqa: E402
 from bayesupdate.inference.priors import prior_from_mapping  # noqa: E402
@@ -115,7 +115,7 @@ def run(args, reduced: bool) -> dict:
         target_ess=1000,
     )
     post = sample_posterior(log_post, calibration, settings, screen=screen)
-    summary = summarise(post)
+    summary = summarize(post)
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
     flat = post.chain[post.burn :].reshape(-1, post.chain.shape[-1])
@@ -260,7 +260,7 @@ def _timed_run(args, moves: str, seed: int, setup_parts: tuple, reference) -> di
     t1, c1 = time.perf_counter(), time.process_time()
     post = sample_posterior(fresh, calibration, settings, screen=screen)
     wall, cpu = time.perf_counter() - t1, time.process_time() - c1
-    summary = summarise(post)
+    summary = summarize(post)
     acceptance = post.acceptance
     moves_info = post.diagnostics.get("moves") or {}
     row = dict(

@@ -14,7 +14,7 @@ BLAS on one thread:
       thicknesses (what every ``FEModel.solve`` costs before its eigen-solve); the eigen-solve
       (shift-invert Lanczos on the supported model) with CHOLMOD where scikit-sparse is installed
       and with SuperLU; memory: tracemalloc peak of set-up + re-assembly + solve (numpy buffers;
-      the factorisations' own allocations are not traced) and the process's peak RSS before the
+      the factorizations' own allocations are not traced) and the process's peak RSS before the
       peers run;
   (b) OpenSeesPy on the same nodes, quads and supports: model build (nodes, ShellMITC4 elements;
       its element matrices are formed inside ``eigen``) and ``eigen`` (its default ARPACK; the

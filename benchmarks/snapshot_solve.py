@@ -3,11 +3,11 @@ vectors, ``fe.reduced.basis``), two ways side by side, at the same seeded points
 ``calibrate --data paper:ema`` box:
 
     separate   ``FEModel.solve`` then ``static_corrections`` with its own assembly and
-               factorisation of K - sigma M (the build before this change)
-    shared     ``basis._snapshot``: one assembly and one factorisation for both (the build now)
+               factorization of K - sigma M (the build before this change)
+    shared     ``basis._snapshot``: one assembly and one factorization for both (the build now)
 
 Printed: median wall and CPU seconds per snapshot over ``--repeats`` points, and the largest
-difference of the frequencies and vectors between the two (round-off: the factorised matrix is
+difference of the frequencies and vectors between the two (round-off: the factorized matrix is
 T^T K T - sigma T^T M T against T^T (K - sigma M) T).
 
     PYTHONPATH=. python benchmarks/snapshot_solve.py --repeats 3

@@ -6,7 +6,7 @@ commands a user types (``bayesupdate.cli.main``).
    test_nastran_femap_roundtrip.py``: the three hanger GRIDs and 17 shell GRIDs) in
    ``[model.test_points]`` and binds the two thicknesses it calibrates (PSHELL 3 and 9 T).
 2. The virtual test: the deck's own first ``N_MODES`` modes at its values, V (z) and H (y) at the
-   20 points, mass-normalised and noise-free, written as modal data (``ema.modal_h5``).
+   20 points, mass-normalized and noise-free, written as modal data (``ema.modal_h5``).
 3. ``bayesupdate correlate study.toml --json``: the MAC diagonal of the unchanged deck against
    its own virtual test (1 to round-off), the pairs, the cross-orthogonality through the SEREP
    TAM (the identity).
@@ -73,7 +73,7 @@ def write_virtual_test(folder: Path) -> None:
     model = load_nastran_model(str(DECK), None, labels, points)
     p = model.predict(None, N_MODES)
     data = ModalData(p.frequencies_hz, shapes=p.shapes, dof_labels=labels, source="virtual",
-                     extra={"mass_normalised": np.ones(N_MODES, bool)})  # fmt: skip
+                     extra={"mass_normalized": np.ones(N_MODES, bool)})  # fmt: skip
     write_modal_h5(folder / "virtual.h5", data)
 
 

@@ -92,7 +92,7 @@ def _truth_starts(
         for point in zip(*(m.ravel() for m in mesh), strict=True)
     ]
     # the effect at its null value: the baseline's own fit is reachable, so D(candidate)
-    # <= D(baseline) up to the optimiser, as it must be for a nested model
+    # <= D(baseline) up to the optimizer, as it must be for a nested model
     starts.append(np.append(design, [candidate.null[a.name] for a in candidate.axes]))
     return problem, effect.tag, starts
 

@@ -19,12 +19,12 @@ The thicknesses' posterior sd is ``sample``'s, and the Laplace (Gauss-Newton) sd
 (relative sd 0.05, the default of ``sample``), with the relative sd estimated from the residuals
 (least squares), and the sandwich sd of the optimum under the identified frequencies' own sds
 added to a model-error level (``error_model``).  Why an estimate misses the truth:
-``attribution`` splits the linearised least-squares error of each thickness into the share of
+``attribution`` splits the linearized least-squares error of each thickness into the share of
 each mode's identification error (target / true frequency - 1), with the relative
-sensitivities d ln f / d ln t at the truth; ``linearised_tests`` gives the unweighted and the
+sensitivities d ln f / d ln t at the truth; ``linearized_tests`` gives the unweighted and the
 weighted estimates' errors in their sds.  Prints one JSON object; slow (the reduced basis of
 each of calibrate and sample takes about 100 full solves of 26,832 DOFs).  ``--tests`` runs
-only ``linearised_tests`` on given simulated tests (about 10 s a test plus 5 full solves).
+only ``linearized_tests`` on given simulated tests (about 10 s a test plus 5 full solves).
 
     PYTHONPATH=. python studies/nastran_roundtrip.py [--out DIR] [--reuse]
     PYTHONPATH=. python studies/nastran_roundtrip.py --tests test.uff s1.uff ...
@@ -69,7 +69,7 @@ def main(argv=None) -> dict:
     args = _arguments(argv)
     plain = load_nastran_model(str(DECK), PARAMETERS)
     if args.tests:
-        result = {"tests": linearised_tests(plain, args.tests)}
+        result = {"tests": linearized_tests(plain, args.tests)}
         print(json.dumps(result))
         return result
     out = Path(args.out or tempfile.mkdtemp(prefix="nastran_roundtrip_"))
@@ -106,7 +106,7 @@ def main(argv=None) -> dict:
         "sample": posterior_summary(sampled, TRUTH),
         "attribution": attribution(plain, np.asarray(calibrated["targets_hz"])),
         # the identified sds in the error model: calibrate's and the weighted estimate's errors
-        "linearised": linearised_tests(plain, [out / "test.uff"]),
+        "linearized": linearized_tests(plain, [out / "test.uff"]),
         "true_hz": test["true_frequencies_hz"][:10],
         "targets_hz": calibrated["targets_hz"],
         # resonances the range's ends cut: fitted by identify, not reported (149.78 Hz here)
@@ -131,7 +131,7 @@ def _arguments(argv):
         "--tests",
         nargs="+",
         metavar="UFF",
-        help="only the linearised estimates (error_model) of these simulated tests (UFF 58 of "
+        help="only the linearized estimates (error_model) of these simulated tests (UFF 58 of "
         "'simulate --study' at the truth), identified as 'identify' does",
     )
     return parser.parse_args(argv)
@@ -201,7 +201,7 @@ def laplace_sd(model, theta: dict, targets: np.ndarray, data_path) -> dict:
 
 
 def error_model(sens: np.ndarray, r: np.ndarray, sd_rel: np.ndarray) -> dict:
-    """The linearised estimates of the parameters under e_i ~ N(0, sigma^2 + sd_rel_i^2), the
+    """The linearized estimates of the parameters under e_i ~ N(0, sigma^2 + sd_rel_i^2), the
     identification's sd added in quadrature to a model-error level sigma (the likelihood of
     ``inference.likelihood_blocks``).  sens (n, p) relative sensitivities d ln f / d ln t,
     r (n,) relative frequency errors of the data, sd_rel (n,) the data's identification sd.
@@ -260,7 +260,7 @@ def posterior_summary(sampled: dict, truth: dict) -> dict:
 def attribution(model, targets: np.ndarray) -> dict:
     """Which mode's identification error moves each thickness: the relative sensitivities
     S = d ln f / d ln t (n_targets, 2) at the truth (central differences of full solves), the
-    identification errors r = target / true - 1, and the linearised least-squares estimate error
+    identification errors r = target / true - 1, and the linearized least-squares estimate error
     (S^T S)^-1 S^T r split into each mode's term [%]."""
     names = list(TRUTH)
     true_hz, jac = paired_jacobian(model, TRUTH, targets)
@@ -278,9 +278,9 @@ def attribution(model, targets: np.ndarray) -> dict:
     }
 
 
-def linearised_tests(model, files) -> dict:
+def linearized_tests(model, files) -> dict:
     """{file: estimates}: each simulated test identified (``ema.identify``, the code of
-    ``bayesupdate identify``) and the thicknesses' linearised errors and sds under its
+    ``bayesupdate identify``) and the thicknesses' linearized errors and sds under its
     identified frequencies and sds (``error_model``; S at the truth, from one set of full
     solves), in % of the truth and in sds."""
     from bayesupdate.ema.identify import identify

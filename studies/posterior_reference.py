@@ -15,7 +15,7 @@ case now, on ``exhaust_shell`` at the demo's mesh density (``pipelines.demo.seed
 optimum as the demo places the walkers (``pipelines.demo.optimum_part``: on the certified
 basis, not polished), then the same calls.
 
-Reference (self-normalised importance sampling, Owen 2013, "Monte Carlo theory, methods and
+Reference (self-normalized importance sampling, Owen 2013, "Monte Carlo theory, methods and
 examples", ch. 9): a pilot DE run (``moves="de"``), a Gaussian mixture fitted to it in the
 sampler's logit coordinates y (K components, covariances x 1.44), and the prior as a defensive
 component (Hesterberg 1995): g = 0.9 GMM + 0.1 prior.  The demo's cases refit g once on draws
@@ -72,7 +72,7 @@ from bayesupdate.inference import (  # noqa: E402
     calibrate,
     prior_from_mapping,
     sample_posterior,
-    summarise,
+    summarize,
 )
 from bayesupdate.inference.moves import DefensiveProposal, fit_gaussian_mixture  # noqa: E402
 from bayesupdate.inference.reference_check import reference_errors, within_tolerance  # noqa: E402
@@ -197,7 +197,7 @@ def demo_posterior(case: str):
 
 
 def weighted_moments(theta: np.ndarray, log_w: np.ndarray) -> dict:
-    """Self-normalised IS moments of draws theta (n, d) with log weights (n,): mean, sd (d,),
+    """Self-normalized IS moments of draws theta (n, d) with log weights (n,): mean, sd (d,),
     ESS, and Monte Carlo standard errors (delta method) of the mean [sd] and of the sd
     [relative]."""
     w = np.exp(log_w - np.max(log_w))
@@ -378,7 +378,7 @@ def _checked_seed(
     c0, t0 = time.process_time(), time.perf_counter()
     post = sample_posterior(log_post, calibration, settings, screen=screen, executor=executor)
     row = {"seed": seed, "steps": int(post.chain.shape[0]), **compare(ref, post.samples())}
-    summary = summarise(post)
+    summary = summarize(post)
     row.update(
         ok=accurate(row), converged=bool(post.converged), walkers=settings.walkers,
         max_rhat=max(v["r_hat"] for v in summary.values()),

@@ -39,7 +39,7 @@ from bayesupdate.inference import (
     prior_from_mapping,
     read_result,
     sample_posterior,
-    summarise,
+    summarize,
     write_result,
 )
 from bayesupdate.inference.coverage import interval_coverage
@@ -77,7 +77,7 @@ def run_case(label, geometry, joints, args, out: Path) -> dict:
         transform="logit",
     )
     posterior = sample_posterior(log_post, optimum, settings)
-    summary = summarise(posterior)
+    summary = summarize(posterior)
     rom_info = None
     if rom is not None:
         mean = posterior.samples()[:, : len(problem.names)].mean(axis=0)

@@ -1,7 +1,7 @@
 """Round-off scale of an eigenvalue (a test helper): how far two correct solves of one pencil may
 differ when their matrices or their arithmetic differ in the last bits.
 
-Two terms, both relative to the eigenvalue lambda of an M-normalised mode phi:
+Two terms, both relative to the eigenvalue lambda of an M-normalized mode phi:
 
 * the matrices: a perturbation dK with |dK| <= eps |K| entry by entry (a product or sum taken in
   another order, another BLAS kernel) moves lambda by at most eps |phi|^T |K| |phi| to first

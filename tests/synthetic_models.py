@@ -20,7 +20,7 @@ FREE_BEAM_BETA_L = np.array(
 
 
 def free_beam_shapes(x_over_length: np.ndarray, n_modes: int) -> np.ndarray:
-    """Free-free beam bending shapes (n_x, n_modes) at x/L, normalised to 2 at the ends."""
+    """Free-free beam bending shapes (n_x, n_modes) at x/L, normalized to 2 at the ends."""
     x = np.asarray(x_over_length, dtype=float)[:, None]
     b = FREE_BEAM_BETA_L[:n_modes][None, :]
     sigma = (np.cosh(b) - np.cos(b)) / (np.sinh(b) - np.sin(b))

@@ -44,7 +44,7 @@ def test_numpy_through_the_array_module_code_matches_the_cpu_path():
     lam1, y1 = be.batched_elastic_eigenvalues(K_ww, M, N_RIGID, N_MODES, vectors=True, threads=1)
     lam2, y2 = be.solve_on(np, K_ww, M, N_RIGID, N_MODES, vectors=True)
     np.testing.assert_allclose(lam2, lam1, rtol=1e-12, atol=0)
-    # eigenvectors up to sign, mass-normalised: y^T M y = I
+    # eigenvectors up to sign, mass-normalized: y^T M y = I
     sign = np.sign(np.sum(y1 * y2, axis=1, keepdims=True))
     np.testing.assert_allclose(y2 * sign, y1, rtol=0, atol=1e-12 * np.abs(y1).max())
     gram = np.einsum("bri,brs,bsj->bij", y2, M, y2)

@@ -75,7 +75,7 @@ def test_pair_batch_equals_hungarian_per_point():
 
 
 def test_batched_shape_pairing_equals_per_point_tracking(rom):
-    """The vectorised likelihood pairs every walker as build_problem's tracked pairing does, and
+    """The vectorized likelihood pairs every walker as build_problem's tracked pairing does, and
     on the exhaust's prior box a large share of points pair differently from the order."""
     problem = build_problem(rom, load_modal_data("paper:ema"))
     assert problem.pairing.method == "tracked"
@@ -218,7 +218,7 @@ def _sum_of_priors(priors, theta):
     return sum(prior.logpdf(theta[:, j]) for j, prior in enumerate(priors))
 
 
-def test_vectorised_prior_equals_the_sum_of_priors():
+def test_vectorized_prior_equals_the_sum_of_priors():
     problem = build_problem(get_model("exhaust"), load_modal_data("paper:ema"))
     lp = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
     rng = np.random.default_rng(1)

@@ -1,6 +1,6 @@
 """``bayesupdate correlate`` on the beam exhaust: against the seed's Table 2 (frequencies only,
 paired in order) and against a virtual test of the unchanged model (``pipelines.simulate``: its
-true, mass-normalised shapes at the 40 sensor DOFs), whose MAC diagonal is 1, whose pairs are
+true, mass-normalized shapes at the 40 sensor DOFs), whose MAC diagonal is 1, whose pairs are
 the identity and whose cross-orthogonality through the SEREP TAM is the identity; a test with
 two shapes exchanged is paired back and the swap named; bad input is one line, exit 2, no file.
 """
@@ -34,7 +34,7 @@ def virtual(tmp_path_factory):
     truth = simulate_test(get_model("exhaust"), VirtualTestSettings(noise=0.0, seed=0, n_modes=12))
     folder = tmp_path_factory.mktemp("virtual")
     data = ModalData(truth.frequencies_hz, shapes=truth.shapes, dof_labels=truth.dof_labels,
-                     source="virtual", extra={"mass_normalised": np.ones(12, bool)})  # fmt: skip
+                     source="virtual", extra={"mass_normalized": np.ones(12, bool)})  # fmt: skip
     write_modal_h5(folder / "virtual.h5", data)
     return folder, data
 
@@ -97,8 +97,8 @@ def test_two_exchanged_test_shapes_are_paired_back_and_named_as_a_swap(virtual, 
                          str(tmp_path / "swapped.h5"), "--json"])  # fmt: skip
     assert [(m["test"], m["model"]) for m in out["modes"]][2:4] == [(3, 4), (4, 3)]
     assert out["swapped"] == [{"test": 3, "model": 4}, {"test": 4, "model": 3}]
-    assert out["cross_orthogonality"] is None  # not mass-normalised: said so in the notes
-    assert any("mass-normalised" in n for n in out["notes"])
+    assert out["cross_orthogonality"] is None  # not mass-normalized: said so in the notes
+    assert any("mass-normalized" in n for n in out["notes"])
     main(["correlate", "--model", "exhaust", "--data", str(tmp_path / "swapped.h5")])
     text = capsys.readouterr().out
     assert "swapped" in text and "test 3 - model 4" in text

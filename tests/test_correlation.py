@@ -80,7 +80,7 @@ def _chain(n=6):
 
 def test_serep_tam_of_a_spring_mass_chain_reproduces_its_retained_modes_exactly():
     K, M = _chain()
-    lam, phi = eigh(K, M)  # mass-normalised
+    lam, phi = eigh(K, M)  # mass-normalized
     retained, at = [0, 1, 2], [1, 3, 5]  # three modes seen at three DOFs
     phi_r = phi[:, retained]
     phi_a = phi_r[at]
@@ -90,7 +90,7 @@ def test_serep_tam_of_a_spring_mass_chain_reproduces_its_retained_modes_exactly(
     np.testing.assert_allclose(eigh(K_a, M_a, eigvals_only=True), lam[retained], rtol=1e-10)
     np.testing.assert_allclose(phi_a.T @ M_a @ phi_a, np.eye(3), atol=1e-10)
     np.testing.assert_allclose(phi_a.T @ K_a @ phi_a, np.diag(lam[retained]), atol=1e-7)
-    # for mass-normalised modes T^T M T is (Phi_a^+)^T Phi_a^+
+    # for mass-normalized modes T^T M T is (Phi_a^+)^T Phi_a^+
     np.testing.assert_allclose(serep_mass(phi_a), M_a, atol=1e-10)
     np.testing.assert_allclose(pseudo_orthogonality(phi_a, M_a), np.eye(3), atol=1e-10)
     # expanding the retained shapes from the test DOFs gives them back at every DOF

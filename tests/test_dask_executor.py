@@ -5,7 +5,7 @@ A ``dask scheduler`` and two ``dask worker`` processes (each with a nanny, one t
 on 127.0.0.1 at a free port, as a user would by hand; ``bayesupdate discover --scheduler`` must
 give the serial run's JSON bit for bit (verdict, every candidate's evidence, parameters), and so
 must a ``LocalCluster`` of two threaded workers talking tcp (``processes=False``: no worker
-start-up cost, but every task and result still goes through the scheduler's serialisation), and
+start-up cost, but every task and result still goes through the scheduler's serialization), and
 ``calibrate --scheduler`` of a user's model (its starts on the workers).  A worker with another
 bayesupdate version, or no scheduler at the address, is a one-line error and exit 2.
 

@@ -29,7 +29,7 @@ def test_shape_residual_norm_is_the_mac_deficit_for_any_model_scaling():
     test = unit_real_shapes(rng.normal(size=(15, 4)))
     model = test + 0.2 * rng.normal(size=(15, 4))
     mac = np.diag(mac_matrix(test, model))
-    for scaling in (1.0, -3.0, 1e-4):  # mass normalisation and sign do not matter
+    for scaling in (1.0, -3.0, 1e-4):  # mass normalization and sign do not matter
         d = shape_residuals(test, scaling * model)
         np.testing.assert_allclose(np.sum(d * d, axis=0), 1.0 - mac, rtol=1e-10)
         # the residual is orthogonal to the model shape (least-squares scale factor)

@@ -315,7 +315,7 @@ def test_prior_odds_spread_over_the_library_set_the_bar(named_mass):
     assert f"posterior log odds {5 - np.log(16):.2f} <= 3" in reason
     verdict, _, named, _ = decide(*args, s.prior_log_odds(1))
     assert verdict == "explained" and named is weak
-    # posterior probabilities over the baseline and the fitted candidates: normalised, and
+    # posterior probabilities over the baseline and the fitted candidates: normalized, and
     # each in proportion to exp(ln BF + prior log odds)
     log_probability = result.log_posterior_probabilities()
     assert np.exp(log_probability).sum() == pytest.approx(1.0)

@@ -1,7 +1,7 @@
 """Each identified frequency's sd (``ModalData.identification_sd_hz``, ``ema.frequency_sd``)
 against the truth of the FE exhaust's virtual tests (seed layout, 1 % time-signal noise).
 
-If the sd is right, the standardised errors z = (f_identified - f_true) / sd are N(0, 1) and
+If the sd is right, the standardized errors z = (f_identified - f_true) / sd are N(0, 1) and
 their mean square over n values is chi-square_n / n.  Over 6 noise seeds x 12 modes (n = 72) its
 0.1 %-99.9 % quantiles put the RMS in [0.75, 1.26]; the test asserts that band.  Measured while
 building (seeds 1-6, the ones the method was chosen on): RMS 1.04; seeds 7-14, once: 0.89; 3 %
@@ -34,7 +34,7 @@ def cases():
     return [_case(model, seed) for seed in SEEDS]
 
 
-def test_standardised_frequency_errors_have_unit_rms(cases):
+def test_standardized_frequency_errors_have_unit_rms(cases):
     z = np.concatenate([(m.frequencies_hz - t) / m.identification_sd_hz for m, t in cases])
     assert z.size == 72
     rms = float(np.sqrt(np.mean(z**2)))

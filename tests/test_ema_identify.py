@@ -30,11 +30,11 @@ def test_twelve_modes_damping_and_shapes(exhaust_case):
     true = shapes[[labels.index(lab) for lab in modes.dof_labels]]
     mac = np.diag(mac_matrix(true, modes.shapes))
     assert mac.min() >= 0.98
-    assert np.all(result.mass_normalised)
-    # driving points give mass-normalised shapes: scale error of the real part below 2 %
-    from bayesupdate.ema.lsfd import realise
+    assert np.all(result.mass_normalized)
+    # driving points give mass-normalized shapes: scale error of the real part below 2 %
+    from bayesupdate.ema.lsfd import realize
 
-    est = realise(modes.shapes)
+    est = realize(modes.shapes)
     scale = np.sum(est * true, axis=0) / np.sum(true * true, axis=0)
     assert np.max(np.abs(np.abs(scale) - 1)) < 0.02
     assert modes.mpc.min() > 0.95

@@ -81,7 +81,7 @@ def test_beam_other_poles_are_bending_modes_but_two(beam_modes, bending_fit):
 
 
 def test_beam_without_driving_point_is_unscaled_and_finite(beam_modes):
-    assert not np.any(beam_modes.extra["mass_normalised"])
+    assert not np.any(beam_modes.extra["mass_normalized"])
     # unscaled shapes have unit largest component (one DOF here)
     np.testing.assert_allclose(np.max(np.abs(beam_modes.shapes), axis=0), 1.0, rtol=1e-12)
     assert np.all(np.isfinite(beam_modes.mpc))

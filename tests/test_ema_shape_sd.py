@@ -5,13 +5,13 @@ shape_sd_rel is meant to satisfy E[1 - MAC(identified, true)] ~ shape_sd_rel^2. 
 residue noise and model error (residual inflated by its correlation across lines), each test
 set's scale relative to the anchor set, and the part of a set too weak to be scaled (the V
 reference barely moves in mode 3, the H reference in mode 4: 1 - MAC ~ 6e-3 to 8e-3 there).
-Measured (real data): ratio realised / predicted over seeds 1-4 has median 1.46 and range
+Measured (real data): ratio realized / predicted over seeds 1-4 has median 1.46 and range
 0.35-6.3 (seeds 5-8, kept for confirmation: median 1.09, range 0.07-11.8); before the scale
 and correlation terms, median 16 and range 0.28-406.
 
 A mode near the top of the band (exhaust with the joint flexibility k_rot = 3e3 at cold_pipe/
 main_muffler: mode 13 at 144.37 Hz, damping fixed at 2.5 %, so its half-power band reaches 3.6
-Hz of the 150 Hz end) is repeated over noise seeds with the truth held fixed: its realised
+Hz of the 150 Hz end) is repeated over noise seeds with the truth held fixed: its realized
 1 - MAC (2.1e-5 to 2.5e-5, nearly all bias, the same in every repeat) is 1.55x the predicted
 sd^2 on average over 8 repeats (seeds 100-107; the test runs 100-102), so its shape sd is
 calibrated.  Its frequency was biased low by 0.02-0.04 % in every repeat (noise sd about

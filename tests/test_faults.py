@@ -113,7 +113,7 @@ def test_sigterm_before_first_checkpoint_leaves_no_file(tmp_path):
         stderr=subprocess.PIPE,
         text=True,
     )
-    # wait until `sample` has installed its SIGTERM handler (then it is optimising: 4000 starts)
+    # wait until `sample` has installed its SIGTERM handler (then it is optimizing: 4000 starts)
     deadline = time.monotonic() + 60
     while not _catches_sigterm(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.02)
@@ -364,7 +364,7 @@ def test_deferred_stop_is_recorded_not_raised():
 def test_a_stop_request_swallowed_by_an_extension_still_stops_sampling(tmp_path, monkeypatch):
     # a SIGTERM whose KeyboardInterrupt a compiled extension swallowed (scipy's Sobol set-up
     # reports "Exception ignored" and goes on): the recorded request stops the run at the next
-    # optimiser start, exit 130, and nothing is written
+    # optimizer start, exit 130, and nothing is written
     import bayesupdate.pipelines.sample as runner
 
     original = runner.sampling_problem

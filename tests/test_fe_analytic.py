@@ -172,7 +172,7 @@ def test_krylov_matches_dense_lapack():
     np.testing.assert_allclose(fk, fd, rtol=1e-7)
 
 
-def test_modes_are_mass_normalised_and_energy_shares_sum_to_one():
+def test_modes_are_mass_normalized_and_energy_shares_sum_to_one():
     m = tube_model(n_el=20, parts=2)
     r = m.solve(n_modes=6, energies=True)
     K, M, _ = m.assembler.assemble()

@@ -62,7 +62,7 @@ def test_result_does_not_depend_on_the_thread_count(pencils, threads):
     assert np.array_equal(lam1, lam2) and np.array_equal(y1, y2)
 
 
-def test_vectors_solve_the_pencil_and_are_mass_normalised(pencils):
+def test_vectors_solve_the_pencil_and_are_mass_normalized(pencils):
     K_ww, M = pencils
     lam, y = batched_elastic_eigenvalues(K_ww, M, N_RIGID, N_MODES, vectors=True, threads=2)
     r = M.shape[-1]

@@ -91,7 +91,7 @@ def test_shell_energies_sum_to_the_eigenvalue_and_densities_integrate_to_the_sha
     )
     area = en.shell_strain[:1] / en.shell_strain_density[:1]
     np.testing.assert_allclose(area, (0.6 / 12) * (0.4 / 8), rtol=1e-12)
-    # energy balance: the elements' strain energy is lambda / 2 for each mass-normalised mode
+    # energy balance: the elements' strain energy is lambda / 2 for each mass-normalized mode
     g = model._general  # noqa: SLF001 - the model's own matrices
     K, M, _ = g.assemble(model.element_properties(), model.shell_properties())
     phi = r.modes.shapes

@@ -7,7 +7,7 @@ of K - sigma M formed from their data (``eigen_small.shifted``).
 * An entry that is zero at the first point and not at a later one is kept (the pattern grows).
 * Closed form: a free-free chain of N masses m on springs k, with a massless node inside every
   link (M singular there), given with K and M on one pattern (M storing zeros): the Krylov's
-  shared-pattern factorisation gives lambda_j = (4 k / m) sin^2(j pi / (2 N)); and the whole
+  shared-pattern factorization gives lambda_j = (4 k / m) sin^2(j pi / (2 N)); and the whole
   route (``GeneralPlan.solve``) does on the same chain with its first mass split over two DOFs
   tied by T.
 * The deck with three wing fields bound, at two points: the route's modes equal

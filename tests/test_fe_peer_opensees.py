@@ -6,7 +6,7 @@ a joint spring between two coincident nodes in a rotated frame.  ``benchmarks/op
 builds it in OpenSees with OpenSees' own elements (ElasticTimoshenkoBeam / elasticBeamColumn with
 consistent mass), rigid links and zeroLength springs; only the section numbers are shared.
 Free-free pencils go to OpenSees' dense generalized (QZ) solver, never to its ARPACK, which
-factorises K at shift 0 and hits a zero pivot on a free body depending on round-off (it failed that
+factorizes K at shift 0 and hits a zero pivot on a free body depending on round-off (it failed that
 way on a fresh clone with numpy 2.5 / scipy 1.18); the six ~0 eigenvalues are dropped by count and
 checked to be ~0. ARPACK is used where K is regular (the frame on ground springs). Agreement
 reached: 1e-11 to 1e-9 relative on the first 12 elastic frequencies (the brief's target is 5e-4);

@@ -28,7 +28,7 @@ from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.shell_model import (
     ShellAssembly,
     ShellMeshWarning,
-    ThicknessParametrisation,
+    ThicknessParametrization,
     shell_mesh,
 )
 from bayesupdate.fe.sparse_modal import ModalSettings, cholmod_available, solve_sparse_modes
@@ -289,7 +289,7 @@ def test_thickness_powers_reproduce_direct_assembly_with_offsets_and_nsm():
     )
     assembly = ShellAssembly(mesh)
     group = rng.integers(-1, 3, n_el)  # three thickness parameters, some elements fixed
-    par = ThicknessParametrisation(assembly, group)
+    par = ThicknessParametrization(assembly, group)
     for _ in range(4):
         theta = rng.uniform(0.5e-3, 5e-3, 3)
         t = np.where(group >= 0, theta[np.maximum(group, 0)], mesh.thickness)
@@ -350,7 +350,7 @@ def test_mechanism_is_reported_with_its_dofs():
         _modes(mesh, n=8)
 
 
-def test_cholmod_and_superlu_factorisations_agree_and_superlu_is_the_fallback(monkeypatch):
+def test_cholmod_and_superlu_factorizations_agree_and_superlu_is_the_fallback(monkeypatch):
     """FV16 at 16 x 16 quads on the Lanczos path (forced: 816 free DOFs).  CHOLMOD (the extra
     ``fast``) and SuperLU each match dense LAPACK to round-off (measured 2e-10 and 4e-10: the
     conditioning of K - sigma M, not the ARPACK tolerance, sets it); without scikit-sparse

@@ -9,7 +9,7 @@ import pytest
 from gvt_runs import GVT, frf_argv
 
 from bayesupdate.cli import main
-from bayesupdate.ema.lsfd import realise
+from bayesupdate.ema.lsfd import realize
 from bayesupdate.ema.modal_h5 import read_modal_h5
 from bayesupdate.ema.uff_io import write_uff58
 from bayesupdate.ema.virtual_test import virtual_impact_test
@@ -94,7 +94,7 @@ def test_modes_table_equals_hdf5(roving_hammer):
         assert row[3] == f"{modes.mpc[r]:.3f}"
         assert int(row[4]) == int(modes.extra["stable_orders"][r])
         assert row[5] == f"{modes.shape_sd_rel[r]:.2g}"
-        assert row[6] == "mass-normalised"  # the set has its driving point
+        assert row[6] == "mass-normalized"  # the set has its driving point
     # and they are the true modes, not any numbers
     freqs = np.array([float(row[1]) for row in rows])
     assert np.max(np.abs(freqs / FN - 1)) < 0.002
@@ -109,8 +109,8 @@ def test_shapes_table_rows_columns_and_values(roving_hammer):
     assert [row[0] for row in rows] == list(modes.dof_labels)
     assert sorted(modes.dof_labels) == sorted(LABELS)
     table = np.array([[float(v) for v in row[1:]] for row in rows])
-    # realised from the HDF5 shapes, largest magnitude +1
-    real = realise(modes.shapes)
+    # realized from the HDF5 shapes, largest magnitude +1
+    real = realize(modes.shapes)
     expect = real / real[np.argmax(np.abs(real), axis=0), range(real.shape[1])]
     assert np.allclose(table, expect, atol=5e-4)
     assert np.allclose(np.max(table, axis=0), 1.0)
@@ -191,7 +191,7 @@ def test_report_folder_that_is_a_file(tmp_path, capsys):
 
 
 def test_shape_cautions_name_complex_and_rough_modes():
-    """The shapes section names modes whose realised shape drops much (low MPC) or whose
+    """The shapes section names modes whose realized shape drops much (low MPC) or whose
     shape error is large; a clean mode is not named."""
     from bayesupdate.modal_data import ModalData
     from bayesupdate.report.identify_report import _shape_cautions, shapes_table
@@ -207,7 +207,7 @@ def test_shape_cautions_name_complex_and_rough_modes():
     complex_note, rough_note = _shape_cautions(modes)
     assert complex_note.startswith("Mode(s) 2: MPC below")
     assert rough_note.startswith("Mode(s) 3: shape_sd_rel above")
-    # mode 1 realised is itself; mode 3 scaled so its largest value (2V) is +1
+    # mode 1 realized is itself; mode 3 scaled so its largest value (2V) is +1
     rows = shapes_table(modes).rows
     assert [r[1] for r in rows] == ["+1.000", "-0.500"]
     assert [r[3] for r in rows] == ["+0.500", "+1.000"]

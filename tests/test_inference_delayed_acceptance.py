@@ -11,7 +11,7 @@ COV = np.array([[1.0, 0.6], [0.6, 2.0]])
 
 
 class Gaussian:
-    """A vectorised Gaussian log-density with the attributes the sampler reads."""
+    """A vectorized Gaussian log-density with the attributes the sampler reads."""
 
     names = ("a", "b")
     ndim = 2

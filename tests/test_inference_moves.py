@@ -357,7 +357,7 @@ def test_importance_ess_of_a_too_wide_gaussian_matches_the_closed_form():
     rng = np.random.default_rng(5)
     s, d, n = 2.0, 3, 400_000
     y = s * rng.standard_normal((n, d))
-    log_p = -0.5 * np.sum(y**2, axis=1) + 17.0  # unnormalised: the constant must not matter
+    log_p = -0.5 * np.sum(y**2, axis=1) + 17.0  # unnormalized: the constant must not matter
     log_g = -0.5 * np.sum((y / s) ** 2, axis=1) - d * np.log(s)
     expected = (np.sqrt(2 * s**2 - 1) / s**2) ** d
     assert importance_ess(log_p, log_g) == pytest.approx(expected, rel=0.02)
@@ -405,7 +405,7 @@ def test_stuck_share_of_a_too_narrow_gaussian_matches_the_closed_form():
     x, y = rng.standard_normal(n), s * rng.standard_normal(n)
 
     def log_p(v):
-        return -0.5 * v**2 + 4.0  # unnormalised
+        return -0.5 * v**2 + 4.0  # unnormalized
 
     def log_g(v):
         return norm.logpdf(v, scale=s)

@@ -1,5 +1,5 @@
 """The parameter space against closed forms: the maps between theta, z, u and y invert each other,
-the log-Jacobians equal finite differences, the prior is a normalised density in every coordinate,
+the log-Jacobians equal finite differences, the prior is a normalized density in every coordinate,
 and a failed model gets the documented residual in every fit."""
 
 import numpy as np
@@ -65,7 +65,7 @@ def test_points_on_a_bound_move_inside_by_the_margin():
         ((0.5, 3.0), {"kind": "normal", "mean": 1.0, "sd": 0.4}),
     ],
 )
-def test_the_prior_is_a_normalised_density_in_theta_z_and_y(bounds, prior):
+def test_the_prior_is_a_normalized_density_in_theta_z_and_y(bounds, prior):
     """The Jacobians are right exactly when each density integrates to one in its coordinate."""
     space = ParameterSpace((_spec("p", bounds, prior),))
     lo, hi = space.z_low[0], space.z_high[0]
@@ -79,7 +79,7 @@ def test_the_prior_is_a_normalised_density_in_theta_z_and_y(bounds, prior):
     assert in_theta == pytest.approx(1.0, abs=1e-6)
 
 
-def test_halfnormal_noise_level_is_normalised_in_its_log_coordinate():
+def test_halfnormal_noise_level_is_normalized_in_its_log_coordinate():
     space = ParameterSpace((FOUR.parameters[1],))
     in_y = integrate.quad(lambda y: np.exp(space.log_prior_y(np.array([[y]]))[0]), -40, 5)[0]
     assert in_y == pytest.approx(1.0, abs=1e-7)
@@ -103,7 +103,7 @@ def test_unit_box_on_linear_and_log_axes():
     assert theta[0, 1] == pytest.approx(1e4, rel=1e-12)  # the geometric midpoint
     np.testing.assert_allclose(theta[1], [3e-3, 1e2], rtol=1e-12)  # clipped to the box
     np.testing.assert_allclose(space.u_from_theta(theta[0]), [0.25, 0.5], rtol=1e-12)
-    # the optimiser's box is linear in theta on every axis
+    # the optimizer's box is linear in theta on every axis
     assert space.linear().theta_from_u(np.array([0.5, 0.5]))[1] == 0.5 * (1e2 + 1e6)
     z = space.z_from_theta(theta[0])
     assert z[1] == pytest.approx(np.log(1e4))

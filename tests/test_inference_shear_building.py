@@ -18,7 +18,7 @@ from bayesupdate.inference import (
     build_problem,
     calibrate,
     sample_posterior,
-    summarise,
+    summarize,
 )
 from bayesupdate.modal_data import ModalData
 from bayesupdate.models import get_model
@@ -38,7 +38,7 @@ def problem():
     return build_problem(model, data, BOUNDS, pairing="order")
 
 
-def test_frequencies_match_generalised_eigenproblem():
+def test_frequencies_match_generalized_eigenproblem():
     theta = np.array([1.3, 0.7])
     k = theta * 29.7e6
     lam = eigh(
@@ -50,7 +50,7 @@ def test_frequencies_match_generalised_eigenproblem():
     model = get_model("shear_building")
     pred = model.predict({"theta_1": 1.3, "theta_2": 0.7}, n_modes=2)
     np.testing.assert_allclose(pred.frequencies_hz, np.sqrt(lam) / (2 * np.pi), rtol=1e-12)
-    # mass-normalised shapes: Phi^T M Phi = I
+    # mass-normalized shapes: Phi^T M Phi = I
     np.testing.assert_allclose(
         pred.shapes.T @ np.diag([M1, M2]) @ pred.shapes, np.eye(2), atol=1e-12
     )
@@ -60,7 +60,7 @@ def test_frequencies_match_generalised_eigenproblem():
     np.testing.assert_allclose(batch[0], np.sqrt(lam) / (2 * np.pi), rtol=1e-12)
 
 
-def test_batch_shapes_are_the_generalised_eigenvectors_and_pair_in_one_batch():
+def test_batch_shapes_are_the_generalized_eigenvectors_and_pair_in_one_batch():
     """``predict_batch_with_shapes``: the closed-form shapes are scipy's eigenvectors of
     (K, M) up to scale (roof positive), a factor <= 0 gives NaN, and a likelihood that pairs by
     shape takes the batched path (one call per walker batch, not one per point)."""
@@ -124,6 +124,6 @@ def test_bimodal_posterior_matches_quadrature(problem):
     np.testing.assert_allclose(draws.mean(axis=0), mean_q, rtol=0.03)
     np.testing.assert_allclose(draws.std(axis=0), sd_q, rtol=0.03)
     assert abs(np.mean(draws[:, 1] > 0.75) - mass_q) < 0.03
-    summary = summarise(result)
+    summary = summarize(result)
     assert all(summary[name]["r_hat"] < 1.02 for name in ("theta_1", "theta_2"))
     assert result.failed_evaluations == 0

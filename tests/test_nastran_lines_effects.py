@@ -55,7 +55,7 @@ def test_effect_on_a_deck_with_a_bound_line_field_equals_the_deck_edited_by_hand
     edited = _extended(_deck(tmp_path / "d", 1.173), {}, spec)
     direct = edited.solve({n: values[n] for n in effect}, n_modes=6).frequencies_hz
     np.testing.assert_allclose(moved, direct, rtol=1e-10)
-    # discover localises by modal energies (``fe.energy``): the line elements' matrices are
+    # discover localizes by modal energies (``fe.energy``): the line elements' matrices are
     # there too, so every mode's strain and kinetic energy shares sum to 1 over the parts
     energies = bound.solve(values, n_modes=6, energies=True).energies
     np.testing.assert_allclose(energies.strain_by_part.sum(axis=0), 1.0, rtol=1e-9)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from bayesupdate.inference.nelder_mead import SimplexSettings, minimise_together, simplex_steps
+from bayesupdate.inference.nelder_mead import SimplexSettings, minimize_together, simplex_steps
 
 
 def rosenbrock(u: np.ndarray) -> float:
@@ -44,7 +44,7 @@ def scipy_polish(f, u0, settings: SimplexSettings):
 
 
 def ours(f, u0, settings: SimplexSettings):
-    ends, values, used = minimise_together(
+    ends, values, used = minimize_together(
         lambda u: np.array([f(row) for row in u]), np.asarray(u0)[None, :], settings
     )
     return ends[0], float(values[0]), used
@@ -87,7 +87,7 @@ def test_lockstep_equals_one_at_a_time():
         batches.append(u.shape[0])
         return np.array([kinked(row) for row in u])
 
-    ends, values, total = minimise_together(batched, np.array(STARTS), settings)
+    ends, values, total = minimize_together(batched, np.array(STARTS), settings)
     alone = [ours(kinked, u0, settings) for u0 in STARTS]
     for k, (x, value, _) in enumerate(alone):
         assert np.array_equal(ends[k], x)

@@ -1,6 +1,6 @@
 """Every long phase says what it is doing (``compute.progress``): the sampler's adaptation
 stages and kept chain, TMCMC's tempering stages, discovery's score tests of the candidates and
-its refits, identification's stabilisation-diagram orders and FRF estimation's channels each
+its refits, identification's stabilization-diagram orders and FRF estimation's channels each
 write their line in "lines" mode (a log, a pipe) with the count of what they did; and the
 commands keep each phase's wall time in their result file and their --json output."""
 

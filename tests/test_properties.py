@@ -142,7 +142,7 @@ def test_identify_recovers_random_modal_models(seed, n_modes, n_dof):
     est = found.shapes[rows]
     mac = (np.sum(est * shapes, axis=0) ** 2) / (np.sum(est**2, axis=0) * np.sum(shapes**2, axis=0))
     assert np.all(mac > 0.9999), mac
-    # driving point -> mass-normalised scale: the shapes themselves come back, up to sign
+    # driving point -> mass-normalized scale: the shapes themselves come back, up to sign
     sign = np.sign(np.sum(est * shapes, axis=0))
     np.testing.assert_allclose(est * sign, shapes, atol=2e-3 * np.abs(shapes).max())
 

@@ -1,6 +1,6 @@
 """The compression of projected affine terms (``fe.reduced.basis.compress_terms``) drops no
 more than a plain SVD truncated at ``rel`` x the largest singular value, whether the low rank
-is found by the randomised range finder or the matrix is full rank (plain SVD)."""
+is found by the randomized range finder or the matrix is full rank (plain SVD)."""
 
 import numpy as np
 

@@ -73,7 +73,7 @@ def test_mode_one_energy_sits_where_the_navier_solution_puts_it(plate):
     D = STEEL.youngs_modulus * T**3 / (12 * (1 - nu**2))
     f11 = np.pi / A**2 * np.sqrt(D / (STEEL.density * T))  # (pi/2)(2/a^2) sqrt(D/rho h)
     assert result.frequencies_hz[0] == pytest.approx(f11, rel=5e-3)
-    # element averages of the analytic density (4 x 4 Gauss points per cell), normalised
+    # element averages of the analytic density (4 x 4 Gauss points per cell), normalized
     g = (np.polynomial.legendre.leggauss(4)[0] + 1) / 2
     lo = emap.polygons[:, 0, :2]  # the cells' lower-left corners (sm.plate's node order)
     h = A / N

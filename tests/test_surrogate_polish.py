@@ -8,7 +8,7 @@ the points meet 1e-5, and the two rules make the same steps to the same end."""
 import numpy as np
 
 from bayesupdate.inference import optimize as opt
-from bayesupdate.inference.nelder_mead import SimplexSettings, minimise_together
+from bayesupdate.inference.nelder_mead import SimplexSettings, minimize_together
 
 CENTRE = np.array([0.3, 0.6, 0.45])
 #: the objective's jump (the shell exhaust's end on a flip: 1.1e-2)
@@ -28,8 +28,8 @@ def _jump(u: np.ndarray) -> np.ndarray:
 
 def test_no_value_test_saves_the_collapse_on_a_jump():
     start = CENTRE[None, :]
-    ends, values, used = minimise_together(_jump, start, SimplexSettings(*opt.SURROGATE_POLISH))
-    _, values_f, used_f = minimise_together(_jump, start, SimplexSettings(1e-5, 1e-8))
+    ends, values, used = minimize_together(_jump, start, SimplexSettings(*opt.SURROGATE_POLISH))
+    _, values_f, used_f = minimize_together(_jump, start, SimplexSettings(1e-5, 1e-8))
     # the start is the minimum: both keep it, to the bit
     np.testing.assert_array_equal(ends[0], CENTRE)
     assert values[0] == values_f[0] == 0.0
@@ -38,8 +38,8 @@ def test_no_value_test_saves_the_collapse_on_a_jump():
 
 def test_on_a_smooth_minimum_both_rules_end_alike():
     start = np.array([[0.35, 0.55, 0.5], [0.2, 0.7, 0.4]])
-    ends, values, used = minimise_together(_smooth, start, SimplexSettings(*opt.SURROGATE_POLISH))
-    ends_f, values_f, used_f = minimise_together(_smooth, start, SimplexSettings(1e-5, 1e-8))
+    ends, values, used = minimize_together(_smooth, start, SimplexSettings(*opt.SURROGATE_POLISH))
+    ends_f, values_f, used_f = minimize_together(_smooth, start, SimplexSettings(1e-5, 1e-8))
     np.testing.assert_array_equal(ends, ends_f)
     np.testing.assert_array_equal(values, values_f)
     assert used == used_f

@@ -15,13 +15,13 @@ DESCRIPTION = """Correlate a model with test modes before updating: a row per te
 model) and the test's AutoMAC, swaps and unpaired modes named, COMAC per test DOF with the worst
 points named, and for an FE model a SEREP test-analysis model at the test DOFs (O'Callahan et
 al. 1989): the model's pseudo-orthogonality, the cross-orthogonality where the test's shapes are
-mass-normalised, and the test shapes expanded to
+mass-normalized, and the test shapes expanded to
 every model DOF (--out).  Test data without shapes (paper:ema, a frequency CSV) pair in order.
 
 Pairs follow the one rule calibrate, sample and discover keep pairs by (the study's [pairing]
 table, or the flags): a pair is admissible when its MAC reaches --mac-threshold (0.6) and
 |f_model / f_test - 1| <= --frequency-window (0.5); the pairs are the assignment of distinct
-model modes maximising the total MAC of the admissible pairs (Hungarian method).  Any other
+model modes maximizing the total MAC of the admissible pairs (Hungarian method).  Any other
 test mode is refused, named with its best MAC partner and the rule: mac (below the threshold),
 window (that partner outside the window) or taken (that partner paired with another test
 mode).  The model is solved for --extra-modes (2) modes beyond the test's highest.

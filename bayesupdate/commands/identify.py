@@ -19,7 +19,7 @@ rounding), and the runs are grouped where a mode's pole shifts between them by m
 its sd and its half-power half-width (or by --groups); each group's poles and residues are
 estimated apart, the shapes assembled, and the spread and per-group MPC reported.
 The range (all lines, or --band) is analysed as consecutive narrow bands with limits at
-sum-FRF minima.  Shapes by LSFD, mass-normalised by the driving points (without one, shapes stay
+sum-FRF minima.  Shapes by LSFD, mass-normalized by the driving points (without one, shapes stay
 unscaled and the output says so); each mode's shape_sd_rel estimates its shape error
 (E[1 - MAC] ~ sd^2).  Writes ModalData as HDF5 (--out), optional plots (--plots DIR) and an
 optional report (--report DIR: report.html, self-contained, and report.md with the data, the

@@ -20,7 +20,7 @@ Examples:
   bayesupdate modes --model exhaust_shell --sed-map sed/
 
 A Nastran deck is solved in its own units (the JSON's "mass" is in its "mass_unit", and a deck
-whose PARAM WTMASS is 1/g also gives its "weight"; "units" says which system was recognised)
+whose PARAM WTMASS is 1/g also gives its "weight"; "units" says which system was recognized)
 with its SPC set, PARAM WTMASS and EIGRL count; its --set names are deck fields
 ("PSHELL 3 T=0.0595", "MAT1 2 E scale=1.1"), plain numbers in the deck's units.
 The JSON also gives the centre of gravity "cg" ("cg_unit") and the inertia about it ("inertia":

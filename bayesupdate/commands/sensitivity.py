@@ -14,8 +14,8 @@ from bayesupdate.commands._shared import (
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "sensitivity"
-HELP = "normalised sensitivities of the paired frequencies, what the test sees, a parameter set"
-DESCRIPTION = """Normalised sensitivities (d f / f) / (d p / p) of the model modes paired with the
+HELP = "normalized sensitivities of the paired frequencies, what the test sees, a parameter set"
+DESCRIPTION = """Normalized sensitivities (d f / f) / (d p / p) of the model modes paired with the
 test (as 'correlate' and 'calibrate' pair them: the study's [pairing] rules) to every candidate
 parameter, at the model's defaults: by the eigenvalue derivative phi^T (dK - lambda dM) phi for
 FE models and decks (one modal solve), or by central differences in log-parameter (--method

@@ -1,9 +1,9 @@
 """Cooperative interruption: a SIGTERM / SIGINT handler records the request, long loops check it.
 
 Why: the handler raises ``KeyboardInterrupt`` where the signal lands, but a compiled extension
-may swallow it (scipy's Sobol initialisation reports "Exception ignored" and carries on), and
+may swallow it (scipy's Sobol initialization reports "Exception ignored" and carries on), and
 the run would then finish as if never asked to stop.  The recorded request is checked again at
-safe points (between optimiser starts, between sampler steps), so the stop always happens;
+safe points (between optimizer starts, between sampler steps), so the stop always happens;
 ``quiet_unraisable`` keeps the extension's "Exception ignored" report off the terminal, and
 ``quiet_excepthook`` the traceback a Cython function prints first (``__Pyx_WriteUnraisable``
 calls ``PyErr_PrintEx``, i.e. ``sys.excepthook``, before the unraisable hook).

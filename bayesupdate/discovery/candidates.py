@@ -9,7 +9,7 @@ z = log(theta) (``ParameterSpace``).
 
 The *null value* of an effect parameter is the value at which the extended model equals the
 model without the effect (zero added mass, zero spring, factor 1, the joint's modelled
-stiffness, a connection's modelled spring): the localisation step probes each candidate by a
+stiffness, a connection's modelled spring): the localization step probes each candidate by a
 small step away from it.
 """
 

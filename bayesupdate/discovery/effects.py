@@ -247,7 +247,7 @@ for _kind in (
         ),
         _bends,
         _extend_bend,
-        "ovalisation of a bend beyond the B31.3 factor",
+        "ovalization of a bend beyond the B31.3 factor",
     ),
     EffectKind(
         "boundary_spring",
@@ -345,7 +345,7 @@ def si_per_model_unit(model: FEModel, unit: str) -> float:
     """SI value of one model unit of an effect parameter whose SI unit is ``unit`` ("kg",
     "N/m", "N m/rad"; 1 for a factor): a Nastran deck's own units (its ``units`` record, e.g.
     lbf s^2/in: 175.1 kg; lbf/in: 175.1 N/m), 1 for a built-in model (SI) or a deck whose
-    units are not recognised."""
+    units are not recognized."""
     from bayesupdate.inference.mass_properties import model_units
 
     record = model.structure.metadata.get("nastran", {}).get("units")

@@ -37,7 +37,7 @@ likelihood has), so an effect that adds mass is judged against the weight too.
 
 PSIS-LOO (Vehtari, Gelman & Gabry 2017) with per-mode log-likelihoods (a mode's frequency and
 shape together), via ``arviz_stats.loo_approximate_posterior``: draws from the Laplace
-Gaussian (truncated to the box), residuals linearised with the same Jacobian (r = r* + J (z - z*),
+Gaussian (truncated to the box), residuals linearized with the same Jacobian (r = r* + J (z - z*),
 the approximation the Laplace evidence already makes; no extra model solves), importance-corrected
 with log p - log q.
 """
@@ -193,7 +193,7 @@ class FitSpace:
 
 @dataclass
 class Optimum:
-    """One end point of a fit: z (d,), normalised residuals r (m_used,), Jacobian J (m_used, d)."""
+    """One end point of a fit: z (d,), normalized residuals r (m_used,), Jacobian J (m_used, d)."""
 
     z: np.ndarray
     r: np.ndarray
@@ -419,7 +419,7 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
         z = np.vstack([z, more[ok]])
         if z.shape[0] >= draws:
             break
-    method = "Laplace draws, linearised residuals, PSIS-LOO (approximate posterior)"
+    method = "Laplace draws, linearized residuals, PSIS-LOO (approximate posterior)"
     if z.shape[0] < draws:
         # the box holds little of the Gaussian (an unconstrained parameter): clip instead
         more = rng.multivariate_normal(best.z, cov, size=draws, method="cholesky")
@@ -427,7 +427,7 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
         method += "; draws clipped to the bounds"
     z = z[:draws]
     n = z.shape[0]
-    r_all = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, size) linearised residuals
+    r_all = best.r[None, :] + (z - best.z) @ best.jac_z.T  # (n, size) linearized residuals
     log_q = stats.multivariate_normal(best.z, cov, allow_singular=True).logpdf(z)
     log_q = np.atleast_1d(log_q)
     pointwise = space.likelihood.pointwise_by_mode(r_all)

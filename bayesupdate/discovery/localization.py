@@ -1,4 +1,4 @@
-"""Localise: where on the structure the flagged modes differ from the unflagged ones.
+"""Localize: where on the structure the flagged modes differ from the unflagged ones.
 
 Three views, each a ranked list:
 

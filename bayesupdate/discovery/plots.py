@@ -1,4 +1,4 @@
-"""Discovery plots (matplotlib, Agg): residuals per mode before/after, the localisation map
+"""Discovery plots (matplotlib, Agg): residuals per mode before/after, the localization map
 along the structure, the candidate ranking.  Each function returns the Figure; ``save_plots``
 writes all three as PNG into a folder."""
 
@@ -57,7 +57,7 @@ def plot_localization(result, structure=None):
                 ax.annotate(
                     name, (p[0], p[1]), fontsize=7, xytext=(3, 3), textcoords="offset points"
                 )
-    ax.set(xlabel="x [m]", ylabel="y [m]", title="localisation (score test, best effect per place)")
+    ax.set(xlabel="x [m]", ylabel="y [m]", title="localization (score test, best effect per place)")
     ax.set_aspect("equal", adjustable="datalim")
     fig.tight_layout()
     return fig

@@ -4,7 +4,7 @@ design variables away from what the frequencies say, and how it counts modes off
 level.
 
 Test mode i has the real, unit-norm shape t_i (n,) on the test's sensor DOFs (complex identified
-shapes are rotated to their best-fit real line first, ``ema.lsfd.realise``; ``unit_real_shapes``).
+shapes are rotated to their best-fit real line first, ``ema.lsfd.realize``; ``unit_real_shapes``).
 The block's residual is d_i = t_i - a_i p_i, |d_i|^2 = 1 - MAC(t_i, p_i), with independent
 N(0, sigma_i^2) components (``ShapeBlock``, after Vanik, Beck & Au 2000 and Yuen 2010 ch. 6), and
 its level is held fixed:
@@ -15,7 +15,7 @@ its level is held fixed:
 * sd_i is the data's ``shape_sd_rel`` (identification estimates it from the LSFD fit; a virtual
   test states it), floored at ``SHAPE_SD_FLOOR_REL`` = 1 % of the shape's RMS amplitude: sensor
   sensitivity and orientation errors of about 1 % (the calibration uncertainty of ordinary
-  accelerometers) and the FE discretisation of a shape leave no test-model difference below it
+  accelerometers) and the FE discretization of a shape leave no test-model difference below it
   that is physics.  Without it a near-perfect mode (1 - MAC ~ 1e-6 on the virtual test) gets a
   level so small that a 0.04 % frequency shift of all modes buys a better shape fit of it: that is
   how the former per-mode integrated level dragged the baseline on identified data (the null case
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from bayesupdate.ema.lsfd import realise
+from bayesupdate.ema.lsfd import realize
 from bayesupdate.inference.likelihood_blocks import ShapeBlock, shape_residuals
 
 #: smallest shape noise as a fraction of a shape's RMS amplitude [-] (module docstring)
@@ -59,7 +59,7 @@ FAILURE_RATE = 0.1
 
 def unit_real_shapes(shapes: np.ndarray) -> np.ndarray:
     """(n_dof, m) real or complex shapes -> real shapes with unit Euclidean norm per column."""
-    real = realise(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
+    real = realize(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
     norm = np.linalg.norm(real, axis=0)
     return real / np.where(norm > 0, norm, 1.0)[None, :]
 

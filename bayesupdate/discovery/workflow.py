@@ -1,4 +1,4 @@
-"""Discovery end to end: baseline -> flag -> localise -> name -> add and show.
+"""Discovery end to end: baseline -> flag -> localize -> name -> add and show.
 
 ``discover(model, data, settings)`` returns a ``DiscoveryResult`` (the knobs named below are
 fields of ``settings.DiscoverySettings``' records):
@@ -6,7 +6,7 @@ fields of ``settings.DiscoverySettings``' records):
 1. the baseline calibration of the design variables (or the one given), its noise model and
    Laplace evidence (``flagging``, ``evidence``);
 2. flagged modes (z-scores, p-values, MAC);
-3. the localisation views; every candidate of the library at every admissible location gets a
+3. the localization views; every candidate of the library at every admissible location gets a
    score test (``localization``);
 4. two-tier refits with the design variables.  Quick tier: the ``quick_refits`` best candidates
    by score, plus the best ``per_kind`` of every kind (the broad-scan fallback: the linear score
@@ -144,7 +144,7 @@ class DiscoveryResult:
 
     def log_posterior_probabilities(self) -> np.ndarray:
         """(1 + len(fits),) log posterior probabilities of the baseline and of each fitted
-        candidate, normalised over these hypotheses (Laplace evidence x prior).  Candidates the
+        candidate, normalized over these hypotheses (Laplace evidence x prior).  Candidates the
         score test left unfitted are omitted, so these are upper bounds for the fitted ones."""
         log_weight = np.array([0.0, *(self.log_posterior_odds(f) for f in self.fits)])
         return log_weight - logsumexp(log_weight)

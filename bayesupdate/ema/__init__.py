@@ -1,4 +1,4 @@
-"""Experimental modal analysis: time signals -> FRFs -> LSCE or pLSCF -> stabilisation ->
+"""Experimental modal analysis: time signals -> FRFs -> LSCE or pLSCF -> stabilization ->
 automatic poles -> LSFD shapes -> :class:`~bayesupdate.modal_data.ModalData` (seed section 4,
 eqs 4-18).
 

@@ -45,7 +45,7 @@ def min_band_lines(n_frf: int, order: int) -> int:
 
     The estimators fit order coefficients to n_frf x lines values; with few values per
     coefficient the spare poles of a band holding one or two modes fit the data's coherent
-    ripple (a sweep's leakage) and stabilise.  Real plate, one FRF, order 40: 256-line bands
+    ripple (a sweep's leakage) and stabilize.  Real plate, one FRF, order 40: 256-line bands
     gave 10 such poles in 60-500 Hz, 512 lines 3, 1024 lines 0; the GVT (10 FRFs) and the FE
     exhaust (40 FRFs) are not affected (64 and 16 lines).
     """

@@ -6,7 +6,7 @@ residues and residuals eliminated by variable projection).  The poles on those l
 theta = (Re s, Im s); the identified poles within a window's width of it enter fixed.  Two
 parts, added as variances:
 
-1. The linearised covariance of a least-squares pole fit (Pintelon, Guillaume & Schoukens
+1. The linearized covariance of a least-squares pole fit (Pintelon, Guillaume & Schoukens
    2007, "Uncertainty calculation in (operational) modal analysis", MSSP 21, 2359-2373: the
    pole covariance from the Jacobian of the fit, propagated to f_n), in its sandwich form
 
@@ -17,7 +17,7 @@ parts, added as variances:
    ``LAG_LINES`` (Newey & West 1987, Econometrica 55, 703-708).  The plain s^2 (J^T J)^-1
    assumes white noise of one level; H1 noise grows with |H| at a resonance (input noise) and
    windowing and model error correlate neighbouring lines, and on the FE exhaust's virtual
-   tests (1 % noise, seeds 1-6, 72 modes) the plain form gave standardised errors with RMS
+   tests (1 % noise, seeds 1-6, 72 modes) the plain form gave standardized errors with RMS
    4.2, the sandwich 2.2.
 2. The estimator's own bias: the reported pole (the band's LSCE, or the end refinement) is not
    the window's least-squares optimum, whose covariance part 1 is.  The window is refined by

@@ -1,4 +1,4 @@
-"""End-to-end modal identification: FRFs -> LSCE per band -> stabilisation -> automatic poles ->
+"""End-to-end modal identification: FRFs -> LSCE per band -> stabilization -> automatic poles ->
 LSFD shapes -> :class:`~bayesupdate.modal_data.ModalData` plus diagnostics.
 
 The range (the whole axis, or the band given) is split into consecutive narrow bands
@@ -53,7 +53,7 @@ class Identification:
     fit_range_hz: tuple  # (lo, hi) of the LSFD fit
     synthesized: np.ndarray  # (n_frf, n_f) synthesized FRFs on the fit range lines
     frf_correlation: np.ndarray  # (n_frf,) FRAC of synthesized vs measured
-    mass_normalised: np.ndarray  # (m,) bool
+    mass_normalized: np.ndarray  # (m,) bool
     # dropped_hz (pruned poles); cut_hz, cut_damping, cut_end (:func:`_cut_summary`)
     extra: dict = field(default_factory=dict)
 
@@ -155,7 +155,7 @@ def shape_sd_rel(scaled: ScaledShapes) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: the progress phase of the pole estimators: every band's model orders (``compute.progress``)
-ORDERS_PHASE = "identify: stabilisation diagram orders"
+ORDERS_PHASE = "identify: stabilization diagram orders"
 #: pole estimators by name: each returns an LsceResult (poles and pole vectors per order)
 ESTIMATORS = {"lsce": lsce, "plscf": plscf}
 
@@ -188,7 +188,7 @@ class IdentifySettings:
     per band minus one (None: :func:`~bayesupdate.ema.bands.automatic_bands`; at least the
     range's lines for one band).  min_count : stable orders a pole needs (None: the
     selection's default, :func:`~bayesupdate.ema.stabilization.select_poles`).
-    tol_frequency, tol_damping [-], min_mac : stabilisation tolerances between orders.
+    tol_frequency, tol_damping [-], min_mac : stabilization tolerances between orders.
     tol_damping 0.2 (not 0.05): on the real plate, damping of clear modes scatters 5-15 %
     between orders, so 0.05 lost 3 of its 5 peaks depending on the band; spurious poles that
     pass are removed by :func:`modal_significance`.  method : a key of ``ESTIMATORS``.
@@ -454,7 +454,7 @@ def _modal_data(frfs: FrfSet, selected: list, fit: LsfdFit, significance, basis)
             "frequency_sd_fallback": sd[1],
             "stable_orders": np.array([p.stable_orders for p in selected]),
             "cluster_spread_hz": np.array([p.spread_hz for p in selected]),
-            "mass_normalised": scaled.mass_normalised,
+            "mass_normalized": scaled.mass_normalized,
             "fit_share": significance[0],
             "peak_to_residual": significance[1],
             "shape_sd_fallback": sd_fallback,
@@ -599,7 +599,7 @@ def identify(
         fit_range_hz=(float(f[fit_lo]), float(f[fit_hi])),
         synthesized=synth,
         frf_correlation=frac,
-        mass_normalised=modes.extra["mass_normalised"],
+        mass_normalized=modes.extra["mass_normalized"],
         extra={
             "dropped_hz": np.array([p.frequency_hz for p in dropped]),
             # the fit's other poles (residual poles, cut resonances) [rad/s]: a re-fit of the

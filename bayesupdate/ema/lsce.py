@@ -16,7 +16,7 @@ over-determined system.  Model orders are nested: with a fixed number of rows, t
 order p uses the first p + 1 columns of the system of the highest order, and the R factor of a
 QR decomposition of those columns is the leading (p + 1) x (p + 1) block of the full R factor.
 One QR (by Cholesky-QR, see :func:`hankel_r_factor`) of the largest Hankel matrix therefore
-solves every order of the stabilisation diagram.
+solves every order of the stabilization diagram.
 """
 
 from dataclasses import dataclass

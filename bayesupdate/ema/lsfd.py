@@ -8,7 +8,7 @@ and UR (upper residual: modes above it) are real.  Writing A = a + j b keeps the
 structure with real unknowns; one real least-squares solve serves all FRFs (shared basis).
 
 Mode shapes: for a fixed DOF q of a test set and roving DOFs i, A_iqr = psi_ir psi_qr / (2 j
-w_dr) for mass-normalised (unit modal-A) scaling, so with the driving point i = q,
+w_dr) for mass-normalized (unit modal-A) scaling, so with the driving point i = q,
 psi_qr = sqrt(2 j w_dr A_qqr) and psi_ir = 2 j w_dr A_iqr / psi_qr.
 """
 
@@ -159,10 +159,10 @@ def mpc(shapes: np.ndarray) -> np.ndarray:
         return np.where(tr > 0, ((l1 - l2) / np.where(tr > 0, tr, 1.0)) ** 2, 0.0)
 
 
-def realise(shapes: np.ndarray) -> np.ndarray:
+def realize(shapes: np.ndarray) -> np.ndarray:
     """Real shapes (n_dof, m): each column rotated to its best-fit real line, real part kept."""
     x = np.asarray(shapes, dtype=complex)
-    # the angle maximising sum Re(e^{-j t} x)^2 is half the angle of sum x^2
+    # the angle maximizing sum Re(e^{-j t} x)^2 is half the angle of sum x^2
     theta = 0.5 * np.angle(np.sum(x**2, axis=0))
     return np.real(x * np.exp(-1j * theta)[None, :])
 
@@ -171,7 +171,7 @@ def realise(shapes: np.ndarray) -> np.ndarray:
 class ScaledShapes:
     """Shapes assembled from the residues of all test sets (:func:`shapes_from_residues`).
 
-    labels (n_dof,) str; shapes (n_dof, m) complex; mass_normalised (m,) bool: the anchor set
+    labels (n_dof,) str; shapes (n_dof, m) complex; mass_normalized (m,) bool: the anchor set
     had a driving point; error_var (n_dof, m): expected |psi_i - psi_i_true|^2 of each value
     up to the shape's common scale (0 when no residue variances were given); weak_part (m,)
     bool: some DOFs come only from a set too weak to be scaled against the others.
@@ -179,7 +179,7 @@ class ScaledShapes:
 
     labels: tuple
     shapes: np.ndarray
-    mass_normalised: np.ndarray
+    mass_normalized: np.ndarray
     error_var: np.ndarray
     weak_part: np.ndarray
 
@@ -264,7 +264,7 @@ def _residue_products(residues, poles, residue_var, sets):
             for s in sets
         ]
     )
-    # without any driving point a mode cannot be mass-normalised: its shape is left unscaled,
+    # without any driving point a mode cannot be mass-normalized: its shape is left unscaled,
     # at unit largest component (dividing by a vanishing driving point would overflow)
     peak = np.max(np.abs(prod), axis=0)
     dp_max = np.max(np.abs(dp), axis=0)
@@ -319,7 +319,7 @@ def shapes_from_residues(
     errors propagated from the residue variances (n_frf, m) when given (:class:`LsfdFit`).
 
     residues (n_frf, m), poles (m,), sets from :meth:`FrfSet.sets`.  For each mode the set whose
-    driving point sees the mode most strongly is the anchor, mass-normalised by its driving
+    driving point sees the mode most strongly is the anchor, mass-normalized by its driving
     point (psi_q = sqrt(2 j w_d A_qq)).  Every other set is scaled onto the already scaled sets
     through their shared DOF labels (complex least squares: magnitude and sign), because a set
     whose own driving point barely moves in this mode would give a noisy sqrt; only a set that

@@ -67,6 +67,11 @@ def write_modal_h5(path: str | os.PathLike, modes: ModalData, timings: dict | No
                 extra[key] = arr
 
 
+#: keys of ``extra`` that files written before release 0.2.0 spell otherwise (one spelling:
+#: -ize, as numpy and scipy write it)
+_RENAMED = {"mass_normalised": "mass_normalized"}
+
+
 def read_modal_h5(path: str | os.PathLike) -> ModalData:
     """Read ModalData written by :func:`write_modal_h5`."""
     if not os.path.isfile(path):
@@ -84,6 +89,7 @@ def read_modal_h5(path: str | os.PathLike) -> ModalData:
                 x.decode() if isinstance(x, bytes) else str(x) for x in g["dof_labels"][()]
             )
             extra = {k: v[()] for k, v in g["extra"].items()} if "extra" in g else {}
+            extra = {_RENAMED.get(k, k): v for k, v in extra.items()}
             return ModalData(
                 frequencies_hz=g["frequencies_hz"][()],
                 shapes=shapes,

@@ -1,4 +1,4 @@
-"""Identification plots (matplotlib, Agg backend): stabilisation diagram with CMIF overlay,
+"""Identification plots (matplotlib, Agg backend): stabilization diagram with CMIF overlay,
 CMIF alone, measured vs synthesized FRFs, MAC matrix, mode shapes on the sensor geometry or as
 bars over the DOF labels.
 
@@ -137,9 +137,9 @@ def plot_mode_shapes(modes, path, coordinates: dict | None = None) -> Path:
     coordinates : {node number: (x, y, z)} [m]; the nodes are drawn along x in node order.  Without
     coordinates the node number is the abscissa.  V (z) and H (y) components are two curves.
     """
-    from bayesupdate.ema.lsfd import realise
+    from bayesupdate.ema.lsfd import realize
 
-    shapes = realise(np.asarray(modes.shapes, dtype=complex))
+    shapes = realize(np.asarray(modes.shapes, dtype=complex))
     parsed = [parse_label(lab) for lab in modes.dof_labels]
     m = modes.n_modes
     ncol = min(4, m)

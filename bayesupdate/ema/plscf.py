@@ -5,14 +5,14 @@ Vibration 11:395-409, eqs 1-12).
 
 Model: every FRF o of the band is H_o(w) = B_o(z) / A(z) with z = exp(j w dt), the common
 denominator A(z) = sum_r alpha_r z^r of order p and numerators B_o(z) = sum_r beta_or z^r,
-real coefficients.  The linearised least-squares error B_o - A H_o, stacked over the lines,
+real coefficients.  The linearized least-squares error B_o - A H_o, stacked over the lines,
 gives normal equations with R = Re(X^H X), S_o = Re(X^H Y_o), T_o = Re(Y_o^H Y_o) (X the
 (N, p+1) basis z^r, Y_o = -diag(H_o) X); eliminating the numerators leaves the reduced normal
 equations M alpha = 0, M = sum_o (T_o - S_o^T R^-1 S_o) (Peeters et al. eq. 9), solved with
 alpha_p = 1.  The poles are the roots z_r of A: s_r = ln(z_r) / dt.  With one reference (the
 FRF rows of a roving or SIMO test) the poly-reference right matrix-fraction model reduces to
 this scalar denominator; its participation factors are then 1, and the pole vector (one value
-per FRF, for the stabilisation MAC) is the residue B_o(z_r) / A'(z_r).
+per FRF, for the stabilization MAC) is the residue B_o(z_r) / A'(z_r).
 
 Band handling as in :mod:`bayesupdate.ema.lsce`: the band's lines are a base-band spectrum
 (w - w_lo), dt = 1 / (2 (f_hi - f_lo)), poles shifted back by j w_lo.  Orders are nested: the
@@ -55,7 +55,7 @@ def _nested_reduction(r: np.ndarray, s: np.ndarray):
 
     L of a leading block of R is the leading block of L, and the first k rows of L^-1 S_o
     involve only those, so Q_o[:k, :k] = L_k^-1 S_o[:k, :k] and S^T R^-1 S = Q^T Q for every
-    order from one factorisation: G[k - 1] = sum_(i < k) sum_o Q_o[i]^T Q_o[i].
+    order from one factorization: G[k - 1] = sum_(i < k) sum_o Q_o[i]^T Q_o[i].
     """
     n = r.shape[0]
     chol = scipy.linalg.cholesky(r, lower=True)
@@ -94,7 +94,7 @@ def plscf(
 
     frequencies_hz (n_f,) uniform [Hz]; frf (n_frf, n_f) complex, any kind.  Returns an
     :class:`~bayesupdate.ema.lsce.LsceResult` (poles [rad/s] with Im > 0 inside the band,
-    pole vectors B_o(z_r) / A'(z_r) per FRF), so stabilisation and selection are shared.
+    pole vectors B_o(z_r) / A'(z_r) per FRF), so stabilization and selection are shared.
     """
     f = np.asarray(frequencies_hz, dtype=float)
     h_all = np.atleast_2d(np.asarray(frf))

@@ -6,7 +6,7 @@ Model of every FRF k on the window's lines (seed eq. 4, :mod:`bayesupdate.ema.ls
             + LR_k (jw)^p / (jw)^2 + UR_k (jw)^p.
 It is linear in the residues and residuals c_k and nonlinear in the poles s_r.  With the
 design matrix D(s) (real and imaginary parts stacked, shared by all FRFs) the residues are
-eliminated, c_k = D^+ y_k, and the poles minimise the projected cost
+eliminated, c_k = D^+ y_k, and the poles minimize the projected cost
   sum_k || P_perp(s) y_k ||^2,   P_perp = I - D D^+
 (variable projection: Golub & Pereyra 1973, SIAM J. Numer. Anal. 10(2) 413-432).  Its Jacobian
 is taken in Kaufman's approximation (Kaufman 1975, BIT 15 49-57): J_j = -P_perp (dD/ds_j) c_k,
@@ -34,7 +34,7 @@ from bayesupdate.ema.synthesis import frf_basis
 #: largest accepted move of a refined pole, in half-power half-widths |Re s|.  The bias the
 #: refinement removes is a small part of a mode's bandwidth (FE exhaust, mode 13: 0.012-0.016);
 #: a larger move means the model (modes, one extra pole, residuals) does not describe the data
-#: there, and the stabilised estimate is kept (real mAEWing1 GVT, top of 3-35 Hz: 0.2-0.96, the
+#: there, and the stabilized estimate is kept (real mAEWing1 GVT, top of 3-35 Hz: 0.2-0.96, the
 #: 31.7 Hz mode pulled 0.23-0.36 % away from the authors' 31.78 Hz peak pick)
 MAX_MOVE = 0.1
 
@@ -99,7 +99,7 @@ def _principal_responses(y: np.ndarray, rank: int) -> np.ndarray:
 
     The model D c has at most rank = 2 m + 2 independent columns over the FRFs, so the
     weaker right singular directions of y hold noise only; the projected cost keeps its
-    minimiser up to that noise while the work per step falls by n_frf / k (principal
+    minimizer up to that noise while the work per step falls by n_frf / k (principal
     response functions: Allemang & Brown 1998, Sound Vib. 32(1), on data reduction by SVD)."""
     if y.shape[1] <= rank:
         return y
@@ -117,7 +117,7 @@ def _evaluate(theta, fixed, f, y, kind, normal=True):
 
 
 def _levenberg_marquardt(theta, fixed, f, y, kind, n_band: int, max_iter: int):
-    """Minimise the projected cost from theta; returns (theta, cost at start, cost at end).
+    """Minimize the projected cost from theta; returns (theta, cost at start, cost at end).
 
     Stops when no step lowers the cost, or when a step moves none of the first n_band poles by
     more than 1e-4 of its half-power half-width |Re s| (the extra poles, in a flat valley,

@@ -108,7 +108,7 @@ class RunGroups:
     labels: tuple[str, ...]
     shapes: np.ndarray
     shape_error_var: np.ndarray
-    mass_normalised: np.ndarray
+    mass_normalized: np.ndarray
 
     @property
     def mpc(self) -> np.ndarray:
@@ -305,7 +305,7 @@ def group_poles(
         residues[g.rows], var[g.rows] = g.residues, g.residue_var
     scaled = shapes_from_residues(residues, poles_from_modal(mean, damping), frfs.sets(), var)
     per_mode = (mean, damping, sd, spread, shifted, own)
-    shapes = (scaled.labels, scaled.shapes, scaled.error_var, scaled.mass_normalised)
+    shapes = (scaled.labels, scaled.shapes, scaled.error_var, scaled.mass_normalized)
     return RunGroups(est, automatic, tuple(cuts), *per_mode, *shapes)
 
 

@@ -3,7 +3,7 @@
 Pole of mode r (seed eq. 16): s_r = -zeta_r w_r + j w_r sqrt(1 - zeta_r^2), w_r = 2 pi f_r.
 Receptance (seed eq. 4):  H_ij(jw) = sum_r A_ijr / (jw - s_r) + conj(A_ijr) / (jw - conj(s_r))
                            [+ lower residual LR_ij / (jw)^2 + upper residual UR_ij].
-For real mass-normalised shapes phi (proportional damping) A_ijr = phi_ir phi_jr / (2 j w_dr),
+For real mass-normalized shapes phi (proportional damping) A_ijr = phi_ir phi_jr / (2 j w_dr),
 w_dr = Im(s_r).  Mobility and accelerance are receptance times (jw) and (jw)^2.
 """
 
@@ -31,7 +31,7 @@ def residues_from_shapes(
 ) -> np.ndarray:
     """Residues A_kr = phi_resp,kr phi_ref,kr / (2 j w_dr) for FRF rows k (n_frf, m).
 
-    shapes_response, shapes_reference: (n_frf, m) real mass-normalised shape values at the
+    shapes_response, shapes_reference: (n_frf, m) real mass-normalized shape values at the
     response and reference DOF of each FRF row [1/sqrt(kg)].
     """
     wd = np.imag(poles)
@@ -84,7 +84,7 @@ def synthesize_from_modes(
     shapes_reference: np.ndarray,
     kind: str = "accelerance",
 ) -> np.ndarray:
-    """FRFs (n_frf, n_f) of a proportionally damped model from real mass-normalised shapes.
+    """FRFs (n_frf, n_f) of a proportionally damped model from real mass-normalized shapes.
 
     shapes_response / shapes_reference: (n_frf, m) shape values at each row's DOFs.
     """

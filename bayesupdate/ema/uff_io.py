@@ -187,16 +187,16 @@ def _coherence(sets: list[dict], resp: list, ref: list, x0: np.ndarray) -> np.nd
 def write_uff55(path: str | os.PathLike, modes: ModalData) -> None:
     """Write modes as dataset 55 (normal modes, 3 translations per node; real shapes).
 
-    Complex shapes are realised first (rotated to their best real line).  Missing DOFs of a
+    Complex shapes are realized first (rotated to their best real line).  Missing DOFs of a
     node are written as 0; on reading, a DOF that is 0 in every mode is dropped.
     """
     import pyuff
 
-    from bayesupdate.ema.lsfd import realise
+    from bayesupdate.ema.lsfd import realize
 
     if modes.shapes is None:
         raise BayesUpdateError(f"{path}: modal data has no shapes; UFF 55 needs them")
-    shapes = realise(modes.shapes) if np.iscomplexobj(modes.shapes) else np.asarray(modes.shapes)
+    shapes = realize(modes.shapes) if np.iscomplexobj(modes.shapes) else np.asarray(modes.shapes)
     if not np.all(np.isfinite(shapes)):
         raise BayesUpdateError(f"{path}: shapes contain NaN or inf; refusing to write them")
     parsed = [parse_label(lab) for lab in modes.dof_labels]

@@ -1,6 +1,6 @@
 """Virtual roving-hammer impact test by modal superposition (for tests, demos and ``simulate``).
 
-Independent of any FE model: give natural frequencies, damping ratios and real mass-normalised
+Independent of any FE model: give natural frequencies, damping ratios and real mass-normalized
 shapes at named sensor DOFs.  Default layout = the seed's test (section 4): 20 sensor points; a
 vertical set with the accelerometer fixed at ``1V`` and the hammer roving over ``1V..19V``
 (19 FRFs, driving point ``1V/1V``), and a horizontal set with the accelerometer at ``1H`` and the
@@ -50,7 +50,7 @@ def best_reference_points(
 
     A roving-hammer set measures psi_i psi_ref, so its reference must move in every mode that has
     motion in the set's direction.  For the V set, the modes whose V part holds at least
-    ``significant`` of the shape's norm count; the point maximising the worst |phi_ref| / max|phi|
+    ``significant`` of the shape's norm count; the point maximizing the worst |phi_ref| / max|phi|
     (V part) over those modes wins.  Likewise for H.  shapes : (n_dof, m) at ``dof_labels``.
     """
     index = {lab: i for i, lab in enumerate(dof_labels)}
@@ -158,7 +158,7 @@ def virtual_impact_test(
 ):
     """Simulate the test; returns an accelerance :class:`FrfSet` on 0..f_max_hz.
 
-    natural_hz (m,) [Hz], damping_ratio (m,), shapes (n_dof, m) real mass-normalised
+    natural_hz (m,) [Hz], damping_ratio (m,), shapes (n_dof, m) real mass-normalized
     [1/sqrt(kg)] at ``dof_labels``; layout: (response, reference) label pairs (default
     :func:`seed_layout`).  settings : :class:`ImpactTestSettings` (default: its defaults);
     options : fields of it to set or override, for calls without a record

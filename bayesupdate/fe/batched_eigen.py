@@ -153,7 +153,7 @@ def batched_elastic_eigenvalues(
     r = n_rigid + r_e.  threads : split the batch over this many threads (default
     ``solver_threads()``; chunks of fewer than ``MIN_CHUNK`` points are not split off).
     Returns (B, n_modes) eigenvalues [rad^2/s^2] ascending and, with ``vectors``, the
-    (B, r, n_modes) reduced eigenvectors, mass-normalised (y^T M_r y = 1).
+    (B, r, n_modes) reduced eigenvectors, mass-normalized (y^T M_r y = 1).
     Raises ``numpy.linalg.LinAlgError`` when a reduced mass matrix is not positive definite.
     A batch of at least ``GPU_MIN_BATCH`` goes to a GPU when CuPy sees one (``gpu_module``).
     """

@@ -18,7 +18,7 @@ SUPORT, ``ModalSettings.rigid_set = "rigid_motions"``).  Dense LAPACK spends O(n
   the shift-invert operator of the compressed pencil, so every Krylov vector lies in the
   constraint space and the massless DOFs follow their statically condensed values;
 * block Krylov (Ericsson & Ruhe, Math. Comp. 35 (1980) 1251; Bathe, *Finite Element
-  Procedures*, 2014, sec. 11.5-11.6) from a seeded random block, M-orthonormalised by classical
+  Procedures*, 2014, sec. 11.5-11.6) from a seeded random block, M-orthonormalized by classical
   Gram-Schmidt twice (Giraud et al., Numer. Math. 101 (2005) 87) and the eigen-decomposition
   of each block's M-Gram matrix;
 * Rayleigh-Ritz on the basis V (V^T M V = I); a Ritz pair is accepted when its residual
@@ -146,7 +146,7 @@ def krylov_modes(Kf, Mf, Rm, n_modes: int, sigma: float, settings: KrylovSetting
 
     sigma : shift [rad^2/s^2] (< 0); start : (n, k) start block (e.g. a neighbouring point's
     modes), else a seeded random block of ``settings.block`` columns.  Returns (lam (n_modes,)
-    [rad^2/s^2] ascending, phi (n, n_modes) mass-normalised), or None where the iteration does
+    [rad^2/s^2] ascending, phi (n, n_modes) mass-normalized), or None where the iteration does
     not resolve the pencil."""
     Kf, Mf = sp.csr_matrix(Kf), sp.csr_matrix(Mf)
     chol = shifted(Kf, Mf, sigma)
@@ -185,7 +185,7 @@ def _shift_invert_values(phi, Mf, op, sigma):
     Rayleigh quotients of the operator, theta = x^T M op(x) = 1 / (lambda - sigma).  x^T K x
     sums terms ~||K|| ||x||^2 that cancel to lambda (axial stiffness ~1e9 x the eigenvalue:
     ~5e-9 relative round-off on a 0.7 Hz suspension mode); op(x) ~ x / (lambda - sigma)
-    cancels nothing, so theta keeps the backward-stable factorisation's accuracy, as in
+    cancels nothing, so theta keeps the backward-stable factorization's accuracy, as in
     ARPACK's shift-invert mode and dense LAPACK on M x = theta (K - sigma M) x."""
     MX = Mf @ phi
     theta = np.einsum("ij,ij->j", MX, op(phi)) / np.einsum("ij,ij->j", MX, phi)
@@ -220,7 +220,7 @@ def _m_orthonormal_block(Y, Mf, V, MV):
     eigen-decomposition of that matrix scaled to unit diagonal, keeping its well-conditioned
     part: columns that Gram-Schmidt reduces by 1e-10 (a mode the basis already
     holds, as from a warm start) and directions below 1e-12 of the largest are dropped.  A
-    block whose Gram matrix had a condition above 1e4 is orthonormalised a second time (as in
+    block whose Gram matrix had a condition above 1e4 is orthonormalized a second time (as in
     Cholesky QR twice: Fukaya et al., SIAM J. Sci. Comput. 42 (2020) A477).  (None, None) when
     nothing is left."""
     Y0 = Y

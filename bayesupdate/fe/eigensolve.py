@@ -1,4 +1,4 @@
-"""Free-free generalised eigenproblem K u = lambda M u (seed eqs 1-2), first elastic modes.
+"""Free-free generalized eigenproblem K u = lambda M u (seed eqs 1-2), first elastic modes.
 
 Default method ("krylov"): shift-invert block Krylov with Rayleigh-Ritz (Ericsson & Ruhe 1980;
 Bathe, *Finite Element Procedures*, 2014, sec. 11.5-11.6), using a banded Cholesky factor of
@@ -37,7 +37,7 @@ class ModalSolution:
     """Elastic modes of a structure.
 
     frequencies_hz : (m,) [Hz]; eigenvalues : (m,) lambda = omega^2 [rad^2/s^2];
-    shapes : (n_dof, m) mass-normalised (phi^T M phi = 1); n_rigid : rigid-body modes removed;
+    shapes : (n_dof, m) mass-normalized (phi^T M phi = 1); n_rigid : rigid-body modes removed;
     rigid_frequencies_hz : (n_rigid,) their frequencies (~0 for a free body) [Hz].
     """
 
@@ -73,7 +73,7 @@ class BandedShiftInvert:
             (data_K - shift * data_M)[self.lower_mask],
             minlength=(self.bandwidth + 1) * self.n,
         ).reshape(self.bandwidth + 1, self.n)
-        # LAPACK directly: scipy's checking wrappers cost more than the factorisation here
+        # LAPACK directly: scipy's checking wrappers cost more than the factorization here
         chol, info = _dpbtrf(band, lower=1)
         if info != 0:
             raise BayesUpdateError(
@@ -88,7 +88,7 @@ class BandedShiftInvert:
 
 
 def _rigid_share(shapes, M, rigid_basis):
-    """Share of each (M-normalised) mode's M-norm inside span(rigid_basis), (m,) in [0, 1]."""
+    """Share of each (M-normalized) mode's M-norm inside span(rigid_basis), (m,) in [0, 1]."""
     MR = M @ rigid_basis
     G = rigid_basis.T @ MR
     c = MR.T @ shapes
@@ -171,7 +171,7 @@ def _lowest_pairs(K, M, n_want, rigid_basis, banded, method, tol, shift):
 
 def _rigid_modes(lam, share) -> np.ndarray:
     """(m,) bool: rigid-body modes, i.e. rigid-shaped (share > 0.5) with a zero eigenvalue: strain
-    + spring energy (lambda, the modes being mass-normalised) below 1e-8 of the highest computed
+    + spring energy (lambda, the modes being mass-normalized) below 1e-8 of the highest computed
     one.  A suspension mode is rigid-shaped too, but its springs store lambda of energy: at
     0.1 Hz under a 10 Hz mode it is at 1e-4, orders above the round-off of a true zero mode."""
     return (share > 0.5) & (np.abs(lam) < 1e-8 * np.abs(lam).max())

@@ -1,7 +1,7 @@
 """Modal strain and kinetic energy per element and per part (seed section 3.2, eq. 3 integrated
 over each element): where each mode works the structure.
 
-For a mass-normalised mode phi with eigenvalue lambda, the strain energy of element e is
+For a mass-normalized mode phi with eigenvalue lambda, the strain energy of element e is
 U_e = 1/2 phi_e^T K_e phi_e and the kinetic energy amplitude is T_e = 1/2 lambda phi_e^T M_e phi_e;
 sum_e U_e = lambda / 2 = sum_e T_e, so shares are fractions of lambda / 2.
 """

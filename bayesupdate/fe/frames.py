@@ -1,5 +1,5 @@
 """Coordinate frames for the DOFs of a node (a Nastran GRID's CD system): rectangular,
-cylindrical or spherical, vectorised over points.
+cylindrical or spherical, vectorized over points.
 
 A frame is an origin and three orthonormal axes (rows of ``axes``, global coordinates).  At a
 point x its local DOF directions are (MSC Nastran Quick Reference Guide, CORD2R/C/S):

@@ -4,7 +4,7 @@ structure at new property values, without rebuilding the structure.
 A deck parameter bound to a beam section or material field (Nastran PBEAM/PBAR A, I1, I2, J,
 NSM, MAT1 E, G, RHO) changes only the elements that use it, and it enters their matrices
 non-affinely where shear is flexible (the Timoshenko parameter 12 EI / (k G A L^2)).  The exact
-way is to recompute those elements at the new values; ``LineUpdate`` does it in the vectorised
+way is to recompute those elements at the new values; ``LineUpdate`` does it in the vectorized
 kernels (``general_beam.general_beam_matrices``, ``rod.rod_matrices``, the point-mass rigid link
 M = T^T D T of ``assembly.Assembler.mass_matrices``) and scatters the change into the general
 pattern at positions found once:

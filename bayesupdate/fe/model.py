@@ -374,7 +374,7 @@ class FEModel:
         return out
 
     def element_properties(self, params: Mapping[str, float] | None = None) -> ElementProperties:
-        """Per-element property arrays at ``params`` (vectorised masks, no element loop)."""
+        """Per-element property arrays at ``params`` (vectorized masks, no element loop)."""
         p = self.full_parameters(params)
         nominal = self._base.values
         fields = {k: v.copy() for k, v in nominal.items()}

@@ -1,4 +1,4 @@
-"""Cross-section properties of beam elements, as pure vectorised functions of the section size.
+"""Cross-section properties of beam elements, as pure vectorized functions of the section size.
 
 A section is described by its ``shape`` and sizes; the properties (area, second moments, torsion
 constant, shear areas) follow from them so that a wall thickness can be a calibration parameter.
@@ -91,7 +91,7 @@ _PHI_W = _GL_W * (np.pi / 4.0)
 
 
 def section_properties(shape_code, width, height, thickness, poisson) -> dict:
-    """Vectorised section properties.
+    """Vectorized section properties.
 
     All inputs are (n,) arrays (shape_code from ``SHAPES`` order).  Returns a dict of (n,) arrays:
     A [m^2], Iy [m^4] (bending about local y, i.e. deflection along z), Iz [m^4], J [m^4],

@@ -252,7 +252,7 @@ class ShellAssembly:
         matrices are multiplied by scale_e^p.
 
         Elements go through their pieces, ``power_matrices`` and ``to_global`` in chunks of
-        ``shell.CHUNK`` (each chunk vectorised), so the (n, d, d) temporaries of the pieces and the
+        ``shell.CHUNK`` (each chunk vectorized), so the (n, d, d) temporaries of the pieces and the
         seven powers never exist for the whole mesh at once; a power that is zero everywhere is
         left out."""
         m = self.mesh
@@ -284,7 +284,7 @@ def _add_into(out: dict, power: int, pos: np.ndarray, X: np.ndarray, nnz: int) -
     out[power][lo:hi] += np.bincount((pos - lo).ravel(), X.ravel(), hi - lo)
 
 
-class ThicknessParametrisation:
+class ThicknessParametrization:
     """K(theta), M(theta) for thickness parameters theta (n_par,) [m]: element e takes the
     thickness theta[group[e]] (group[e] = -1 keeps the mesh's thickness).  The per-power data
     are stored once on each group's own CSR positions, so an evaluation costs

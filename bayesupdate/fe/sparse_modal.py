@@ -11,7 +11,7 @@ left to the iteration: the rigid motions that the constraints allow (null space 
 constraint rows of the 6 rigid motions) and that carry no strain energy are the exact rigid
 modes; the Lanczos operator is restricted to their M-orthogonal complement
 (P (K - sigma M)^-1 with P = I - R R^T M), so only elastic modes come out.  A further eigenvalue
-below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalised: the value its
+below ``zero_tol`` x its own diagonal energy sum_i K_ii x_i^2 (x mass-normalized: the value its
 eigenvalue would have without any cancellation between DOFs) is a mechanism and is reported with
 the DOFs
 that move.  Small models (below ``ModalSettings.dense_below`` DOFs) use dense LAPACK on the same
@@ -33,7 +33,7 @@ complement, exactly: the Lanczos operator is then the constrained inverse
 x = (K - sigma M)^-1 (b - M Rm mu), Rm^T M x = 0, i.e. the inverse of the compressed pencil
 (a bordered solve; P (K - sigma M)^-1 alone is exact only when Rm are eigenvectors).
 
-Factorisation of K - sigma M: CHOLMOD (supernodal Cholesky, Chen et al., ACM TOMS 35 (2008) 22,
+Factorization of K - sigma M: CHOLMOD (supernodal Cholesky, Chen et al., ACM TOMS 35 (2008) 22,
 through scikit-sparse, the optional extra ``bayesupdate[fast]``) where it is installed, else
 SuperLU (``ModalSettings.factorization``).
 """
@@ -157,7 +157,7 @@ class ModalSettings:
     """Settings of ``solve_sparse_modes``.
 
     n_modes : elastic modes wanted; shift : sigma [rad^2/s^2] (< 0); zero_tol : a mode x
-    (mass-normalised) with eigenvalue below zero_tol x sum_i K_ii x_i^2 counts as a zero mode
+    (mass-normalized) with eigenvalue below zero_tol x sum_i K_ii x_i^2 counts as a zero mode
     (rigid or mechanism).  A scale per mode, not max(K_ii / M_ii): the small rotary inertia of a
     thin shell makes that ratio ~1e12 and flagged the first bending mode of a 30 mm plate as a
     mechanism; a true zero mode cancels to round-off (~1e-16) and a thin plate's bending mode
@@ -207,8 +207,8 @@ class ModalSettings:
 class SparseModes:
     """Elastic and rigid-body modes.
 
-    frequencies_hz, eigenvalues (m,) [Hz, rad^2/s^2]; shapes (n_dof, m) mass-normalised, zero on
-    constrained DOFs; rigid_shapes (n_dof, r) mass-normalised rigid-body modes allowed by the
+    frequencies_hz, eigenvalues (m,) [Hz, rad^2/s^2]; shapes (n_dof, m) mass-normalized, zero on
+    constrained DOFs; rigid_shapes (n_dof, r) mass-normalized rigid-body modes allowed by the
     constraints (``ModalSettings.rigid_set``); rigid_eigenvalues (r,) their eigenvalues (round-off
     ~0 for zero-energy rigid modes, the Rayleigh quotient for a SUPORT's rigid motions).
     """
@@ -230,7 +230,7 @@ def dof_names(dofs) -> str:
 
 
 def _diagonal_energy(kd, x):
-    """(m,) sum_i K_ii x_i^2 of mass-normalised columns x (n, m)."""
+    """(m,) sum_i K_ii x_i^2 of mass-normalized columns x (n, m)."""
     return np.einsum("i,im->m", kd, x**2)
 
 
@@ -296,10 +296,10 @@ def constrained_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, T) -> ModalSo
 def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None):
     """Elastic and rigid modes of a reduced pencil (Kf, Mf) (n, n) sparse whose allowed rigid
     motions are the columns of R (n, r); dof_ids (n,) global DOF number of each coordinate (for
-    mechanism messages).  solve : a factorisation of Kf - shift Mf (``factorize``) the caller
+    mechanism messages).  solve : a factorization of Kf - shift Mf (``factorize``) the caller
     made and uses again (e.g. for design sensitivities, ``fe.reduced.sensitivity``); None: made
     here when the Lanczos path needs one.  Returns (lam (m,), phi (n, m), rigid modes (n, r')
-    and their eigenvalues (r',)), all mass-normalised; raises BayesUpdateError for a
+    and their eigenvalues (r',)), all mass-normalized; raises BayesUpdateError for a
     mechanism."""
     Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol, settings.rigid_set)
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
@@ -439,7 +439,7 @@ def _lanczos_modes(Kf, Mf, Rm, settings: ModalSettings, bordered: bool = False, 
 
     bordered : Rm need not be eigenvectors (a SUPORT's rigid motions on springs): the operator is
     the constrained inverse (module docstring), from Z = A^-1 M Rm and S = Rm^T M Z made once.
-    solve : the factorisation of Kf - shift Mf (None: made here)."""
+    solve : the factorization of Kf - shift Mf (None: made here)."""
     n = Kf.shape[0]
     sigma = settings.shift
     if solve is None:

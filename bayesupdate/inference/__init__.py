@@ -4,18 +4,18 @@ Typical use (a thin script)::
 
     from bayesupdate.inference import (build_problem, calibrate, CalibrationSettings,
                                        LikelihoodSpec, LogPosterior,
-                                       SamplerSettings, sample_posterior, summarise,
+                                       SamplerSettings, sample_posterior, summarize,
                                        load_modal_data)
     problem = build_problem(model, load_modal_data("paper:ema"))
     optimum = calibrate(problem, CalibrationSettings(starts=16, seed=0))
     log_post = LogPosterior(problem, LikelihoodSpec(sigma=0.05))
     settings = SamplerSettings(walkers=32, steps=5000, seed=1)
     posterior = sample_posterior(log_post, optimum, settings)
-    table = summarise(posterior)
+    table = summarize(posterior)
 
 The names are loaded on first use (PEP 562 ``__getattr__``), each from its own module: this
 package's ``__init__`` runs for every ``bayesupdate.inference.*`` import, and loading all of them
-there (the optimiser with ``scipy.optimize`` and ``scipy.stats``, the sampler with emcee, h5py)
+there (the optimizer with ``scipy.optimize`` and ``scipy.stats``, the sampler with emcee, h5py)
 cost a command that needs one data loader a second or more.  ``tmcmc`` is bound at import: it
 is also a submodule's name, and a submodule imported first would otherwise take the name.
 """
@@ -33,7 +33,7 @@ if TYPE_CHECKING:  # the lazy names' modules, for type checkers and the import-g
         register_loader,
         select_modes,
     )
-    from bayesupdate.inference.diagnostics import posterior_predictive, summarise
+    from bayesupdate.inference.diagnostics import posterior_predictive, summarize
     from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
     from bayesupdate.inference.optimize import (
         CalibrationResult,
@@ -77,7 +77,7 @@ if TYPE_CHECKING:  # the lazy names' modules, for type checkers and the import-g
 _SOURCES = {
     "checks": ("calibration_warnings", "sampling_warnings"),
     "data": ("ModeSelection", "load_modal_data", "register_loader", "select_modes"),
-    "diagnostics": ("posterior_predictive", "summarise"),
+    "diagnostics": ("posterior_predictive", "summarize"),
     "likelihood": ("LikelihoodSpec", "LogPosterior"),
     "optimize": ("CalibrationResult", "CalibrationSettings", "calibrate", "pareto_front_mass"),
     "pairing": ("ModePairing", "PairingRules", "RefusedMode", "ResidualTable", "pair_modes"),
@@ -109,7 +109,18 @@ _SOURCES = {
 _SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}
 
 
+#: names spelt with -ise before release 0.2.0 -> their -ize names (a DeprecationWarning)
+_DEPRECATED = {"summarise": "summarize"}
+
+
 def __getattr__(name: str):
+    if name in _DEPRECATED:
+        import warnings
+
+        new = _DEPRECATED[name]
+        warnings.warn(f"bayesupdate.inference.{name} is deprecated; use {new}",
+                      DeprecationWarning, stacklevel=2)  # fmt: skip
+        name = new
     module = _SOURCE_OF.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -159,7 +170,7 @@ __all__ = [
     "sample_posterior",
     "sampling_warnings",
     "select_modes",
-    "summarise",
+    "summarize",
     "tmcmc",
     "to_datatree",
     "write_result",

@@ -1,4 +1,4 @@
-"""Rank-normalised split R-hat, bulk and tail ESS and the nearest-sample HDI, in numpy.
+"""Rank-normalized split R-hat, bulk and tail ESS and the nearest-sample HDI, in numpy.
 
 Vehtari, Gelman, Simpson, Carpenter & Buerkner (2021), "Rank-normalization, folding, and
 localization: an improved R-hat for assessing convergence of MCMC", Bayesian Analysis 16(2)
@@ -48,7 +48,7 @@ def average_ranks(x: np.ndarray) -> np.ndarray:
 
 
 def z_scale(x: np.ndarray) -> np.ndarray:
-    """Rank-normalised draws, same shape as x: ranks over all of x, ties averaged."""
+    """Rank-normalized draws, same shape as x: ranks over all of x, ties averaged."""
     return ndtri((average_ranks(x) - 0.375) / (x.size + 0.25))
 
 
@@ -71,7 +71,7 @@ def _valid(x: np.ndarray, min_chains: int) -> bool:
 
 
 def rank_rhat_of(x: np.ndarray) -> float:
-    """Rank-normalised split R-hat of chains x (m, n) (module docstring); NaN for fewer than 2
+    """Rank-normalized split R-hat of chains x (m, n) (module docstring); NaN for fewer than 2
     chains or 4 draws, or NaN draws."""
     if not _valid(x, 2):
         return np.nan
@@ -145,7 +145,7 @@ def _per_parameter(function, chain: np.ndarray) -> np.ndarray:
 
 
 def rank_rhat(chain: np.ndarray) -> np.ndarray:
-    """(d,) rank-normalised split R-hat, walkers as chains, chain (n_draws, n_walkers, d)."""
+    """(d,) rank-normalized split R-hat, walkers as chains, chain (n_draws, n_walkers, d)."""
     return _per_parameter(rank_rhat_of, chain)
 
 

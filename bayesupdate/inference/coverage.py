@@ -11,7 +11,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from bayesupdate.inference.diagnostics import summarise
+from bayesupdate.inference.diagnostics import summarize
 from bayesupdate.inference.likelihood import LikelihoodSpec, LogPosterior
 from bayesupdate.inference.optimize import CalibrationSettings, calibrate
 from bayesupdate.inference.problem import build_problem
@@ -68,7 +68,7 @@ def interval_coverage(
         log_post = LogPosterior(problem, LikelihoodSpec(sigma=noise_rel))
         settings = SamplerSettings(walkers=walkers, steps=steps, seed=seed + r, transform=transform)
         posterior = sample_posterior(log_post, optimum, settings)
-        summary = summarise(posterior, hdi_prob=prob)
+        summary = summarize(posterior, hdi_prob=prob)
         for name in problem.names:
             low, high = summary[name]["hdi_low"], summary[name]["hdi_high"]
             hits.setdefault(name, []).append(bool(low <= truth[name] <= high))

@@ -30,7 +30,7 @@ import numpy as np
 class ScreenedLogDensity:
     """The surrogate log-density q with a cache of the current walkers' values.
 
-    screen, exact : vectorised (n, d) -> (n,) log-densities in the sampler's coordinates.
+    screen, exact : vectorized (n, d) -> (n,) log-densities in the sampler's coordinates.
     ``screen_evaluations`` counts the surrogate's evaluations (points).
     """
 

@@ -2,7 +2,7 @@
 frequencies.
 
 Walkers as chains: after the warm-up, each emcee walker is passed to ArviZ as one chain, so the
-rank-normalised split R-hat (Vehtari et al. 2021) compares the walkers with each other - a walker
+rank-normalized split R-hat (Vehtari et al. 2021) compares the walkers with each other - a walker
 stuck in one mode, or an ensemble not yet mixed, shows as R-hat > 1.01.  Walkers of an ensemble
 sampler are not independent (each move uses the others), so ArviZ's ESS, which assumes independent
 chains, can be optimistic; we therefore also report emcee's ESS = n_draws * n_walkers / tau, and the
@@ -16,7 +16,7 @@ from bayesupdate.inference.likelihood import LogPosterior
 from bayesupdate.inference.sampling import PosteriorResult, rhat_and_ess
 
 
-def summarise(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
+def summarize(result: PosteriorResult, hdi_prob: float = 0.9) -> dict:
     """Per parameter: mean, sd, hdi_low, hdi_high, r_hat, ess_bulk, ess_tail, ess_arviz_bulk,
     ess_autocorr.  Uses the post-burn-in chain, walkers as chains (module docstring)."""
     post = result.chain[result.burn :]  # (draws, walkers, d)
@@ -104,7 +104,7 @@ def convergence_report(
     """Whether the run met its own targets, judged on what is reported (``summary``), and why not.
 
     A run that stops on its step budget is not converged, whatever its last check said; so is one
-    whose final R-hat or bulk ESS (``summarise``) misses the target, or whose chain is shorter
+    whose final R-hat or bulk ESS (``summarize``) misses the target, or whose chain is shorter
     than ``min_autocorr_times`` autocorrelation times.  Returns {"converged": bool, "reason":
     str | None (the failed criteria, with the worst parameter), "max_r_hat", "min_ess_bulk",
     "target_rhat", "target_ess", "steps"}.

@@ -212,7 +212,7 @@ def _remote_part(densities, item) -> tuple:
 
 
 class SplitDensity:
-    """A vectorised log-density (n, d) -> (n,) whose larger batches are evaluated in two parts
+    """A vectorized log-density (n, d) -> (n,) whose larger batches are evaluated in two parts
     at once: the first ``split_point(n)`` rows in this process, the rest on a local worker
     process, values returned in row order.  The counters of the density (``SPLIT_COUNTERS``)
     count the worker's points too.  Made by ``split_densities``; a worker that died (killed,
@@ -292,7 +292,7 @@ class SplitDensity:
 
 
 def split_densities(densities: tuple, executor) -> tuple:
-    """Each of ``densities`` (vectorised log-densities, e.g. a run's exact posterior and its
+    """Each of ``densities`` (vectorized log-densities, e.g. a run's exact posterior and its
     delayed-acceptance screen; None entries stay None) as a ``SplitDensity`` on ``executor``,
     all shared with the workers in one payload (a worker keeps one payload at a time).  The
     densities as they are when the executor has no local worker processes, one of them sends

@@ -1,5 +1,5 @@
 """The calibration posterior: the frequency block (and optionally the mass block) of
-``likelihood_blocks`` with a sampled or fixed level sigma, times the parameter priors, vectorised
+``likelihood_blocks`` with a sampled or fixed level sigma, times the parameter priors, vectorized
 over walkers.
 
 For paired frequencies f_i(theta) and test values f_Ti:
@@ -105,7 +105,7 @@ class LikelihoodSpec:
 
 
 class LogPosterior:
-    """Vectorised log-posterior over walkers; counts evaluations and failures.
+    """Vectorized log-posterior over walkers; counts evaluations and failures.
 
     Call with theta (n_walkers, d) where d = number of parameters (+1 for sigma, last column).
     """
@@ -258,7 +258,7 @@ class LogPosterior:
         14.3 against 12.6 ms on the loaded 2-core machine), the polynomial's in one array
         product.  ``sample --model exhaust --data paper:ema`` gives the same chain to the bit
         with either (seed 1).  Why the target does not move: a relative mass error
-        e changes the mass block's log-likelihood by |z| e / mass_sd_rel (z the standardised
+        e changes the mass block's log-likelihood by |z| e / mass_sd_rel (z the standardized
         mass residual), < 3e-8 at e = 1e-10, |z| < 3 and the weighed 1 %, against the reduced
         basis's certified frequency error (1e-4 relative, |z| 1e-4 / sigma per mode) that the
         target already carries.  The exhaust's fit: 1.3e-12 at its check points, 2.3e-12 at

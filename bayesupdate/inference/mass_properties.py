@@ -54,7 +54,7 @@ class RawProperty:
 @dataclass(frozen=True)
 class ModelUnits:
     """The model's consistent units: SI factors of its mass and length unit (None: not
-    recognised, then only plain numbers in the model's units are accepted) and their names."""
+    recognized, then only plain numbers in the model's units are accepted) and their names."""
 
     mass_si: float | None = 1.0
     length_si: float | None = 1.0
@@ -73,7 +73,7 @@ class ModelUnits:
         return {"mass": self.mass, "length": self.length, "inertia": self.inertia}[kind]
 
     def factor(self, kind: str) -> float | None:
-        """SI value of one model unit of ``kind`` (None where the units are not recognised)."""
+        """SI value of one model unit of ``kind`` (None where the units are not recognized)."""
         if self.mass_si is None or self.length_si is None:
             return None
         power = DIMENSIONS[kind]
@@ -103,7 +103,7 @@ def in_model_units(value: float, is_si: bool, kind: str, units: ModelUnits, what
     factor = units.factor(kind)
     if factor is None:
         raise BayesUpdateError(
-            f"{what}: the model's units are not recognised; give a plain number in the model's "
+            f"{what}: the model's units are not recognized; give a plain number in the model's "
             "own units or name them with [model] units"
         )
     return float(value) / factor
@@ -188,7 +188,7 @@ class MassPropertyTargets:
     """Measured CG / inertia components in the model's units.
 
     names : (k,) component names ("cg_x", "ixx", ...); values, sd, scale : (k,) measured values,
-    their sd and the objective's normalisation S (module docstring); weights : (k,) objective
+    their sd and the objective's normalization S (module docstring); weights : (k,) objective
     weights w; units : (k,) unit names; about : (3,) inertia reference point or None (the CG)."""
 
     names: tuple[str, ...]

@@ -55,7 +55,7 @@ def _initial_simplex(x0: np.ndarray) -> np.ndarray:
 
 
 def simplex_steps(u0: np.ndarray, settings: SimplexSettings = SimplexSettings()) -> Steps:
-    """One bounded adaptive Nelder-Mead minimisation in [0, 1]^d from u0 (d,) as a generator.
+    """One bounded adaptive Nelder-Mead minimization in [0, 1]^d from u0 (d,) as a generator.
 
     Yields (k, d) points to evaluate (k = d + 1 for the initial simplex, d for a shrink, else
     1) and is sent their (k,) objective values; returns (x (d,), the best value, evaluations):
@@ -133,7 +133,7 @@ def _shrink(sim, fsim, sigma: float, left: int):
     return 2 + k if k == n else -1
 
 
-def minimise_together(
+def minimize_together(
     objective: Callable[[np.ndarray], np.ndarray],
     starts: np.ndarray,
     settings: SimplexSettings = SimplexSettings(),

@@ -1,8 +1,8 @@
 """Point optimum: bounded least squares on the weighted residuals, multi-start, optional global.
 
 The fit objective is seed eq. 19, Expr = sum_i w_i ((f_si - f_Ti) / f_Ti)^2, plus the optional mass
-and MAC terms of ``ObjectiveSpec``; it is minimised as a sum of squared residuals with
-``scipy.optimize.least_squares`` (trust-region reflective, bounded) in normalised coordinates
+and MAC terms of ``ObjectiveSpec``; it is minimized as a sum of squared residuals with
+``scipy.optimize.least_squares`` (trust-region reflective, bounded) in normalized coordinates
 u = (theta - low) / (high - low) in [0, 1]^d (``parameter_space``'s unit box, every axis linear),
 so thicknesses (1e-3 m) and densities (1e4 kg/m^3) are equally scaled.  Starts come from a
 scrambled Sobol design (seeded).  The seed reports that different starts reach the same optimum;
@@ -55,7 +55,7 @@ from bayesupdate.compute.progress import phase
 from bayesupdate.compute.stop import StopRequest
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood import mass_function
-from bayesupdate.inference.nelder_mead import SimplexSettings, minimise_together
+from bayesupdate.inference.nelder_mead import SimplexSettings, minimize_together
 from bayesupdate.inference.pairing import ResidualTable, pair_batch
 from bayesupdate.inference.parameter_space import (
     FAILED_RELATIVE_ERROR,
@@ -169,7 +169,7 @@ def space_filling_starts(n_starts: int, n_dim: int, seed: int, design: str = "so
 
 
 def unit_box(problem: CalibrationProblem) -> ParameterSpace:
-    """The optimiser's coordinates: u linear in theta on every axis (module docstring)."""
+    """The optimizer's coordinates: u linear in theta on every axis (module docstring)."""
     return ParameterSpace(problem.parameters).linear()
 
 
@@ -425,7 +425,7 @@ def _nelder_mead_polish(residuals, u0: np.ndarray, value0: float, settings: Simp
     """Bounded adaptive Nelder-Mead on sum(residuals(u)^2) in [0, 1]^d from a least-squares end
     point u0 (d,) with objective value0 (``nelder_mead``: scipy's algorithm, its stopping rules
     ``settings``); returns the better of the two (end, objective)."""
-    ends, values, _ = minimise_together(
+    ends, values, _ = minimize_together(
         lambda u: np.array([np.sum(residuals(row) ** 2) for row in u]), u0[None, :], settings
     )
     return _better(ends[0], float(values[0]), u0, value0)
@@ -443,7 +443,7 @@ def _polish_together(
 ) -> tuple[list, list]:
     """The least-squares ends (u (d,) each, objectives each) at the indices ``which``
     Nelder-Mead polished (``job.simplex``), the polishes in lockstep and each round's points one
-    batched solve (``nelder_mead.minimise_together``: the same steps as one polish at a time, at
+    batched solve (``nelder_mead.minimize_together``: the same steps as one polish at a time, at
     about half the cost per point on the shell exhaust's basis); (ends, objectives), each the
     better of the end and its polish."""
     ends, values = list(ends), list(values)
@@ -457,7 +457,7 @@ def _polish_together(
         return np.sum(batch(u) ** 2, axis=1)
 
     with phase("calibration: polish of the ends", len(which), "ends") as running:
-        polished, best, _ = minimise_together(
+        polished, best, _ = minimize_together(
             objective,
             np.array([ends[i] for i in which]),
             job.simplex(len(ends[0])),
@@ -858,7 +858,7 @@ def pareto_front_mass(
     starts, seed, polish: as ``CalibrationSettings`` (polish=False: ~10x cheaper, each point may
     stay on a pairing kink a few % above its polished value).
 
-    For each weight W the fit minimises Expr + W ((m - m_T)/m_T)^2.  Returns one dict per weight:
+    For each weight W the fit minimizes Expr + W ((m - m_T)/m_T)^2.  Returns one dict per weight:
     {"mass_weight", "expr", "mass_kg", "mass_error_pct", "parameters", "swapped"}.
     """
     from bayesupdate.inference.problem import ObjectiveSpec

@@ -195,7 +195,7 @@ def screen_pairs(
     (n_test,) [Hz]; model_hz : (n_model,) [Hz]; numbers : (n_test,) 1-based numbers of the test
     modes in their source.  A pair is admissible when it lies inside the frequency window and
     its MAC reaches the threshold; the pairs kept are the assignment of distinct model modes
-    maximising the total MAC of the admissible pairs (Hungarian method, Kuhn 1955), so a pair
+    maximizing the total MAC of the admissible pairs (Hungarian method, Kuhn 1955), so a pair
     that will be refused never takes the partner of one that is kept.  Returns
     ``ScreenedPairs``.
     """
@@ -365,7 +365,7 @@ def pair_modes(prediction: Prediction, pairing: ModePairing) -> PairedModes:
 
 
 def _pair_in_window(reference, current, prediction: Prediction, pairing: ModePairing):
-    """(model_index (n_test,), mac (n_test,)): the assignment maximising the total
+    """(model_index (n_test,), mac (n_test,)): the assignment maximizing the total
     ``window_scores`` (a partner inside the frequency window first)."""
     from scipy.optimize import linear_sum_assignment
 
@@ -455,7 +455,7 @@ def residual_table(
 def pair_batch(
     reference: np.ndarray, shapes: np.ndarray, window: tuple | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Batched MAC pairing: each reference mode takes a distinct current mode maximising the
+    """Batched MAC pairing: each reference mode takes a distinct current mode maximizing the
     total MAC, for every point of a batch at once (same result as ``pair_by_mac`` per point;
     with ``window`` = (test_hz (n_test,), freqs (B, n_model) [Hz], relative window) the total
     ``window_scores``, as ``pair_modes`` with a ``ModePairing.window``).

@@ -11,7 +11,7 @@ A ``ParameterSpace`` over d such parameters maps between four coordinates, each 
 - z, the axis coordinates: z = theta on a linear axis, z = log theta on a log axis (the
   coordinates of discovery's Laplace evidence and its score test);
 - u, the unit box u in [0, 1]^d over z: z = z_low + clip(u, 0, 1) (z_high - z_low) (the
-  coordinates of every bounded least-squares fit and of the optimiser's space-filling starts;
+  coordinates of every bounded least-squares fit and of the optimizer's space-filling starts;
   thicknesses of 1e-3 m and densities of 1e4 kg/m^3 are then equally scaled);
 - y, the unconstrained sampler coordinates (Stan Reference Manual, "Constraint transforms"):
   both bounds finite -> theta = lo + (hi - lo) logistic(y); lower bound only ->
@@ -136,7 +136,7 @@ class ParameterSpace:
         return len(self.parameters)
 
     def linear(self) -> "ParameterSpace":
-        """The same parameters, every axis linear (the optimiser's box: u is linear in theta)."""
+        """The same parameters, every axis linear (the optimizer's box: u is linear in theta)."""
         return ParameterSpace(tuple(replace(p, axis="linear") for p in self.parameters))
 
     # -- axis coordinates z and the unit box u ------------------------------------------------

@@ -19,7 +19,7 @@ from bayesupdate import plotting
 @dataclass(frozen=True)
 class DesignReference:
     """A published design to draw the posterior against.  initial, optimum : {parameter name:
-    value} (SI; the initial values normalise both axes); label : what the optimum is (legend)."""
+    value} (SI; the initial values normalize both axes); label : what the optimum is (legend)."""
 
     initial: Mapping[str, float]
     optimum: Mapping[str, float]
@@ -137,7 +137,7 @@ def plot_residuals(result: dict):
 
 
 def plot_design_vs_reference(result: dict, reference: DesignReference):
-    """Posterior of each design variable (normalised by the reference's initial value) beside
+    """Posterior of each design variable (normalized by the reference's initial value) beside
     the reference optimum (e.g. the seed's Table 3); only parameters the reference names.  None
     if there are none."""
     initial, optimum = reference.initial, reference.optimum

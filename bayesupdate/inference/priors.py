@@ -1,7 +1,7 @@
 """Prior distributions of calibration parameters, truncated to the parameter's bounds.
 
 Kinds: ``uniform`` (on the bounds), ``normal`` (mean, sd), ``lognormal`` (mu, sigma of the log of
-the value), ``halfnormal`` (scale; for the noise level sigma).  Each density is normalised over the
+the value), ``halfnormal`` (scale; for the noise level sigma).  Each density is normalized over the
 bounds (the truncation constant log(F(high) - F(low)) is included), so log-evidence comparisons in
 the discovery layer see proper densities.  A prior with no mass inside the bounds is an error.
 """
@@ -22,7 +22,7 @@ PRIOR_KEYS = {
     "halfnormal": ("scale",),
 }
 
-#: kind -> the support (a, b) of the standardised distribution (scipy.stats' ``a``, ``b``)
+#: kind -> the support (a, b) of the standardized distribution (scipy.stats' ``a``, ``b``)
 _SUPPORT = {
     "uniform": (0.0, 1.0),
     "normal": (-np.inf, np.inf),
@@ -85,7 +85,7 @@ class Prior:
         return dict(self.args)
 
     def _location_scale(self) -> tuple[float, float]:
-        """(loc, scale) of the untruncated distribution in scipy.stats' parametrisation
+        """(loc, scale) of the untruncated distribution in scipy.stats' parametrization
         (``uniform(low, high - low)``, ``norm(mean, sd)``, ``lognorm(sigma, scale=exp(mu))``,
         ``halfnorm(scale=scale)``)."""
         p = self.params
@@ -208,7 +208,7 @@ class JointPrior:
     """Independent priors on the columns of theta (n_points, n_params), evaluated together
     (``JointPrior.of``).
 
-    The uniform ones (the usual case) are one vectorised box check and one constant: priors are
+    The uniform ones (the usual case) are one vectorized box check and one constant: priors are
     evaluated for every walker at every step (the likelihood's and the mixture proposal's), and
     one call per parameter costs more than the check.  uniform : (n_params,) which columns have
     a uniform prior; low, high : their bounds; uniform_log_density : the sum of their log

@@ -2,7 +2,7 @@
 
 On a reduced basis the pencil is K_r(theta) = sum_t c_t(theta) K_t, M_r likewise
 (``fe.reduced.basis.ReducedBasis``), so an eigenvalue's design derivative needs no second solve:
-for a simple eigenvalue lambda_k with mass-normalised reduced vector y_k (Fox & Kapoor, AIAA J. 6
+for a simple eigenvalue lambda_k with mass-normalized reduced vector y_k (Fox & Kapoor, AIAA J. 6
 (1968) 2426; Nelson, AIAA J. 14 (1976) 1201)
 
     d lambda_k / d theta_j = y_k^T (dK_r/dtheta_j - lambda_k dM_r/dtheta_j) y_k,
@@ -52,7 +52,7 @@ def eigen_derivatives(
     basis, full: np.ndarray, columns: list[int], n_modes: int, solved=None, paths=None
 ):
     """At one point full (1, P) of the basis's parameters (SI): (lambda (m,) [rad^2/s^2], y
-    (r, m) mass-normalised reduced vectors, d lambda / d theta (m, len(columns)) for the
+    (r, m) mass-normalized reduced vectors, d lambda / d theta (m, len(columns)) for the
     parameters at ``columns``).  solved : ``basis.eigen(full, n_modes, vectors=True)`` when
     the caller has it (``LastSolve``), else it is solved here.  paths : the two contractions'
     ``contraction_paths`` (None: numpy searches them on each call)."""

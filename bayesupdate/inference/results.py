@@ -33,7 +33,7 @@ Schema ``bayesupdate-result/1`` (all arrays SI; frequencies in Hz):
 /posterior/state       coords (walkers, d), last_log_prob (walkers,), accepted (walkers,),
                        rng_keys (624,) uint32, attrs: rng_pos, rng_has_gauss, rng_cached_gaussian,
                        moves_json (the move scheme and frozen proposal, ``SamplerState.moves``)
-/posterior/diagnostics attrs: summary_json (see diagnostics.summarise), sampling_json
+/posterior/diagnostics attrs: summary_json (see diagnostics.summarize), sampling_json
                        ({"pairing_mode", "pair_differs_fraction", "rom": {size,
                        max_rel_error, certified, tol, n_modes, error_at (posterior mean)},
                        "convergence": diagnostics.convergence_report}), timings_json

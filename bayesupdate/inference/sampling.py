@@ -19,10 +19,10 @@ x_k sit in different modes), DE snooker (ter Braak & Vrugt 2008) 20 %.  The stre
 used: it misweights multi-modal posteriors.
 
 Walkers start in small balls around the distinct optima of the multi-start fit (so every mode
-found by the optimiser holds walkers from the start; the DE moves then set the weights).  The run
+found by the optimizer holds walkers from the start; the DE moves then set the weights).  The run
 is cut in blocks of ``check_every`` steps; after each block the integrated autocorrelation time
 tau is estimated (emcee) and the run stops once steps >= ``min_autocorr_times`` * max(tau) and,
-when asked for, the convergence targets hold (``target_rhat``: rank-normalised split R-hat of
+when asked for, the convergence targets hold (``target_rhat``: rank-normalized split R-hat of
 every parameter at most this; ``target_ess``: bulk ESS at least this, the smaller of ArviZ's and
 emcee's n_draws * n_walkers / tau, after the warm-up ``burn_in``), or the step budget ends.
 Why both: R-hat <= 1.01 needs each walker ~100 tau long whatever the number of walkers, while
@@ -143,7 +143,7 @@ class PosteriorResult:
 
     chain : (n_steps, n_walkers, d) all steps, names order; log_prob : (n_steps, n_walkers).
     burn : steps discarded as warm-up.  autocorr_time : (d,) tau per parameter [steps].
-    diagnostics : see ``diagnostics.summarise``.  predictions : see ``posterior_predictive``.
+    diagnostics : see ``diagnostics.summarize``.  predictions : see ``posterior_predictive``.
     """
 
     names: tuple[str, ...]
@@ -259,13 +259,13 @@ def burn_in(n_steps: int, tau: np.ndarray) -> int:
 
 def rhat_and_ess(post: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, ...]:
     """(r_hat, ess_arviz, ess_autocorr), each (d,), of a post-warm-up chain (n_draws, n_walkers,
-    d), walkers as chains (Vehtari et al. 2021, ArviZ): rank-normalised split R-hat, ArviZ's
+    d), walkers as chains (Vehtari et al. 2021, ArviZ): rank-normalized split R-hat, ArviZ's
     bulk ESS, and emcee's n_draws * n_walkers / tau (NaN where tau is not finite)."""
     return (_rhat(post), *_ess(post, tau))
 
 
 def _rhat(post: np.ndarray) -> np.ndarray:
-    """(d,) rank-normalised split R-hat of a chain (n_draws, n_walkers, d), walkers as chains
+    """(d,) rank-normalized split R-hat of a chain (n_draws, n_walkers, d), walkers as chains
     (``inference.convergence``: ArviZ's, without importing ArviZ)."""
     return convergence.rank_rhat(post)
 
@@ -916,7 +916,7 @@ def sample_posterior(
     (``settings.target_rhat``, ``settings.target_ess``; None: not checked), or ``settings.steps``
     steps.
 
-    log_posterior : vectorised, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
+    log_posterior : vectorized, (n_walkers, d) -> (n_walkers,).  calibration : point optimum
     (walkers start around its distinct optima) unless ``initial`` (n_walkers, d) is given.
     settings : SamplerSettings (walkers, steps, seed, stop rule, transform, progress bar).
     checkpoint : called with a SamplerState after every block (write it to disk there).

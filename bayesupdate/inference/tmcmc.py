@@ -9,8 +9,8 @@ The stage densities p_j(x) ∝ p(x) L(x)^beta_j run from the prior (beta_0 = 0) 
    beta_{j+1} = 1 when the step to 1 keeps it below that;
 2. the evidence factor S_j = mean_i w_i, so log Z = sum_j log S_j (eq. 18; an unbiased
    estimate of Z);
-3. systematic resampling by the normalised weights;
-4. ``mcmc_steps`` Metropolis steps of every particle (vectorised over particles) targeting
+3. systematic resampling by the normalized weights;
+4. ``mcmc_steps`` Metropolis steps of every particle (vectorized over particles) targeting
    p_{j+1}, with a Gaussian proposal of covariance scale^2 Sigma_j, Sigma_j the weighted sample
    covariance of step 1's particles (eq. 21; Ching & Chen take scale = 0.2).  After every
    Metropolis step the scale is steered towards acceptance 0.234 (Roberts, Gelman & Gilks
@@ -114,7 +114,7 @@ def next_beta(beta: float, loglike: np.ndarray, target_cov: float) -> float:
 
 
 def _systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """(N,) indices by systematic resampling of normalised ``weights`` (N,)."""
+    """(N,) indices by systematic resampling of normalized ``weights`` (N,)."""
     n = weights.size
     positions = (rng.uniform() + np.arange(n)) / n
     cumulative = np.cumsum(weights)
@@ -135,7 +135,7 @@ def _evaluate(log_prior, log_likelihood, x: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def _metropolis(x, lp, ll, beta, chol, scale, steps, rng, log_prior, log_likelihood):
-    """``steps`` vectorised random-walk Metropolis steps at temperature beta; x (N, d); the
+    """``steps`` vectorized random-walk Metropolis steps at temperature beta; x (N, d); the
     proposal sd scale chol (chol: Cholesky factor of the weighted covariance), the scale
     adapted after each step (module docstring).  Returns x, lp, ll, mean acceptance, the next
     stage's scale, evaluations."""
@@ -175,7 +175,7 @@ def tmcmc(
 ) -> TMCMCResult:
     """TMCMC posterior and log evidence (module docstring).
 
-    prior_sample(rng, n) -> (n, d) prior draws; log_prior (n, d) -> (n,) normalised log prior
+    prior_sample(rng, n) -> (n, d) prior draws; log_prior (n, d) -> (n,) normalized log prior
     density (-inf outside its support); log_likelihood (n, d) -> (n,) (batched over particles).
     progress(stage, beta) is called after each stage when given; the stages are also the
     ``compute.progress`` phase "TMCMC: tempering stages".

@@ -12,7 +12,7 @@ pipe's radius, and is joined to every node of the hole's ring by an RBE2 spider 
 components). A closed tube welded into the hole is far stiffer in its own section plane than the
 cap sheet, so a rigid ring is the welded pipe; the cap around it flexes with its own thickness, and
 that is the joint stiffness the beam model lumps into springs. (An RBE3 would add no stiffness and
-leave the ring free to ovalise, which a welded pipe does not allow.)  The spider's centre follows
+leave the ring free to ovalize, which a welded pipe does not allow.)  The spider's centre follows
 the pipe end through a connection spring (``_connection``: bending ``connection_k_rot``, rigid
 by default) in parts named as the beam model's joints, which discovery scans
 (``connection_flexibility``) and the uncertainty study floats.  At the main muffler's

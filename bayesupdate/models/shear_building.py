@@ -31,7 +31,7 @@ def shear_building_frequencies(
     masses_kg: tuple[float, float] = FLOOR_MASSES_KG,
     k_nominal: float = NOMINAL_STIFFNESS_N_PER_M,
 ) -> np.ndarray:
-    """Closed-form natural frequencies of the 2-DOF shear building, vectorised over points.
+    """Closed-form natural frequencies of the 2-DOF shear building, vectorized over points.
 
     theta : (..., 2) stiffness factors [-].  Returns (..., 2) ascending frequencies [Hz];
     non-positive stiffness gives NaN.
@@ -56,7 +56,7 @@ class ShearBuildingModel:
     """ParametricModel (and BatchParametricModel) of the 2-DOF shear building.
 
     Parameters ``theta_1``, ``theta_2`` [-]; sensors ``"1"`` (first floor) and ``"2"`` (roof),
-    shapes mass-normalised.  Its batch shapes (``predict_batch_with_shapes``) let a likelihood
+    shapes mass-normalized.  Its batch shapes (``predict_batch_with_shapes``) let a likelihood
     that pairs by MAC evaluate a walker batch in one call (``inference.likelihood``'s
     "shape-batch" mode) instead of one Python call per point.
     """
@@ -89,7 +89,7 @@ class ShearBuildingModel:
         return theta
 
     def predict(self, params: Mapping[str, float], n_modes: int = 2) -> Prediction:
-        """Frequencies [Hz], mass-normalised shapes (2, n_modes) at floors 1, 2, total mass [kg]."""
+        """Frequencies [Hz], mass-normalized shapes (2, n_modes) at floors 1, 2, total mass [kg]."""
         if not 1 <= n_modes <= 2:
             raise BayesUpdateError(
                 f"shear_building: {n_modes} modes requested but the model has only 2"
@@ -143,7 +143,7 @@ class ShearBuildingModel:
         (rows on ``sensor_labels``), closed form; failed points (a factor <= 0) give NaN.
 
         The first row of (K - lambda M) phi = 0 gives phi = (k2, k1 + k2 - lambda m1) up to
-        scale (roof positive, as ``predict``; not normalised: a MAC ignores scale)."""
+        scale (roof positive, as ``predict``; not normalized: a MAC ignores scale)."""
         full = self._full_theta(theta, names, n_modes)
         f = shear_building_frequencies(full, self.masses_kg, self.k_nominal)
         k1, k2 = (full * self.k_nominal).T

@@ -19,7 +19,7 @@ def load_nastran_model(
     the deck's DESVARs (``nastran.desvar``) if it has any, else no parameters.
     test_labels : test DOF labels the model reads shapes at (``nastran.test_points``);
     test_points : ``[model.test_points]`` {test node: GRID id}; units : the deck's unit system
-    by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognised from WTMASS
+    by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognized from WTMASS
     and the MAT1 moduli."""
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.nastran.bindings import refuse_differing

@@ -52,7 +52,7 @@ x terms).
 An absolute binding over several cards sets them all to one value.  When the deck's values of
 those cards differ (seven PBEAM I1 of 0.0099-0.0563 in^4 bound as one section), the parameter's
 default would be the deck and every other value one section: K would jump at the default, and
-an optimiser or a sampler near it would see a discontinuous model.  Such a binding is refused
+an optimizer or a sampler near it would see a discontinuous model.  Such a binding is refused
 (``refuse_differing``) with the fix: a ``scale`` (1 = the deck, continuous, the distribution
 kept) or one card.  Reading the deck with their mean instead would move the model at the
 default off the deck, and with it every command's reference design (the pairing).  A DESVAR's

@@ -33,7 +33,7 @@ ELEMENT_CARDS = {
 } | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
 #: design variables and relations: parameters when the study names none (``desvar``)
 DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1"}
-#: the deck's own optimisation problem (SOL 200): read and listed, not used
+#: the deck's own optimization problem (SOL 200): read and listed, not used
 OBJECTIVE_CARDS = {"DRESP1", "DRESP2", "DRESP3", "DCONSTR", "DCONADD", "DEQATN", "DOPTPRM",
                    "DTABLE", "DLINK", "DSCREEN"}  # fmt: skip
 #: cards that add no element: output sets (SET1: test points, ``test_points``), rigid-body

@@ -15,7 +15,7 @@ their matrices at new values, both the reading of the deck written with them:
   E -> E and, G blank, G = E / 2(1 + NU), RHO -> rho and the lumped masses, NSM).  The map is
   found once from ``LineRebuild`` (the deck's records and one step per parameter) and checked at
   seeded points of the box against it; then a solve writes the records (a matrix-vector
-  product) and recomputes the bound elements in the vectorised kernels (``fe.line_update``):
+  product) and recomputes the bound elements in the vectorized kernels (``fe.line_update``):
 
       K(theta) = K(deck) + sum_e P_e^T (K_e(records(theta)) - K_e(records(deck))) P_e,
 

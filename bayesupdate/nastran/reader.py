@@ -59,7 +59,7 @@ def _shell_cards(ctx):
     nodes = -np.ones((n, 4), np.int64)
     corner = np.full((n, 4), np.nan)
     zoffs, tflag = np.zeros(n), np.zeros(n, np.int64)
-    for i, e in enumerate(shells):  # reading the cards; the maths below is vectorised
+    for i, e in enumerate(shells):  # reading the cards; the maths below is vectorized
         k = 4 if e.name == "CQUAD4" else 3
         try:
             nodes[i, :k] = [e.int(f"G{j + 1}", positive=True) for j in range(k)]

@@ -1,6 +1,6 @@
 """The unit system a Nastran deck is written in.
 
-Nastran has no units: a deck is in any consistent set.  The set is recognised from PARAM WTMASS
+Nastran has no units: a deck is in any consistent set.  The set is recognized from PARAM WTMASS
 (1 / 386.09 = 1 / g in in/s^2: weights in lbf, lengths in inches; 1 / 32.174: feet) or else from
 the Young's moduli (most of them within steel to aluminium in Pa, MPa or psi); it is reported,
 never converted: the model works in the deck's own units (mass = WTMASS x the deck's mass and
@@ -41,10 +41,10 @@ def unit_system(moduli, wtmass: float) -> dict:
                 mass=mass,
                 time="s",
                 wtmass=wtmass,
-                basis="recognised from the MAT1 Young's moduli; values are the deck's own",
+                basis="recognized from the MAT1 Young's moduli; values are the deck's own",
             )
     return dict(
-        system="the deck's own consistent units (not recognised)",
+        system="the deck's own consistent units (not recognized)",
         length="deck length",
         force="deck force",
         mass="deck mass x WTMASS",
@@ -64,7 +64,7 @@ NAMED = {
 
 
 def named_system(name: str, wtmass: float) -> dict:
-    """The record of a unit system the user names (``NAMED``), instead of the recognised one."""
+    """The record of a unit system the user names (``NAMED``), instead of the recognized one."""
     from bayesupdate.errors import BayesUpdateError
 
     key = str(name).strip().lower()

@@ -17,7 +17,7 @@ solve of 28,386 DOFs is made.  A full solve that fails at the
 best end or at the optimum gives a one-line warning naming the point.  The whole step
 (``calibrate_on_exact_basis``) is pure functions and frozen records; its result is kept on disk
 and recalled by the same command again (``pipelines.calibration_memo``).  This is the
-trust-region idea of reduced-basis optimisation: optimise on the surrogate, make it exact at the
+trust-region idea of reduced-basis optimization: optimize on the surrogate, make it exact at the
 iterate and check it there in full (Yue & Meerbergen, SIAM J. Optim. 23 (2013) 1344; Qian,
 Grepl, Veroy & Willcox, SIAM J. Sci. Comput. 39 (2017) S434).
 """

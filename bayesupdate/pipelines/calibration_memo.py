@@ -3,7 +3,7 @@ settings recalls its optimum instead of searching again, and checks it by one fu
 
 The optimum of ``pipelines.calibrate`` is a pure function of the certified basis (its vectors),
 the problem (data, parameters and their bounds and starts, pairing, objective, fixed values, the
-reference prediction) and the optimiser's settings; the entry's key is the SHA-256 of all of them
+reference prediction) and the optimizer's settings; the entry's key is the SHA-256 of all of them
 and the package version (``compute.cache.content_key``), in the same store as the bases
 (``compute.cache.ArrayStore``: ``BAYESUPDATE_CACHE_DIR``, ``--no-cache``, atomic writes,
 checksums, least recently used out).  A recalled optimum is evaluated by one full solve, as a

@@ -15,7 +15,7 @@ modes (by ``inference.pairing.screen_pairs``, the one rule ``calibrate``, ``samp
 frequencies only),
 the MAC matrix and the test's AutoMAC, COMAC per test DOF, and, for an FE model, the SEREP TAM
 of the model at the test DOFs (``correlation.serep_*``): the model's pseudo-orthogonality, the
-cross-orthogonality where the test's shapes are mass-normalised, and the test shapes expanded to
+cross-orthogonality where the test's shapes are mass-normalized, and the test shapes expanded to
 every model DOF.  ``write_correlation_h5`` writes it (layout in its docstring).
 """
 
@@ -103,9 +103,9 @@ class Correlation:
     pairs : ``correlation.ModePairs`` (its ``refused``: (test, best model mode, MAC) of each
     refused test mode).  mac (m_t, m_m), test_auto_mac (m_t, m_t), comac (n_a,)
     over the paired modes: None without test shapes.  mapping : ``SensorMapping``.
-    test_shapes (n_a, m_t) real (realised) test shapes, model_shapes (n_a, m_m) model shapes at
+    test_shapes (n_a, m_t) real (realized) test shapes, model_shapes (n_a, m_m) model shapes at
     the test DOFs: None without test shapes.  pseudo_orthogonality (k, k) of the paired model
-    modes through the SEREP TAM, cross_orthogonality (k, k) test vs model (mass-normalised test
+    modes through the SEREP TAM, cross_orthogonality (k, k) test vs model (mass-normalized test
     shapes only), expanded (n_dof, k) the paired test shapes expanded by SEREP: None where not
     computed.  notes : what a reader must know (why something is missing).  model_nodes
     (n_nodes, 3) the model's node coordinates (its own units) for the report's picture of the
@@ -191,7 +191,7 @@ def _test_node(label) -> str:
 @dataclass(frozen=True)
 class ModelModes:
     """The model's modes: frequencies_hz (m,), shapes (n_labels, m) at ``labels`` (None: no
-    shapes), full (n_dof, m) mass-normalised shapes at every DOF (FE models only, else None)."""
+    shapes), full (n_dof, m) mass-normalized shapes at every DOF (FE models only, else None)."""
 
     frequencies_hz: np.ndarray
     labels: tuple[str, ...]
@@ -292,7 +292,7 @@ def correlate(
         comac=comac(data.shapes[:, pairs.test], model_at[:, pairs.model])
         if pairs.test.size
         else None,
-        test_shapes=_realise(data.shapes),
+        test_shapes=_realize(data.shapes),
         model_shapes=model_at,
         model_nodes=_nodes(model),
         test_numbers=_shown(numbers),
@@ -372,10 +372,10 @@ def _pairs_in_order(numbers: tuple[int, ...], n_model: int) -> ModePairs:
     )
 
 
-def _realise(shapes: np.ndarray) -> np.ndarray:
-    from bayesupdate.ema.lsfd import realise
+def _realize(shapes: np.ndarray) -> np.ndarray:
+    from bayesupdate.ema.lsfd import realize
 
-    return realise(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
+    return realize(shapes) if np.iscomplexobj(shapes) else np.asarray(shapes, dtype=float)
 
 
 def _pair_notes(
@@ -409,14 +409,14 @@ def _with_serep(
     transform = serep_transformation(modes.full[:, pairs.model], phi_a)
     mass_a = serep_mass(phi_a)
     test_real = base.test_shapes[:, pairs.test]
-    # a realised shape's sign is arbitrary: turn each towards its paired model shape
+    # a realized shape's sign is arbitrary: turn each towards its paired model shape
     test_real = test_real * np.where(np.sum(test_real * phi_a, axis=0) < 0, -1.0, 1.0)
     xor = None
-    scaled = np.asarray(data.extra.get("mass_normalised", np.zeros(data.n_modes)), dtype=bool)
+    scaled = np.asarray(data.extra.get("mass_normalized", np.zeros(data.n_modes)), dtype=bool)
     if scaled.size == data.n_modes and scaled[pairs.test].all():
         xor = cross_orthogonality(test_real, phi_a, mass_a)
     else:
-        notes.append("no cross-orthogonality: the test's shapes are not all mass-normalised")
+        notes.append("no cross-orthogonality: the test's shapes are not all mass-normalized")
     return replace(
         base,
         pseudo_orthogonality=pseudo_orthogonality(phi_a, mass_a),
@@ -443,7 +443,7 @@ def write_correlation_h5(path, result: Correlation) -> None:
       ``points/model_xyz`` (n_a, 3), ``points/direction`` (n_a, 3), ``points/distance`` (n_a,)
       test point to its model point after the transform (NaN: none);
     - where computed: ``mac`` (m_t, m_m), ``test_auto_mac`` (m_t, m_t), ``comac`` (n_a,),
-      ``test_shapes`` (n_a, m_t) realised, ``model_shapes`` (n_a, m_m),
+      ``test_shapes`` (n_a, m_t) realized, ``model_shapes`` (n_a, m_m),
       ``pseudo_orthogonality`` (k, k), ``cross_orthogonality`` (k, k), ``expanded`` (n_dof, k);
     - ``notes`` strings.
     """

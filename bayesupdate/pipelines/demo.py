@@ -434,7 +434,7 @@ def _assemble(settings: DemoSettings, parts: dict) -> DemoResults:
 def _study(
     settings: DemoSettings, data_source, model: dict = BEAM_MODEL, starts: int | None = None
 ) -> StudyConfig:
-    """The demo's study of ``model`` against ``data_source``; ``starts``: the optimiser's
+    """The demo's study of ``model`` against ``data_source``; ``starts``: the optimizer's
     starts (None: ``settings.starts``)."""
     starts = settings.starts if starts is None else starts
     document = {
@@ -457,7 +457,7 @@ def _study(
 
 def seed_study(settings: DemoSettings) -> StudyConfig:
     """The demo's seed case: the shell exhaust (``SHELL_MODEL``) against seed Table 2, the
-    measured mass kept, the demo's optimiser and sampler settings."""
+    measured mass kept, the demo's optimizer and sampler settings."""
     return _study(settings, "paper:ema", SHELL_MODEL)
 
 

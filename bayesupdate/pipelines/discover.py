@@ -103,9 +103,9 @@ def discover_study(
     posterior = None
     if request.posterior_steps > 0:
         from bayesupdate.discovery.posterior import sample_final
-        from bayesupdate.inference.diagnostics import summarise
+        from bayesupdate.inference.diagnostics import summarize
 
         seed = request.settings.seed + 1
         chain, _ = sample_final(result, steps=request.posterior_steps, seed=seed)
-        posterior = (chain, summarise(chain))
+        posterior = (chain, summarize(chain))
     return DiscoveryRun(model, tuple(request.effects), result, posterior, compute, result.pairing)

@@ -1,5 +1,5 @@
 """The identify pipeline: FRF files (UFF 58) -> modes (seed eqs 7-17: LSCE or pLSCF poles,
-stabilisation, automatic selection, LSFD shapes), as ``bayesupdate identify`` runs it.
+stabilization, automatic selection, LSFD shapes), as ``bayesupdate identify`` runs it.
 
 Several files are one test (the runs of a roving accelerometer); ``IdentifyRequest`` is
 validated once; the result is the frozen ``IdentifyRun`` (the merged FRFs, the
@@ -110,7 +110,7 @@ def _grouped_modes(modes, rg, n_files: int):
         group_of_file[list(g.files)] = k
     extra = {
         **modes.extra,
-        "mass_normalised": rg.mass_normalised,
+        "mass_normalized": rg.mass_normalized,
         "shape_sd_fallback": fallback,
         "mpc_one_pole": modes.mpc,
         "frequency_one_pole_hz": modes.frequencies_hz,
@@ -146,10 +146,10 @@ def identification_notes(result: Identification, merge_notes=()) -> tuple[str, .
     notes += _group_notes(result)
     if len(modes.dof_labels) < 2:
         notes.append("MPC not reported: shapes have one DOF, so phase collinearity is undefined")
-    if not np.all(modes.extra.get("mass_normalised", result.mass_normalised)):
+    if not np.all(modes.extra.get("mass_normalized", result.mass_normalized)):
         notes.append(
             "shapes without a driving point are unscaled (largest component 1), "
-            "not mass-normalised; measure a driving point to scale them"
+            "not mass-normalized; measure a driving point to scale them"
         )
     if np.any(modes.extra.get("shape_sd_fallback", False)):
         notes.append(f"shape_sd_rel not estimable for some modes: set to {MAX_SHAPE_SD}")
@@ -241,7 +241,7 @@ def identify_summary(result: Identification, out, notes, report=None) -> dict:
                 "damping_ratio": float(modes.damping_ratio[r]),
                 "mpc": None if no_mpc[r] else float(modes.mpc[r]),
                 "shape_sd_rel": float(modes.shape_sd_rel[r]),
-                "mass_normalised": bool(modes.extra["mass_normalised"][r]),
+                "mass_normalized": bool(modes.extra["mass_normalized"][r]),
                 "stable_orders": int(modes.extra["stable_orders"][r]),
                 **_group_keys(modes.extra, r),
             }

@@ -30,7 +30,7 @@ def resolve_model(
 
     A Nastran deck (``nastran.load_nastran_model``) takes its parameters from the tables'
     ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``, in its
-    own ``units`` (a name, ``nastran.units``; None: recognised from the deck).  A deck without
+    own ``units`` (a name, ``nastran.units``; None: recognized from the deck).  A deck without
     bound parameters is refused unless ``needs_parameters`` is False (``modes``, ``correlate``:
     a model at its own values)."""
     from bayesupdate.inference.user_model import load_user_model

@@ -22,7 +22,7 @@ from bayesupdate.inference.checks import sampling_warnings
 from bayesupdate.inference.diagnostics import (
     convergence_report,
     posterior_predictive,
-    summarise,
+    summarize,
 )
 from bayesupdate.inference.evaluators import split_pays
 from bayesupdate.inference.likelihood import LogPosterior
@@ -86,7 +86,7 @@ class SamplingRun:
 
     calibration : the optimum the walkers started from.  posterior : the chain and its
     diagnostics (``posterior.interrupted`` after a stop request).  summary : per-parameter
-    diagnostics (``inference.diagnostics.summarise``), {} when interrupted.  predictions : the
+    diagnostics (``inference.diagnostics.summarize``), {} when interrupted.  predictions : the
     posterior predictive (``posterior_predictive``), {} when interrupted.  compute : where the
     independent work ran (the executor's ``describe()``: {"kind", "workers"[, "scheduler"]}).
     warnings : one-line warnings (``inference.checks.sampling_warnings``: a paired MAC below the
@@ -312,7 +312,7 @@ def _sample(
 def _diagnosed(posterior, log_post, rom, screen, cfg: SamplerConfig, basis_note=None):
     """(posterior with its convergence verdict and diagnostics, summary table); ``basis_note``
     (``_basis_at_optimum``) joins the diagnostics' "rom"."""
-    summary = summarise(posterior, hdi_prob=cfg.hdi_prob)
+    summary = summarize(posterior, hdi_prob=cfg.hdi_prob)
     report = convergence_report(
         posterior, summary, cfg.target_rhat, cfg.target_ess, cfg.min_autocorr_times
     )

@@ -1,11 +1,11 @@
 """The sensitivity pipeline: which parameters the measured modes can inform, before updating.
 
-Normalised sensitivities S_ij = (d f_i / f_i) / (d p_j / p_j) = d ln f_i / d ln p_j of the model
+Normalized sensitivities S_ij = (d f_i / f_i) / (d p_j / p_j) = d ln f_i / d ln p_j of the model
 modes paired with the test (``pipelines.correlate``) to every candidate parameter, at the
 model's defaults:
 
 * ``analytic`` (FE models): one modal solve, then per parameter the eigenvalue derivative
-  d lambda_i = phi_i^T (dK - lambda_i dM) phi_i of mass-normalised modes (Fox & Kapoor 1968,
+  d lambda_i = phi_i^T (dK - lambda_i dM) phi_i of mass-normalized modes (Fox & Kapoor 1968,
   "Rates of change of eigenvalues and eigenvectors", AIAA J. 6(12)), with dK, dM the central
   difference of the assembled matrices in ln p (exact for terms linear in p, O(h^2) for a shell
   thickness's t^2 and t^3 terms); S_ij = d lambda_i / (2 lambda_i).  A repeated eigenvalue has
@@ -17,7 +17,7 @@ Then what the test can see (``identifiability``): the singular values of S and t
 singular vectors (directions in log-parameter space; those below ``rank_tol`` x the largest are
 not seen), groups of confounded parameters (columns of S parallel or anti-parallel within
 ``group_cos``, e.g. E and RHO of a material that is all of the structure: only E/RHO moves its
-frequencies), and a suggested parameter set, the first ``rank`` pivots of a QR factorisation
+frequencies), and a suggested parameter set, the first ``rank`` pivots of a QR factorization
 with column pivoting of S (Businger & Golub 1965, "Linear least squares solutions by
 Householder transformations", Numer. Math. 7; Golub & Van Loan, "Matrix Computations", QR with
 column pivoting): a rank-revealing choice, a suggestion and no more.

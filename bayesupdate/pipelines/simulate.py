@@ -42,7 +42,7 @@ class VirtualTest:
 
     frfs : the FRFs (accelerance, seed layout).  frequencies_hz, damping_ratio : (n_modes,) true
     modes [Hz], [-].  mass_kg : true mass.  parameters : the true parameter point (SI).
-    effects : spec strings of the hidden effects.  shapes : (n_dof, n_modes) true mass-normalised
+    effects : spec strings of the hidden effects.  shapes : (n_dof, n_modes) true mass-normalized
     shapes at ``dof_labels``.  reference_points : the accelerometer points (V, H).
     """
 

@@ -114,7 +114,7 @@ def basis_error_allowed(problem: CalibrationProblem, spec: LikelihoodSpec, calib
     The basis's error is one-sided (Rayleigh-Ritz: reduced frequencies >= full), so it biases
     the posterior; below a tenth of a mode's sd the bias is a tenth of an sd or less.  The sd is
     the likelihood's, s_i^2 = sigma^2 / w_i + the data's relative sd_i^2 (``SampledNoise``), at
-    the fixed sigma, or, with sigma sampled, at the sigma that maximises the likelihood of the
+    the fixed sigma, or, with sigma sampled, at the sigma that maximizes the likelihood of the
     optimum's residuals (``sigma_at_optimum``): near 0 when the identification sds explain the
     scatter (the NX round trip: posterior sigma 8e-6, basis error 4e-6 against sds from 5.5e-6),
     the model error's level when the model misses physics (a hidden 0.4 kg mass on the exhaust:
@@ -133,7 +133,7 @@ def basis_error_allowed(problem: CalibrationProblem, spec: LikelihoodSpec, calib
 
 
 def sigma_at_optimum(noise: SampledNoise, residual: np.ndarray) -> float:
-    """The noise level sigma that maximises the likelihood (eq. 1) of the relative residuals
+    """The noise level sigma that maximizes the likelihood (eq. 1) of the relative residuals
     (n,) under ``noise``, on a log grid 1e-9 to 1 (121 points): 1e-9 stands for 0."""
     grid = np.logspace(-9.0, 0.0, 121)
     ll = noise.log_likelihood(np.broadcast_to(residual, (grid.size, residual.size)), grid)

@@ -4,7 +4,7 @@ DIR``.
 correlate: the inputs and the test-point mapping, the frequency table of the paired modes, the
 MAC matrix as a picture (pairs outlined), the pairs with swaps, refused and unpaired modes, the
 paired shapes side by side at the test DOFs, COMAC per test DOF as a chart, the orthogonality
-checks through the SEREP TAM.  sensitivity: the normalised sensitivity matrix as a heat map, its
+checks through the SEREP TAM.  sensitivity: the normalized sensitivity matrix as a heat map, its
 singular values and directions, the confounded groups and the suggested parameter set.
 
 :func:`correlate_document` / :func:`sensitivity_document` build the content (pure); the
@@ -22,14 +22,14 @@ from bayesupdate.report.render import write_report
 FIGURES = {
     "mac": ("mac.png", "MAC of the test modes (rows) against the model modes (columns); the "
             "accepted pairs are outlined."),
-    "shapes": ("shapes.png", "Paired shapes at the test DOFs: test (bars, realised and scaled "
+    "shapes": ("shapes.png", "Paired shapes at the test DOFs: test (bars, realized and scaled "
                "onto the model shape by the modal scale factor) and model (dots)."),
     "comac": ("comac.png", "COMAC per test DOF over the paired modes (1 = test and model agree "
               "at that DOF over all pairs)."),
     "points": ("points.png", "The test points on the model (plan and side view, the model's "
                "frame and units): model nodes grey, each test point at its paired model point, "
                "coloured by its lowest COMAC, labelled by its test node."),
-    "sensitivity": ("sensitivity.png", "Normalised sensitivities (d f / f) / (d p / p) of the "
+    "sensitivity": ("sensitivity.png", "Normalized sensitivities (d f / f) / (d p / p) of the "
                     "paired frequencies (rows) to the candidate parameters (columns)."),
 }  # fmt: skip
 
@@ -283,7 +283,7 @@ def _sensitivity_table(result) -> Table:
         for i, row in enumerate(result.matrix)
     )
     return Table(("mode [Hz]", *result.names), rows,
-                 caption="Normalised sensitivities (d f / f) / (d p / p)")  # fmt: skip
+                 caption="Normalized sensitivities (d f / f) / (d p / p)")  # fmt: skip
 
 
 def _singular_table(result) -> Table:

@@ -355,7 +355,7 @@ def _discovery_table(part: DiscoveryPart) -> Table:
 
 _DISCOVERY_CAPTIONS = {
     "residuals": "Per-mode residuals before and after adding the named effect.",
-    "localization": "Localisation map: where on the structure the misfit points.",
+    "localization": "Localization map: where on the structure the misfit points.",
     "ranking": "Candidate ranking by evidence.",
 }
 

@@ -2,7 +2,7 @@
 element, the strain energy of a mode per unit area, drawn on the shell mesh.
 
 ``shell_energy_map`` gathers the numbers from an ``FEResult`` solved with ``energies=True``
-(``fe.energy.general_energies``: U_e = 1/2 phi_e^T K_e phi_e of each element of a mass-normalised
+(``fe.energy.general_energies``: U_e = 1/2 phi_e^T K_e phi_e of each element of a mass-normalized
 mode); ``plot_energy_density_map`` draws one mode (one 3-D panel per shell part, matplotlib,
 Agg) and returns the PNG's path.
 """
@@ -31,7 +31,7 @@ class ShellEnergyMap:
     polygons : (n_shell, 4, 3) element corners [m] (a triangle repeats its last corner).
     area : (n_shell,) element areas [m^2] (those the element matrices use).
     part : (n_shell,) index into ``part_names``.
-    density : (n_shell, m) strain energy per unit area of each mass-normalised mode [J/m^2 per
+    density : (n_shell, m) strain energy per unit area of each mass-normalized mode [J/m^2 per
         kg m^2 of modal mass]: sum(density[:, k] * area) is the shells' part of the mode's
         strain energy.
     modal_energy : (m,) each mode's whole strain energy lambda / 2 (beams and springs included).

@@ -1,5 +1,5 @@
 """The report of ``bayesupdate identify --report DIR``: the data, the modes and how well they are
-known, their shapes over the response DOFs, the stabilisation diagram, the FRF synthesis and the
+known, their shapes over the response DOFs, the stabilization diagram, the FRF synthesis and the
 AutoMAC.
 
 :func:`identify_document` builds the content from an identification (pure);
@@ -15,7 +15,7 @@ import numpy as np
 from bayesupdate.atomic import make_writable_folder
 from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.ema.identify import Identification
-from bayesupdate.ema.lsfd import realise
+from bayesupdate.ema.lsfd import realize
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.pipelines.identify import identification_notes, mpc_reasons
 from bayesupdate.report.document import Alert, Document, Figure, Section, Table
@@ -36,7 +36,7 @@ FIGURES = {
     ),
     "shapes": (
         "shapes.png",
-        "Mode shapes over the response DOFs: realised (rotated to the best real line), "
+        "Mode shapes over the response DOFs: realized (rotated to the best real line), "
         "largest value +1.",
     ),
     "frf_fit": (
@@ -71,11 +71,11 @@ class IdentifyInput:
     out: str = ""
 
 
-def normalised_shapes(shapes: np.ndarray) -> np.ndarray:
-    """Real shapes (n_dof, m): each column realised (:func:`~bayesupdate.ema.lsfd.realise`)
+def normalized_shapes(shapes: np.ndarray) -> np.ndarray:
+    """Real shapes (n_dof, m): each column realized (:func:`~bayesupdate.ema.lsfd.realize`)
     and divided by its value of largest magnitude, so that value is +1 (a zero column stays
     zero)."""
-    real = np.atleast_2d(realise(np.asarray(shapes, dtype=complex)))
+    real = np.atleast_2d(realize(np.asarray(shapes, dtype=complex)))
     if real.size == 0:
         return real
     peak = real[np.argmax(np.abs(real), axis=0), np.arange(real.shape[1])]
@@ -94,7 +94,7 @@ def modes_table(modes) -> Table:
     damping = modes.damping_ratio if modes.damping_ratio is not None else [np.nan] * modes.n_modes
     sd = modes.shape_sd_rel if modes.shape_sd_rel is not None else [np.nan] * modes.n_modes
     orders = extra.get("stable_orders", [None] * modes.n_modes)
-    massnorm = extra.get("mass_normalised", [False] * modes.n_modes)
+    massnorm = extra.get("mass_normalized", [False] * modes.n_modes)
     reasons = mpc_reasons(modes)
     rows = tuple(
         (
@@ -104,7 +104,7 @@ def modes_table(modes) -> Table:
             f"{float(modes.mpc[r]):.3f}" if reasons[r] is None else f"n/a ({reasons[r]})",
             "-" if orders[r] is None else int(orders[r]),
             f"{float(sd[r]):.2g}",
-            "mass-normalised" if massnorm[r] else "unscaled",
+            "mass-normalized" if massnorm[r] else "unscaled",
         )
         for r in range(modes.n_modes)
     )
@@ -125,8 +125,8 @@ def modes_table(modes) -> Table:
 
 
 def shapes_table(modes) -> Table:
-    """One row per response DOF, one column per mode: the normalised real shape."""
-    shapes = normalised_shapes(modes.shapes)
+    """One row per response DOF, one column per mode: the normalized real shape."""
+    shapes = normalized_shapes(modes.shapes)
     headers = ("DOF",) + tuple(
         f"mode {r + 1} ({modes.frequencies_hz[r]:.2f} Hz)" for r in range(modes.n_modes)
     )
@@ -134,17 +134,17 @@ def shapes_table(modes) -> Table:
         (str(label),) + tuple(f"{v:+.3f}" for v in shapes[i])
         for i, label in enumerate(modes.dof_labels)
     )
-    return Table(headers, rows, caption="Mode shapes (realised, largest value +1)")
+    return Table(headers, rows, caption="Mode shapes (realized, largest value +1)")
 
 
-#: below this MPC a shape is far from a real (normal) mode: its realised values drop much
+#: below this MPC a shape is far from a real (normal) mode: its realized values drop much
 MIN_REAL_MPC = 0.8
 #: above this shape_sd_rel (E[1 - MAC] ~ 0.09) a shape's values are rough
 MAX_GOOD_SHAPE_SD = 0.3
 
 
 def _shape_cautions(modes) -> tuple[str, ...]:
-    """Sentences naming the modes whose realised shape is far from the identified one (low
+    """Sentences naming the modes whose realized shape is far from the identified one (low
     MPC) or poorly known (large shape_sd_rel)."""
     out = []
     reasons = mpc_reasons(modes)
@@ -157,7 +157,7 @@ def _shape_cautions(modes) -> tuple[str, ...]:
         if low:
             out.append(
                 f"Mode(s) {', '.join(map(str, low))}: MPC below {MIN_REAL_MPC}, the identified "
-                "shape is strongly complex and the realised values below drop its quadrature "
+                "shape is strongly complex and the realized values below drop its quadrature "
                 "part."
             )
     if modes.shape_sd_rel is not None:
@@ -396,7 +396,7 @@ def _draw(folder: Path, inp: IdentifyInput, result: Identification | None) -> di
         modes = result.modes
         plots.plot_stabilization(result, inp.frfs, path["stabilization"])
         plots.plot_shape_bars(
-            modes.dof_labels, normalised_shapes(modes.shapes), modes.frequencies_hz, path["shapes"]
+            modes.dof_labels, normalized_shapes(modes.shapes), modes.frequencies_hz, path["shapes"]
         )
         plots.plot_frf_fit(result, inp.frfs, path["frf_fit"])
         plots.plot_mac(modes.shapes, modes.shapes, path["automac"], "AutoMAC")

@@ -60,7 +60,7 @@ def homogeneous(R, t, s: float = 1.0) -> np.ndarray:
 
 
 def umeyama(src, dst, with_scale: bool = False) -> tuple[np.ndarray, np.ndarray, float]:
-    """(R (3, 3), t (3,), s) minimising sum |s R src_i + t - dst_i|^2 (Umeyama 1991 eqs 40-42;
+    """(R (3, 3), t (3,), s) minimizing sum |s R src_i + t - dst_i|^2 (Umeyama 1991 eqs 40-42;
     s = 1 without scale).  src, dst : (n, 3), n >= 3."""
     src, dst = np.asarray(src, float), np.asarray(dst, float)
     mu_s, mu_d = src.mean(axis=0), dst.mean(axis=0)

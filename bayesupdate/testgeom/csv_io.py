@@ -7,7 +7,7 @@ Rows (a header line and ``#`` comments allowed; lengths in the file's ``length_u
                                     # kind rectangular|cylindrical|spherical; rows of R are
                                     # the frame's axes in global, (ox, oy, oz) its origin
     dof, label, node, dx, dy, dz    # a test DOF in a skewed direction (in the node's
-                                    # displacement frame; need not be normalised)
+                                    # displacement frame; need not be normalized)
 
 A ``dof`` row lets test data name a DOF that no UFF direction code describes (a sensor glued at
 an angle): the data's label ``label`` reads the model along that vector.

@@ -62,7 +62,7 @@ def direction_code(label: str) -> tuple[int, int]:
 
 
 def unit_vector(vector, what: str) -> np.ndarray:
-    """``vector`` (3,) normalised; a one-line error for a zero or non-finite vector."""
+    """``vector`` (3,) normalized; a one-line error for a zero or non-finite vector."""
     v = np.asarray(vector, dtype=float).reshape(3)
     norm = float(np.linalg.norm(v))
     if not (np.isfinite(norm) and norm > 1e-12):

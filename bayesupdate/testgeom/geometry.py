@@ -18,7 +18,7 @@ from bayesupdate.testgeom.frames import GLOBAL, CoordinateFrame, displacement_ax
 @dataclass(frozen=True)
 class DeclaredDof:
     """A test DOF with its own direction: ``label`` (as the test data name it), ``node``,
-    ``vector`` (3,) in the node's displacement frame (not normalised)."""
+    ``vector`` (3,) in the node's displacement frame (not normalized)."""
 
     label: str
     node: int

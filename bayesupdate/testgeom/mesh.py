@@ -37,8 +37,8 @@ class ModelMesh:
 
 def model_unit(structure, given: str | None) -> str:
     """The model's length unit: ``given`` (the study's ``[test] model_length_unit``), else a
-    Nastran deck's recognised unit, else metres (a built-in model); a deck whose units are not
-    recognised needs ``given``."""
+    Nastran deck's recognized unit, else metres (a built-in model); a deck whose units are not
+    recognized needs ``given``."""
     if given is not None:
         return length_unit(given, "test.model_length_unit")
     nastran = structure.metadata.get("nastran")
@@ -47,7 +47,7 @@ def model_unit(structure, given: str | None) -> str:
     unit = str(nastran.get("units", {}).get("length", ""))
     if unit not in METRES_PER:
         raise BayesUpdateError(
-            f"model {nastran.get('deck', '')}: its length unit is not recognised; give "
+            f"model {nastran.get('deck', '')}: its length unit is not recognized; give "
             "[test] model_length_unit = 'mm' (m, mm, cm, in, ft)"
         )
     return unit

@@ -1,5 +1,5 @@
 """Element families, one file each: the element arrays of a family as a frozen dataclass and its
-element matrices vectorised over elements (SI units, global axes).
+element matrices vectorized over elements (SI units, global axes).
 
 * ``beam``: tube beams of the exhaust (Timoshenko, Przemieniecki 1968);
 * ``general_beam``: general 3-D beams (Nastran CBAR/CBEAM: sections, offsets, pin flags);

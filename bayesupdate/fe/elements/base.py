@@ -2,7 +2,7 @@
 total mass and the reduced basis loop over.
 
 An element family is a frozen dataclass of element arrays, one row per element, with its global
-DOF map and its element matrices vectorised over elements.  Two kinds:
+DOF map and its element matrices vectorized over elements.  Two kinds:
 
 * ``ParametricFamily`` (registry ``PARAMETRIC``, ``register_parametric``): its properties are
   design parameters (tube beams, point masses, springs).  Its element matrices are taken at an

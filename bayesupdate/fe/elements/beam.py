@@ -1,4 +1,4 @@
-"""Shear-deformable (Timoshenko) 3D beam element, vectorised over elements.
+"""Shear-deformable (Timoshenko) 3D beam element, vectorized over elements.
 
 Local DOFs per element (12): [u1 v1 w1 rx1 ry1 rz1  u2 v2 w2 rx2 ry2 rz2], x along the element.
 Stiffness and consistent mass (translational + rotary inertia) with shear parameters

@@ -1,4 +1,4 @@
-"""General 3-D beams: arbitrary section properties, rigid end offsets and pin flags, vectorised
+"""General 3-D beams: arbitrary section properties, rigid end offsets and pin flags, vectorized
 over elements (the ``CBAR``/``CBEAM`` of Nastran).
 
 Each element is the Timoshenko beam of ``fe.elements.beam`` (Przemieniecki 1968, eqs 5.116 and
@@ -51,7 +51,7 @@ class GeneralBeams(LineElements):
 
     nodes (n, 2), part (n,); E, G [Pa], rho [kg/m^3]; area [m^2], iy, iz, iyz, torsion [m^4],
     shear_y, shear_z (shear-area factors, 0 = rigid in shear); nsm [kg/m]; torsion_inertia
-    [kg m]; up (n, 3) local z reference (local y = up x axis normalised); offset (n, 2, 3) [m]
+    [kg m]; up (n, 3) local z reference (local y = up x axis normalized); offset (n, 2, 3) [m]
     from each node to the element's end (global axes); pins (n, 2, 6) bool released element-axis
     DOFs at end a and b; mass (n,) index into ``MASS_KINDS``.  An ``elements.base.ElementFamily``
     (``Structure.general_beams``).

@@ -1,5 +1,5 @@
 """Point masses rigidly offset from their node (Nastran CONM2: mass, inertia tensor and offset),
-vectorised over the masses.
+vectorized over the masses.
 
 A mass m [kg] with inertia tensor J (3, 3) [kg m^2] about its centre, which sits at the offset
 o [m] from its node, moves rigidly with the node: its centre's DOFs are u_c = T q with

@@ -1,5 +1,5 @@
 """Axial rods and trusses (Nastran CROD/CONROD/PROD): axial and optional torsional stiffness,
-consistent or lumped mass, vectorised over elements.
+consistent or lumped mass, vectorized over elements.
 
 With e the unit axis, the stiffness couples the end translations along e and the end rotations
 about e: K = [[P, -P], [-P, P]] (x) EA / L on the translations and the same with GJ / L on the

@@ -1,4 +1,4 @@
-"""Flat shell elements (4-node quadrilateral, 3-node triangle), vectorised over elements.
+"""Flat shell elements (4-node quadrilateral, 3-node triangle), vectorized over elements.
 
 Local DOFs per node (6): [u v w rx ry rz] in the element frame (x, y in the element plane, z its
 normal); displacements in m, rotations in rad.  Mindlin-Reissner kinematics with the rotations
@@ -344,7 +344,7 @@ class PieceSource:
     """What the thickness-free pieces (``LocalPieces``) of a family of elements are computed from,
     kept in their place: the six (n, d, d) stacks take 27.6 kB per quad (4.3 GiB for the 166,000
     quads of a 1e6-DOF plate), the source 0.1 kB.  Pieces are computed when asked for, ``CHUNK``
-    elements at a time (each chunk vectorised), with the same values every time.
+    elements at a time (each chunk vectorized), with the same values every time.
 
     xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu

@@ -1,4 +1,4 @@
-"""Bending of the 3-node shell triangle: the Discrete Kirchhoff Triangle (DKT), vectorised.
+"""Bending of the 3-node shell triangle: the Discrete Kirchhoff Triangle (DKT), vectorized.
 
 Batoz, Bathe & Ho, "A study of three-node triangular plate bending elements", IJNME 15 (1980)
 1771-1812, sec. 3 (the DKT element); Batoz, IJNME 18 (1982) 1077 gives the explicit form.  The
@@ -27,7 +27,7 @@ constraints than a mesh of triangles has rotational freedom, so it locks as t / 
 plate, one diagonal: modes 1-8 up to 2.1 % high at a/t = 100 and 32 % at a/t = 1000; DKT 0.93
 and 0.98 %).  A locking-free Mindlin triangle with corner DOFs only needs internal bubbles
 condensed with the shear stiffness (MITC3+, Lee & Bathe 2014) or a mesh-dependent shear factor
-t^2 / (t^2 + alpha h^2) (stabilised DSG3 and CS-DSG3, Nguyen-Thoi et al. 2012;
+t^2 / (t^2 + alpha h^2) (stabilized DSG3 and CS-DSG3, Nguyen-Thoi et al. 2012;
 MIN3, Tessler & Hughes 1985; DKMT, Katili 1993): either makes the stiffness
 a rational function of t, which the exact thickness powers cannot hold.
 

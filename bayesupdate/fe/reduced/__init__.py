@@ -16,7 +16,7 @@ Offline (``ReducedFEModel.build``), one module per step:
    box centre (Quarteroni, Manzoni & Negri, *Reduced Basis Methods for PDEs*, 2016, ch. 6); the
    six rigid-body motions are kept exactly as the first basis vectors.  On large models each
    snapshot also gives its modes' design-sensitivity vectors (``sensitivity``: static
-   corrections from one factorisation at the snapshot), so 8 snapshots do the work of 32;
+   corrections from one factorization at the snapshot), so 8 snapshots do the work of 32;
    ``estimator``: a residual indicator for an opt-in greedy choice of further snapshots.
 3. ``certification``: reduced frequencies are Rayleigh-Ritz upper bounds of the full ones;
    seeded validation points are solved in full and the basis enriched until the largest
@@ -26,7 +26,7 @@ Offline (``ReducedFEModel.build``), one module per step:
 Online (``ReducedFEModel.predict_frequencies_batch``, ``model``): reduced K and M for all points by
 one matrix product each, rigid coordinates eliminated exactly, stacked Cholesky + ``eigvalsh``
 (``fe.batched_eigen``).  ``coarsening``: a coarser basis inside a certified one (screening) and
-a model localised on a sub-box.  ``enrichment``: a basis enriched for a local change of the
+a model localized on a sub-box.  ``enrichment``: a basis enriched for a local change of the
 structure (an added effect) by attachment vectors.  ``settings``: the validated build settings.
 
 Models are immutable: ``build``, ``certify_at``, ``coarsened`` and ``localized`` return new ones.

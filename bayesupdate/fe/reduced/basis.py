@@ -117,7 +117,7 @@ def _solve_point(shared: tuple, row: np.ndarray):
     fe, names, n_modes, decomposition = shared
     params = dict(zip(names, map(float, row), strict=True))
     try:
-        if decomposition is not None and _shares_factorisation(fe):
+        if decomposition is not None and _shares_factorization(fe):
             return _snapshot(fe, decomposition, params, n_modes)
         sol = fe.solve(params, n_modes).modes
         if decomposition is None:
@@ -135,10 +135,10 @@ def _modal_settings(fe: FEModel, n_modes: int) -> ModalSettings:
     return ModalSettings(n_modes=n_modes, rigid_set=rigid_set)
 
 
-def _shares_factorisation(fe: FEModel) -> bool:
+def _shares_factorization(fe: FEModel) -> bool:
     """Whether a snapshot of ``fe`` is solved by shift-invert Lanczos (the sparse path, above
     ``dense_below`` independent DOFs) with the sensitivities' shift, so that both can use one
-    factorisation of K - sigma M."""
+    factorization of K - sigma M."""
     g = fe.general
     settings = ModalSettings()
     return (
@@ -151,8 +151,8 @@ def _shares_factorisation(fe: FEModel) -> bool:
 def _snapshot(fe: FEModel, decomposition: AffineDecomposition, params, n_modes: int):
     """(frequencies (n_modes,) [Hz], [modes, design-sensitivity vectors] (n_dof, k)) at
     ``params``: the modes of ``FEModel.solve`` (same assembly, constraints and solver) and
-    ``static_corrections`` from the one factorisation of T^T (K - sigma M) T the Lanczos
-    iteration made, instead of a second assembly and factorisation."""
+    ``static_corrections`` from the one factorization of T^T (K - sigma M) T the Lanczos
+    iteration made, instead of a second assembly and factorization."""
     g = fe.general
     tr = g.transform
     K, M = fe.matrices(params)
@@ -275,7 +275,7 @@ def compress_terms(terms: np.ndarray, rel: float = 1e-14) -> tuple[np.ndarray, n
     parameter): on the mAEWing1 deck's line group 3,758 terms have rank 16 (K) and 6 (M) to
     ``rel``.  What is dropped has spectral norm <= ``rel`` times the largest singular value,
     which changes reduced entries by < 1e-14 ||K_r||, far below the certified tolerance (and the
-    certification is run on the compressed terms).  The low rank is found by a randomised range
+    certification is run on the compressed terms).  The low rank is found by a randomized range
     finder (Halko, Martinsson & Tropp, SIAM Rev. 53, 2011, alg. 4.2 and sec. 4.3) whose
     residual is measured exactly (``_range_finder``); the plain SVD (O(n_terms^2 r^2)) is kept
     for small term sets and as the fallback when the rank is not low."""

@@ -1,5 +1,5 @@
 """Smaller reduced models made from a certified one: a coarser basis inside it (for screening
-proposals in delayed-acceptance sampling) and a model localised on a sub-box (e.g. a pilot
+proposals in delayed-acceptance sampling) and a model localized on a sub-box (e.g. a pilot
 chain's)."""
 
 from dataclasses import replace

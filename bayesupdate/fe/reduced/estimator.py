@@ -15,7 +15,7 @@ and it only ranks points: the build full-solves where it is largest (a weak gree
 and the certificate still rests on full solves at fresh points
 (``reduced.certification``).  Its cost per point: an assembly of K and M, the reduced eigen-solve
 with vectors, two sparse products and one back-substitution of n_modes right-hand sides with the
-one factorisation at the centre; no eigen-solve of the full model.
+one factorization at the centre; no eigen-solve of the full model.
 """
 
 from collections.abc import Mapping
@@ -29,7 +29,7 @@ from bayesupdate.fe.sparse_modal import factorize
 
 
 class ResidualIndicator:
-    """eta(theta) of the module docstring for bases of ``fe``, with the factorisation of A0 at
+    """eta(theta) of the module docstring for bases of ``fe``, with the factorization of A0 at
     ``centre`` (all parameters, SI) made once."""
 
     def __init__(self, fe: FEModel, centre: Mapping[str, float]):

@@ -37,7 +37,7 @@ def barycentric_weights(x: np.ndarray, pieces: np.ndarray, degree: int) -> np.nd
 
 def barycentric_weights_columns(x: np.ndarray, pieces: np.ndarray, degree: int) -> np.ndarray:
     """``barycentric_weights`` for G interpolants of the same degree and piece count at once:
-    x (B, G), pieces (G, P + 1) -> (B, G, P * (degree + 1)).  Vectorised over points, columns
+    x (B, G), pieces (G, P + 1) -> (B, G, P * (degree + 1)).  Vectorized over points, columns
     and pieces: it runs in every likelihood call."""
     B, G = x.shape
     n = degree + 1

@@ -238,7 +238,7 @@ class ReducedFEModel:
         self, theta: np.ndarray, names: tuple[str, ...] | None = None, n_modes: int | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
         """Frequencies (B, n_modes) [Hz] and sensor shapes (B, n_sensors, n_modes) at theta
-        (B, len(names)), rows on ``sensor_labels``; shapes are not normalised (MAC ignores scale).
+        (B, len(names)), rows on ``sensor_labels``; shapes are not normalized (MAC ignores scale).
 
         Reduced points: one batched solve with eigenvectors, phi_sensors = V_sensor @ y (no
         full-size shape is formed).  Points outside the box, more modes than certified or an

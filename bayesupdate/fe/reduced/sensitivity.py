@@ -1,4 +1,4 @@
-"""Design-sensitivity vectors of a snapshot's modes, from one factorisation at the snapshot.
+"""Design-sensitivity vectors of a snapshot's modes, from one factorization at the snapshot.
 
 Differentiating (K - lambda_i M) phi_i = 0 in a parameter theta_j gives (Nelson, AIAA J. 14,
 1976)
@@ -12,8 +12,8 @@ response to the pseudo-load (dK_j - lambda_i dM_j) phi_i.  The static correction
 
 at the snapshot point adds that response: with the snapshot's modes it spans the first-order
 change of every mode in every parameter (the modal-acceleration form of the derivative: Wang,
-AIAA J. 29, 1991; Fox & Kapoor, AIAA J. 6, 1968).  One factorisation and one back-substitution
-of n_modes right-hand sides per parameter, against the factorisation, shift-invert Lanczos and
+AIAA J. 29, 1991; Fox & Kapoor, AIAA J. 6, 1968).  One factorization and one back-substitution
+of n_modes right-hand sides per parameter, against the factorization, shift-invert Lanczos and
 assembly of a full solve; a snapshot then informs a neighbourhood of its point, not the point
 alone, so fewer snapshots span the box (measured in ``docs/validation/shells-reduced.md``).
 
@@ -31,7 +31,7 @@ from bayesupdate.fe.reduced.affine import AffineDecomposition
 from bayesupdate.fe.reduced.shell_terms import SparsePart
 from bayesupdate.fe.sparse_modal import factorize
 
-#: the shift of the factorisation [rad^2/s^2], that of the full solver (``ModalSettings.shift``)
+#: the shift of the factorization [rad^2/s^2], that of the full solver (``ModalSettings.shift``)
 SHIFT = -((2 * np.pi * 1.0) ** 2)
 #: relative step of the central difference of the coefficients
 REL_STEP = 1e-5
@@ -79,7 +79,7 @@ def static_corrections(
     """(n_dof, n_params * m) static corrections X_ij of the module docstring at ``params``
     (all parameters, SI) for the modes ``shapes`` (n_dof, m) with ``eigenvalues`` (m,)
     [rad^2/s^2]; full-DOF vectors that satisfy the supports and rigid elements (u = T q).
-    solve : the factorisation of T^T (K - SHIFT M) T at ``params`` that the snapshot's eigen-solve
+    solve : the factorization of T^T (K - SHIFT M) T at ``params`` that the snapshot's eigen-solve
     made (``sparse_modal.factorize``; None: made here)."""
     theta = np.array([params[k] for k in decomposition.names], dtype=float)
     dK, dM = coefficient_derivatives(decomposition, theta)

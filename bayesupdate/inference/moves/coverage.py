@@ -1,6 +1,6 @@
 """How well a frozen proposal g covers the posterior p: the importance-weight ESS of draws from g.
 
-With y_i ~ g (i = 1..n) and weights w_i = p(y_i) / g(y_i) (p unnormalised), Kish's effective
+With y_i ~ g (i = 1..n) and weights w_i = p(y_i) / g(y_i) (p unnormalized), Kish's effective
 sample size fraction
 
     ess = (sum w)^2 / (n sum w^2)  ~  1 / E_g[(p / (Z g))^2] = 1 / E_p[p / (Z g)],

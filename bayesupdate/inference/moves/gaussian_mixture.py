@@ -1,6 +1,6 @@
 """A Gaussian mixture in d dimensions: density, draws and a seeded EM fit with a covariance floor.
 
-Fitted by expectation-maximisation (Dempster, Laird & Rubin 1977; Bishop 2006, "Pattern
+Fitted by expectation-maximization (Dempster, Laird & Rubin 1977; Bishop 2006, "Pattern
 Recognition and Machine Learning", sec. 9.2.2) from a k-means++ start (Arthur & Vassilvitskii
 2007).  Every covariance gets a floor ``floor * var(points)`` on its diagonal after each M step,
 so a component cannot collapse onto a few repeated points (an MCMC sample repeats a walker's

@@ -199,7 +199,7 @@ def proposal_coordinates(
 def log_acceptance(log_g: np.ndarray, log_p: np.ndarray) -> float:
     """log of the independence Metropolis-Hastings acceptance rate of a proposal g at
     stationarity, up to an additive constant the same for every g, from draws x_i ~ p with
-    log g(x_i) and log p(x_i) (p unnormalised, (n,) each).
+    log g(x_i) and log p(x_i) (p unnormalized, (n,) each).
 
     With w = p / g, the rate is E_{x ~ p/Z, y ~ g} min(1, w(y) / w(x)) = Z E_{x, y ~ p/Z}
     min(1 / w(x), 1 / w(y)) (substitute g(y) = p(y) / w(y)), Z = the integral of p: over pairs

@@ -1,7 +1,7 @@
 """A snapshot of a large model's basis build (``fe.reduced.basis``) gives its modes and their
-design-sensitivity vectors from one factorisation of K - sigma M (the Lanczos iteration's, used
+design-sensitivity vectors from one factorization of K - sigma M (the Lanczos iteration's, used
 again for the static corrections of ``fe.reduced.sensitivity``), not two: the same numbers as a
-full solve followed by ``static_corrections`` with its own assembly and factorisation."""
+full solve followed by ``static_corrections`` with its own assembly and factorization."""
 
 import numpy as np
 import pytest
@@ -12,7 +12,7 @@ import bayesupdate.fe.reduced.sensitivity as sensitivity_module
 from bayesupdate.fe import Binding, FEModel, StructureBuilder
 from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.reduced.affine import decompose
-from bayesupdate.fe.reduced.basis import _shares_factorisation, full_solves
+from bayesupdate.fe.reduced.basis import _shares_factorization, full_solves
 from bayesupdate.fe.reduced.sensitivity import static_corrections
 
 N_MODES = 6
@@ -44,8 +44,8 @@ def fe():
     return fine_box()
 
 
-def test_one_factorisation_gives_the_modes_and_their_sensitivities(fe, monkeypatch):
-    assert _shares_factorisation(fe)
+def test_one_factorization_gives_the_modes_and_their_sensitivities(fe, monkeypatch):
+    assert _shares_factorization(fe)
     names = fe.parameter_names
     point = np.array([[2.4e-3, 1.2e-3, 8100.0]])
     params = dict(zip(names, point[0], strict=True))
@@ -65,7 +65,7 @@ def test_one_factorisation_gives_the_modes_and_their_sensitivities(fe, monkeypat
     )
     freqs, vectors = full_solves(fe, names, point, N_MODES, sensitivities=dec)
     assert calls == {"basis": 1, "sensitivity": 0}
-    # the same numbers as a full solve and static corrections with their own factorisation
+    # the same numbers as a full solve and static corrections with their own factorization
     sol = fe.solve(params, N_MODES).modes
     separate = static_corrections(fe, dec, params, sol.eigenvalues, sol.shapes)
     assert calls["sensitivity"] == 1

@@ -40,13 +40,20 @@ one thing shows in its pair.  Sites, not events: a loop of 500 sampler steps is 
 site whose callee is a property getter (``ModalData.n_modes``, ``CalibrationProblem.names``) is
 a read of a record handed down, marked ``rd`` and counted apart: "work sites" leave it out.
 
+A climbing site whose callee is a protocol method its caller's line does not name (``pickle``
+running an object's ``__reduce__`` inside an executor's ``share``) is a callback too: the object
+was handed down.
+
 Measured (this script): discover enters 11 rooms and climbs at 2 sites (26 events), both
 executor callbacks (``discovery.workflow:discovery_task``, ``inference.optimize:_fit_start``);
-sample enters 10 rooms and climbs at 2 sites (9 events), ``_fit_start`` and
-``fe.reduced.basis:_solve_point``.  Before discovery had one task entry and built its refits'
-residual function itself, discover climbed at 5 sites (388 events): three discovery task
-functions, ``_fit_start`` and inference's ``unit_box_residuals`` calling discovery's
-``residuals_at``.
+sample enters 10 rooms and climbs at 3 sites (7 events), all callbacks: ``_fit_start``,
+``fe.reduced.basis:_solve_point`` and ``fe.assembly:ElementProperties.__reduce__`` (the split
+worker's share of the model; it had 2 sites before the split worker, and 4 while the pairing's
+reference memo lived in ``pipelines``: ``inference.problem`` called it back up, and it is
+``fe.reference_memo`` now, an FE solve's memo beside the FE model).  Before discovery had one
+task entry and built its refits' residual function itself, discover climbed at 5 sites (388
+events): three discovery task functions, ``_fit_start`` and inference's
+``unit_box_residuals`` calling discovery's ``residuals_at``.
 
 Pairs crossed at more than two sites, before -> after the commands were thinned (the study's
 overrides in one ``config.with_overrides``, the move scheme checked in ``pipelines.study.prepare``,
@@ -59,7 +66,8 @@ reader (``pipelines.study.study_mass_terms``):
   ``with`` and ``describe``), pipelines -> inference 4, pipelines -> config 4 (3 work),
   pipelines -> discovery 3, commands -> config 3.
 - sample: 24 pairs, 12 at more than two sites, 11 -> 10 at more than two work sites; 156 -> 154
-  sites, 123 -> 121 work sites.  commands -> config 5 -> 3 sites (``load_study``,
+  sites, 123 -> 121 work sites (181 sites, 140 work sites with the split worker and the
+  reference memo, 2026-11-29).  commands -> config 5 -> 3 sites (``load_study``,
   ``with_overrides``, ``compute_settings``), commands -> inference 5 -> 3 sites (3 -> 1 work:
   ``ModePairing.to_dict``; the other two are property reads), pipelines -> inference 30 -> 32
   sites (22 -> 24 work: the move check and the mass report moved there from the command).
@@ -74,6 +82,7 @@ import contextlib
 import functools
 import inspect
 import io
+import linecache
 import sys
 import tempfile
 from collections import Counter
@@ -176,7 +185,7 @@ class WalkTracer:
             self.events[key] += 1
             site = (_name(caller.f_code), _name(frame.f_code))
             self.sites.setdefault(key, set()).add(site)
-            if climbs(key) and _handed(caller, frame.f_code):
+            if climbs(key) and (_handed(caller, frame.f_code) or _implicit(caller, frame.f_code)):
                 self.callbacks.add(site)
             if _is_property(frame):
                 self.reads.add(site)
@@ -191,6 +200,16 @@ def _handed(caller, code) -> bool:
         if getattr(func, "__code__", None) is code:
             return True
     return False
+
+
+def _implicit(caller, code) -> bool:
+    """Whether the callee is a protocol method (``__reduce__``, ``__eq__``, ...) that the
+    caller's line does not name: the interpreter or the standard library calls it on an object
+    the caller was handed (``pickle.dumps(obj)`` in an executor runs ``obj``'s ``__reduce__``),
+    a callback in effect."""
+    name = code.co_name
+    dunder = name.startswith("__") and name.endswith("__")
+    return dunder and name not in linecache.getline(caller.f_code.co_filename, caller.f_lineno)
 
 
 def _is_property(frame) -> bool:

@@ -56,7 +56,7 @@ PUBLIC_MODULES = (
     "bayesupdate.pipelines.discover",
     "bayesupdate.pipelines.identify",
     "bayesupdate.pipelines.model_source",
-    "bayesupdate.pipelines.reference_memo",
+    "bayesupdate.fe.reference_memo",
     "bayesupdate.pipelines.sample",
     "bayesupdate.pipelines.simulate",
     "bayesupdate.pipelines.study",

@@ -1,5 +1,5 @@
 """A large model's full solve at the reference design kept on disk
-(``pipelines.reference_memo``): the pairing's reference of a second ``build_problem`` on the
+(``fe.reference_memo``): the pairing's reference of a second ``build_problem`` on the
 same model is recalled without a solve and is the first one's to the bit; a changed model or
 point is another entry (solved), the store off or a small model solve every time, and an entry
 that does not hold the modes asked for is solved again.  On the beam exhaust with the
@@ -15,12 +15,12 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from bayesupdate.compute.cache import ArrayStore  # noqa: E402
+from bayesupdate.fe import reference_memo as memo  # noqa: E402
 from bayesupdate.fe.model import FEModel  # noqa: E402
 from bayesupdate.fe.reduced import settings as reduced_settings  # noqa: E402
 from bayesupdate.inference.data import load_modal_data  # noqa: E402
 from bayesupdate.inference.problem import build_problem  # noqa: E402
 from bayesupdate.models import get_model  # noqa: E402
-from bayesupdate.pipelines import reference_memo as memo  # noqa: E402
 
 
 @pytest.fixture

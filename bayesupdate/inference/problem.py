@@ -410,7 +410,7 @@ def build_problem(
     listed in ``pairing.refused``), and the pairing is redone inside the window (None: every
     test mode is paired, with any model mode).  test_modes : (n_test,) 1-based numbers of
     ``data``'s modes in their source (() : 1..n_test).  reference_solve : ``ReferenceSolve``,
-    raising as ``model.predict`` (None: ``model.predict``; ``pipelines.reference_memo``'s)."""
+    raising as ``model.predict`` (None: ``model.predict``; ``fe.reference_memo``'s)."""
     if pairing not in PAIRING_METHODS:
         raise BayesUpdateError(f"pairing.method: {pairing!r}; use one of {list(PAIRING_METHODS)}")
     if not isinstance(parameters, tuple):

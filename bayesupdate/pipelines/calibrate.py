@@ -29,6 +29,7 @@ import numpy as np
 
 from bayesupdate.compute.cache import ArrayStore
 from bayesupdate.compute.progress import phase
+from bayesupdate.fe.reference_memo import large_fe_model
 from bayesupdate.inference.optimize import (
     SURROGATE_POLISH,
     CalibrationResult,
@@ -37,7 +38,6 @@ from bayesupdate.inference.optimize import (
 )
 from bayesupdate.inference.problem import CalibrationProblem
 from bayesupdate.pipelines import calibration_memo as memo
-from bayesupdate.pipelines.reference_memo import large_fe_model
 from bayesupdate.pipelines.study import PreparedStudy
 from bayesupdate.pipelines.surrogates import sampling_problem
 

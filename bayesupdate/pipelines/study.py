@@ -12,6 +12,7 @@ import numpy as np
 
 from bayesupdate.config import StudyConfig
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.reference_memo import remembered_solve
 from bayesupdate.inference.data import load_modal_data, select_modes
 from bayesupdate.inference.likelihood import LikelihoodSpec
 from bayesupdate.inference.mass_properties import (
@@ -27,7 +28,6 @@ from bayesupdate.inference.priors import prior_from_mapping
 from bayesupdate.inference.problem import CalibrationProblem, ObjectiveSpec, build_problem
 from bayesupdate.modal_data import ModalData
 from bayesupdate.pipelines.model_source import problem_parameters, study_model
-from bayesupdate.pipelines.reference_memo import remembered_solve
 
 #: weight of the mass term of the fit objective when the data carry a measured mass: on seed
 #: Table 2 it keeps the exhaust's mass within 0.4 % of the weighed 12.29 kg (the seed keeps its

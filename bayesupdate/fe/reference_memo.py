@@ -20,6 +20,7 @@ import numpy as np
 
 from bayesupdate import __version__
 from bayesupdate.compute.cache import ArrayStore, content_key
+from bayesupdate.fe.model import FEModel
 from bayesupdate.model_protocol import Prediction
 
 #: format of a kept reference solve; bump when the stored arrays change meaning
@@ -48,7 +49,8 @@ def large_fe_model(model) -> bool:
     """Whether ``model`` is an ``FEModel`` of ``fe.reduced.settings.LARGE_MODEL_DOFS`` DOFs or
     more (its reference solve here, its calibration in ``pipelines.calibration_memo``, are
     kept on disk)."""
-    from bayesupdate.fe.model import FEModel
+    # late: the fe.reduced package loads the basis machinery (~320 modules), which a command
+    # that only builds a problem does not need
     from bayesupdate.fe.reduced.settings import LARGE_MODEL_DOFS
 
     return isinstance(model, FEModel) and model.structure.n_dof >= LARGE_MODEL_DOFS

@@ -125,3 +125,20 @@ def test_one_e_cannot_bind_a_sandwich(tmp_path, mid):
     deck = _sandwich(tmp_path, f"PSHELL,1,1,0.01,2,{BENDING},3,{SHEAR}")
     with pytest.raises(BayesUpdateError, match=r"PSHELL 1 take\(s\) bending or transverse shear"):
         load_nastran_model(deck, {"E": {"binds": f"MAT1 {mid} E", "bounds": [1e9, 1e12]}})
+
+
+def test_a_sandwichs_thickness_binding_is_the_deck_written_with_it(tmp_path):
+    """PSHELL T bound on the sandwich: its bending and shear ratios are factors of the element's
+    pieces, so K and M stay exact powers of t and the bound model at T = 0.13 m is the deck
+    written with T = 0.13 m (measured: identical frequencies; asserted to 1e-12, round-off)."""
+
+    def deck(t, name):
+        path = plate_deck(tmp_path / name, 8, t, f"PSHELL,1,1,{t},2,{BENDING},3,{SHEAR}")
+        path.write_text(path.read_text().replace("ENDDATA", f"{FACES}\n{CORE}\nENDDATA"))
+        return path
+
+    bound = load_nastran_model(deck(0.1, "a.bdf"), {"t": {"binds": "PSHELL 1 T",
+                                                           "bounds": [0.05, 0.2]}})  # fmt: skip
+    written = load_nastran_model(deck(0.13, "b.bdf"))
+    np.testing.assert_allclose(bound.solve({"t": 0.13}, n_modes=6).frequencies_hz,
+                               written.solve(n_modes=6).frequencies_hz, rtol=1e-12)  # fmt: skip

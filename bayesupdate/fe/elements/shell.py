@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bayesupdate.fe.elements import shell_tria
+from bayesupdate.fe.elements import shell_dkq, shell_tria
 
 #: drilling penalty as a fraction of the in-plane shear modulus (Hughes & Brezzi 1989 allow
 #: any gamma > 0).  Measured on the free cylinder (48 x 60 quads): alpha 1e-5 -> 1e-3 moves the
@@ -214,6 +214,18 @@ def quad_operators(xy: np.ndarray) -> _Operators:
     return _Operators(Bm, Bb, Bs, Bd, N, det, Ginc)
 
 
+def dkq_operators(xy: np.ndarray) -> _Operators:
+    """Operators of the shear-rigid quadrilateral, xy (n, 4, 2) [m]: the quadrilateral's
+    membrane (incompatible modes), drilling and 2 x 2 Gauss points, the curvatures of the
+    discrete Kirchhoff quadrilateral (``shell_dkq.dkq_curvature``) and no transverse shear
+    rows (a PSHELL with MID3 blank)."""
+    ops = quad_operators(xy)
+    _, dxi, deta = zip(*(_quad_shape(*p) for p in _GAUSS_2x2), strict=True)
+    J = np.einsum("qak,nkd->nqad", np.stack([dxi, deta], axis=1), xy)
+    Bb = shell_dkq.dkq_curvature(xy, np.linalg.inv(J), _GAUSS_2x2)
+    return replace(ops, Bb=Bb, Bs=np.zeros(ops.Bs.shape[:2] + (0, ops.Bs.shape[3])))
+
+
 def _incompatible_modes(xy, det):
     """(n, q, 3, 4) strains of the modes a1 u(1-xi^2), a2 u(1-eta^2), a3 v(1-xi^2),
     a4 v(1-eta^2) with the centre Jacobian J0 and the factor det J0 / det J (Taylor et al. 1976),
@@ -349,7 +361,8 @@ class PieceSource:
     xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
-    bending_ratio, shear_ratio (n,) or None: ``local_pieces``'s.
+    bending_ratio, shear_ratio (n,) or None: ``local_pieces``'s; kirchhoff : quadrilaterals
+    without transverse shear flexibility (``dkq_operators``) instead of MITC4.
     """
 
     xy: np.ndarray
@@ -360,14 +373,17 @@ class PieceSource:
     rotary_inertia: bool = True
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
+    kirchhoff: bool = False
 
     def __len__(self) -> int:
         return len(self.xy)
 
     def pieces(self, rows) -> LocalPieces:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
-        operators = quad_operators if self.xy.shape[1] == 4 else tria_operators
+        quad = dkq_operators if self.kirchhoff else quad_operators
+        operators = quad if self.xy.shape[1] == 4 else tria_operators
         b, s = (None if r is None else r[rows] for r in (self.bending_ratio, self.shear_ratio))
+        s = None if self.kirchhoff else s  # no shear piece: its ratio (inf) is not used
         p = local_pieces(operators(self.xy[rows]), self.E[rows], self.nu[rows], self.lumped, b, s)
         if self.height is not None:
             p = warp_link(p, self.height[rows])

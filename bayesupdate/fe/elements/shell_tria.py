@@ -57,15 +57,18 @@ def _quadratic_derivatives(pts: np.ndarray) -> np.ndarray:
 
 
 def rotation_nodes(xy: np.ndarray) -> np.ndarray:
-    """(n, 6, 2, 18) the rotations (beta_x, beta_y) at the 6 nodes (corners, then the mid-points
-    of edges 1-2, 2-3, 3-1) in terms of the 18 element DOFs, from the discrete Kirchhoff
-    conditions above; xy (n, 3, 2) corner coordinates in the element plane [m]."""
-    n = xy.shape[0]
-    A = np.zeros((n, 6, 2, 18))
-    corner = np.arange(3)
+    """(n, 2c, 2, 6c) the rotations (beta_x, beta_y) at the 2c nodes (the c corners, then the
+    mid-points of edges 1-2, 2-3, ..., c-1) in terms of the 6c element DOFs, from the discrete
+    Kirchhoff conditions above; xy (n, c, 2) corner coordinates in the element plane [m], c = 3
+    (DKT) or 4 (the discrete Kirchhoff quadrilateral, ``shell_dkq``: the same edge conditions,
+    Batoz & Ben Tahar, IJNME 18 (1982) 1655)."""
+    n, c = xy.shape[:2]
+    A = np.zeros((n, 2 * c, 2, 6 * c))
+    corner = np.arange(c)
     A[:, corner, 0, 6 * corner + RY] = 1.0
     A[:, corner, 1, 6 * corner + RX] = -1.0
-    for k, (i, j) in enumerate(_EDGES):
+    edges = _EDGES if c == 3 else tuple((i, (i + 1) % c) for i in range(c))
+    for k, (i, j) in enumerate(edges):
         e = xy[:, j] - xy[:, i]
         length = np.linalg.norm(e, axis=1)
         s = e / length[:, None]
@@ -76,7 +79,7 @@ def rotation_nodes(xy: np.ndarray) -> np.ndarray:
         grad_w = -1.5 * s / length[:, None]
         Ak[:, :, 6 * j + W] += grad_w
         Ak[:, :, 6 * i + W] -= grad_w
-        A[:, 3 + k] = Ak
+        A[:, c + k] = Ak
     return A
 
 

@@ -108,6 +108,7 @@ def _sandwich(tmp_path, pshell: str, mats: str = f"{FACES}\n{CORE}"):
     [
         ("PSHELL,1,1,0.01,2,,3", "MAT1,2,3.2E+11,,0.25,7800.0\n" + CORE, "MID2 2 has NU = 0.25"),
         ("PSHELL,1,1,0.01,1,,1,,,\n,,,3", FACES, "MID4 (membrane-bending coupling)"),
+        ("PSHELL,1,,0.01,2,,3", f"{FACES}\n{CORE}", "no membrane stiffness (MID1 blank)"),
     ],
 )
 def test_sandwich_cards_it_cannot_hold_are_refused_with_their_line(

@@ -103,6 +103,8 @@ def _pshell(ctx, p):
         p.fail("MID4 (membrane-bending coupling) is not supported")
     if mid2 is None:
         p.fail("a membrane-only shell (MID2 blank) is not supported")
+    if mid1 is None:
+        p.fail("a shell with no membrane stiffness (MID1 blank) is not supported")
     bending, shear = p.real("12IT3"), p.real("TST")
     for name, v in (("12I/T**3", bending), ("TS/T", shear)):
         if not v > 0:

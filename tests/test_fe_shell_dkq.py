@@ -9,6 +9,8 @@ Tolerances and why:
 - a/t = 10: the element has no transverse shear flexibility, so it converges to the Rayleigh
   plate (Kirchhoff's with the rotary inertia rho t^3 / 12 the element carries), measured +0.09
   to +0.67 % at 32 x 32, rate 2.00-2.01, and not to Mindlin's, 2.7-14.3 % below it;
+- a mesh mixing both kinds of quad and triangles: K and M are the all-DKQ mesh's on the
+  shear-rigid elements plus the all-MITC4 mesh's on the others to 1e-12;
 - a deck with MID3 blank through ``bayesupdate modes --model``: the mesh built directly with
   ``shear_ratio`` inf to 1e-8 (``--json`` prints about nine digits), and above the same deck
   with MID3 = MID1 by more than 2 % on every mode at a/t = 10.
@@ -125,3 +127,35 @@ def test_its_matrices_are_exact_thickness_polynomials():
     pieces = p.pieces(np.arange(n))
     K = assert_thickness_polynomials(pieces, n, RHO)
     assert sorted(K) == [1, 2, 3] and not np.any(pieces.shear)
+
+
+def test_shear_rigid_and_mitc4_quads_mix_in_one_mesh():
+    """Quads of two kinds in one mesh (some PSHELLs with MID3, some without) with triangles
+    beside them: each element keeps its own kind, the assembled K and M are the all-DKQ mesh's
+    on the shear-rigid elements plus the all-MITC4 mesh's on the others (1e-12), and the plate
+    converges to Kirchhoff at a/t = 100 (within 1 % at 32 x 32)."""
+    t = A / 100
+    nodes, quads, _ = sm.plate(A, A, 32, 32)
+    right = nodes[quads].mean(axis=1)[:, 0] > 0.75 * A
+    trias = sm.split_quads(quads[right], np.zeros(right.sum(), bool))
+    quads = quads[~right]
+    rigid = np.random.default_rng(0).uniform(size=len(quads)) < 0.5
+    n_el = len(quads) + len(trias)
+    shear = np.full(n_el, 5 / 6)
+    shear[: len(quads)][rigid] = np.inf
+
+    def mesh(ratio):
+        return shell_mesh(nodes, quads, trias, thickness=t, E=E, nu=NU, rho=RHO,
+                          shear_ratio=ratio)  # fmt: skip
+
+    mixed = ShellAssembly(mesh(shear)).assemble()
+    chosen = np.r_[rigid, np.zeros(len(trias), bool)]
+    dkq = ShellAssembly(mesh(np.full(n_el, np.inf))).assemble(include=chosen)
+    mitc = ShellAssembly(mesh(np.full(n_el, 5 / 6))).assemble(include=~chosen)
+    for X, Y, Z in zip(mixed, dkq, mitc, strict=True):
+        np.testing.assert_allclose((X - Y - Z).toarray(), 0.0, atol=1e-12 * abs(X).max())
+    K, M = mixed
+    m = mesh(shear)
+    f = solve_sparse_modes(K, M, m.nodes, ModalSettings(n_modes=8), _ss_fixed(m.nodes))
+    ref = np.array([STEEL.kirchhoff_hz(t, i, j) for i, j in MODES_1_TO_8])
+    np.testing.assert_allclose(f.frequencies_hz, ref, rtol=0.01)

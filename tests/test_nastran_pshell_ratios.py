@@ -59,14 +59,16 @@ def test_sandwich_quads_converge_to_mindlin_with_the_decks_ratios(tmp_path, caps
     assert np.all((rate > 1.8) & (rate < 2.3)), rate
 
 
-def test_sandwich_triangles_against_kirchhoff_and_ts_t_has_no_effect(tmp_path, capsys):
+def test_sandwich_triangles_against_kirchhoff_and_ts_t_or_mid3_has_no_effect(tmp_path, capsys):
     t = A / 100
     ref = np.array([STEEL.kirchhoff_hz(t, m, n, BENDING) for m, n in MODES_1_TO_8])
-    decks = (f"PSHELL,1,1,{t},1,{BENDING},1,{SHEAR}", f"PSHELL,1,1,{t},1,{BENDING},1")
-    f, f_default = (_modes(plate_deck(tmp_path / f"t{i}.bdf", 32, t, p, True), capsys)
-                    for i, p in enumerate(decks))  # fmt: skip
+    decks = (f"PSHELL,1,1,{t},1,{BENDING},1,{SHEAR}", f"PSHELL,1,1,{t},1,{BENDING},1",
+             f"PSHELL,1,1,{t},1,{BENDING}")  # fmt: skip
+    f, f_default, f_rigid = (_modes(plate_deck(tmp_path / f"t{i}.bdf", 32, t, p, True), capsys)
+                             for i, p in enumerate(decks))  # fmt: skip
     np.testing.assert_allclose(f, ref, rtol=0.01)
     np.testing.assert_array_equal(f, f_default)
+    np.testing.assert_array_equal(f, f_rigid)  # MID3 blank: the DKT is shear rigid anyway
 
 
 @pytest.mark.parametrize("field", ["12I/T**3", "TS/T"])

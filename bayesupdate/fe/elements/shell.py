@@ -337,7 +337,8 @@ def local_pieces(
     # scaled in place: the same products as X * factor without a second (n, d, d) copy
     Km *= E[:, None, None]
     kappa = SHEAR_FACTOR if shear_ratio is None else shear_ratio
-    Ks *= (kappa * G)[:, None, None]
+    if ops.Bs.shape[2]:  # shear-rigid elements (DKT, DKQ) have no shear rows: no kappa (inf)
+        Ks *= (kappa * G)[:, None, None]
     Kd *= (DRILL_ALPHA * G)[:, None, None]
     Kb *= (E / 12.0 if bending_ratio is None else bending_ratio * E / 12.0)[:, None, None]
     return LocalPieces(
@@ -383,7 +384,6 @@ class PieceSource:
         quad = dkq_operators if self.kirchhoff else quad_operators
         operators = quad if self.xy.shape[1] == 4 else tria_operators
         b, s = (None if r is None else r[rows] for r in (self.bending_ratio, self.shear_ratio))
-        s = None if self.kirchhoff else s  # no shear piece: its ratio (inf) is not used
         p = local_pieces(operators(self.xy[rows]), self.E[rows], self.nu[rows], self.lumped, b, s)
         if self.height is not None:
             p = warp_link(p, self.height[rows])

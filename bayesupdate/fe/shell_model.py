@@ -207,7 +207,7 @@ def _families(mesh: ShellMesh) -> list[tuple[np.ndarray, str]]:
     out.  Without a shear-rigid quad the families are the quads and the triangles, as they
     always were (the same order, so the same sums)."""
     nq = len(mesh.quads)
-    rigid = np.zeros(nq, bool) if mesh.shear_ratio is None else np.isinf(mesh.shear_ratio[:nq])
+    rigid = np.zeros(nq, bool) if mesh.shear_ratio is None else mesh.shear_ratio[:nq] == np.inf
     out = [(np.flatnonzero(~rigid), "quad"), (np.flatnonzero(rigid), "kirchhoff quad"),
            (nq + np.arange(len(mesh.trias)), "tria")]  # fmt: skip
     return [(idx, kind) for idx, kind in out if idx.size]

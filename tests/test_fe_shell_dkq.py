@@ -64,13 +64,13 @@ def test_a_constant_curvature_is_reproduced_exactly_on_a_distorted_quad():
         d[6 * k + 2] = a * x * x + b * x * y + c * y * y
         d[6 * k + 3] = b * x + 2 * c * y  # rx = -beta_y = w,y
         d[6 * k + 4] = -(2 * a * x + b * y)  # ry = beta_x = -w,x
-    kappa = np.einsum("qrj,j->qr", shell.dkq_operators(DISTORTED[None]).Bb[0], d)
+    kappa = np.einsum("qrj,j->qr", shell.quad_operators(DISTORTED[None], kirchhoff=True).Bb[0], d)
     np.testing.assert_allclose(kappa, np.broadcast_to([-2 * a, -2 * c, -2 * b], kappa.shape),
                                rtol=1e-12, atol=1e-12)  # fmt: skip
 
 
 def test_a_free_quad_has_exactly_six_rigid_modes_and_no_shear_stiffness():
-    ops = shell.dkq_operators(DISTORTED[None])
+    ops = shell.quad_operators(DISTORTED[None], kirchhoff=True)
     p = shell.local_pieces(ops, np.array([E]), np.array([NU]))
     assert not np.any(p.shear)
     t = 0.01

@@ -36,7 +36,7 @@ class ShellMesh:
     thickness over t (default 5/6; quads only, the DKT triangle is shear rigid), Nastran's
     PSHELL 12I/T**3 and TS/T (``shell.local_pieces``); a quad whose shear_ratio is inf has no
     transverse shear flexibility (a PSHELL with MID3 blank: the discrete Kirchhoff
-    quadrilateral, ``shell.dkq_operators``)."""
+    quadrilateral, ``shell.quad_operators``)."""
 
     nodes: np.ndarray
     quads: np.ndarray

@@ -96,7 +96,7 @@ def _pshell(ctx, p):
     G3 / G1 for a transverse shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's
     own), so the plane-stress matrices stay MID1's (``shell.local_pieces``); the mass is
     MID1's RHO (QRG PSHELL).  MID3 blank: no transverse shear flexibility (QRG PSHELL), the
-    shear ratio inf (the quads are discrete Kirchhoff quadrilaterals, ``shell.dkq_operators``;
+    shear ratio inf (the quads are discrete Kirchhoff quadrilaterals, ``shell.quad_operators``;
     the triangles are Kirchhoff anyway)."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
     if p["MID4"]:

@@ -179,8 +179,11 @@ def _covariant_shear(xy, N, dNr, k):
     return row
 
 
-def quad_operators(xy: np.ndarray) -> _Operators:
-    """MITC4 / bilinear / incompatible-mode operators at 2x2 Gauss points, xy (n, 4, 2) [m]."""
+def quad_operators(xy: np.ndarray, kirchhoff: bool = False) -> _Operators:
+    """MITC4 / bilinear / incompatible-mode operators at 2x2 Gauss points, xy (n, 4, 2) [m].
+    ``kirchhoff``: the shear-rigid quadrilateral instead (a PSHELL with MID3 blank): the
+    curvatures of the discrete Kirchhoff quadrilateral (``shell_dkq.dkq_curvature``) and no
+    transverse shear rows; the membrane and drilling are the same."""
     n = xy.shape[0]
     shapes = [_quad_shape(*p) for p in _GAUSS_2x2]
     N = np.array([s[0] for s in shapes])
@@ -190,6 +193,17 @@ def quad_operators(xy: np.ndarray) -> _Operators:
     Jinv = np.linalg.inv(J)
     dN = np.einsum("nqab,qbk->nqak", Jinv, dnat)  # (n, q, 2, 4): d/dx, d/dy
     Bm, Bb, Bd = _fill_common(n, 4, 4, N, dN[:, :, 0], dN[:, :, 1])
+    if kirchhoff:
+        Bb = shell_dkq.dkq_curvature(xy, Jinv, _GAUSS_2x2)
+        Bs = np.zeros((n, len(_GAUSS_2x2), 0, 24))
+    else:
+        Bs = _mitc4_shear(xy, Jinv)
+    return _Operators(Bm, Bb, Bs, Bd, N, det, _incompatible_modes(xy, det))
+
+
+def _mitc4_shear(xy: np.ndarray, Jinv: np.ndarray) -> np.ndarray:
+    """(n, q, 2, 24) MITC4 transverse shear at the 2x2 Gauss points, with the inverse
+    Jacobians Jinv (n, q, 2, 2) there: the covariant strains tied at the edge mid-points."""
     # MITC4 tying: e_xi at A (0, 1), C (0, -1); e_eta at B (1, 0), D (-1, 0)
     tie = {}
     for name, (xi, eta, direction) in {
@@ -209,21 +223,7 @@ def quad_operators(xy: np.ndarray) -> _Operators:
         0.5 * (1 + g[:, 0])[None, :, None] * tie["B"][:, None]
         + 0.5 * (1 - g[:, 0])[None, :, None] * tie["D"][:, None]
     )
-    Bs = np.einsum("nqab,nqbj->nqaj", Jinv, np.stack([e_xi, e_eta], axis=2))
-    Ginc = _incompatible_modes(xy, det)
-    return _Operators(Bm, Bb, Bs, Bd, N, det, Ginc)
-
-
-def dkq_operators(xy: np.ndarray) -> _Operators:
-    """Operators of the shear-rigid quadrilateral, xy (n, 4, 2) [m]: the quadrilateral's
-    membrane (incompatible modes), drilling and 2 x 2 Gauss points, the curvatures of the
-    discrete Kirchhoff quadrilateral (``shell_dkq.dkq_curvature``) and no transverse shear
-    rows (a PSHELL with MID3 blank)."""
-    ops = quad_operators(xy)
-    _, dxi, deta = zip(*(_quad_shape(*p) for p in _GAUSS_2x2), strict=True)
-    J = np.einsum("qak,nkd->nqad", np.stack([dxi, deta], axis=1), xy)
-    Bb = shell_dkq.dkq_curvature(xy, np.linalg.inv(J), _GAUSS_2x2)
-    return replace(ops, Bb=Bb, Bs=np.zeros(ops.Bs.shape[:2] + (0, ops.Bs.shape[3])))
+    return np.einsum("nqab,nqbj->nqaj", Jinv, np.stack([e_xi, e_eta], axis=2))
 
 
 def _incompatible_modes(xy, det):
@@ -363,7 +363,7 @@ class PieceSource:
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
     bending_ratio, shear_ratio (n,) or None: ``local_pieces``'s; kirchhoff : quadrilaterals
-    without transverse shear flexibility (``dkq_operators``) instead of MITC4.
+    without transverse shear flexibility (``quad_operators(kirchhoff=True)``) instead of MITC4.
     """
 
     xy: np.ndarray
@@ -381,10 +381,10 @@ class PieceSource:
 
     def pieces(self, rows) -> LocalPieces:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
-        quad = dkq_operators if self.kirchhoff else quad_operators
-        operators = quad if self.xy.shape[1] == 4 else tria_operators
+        xy = self.xy[rows]
+        ops = quad_operators(xy, self.kirchhoff) if xy.shape[1] == 4 else tria_operators(xy)
         b, s = (None if r is None else r[rows] for r in (self.bending_ratio, self.shear_ratio))
-        p = local_pieces(operators(self.xy[rows]), self.E[rows], self.nu[rows], self.lumped, b, s)
+        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s)
         if self.height is not None:
             p = warp_link(p, self.height[rows])
         if not self.rotary_inertia:

@@ -13,6 +13,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import standard_sections as ss
+from bayesupdate.fe.elements.beam import element_frames
 from bayesupdate.fe.standard_sections import general_section
 from bayesupdate.nastran.cards.common import (
     Context,
@@ -286,11 +287,12 @@ def offsets_in_basic(grids, e, rows, offt: str) -> np.ndarray:
                "O for each end's offset")  # fmt: skip
     if not np.any(w):
         return w
+    axes = _grid_axes(grids, e, rows, offt) if "O" in offt[1:] else None
     for end in (0, 1):
         if offt[1 + end] == "G":
             w[end] = grids.frame[rows[end]].T @ w[end]
         elif offt[1 + end] == "O":
-            w[end] = _grid_axes(grids, e, rows, offt).T @ w[end]
+            w[end] = axes.T @ w[end]
     return w
 
 
@@ -308,21 +310,17 @@ def in_grid_frames(grids, e) -> tuple[np.ndarray | None, np.ndarray]:
 
 
 def _grid_axes(grids, e, rows, offt: str) -> np.ndarray:
-    """(3, 3) rows x, y, z in basic of the frame that OFFT 'O' offsets are given in: x from GA
-    to GB (the grids, not the offset ends: the offsets cannot define the frame they are given
-    in), z along x cross v, y = z cross x, v the orientation vector (as pyNastran's
-    ``rotate_v_wa_wb`` reads the QRG)."""
-    xyz = grids.xyz[rows]
-    x = _unit(xyz[1] - xyz[0])
-    z = _unit(np.cross(x, _orientation(grids, e, rows[0], offt)))
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+    """(3, 3) rows x, y, z in basic of the frame that OFFT 'O' offsets are given in: the
+    element's frame (``fe.elements.beam.element_frames``, z along x cross v, v the orientation
+    vector) with x from GA to GB, the grids, not the offset ends: the offsets cannot define the
+    frame they are given in (as pyNastran's ``rotate_v_wa_wb`` reads the QRG)."""
+    a, b = grids.xyz[rows]
+    z = np.cross(b - a, _orientation(grids, e, rows[0], offt))
+    with np.errstate(invalid="ignore", divide="ignore"):  # degenerate: refused below
+        R, _ = element_frames(a[None], b[None], z[None])
+    if not np.all(np.isfinite(R)):
         e.fail("OFFT 'O': GA and GB coincide, or the orientation vector is along GA-GB")
-    return np.stack([x, np.cross(z, x), z])
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(v)
-    return v / n if n > 0 else np.full(3, np.nan)
+    return R[0]
 
 
 def _pins(e):

@@ -57,21 +57,19 @@ class StopRequest:
         if self._requested:
             raise KeyboardInterrupt
 
-    @contextmanager
     def deferred(self):
         """While the block runs, ``handler`` records a stop request without raising; the caller
         checks ``requested()`` after the block."""
-        previous, self._deferred = self._deferred, True
-        try:
-            yield
-        finally:
-            self._deferred = previous
+        return self._deferring(True)
 
-    @contextmanager
     def interruptible(self):
         """Inside ``deferred()``, a block where ``handler`` raises again: a long model call that
         a stop may cut, inside a caller that catches the ``KeyboardInterrupt``."""
-        previous, self._deferred = self._deferred, False
+        return self._deferring(False)
+
+    @contextmanager
+    def _deferring(self, deferred: bool):
+        previous, self._deferred = self._deferred, deferred
         try:
             yield
         finally:

@@ -95,7 +95,7 @@ def test_the_thick_plate_converges_to_the_rayleigh_plate_not_mindlin():
     np.testing.assert_allclose(fine, rayleigh, rtol=0.01)
     rate = np.log2((coarse - rayleigh) / (fine - rayleigh))
     assert np.all((rate > 1.8) & (rate < 2.3)), rate
-    assert np.all(rayleigh / mindlin - 1 > 0.02)
+    assert np.all(fine / mindlin - 1 > 0.02)  # not Mindlin's plate: no shear flexibility
 
 
 def _modes(deck, capsys) -> np.ndarray:

@@ -243,18 +243,30 @@ def card_name(head: str) -> str:
 
 
 def real16(value: float) -> str:
-    """A real in at most 16 characters with as many digits as fit (Python's shortest repr when
-    it fits, else Nastran's exponent form without 'E', e.g. '-1.234567890123-5')."""
+    """A real in at most 16 characters with as many digits as fit: Python's shortest repr when
+    it fits, else whichever of the fixed form ('-1.1746955442270') and Nastran's exponent form
+    without 'E' ('-1.234567890123-5') reads back closer to the value (the fixed form keeps two
+    more digits where the exponent is small: a written offset or factor then holds 13-14
+    digits, not 11)."""
     v = float(value)
     text = repr(v)
     if len(text) <= 16 and ("." in text or "e" in text):
         return text
+    forms = [_exponent16(v)]
+    fixed = f"{v:.{max(15 - len(f'{v:.0f}'), 0)}f}"
+    if len(fixed) <= 16 and "." in fixed:
+        forms.append(fixed)
+    return min(forms, key=lambda t: abs(parse_number(t) - v))
+
+
+def _exponent16(v: float) -> str:
+    """``v`` in Nastran's exponent form without 'E', as many digits as fit 16 characters."""
     for digits in range(15, 0, -1):
         mantissa, exponent = f"{v:.{digits}e}".split("e")
         text = f"{mantissa}{int(exponent):+d}"
         if len(text) <= 16:
             return text
-    raise ValueError(f"{value!r} does not fit a large field")
+    raise ValueError(f"{v!r} does not fit a large field")
 
 
 def with_fields(card: Card, changes: dict[int, object]) -> Card:

@@ -4,7 +4,8 @@ The deck is read again and each bound card gets the parameter's value (or, for a
 binding, the factor times the card's own value; for a DESVAR, C0 + COEF x its value in each
 related field, element cards' own fields too, and the DESVAR's XINIT the value). The deck's own
 text is then copied line for line with only those cards replaced, each by a large-field card
-(16-character fields, ``bulk.real16``: the shortest repr or 11-15 digits) of all its fields:
+(16-character fields, ``bulk.real16``: the shortest repr or 11-15 digits, the fixed form
+where it holds more) of all its fields:
 comments, card order and every other card stay as they were. A bound card in an ``INCLUDE``d
 file is replaced in that file's text, which is written in place of its ``INCLUDE`` line (the
 output is one file); the other ``INCLUDE`` lines stay, with the file's absolute path when the

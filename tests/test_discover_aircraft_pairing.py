@@ -110,12 +110,12 @@ def test_a_candidate_takes_over_the_decks_line_records_and_solves_as_if_found_ag
     point = {"EI_wing": 2.4, "added_mass@17:m": 0.002}
     reused = candidate.model.solve(point, n_modes=8).frequencies_hz
     fields = candidate.model._general.fields  # noqa: SLF001
-    assert fields.slopes is model._general.fields.slopes  # noqa: SLF001 - taken over
+    assert fields.fit is model._general.fields.fit  # noqa: SLF001 - taken over
     assert fields.update.structure is candidate.model.structure  # on the extended pattern
     fresh = make_candidate(model, Effect("added_mass", "17")).model
     fresh._general._known = None  # noqa: SLF001 - found again from the cards
     again = fresh.solve(point, n_modes=8).frequencies_hz
-    assert fresh._general.fields.slopes is not fields.slopes  # noqa: SLF001
+    assert fresh._general.fields.fit is not fields.fit  # noqa: SLF001
     np.testing.assert_allclose(reused, again, rtol=1e-13)
     # and the extended model moved: 2 g at the tip node lowers the first bending mode
     assert reused[0] < model.solve({"EI_wing": 2.4}, n_modes=3).frequencies_hz[0]

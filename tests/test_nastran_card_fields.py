@@ -1,5 +1,6 @@
 """Element cards' own fields as parameters (``nastran.bindings.CARD_FIELDS``: written into the
-cards and converted again, ``lines.LineRebuild``) against closed forms, one per kind.
+cards and converted again, ``lines.LineRebuild``, whose records ``nastran.card_records`` fits
+once) against closed forms, one per kind.
 
 * CONM2 X1 and I33 (MSC QRG CONM2: inertia about the centre of gravity, offset from the grid): a
   mass m at arm x on a grid that only turns about z, held by a torsion spring k:
@@ -54,6 +55,7 @@ def test_conm2_offset_and_inertia_on_a_rigid_arm(tmp_path, x, j):
                                                       "j": {"binds": "CONM2 31 I33"}})  # fmt: skip
     assert model.default_parameters() == {"x": 0.5, "j": 0.3}
     f = model.solve({"x": x, "j": j}, n_modes=1).frequencies_hz[0]
+    assert model.general.card_notes == [""]  # from fitted records (``nastran.card_records``)
     assert f == pytest.approx(_hz(1000.0 / (j + 2.0 * x * x)), rel=1e-12)
 
 
@@ -71,6 +73,7 @@ def test_cmass2_on_a_spring(tmp_path, m):
     model = load_nastran_model(_deck(tmp_path, SPRING), {"m": {"binds": "CMASS2 21 M"}})
     assert model.default_bounds()["m"] == (1.25, 5.0)  # 0.5-2 x the card's M
     f = model.solve({"m": m}, n_modes=1).frequencies_hz[0]
+    assert model.general.card_notes == [""]
     assert f == pytest.approx(_hz(1000.0 / m), rel=1e-12)
 
 
@@ -79,6 +82,7 @@ def test_cbeam_end_offset_along_the_axis(tmp_path, w):
     model = load_nastran_model(_deck(tmp_path, ROD), {"w": {"binds": "CBEAM 1 W1A",
                                                             "bounds": [-2.0, 4.0]}})  # fmt: skip
     f = model.solve({"w": w}, n_modes=1).frequencies_hz[0]
+    assert model.general.card_notes == [""]
     assert f == pytest.approx(_hz(1.0e7 * 0.5 / ((10.0 - w) * 3.0)), rel=1e-9)
 
 

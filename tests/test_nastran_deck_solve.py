@@ -131,7 +131,13 @@ def test_a_product_of_two_bound_fields_solves_through_bilinear_records(point, tm
     model = load_nastran_model(str(ac.data_folder() / ac.V33_DECK), spec)
     g = model.general
     assert g.fields is not None, g.fields_note
-    assert ("beam", "torsion_inertia") in g.fields.pairs and len(g.fields.pair_index) == 3
+    fit = g.fields.fit
+    assert "beam.torsion_inertia" in fit.pairs
+    # the only products: RHO with the I1 of the beams it is the density of (not I1 with I1)
+    assert {(fit.names[i], fit.names[j]) for i, j in fit.pair_index} == {
+        ("EI_root", "rho_wing"),
+        ("EI_outer", "rho_wing"),
+    }
     p = dict(zip(ac.PARAMETERS, point, strict=True))
     K, M = model.matrices(p)
     reference = LineAssembler(model.structure, model._shell_keys(), model.bdf, model.bindings,

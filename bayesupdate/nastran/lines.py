@@ -36,7 +36,6 @@ the reduced model's ``interp_tol``, as the built-in models' non-linear beam para
 """
 
 from dataclasses import dataclass, replace
-from dataclasses import field as _field
 
 import numpy as np
 
@@ -45,6 +44,7 @@ from bayesupdate.fe.assembly import GeneralAssembler
 from bayesupdate.fe.line_update import LineUpdate, PointMassValues
 from bayesupdate.fe.structure import StructureBuilder
 from bayesupdate.nastran import cards
+from bayesupdate.nastran.affine_records import AffineRecords, fit_records
 from bayesupdate.nastran.bindings import (
     LINE_ELEMENTS,
     MASS_CARDS,
@@ -54,6 +54,7 @@ from bayesupdate.nastran.bindings import (
     with_own_material,
     write_relations,
 )
+from bayesupdate.nastran.card_records import card_records
 from bayesupdate.nastran.cards.masses import add as add_masses
 from bayesupdate.nastran.deck import Refusals
 from bayesupdate.nastran.frames import read_grids
@@ -207,57 +208,47 @@ BEAM_VALUES = ("E", "G", "rho", "area", "iy", "iz", "iyz", "torsion", "shear_y",
                "nsm", "torsion_inertia")  # fmt: skip
 ROD_VALUES = ("E", "G", "rho", "area", "torsion", "nsm")
 _BEAM_FIXED = ("nodes", "up", "offset", "pins", "mass")
-#: relative miss allowed between the affine records and the converted cards (exact: ~1e-16)
-RECORD_TOL = 1e-12
+_FAMILIES = ("beam", "rod", "mass")
 
 
 @dataclass(frozen=True, eq=False)
 class LineFields:
-    """The bound line elements' records as affine functions of the parameters (module
-    docstring), and their matrices from them.
+    """The bound line elements' records as affine (or bilinear) functions of the parameters
+    (module docstring), and their matrices from them.
 
-    names : the parameters (``theta`` order); theta0 : (p,) their deck values; beams, rods,
-    masses : indices of the bound general beams, rods and lumped point masses in the structure;
-    records0 : (GeneralBeams | None, Rods | None, PointMassValues) at the deck's values;
-    slopes : {(family, field): (n, ..., p) d record / d theta}, the non-zero ones; update :
-    ``LineUpdate`` of those elements on the general pattern; pairs : {(family, field): (n, ...,
-    q) d^2 record / d theta_i d theta_j} of the parameter pairs ``pair_index`` (q pairs (i, j)):
-    a record that is a product of two bound fields (RHO and A or I1 of the same elements: the
-    mass per length rho A, the twist inertia rho (I1 + I2)) is bilinear in them, so the records
-    are exact with these terms (none when every record is affine)."""
+    fit : the records' map (``affine_records.AffineRecords``, keys "<family>.<field>" of
+    ``_fields``); beams, rods, masses : indices of the bound general beams, rods and lumped
+    point masses in the structure; records0 : (GeneralBeams | None, Rods | None,
+    PointMassValues) at the parameters' deck values (their fixed fields: nodes, axes, offsets);
+    update : ``LineUpdate`` of those elements on the general pattern."""
 
-    names: tuple[str, ...]
-    theta0: np.ndarray
+    fit: AffineRecords
     beams: np.ndarray
     rods: np.ndarray
     masses: np.ndarray
     records0: tuple
-    slopes: dict
     update: LineUpdate
-    pairs: dict = _field(default_factory=dict)
-    pair_index: tuple = ()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.fit.names
 
     def theta(self, values) -> np.ndarray:
         """(p,) the parameters of ``values`` ({name: deck units}; None: the deck's)."""
         if values is None:
-            return self.theta0
+            return self.fit.theta0
         return np.array([float(values[n]) for n in self.names])
 
     def records(self, theta: np.ndarray) -> tuple:
         """(GeneralBeams | None, Rods | None, PointMassValues) of the bound elements at
         ``theta`` (p,)."""
-        step = theta - self.theta0
-        both = np.array([step[i] * step[j] for i, j in self.pair_index])
+        at = self.fit.at(theta)
         out = []
-        for k, family in enumerate(("beam", "rod", "mass")):
-            rec = self.records0[k]
+        for family, rec in zip(_FAMILIES, self.records0, strict=True):
             if rec is not None:
-                fields = {f: getattr(rec, f) + slope @ step
-                          for (fam, f), slope in self.slopes.items() if fam == family}  # fmt: skip
-                for (fam, f), pair in self.pairs.items():
-                    if fam == family:
-                        fields[f] = fields.get(f, getattr(rec, f)) + pair @ both
-                rec = replace(rec, **fields)
+                moved = {f: at[f"{family}.{f}"] for f in _fields(family)
+                         if f"{family}.{f}" in self.fit.slopes}  # fmt: skip
+                rec = replace(rec, **moved)
             out.append(rec)
         return tuple(out)
 
@@ -362,9 +353,9 @@ def reused_fields(known: LineFields, probe0, g) -> "LineFields | None":
 
 def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields | None", str]:
     """(``LineFields`` of the bound elements, "") or (None, the reason) when their records are
-    not affine in the parameters (then ``LineRebuild`` re-converts the cards at every solve).
-    g : the ``GeneralAssembler`` of the whole structure; defaults, bounds : {name: deck value},
-    {name: (low, high)} (deck units)."""
+    not affine (or bilinear) in the parameters (then ``LineRebuild`` re-converts the cards at
+    every solve).  g : the ``GeneralAssembler`` of the whole structure; defaults, bounds :
+    {name: deck value}, {name: (low, high)} (deck units)."""
     names = tuple(rebuild.bindings)
     theta0 = np.array([float(defaults[n]) for n in names])
     low, high = (np.array([float(bounds[n][k]) for n in names]) for k in (0, 1))
@@ -372,88 +363,30 @@ def line_fields(g, rebuild: LineRebuild, defaults, bounds) -> tuple["LineFields 
     rows = _matched_rows(s, rebuild.probe0)
     if isinstance(rows, str):
         return None, rows
-    families = [f for f, r in zip(("beam", "rod", "mass"), rows, strict=True) if r.size]
-    # the records at theta0 anchor the slopes: an absolute value bound on cards whose deck
-    # values differ (one I1 for seven PBEAMs) writes theta0 into all of them, not the deck's
-    at0 = rebuild.structure_at(dict(zip(names, theta0, strict=True)))
-    rec0 = {f: _values(at0, f) for f in families}
-    slopes = {}
-    step = np.where(high > theta0, high, low) - theta0
-    for j, name in enumerate(names):
-        theta = theta0 + step[j] * (np.arange(len(names)) == j)
+    families = [f for f, r in zip(_FAMILIES, rows, strict=True) if r.size]
+
+    def read(theta):
         probe = rebuild.structure_at(dict(zip(names, theta, strict=True)))
         if not _same_layout(s, probe, rows):
-            return None, f"{name} changes which elements or masses there are"
-        for f in families:
-            for field in _fields(f):
-                d = (getattr(_values(probe, f), field) - getattr(rec0[f], field)) / step[j]
-                if np.any(d != 0):
-                    slope = slopes.setdefault((f, field), np.zeros((*d.shape, len(names))))
-                    slope[..., j] = d
-    no_mass = PointMassValues(np.zeros(0), np.zeros((0, 3, 3)))
-    records0 = (rec0.get("beam"), rec0.get("rod"), rec0.get("mass", no_mass))
-    update = LineUpdate(g, beams=rows[0], rods=rows[1], masses=rows[2])
-    fields = LineFields(names, theta0, *rows, records0, slopes, update)
-    probe = (rebuild, s, rows, families)
-    reason = _miss(probe, fields, low, high)
-    if reason and len(names) > 1:  # a product of two fields: bilinear terms (``LineFields``)
-        pairs = _pair_terms(probe, fields, step)
-        if pairs is None:
-            return None, "a parameter changes which elements or masses there are"
-        fields = replace(fields, pairs=pairs[0], pair_index=pairs[1])
-        reason = _miss(probe, fields, low, high)
-    return (None, reason) if reason else (fields, "")
-
-
-def _pair_terms(probe, fields: LineFields, step: np.ndarray):
-    """({(family, field): (n, ..., q) d^2 record / d theta_i d theta_j}, the q pairs (i, j)) from
-    one re-build per pair of parameters at theta0 + step_i e_i + step_j e_j (the single steps
-    are the affine slopes' own points); None when a step changes the elements."""
-    rebuild, s, rows, families = probe
-    names, p = fields.names, len(fields.names)
-    index = tuple((i, j) for i in range(p) for j in range(i + 1, p))
-    pairs = {}
-    for q, (i, j) in enumerate(index):
-        theta = fields.theta0 + step * np.isin(np.arange(p), (i, j))
-        at = rebuild.structure_at(dict(zip(names, theta, strict=True)))
-        if not _same_layout(s, at, rows):
             return None
-        affine = fields.records(theta)
-        for k, f in enumerate(("beam", "rod", "mass")):
-            for name in _fields(f) if f in families else ():
-                exact = getattr(_values(at, f), name)
-                d = exact - getattr(affine[k], name)
-                d = np.where(np.abs(d) > RECORD_TOL * max(np.abs(exact).max(), 1e-300), d, 0.0)
-                if np.any(d != 0):
-                    term = pairs.setdefault((f, name), np.zeros((*d.shape, len(index))))
-                    term[..., q] = d / (step[i] * step[j])
-    return pairs, index
+        return {f"{f}.{x}": getattr(_values(probe, f), x) for f in families for x in _fields(f)}
 
-
-def _miss(probe, fields: LineFields, low: np.ndarray, high: np.ndarray) -> str:
-    """ "" when ``fields.records`` equal the re-built elements at the seeded points of the box
-    (``LINEAR_SEED``, ``LINEAR_POINTS``) to ``RECORD_TOL``, else the reason."""
-    rebuild, s, rows, families = probe
-    names = fields.names
-    rng = np.random.default_rng(LINEAR_SEED)
-    for u in rng.uniform(size=(LINEAR_POINTS, len(names))):
-        theta = low + u * (high - low)
-        at = rebuild.structure_at(dict(zip(names, theta, strict=True)))
-        if not _same_layout(s, at, rows):
-            return "a parameter changes which elements or masses there are"
-        approx = fields.records(theta)
-        for k, f in enumerate(("beam", "rod", "mass")):
-            for name in _fields(f) if f in families else ():
-                exact, mine = getattr(_values(at, f), name), getattr(approx[k], name)
-                scale = max(float(np.abs(exact).max()), 1e-300)
-                if np.abs(exact - mine).max() > RECORD_TOL * scale:
-                    return f"the elements' {name} is not affine in {', '.join(names)}"
-    return ""
+    # the records at theta0 anchor the map: an absolute value bound on cards whose deck
+    # values differ (one I1 for seven PBEAMs) writes theta0 into all of them, not the deck's
+    fit, reason = fit_records(read, names, theta0, low, high)
+    if fit is None:
+        return None, reason
+    at0 = rebuild.structure_at(dict(zip(names, theta0, strict=True)))
+    no_mass = PointMassValues(np.zeros(0), np.zeros((0, 3, 3)))
+    records0 = tuple(_values(at0, f) if f in families else None for f in _FAMILIES[:2])
+    records0 += (_values(at0, "mass") if "mass" in families else no_mass,)
+    update = LineUpdate(g, beams=rows[0], rods=rows[1], masses=rows[2])
+    return LineFields(fit, *rows, records0, update), ""
 
 
 #: relative round-off allowed between the affine sum and the re-built elements (exact: ~1e-15)
 LINEAR_TOL = 1e-9
-#: the seeded points of the box where the affine sum (and the affine records) are checked
+#: the seeded points of the box where the affine sum is checked
 LINEAR_SEED, LINEAR_POINTS = 0, 3
 
 
@@ -550,6 +483,7 @@ class LineAssembler(GeneralAssembler):
         self.values = None
         self._box = (defaults, bounds)
         self._fields = None if fast else (None, "the reference path was asked for")
+        self._fast, self._card_records, self._card_notes = fast, None, []
         if not self.rebuild.bindings:
             self._fields = (None, "no line element is bound")
         same = fast and _same_box(known, deck, self.bindings, self._box)
@@ -598,10 +532,27 @@ class LineAssembler(GeneralAssembler):
             K, M = self.fields.contribution(self.fields.theta(values))
             K0, M0 = self.fields.update.base
             dK, dM = K - K0, M - M0
-        for part in self.cards:
-            cK, cM = part.delta(values)
+        for part, fast in zip(self.cards, self.card_records, strict=True):
+            cK, cM = (part if fast is None else fast).delta(values)
             dK, dM = dK + cK, dM + cM
         return dK, dM
+
+    @property
+    def card_records(self) -> list:
+        """Per part of ``cards``: its ``card_records.CardRecords`` (the cards' matrices from
+        records fitted once), or None where they are read again at every solve (the
+        reference path, or ``card_notes`` says why)."""
+        if self._card_records is None:
+            found = [(None, "the reference path was asked for") if not self._fast
+                     else card_records(self, part, *self._box) for part in self.cards]  # fmt: skip
+            self._card_records = [f for f, _ in found]
+            self._card_notes = [why for _, why in found]
+        return self._card_records
+
+    @property
+    def card_notes(self) -> list[str]:
+        """Per part of ``cards``: why its cards are read again at every solve ("" where not)."""
+        return self._card_notes if self.card_records is not None else []
 
     def assemble(self, props, shell_props=None):
         key = _assembly_key(self.values, self.bindings, props, shell_props)

@@ -296,6 +296,14 @@ def offsets_in_basic(grids, e, rows, offt: str) -> np.ndarray:
     return w
 
 
+def orientation_vector(grids, e) -> tuple[np.ndarray, np.ndarray]:
+    """(GA's and GB's rows (2,), the orientation vector v (3,) in basic) of a CBAR/CBEAM ``e``
+    as ``add`` reads them (``_orientation``; a BIT in the OFFT field reads as GGG)."""
+    rows = grids.index([e.int(g, positive=True) for g in ("GA", "GB")], e)
+    offt = e["OFFT"] if isinstance(e["OFFT"], str) else "GGG"
+    return rows, _orientation(grids, e, rows[0], offt)
+
+
 def in_grid_frames(grids, e) -> tuple[np.ndarray | None, np.ndarray]:
     """A CBAR's (or CBEAM's, with an OFFT) orientation vector and offsets as OFFT GGG gives
     them: (v (3,) in GA's CD frame, or None where G0 gives it; (2, 3) WA, WB in GA's and GB's
@@ -352,10 +360,8 @@ def _add_beam(ctx: Context, e) -> None:
         section, nsm = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
     offt = _offt(ctx, e)
     off = offsets_in_basic(ctx.grids, e, rows, offt)
-    x = ctx.grids.xyz[rows] + off
-    length = np.linalg.norm(x[1] - x[0])
-    axis = (x[1] - x[0]) / max(length, 1e-300)
-    up = np.cross(axis, _orientation(ctx.grids, e, rows[0], offt))  # local z = x cross v
+    v = _orientation(ctx.grids, e, rows[0], offt)
+    length, axis, up = (x[0] for x in end_geometry(ctx.grids.xyz[rows][None], off[None], v[None]))
     a, b = ctx.node[rows]
     part = f"{prop.name} {prop.id()}"
     try:
@@ -370,5 +376,26 @@ def _add_beam(ctx: Context, e) -> None:
         line = mat.density * section.area + nsm * ctx.wtmass
         twist = None
         if e.name == "CBEAM":
-            twist = mat.density * (section.iy + section.iz) * length * np.outer(axis, axis)
+            twist = mat.density * (section.iy + section.iz)
+            twist = lumped_twist(np.array([twist]), length[None], axis[None])[0]
         _lumped_mass(ctx, (a, b), line, length, part, twist, off)
+
+
+def end_geometry(ends, offsets, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(length (n,), axis (n, 3), up (n, 3)) of CBAR/CBEAM elements whose grids sit at ``ends``
+    (n, 2, 3) with end ``offsets`` (n, 2, 3) in basic axes and orientation vectors ``v`` (n, 3)
+    in basic (``_orientation``) [deck length units]: the element spans the offset ends (MSC QRG
+    CBAR, CBEAM), ``up`` = axis x v is its local z, the reference ``fe.elements.general_beam``
+    takes (its local y is then v's part normal to the axis, v in plane 1)."""
+    x = ends + offsets
+    d = x[:, 1] - x[:, 0]
+    length = np.linalg.norm(d, axis=1)
+    axis = d / np.maximum(length, 1e-300)[:, None]
+    return length, axis, np.cross(axis, v)
+
+
+def lumped_twist(per_length, length, axis) -> np.ndarray:
+    """(n, 3, 3) a lumped CBEAM's torsional inertia tensor, rho (I1 + I2) L about its axis
+    (``per_length`` (n,) rho (I1 + I2), ``length`` (n,), ``axis`` (n, 3) unit); half of it goes to
+    each end (``add``)."""
+    return (per_length * length)[:, None, None] * axis[:, :, None] * axis[:, None, :]

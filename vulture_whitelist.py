@@ -36,4 +36,4 @@ _.writeable  # fe.assembly: numpy's ndarray.flags.writeable, set to make memoize
 mac_v33  # pipelines.aircraft.ComparisonRow: JSON fields of demo --case aircraft (asdict)
 mac_v42
 mac_ours
-mass_kind  # nastran.card_records.Layout: a field compared through __dataclass_fields__ (Layout.same)
+mass_kind  # nastran.card_records.Layout: a field Layout.same compares by __dataclass_fields__

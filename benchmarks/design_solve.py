@@ -91,8 +91,10 @@ def main() -> None:
     first = moved_points(model, sorted(cards), 1, args.seed + 1, args.spread)[0]
     t = time.process_time()
     model.predict(first, n_modes=N_MODES)
-    print(f"first solve away from the deck's values (the records fitted once): "
-          f"{time.process_time() - t:.2f} s CPU; {model.general.card_notes or 'no card fields'}")
+    print(
+        f"first solve away from the deck's values (the records fitted once): "
+        f"{time.process_time() - t:.2f} s CPU; {model.general.card_notes or 'no card fields'}"
+    )
     groups = {
         "every DESVAR moved": list(model.parameter_names),
         f"only the {len(cards)} element-card DESVARs moved (offsets, CONM2, CMASS2)": sorted(cards),

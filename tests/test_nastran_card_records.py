@@ -147,3 +147,27 @@ def test_a_written_real_keeps_the_digits_a_large_field_holds(value, digits):
     text = real16(value)
     assert len(text) <= 16
     assert abs(parse_number(text) / value - 1) < 10.0 ** (1 - digits)
+
+
+def test_a_discovery_candidate_takes_the_fitted_records_over(tmp_path):
+    """An effect appends a mass at a grid: the candidate's bound cards are the deck's, so their
+    fitted records are taken over (only their places in the new pattern are found again), and
+    it solves as a candidate that fits them afresh."""
+    from bayesupdate.discovery.candidates import make_candidate
+    from bayesupdate.discovery.effects import Effect
+
+    model = load_nastran_model(_deck(tmp_path, MIXED), BINDINGS, test_labels=["3Y", "4Y"])
+    point = {"wa": 0.6, "w3": 0.8, "x1": -0.9, "m": 3.5}
+    model.solve(point, n_modes=6)
+    candidate = make_candidate(model, Effect("added_mass", "3")).model
+    moved = dict(point, **{"added_mass@3:m": 0.4})
+    taken = candidate.solve(moved, n_modes=6).frequencies_hz
+    mine, theirs = candidate.general.card_records, model.general.card_records
+    # the same fit, placed on the candidate's own assembly
+    assert all(a.fit is b.fit and a is not b for a, b in zip(mine, theirs, strict=True))
+    fresh = make_candidate(model, Effect("added_mass", "3")).model
+    fresh.general._known_cards = None  # noqa: SLF001 - fitted again from the cards
+    again = fresh.solve(moved, n_modes=6).frequencies_hz
+    assert fresh.general.card_records[0].fit is not theirs[0].fit
+    np.testing.assert_allclose(taken, again, rtol=1e-12)
+    assert np.abs(taken / model.solve(point, n_modes=6).frequencies_hz - 1).max() > 1e-3

@@ -54,7 +54,7 @@ from bayesupdate.nastran.bindings import (
     with_own_material,
     write_relations,
 )
-from bayesupdate.nastran.card_records import card_records
+from bayesupdate.nastran.card_records import card_records, reused_records
 from bayesupdate.nastran.cards.masses import add as add_masses
 from bayesupdate.nastran.deck import Refusals
 from bayesupdate.nastran.frames import read_grids
@@ -450,14 +450,18 @@ class LineAssembler(GeneralAssembler):
     elements from the deck's values is added to the deck's assembly: with ``fields``
     (``LineFields``) their matrices at the new records less those at the deck's (module
     docstring), without (records not affine: ``fields_note`` says why) ``LineRebuild.delta``.
-    At the deck's values the change is exactly 0, so the bound model is the deck to the bit.
-    The K returned is the very object ``solve`` matches its ground springs by.
+    The element cards whose own fields are bound (``cards``: offsets, CONM2, CMASS2) add their
+    change from ``card_records`` (``nastran.card_records``), or ``LineRebuild.delta`` where
+    those records do not hold (``card_notes`` says why).  At the deck's values the change is
+    exactly 0, so the bound model is the deck to the bit.  The K returned is the very object
+    ``solve`` matches its ground springs by.
 
     fast : False keeps ``LineRebuild`` at every solve (the reference, for checks).  The
-    ``LineFields`` are found at the first point away from the deck's values (a ``modes`` run at
-    the deck's values converts nothing again).  known : the ``LineAssembler`` of the same deck
-    and bindings on the structure this one extends (``NastranModel.with_structure``): its
-    ``LineFields`` are taken over where they hold (``reused_fields``), not found again.
+    ``LineFields`` and card records are found at the first point away from the deck's values
+    (a ``modes`` run at the deck's values converts nothing again).  known : the
+    ``LineAssembler`` of the same deck and bindings on the structure this one extends
+    (``NastranModel.with_structure``): its ``LineFields`` and card records are taken over where
+    they hold (``reused_fields``, ``card_records.reused_records``), not found again.
 
     The last assembly is kept, keyed by the values and the property arrays it was made from:
     an evaluation asks for K and M at one point up to three times (the eigen-solve, then the
@@ -488,6 +492,8 @@ class LineAssembler(GeneralAssembler):
             self._fields = (None, "no line element is bound")
         same = fast and _same_box(known, deck, self.bindings, self._box)
         self._known = known if same else None
+        #: the element-card records the extended model found already (``card_records``)
+        self._known_cards = known._card_records if same else None
         self._last = (None, None)  # (key, (K, M, elem)) of the last assembly
 
     @property
@@ -543,11 +549,20 @@ class LineAssembler(GeneralAssembler):
         records fitted once), or None where they are read again at every solve (the
         reference path, or ``card_notes`` says why)."""
         if self._card_records is None:
-            found = [(None, "the reference path was asked for") if not self._fast
-                     else card_records(self, part, *self._box) for part in self.cards]  # fmt: skip
+            known = self._known_cards or [None] * len(self.cards)
+            found = [self._records_of(part, k) for part, k in zip(self.cards, known, strict=True)]
             self._card_records = [f for f, _ in found]
             self._card_notes = [why for _, why in found]
+            self._known_cards = None  # taken over or not: the other model's are not held
         return self._card_records
+
+    def _records_of(self, part, known) -> tuple:
+        """(``CardRecords`` of ``part``, "") or (None, why not); ``known``: the records of
+        the model this one extends, taken over where they hold (``reused_records``)."""
+        if not self._fast:
+            return None, "the reference path was asked for"
+        reused = None if known is None else reused_records(self, part, known)
+        return (reused, "") if reused is not None else card_records(self, part, *self._box)
 
     @property
     def card_notes(self) -> list[str]:

@@ -48,6 +48,11 @@ class AffineRecords:
     pairs: dict
     pair_index: tuple = ()
 
+    @property
+    def moving(self) -> set[str]:
+        """The keys of the records that move with the parameters."""
+        return set(self.slopes) | set(self.pairs)
+
     def at(self, theta: np.ndarray) -> dict:
         """{key: array} the records at ``theta`` (p,)."""
         step = np.asarray(theta, float) - self.theta0

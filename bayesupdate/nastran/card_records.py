@@ -3,8 +3,8 @@
 A DVCREL1 of the authors' SOL 200 deck (or a binding such as ``CBEAM 2001 W1A``:
 ``bindings.CARD_FIELDS``) writes a CBAR/CBEAM end offset, a CONM2's M, X1-X3 or I11-I33, or a
 CMASS2's M.  ``lines.LineRebuild`` (the reference) writes the values into copies of the cards
-and converts them again at every solve: about 50 ms for the deck's 44 offset beams and 36 mass
-cards, against 8 ms for its eigen-solve.  Their matrices are not affine in these fields (a
+and converts them again at every solve: 56 ms on the SOL 200 deck (44 offset beams, 47 mass
+cards) a solve, against 8 ms for its eigen-solve.  Their matrices are not affine in these fields (a
 beam's length, axis, local frame and lumped end masses follow its offsets; a CONM2's offset x
 enters as m skew(x)^T skew(x)), but what the reader makes of the cards is
 (``affine_records``):
@@ -20,7 +20,8 @@ enters as m skew(x)^T skew(x)), but what the reader makes of the cards is
 orientation vector; lumped end masses (rho A + NSM) L / 2 each, with half the CBEAM twist
 inertia ``cards.beams.lumped_twist``), computes the elements in the vectorized kernels
 (``general_beam_matrices``; point masses T^T D T, ``point_mass_matrices``, with the inertia J in
-D; scalar masses m v v^T) and gives the change from the deck's values on the assembled pattern.
+D; scalar masses m v v^T, ``ScalarMasses``) and gives the change from the deck's values on
+the assembled pattern.
 The CONM2 inertia is one block J here where the reader splits it into scalar masses on its
 principal axes (``cards.masses``): the same matrix, to round-off.
 
@@ -37,6 +38,7 @@ import numpy as np
 from bayesupdate.fe.elements.base import grounded_line_dofs
 from bayesupdate.fe.elements.general_beam import general_beam_matrices
 from bayesupdate.fe.elements.point_mass import offset_link, point_mass_matrices
+from bayesupdate.fe.elements.scalar_mass import ScalarMasses
 from bayesupdate.fe.line_update import _positions
 from bayesupdate.nastran.affine_records import AffineRecords, fit_records
 from bayesupdate.nastran.cards.beams import end_geometry, lumped_twist, orientation_vector
@@ -177,11 +179,10 @@ class CardRecords:
                                      rec["conm2.inertia"])  # fmt: skip
             M += np.bincount(pos["conm2"], Mc.ravel(), n)
         if "cmass" in pos:
-            v = self.lay.cmass_direction.copy()
-            v[:, 1] *= -1
-            v = v.reshape(-1, 12)
-            Ms = rec["cmass.mass"][:, None, None] * v[:, :, None] * v[:, None, :]
-            M += np.bincount(pos["cmass"], Ms.ravel(), n)
+            lay = self.lay
+            scalar = ScalarMasses(lay.cmass_nodes, lay.cmass_direction, rec["cmass.mass"],
+                                  np.zeros(lay.cmass.size, int))  # fmt: skip
+            M += np.bincount(pos["cmass"], scalar.matrices(self.nodes, None)[1].ravel(), n)
         return K, M
 
     def _beams(self, rec) -> tuple[object, tuple]:

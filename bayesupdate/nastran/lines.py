@@ -246,8 +246,8 @@ class LineFields:
         out = []
         for family, rec in zip(_FAMILIES, self.records0, strict=True):
             if rec is not None:
-                moved = {f: at[f"{family}.{f}"] for f in _fields(family)
-                         if f"{family}.{f}" in self.fit.slopes}  # fmt: skip
+                keys = {f: f"{family}.{f}" for f in _fields(family)}
+                moved = {f: at[k] for f, k in keys.items() if k in self.fit.moving}
                 rec = replace(rec, **moved)
             out.append(rec)
         return tuple(out)

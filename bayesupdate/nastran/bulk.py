@@ -17,6 +17,7 @@ field table (QRG names, ``NAME=default`` where a blank field has a default), so 
 
 import re
 from dataclasses import dataclass
+from functools import cache, lru_cache
 
 #: an integer field (no decimal point, no exponent)
 _INT = re.compile(r"^[+-]?\d+$")
@@ -30,9 +31,11 @@ class CardError(Exception):
     """One card's refusal: 'file:line CARD id: message' (collected, never shown alone)."""
 
 
+@lru_cache(maxsize=1 << 16)
 def parse_number(text: str):
     """int, float, str (upper case) or None of one field's text (module docstring); a
-    ``ValueError`` for text that is none of these."""
+    ``ValueError`` for text that is none of these.  Kept for the last 65,536 texts: a deck's
+    fields repeat, and a bound model reads its bound cards again (``lines.LineRebuild``)."""
     s = text.strip().upper()
     if not s:
         return None
@@ -169,11 +172,11 @@ class Card:
         return [self.value(i) for i in range(start, stop)]
 
     def position(self, name: str) -> int:
-        names = [n for n, _ in FIELDS.get(self.name, ())]
-        name = ALIASES.get(name, name)
-        if name not in names:
-            self.fail(f"has no field {name}")
-        return names.index(name)
+        """The raw index of field ``name`` of the card's table (``FIELDS``)."""
+        i = _positions(self.name).get(ALIASES.get(name, name))
+        if i is None:
+            self.fail(f"has no field {ALIASES.get(name, name)}")
+        return i
 
     def __getitem__(self, name: str):
         """Field ``name`` of the card's table (``FIELDS``), its default where blank."""
@@ -204,6 +207,15 @@ class Card:
         if not isinstance(v, int):
             self.fail(f"field 2 = {v!r}: give an integer id")
         return v
+
+
+@cache
+def _positions(card: str) -> dict[str, int]:
+    """{field name: its first raw index} of a card's table (``FIELDS``)."""
+    out = {}
+    for i, (name, _) in enumerate(FIELDS.get(card, ())):
+        out.setdefault(name, i)
+    return out
 
 
 def _field_number(i: int) -> str:

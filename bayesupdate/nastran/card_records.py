@@ -233,8 +233,9 @@ def reused_records(g, rebuild, known: CardRecords) -> CardRecords | None:
     model before a discovery effect was added) on the assembler ``g`` of the extended
     structure, or None where it does not hold there.  An effect appends nodes and elements, so
     the bound cards read on the extended structure must have the same ``Layout`` on nodes at
-    the same places; the fit depends on the cards alone (47 readings of them, 1.3 s with
-    the SOL 200 deck), and only the places in the new pattern are found again."""
+    the same places; the fit depends on the cards alone (47 readings of them on the SOL 200
+    deck, whose first solve takes 1.3 s), and only the places in the new pattern are found
+    again."""
     s, n = g.structure, known.nodes.shape[0]
     if s.nodes.shape[0] < n or not np.array_equal(s.nodes[:n], known.nodes):
         return None

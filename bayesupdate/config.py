@@ -59,7 +59,7 @@ Example::
     pairing = "auto"                # "auto": the pairing above, batched when the model gives
                                     # batch shapes; "order" (batched, in order); "problem"
     [sampler]
-    walkers = 32
+    walkers = 32                    # default: 32, or 2 per sampled parameter above 16
     steps = 5000
     seed = 1
     min_autocorr_times = 50
@@ -303,9 +303,17 @@ class LikelihoodConfig:
     pairing: str = "auto"
 
 
+#: the sampler's walkers when ``[sampler] walkers`` is not given, at the least (two per sampled
+#: dimension above it: ``SamplerConfig.walkers_for``)
+DEFAULT_WALKERS = 32
+
+
 @dataclass(frozen=True)
 class SamplerConfig:
-    walkers: int = 32
+    #: None: ``DEFAULT_WALKERS``, or two per sampled dimension where there are more than 16
+    #: (the ensemble's moves need at least two per dimension; ``pipelines.study.prepare``
+    #: resolves it once the parameters are known, a deck's DESVARs too)
+    walkers: int | None = None
     steps: int = 5000
     seed: int = 1
     min_autocorr_times: float = 50.0
@@ -326,6 +334,11 @@ class SamplerConfig:
     def __post_init__(self):
         if self.adapt_steps is not None:
             check_adapt_steps(self.adapt_steps)
+
+    def walkers_for(self, ndim: int) -> int:
+        """The walkers of a run with ``ndim`` sampled dimensions: the given number, else
+        ``DEFAULT_WALKERS`` or 2 ndim, whichever is more."""
+        return self.walkers if self.walkers is not None else max(DEFAULT_WALKERS, 2 * ndim)
 
 
 @dataclass(frozen=True)

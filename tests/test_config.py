@@ -227,3 +227,19 @@ def test_an_empty_sampler_table_gives_the_documented_sampler_settings():
     assert sampler_settings(short.sampler).adapt_steps == 60
     with pytest.raises(BayesUpdateError, match=r"sampler.adapt_steps: 19; use at least 20"):
         parse_study({"model": {"source": "exhaust"}, "sampler": {"adapt_steps": 19}})
+
+
+def test_the_default_walkers_follow_the_sampled_dimensions():
+    """No ``[sampler] walkers``: 32, or two per sampled dimension above 16 (the ensemble's
+    moves need two per dimension); a given number is kept, and refused where it is too few."""
+    from bayesupdate.pipelines.study import _check_sampler
+
+    study = parse_study({"model": {"source": "exhaust"}})
+    assert study.sampler.walkers is None
+    assert [study.sampler.walkers_for(n) for n in (5, 16, 17, 34)] == [32, 32, 34, 68]
+    assert _check_sampler(study, 35).sampler.walkers == 70
+    given = parse_study({"model": {"source": "exhaust"}, "sampler": {"walkers": 8}})
+    assert _check_sampler(given, 4).sampler.walkers == 8
+    with pytest.raises(BayesUpdateError, match="8 is too few for 34 sampled parameters; use at "
+                       "least 68"):  # fmt: skip
+        _check_sampler(given, 34)

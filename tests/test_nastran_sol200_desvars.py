@@ -70,3 +70,22 @@ def test_a_bound_element_card_field_solves_as_the_written_design_deck(model, kin
     assert r.mass_kg == pytest.approx(again.mass_kg, rel=1e-12)
     base = model.solve(n_modes=10).frequencies_hz
     assert np.abs(r.frequencies_hz / base - 1).max() > 1e-4
+
+
+def test_a_study_of_its_desvars_runs_with_the_default_sampler_settings(tmp_path):
+    """A study of the deck with no ``[parameters]`` and no ``[sampler]`` table: its 34 DESVARs
+    are the parameters, and the walkers follow them (two per parameter, 68: the ensemble's
+    least), where the 32 of before refused even ``calibrate`` ("32 is too few for 34")."""
+    from bayesupdate.config import parse_study
+    from bayesupdate.ema.modal_h5 import write_modal_h5
+    from bayesupdate.modal_data import ModalData
+    from bayesupdate.pipelines.study import prepare
+
+    write_modal_h5(tmp_path / "m.h5", ModalData(np.array([7.81, 19.07, 31.71])))
+    study = parse_study(
+        {"model": {"source": str(DECK)}, "data": {"source": str(tmp_path / "m.h5")}}
+    )
+    assert study.sampler.walkers is None
+    prepared = prepare(study)
+    assert len(prepared.problem.parameters) == 34
+    assert prepared.study.sampler.walkers == 68

@@ -272,13 +272,15 @@ def _screen(problem, rom, likelihood, cfg: SamplerConfig, calibration) -> tuple:
     return (None, why) if why else (screen, "")
 
 
-def sampler_settings(cfg: SamplerConfig, progress: bool = False) -> SamplerSettings:
+def sampler_settings(cfg: SamplerConfig, progress: bool = False, ndim: int = 0) -> SamplerSettings:
     """The ``SamplerSettings`` a study's ``[sampler]`` table gives (``SamplerConfig()``: the
-    defaults a user gets); ``target_ess = 0`` turns the ESS target off."""
+    defaults a user gets) for ``ndim`` sampled dimensions (the walkers where the table gives
+    none: ``SamplerConfig.walkers_for``; a prepared study's are resolved already);
+    ``target_ess = 0`` turns the ESS target off."""
     adapt = {} if cfg.adapt_steps is None else {"adapt_steps": cfg.adapt_steps}
     return SamplerSettings(
         **adapt,
-        walkers=cfg.walkers,
+        walkers=cfg.walkers_for(ndim),
         steps=cfg.steps,
         seed=cfg.seed,
         min_autocorr_times=cfg.min_autocorr_times,

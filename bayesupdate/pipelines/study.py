@@ -231,13 +231,15 @@ def prepare(study: StudyConfig, effects: tuple[str, ...] = ()) -> PreparedStudy:
         raise BayesUpdateError(
             "likelihood.mass_sd: no mass to compare with; give [data] mass or [objective] mass"
         )
-    _check_sampler(study, len(problem.parameters) + int(likelihood.infer_sigma))
+    study = _check_sampler(study, len(problem.parameters) + int(likelihood.infer_sigma))
     return PreparedStudy(study, problem, likelihood)
 
 
-def _check_sampler(study: StudyConfig, ndim: int) -> None:
-    """The ``[sampler]`` settings against the ``ndim`` sampled dimensions."""
-    cfg = study.sampler
+def _check_sampler(study: StudyConfig, ndim: int) -> StudyConfig:
+    """``study`` with its ``[sampler]`` walkers resolved for the ``ndim`` sampled dimensions
+    (``SamplerConfig.walkers_for``), its settings checked against them."""
+    cfg = replace(study.sampler, walkers=study.sampler.walkers_for(ndim))
+    study = replace(study, sampler=cfg)
     if cfg.walkers < max(2 * ndim, 4):
         raise BayesUpdateError(
             f"sampler.walkers: {cfg.walkers} is too few for {ndim} sampled parameters; "
@@ -254,3 +256,4 @@ def _check_sampler(study: StudyConfig, ndim: int) -> None:
         raise BayesUpdateError(f"sampler.target_ess: must be >= 0, got {cfg.target_ess}")
     if not 0 < cfg.hdi_prob < 1:
         raise BayesUpdateError("sampler.hdi_prob: must be in (0, 1)")
+    return study

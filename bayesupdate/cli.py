@@ -21,9 +21,11 @@ for _var in BLAS_THREAD_VARIABLES:
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import importlib  # noqa: E402
 import pkgutil  # noqa: E402
 import sys  # noqa: E402
+import warnings  # noqa: E402
 
 from bayesupdate import __version__, commands  # noqa: E402
 from bayesupdate.errors import BayesUpdateError  # noqa: E402
@@ -122,10 +124,24 @@ def _run(args) -> int:
     keeps its own)."""
     from bayesupdate.compute.progress import mode_for, reporting
 
-    with reporting(mode_for(getattr(args, "quiet", False))):
+    with reporting(mode_for(getattr(args, "quiet", False))), plain_warnings():
         if not getattr(args, "no_cache", False):
             return int(args._run(args) or 0)
         return _without_cache(args)
+
+
+@contextlib.contextmanager
+def plain_warnings():
+    """While a command runs, a warning is one ``warning: message`` line on stderr, as the
+    commands' own warnings are (Python's format adds the package's file, line and source line,
+    which tell a user nothing); the caller's warning display is restored after."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        yield
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"warning: {message}", file=sys.stderr)
 
 
 def _without_cache(args) -> int:

@@ -773,3 +773,23 @@ def test_console_script_subprocess_one_line(tmp_path):
     )
     assert proc.returncode == 2
     assert len(proc.stderr.strip().splitlines()) == 1 and "missing.uff" in proc.stderr
+
+
+def test_a_cache_folder_that_cannot_be_written_is_one_warning_line(tmp_path, monkeypatch, capsys):
+    """The run goes on without the cache, and the warning is one ``warning:`` line (the CLI
+    shows warnings so, ``cli.plain_warnings``; Python's own format adds the package's file,
+    line and source), and the caller's warning display is restored after the command."""
+    import warnings
+
+    blocker = tmp_path / "file"
+    blocker.write_text("a file where the cache folder would go")
+    monkeypatch.setenv("BAYESUPDATE_CACHE_DIR", str(blocker / "cache"))
+    monkeypatch.delenv("BAYESUPDATE_NO_CACHE")  # the suite's own (conftest): the user's default
+    before = warnings.showwarning
+    code, out, err = run_cli(["calibrate", "--model", "exhaust", "--data", "paper:ema",
+                              "--starts", "1", "--no-polish"], capsys)  # fmt: skip
+    assert code == 0 and "objective" in out
+    warned = [line for line in err.splitlines() if "cannot be written" in line]
+    assert len(warned) == 1 and warned[0].startswith("warning: cache folder "), err
+    assert ".py:" not in err and "RuntimeWarning" not in err
+    assert warnings.showwarning is before

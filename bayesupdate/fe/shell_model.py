@@ -36,7 +36,8 @@ class ShellMesh:
     thickness over t (default 5/6; quads only, the DKT triangle is shear rigid), Nastran's
     PSHELL 12I/T**3 and TS/T (``shell.local_pieces``); a quad whose shear_ratio is inf has no
     transverse shear flexibility (a PSHELL with MID3 blank: the discrete Kirchhoff
-    quadrilateral, ``shell.quad_operators``)."""
+    quadrilateral, ``shell.quad_operators``); bending_nu (n_el,) or None (nu): the Poisson
+    ratio of the bending material (PSHELL MID2, another MAT1 than MID1)."""
 
     nodes: np.ndarray
     quads: np.ndarray
@@ -50,6 +51,7 @@ class ShellMesh:
     nsm: np.ndarray
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
+    bending_nu: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -78,9 +80,11 @@ def shell_mesh(
     warp_limit: float = WARP_LIMIT,
     bending_ratio=None,
     shear_ratio=None,
+    bending_nu=None,
 ) -> ShellMesh:
     """Validated ``ShellMesh``; scalars broadcast to every element (``bending_ratio`` and
-    ``shear_ratio``: None keeps the solid section's 1 and 5/6).  Raises BayesUpdateError
+    ``shear_ratio``: None keeps the solid section's 1 and 5/6; ``bending_nu``: None keeps nu
+    in bending).  Raises BayesUpdateError
     naming the element or node at fault; warns (``ShellMeshWarning``) for warped quads."""
     nodes = np.asarray(nodes, dtype=float)
     q = np.zeros((0, 4), int) if quads is None else np.asarray(quads, dtype=np.int64)
@@ -96,7 +100,7 @@ def shell_mesh(
     values = dict(
         thickness=thickness, E=E, nu=nu, rho=rho, offset=offset, offset_ratio=offset_ratio, nsm=nsm
     )
-    ratios = dict(bending_ratio=bending_ratio, shear_ratio=shear_ratio)
+    ratios = dict(bending_ratio=bending_ratio, shear_ratio=shear_ratio, bending_nu=bending_nu)
     values.update({k: v for k, v in ratios.items() if v is not None})
     for name, value in values.items():
         v = np.asarray(value, dtype=float)
@@ -156,6 +160,8 @@ def _check_properties(mesh: ShellMesh) -> None:
         shear = np.where(shear == np.inf, 1.0, shear)
     ratios = (("bending_ratio", mesh.bending_ratio), ("shear_ratio", shear))
     checks += tuple((n, v, lambda v: v > 0, "> 0") for n, v in ratios if v is not None)
+    if mesh.bending_nu is not None:
+        checks += (("bending_nu", mesh.bending_nu, lambda v: (v > -1) & (v < 0.5), "in (-1, 0.5)"),)
     for name, v, ok, rule in checks:
         bad = ~np.isfinite(v) | ~ok(v)
         if np.any(bad):
@@ -201,6 +207,13 @@ def _check_geometry(mesh: ShellMesh, warp_limit: float) -> None:
                 )
 
 
+def _section_rows(mesh: ShellMesh, idx: np.ndarray) -> tuple:
+    """(bending_ratio, shear_ratio, bending_nu) of the elements ``idx``, each None where the
+    mesh has none."""
+    return tuple(None if r is None else r[idx]
+                 for r in (mesh.bending_ratio, mesh.shear_ratio, mesh.bending_nu))  # fmt: skip
+
+
 def _families(mesh: ShellMesh) -> list[tuple[np.ndarray, str]]:
     """(element indices, kind) of the mesh's element families: MITC4 quads, shear-rigid quads
     (``shear_ratio`` inf: the discrete Kirchhoff quadrilateral), triangles; empty ones left
@@ -226,8 +239,7 @@ class ShellAssembly:
             conn = mesh.quads[idx] if kind != "tria" else mesh.trias[idx - len(mesh.quads)]
             x = mesh.nodes[conn]
             f = shell.tria_frames(x) if kind == "tria" else shell.quad_frames(x)
-            ratios = (None if r is None else r[idx]
-                      for r in (mesh.bending_ratio, mesh.shear_ratio))  # fmt: skip
+            b, s, n = _section_rows(mesh, idx)
             source = shell.PieceSource(
                 f.xy,
                 f.height,
@@ -235,8 +247,10 @@ class ShellAssembly:
                 mesh.nu[idx],
                 lumped,
                 rotary_inertia,
-                *ratios,
+                b,
+                s,
                 kirchhoff=kind == "kirchhoff quad",
+                bending_nu=n,
             )
             self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
@@ -354,7 +368,7 @@ class ShellElements:
     thickness_factor (nq + nt,) or None (all 1): the element's thickness over its part's
     thickness parameter, where one binds it (t_e = factor_e theta: caps of another gauge than the
     mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep);
-    bending_ratio, shear_ratio (nq + nt,) or None as in ``ShellMesh``."""
+    bending_ratio, shear_ratio, bending_nu (nq + nt,) or None as in ``ShellMesh``."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -369,6 +383,7 @@ class ShellElements:
     thickness_factor: np.ndarray | None = None
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
+    bending_nu: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -384,7 +399,7 @@ class ShellElements:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
         used by beams only are allowed here); ``changes`` replace property arrays."""
         names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm", "bending_ratio",
-                 "shear_ratio")  # fmt: skip
+                 "shear_ratio", "bending_nu")  # fmt: skip
         props = {n: getattr(self, n) for n in names} | changes
         return ShellMesh(nodes, self.quads, self.trias, **props)
 

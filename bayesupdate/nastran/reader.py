@@ -91,13 +91,13 @@ def _pshell_table(ctx, pids, shells):
 
 
 def _pshell(ctx, p):
-    """(T, MID1, NSM, bending ratio, shear ratio) of a PSHELL: 12I/T**3 times E2 / E1 when the
-    bending material MID2 is another MAT1 with MID1's NU (a sandwich's faces), and TS/T times
-    G3 / G1 for a transverse shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's
-    own), so the plane-stress matrices stay MID1's (``shell.local_pieces``); the mass is
-    MID1's RHO (QRG PSHELL).  MID3 blank: no transverse shear flexibility (QRG PSHELL), the
-    shear ratio inf (the quads are discrete Kirchhoff quadrilaterals, ``shell.quad_operators``;
-    the triangles are Kirchhoff anyway)."""
+    """(T, MID1, NSM, bending ratio, shear ratio, bending NU) of a PSHELL: 12I/T**3 times
+    E2 / E1 when the bending material MID2 is another MAT1 (a sandwich's faces), with MID2's NU
+    in the bending matrix (``shell.local_pieces``), and TS/T times G3 / G1 for a transverse
+    shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's own); the membrane
+    stays MID1's and the mass is MID1's RHO (QRG PSHELL).  MID3 blank: no transverse shear
+    flexibility (QRG PSHELL), the shear ratio inf (the quads are discrete Kirchhoff
+    quadrilaterals, ``shell.quad_operators``; the triangles are Kirchhoff anyway)."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
     if p["MID4"]:
         p.fail("MID4 (membrane-bending coupling) is not supported")
@@ -116,18 +116,19 @@ def _pshell(ctx, p):
     m = cards.mat1(ctx, mid1, p)
     if not -1 < m.NU < 0.5:
         p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    bending_nu = m.NU
     if mid2 != mid1:
         m2 = cards.mat1(ctx, mid2, p)
-        if abs(m2.NU - m.NU) > 1e-9 * max(abs(m.NU), 1.0):
-            p.fail(f"MID2 {mid2} has NU = {m2.NU:.4g}, MID1 {mid1} {m.NU:.4g}: a bending "
-                   "material with another NU is not supported")  # fmt: skip
+        if not -1 < m2.NU < 0.5:
+            p.fail(f"MID2 {mid2}: NU = {m2.NU:.4g} (from E and G) is outside (-1, 0.5)")
         bending *= m2.E / m.E
+        bending_nu = m2.NU
     if mid3 is not None and mid3 != mid1:
         m3 = cards.mat1(ctx, mid3, p)
         if not m3.G > 0:
             p.fail(f"MID3 {mid3}: the transverse shear material needs G > 0")
         shear *= m3.G / (m.E / (2 * (1 + m.NU)))
-    return p.real("T"), int(mid1), p.real("NSM"), bending, shear
+    return p.real("T"), int(mid1), p.real("NSM"), bending, shear, bending_nu
 
 
 def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
@@ -138,7 +139,8 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     uniq, inv = np.unique(pids, return_inverse=True)
     if any(int(p) not in table for p in uniq):
         return None
-    t_p, mid, nsm, bending, shear = (np.array([table[int(p)][k] for p in uniq]) for k in range(5))
+    t_p, mid, nsm, bending, shear, bending_nu = (np.array([table[int(p)][k] for p in uniq])
+                                                 for k in range(6))  # fmt: skip
     mats = {int(m): cards.material(ctx, int(m), ctx.props[int(p)])
             for p, m in zip(uniq, mid, strict=True)}  # fmt: skip
     E, nu, rho = (np.array([getattr(mats[int(m)], a) for m in mid]) for a in
@@ -150,7 +152,7 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     thickness = np.where(valid, corner_t, 0.0).sum(axis=1) / n_nodes
     return dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
                 nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],
-                shear_ratio=shear[inv])  # fmt: skip
+                shear_ratio=shear[inv], bending_nu=bending_nu[inv])  # fmt: skip
 
 
 def _used_rows(ctx, shell_nodes):
@@ -197,10 +199,11 @@ def _patch_shells(structure, pids, props):
     rho = np.maximum(props["rho"], 0.0)
     # None where every shell has the solid section's ratios: the arrays' products are then
     # left out, and decks without 12I/T**3 or TS/T keep their bits
-    bending, shear = props["bending_ratio"], props["shear_ratio"]
+    bending, shear, bending_nu = props["bending_ratio"], props["shear_ratio"], props["bending_nu"]
     ratios = dict(
         bending_ratio=None if np.all(bending == 1.0) else bending,
         shear_ratio=None if np.all(shear == SHEAR_FACTOR) else shear,
+        bending_nu=None if np.all(bending_nu == props["nu"]) else bending_nu,
     )
     shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part, **ratios)
     return replace(structure, shells=shells, parts=parts)

@@ -300,15 +300,19 @@ class LocalPieces:
 
 
 def local_pieces(
-    ops: _Operators, E, nu, lumped: bool = False, bending_ratio=None, shear_ratio=None
-) -> LocalPieces:
+    ops: _Operators, E, nu, lumped: bool = False, bending_ratio=None, shear_ratio=None,
+    bending_nu=None,
+) -> LocalPieces:  # fmt: skip
     """Element pieces from operators and (n,) E [Pa], nu.  ``lumped``: row-sum mass.
 
     bending_ratio (n,) or None (1): the bending inertia over that of the solid section,
     I / (t^3 / 12) (Nastran PSHELL 12I/T**3: a sandwich's faces carry its bending), so the
     bending piece is bending_ratio E / 12 x int Bb^T D Bb; shear_ratio (n,) or None
     (``SHEAR_FACTOR``): the transverse shear thickness over t (PSHELL TS/T), the shear piece's
-    kappa.  Both leave the rotary inertia rho t^3 / 12 and the thickness powers as they are.
+    kappa; bending_nu (n,) or None (nu): the Poisson ratio of the bending material, in the
+    bending piece's D (PSHELL MID2, another MAT1 than MID1: D = E2 t^3 / 12 (1 - nu2^2) x
+    [[1, nu2, 0], [nu2, 1, 0], [0, 0, (1 - nu2) / 2]], with bending_ratio carrying E2 / E).
+    They leave the rotary inertia rho t^3 / 12 and the thickness powers as they are.
     """
     D = _plane_stress(nu)
     G = E / (2.0 * (1.0 + nu))
@@ -320,7 +324,8 @@ def local_pieces(
     Km = 0.5 * (Km + Km.transpose(0, 2, 1))
     Ks = _quadrature_form(ops.Bs, None, ops.wdet)
     Kd = _quadrature_form(ops.Bd[:, :, None], None, ops.wdet)
-    Kb = _quadrature_form(ops.Bb, D, ops.wdet)
+    Kb = _quadrature_form(ops.Bb, D if bending_nu is None else _plane_stress(bending_nu),
+                          ops.wdet)  # fmt: skip
     k = ops.N.shape[1]
     mass = np.einsum("nq,qi,qj->nij", ops.wdet, ops.N, ops.N)  # (n, k, k)
     if lumped:
@@ -362,8 +367,9 @@ class PieceSource:
     xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
-    bending_ratio, shear_ratio (n,) or None: ``local_pieces``'s; kirchhoff : quadrilaterals
-    without transverse shear flexibility (``quad_operators(kirchhoff=True)``) instead of MITC4.
+    bending_ratio, shear_ratio, bending_nu (n,) or None: ``local_pieces``'s; kirchhoff :
+    quadrilaterals without transverse shear flexibility (``quad_operators(kirchhoff=True)``)
+    instead of MITC4.
     """
 
     xy: np.ndarray
@@ -375,6 +381,7 @@ class PieceSource:
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
     kirchhoff: bool = False
+    bending_nu: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -383,8 +390,9 @@ class PieceSource:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
         xy = self.xy[rows]
         ops = quad_operators(xy, self.kirchhoff) if xy.shape[1] == 4 else tria_operators(xy)
-        b, s = (None if r is None else r[rows] for r in (self.bending_ratio, self.shear_ratio))
-        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s)
+        b, s, n = (None if r is None else r[rows]
+                   for r in (self.bending_ratio, self.shear_ratio, self.bending_nu))  # fmt: skip
+        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n)
         if self.height is not None:
             p = warp_link(p, self.height[rows])
         if not self.rotary_inertia:

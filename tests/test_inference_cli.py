@@ -284,17 +284,21 @@ def test_the_pair_plot_draws_the_lower_triangle_with_shared_axes():
         assert not grid[i, i].get_shared_y_axes().joined(grid[i, 0], grid[i, i])
 
 
-def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, reference, tmp_path):
+def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, tmp_path):
     import os
     import signal
     import subprocess
     import sys
     import time
 
-    # 400 kept steps, checked every 100: after the first checkpoint 300 steps (~5,000 model
-    # calls, seconds) remain, while the signal follows the checkpoint within the 50 ms poll
+    # 1,600 kept steps, checked every 100: after the first checkpoint 1,500 steps (over 1 s)
+    # remain, while the signal follows the checkpoint within the 50 ms poll (the study's 400
+    # steps left 0.25 s, which a loaded machine could miss: the run then ended by itself)
+    long = tmp_path / "long.toml"
+    long.write_text(study.read_text().replace("steps = 400", "steps = 1600"))
+    reference = _sample_run(long, tmp_path / "ref.h5")
     out = tmp_path / "run.h5"
-    cmd = [sys.executable, "-m", "bayesupdate", "sample", str(study), "--out", str(out), "--json"]
+    cmd = [sys.executable, "-m", "bayesupdate", "sample", str(long), "--out", str(out), "--json"]
     proc = subprocess.Popen(
         cmd,
         stdout=subprocess.PIPE,
@@ -314,8 +318,8 @@ def test_real_sigint_keeps_a_checkpoint_and_resume_completes(study, reference, t
     assert "Traceback" not in err and "--resume" in err
     with h5py.File(out) as h5:
         assert h5.attrs["status"] == "partial"
-        assert h5["posterior/chain"].shape[0] < 400
-    assert main(["sample", str(study), "--out", str(out), "--resume", "--json"]) == 0
+        assert h5["posterior/chain"].shape[0] < 1600
+    assert main(["sample", str(long), "--out", str(out), "--resume", "--json"]) == 0
     with h5py.File(out) as a, h5py.File(reference.out) as b:
         assert np.array_equal(a["posterior/chain"][()], b["posterior/chain"][()])
 

@@ -84,8 +84,8 @@ def shell_mesh(
 ) -> ShellMesh:
     """Validated ``ShellMesh``; scalars broadcast to every element (``bending_ratio`` and
     ``shear_ratio``: None keeps the solid section's 1 and 5/6; ``bending_nu``: None keeps nu
-    in bending).  Raises BayesUpdateError
-    naming the element or node at fault; warns (``ShellMeshWarning``) for warped quads."""
+    in bending).  Raises BayesUpdateError naming the element or node at fault; warns
+    (``ShellMeshWarning``) for warped quads."""
     nodes = np.asarray(nodes, dtype=float)
     q = np.zeros((0, 4), int) if quads is None else np.asarray(quads, dtype=np.int64)
     t = np.zeros((0, 3), int) if trias is None else np.asarray(trias, dtype=np.int64)
@@ -207,13 +207,6 @@ def _check_geometry(mesh: ShellMesh, warp_limit: float) -> None:
                 )
 
 
-def _section_rows(mesh: ShellMesh, idx: np.ndarray) -> tuple:
-    """(bending_ratio, shear_ratio, bending_nu) of the elements ``idx``, each None where the
-    mesh has none."""
-    return tuple(None if r is None else r[idx]
-                 for r in (mesh.bending_ratio, mesh.shear_ratio, mesh.bending_nu))  # fmt: skip
-
-
 def _families(mesh: ShellMesh) -> list[tuple[np.ndarray, str]]:
     """(element indices, kind) of the mesh's element families: MITC4 quads, shear-rigid quads
     (``shear_ratio`` inf: the discrete Kirchhoff quadrilateral), triangles; empty ones left
@@ -239,7 +232,8 @@ class ShellAssembly:
             conn = mesh.quads[idx] if kind != "tria" else mesh.trias[idx - len(mesh.quads)]
             x = mesh.nodes[conn]
             f = shell.tria_frames(x) if kind == "tria" else shell.quad_frames(x)
-            b, s, n = _section_rows(mesh, idx)
+            b, s, n = shell.optional_rows(idx, mesh.bending_ratio, mesh.shear_ratio,
+                                          mesh.bending_nu)  # fmt: skip
             source = shell.PieceSource(
                 f.xy,
                 f.height,

@@ -19,6 +19,7 @@ record's largest value: it holds exactly there, or the caller keeps reading the 
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -48,10 +49,11 @@ class AffineRecords:
     pairs: dict
     pair_index: tuple = ()
 
-    @property
-    def moving(self) -> set[str]:
-        """The keys of the records that move with the parameters."""
-        return set(self.slopes) | set(self.pairs)
+    @cached_property
+    def moving(self) -> frozenset[str]:
+        """The keys of the records that move with the parameters (found once: a solve asks
+        for them per family)."""
+        return frozenset(self.slopes) | frozenset(self.pairs)
 
     def at(self, theta: np.ndarray) -> dict:
         """{key: array} the records at ``theta`` (p,)."""

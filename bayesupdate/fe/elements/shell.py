@@ -351,6 +351,12 @@ def local_pieces(
     )
 
 
+def optional_rows(rows, *arrays) -> tuple:
+    """Each of ``arrays`` (the optional per-element section arrays: bending and shear ratios,
+    bending nu) at the elements ``rows``, None where it is None."""
+    return tuple(None if a is None else a[rows] for a in arrays)
+
+
 #: elements per chunk of ``PieceSource.chunks`` (``direct_matrices``, ``ShellAssembly.power_data``):
 #: the temporaries are then ~15 (CHUNK, 24, 24) float64 stacks (~70 MB) whatever the mesh size
 CHUNK = 2048
@@ -390,8 +396,7 @@ class PieceSource:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
         xy = self.xy[rows]
         ops = quad_operators(xy, self.kirchhoff) if xy.shape[1] == 4 else tria_operators(xy)
-        b, s, n = (None if r is None else r[rows]
-                   for r in (self.bending_ratio, self.shear_ratio, self.bending_nu))  # fmt: skip
+        b, s, n = optional_rows(rows, self.bending_ratio, self.shear_ratio, self.bending_nu)
         p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n)
         if self.height is not None:
             p = warp_link(p, self.height[rows])

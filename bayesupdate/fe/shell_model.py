@@ -37,7 +37,9 @@ class ShellMesh:
     PSHELL 12I/T**3 and TS/T (``shell.local_pieces``); a quad whose shear_ratio is inf has no
     transverse shear flexibility (a PSHELL with MID3 blank: the discrete Kirchhoff
     quadrilateral, ``shell.quad_operators``); bending_nu (n_el,) or None (nu): the Poisson
-    ratio of the bending material (PSHELL MID2, another MAT1 than MID1)."""
+    ratio of the bending material (PSHELL MID2, another MAT1 than MID1); membrane_ratio
+    (n_el,) or None (1): 0 for a shell with no membrane (PSHELL MID1 blank).  A membrane
+    (PSHELL MID2 blank) has bending_ratio and shear_ratio 0 (``shell.local_pieces``)."""
 
     nodes: np.ndarray
     quads: np.ndarray
@@ -52,6 +54,7 @@ class ShellMesh:
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
     bending_nu: np.ndarray | None = None
+    membrane_ratio: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -81,11 +84,12 @@ def shell_mesh(
     bending_ratio=None,
     shear_ratio=None,
     bending_nu=None,
+    membrane_ratio=None,
 ) -> ShellMesh:
     """Validated ``ShellMesh``; scalars broadcast to every element (``bending_ratio`` and
     ``shear_ratio``: None keeps the solid section's 1 and 5/6; ``bending_nu``: None keeps nu
-    in bending).  Raises BayesUpdateError naming the element or node at fault; warns
-    (``ShellMeshWarning``) for warped quads."""
+    in bending; ``membrane_ratio``: None keeps the membrane).  Raises BayesUpdateError naming
+    the element or node at fault; warns (``ShellMeshWarning``) for warped quads."""
     nodes = np.asarray(nodes, dtype=float)
     q = np.zeros((0, 4), int) if quads is None else np.asarray(quads, dtype=np.int64)
     t = np.zeros((0, 3), int) if trias is None else np.asarray(trias, dtype=np.int64)
@@ -100,7 +104,8 @@ def shell_mesh(
     values = dict(
         thickness=thickness, E=E, nu=nu, rho=rho, offset=offset, offset_ratio=offset_ratio, nsm=nsm
     )
-    ratios = dict(bending_ratio=bending_ratio, shear_ratio=shear_ratio, bending_nu=bending_nu)
+    ratios = dict(bending_ratio=bending_ratio, shear_ratio=shear_ratio, bending_nu=bending_nu,
+                  membrane_ratio=membrane_ratio)  # fmt: skip
     values.update({k: v for k, v in ratios.items() if v is not None})
     for name, value in values.items():
         v = np.asarray(value, dtype=float)
@@ -158,10 +163,33 @@ def _check_properties(mesh: ShellMesh) -> None:
     shear = mesh.shear_ratio
     if shear is not None:  # +inf is a shear-rigid (Kirchhoff) element, not a fault
         shear = np.where(shear == np.inf, 1.0, shear)
-    ratios = (("bending_ratio", mesh.bending_ratio), ("shear_ratio", shear))
-    checks += tuple((n, v, lambda v: v > 0, "> 0") for n, v in ratios if v is not None)
+    ratios = (("bending_ratio", mesh.bending_ratio), ("shear_ratio", shear),
+              ("membrane_ratio", mesh.membrane_ratio))  # fmt: skip
+    checks += tuple((n, v, lambda v: v >= 0, ">= 0") for n, v in ratios if v is not None)
     if mesh.bending_nu is not None:
         checks += (("bending_nu", mesh.bending_nu, lambda v: (v > -1) & (v < 0.5), "in (-1, 0.5)"),)
+    _check(checks, mesh)
+    _check_parts(mesh)
+
+
+def _check_parts(mesh: ShellMesh) -> None:
+    """A shell has a membrane or a bending part, and a bending part its transverse shear (a
+    zero shear ratio leaves the deflection free of the rotations)."""
+    n = mesh.n_elements
+    bending = np.ones(n) if mesh.bending_ratio is None else mesh.bending_ratio
+    membrane = np.ones(n) if mesh.membrane_ratio is None else mesh.membrane_ratio
+    shear = np.ones(n) if mesh.shear_ratio is None else mesh.shear_ratio
+    rules = ((bending + membrane > 0, "it has neither membrane nor bending stiffness"),
+             ((bending == 0) | (shear > 0), "its bending has no transverse shear stiffness"),
+             ((bending > 0) | (shear == 0), "it has transverse shear but no bending"))  # fmt: skip
+    for ok, why in rules:
+        if not np.all(ok):
+            raise BayesUpdateError(f"shell mesh: {mesh.element_name(_first(~ok))}: {why}")
+
+
+def _check(checks, mesh: ShellMesh) -> None:
+    """Raise on the first element whose value breaks its rule: checks (name, (n_el,) values,
+    rule function, rule text)."""
     for name, v, ok, rule in checks:
         bad = ~np.isfinite(v) | ~ok(v)
         if np.any(bad):
@@ -232,8 +260,8 @@ class ShellAssembly:
             conn = mesh.quads[idx] if kind != "tria" else mesh.trias[idx - len(mesh.quads)]
             x = mesh.nodes[conn]
             f = shell.tria_frames(x) if kind == "tria" else shell.quad_frames(x)
-            b, s, n = shell.optional_rows(idx, mesh.bending_ratio, mesh.shear_ratio,
-                                          mesh.bending_nu)  # fmt: skip
+            b, s, n, m = shell.optional_rows(idx, mesh.bending_ratio, mesh.shear_ratio,
+                                             mesh.bending_nu, mesh.membrane_ratio)  # fmt: skip
             source = shell.PieceSource(
                 f.xy,
                 f.height,
@@ -245,6 +273,7 @@ class ShellAssembly:
                 s,
                 kirchhoff=kind == "kirchhoff quad",
                 bending_nu=n,
+                membrane_ratio=m,
             )
             self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
@@ -362,7 +391,8 @@ class ShellElements:
     thickness_factor (nq + nt,) or None (all 1): the element's thickness over its part's
     thickness parameter, where one binds it (t_e = factor_e theta: caps of another gauge than the
     mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep);
-    bending_ratio, shear_ratio, bending_nu (nq + nt,) or None as in ``ShellMesh``."""
+    bending_ratio, shear_ratio, bending_nu, membrane_ratio (nq + nt,) or None as in
+    ``ShellMesh``."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -378,6 +408,7 @@ class ShellElements:
     bending_ratio: np.ndarray | None = None
     shear_ratio: np.ndarray | None = None
     bending_nu: np.ndarray | None = None
+    membrane_ratio: np.ndarray | None = None
 
     @property
     def n_elements(self) -> int:
@@ -393,7 +424,7 @@ class ShellElements:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
         used by beams only are allowed here); ``changes`` replace property arrays."""
         names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm", "bending_ratio",
-                 "shear_ratio", "bending_nu")  # fmt: skip
+                 "shear_ratio", "bending_nu", "membrane_ratio")  # fmt: skip
         props = {n: getattr(self, n) for n in names} | changes
         return ShellMesh(nodes, self.quads, self.trias, **props)
 

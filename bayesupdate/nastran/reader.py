@@ -15,7 +15,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.elements.shell import SHEAR_FACTOR
@@ -91,20 +90,30 @@ def _pshell_table(ctx, pids, shells):
 
 
 def _pshell(ctx, p):
-    """(T, MID1, NSM, bending ratio, shear ratio, bending NU) of a PSHELL: 12I/T**3 times
-    E2 / E1 when the bending material MID2 is another MAT1 (a sandwich's faces), with MID2's NU
-    in the bending matrix (``shell.local_pieces``), and TS/T times G3 / G1 for a transverse
-    shear material MID3 (its core; G1 = E1 / 2 (1 + NU1), the shell's own); the membrane
-    stays MID1's and the mass is MID1's RHO (QRG PSHELL).  MID3 blank: no transverse shear
-    flexibility (QRG PSHELL), the shear ratio inf (the quads are discrete Kirchhoff
-    quadrilaterals, ``shell.quad_operators``; the triangles are Kirchhoff anyway)."""
+    """(T, base MID, NSM, bending ratio, shear ratio, bending NU, membrane ratio) of a PSHELL.
+
+    The base material is MID1 (MID2 where MID1 is blank): its E, NU and RHO are the shell's
+    (the mass is MID1's RHO, MID2's where MID1 is blank: MSC Nastran QRG PSHELL remark 2).
+    Bending: 12I/T**3 times E2 / E1 when MID2 is another MAT1 (a sandwich's faces), with MID2's
+    NU in the bending matrix (``shell.local_pieces``); shear: TS/T times G3 / G of the base
+    (G = E / 2 (1 + NU)) for a transverse shear material MID3 (its core).  MID3 blank: no
+    transverse shear flexibility, the shear ratio inf (the quads are discrete Kirchhoff
+    quadrilaterals, ``shell.quad_operators``; the triangles are Kirchhoff anyway).  A blank
+    MID leaves its part out (remark 3): MID1 blank, no membrane (membrane ratio 0, and no
+    drilling stiffness); MID2 blank, no bending and no transverse shear (bending and shear
+    ratios 0: a membrane)."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
     if p["MID4"]:
         p.fail("MID4 (membrane-bending coupling) is not supported")
+    if mid2 == -1:
+        p.fail("MID2 = -1 (plane strain) is not supported")
+    if mid1 is None and mid2 is None:
+        p.fail("MID1 and MID2 are both blank: the shell has no stiffness")
     if mid2 is None:
-        p.fail("a membrane-only shell (MID2 blank) is not supported")
-    if mid1 is None:
-        p.fail("a shell with no membrane stiffness (MID1 blank) is not supported")
+        if mid3 is not None:
+            p.fail("MID3 must be blank when MID2 is blank (QRG PSHELL)")
+        m = _shell_mat1(ctx, mid1, p, "MID1")
+        return p.real("T"), int(mid1), p.real("NSM"), 0.0, 0.0, m.NU, 1.0
     bending, shear = p.real("12IT3"), p.real("TST")
     for name, v in (("12I/T**3", bending), ("TS/T", shear)):
         if not v > 0:
@@ -113,22 +122,29 @@ def _pshell(ctx, p):
         shear = SHEAR_FACTOR
     if mid3 is None:  # no transverse shear flexibility: the discrete Kirchhoff quadrilateral
         shear = np.inf
-    m = cards.mat1(ctx, mid1, p)
-    if not -1 < m.NU < 0.5:
-        p.fail(f"MAT1 {mid1}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    base = mid2 if mid1 is None else mid1
+    m = _shell_mat1(ctx, base, p, "MID1" if mid1 is not None else "MID2")
     bending_nu = m.NU
-    if mid2 != mid1:
-        m2 = cards.mat1(ctx, mid2, p)
-        if not -1 < m2.NU < 0.5:
-            p.fail(f"MID2 {mid2}: NU = {m2.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    if mid2 != base:
+        m2 = _shell_mat1(ctx, mid2, p, "MID2")
         bending *= m2.E / m.E
         bending_nu = m2.NU
-    if mid3 is not None and mid3 != mid1:
+    if mid3 is not None and mid3 != base:
         m3 = cards.mat1(ctx, mid3, p)
         if not m3.G > 0:
             p.fail(f"MID3 {mid3}: the transverse shear material needs G > 0")
         shear *= m3.G / (m.E / (2 * (1 + m.NU)))
-    return p.real("T"), int(mid1), p.real("NSM"), bending, shear, bending_nu
+    membrane = 0.0 if mid1 is None else 1.0
+    return p.real("T"), int(base), p.real("NSM"), bending, shear, bending_nu, membrane
+
+
+def _shell_mat1(ctx, mid, p, field):
+    """The MAT1 ``mid`` of PSHELL ``p``'s ``field``, refused where its NU (given or from E and G)
+    is outside (-1, 0.5)."""
+    m = cards.mat1(ctx, mid, p)
+    if not -1 < m.NU < 0.5:
+        p.fail(f"{field} {mid}: NU = {m.NU:.4g} (from E and G) is outside (-1, 0.5)")
+    return m
 
 
 def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
@@ -136,11 +152,14 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     TFLAG 1 makes them factors of T), E, nu, rho, nsm (WTMASS applied) and offset arrays; None
     when a PSHELL is refused."""
     table = _pshell_table(ctx, pids, shells)
+    partial = {p for p, row in table.items() if row[3] == 0 or row[6] == 0}
+    for i in np.flatnonzero(np.isin(pids, list(partial)) & (zoffs != 0)):  # QRG remark 3's note
+        ctx.refusals.card(shells[i], "ZOFFS needs both MID1 and MID2 on its PSHELL")
     uniq, inv = np.unique(pids, return_inverse=True)
     if any(int(p) not in table for p in uniq):
         return None
-    t_p, mid, nsm, bending, shear, bending_nu = (np.array([table[int(p)][k] for p in uniq])
-                                                 for k in range(6))  # fmt: skip
+    t_p, mid, nsm, bending, shear, bending_nu, membrane = (
+        np.array([table[int(p)][k] for p in uniq]) for k in range(7))  # fmt: skip
     mats = {int(m): cards.material(ctx, int(m), ctx.props[int(p)])
             for p, m in zip(uniq, mid, strict=True)}  # fmt: skip
     E, nu, rho = (np.array([getattr(mats[int(m)], a) for m in mid]) for a in
@@ -152,7 +171,8 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     thickness = np.where(valid, corner_t, 0.0).sum(axis=1) / n_nodes
     return dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
                 nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],
-                shear_ratio=shear[inv], bending_nu=bending_nu[inv])  # fmt: skip
+                shear_ratio=shear[inv], bending_nu=bending_nu[inv],
+                membrane_ratio=membrane[inv])  # fmt: skip
 
 
 def _used_rows(ctx, shell_nodes):
@@ -200,10 +220,12 @@ def _patch_shells(structure, pids, props):
     # None where every shell has the solid section's ratios: the arrays' products are then
     # left out, and decks without 12I/T**3 or TS/T keep their bits
     bending, shear, bending_nu = props["bending_ratio"], props["shear_ratio"], props["bending_nu"]
+    membrane = props["membrane_ratio"]
     ratios = dict(
         bending_ratio=None if np.all(bending == 1.0) else bending,
         shear_ratio=None if np.all(shear == SHEAR_FACTOR) else shear,
         bending_nu=None if np.all(bending_nu == props["nu"]) else bending_nu,
+        membrane_ratio=None if np.all(membrane == 1.0) else membrane,
     )
     shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part, **ratios)
     return replace(structure, shells=shells, parts=parts)
@@ -264,26 +286,51 @@ def _hold_spoint(ctx, sid: int, comps: str, card) -> None:
 
 
 def _autospc(ctx, structure):
-    """Hold the independent DOFs with no stiffness at all (Nastran's AUTOSPC): shell and beam
-    nodes have all six; springs and rods are checked on their assembled diagonal."""
+    """Hold the independent DOFs with no stiffness (Nastran's AUTOSPC), found per node in its
+    CD axes on the constrained stiffness by ``fe.autospc.singular_dofs`` (a grid with a rotated
+    CD frame held on a partial set gets that frame, ``cards.common.frame_partial``); a node
+    whose singular direction off its axes carries mass is refused.  Returns the number held."""
     from bayesupdate.fe.assembly import Assembler
+    from bayesupdate.fe.autospc import singular_dofs
     from bayesupdate.fe.constraints import Constraints, constraint_transform
 
     a = Assembler(structure)
-    K, _, _ = a.assemble(a.default_properties())
-    diag = np.abs(K.diagonal())  # the element families (rods, general beams) included
-    if structure.shells is not None:
-        sh = structure.shells
-        for conn in (sh.quads, sh.trias):
-            diag[(6 * conn.ravel()[:, None] + np.arange(6)).ravel()] += 1.0
+    K, M, _ = a.assemble(a.default_properties())
     c = structure.constraints if structure.constraints is not None else Constraints()
     tr = constraint_transform(structure.nodes, c)
-    reduced = tr.reduce(sp.diags(diag)).diagonal()
-    zero = tr.independent[reduced <= 1e-12 * max(diag.max(), 1.0)]
-    for node in np.unique(zero // 6):
-        comps = "".join(str(int(d % 6) + 1) for d in zero[zero // 6 == node])
-        ctx.builder.add_support(int(node), comps)
-    return zero.size
+    # rows: the node's CD axes in the reduced DOFs' axes (basic, or the frame it already has)
+    axes = np.broadcast_to(np.eye(3), (structure.n_nodes, 3, 3)).copy()
+    rows = np.flatnonzero(ctx.node >= 0)
+    rotated = rows[~ctx.grids.is_basic(rows) & ~np.isin(rows, list(ctx.framed))]
+    axes[ctx.node[rotated]] = ctx.grids.frame[rotated]
+    found = singular_dofs(tr.reduce(K), tr.reduce(M), tr.independent, axes)
+    row_of_node = dict(zip(ctx.node[rows].tolist(), rows.tolist(), strict=True))
+    for node in np.unique(found.held // 6):
+        mask = np.zeros(6, bool)
+        mask[found.held[found.held // 6 == node] % 6] = True
+        if int(node) in row_of_node:
+            cards.common.frame_partial(ctx, mask, row_of_node[int(node)])
+        ctx.builder.add_support(int(node), "".join(str(i + 1) for i in np.flatnonzero(mask)))
+    names = ctx.builder.node_names
+    if found.off_axis.size:
+        ctx.notes.append(
+            f"{found.off_axis.size} GRID(s) have rotations with no stiffness and no "
+            "mass off their axes (e.g. a membrane skewed to them), held through "
+            f"chosen components (AUTOSPC; exact): {_few(names, found.off_axis)}"
+        )
+    if found.loose.size:
+        raise BayesUpdateError(
+            f"{found.loose.size} GRID(s) have a direction with mass but no stiffness that is not "
+            "along their axes (e.g. the normal of a flat membrane skewed to them), which "
+            "AUTOSPC cannot hold without changing the answer: hold it by an SPC in a CD frame "
+            f"along it, or connect it: {_few(names, found.loose)}")  # fmt: skip
+    return found.held.size
+
+
+def _few(name, nodes, shown: int = 5) -> str:
+    """The first ``shown`` of ``nodes`` by ``name`` (a node's label), and how many more."""
+    text = ", ".join(name(int(n)) for n in nodes[:shown])
+    return text + (f" and {nodes.size - shown} more" if nodes.size > shown else "")
 
 
 def context(deck, grids, node, settings, builder, refusals) -> cards.Context:

@@ -301,7 +301,7 @@ class LocalPieces:
 
 def local_pieces(
     ops: _Operators, E, nu, lumped: bool = False, bending_ratio=None, shear_ratio=None,
-    bending_nu=None,
+    bending_nu=None, membrane_ratio=None,
 ) -> LocalPieces:  # fmt: skip
     """Element pieces from operators and (n,) E [Pa], nu.  ``lumped``: row-sum mass.
 
@@ -311,8 +311,13 @@ def local_pieces(
     (``SHEAR_FACTOR``): the transverse shear thickness over t (PSHELL TS/T), the shear piece's
     kappa; bending_nu (n,) or None (nu): the Poisson ratio of the bending material, in the
     bending piece's D (PSHELL MID2, another MAT1 than MID1: D = E2 t^3 / 12 (1 - nu2^2) x
-    [[1, nu2, 0], [nu2, 1, 0], [0, 0, (1 - nu2) / 2]], with bending_ratio carrying E2 / E).
-    They leave the rotary inertia rho t^3 / 12 and the thickness powers as they are.
+    [[1, nu2, 0], [nu2, 1, 0], [0, 0, (1 - nu2) / 2]], with bending_ratio carrying E2 / E);
+    membrane_ratio (n,) or None (1): 1, or 0 for a shell with no membrane stiffness (PSHELL
+    MID1 blank: a bending panel), which then has no drilling stiffness either (the drilling
+    penalty is the membrane's).  A shell with no bending (PSHELL MID2 blank: a membrane) has
+    bending_ratio 0 and shear_ratio 0, and no rotary inertia (it has no bending rotations to
+    carry it); otherwise the rotary inertia rho t^3 / 12 stays, and the thickness powers stay
+    as they are (MSC Nastran QRG, PSHELL remarks 2-3).
     """
     D = _plane_stress(nu)
     G = E / (2.0 * (1.0 + nu))
@@ -345,6 +350,11 @@ def local_pieces(
     if ops.Bs.shape[2]:  # shear-rigid elements (DKT, DKQ) have no shear rows: no kappa (inf)
         Ks *= (kappa * G)[:, None, None]
     Kd *= (DRILL_ALPHA * G)[:, None, None]
+    if membrane_ratio is not None:
+        Km *= membrane_ratio[:, None, None]
+        Kd *= membrane_ratio[:, None, None]
+    if bending_ratio is not None and not np.all(bending_ratio > 0):
+        Mr *= (bending_ratio > 0)[:, None, None]
     Kb *= (E / 12.0 if bending_ratio is None else bending_ratio * E / 12.0)[:, None, None]
     return LocalPieces(
         membrane=Km, shear=Ks, drilling=Kd, bending=Kb, mass_t=Mt, mass_r=Mr, offset=S
@@ -353,7 +363,7 @@ def local_pieces(
 
 def optional_rows(rows, *arrays) -> tuple:
     """Each of ``arrays`` (the optional per-element section arrays: bending and shear ratios,
-    bending nu) at the elements ``rows``, None where it is None."""
+    bending nu, membrane ratio) at the elements ``rows``, None where it is None."""
     return tuple(None if a is None else a[rows] for a in arrays)
 
 
@@ -373,7 +383,8 @@ class PieceSource:
     xy (n, k, 2) in-plane node coordinates [m] (k = 4: MITC4 quads, 3: DKT triangles);
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
-    bending_ratio, shear_ratio, bending_nu (n,) or None: ``local_pieces``'s; kirchhoff :
+    bending_ratio, shear_ratio, bending_nu, membrane_ratio (n,) or None: ``local_pieces``'s;
+    kirchhoff :
     quadrilaterals without transverse shear flexibility (``quad_operators(kirchhoff=True)``)
     instead of MITC4.
     """
@@ -388,6 +399,7 @@ class PieceSource:
     shear_ratio: np.ndarray | None = None
     kirchhoff: bool = False
     bending_nu: np.ndarray | None = None
+    membrane_ratio: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -396,8 +408,9 @@ class PieceSource:
         """``LocalPieces`` of the elements ``rows`` (index array or slice), as one batch."""
         xy = self.xy[rows]
         ops = quad_operators(xy, self.kirchhoff) if xy.shape[1] == 4 else tria_operators(xy)
-        b, s, n = optional_rows(rows, self.bending_ratio, self.shear_ratio, self.bending_nu)
-        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n)
+        b, s, n, m = optional_rows(rows, self.bending_ratio, self.shear_ratio, self.bending_nu,
+                                   self.membrane_ratio)  # fmt: skip
+        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n, m)
         if self.height is not None:
             p = warp_link(p, self.height[rows])
         if not self.rotary_inertia:

@@ -168,14 +168,22 @@ def components(ctx: Context, text, rows, card):
         mask = parse_components(str(text), card.label)
     except BayesUpdateError as exc:
         card.fail(str(exc).split(": ", 1)[-1])
-    if not _invariant(mask):
-        for row in np.atleast_1d(rows):
-            if not ctx.grids.is_basic([row])[0] and row not in ctx.framed:
-                xyz = ctx.grids.xyz[row]
-                frame = CoordinateFrame.from_axes("rectangular", xyz, ctx.grids.frame[row])
-                ctx.builder.set_frame(int(ctx.node[row]), frame)
-                ctx.framed.add(int(row))
+    frame_partial(ctx, mask, rows)
     return "".join(str(i + 1) for i in np.flatnonzero(mask))
+
+
+def frame_partial(ctx: Context, mask, rows) -> None:
+    """Give each grid of ``rows`` with a rotated CD frame that frame in the structure
+    (``StructureBuilder.set_frame``) where the component ``mask`` (6,) is a partial set, so
+    that the components act in the CD axes."""
+    if _invariant(mask):
+        return
+    for row in np.atleast_1d(rows):
+        if not ctx.grids.is_basic([row])[0] and row not in ctx.framed:
+            xyz = ctx.grids.xyz[row]
+            frame = CoordinateFrame.from_axes("rectangular", xyz, ctx.grids.frame[row])
+            ctx.builder.set_frame(int(ctx.node[row]), frame)
+            ctx.framed.add(int(row))
 
 
 def id_list(card, start: int) -> list[int]:

@@ -1,0 +1,166 @@
+"""PSHELL with MID1 or MID2 blank (MSC Nastran QRG PSHELL, remarks 2-3), and AUTOSPC per node.
+
+A blank MID leaves its part of the shell out: MID2 blank, a membrane (no bending, no
+transverse shear); MID1 blank, a bending panel (no membrane, so no drilling stiffness either),
+whose mass is MID2's RHO.  The DOFs left with no stiffness are held as Nastran's AUTOSPC holds
+them (``fe.autospc``).  Checked on a cantilever strip (1 m x 0.1 m, 10 mm steel, CQUAD4, its
+x = 0 edge clamped, in the XY plane):
+
+* the membrane's modes equal, to round-off, those of the full shell with w, rx and ry held
+  by SPC at every GRID (a flat shell's membrane and bending do not couple), and MYSTRAN's on
+  the same decks converge to one limit: on modes 1-8 the largest difference is 2.1 % at
+  40 x 4 quads, 0.52 % at 80 x 8 and 0.13 % at 160 x 16 (second order; asserted: under 0.6 %
+  at 80 x 8 and shrinking by more than 3.5 from 40 x 4); its first axial mode is the rod's
+  c / 4L within 0.2 % (measured +0.15 % at 40 x 4: the strip's width and Poisson);
+* the bending panel's modes equal those of the full shell with u, v and rz held by SPC, with
+  E, NU and RHO taken from MID2;
+* the same membrane turned off the axes (normal (0, -0.48, 0.88)) is refused, naming its
+  GRIDs (its normal motion has mass and no stiffness off their axes); with each GRID's CD a
+  CORD2R along the strip, its modes are the flat strip's.
+
+``singular_dofs`` is also checked on a pencil built with a null space off the axes: holding
+the chosen components leaves the pencil's eigenvalues as they are when the null space itself
+is removed.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg as sl
+import scipy.sparse as sp
+
+from bayesupdate.cli import main
+from bayesupdate.fe import shell_mesh as sm
+from bayesupdate.fe.autospc import singular_dofs
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from pshell_ratios import mystran_hz  # noqa: E402
+
+L, W, T = 1.0, 0.1, 0.01
+E, RHO = 2.0e11, 7800.0
+STEEL = f"MAT1,1,{E:.3E},,0.30,{RHO:.1f}"
+#: MID2 of the bending panel: another E, NU and RHO, so that taking MID1's would show
+STIFF = "MAT1,2,3.0E+11,,0.25,9000.0"
+TURN = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
+
+
+def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False):
+    """The strip's SOL 103 deck: ``held`` components SPC'd at every GRID; ``turn`` (3, 3) the
+    strip's rotation; ``cd``: every GRID's displacements in CORD2R 5 along the turned strip;
+    ``rods``: every GRID on a CROD along the strip's normal to a held GRID 0.1 m away."""
+    nodes, quads, _ = sm.plate(L, W, nx, ny)
+    R = np.eye(3) if turn is None else turn
+    xyz = nodes @ R.T
+    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
+    if cd:  # z along the strip's normal, x along its length
+        a, b, c = np.zeros(3), R[:, 2], R[:, 0]
+        lines += ["CORD2R  5               " + "".join(f"{v:8.5f}" for v in (*a, *b)),
+                  "        " + "".join(f"{v:8.5f}" for v in c)]  # fmt: skip
+    lines += [f"GRID,{i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}{',5' if cd else ''}"
+              for i, p in enumerate(xyz)]  # fmt: skip
+    lines += [f"CQUAD4,{e + 1},1,{','.join(str(g + 1) for g in q)}" for e, q in enumerate(quads)]
+    lines += [pshell, STEEL, STIFF]
+    if rods:
+        n = len(nodes)
+        ends = xyz + 0.1 * R[:, 2]
+        lines += [f"GRID,{n + i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}" for i, p in enumerate(ends)]
+        lines += [f"CROD,{n + i + 1},9,{i + 1},{n + i + 1}" for i in range(n)]
+        lines += ["PROD,9,1,1.0E-6"] + [f"SPC1,1,123456,{n + i + 1}" for i in range(n)]
+    lines += [f"SPC1,1,123456,{g + 1}" for g in np.flatnonzero(nodes[:, 0] < 1e-9)]
+    lines += [f"SPC1,1,{held},{g + 1}" for g in range(len(nodes)) if held]
+    path.write_text("\n".join([*lines, "ENDDATA", ""]))
+    return path
+
+
+def _modes(path, capsys) -> np.ndarray:
+    assert main(["modes", "--model", str(path), "--modes", "8", "--json"]) == 0
+    return np.array(json.loads(capsys.readouterr().out)["frequencies_hz"])
+
+
+def test_membrane_is_the_full_shell_held_out_of_plane_and_mystrans(tmp_path, capsys):
+    membrane = _modes(_strip(tmp_path / "m.bdf", f"PSHELL,1,1,{T}"), capsys)
+    held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,1,{T},1", held="345"), capsys)
+    np.testing.assert_allclose(membrane, held, rtol=1e-9)
+    # MYSTRAN's QUAD4 on the same decks: the two elements converge to one limit (O(h^2))
+    gaps = []
+    for nx in (40, 80):
+        deck = _strip(tmp_path / f"m{nx}.bdf", f"PSHELL,1,1,{T}", nx=nx, ny=nx // 10)
+        gaps.append(np.max(np.abs(_modes(deck, capsys) / mystran_hz(deck) - 1)))
+    assert gaps[1] < 6e-3 and gaps[0] / gaps[1] > 3.5, gaps
+    rod = np.sqrt(E / RHO) / (4 * L)  # the first axial mode of a clamped-free rod
+    axial = membrane[np.argmin(np.abs(membrane - rod))]
+    assert abs(axial / rod - 1) < 2e-3
+
+
+def test_bending_panel_is_the_full_shell_held_in_plane_with_mid2s_material(tmp_path, capsys):
+    panel = _modes(_strip(tmp_path / "b.bdf", f"PSHELL,1,,{T},2,,2"), capsys)
+    held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,2,{T},2,,2", held="126"), capsys)
+    np.testing.assert_allclose(panel, held, rtol=1e-9)
+    steel = _modes(_strip(tmp_path / "s.bdf", f"PSHELL,1,1,{T},1,,1", held="126"), capsys)
+    assert np.all(np.abs(panel / steel - 1) > 0.05)  # MID1's material would be far off
+
+
+def test_membrane_off_the_axes_is_refused_or_held_in_its_cd_frame(tmp_path, capsys):
+    flat = _modes(_strip(tmp_path / "m.bdf", f"PSHELL,1,1,{T}"), capsys)
+    turned = _strip(tmp_path / "t.bdf", f"PSHELL,1,1,{T}", turn=TURN)
+    assert main(["modes", "--model", str(turned), "--modes", "8", "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "200 GRID(s) have a direction with mass but no stiffness" in err
+    assert "GRID 6, GRID 7" in err and "CD frame" in err
+    in_cd = _strip(tmp_path / "c.bdf", f"PSHELL,1,1,{T}", turn=TURN, cd=True)
+    np.testing.assert_allclose(_modes(in_cd, capsys), flat, rtol=1e-6)
+
+
+def test_membrane_off_the_axes_on_rods_holds_its_rotations_exactly(tmp_path, capsys):
+    """Rods along the normal stiffen the turned membrane's translations; its rotations keep a
+    null space off the axes with no mass (only the drilling is stiff), held through chosen
+    components: the modes are the flat strip's on the same rods."""
+    pshell = f"PSHELL,1,1,{T}"
+    flat = _modes(_strip(tmp_path / "f.bdf", pshell, rods=True), capsys)
+    deck = _strip(tmp_path / "t.bdf", pshell, turn=TURN, rods=True)
+    assert main(["modes", "--model", str(deck), "--modes", "8", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    notes = " ".join(result["notes"])
+    assert "200 GRID(s) have rotations with no stiffness and no mass off their axes" in notes
+    np.testing.assert_allclose(result["frequencies_hz"], flat, rtol=1e-6)
+
+
+def test_blank_mid_cards_refused_together_with_their_lines(tmp_path, capsys):
+    deck = _strip(tmp_path / "bad.bdf", f"PSHELL,1,1,{T},-1")
+    text = deck.read_text()
+    text = text.replace("CQUAD4,1,1,", "CQUAD4,1,2,").replace("CQUAD4,2,1,", "CQUAD4,2,3,")
+    text = text.replace("CQUAD4,3,1,3,8,9,4", "CQUAD4,3,4,3,8,9,4,,0.001")
+    extra = [f"PSHELL,2,,{T}", f"PSHELL,3,1,{T},,,1", f"PSHELL,4,1,{T}"]
+    deck.write_text(text.replace("ENDDATA", "\n".join([*extra, "ENDDATA"])))
+    assert main(["modes", "--model", str(deck), "--modes", "8", "--json"]) == 2
+    err = capsys.readouterr().err
+    lines = deck.read_text().splitlines()
+    for card, why in ((f"PSHELL,1,1,{T},-1", "plane strain"),
+                      (extra[0], "MID1 and MID2 are both blank"),
+                      (extra[1], "MID3 must be blank when MID2 is blank"),
+                      ("CQUAD4,3,4,3,8,9,4,,0.001", "ZOFFS needs both MID1 and MID2")):  # fmt: skip
+        assert f"bad.bdf:{lines.index(card) + 1}" in err and why in err, (card, err)
+
+
+def test_singular_dofs_off_the_axes_held_exactly_when_massless():
+    rng = np.random.default_rng(147)
+    n = 12
+    null = np.zeros((n, 2))  # node 0's rotations (DOFs 3-5): a 2-D null space off the axes
+    null[3:6] = np.linalg.qr(rng.normal(size=(3, 2)))[0]
+    P = np.eye(n) - null @ null.T
+    A, B = rng.normal(size=(n, n)), rng.normal(size=(n, n))
+    K, M = P @ (A @ A.T) @ P, P @ (B @ B.T + n * np.eye(n)) @ P
+    found = singular_dofs(sp.csr_matrix(K), sp.csr_matrix(M), np.arange(n))
+    assert found.held.size == 2 and set(found.held) <= {3, 4, 5}
+    assert found.off_axis.tolist() == [0] and found.loose.size == 0
+    free = np.setdiff1d(np.arange(n), found.held)
+    held = sl.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)], eigvals_only=True)
+    basis = sl.null_space(null.T)  # the null space itself removed
+    exact = sl.eigh(basis.T @ K @ basis, basis.T @ M @ basis, eigvals_only=True)
+    np.testing.assert_allclose(held, exact, rtol=1e-9)
+    # with mass on that null space, components cannot hold it without changing the answer
+    massive = M + null @ null.T
+    found = singular_dofs(sp.csr_matrix(K), sp.csr_matrix(massive), np.arange(n))
+    assert found.held.size == 0 and found.loose.tolist() == [0]

@@ -13,7 +13,9 @@ x = 0 edge clamped, in the XY plane):
   at 80 x 8 and shrinking by more than 3.5 from 40 x 4); its first axial mode is the rod's
   c / 4L within 0.2 % (measured +0.15 % at 40 x 4: the strip's width and Poisson);
 * the bending panel's modes equal those of the full shell with u, v and rz held by SPC, with
-  E, NU and RHO taken from MID2;
+  E, NU and RHO taken from MID2; both equalities hold in CTRIA3 too;
+* a PSHELL T binding on either gives the deck written with that T (a membrane's modes do not
+  move with t, its mass does; a panel's modes rise by about the ratio of t);
 * the same membrane turned off the axes (normal (0, -0.48, 0.88)) is refused, naming its
   GRIDs (its normal motion has mass and no stiffness off their axes); with each GRID's CD a
   CORD2R along the strip, its modes are the flat strip's.
@@ -28,12 +30,14 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import scipy.linalg as sl
 import scipy.sparse as sp
 
 from bayesupdate.cli import main
 from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.autospc import singular_dofs
+from bayesupdate.nastran import load_nastran_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from pshell_ratios import mystran_hz  # noqa: E402
@@ -46,10 +50,11 @@ STIFF = "MAT1,2,3.0E+11,,0.25,9000.0"
 TURN = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
 
 
-def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False):
+def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False, trias=False):
     """The strip's SOL 103 deck: ``held`` components SPC'd at every GRID; ``turn`` (3, 3) the
     strip's rotation; ``cd``: every GRID's displacements in CORD2R 5 along the turned strip;
-    ``rods``: every GRID on a CROD along the strip's normal to a held GRID 0.1 m away."""
+    ``rods``: every GRID on a CROD along the strip's normal to a held GRID 0.1 m away;
+    ``trias``: CTRIA3, two per cell."""
     nodes, quads, _ = sm.plate(L, W, nx, ny)
     R = np.eye(3) if turn is None else turn
     xyz = nodes @ R.T
@@ -60,7 +65,8 @@ def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False):
                   "        " + "".join(f"{v:8.5f}" for v in c)]  # fmt: skip
     lines += [f"GRID,{i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}{',5' if cd else ''}"
               for i, p in enumerate(xyz)]  # fmt: skip
-    lines += [f"CQUAD4,{e + 1},1,{','.join(str(g + 1) for g in q)}" for e, q in enumerate(quads)]
+    name, cells = ("CTRIA3", sm.split_quads(quads)) if trias else ("CQUAD4", quads)
+    lines += [f"{name},{e + 1},1,{','.join(str(g + 1) for g in c)}" for e, c in enumerate(cells)]
     lines += [pshell, STEEL, STIFF]
     if rods:
         n = len(nodes)
@@ -83,6 +89,10 @@ def test_membrane_is_the_full_shell_held_out_of_plane_and_mystrans(tmp_path, cap
     membrane = _modes(_strip(tmp_path / "m.bdf", f"PSHELL,1,1,{T}"), capsys)
     held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,1,{T},1", held="345"), capsys)
     np.testing.assert_allclose(membrane, held, rtol=1e-9)
+    trias = (_modes(_strip(tmp_path / f"t{i}.bdf", p, held=h, trias=True), capsys)
+             for i, (p, h) in enumerate(((f"PSHELL,1,1,{T}", ""),
+                                         (f"PSHELL,1,1,{T},1", "345"))))  # fmt: skip
+    np.testing.assert_allclose(*trias, rtol=1e-9)
     # MYSTRAN's QUAD4 on the same decks: the two elements converge to one limit (O(h^2))
     gaps = []
     for nx in (40, 80):
@@ -98,8 +108,33 @@ def test_bending_panel_is_the_full_shell_held_in_plane_with_mid2s_material(tmp_p
     panel = _modes(_strip(tmp_path / "b.bdf", f"PSHELL,1,,{T},2,,2"), capsys)
     held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,2,{T},2,,2", held="126"), capsys)
     np.testing.assert_allclose(panel, held, rtol=1e-9)
+    trias = (_modes(_strip(tmp_path / f"t{i}.bdf", p, held=h, trias=True), capsys)
+             for i, (p, h) in enumerate(((f"PSHELL,1,,{T},2", ""),
+                                         (f"PSHELL,1,2,{T},2", "126"))))  # fmt: skip
+    np.testing.assert_allclose(*trias, rtol=1e-9)
     steel = _modes(_strip(tmp_path / "s.bdf", f"PSHELL,1,1,{T},1,,1", held="126"), capsys)
     assert np.all(np.abs(panel / steel - 1) > 0.05)  # MID1's material would be far off
+
+
+@pytest.mark.parametrize("pshell", [f"PSHELL,1,1,{T}", f"PSHELL,1,,{T},2,,2"])
+def test_bound_thickness_of_a_membrane_or_panel_is_the_deck_written_with_it(tmp_path, pshell):
+    """A PSHELL T binding enters as exact powers of t: a membrane's K and M both go as t (its
+    modes stay, its mass does not), a panel's K as t^3 (its modes rise by about t'/t)."""
+    base = _strip(tmp_path / "base.bdf", pshell)
+    moved = _strip(tmp_path / "moved.bdf", pshell.replace(f",{T}", ",0.013"))
+    bound = load_nastran_model(str(base), {"t": {"binds": "PSHELL 1 T", "bounds": [5e-3, 0.02]}})
+    at, deck = (
+        bound.predict({"t": 0.013}, n_modes=8),
+        load_nastran_model(str(moved)).predict(n_modes=8),
+    )
+    np.testing.assert_allclose(at.frequencies_hz, deck.frequencies_hz, rtol=1e-12)
+    start = bound.predict(n_modes=8)
+    assert at.mass_kg / start.mass_kg == pytest.approx(1.3, rel=1e-12)
+    rise = at.frequencies_hz / start.frequencies_hz
+    if ",," in pshell:  # the panel
+        assert np.all((rise > 1.25) & (rise < 1.3 + 1e-9)), rise
+    else:
+        np.testing.assert_allclose(rise, 1.0, rtol=1e-9)
 
 
 def test_membrane_off_the_axes_is_refused_or_held_in_its_cd_frame(tmp_path, capsys):

@@ -445,6 +445,10 @@ def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
         notes.append(f"{dropped} GRID(s) used by no element were dropped (AUTOSPC)")
     if n_auto:
         notes.append(f"{n_auto} DOF(s) with no stiffness were held (AUTOSPC)")
+    if structure.shells is not None and np.any(structure.shells.offset):
+        notes.append("shell ZOFFS: the mass moves with the mid-surface, as the stiffness does "
+                     "(MSC's QRG PSHELL remark 6 says the mass is not offset; not checked "
+                     "against MSC)")  # fmt: skip
     if structure.shells is not None:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
                      "penalty is fixed (fe.elements.shell.DRILL_ALPHA)")  # fmt: skip

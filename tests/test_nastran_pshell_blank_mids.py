@@ -18,7 +18,12 @@ x = 0 edge clamped, in the XY plane):
   move with t, its mass does; a panel's modes rise by about the ratio of t);
 * the same membrane turned off the axes (normal (0, -0.48, 0.88)) is refused, naming its
   GRIDs (its normal motion has mass and no stiffness off their axes); with each GRID's CD a
-  CORD2R along the strip, its modes are the flat strip's.
+  CORD2R along the strip, its modes are the flat strip's; on rods along its normal (its
+  translations stiff, its rotations free off the axes with no mass) it is held through chosen
+  components, and its modes are the flat strip's on the same rods.
+
+PSHELL T blank: the shells' corner thicknesses are theirs (a blank corner, TFLAG 1 and a T
+binding refused); a MAT1 E binding reaches a bending panel through its MID2.
 
 ``singular_dofs`` is also checked on a pencil built with a null space off the axes: holding
 the chosen components leaves the pencil's eigenvalues as they are when the null space itself
@@ -35,6 +40,7 @@ import scipy.linalg as sl
 import scipy.sparse as sp
 
 from bayesupdate.cli import main
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.autospc import singular_dofs
 from bayesupdate.nastran import load_nastran_model
@@ -50,11 +56,14 @@ STIFF = "MAT1,2,3.0E+11,,0.25,9000.0"
 TURN = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
 
 
-def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False, trias=False):
+def _strip(
+    path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False, trias=False, corners=None
+):
     """The strip's SOL 103 deck: ``held`` components SPC'd at every GRID; ``turn`` (3, 3) the
     strip's rotation; ``cd``: every GRID's displacements in CORD2R 5 along the turned strip;
     ``rods``: every GRID on a CROD along the strip's normal to a held GRID 0.1 m away;
-    ``trias``: CTRIA3, two per cell."""
+    ``trias``: CTRIA3, two per cell; ``corners`` {element id: continuation line} (CQUAD4 ZOFFS,
+    TFLAG, T1-T4)."""
     nodes, quads, _ = sm.plate(L, W, nx, ny)
     R = np.eye(3) if turn is None else turn
     xyz = nodes @ R.T
@@ -66,7 +75,9 @@ def _strip(path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False, 
     lines += [f"GRID,{i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}{',5' if cd else ''}"
               for i, p in enumerate(xyz)]  # fmt: skip
     name, cells = ("CTRIA3", sm.split_quads(quads)) if trias else ("CQUAD4", quads)
-    lines += [f"{name},{e + 1},1,{','.join(str(g + 1) for g in c)}" for e, c in enumerate(cells)]
+    lines += [f"{name},{e + 1},1,{','.join(str(g + 1) for g in c)}"
+              + (f"\n{corners[e + 1]}" if corners and e + 1 in corners else "")
+              for e, c in enumerate(cells)]  # fmt: skip
     lines += [pshell, STEEL, STIFF]
     if rods:
         n = len(nodes)
@@ -199,3 +210,30 @@ def test_singular_dofs_off_the_axes_held_exactly_when_massless():
     massive = M + null @ null.T
     found = singular_dofs(sp.csr_matrix(K), sp.csr_matrix(massive), np.arange(n))
     assert found.held.size == 0 and found.loose.tolist() == [0]
+
+
+def test_pshell_t_blank_takes_the_corner_thicknesses(tmp_path, capsys):
+    """PSHELL T blank: the shells give T1-T4 (QRG PSHELL); a blank corner, or TFLAG 1 (which
+    scales T), is refused with its line, and a T binding is refused by name."""
+    given = _modes(_strip(tmp_path / "t.bdf", f"PSHELL,1,1,{T},1"), capsys)
+    every = {e: f",,,{T},{T},{T},{T}" for e in range(1, 161)}
+    deck = _strip(tmp_path / "c.bdf", "PSHELL,1,1,,1", corners=every)
+    np.testing.assert_array_equal(_modes(deck, capsys), given)
+    with pytest.raises(BayesUpdateError, match=r"PSHELL 1 has T blank .* T cannot be bound"):
+        load_nastran_model(str(deck), {"t": {"binds": "PSHELL 1 T", "bounds": [5e-3, 0.02]}})
+    bad = _strip(tmp_path / "c.bdf", "PSHELL,1,1,,1",
+                 corners=every | {7: f",,,{T}", 9: f",,1,{T},{T},{T},{T}"})  # fmt: skip
+    assert main(["modes", "--model", str(bad), "--modes", "8", "--json"]) == 2
+    err = capsys.readouterr().err
+    lines = bad.read_text().splitlines()
+    for e, why in ((7, "a corner thickness (T1-T4) is blank"), (9, "TFLAG 1 scales T")):
+        line = next(i for i, text in enumerate(lines) if text.startswith(f"CQUAD4,{e},"))
+        assert f"c.bdf:{line + 1} CQUAD4 {e}: {why}, and PSHELL 1 has no T" in err, err
+
+
+def test_a_modulus_binding_reaches_a_bending_panel_through_mid2(tmp_path, capsys):
+    """MAT1 E of a panel's MID2 (MID1 blank) scales its stiffness: E x 2, modes x sqrt 2."""
+    deck = _strip(tmp_path / "b.bdf", f"PSHELL,1,,{T},2,,2")
+    bound = load_nastran_model(str(deck), {"E": {"binds": "MAT1 2 E", "bounds": [1e11, 1e12]}})
+    start, twice = (bound.predict({"E": e}, n_modes=8).frequencies_hz for e in (3e11, 6e11))
+    np.testing.assert_allclose(twice / start, np.sqrt(2.0), rtol=1e-9)

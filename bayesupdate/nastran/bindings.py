@@ -511,11 +511,19 @@ def _part_mask(part_of, parts, names) -> np.ndarray:
 
 
 def _pshells_of(deck, f: DeckField) -> list[int]:
-    """PSHELL ids whose MID1 is one of ``f.ids`` (line properties: ``line_elements``)."""
-    return [i for i, p in deck.table("PSHELL").items() if p["MID1"] in f.ids]
+    """PSHELL ids whose shells' material (MID1, or MID2 where MID1 is blank: a bending panel,
+    ``nastran.reader._pshell``) is one of ``f.ids`` (line properties: ``line_elements``)."""
+    table = deck.table("PSHELL").items()
+    return [i for i, p in table if (p["MID2"] if p["MID1"] is None else p["MID1"]) in f.ids]
 
 
 def _check_uniform_thickness(f: DeckField, s, mask, cards) -> None:
+    blank = [c.id() for c in cards if c.is_blank("T")]
+    if blank:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: PSHELL {', '.join(map(str, blank))} has T blank (its "
+            "shells' thicknesses are their corners', T1-T4); T cannot be bound"
+        )
     t = np.array([c.real("T") for c in cards], float)
     pid_t = dict(zip(f.ids, t, strict=True))
     parts = np.array([pid_t.get(int(s.parts[p].split()[1]), np.nan) for p in s.shells.part[mask]])

@@ -113,7 +113,7 @@ def _pshell(ctx, p):
         if mid3 is not None:
             p.fail("MID3 must be blank when MID2 is blank (QRG PSHELL)")
         m = _shell_mat1(ctx, mid1, p, "MID1")
-        return p.real("T"), int(mid1), p.real("NSM"), 0.0, 0.0, m.NU, 1.0
+        return _pshell_t(p), int(mid1), p.real("NSM"), 0.0, 0.0, m.NU, 1.0
     bending, shear = p.real("12IT3"), p.real("TST")
     for name, v in (("12I/T**3", bending), ("TS/T", shear)):
         if not v > 0:
@@ -135,7 +135,12 @@ def _pshell(ctx, p):
             p.fail(f"MID3 {mid3}: the transverse shear material needs G > 0")
         shear *= m3.G / (m.E / (2 * (1 + m.NU)))
     membrane = 0.0 if mid1 is None else 1.0
-    return p.real("T"), int(base), p.real("NSM"), bending, shear, bending_nu, membrane
+    return _pshell_t(p), int(base), p.real("NSM"), bending, shear, bending_nu, membrane
+
+
+def _pshell_t(p) -> float:
+    """PSHELL T; NaN where blank (the shells then give every corner thickness, QRG PSHELL)."""
+    return np.nan if p.is_blank("T") else p.real("T")
 
 
 def _shell_mat1(ctx, mid, p, field):
@@ -168,6 +173,9 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     corner_t = np.where(np.isnan(corner), t, np.where(tflag[:, None] == 1, corner * t, corner))
     n_nodes = np.where(nodes[:, 3] >= 0, 4, 3)
     valid = np.arange(4)[None, :] < n_nodes[:, None]
+    for i in np.flatnonzero(np.any(np.isnan(corner_t) & valid, axis=1)):  # T blank
+        why = "TFLAG 1 scales T" if tflag[i] == 1 else "a corner thickness (T1-T4) is blank"
+        ctx.refusals.card(shells[i], f"{why}, and PSHELL {pids[i]} has no T")
     thickness = np.where(valid, corner_t, 0.0).sum(axis=1) / n_nodes
     return dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
                 nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],

@@ -16,9 +16,10 @@ carries no stiffness at all and couples to no other DOF.
   components' complement and the null space, the null space has no stiffness, no mass and no
   coupling, so the finite eigenpairs are the same as with the null space itself held.
 * A singular subspace off the axes that carries mass (a flat membrane skewed to the axes: its
-  normal motion) cannot be held by components without changing the answer; it is left free
-  (zero-frequency modes) and reported, so that it can be held along its own direction (an SPC
-  in a CD frame along it).
+  normal motion) cannot be held by components without changing the answer; it is not held
+  but reported (``SingularDofs.loose``: left free it would give zero-frequency modes), and the
+  Nastran reader refuses the deck, naming the GRIDs, so that it is held along its own
+  direction (an SPC in a CD frame along it).
 """
 
 from dataclasses import dataclass

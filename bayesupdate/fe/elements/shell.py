@@ -384,9 +384,8 @@ class PieceSource:
     height (n, k) node heights above the element plane [m] (``warp_link``) or None; E [Pa], nu
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
     bending_ratio, shear_ratio, bending_nu, membrane_ratio (n,) or None: ``local_pieces``'s;
-    kirchhoff :
-    quadrilaterals without transverse shear flexibility (``quad_operators(kirchhoff=True)``)
-    instead of MITC4.
+    kirchhoff : quadrilaterals without transverse shear flexibility
+    (``quad_operators(kirchhoff=True)``) instead of MITC4.
     """
 
     xy: np.ndarray

@@ -41,54 +41,21 @@ import scipy.sparse as sp
 
 from bayesupdate.cli import main
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.fe import shell_mesh as sm
 from bayesupdate.fe.autospc import singular_dofs
 from bayesupdate.nastran import load_nastran_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from pshell_blank_mids import RHO, STRIP_LENGTH, STRIP_T, E, Strip, strip_deck, turn  # noqa: E402
 from pshell_ratios import mystran_hz  # noqa: E402
 
-L, W, T = 1.0, 0.1, 0.01
-E, RHO = 2.0e11, 7800.0
-STEEL = f"MAT1,1,{E:.3E},,0.30,{RHO:.1f}"
-#: MID2 of the bending panel: another E, NU and RHO, so that taking MID1's would show
-STIFF = "MAT1,2,3.0E+11,,0.25,9000.0"
-TURN = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
+T = STRIP_T
+#: the strip's rotation off the axes (its normal becomes (0, -0.48, 0.88))
+TURN = turn(0.5)
 
 
-def _strip(
-    path, pshell, nx=40, ny=4, held="", turn=None, cd=False, rods=False, trias=False, corners=None
-):
-    """The strip's SOL 103 deck: ``held`` components SPC'd at every GRID; ``turn`` (3, 3) the
-    strip's rotation; ``cd``: every GRID's displacements in CORD2R 5 along the turned strip;
-    ``rods``: every GRID on a CROD along the strip's normal to a held GRID 0.1 m away;
-    ``trias``: CTRIA3, two per cell; ``corners`` {element id: continuation line} (CQUAD4 ZOFFS,
-    TFLAG, T1-T4)."""
-    nodes, quads, _ = sm.plate(L, W, nx, ny)
-    R = np.eye(3) if turn is None else turn
-    xyz = nodes @ R.T
-    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
-    if cd:  # z along the strip's normal, x along its length
-        a, b, c = np.zeros(3), R[:, 2], R[:, 0]
-        lines += ["CORD2R  5               " + "".join(f"{v:8.5f}" for v in (*a, *b)),
-                  "        " + "".join(f"{v:8.5f}" for v in c)]  # fmt: skip
-    lines += [f"GRID,{i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}{',5' if cd else ''}"
-              for i, p in enumerate(xyz)]  # fmt: skip
-    name, cells = ("CTRIA3", sm.split_quads(quads)) if trias else ("CQUAD4", quads)
-    lines += [f"{name},{e + 1},1,{','.join(str(g + 1) for g in c)}"
-              + (f"\n{corners[e + 1]}" if corners and e + 1 in corners else "")
-              for e, c in enumerate(cells)]  # fmt: skip
-    lines += [pshell, STEEL, STIFF]
-    if rods:
-        n = len(nodes)
-        ends = xyz + 0.1 * R[:, 2]
-        lines += [f"GRID,{n + i + 1},,{p[0]:.9f},{p[1]:.9f},{p[2]:.9f}" for i, p in enumerate(ends)]
-        lines += [f"CROD,{n + i + 1},9,{i + 1},{n + i + 1}" for i in range(n)]
-        lines += ["PROD,9,1,1.0E-6"] + [f"SPC1,1,123456,{n + i + 1}" for i in range(n)]
-    lines += [f"SPC1,1,123456,{g + 1}" for g in np.flatnonzero(nodes[:, 0] < 1e-9)]
-    lines += [f"SPC1,1,{held},{g + 1}" for g in range(len(nodes)) if held]
-    path.write_text("\n".join([*lines, "ENDDATA", ""]))
-    return path
+def _strip(path, pshell, **options):
+    """``strip_deck`` with the ``Strip`` options given by name."""
+    return strip_deck(path, pshell, Strip(**options))
 
 
 def _modes(path, capsys) -> np.ndarray:
@@ -110,7 +77,7 @@ def test_membrane_is_the_full_shell_held_out_of_plane_and_mystrans(tmp_path, cap
         deck = _strip(tmp_path / f"m{nx}.bdf", f"PSHELL,1,1,{T}", nx=nx, ny=nx // 10)
         gaps.append(np.max(np.abs(_modes(deck, capsys) / mystran_hz(deck) - 1)))
     assert gaps[1] < 6e-3 and gaps[0] / gaps[1] > 3.5, gaps
-    rod = np.sqrt(E / RHO) / (4 * L)  # the first axial mode of a clamped-free rod
+    rod = np.sqrt(E / RHO) / (4 * STRIP_LENGTH)  # the first axial mode of a clamped-free rod
     axial = membrane[np.argmin(np.abs(membrane - rod))]
     assert abs(axial / rod - 1) < 2e-3
 

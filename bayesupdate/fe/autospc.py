@@ -97,17 +97,20 @@ def singular_dofs(K, M, independent: np.ndarray, axes=None) -> SingularDofs:
 def _null_spaces(Kb: np.ndarray, present: np.ndarray, floor: float):
     """(group, components to hold, null basis N (3, d) in the block's axes) of each block of Kb
     (n, 3, 3) with a singular direction among its ``present`` (n, 3) components; eigenvalues
-    below RATIO times the block's largest, or below ``floor``, are singular.  Full blocks are
-    solved as one batch; blocks with a fixed or dependent component one by one."""
+    below RATIO times the block's largest are singular, and every one where the largest is
+    below ``floor`` (an absolute test on the block, not on each direction: a thin shell's
+    drilling is small beside a stiff spring elsewhere, and it is no singularity).  Full blocks
+    are solved as one batch; blocks with a fixed or dependent component one by one."""
     full = np.flatnonzero(present.all(axis=1))
     lam, vec = np.linalg.eigh(Kb[full])
-    for i in np.flatnonzero((lam[:, 0] <= RATIO * lam[:, -1]) | (lam[:, 0] <= floor)):
-        N = vec[i][:, (lam[i] <= RATIO * lam[i, -1]) | (lam[i] <= floor)]
+    null = (lam <= RATIO * lam[:, -1:]) | (lam[:, -1:] <= floor)
+    for i in np.flatnonzero(null[:, 0]):
+        N = vec[i][:, null[i]]
         yield full[i], _held_components(N, np.arange(3)), N
     for g in np.flatnonzero(~present.all(axis=1) & present.any(axis=1)):
         c = np.flatnonzero(present[g])
         lam_g, vec_g = np.linalg.eigh(Kb[g][np.ix_(c, c)])
-        null = (lam_g <= RATIO * lam_g[-1]) | (lam_g <= floor)
+        null = (lam_g <= RATIO * lam_g[-1]) | (lam_g[-1] <= floor)
         if null.any():
             N = np.zeros((3, int(null.sum())))
             N[c] = vec_g[:, null]

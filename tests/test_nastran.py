@@ -173,10 +173,33 @@ def test_the_reader_needs_no_pynastran(capsys, tmp_path, monkeypatch):
 
 
 def test_unsupported_card_named_with_its_line(capsys, tmp_path):
-    deck = tmp_path / "damper.bdf"
-    deck.write_text(SPRING_DECK.replace("ENDDATA", "CDAMP2  20      1.      1       1\nENDDATA"))
+    deck = tmp_path / "mpc.bdf"
+    mpc = "MPC     20      1       1       1.      2       1       -1."
+    deck.write_text(SPRING_DECK.replace("ENDDATA", f"{mpc}\nENDDATA"))
     line = rejected(capsys, "--model", deck)
-    assert "CDAMP2" in line and "damper.bdf:17" in line
+    assert "MPC 20" in line and "mpc.bdf:17" in line
+
+
+def test_cards_of_other_analyses_are_ignored_and_listed(capsys, tmp_path):
+    """A damper, a load, an aerodynamic panel and MDLPRM's HDF5 output leave the real modes as
+    they are (the spring deck's closed form), each group listed once; a preload (STATSUB) and
+    another MDLPRM (OFFDEF: offsets) are refused."""
+    deck = tmp_path / "other.bdf"
+    extra = ("CDAMP2  20      1.      1       1\nFORCE   30      1               1.      1.\n"
+             "AERO    0       1.      1.      1.\nMDLPRM  HDF5    1\nENDDATA")  # fmt: skip
+    deck.write_text(SPRING_DECK.replace("ENDDATA", extra))
+    out = modes_json(capsys, "--model", deck)
+    assert out["frequencies_hz"] == pytest.approx(np.sqrt([100.0, 400.0, 900.0]) / (2 * np.pi))
+    notes = " ".join(out["notes"])
+    for what in ("of damping elements ignored", "of static and dynamic loads ignored",
+                 "of the aeroelastic model ignored"):  # fmt: skip
+        assert what in notes, notes
+    assert "MDLPRM HDF5 output settings ignored" in notes, notes
+    text = deck.read_text().replace("CEND", "CEND\nSTATSUB = 1")
+    deck.write_text(text.replace("MDLPRM  HDF5    1", "MDLPRM  HDF5    1       OFFDEF  1"))
+    line = rejected(capsys, "--model", deck)
+    assert "other.bdf:3 case control STATSUB" in line, line
+    assert "MDLPRM OFFDEF is not supported" in line, line
 
 
 def test_unreadable_deck_and_massless_deck(capsys, tmp_path):

@@ -134,6 +134,24 @@ def test_a_desvar_that_is_not_one_binding_is_named(tmp_path):
         assert part + "summed.bdf:38 DVCREL1 401: 2 DESVARs in one relation" in note, note
 
 
+def test_a_shape_variable_is_named_and_the_deck_solves_at_its_grids(tmp_path):
+    """A DESVAR that a DVGRID moves GRIDs with (a shape variable, MSC QRG DVGRID) is no
+    parameter, even where a DVPREL also uses it; the deck solves as written (its GRIDs are at
+    the DESVARs' initial values), the note names the DVGRID with its file:line."""
+    plain = load_nastran_model(_deck(tmp_path, "plain.bdf", CARDS, True))
+    shaped = DESIGN + "DVGRID,2,3,,1.,0.,1.,0.\n"
+    path = tmp_path / "shape.bdf"
+    path.write_text(f"SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\n{BULK.format(**CARDS)}{shaped}"
+                    "ENDDATA\n")  # fmt: skip
+    model = load_nastran_model(str(path))
+    assert sorted(model.parameter_names) == ["IXX", "OFF", "ROT", "XCG"]
+    note = next(n for n in model.structure.metadata["nastran"]["notes"] if "DESVAR(s)" in n)
+    line = 1 + path.read_text().splitlines().index("DVGRID,2,3,,1.,0.,1.,0.")
+    assert f"GMOD (2: 4e+06 in [1e+06, 1e+07]): shape.bdf:{line} DVGRID 2: it moves GRID 3" in note
+    np.testing.assert_array_equal(model.predict(n_modes=6).frequencies_hz,
+                                  plain.predict(n_modes=6).frequencies_hz)  # fmt: skip
+
+
 def test_a_relation_to_a_missing_card_is_named(tmp_path):
     """A DVCREL1 on a CBEAM the deck does not have and a DVMREL1 naming a DESVAR it does not
     have: one message, each relation's file:line."""

@@ -32,14 +32,48 @@ ELEMENT_CARDS = {
     "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM",
 } | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
 #: design variables and relations: parameters when the study names none (``desvar``)
-DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1"}
+DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1", "DVGRID"}
 #: the deck's own optimization problem (SOL 200): read and listed, not used
 OBJECTIVE_CARDS = {"DRESP1", "DRESP2", "DRESP3", "DCONSTR", "DCONADD", "DEQATN", "DOPTPRM",
                    "DTABLE", "DLINK", "DSCREEN"}  # fmt: skip
 #: cards that add no element: output sets (SET1: test points, ``test_points``), rigid-body
 #: reference DOFs (SUPORT: the reader then asks for MSC's rigid set, ``reader``), the end marker
 NO_EFFECT_CARDS = {"USET", "USET1", "SUPORT", "SUPORT1", "SET1", "ENDDATA"}
-SUPPORTED = ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS
+#: cards of other analyses, read and listed once as ignored: the real normal modes of SOL 103
+#: are those of K and M alone (MSC QRG, each card's remarks: they are selected from the case
+#: control of the solutions that use them).  Loads change the modes only as a preload
+#: (STATSUB, refused in the case control); damping elements enter only the damped, complex or
+#: response solutions; the aeroelastic model only SOL 144-146 (its splines read the structure's
+#: GRIDs, they do not add to K or M)
+IGNORED_CARDS = {
+    "static and dynamic loads": {
+        "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
+        "PLOAD4", "GRAV", "ACCEL", "ACCEL1", "RFORCE", "LOAD", "LSEQ", "DLOAD", "RLOAD1",
+        "RLOAD2", "TLOAD1", "TLOAD2", "DAREA", "DPHASE", "DELAY", "SPCD", "TEMP", "TEMPD",
+        "RANDPS", "TABRND1", "TABLED1", "TABLED2", "TABLED3", "TABLED4",
+    },
+    "other solutions' controls": {
+        "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "NLPARM", "EIGB", "EIGC",
+        "TABDMP1",
+    },
+    "damping elements": {"CDAMP1", "CDAMP2", "CDAMP3", "CDAMP4", "PDAMP", "CVISC", "PVISC"},
+    "the aeroelastic model": {
+        "AERO", "AEROS", "CAERO1", "CAERO2", "CAERO3", "CAERO4", "CAERO5", "PAERO1", "PAERO2",
+        "PAERO3", "PAERO4", "PAERO5", "SPLINE1", "SPLINE2", "SPLINE3", "SPLINE4", "SPLINE5",
+        "SET2", "AESURF", "AESURFS", "AELIST", "AEFACT", "AESTAT", "AELINK", "AEPARM",
+        "AECOMP", "AECOMPL", "MKAERO1", "MKAERO2", "FLUTTER", "FLFACT", "GUST", "TRIM",
+        "DIVERG", "CSSCHD", "MONPNT1", "MONPNT2", "MONPNT3", "MONDSP1", "UXVEC",
+    },
+    "plot and output": {"PLOTEL", "PLOTEL3", "PLOTEL4", "CBARAO", "EPOINT"},
+    "material tables (read only by MATT and MATS cards, refused here)": {
+        "TABLEM1", "TABLEM2", "TABLEM3", "TABLEM4",
+    },
+}  # fmt: skip
+#: MDLPRM (MSC's model parameters): only the HDF5 output settings (HDF5, H5...) are ignored; any
+#: other MDLPRM may change the model (offsets, shell formulation) and is refused, named
+MDLPRM_OUTPUT = re.compile(r"^(HDF5|H5\w*)$")
+SUPPORTED = (ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS | {"MDLPRM"}
+             | set().union(*IGNORED_CARDS.values()))  # fmt: skip
 #: PARAMs that shape the model (``reader``)
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
 #: PARAMs with no effect on real eigenvalues and shapes (MSC QRG, Parameters): output requests
@@ -47,7 +81,9 @@ MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
 #: the weight summary's reference point (GRDPNT), aeroelastic velocity units (VREF, AUNITS),
 #: checks that only print or stop (MAXRATIO, BAILOUT, EPZERO), restart and database control,
 #: SOL 200 print and punch control, residual vectors (RESVEC: responses, not eigenpairs),
-#: LGDISP (nonlinear solutions only)
+#: LGDISP (nonlinear solutions only), the modes a modal response solution keeps (LMODES), the
+#: unit system's label (UNITSYS), the aeroelastic Mach check and gust (OMACHPR, GUSTAERO),
+#: sparse data recovery (SPARSEDR)
 IGNORED_PARAMS = {
     "POST", "POSTEXT", "OGEOM", "GRDPNT", "RESCOMP", "OUGCORD", "PRGPST", "NOCOMPS", "PATVER",
     "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT", "PRTMAXIM", "VREF", "AUNITS", "PRTGPL", "PRTEQXIN",
@@ -55,7 +91,8 @@ IGNORED_PARAMS = {
     "DBDICT", "DBCCONV", "OPPHIPA", "OUNIT1", "OUNIT2", "ITAPE", "POSTOUT", "NASPRT",
     "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
     "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
-    "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY",
+    "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY", "LMODES", "UNITSYS",
+    "OMACHPR", "GUSTAERO", "SPARSEDR",
 }  # fmt: skip
 # any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,
 # W4: damping; SNORM: shell normals)
@@ -265,12 +302,21 @@ def _words(text: str) -> str:
     return text.split("$", 1)[0].strip().upper()
 
 
+#: case control commands that change the real normal modes and are not modelled (by their
+#: first four letters, as Nastran reads them)
+CASE_REFUSED = {
+    "STATSUB": "a preloaded subcase (its differential stiffness changes the modes) is not "
+    "supported",
+}
+
+
 def _case_control(lines) -> tuple[dict, dict]:
     """(selections of the first subcase over the global ones, {SET id: ints}) of case control
-    lines (file, line, text)."""
+    lines (file, line, text); ``changes`` in the selections: (file:line, command) of each
+    command in ``CASE_REFUSED``."""
     scopes, current = {0: {}}, 0
-    sets, pending = {}, None
-    for _, _, text in lines:
+    sets, pending, changes = {}, None, []
+    for file, number, text in lines:
         words = _words(text)
         if not words:
             continue
@@ -278,6 +324,9 @@ def _case_control(lines) -> tuple[dict, dict]:
             sets[pending] += _ints(words)
             pending = pending if words.endswith(",") else None
             continue
+        refused = [c for c in CASE_REFUSED if words.startswith(c[:4])]
+        if refused:  # in any subcase: the deck is meant for that solution
+            changes.append((f"{Path(file).name}:{number}", refused[0]))
         m = re.match(r"^SUBCASE\s+(\d+)", words)
         if m:
             current = int(m.group(1))
@@ -294,7 +343,7 @@ def _case_control(lines) -> tuple[dict, dict]:
             scopes[current][m.group(1)[:4]] = m.group(2)
     first = min((k for k in scopes if k > 0), default=0)
     chosen = {**scopes[0], **scopes[first]}
-    case = {}
+    case = {"changes": tuple(changes)} if changes else {}
     for key, name in (("METH", "METHOD"), ("SPC", "SPC")):
         if key in chosen and chosen[key].isdigit():
             case[name] = int(chosen[key])
@@ -419,6 +468,19 @@ def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
             refusals.card(c, f"PARAM {name} is not supported (it may change the normal modes)")
     if ignored:
         notes.append(f"PARAM {', '.join(sorted(ignored))} ignored (no effect on normal modes)")
+    for what, names in IGNORED_CARDS.items():
+        found = [c.name for c in deck.cards if c.name in names]
+        if found:
+            notes.append(f"{len(found)} card(s) of {what} ignored (no effect on the real normal "
+                         f"modes): {', '.join(sorted(set(found)))}")  # fmt: skip
+    for c in deck.of("MDLPRM"):
+        keys = [str(k).strip().upper() for k in c.raw[::2] if str(k).strip()]
+        for key in (k for k in keys if not MDLPRM_OUTPUT.match(k)):
+            refusals.card(c, f"MDLPRM {key} is not supported (it may change the normal modes)")
+    if deck.of("MDLPRM"):
+        notes.append("MDLPRM HDF5 output settings ignored (no effect on normal modes)")
+    for where, command in deck.case.get("changes", ()):
+        refusals.add(f"{where} case control {command}: {CASE_REFUSED[command]}")
     objective = sorted({c.name for c in deck.cards if c.name in OBJECTIVE_CARDS})
     if objective:
         n = sum(1 for c in deck.cards if c.name in OBJECTIVE_CARDS)

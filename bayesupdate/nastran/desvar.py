@@ -108,8 +108,11 @@ def desvar_parameters(deck) -> dict:
                 ((ptype, field) if one else None, coef, c0, int(rel.value(2)))
             )
     desvars = deck.table("DESVAR")
+    shape = _shape_variables(deck)
     out = {}
     for dvid, rels in sorted(relations.items()):
+        if dvid in shape:
+            continue  # it moves GRIDs too (DVGRID), which no binding does
         if any(k is not None and _family(k) == "card" for k, *_ in rels):
             entry = _card_relations(rels)
         else:
@@ -245,13 +248,24 @@ def _unused(deck, dvid: int) -> str:
     return "its relations mix kinds of fields or set one field twice"
 
 
+def _shape_variables(deck) -> dict[int, str]:
+    """{DESVAR id: 'file:line DVGRID id: why'} of the DESVARs a DVGRID moves GRIDs with (shape
+    design variables, MSC QRG DVGRID): not parameters, the deck's GRIDs are at their XINIT."""
+    out = {}
+    for c in deck.of("DVGRID"):
+        dvid = int(c.value(0))
+        out.setdefault(dvid, f"{c.where} DVGRID {dvid}: it moves GRID {c.value(1)} (a shape "
+                             "variable, which no binding is)")  # fmt: skip
+    return out
+
+
 def unbound_reasons(deck) -> dict[int, str]:
     """{DESVAR id: 'file:line CARD id: why'} of the first relation that keeps each DESVAR from
     being a parameter (``desvar_parameters``): one PBEAM(L) station, a field no binding acts
     on, several DESVARs in one relation, C0 != 0 or COEFs / fields that differ between its
     relations on a field that is a factor (PSHELL T, MAT1 E/RHO of shells, springs), relations
-    on several card types (one parameter re-builds one kind of card)."""
-    out, first = {}, {}
+    on several card types (one parameter re-builds one kind of card), a DVGRID (shape)."""
+    out, first = dict(_shape_variables(deck)), {}
     for rel in deck.of("DVPREL1", "DVMREL1", "DVCREL1"):
         ptype, name, c0, pairs = _relation(rel)
         where = f"{rel.where} {rel.name} {rel.value(0)}"

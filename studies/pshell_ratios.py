@@ -47,14 +47,17 @@ class Plate:
     nu: float = NU
     rho: float = RHO
 
-    def mindlin_hz(self, t, m, n, bending=1.0, kappa=5.0 / 6.0):
+    def mindlin_hz(self, t, m, n, bending=1.0, kappa=5.0 / 6.0, rotary=True):
         """Flexural root of the hard simply supported Mindlin plate (Mindlin 1951):
         (s k^2 - rho t w^2)(D k^2 + s - I w^2) = s^2 k^2, D = bending E t^3 / 12 (1 - nu^2),
-        s = kappa G t, I = rho t^3 / 12, k^2 = (pi / a)^2 (m^2 + n^2); t [m], f [Hz]."""
+        s = kappa G t, I = rho t^3 / 12 (0 without ``rotary``: then w^2 = s D k^4 / rho t
+        (D k^2 + s)), k^2 = (pi / a)^2 (m^2 + n^2); t [m], f [Hz]."""
         G = self.E / (2 * (1 + self.nu))
         D = bending * self.E * t**3 / (12 * (1 - self.nu**2))
         k2 = (np.pi / self.a) ** 2 * (m * m + n * n)
         s, inertia = kappa * G * t, self.rho * t**3 / 12
+        if not rotary:
+            return np.sqrt(s * D * k2**2 / (self.rho * t * (D * k2 + s))) / (2 * np.pi)
         a2 = self.rho * t * inertia
         a1 = -(self.rho * t * (D * k2 + s) + inertia * s * k2)
         a0 = s * k2 * (D * k2 + s) - s**2 * k2
@@ -74,13 +77,15 @@ class Plate:
 STEEL = Plate()
 
 
-def plate_deck(path, n, t, pshell, triangles=False, a=A, mat1=None):
+def plate_deck(path, n, t, pshell, triangles=False, a=A, mat1=None, coupled=True):
     """Write the plate's SOL 103 deck (SI) in n x n CQUAD4 (or 2 n^2 CTRIA3, one diagonal) with
     the PSHELL line ``pshell`` to ``path``: side ``a`` [m], MAT1 line ``mat1`` (default this
-    study's steel); returns ``path``."""
+    study's steel); ``coupled``: PARAM COUPMASS 1 (consistent mass with rotary inertia, which
+    the closed forms here carry; False: Nastran's default lumped mass); returns ``path``."""
     nodes, quads, _ = sm.plate(a, a, n, n)
     x, y = nodes[:, 0], nodes[:, 1]
     lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,8"]
+    lines += ["PARAM,COUPMASS,1"] if coupled else []
     lines += [f"GRID,{i + 1},,{p[0]:.6f},{p[1]:.6f},0." for i, p in enumerate(nodes)]
     if triangles:
         trias = sm.split_quads(quads, np.zeros(len(quads), bool))

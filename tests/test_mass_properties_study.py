@@ -148,9 +148,10 @@ def test_bad_units_and_shapes_exit_2_with_one_line(bar, tmp_path, capsys, data, 
     assert words in err and "\n" not in err, err
 
 
-def test_affine_mass_terms_are_exact_and_refused_where_the_mass_is_not_affine(bar):
-    # densities, moduli and point masses: M_r(theta) is an exact affine sum (no assembly);
-    # a shell thickness enters M as t and t^3 (rotary inertia): refused, the assembly is used
+def test_affine_mass_terms_are_exact_and_refused_where_the_mass_is_not_affine(bar, tmp_path):
+    # densities, moduli and point masses: M_r(theta) is an exact affine sum (no assembly); so
+    # is a shell thickness with Nastran's default lumped mass (t only); with consistent mass
+    # (PARAM COUPMASS 1) it enters M as t and t^3 (rotary inertia): refused, the assembly is used
     from bayesupdate.fe.mass_properties import rigid_mass_terms
     from bayesupdate.nastran import load_nastran_model
 
@@ -162,6 +163,13 @@ def test_affine_mass_terms_are_exact_and_refused_where_the_mass_is_not_affine(ba
     np.testing.assert_allclose(terms(point).vector(), exact, rtol=0, atol=1e-12 * abs(exact).max())
     assert model.mass_properties_function() is not model.mass_properties
     thick = load_nastran_model(deck, {"t": {"binds": "PSHELL 1 T"}})
+    at = {"t": 1.3 * thick.default_parameters()["t"]}
+    exact = thick.mass_properties(at).vector()
+    np.testing.assert_allclose(rigid_mass_terms(thick)(at).vector(), exact, rtol=0,
+                               atol=1e-12 * abs(exact).max())  # fmt: skip
+    coupled = tmp_path / "coupled.bdf"
+    coupled.write_text(bar[0].read_text().replace("BEGIN BULK", "BEGIN BULK\nPARAM,COUPMASS,1"))
+    thick = load_nastran_model(str(coupled), {"t": {"binds": "PSHELL 1 T"}})
     assert rigid_mass_terms(thick) is None
     assert thick.mass_properties_function() == thick.mass_properties
 

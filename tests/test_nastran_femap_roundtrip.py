@@ -71,7 +71,11 @@ def _simulate_and_identify(capsys, study, sets, uff, modes) -> None:
     for mode in ident["modes"]:
         error = np.min(np.abs(true - mode["frequency_hz"]))
         assert error < 4 * mode["identification_sd_hz"], (mode, true)
-    assert len(ident["cut"]) == 1 and abs(ident["cut"][0]["frequency_hz"] - 149.78) < 0.5
+    # one pole cut at the band's top, at a true mode (149.2 Hz with Nastran's lumped shell
+    # mass, 149.8 Hz with consistent mass)
+    assert len(ident["cut"]) == 1, ident["cut"]
+    assert np.min(np.abs(true - ident["cut"][0]["frequency_hz"])) < 0.5, (ident["cut"], true)
+    assert 148 < ident["cut"][0]["frequency_hz"] < 151
 
 
 @needs_deck

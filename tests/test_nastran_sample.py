@@ -1,6 +1,7 @@
 """``bayesupdate sample`` on a Nastran deck: the issue-19 round trip through the CLI on the
 free-free steel plate deck of ``test_nastran_params`` (two PSHELLs, one CONM2), made thinner so
-that four modes fall in the simulated test's 0-150 Hz band.  Simulate a test at perturbed
+that four modes fall in the simulated test's 0-150 Hz band (1.25 and 1.875 mm: 41.6-136.2 Hz,
+the fifth at 158 Hz, with Nastran's default lumped shell mass).  Simulate a test at perturbed
 thicknesses, identify it, sample the thicknesses, write the posterior mean back.
 
 The thicknesses must be sampled on the certified reduced basis (``fe.reduced``, the path of the
@@ -18,8 +19,8 @@ from test_nastran_params import _model, _plate
 
 from bayesupdate.cli import main
 
-DECK_T = (0.001, 0.0015)
-TRUTH = {"t1": 0.001 * 1.08, "t2": 0.0015 * 0.94}
+DECK_T = (0.00125, 0.001875)
+TRUTH = {"t1": 0.00125 * 1.08, "t2": 0.001875 * 0.94}
 #: corners, edge middles and two inner GRIDs (GRID id = 1 + i + 9 j on the 9 x 5 grid)
 POINTS = (1, 5, 9, 19, 23, 27, 37, 41, 45)
 PARAMETERS = {"t1": "PSHELL 1 T", "t2": "PSHELL 2 T"}

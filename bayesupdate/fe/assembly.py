@@ -114,7 +114,8 @@ class Assembler:
         self.shells = None
         if s.shells is not None:
             unit = s.shells.mesh(s.nodes, rho=np.ones(s.shells.n_elements))  # per unit density
-            self.shells = ShellAssembly(unit, rotary_inertia=s.rotary_inertia)
+            lumped = s.shells.lumped  # Nastran's lumped mass carries no rotary inertia
+            self.shells = ShellAssembly(unit, lumped, s.rotary_inertia and not lumped)
         positions = self._build_pattern([*self._dofs.values(), *(f.dofs for f in self.families)])
         # each parametric family's data is kept at the positions it touches only: a family of a
         # few beams or masses on a shell mesh would otherwise add a whole (nnz,) array per

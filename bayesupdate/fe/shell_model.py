@@ -392,7 +392,8 @@ class ShellElements:
     thickness parameter, where one binds it (t_e = factor_e theta: caps of another gauge than the
     mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep);
     bending_ratio, shear_ratio, bending_nu, membrane_ratio (nq + nt,) or None as in
-    ``ShellMesh``."""
+    ``ShellMesh``; lumped : the mass lumped at the nodes by row sums, translational only (no
+    rotary inertia; Nastran's PARAM COUPMASS -1, its default), instead of consistent."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -409,6 +410,7 @@ class ShellElements:
     shear_ratio: np.ndarray | None = None
     bending_nu: np.ndarray | None = None
     membrane_ratio: np.ndarray | None = None
+    lumped: bool = False
 
     @property
     def n_elements(self) -> int:

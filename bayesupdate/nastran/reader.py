@@ -219,8 +219,9 @@ def _add_shells(ctx, shell_rows, pids, nodes, props):
     ctx.notes += [str(w.message) for w in caught]
 
 
-def _patch_shells(structure, pids, props):
-    """Per-element material and part (PSHELL id) on the built structure's shells."""
+def _patch_shells(structure, pids, props, lumped: bool):
+    """Per-element material and part (PSHELL id) on the built structure's shells; ``lumped``:
+    their mass lumped, translational only (PARAM COUPMASS < 1, Nastran's default)."""
     names = [f"PSHELL {p}" for p in np.unique(pids)]
     parts = tuple(structure.parts) + tuple(n for n in names if n not in structure.parts)
     part = np.array([parts.index(f"PSHELL {p}") for p in pids])
@@ -235,7 +236,8 @@ def _patch_shells(structure, pids, props):
         bending_nu=None if np.all(bending_nu == props["nu"]) else bending_nu,
         membrane_ratio=None if np.all(membrane == 1.0) else membrane,
     )
-    shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part, **ratios)
+    shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part,
+                     lumped=lumped, **ratios)  # fmt: skip
     return replace(structure, shells=shells, parts=parts)
 
 
@@ -441,7 +443,7 @@ def _finish(ctx, eids, pids, props):
         structure = replace(structure, elements=(*structure.elements, springs), parts=parts)
     check_connected(structure, grid_name)
     if props is not None and eids.size:
-        structure = _patch_shells(structure, pids, props)
+        structure = _patch_shells(structure, pids, props, ctx.lumped)
     return structure
 
 
@@ -460,7 +462,9 @@ def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
     if structure.shells is not None:
         notes.append(f"PARAM K6ROT {settings['k6rot']:g} not applied: the shell's drilling "
                      "penalty is fixed (fe.elements.shell.DRILL_ALPHA)")  # fmt: skip
-        notes.append("shell mass is consistent (Nastran's default is lumped, COUPMASS -1)")
+        notes.append("shell mass lumped at the GRIDs, translational only (PARAM COUPMASS -1, "
+                     "Nastran's default)" if structure.shells.lumped else "shell mass "
+                     "consistent, with rotary inertia (PARAM COUPMASS 1)")  # fmt: skip
     n_nodes = structure.n_nodes
     used = ctx.node >= 0
     grid_of_node = np.zeros(n_nodes, np.int64)  # 0: a node of no GRID (a CBUSH's arm ends)

@@ -10,8 +10,9 @@ off the axes (``turn``): this package refuses it (its normal motion has mass and
 off the GRIDs' axes), while MYSTRAN holds components 3-6 of every GRID and answers; its first
 mode against the flat strip's.
 
-Measured (2026-11-30): largest difference 2.09 % (40 x 4), 0.52 % (80 x 8), 0.13 % (160 x 16);
-MYSTRAN's turned strip 71.59 Hz against 81.53 Hz flat (-12 %).
+Measured (2026-11-30), with the deck's default lumped mass: largest difference 0.31 % (40 x 4),
+0.08 % (80 x 8), 0.02 % (160 x 16) (with consistent mass, before Nastran's default was taken:
+2.09, 0.52 and 0.13 %); MYSTRAN's turned strip 71.59 Hz against 81.53 Hz flat (-12 %).
 
 Run: PYTHONPATH=. .venv/bin/python studies/pshell_blank_mids.py
 """

@@ -148,6 +148,27 @@ def test_rod_rbar_bush_conm1_deck_matches_closed_form(capsys, tmp_path):
     assert out["mass"] == pytest.approx(2.0)
 
 
+@pytest.mark.parametrize("rbar", ["RBAR,2,2,3,123456", "RBAR,2,3,2,,123456,123456"])
+def test_rbar_forms_with_six_independent_components_at_one_end(capsys, tmp_path, rbar):
+    """MSC QRG RBAR: CMA and CMB blank make every component not in CNA, CNB dependent (MSC's
+    BAH plane writes its tail's RBARs so); the six independent ones may be at either end (GA
+    and GB swapped, CNB and CMA): the mixed deck's closed form either way."""
+    deck = tmp_path / "rbar.bdf"
+    deck.write_text(MIXED_DECK.replace("RBAR,2,2,3,123456,,,123456", rbar))
+    out = modes_json(capsys, "--model", deck)
+    k_x = 1 / (1 / 5e5 + 1 / 1e4)
+    expected = np.sqrt([k_x / 2, 1e4 / 2, 1e4 / 2, 1e6, 1e6, 1e6]) / (2 * np.pi)
+    assert out["frequencies_hz"] == pytest.approx(expected, rel=1e-6)
+
+
+def test_rbar_with_independent_components_split_over_both_ends_is_refused(capsys, tmp_path):
+    deck = tmp_path / "split.bdf"
+    deck.write_text(MIXED_DECK.replace("RBAR,2,2,3,123456,,,123456", "RBAR,2,2,3,123,456"))
+    line = rejected(capsys, "--model", deck)
+    assert "RBAR 2: only all six independent components at one end" in line, line
+    assert "split.bdf:" in line, line
+
+
 def test_cbush_with_ends_apart_acts_at_its_midpoint_through_rigid_arms(capsys, tmp_path):
     """The mixed deck with GRID 4 at x = 20: the bush (CID 0, S = 0.5) acts at x = 15, 5 from
     the mass.  Lateral v and rotation t of GRID 4 (the bar end holds GRID 3): the spring point

@@ -8,7 +8,8 @@ CARDS = ("RBE2", "RBAR", "RBE3")
 
 
 def add(ctx: Context) -> None:
-    """RBE2, RBE3 (weight groups with their own components; UM) and RBAR (CNA = CMB = 123456)."""
+    """RBE2, RBE3 (weight groups with their own components; UM) and RBAR (six independent
+    components at one end)."""
     ctx.each(("RBE2",), _add_rbe2)
     ctx.each(("RBAR",), _add_rbar)
     ctx.each(("RBE3",), _add_rbe3)
@@ -26,10 +27,25 @@ def _add_rbe2(ctx: Context, r) -> None:
 
 
 def _add_rbar(ctx: Context, r) -> None:
-    if str(r["CNA"]) != "123456" or str(r["CMB"]) != "123456" or r["CNB"] or r["CMA"]:
-        r.fail("only CNA = 123456, CMB = 123456 is supported")
-    ga, gb = ctx.node[ctx.rows(r, ("GA", "GB"))]
-    ctx.rigid[f"rbe2 {ctx.builder.add_rbe2(ga, [gb], '123456')}"] = r
+    """RBAR with all six independent components at one end (CNA = 123456 and CNB blank, or
+    CNB = 123456 and CNA blank): the other end's dependent components (CMB, or CMA; both
+    blank: all six) follow it rigidly, an RBE2 from that end (MSC QRG RBAR; the other end's
+    remaining components are not tied).  Independent components split over both ends are
+    refused."""
+    cna, cnb, cma, cmb = (str(r[f]) if r[f] else "" for f in ("CNA", "CNB", "CMA", "CMB"))
+    if not cma and not cmb:  # every component not in CNA and CNB is dependent (QRG RBAR)
+        cma, cmb = ("123456" if not cna else "", "123456" if not cnb else "")
+    rows = ctx.rows(r, ("GA", "GB"))
+    if cna == "123456" and not cnb and not cma and cmb:
+        independent, dependent, comps = rows[0], rows[1], cmb
+    elif cnb == "123456" and not cna and not cmb and cma:
+        independent, dependent, comps = rows[1], rows[0], cma
+    else:
+        r.fail("only all six independent components at one end (CNA or CNB = 123456, the "
+               "other end's CMB or CMA dependent) is supported")  # fmt: skip
+    comps = components(ctx, comps, [dependent], r)
+    rbe2 = ctx.builder.add_rbe2(ctx.node[independent], [ctx.node[dependent]], comps)
+    ctx.rigid[f"rbe2 {rbe2}"] = r
 
 
 def rbe3_groups(r) -> list[tuple[float, str, list[int]]]:

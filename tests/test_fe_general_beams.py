@@ -384,8 +384,11 @@ def test_bad_beams_are_one_line_errors_naming_the_element(kwargs, pairs, words):
 
 
 def test_bad_sections_and_rods():
-    with pytest.raises(BayesUpdateError, match="iy must be finite and > 0"):
+    with pytest.raises(BayesUpdateError, match="iy must be finite and >= 0"):
         ss.general_section(1e-4, -1e-8, 1e-8, 1e-8)
+    with pytest.raises(BayesUpdateError, match="area must be finite and > 0"):
+        ss.general_section(0.0, 1e-8, 1e-8, 1e-8)
+    assert ss.general_section(1e-4, 0.0, 1e-8, 0.0).iy == 0.0  # MSC's PBAR allows I = 0
     with pytest.raises(BayesUpdateError, match="iy iz > iyz"):
         ss.general_section(1e-4, 1e-8, 1e-8, 1e-8, iyz=2e-8)
     b, _ = _frame_builder()

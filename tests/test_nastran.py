@@ -501,3 +501,29 @@ def test_bad_beam_cards_are_one_line_errors(capsys, tmp_path, card, words):
     deck.write_text(_deck(CANTILEVER + card))
     line = rejected(capsys, "--model", deck)
     assert words in line and "bad.bdf:" in line, line
+
+
+def test_coupled_cbar_mass_is_translational_as_msc_forms_it(capsys, tmp_path):
+    """PARAM COUPMASS 1: a CBAR's mass is the consistent mass of its translations alone, no
+    rotary inertia of bending and no torsional inertia (as MSC's: pyNastran's pt145 deck then
+    gives its f06 to the printed digits).  A steel cantilever (1 m, 40 CBARs, shear rigid, I1
+    1e-6 and I2 2e-6 m^4 on A 1e-3 m^2) with a
+    massless tip carrying 1 kg m^2 about its axis: Euler-Bernoulli's bending roots in both
+    planes (Blevins, *Formulas for natural frequency and mode shape*, table 8-1: 1.87510,
+    4.69409), and a twist of the massless shaft, f = sqrt(G J / L I_tip) / 2 pi (the shaft's
+    own torsional inertia rho (I1 + I2) L / 3 would lower it by 0.39 %)."""
+    E, G, rho, A, I1, I2, J, L = 2.0e11, 7.7e10, 7800.0, 1.0e-3, 1.0e-6, 2.0e-6, 2.0e-6, 1.0
+    n = 40
+    lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,5",
+             "PARAM,COUPMASS,1", f"PBAR,1,1,{A!r},{I1!r},{I2!r},{J!r}",
+             f"MAT1,1,{E!r},{G!r},,{rho!r}", "SPC1,1,123456,1",
+             f"CONM2,99,{n + 1},,0.\n,1.,,0.,,,0."]  # fmt: skip
+    lines += [f"GRID,{i + 1},,{L * i / n!r},0.,0." for i in range(n + 1)]
+    lines += [f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0." for i in range(n)]
+    deck = tmp_path / "cantilever.bdf"
+    deck.write_text("\n".join([*lines, "ENDDATA", ""]))
+    f = np.array(modes_json(capsys, "--model", deck)["frequencies_hz"])
+    bending = [b**2 / (2 * np.pi * L**2) * np.sqrt(E * i / (rho * A))
+               for b in (1.875104069, 4.694091133) for i in (I1, I2)]  # fmt: skip
+    twist = np.sqrt(G * J / L / 1.0) / (2 * np.pi)
+    np.testing.assert_allclose(f, np.sort([*bending, twist]), rtol=3e-7)

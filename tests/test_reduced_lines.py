@@ -1,7 +1,8 @@
 """The certified reduced basis on a deck's line-element bindings (``nastran.lines.LineTerm``,
 ``fe.reduced.shell_terms``).  On the hand-edited variant of the MSC beam deck
 (``test_nastran_lines._variant``: CBARs with a shear-rigid PBAR 1, a shear-flexible PBEAM 3,
-two CRODs with PROD 2, MAT1 2 with G blank; here with coupled mass), PBAR A, I1, I2, J and
+two CRODs with PROD 2, MAT1 2 with G blank; here with coupled mass and a rotary inertia at
+every GRID), PBAR A, I1, I2, J and
 PROD A, J, NSM enter K and M linearly.  The affine sum must equal the deck's full assembly
 (the bound elements re-built) to round-off at random points; the reduced frequencies must
 match full solves within the certified tolerance, and bound them from above (Rayleigh-Ritz).
@@ -31,11 +32,13 @@ LINEAR = {
 
 
 def _coupled(lines):
-    """The variant with NSM 2e-4 on PROD 2 (PID MID A J C NSM) and coupled mass: with the
-    deck's lumped mass the rotations carry none, and the basis cannot hold their static
-    response (``fe.reduced.basis.pod_basis``)."""
+    """The variant with NSM 2e-4 on PROD 2 (PID MID A J C NSM), coupled mass and a rotary
+    inertia of 1e-5 at every GRID (a massless CONM2): with the deck's lumped mass the
+    rotations carry none, nor with a CBAR's coupled mass (translational, as MSC's), and the
+    basis cannot hold their static response (``fe.reduced.basis.pod_basis``)."""
     out = [ln.replace("PROD,2,2,1.0,0.3", "PROD,2,2,1.0,0.3,,2e-4") for ln in _variant()(lines)]
-    return ["PARAM,COUPMASS,1", *out]
+    rotary = [f"CONM2,{900 + g},{g},,0.\n,1e-5,,1e-5,,,1e-5" for g in range(1, 13)]
+    return ["PARAM,COUPMASS,1", *rotary, *out]
 
 
 @pytest.fixture(scope="module")

@@ -226,8 +226,9 @@ def add_beams(
     unless ``shear_modulus`` [Pa]); up : local z reference (3,) or (n, 3), default global z
     (global y for vertical elements); offsets : (2, 3) or (n, 2, 3) [m] from each node to its
     element end (global axes); pins : (pa, pb) or n pairs of released element-axis components
-    ('456', 'rz', ...); mass : 'consistent', 'lumped' or 'none'; nsm [kg/m]; torsion_inertia
-    [kg m] per length (default rho (iy + iz)).
+    ('456', 'rz', ...); mass : 'consistent', 'lumped', 'none' or 'translational' (consistent,
+    no rotary or torsional inertia); nsm [kg/m]; torsion_inertia [kg m] per length (default
+    rho (iy + iz)).
     """
     from bayesupdate.fe.elements import general_beam as gb
     from bayesupdate.fe.standard_sections import BeamSection

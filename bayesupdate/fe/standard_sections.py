@@ -75,18 +75,21 @@ class BeamSection:
 
 
 def check_section(s: BeamSection) -> None:
-    """BayesUpdateError naming the section and the field for a non-physical property."""
-    values = dict(area=s.area, iy=s.iy, iz=s.iz, torsion=s.torsion)
-    for name, v in values.items():
-        if not (np.isfinite(v) and v > 0):
-            raise BayesUpdateError(f"section {s.name!r}: {name} must be finite and > 0, got {v}")
+    """BayesUpdateError naming the section and the field for a non-physical property.  The
+    area must be > 0; iy, iz and the torsion constant may be 0 (no stiffness in that plane or
+    twist, as MSC's PBAR allows: I1, I2 >= 0), a product iyz needs iy iz > iyz^2."""
+    if not (np.isfinite(s.area) and s.area > 0):
+        raise BayesUpdateError(f"section {s.name!r}: area must be finite and > 0, got {s.area}")
+    for name, v in dict(iy=s.iy, iz=s.iz, torsion=s.torsion).items():
+        if not (np.isfinite(v) and v >= 0):
+            raise BayesUpdateError(f"section {s.name!r}: {name} must be finite and >= 0, got {v}")
     for name in ("shear_y", "shear_z"):
         v = getattr(s, name)
         if not (np.isfinite(v) and v >= 0):
             raise BayesUpdateError(
                 f"section {s.name!r}: {name} must be >= 0 (0: rigid in shear), got {v}"
             )
-    if not (np.isfinite(s.iyz) and s.iy * s.iz - s.iyz**2 > 0):
+    if not (np.isfinite(s.iyz) and (s.iyz == 0 or s.iy * s.iz - s.iyz**2 > 0)):
         raise BayesUpdateError(
             f"section {s.name!r}: needs iy iz > iyz^2 (a positive definite inertia), got "
             f"iy={s.iy}, iz={s.iz}, iyz={s.iyz}"

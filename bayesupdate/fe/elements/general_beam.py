@@ -21,7 +21,9 @@ Each element is the Timoshenko beam of ``fe.elements.beam`` (Przemieniecki 1968,
 Mass per unit length m = rho A + nsm [kg/m]; rotary inertia rho iy, rho iz [kg m] (if the
 structure keeps rotary inertia); torsional inertia per unit length ``torsion_inertia`` [kg m]
 (rho (iy + iz) unless given).  Lumped mass: m L / 2 on each end's translations and
-torsion_inertia L / 2 on each end's twist.  All inputs SI; arrays (n,), results (n, 12, 12).
+torsion_inertia L / 2 on each end's twist; "translational" mass: the consistent mass of the
+translations alone (no rotary or torsional inertia), as MSC's coupled CBAR mass.  All inputs
+SI; arrays (n,), results (n, 12, 12).
 """
 
 from dataclasses import dataclass
@@ -41,7 +43,9 @@ from bayesupdate.fe.elements.beam import (
 )
 
 #: mass formulations of a line element
-MASS_KINDS = ("consistent", "lumped", "none")
+#: "translational": the consistent mass of the translations alone, no rotary inertia of bending
+#: and no torsional inertia (MSC's CBAR with PARAM COUPMASS 1)
+MASS_KINDS = ("consistent", "lumped", "none", "translational")
 
 
 @register
@@ -203,7 +207,10 @@ def element_local(L, b: GeneralBeams, idx, shear: bool, rotary: bool):
     if not shear:
         asy = asz = np.full(len(idx), np.inf)
     m_line = sub.rho * sub.area + sub.nsm
-    rot = 1.0 if rotary else 0.0
+    kind = np.asarray(MASS_KINDS)[sub.mass]
+    translational = kind == "translational"
+    rot = np.where(translational, 0.0, 1.0 if rotary else 0.0)
+    twist = np.where(translational, 0.0, sub.torsion_inertia)
     K, M = local_matrices(
         L,
         sub.E,
@@ -217,9 +224,8 @@ def element_local(L, b: GeneralBeams, idx, shear: bool, rotary: bool):
         m_line,
         rot * sub.rho * iy,
         rot * sub.rho * iz,
-        sub.torsion_inertia,
+        twist,
     )
-    kind = np.asarray(MASS_KINDS)[sub.mass]
     M[kind == "lumped"] = lumped_mass(L, m_line, sub.torsion_inertia)[kind == "lumped"]
     M[kind == "none"] = 0.0
     turned = alpha != 0

@@ -263,10 +263,18 @@ def _orientation(grids, e, ga_row, offt: str = "GGG"):
 def _offt(ctx: Context, e) -> str:
     """OFFT of a CBAR/CBEAM ('GGG' when blank).  A CBEAM's field 9 may be BIT instead (a real),
     the built-in twist of a beam p-element only (MSC QRG CBEAM), which an ordinary CBEAM
-    ignores: the offsets then take OFFT's default GGG, and a BIT other than 0 gets a note."""
+    ignores: the offsets then take OFFT's default GGG, and a BIT other than 0 gets a note.  An
+    integer 1 or 2 there is NASTRAN's old flag F (how X1-X3 give the orientation, which the
+    fields show anyway): OFFT GGG, with a note."""
     offt = e["OFFT"]
     if isinstance(offt, str):
         return offt
+    if isinstance(offt, int) and offt in (1, 2):  # the old orientation flag F
+        note = ("CBAR/CBEAM field 9 = 1 or 2: NASTRAN's old orientation flag (1: X1-X3 a "
+                "vector, 2: X1 the grid G0), read as OFFT GGG")  # fmt: skip
+        if note not in ctx.notes:
+            ctx.notes.append(note)
+        return "GGG"
     if e.name != "CBEAM" or not isinstance(offt, float):
         e.fail(f"OFFT = {offt}: give a code such as GGG or BOO")
     if offt != 0.0:
@@ -342,7 +350,7 @@ def add(ctx: Context) -> None:
     MAT1.  Lumped mass (COUPMASS < 1): point masses at the element's ends (rigidly offset),
     (rho A + NSM) L / 2 each, and for CBEAM also half the torsional inertia rho (I1 + I2) L about
     the axis (MSC lumps none for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with
-    against MSC's 3554.923)."""
+    against MSC's 3554.923).  Coupled mass (COUPMASS 1): ``_coupled``."""
     ctx.each(("CBAR", "CBEAM"), _add_beam)
 
 
@@ -367,7 +375,7 @@ def _add_beam(ctx: Context, e) -> None:
     try:
         ctx.builder.add_beams(
             [[a, b]], section, mat, part, up=up, offsets=off, pins=_pins(e),
-            mass="none" if ctx.lumped else "consistent", nsm=nsm * ctx.wtmass,
+            mass="none" if ctx.lumped else _coupled(e), nsm=nsm * ctx.wtmass,
             shear_modulus=mat1(ctx, mid, e).G,
         )  # fmt: skip
     except BayesUpdateError as exc:
@@ -379,6 +387,15 @@ def _add_beam(ctx: Context, e) -> None:
             twist = mat.density * (section.iy + section.iz)
             twist = lumped_twist(np.array([twist]), length[None], axis[None])[0]
         _lumped_mass(ctx, (a, b), line, length, part, twist, off)
+
+
+def _coupled(e) -> str:
+    """The coupled mass (PARAM COUPMASS 1) of a CBAR: its translations' consistent mass alone,
+    no rotary or torsional inertia, as MSC's (pyNastran's ``models/aero/pt145``: every mode of
+    MSC's f06 to its printed digits, where the rotary and torsional inertia moved bending by up
+    to 0.05 % and torsion by 0.03 %); of a CBEAM: the consistent mass with both (MSC's CBEAM
+    convention not checked)."""
+    return "translational" if e.name == "CBAR" else "consistent"
 
 
 def end_geometry(ends, offsets, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -13,9 +13,9 @@ tool library's ``fetch``).  For every ``.bdf`` / ``.dat`` / ``.nas`` under it:
    eigenvalue table.
 
 Measured on pyNastran 1d25a9244 (2026-11-30): 84 decks; 6 read with no refusal before the cards
-of other analyses were ignored (loads, aero, dampers, plot cards), 27 after; 21 of those read
-to a model (the others: include fragments with no elements or no mass, PBEAM warping fields,
-template variables).  The refusals left are solids (CTETRA, CHEXA,
+of other analyses were ignored (loads, aero, dampers, plot cards, aeroelastic DMI), 29 after;
+23 of those read to a model (the others: include fragments with no elements or no mass, PBEAM
+warping fields, template variables).  The refusals left are solids (CTETRA, CHEXA,
 CPENTA, PSOLID), composites (PCOMP, MAT8), DMI, DMIG, CSHEAR, MPC, CQUADR/CTRIAR,
 CQUAD8/CTRIA6, CTUBE, PBEND, ZONA's cards.  f06: MSC's BAH plane (``aero/bah_plane``, a half
 aircraft of CBARs, CONM2s, RBE2s and RBARs), its 6 elastic modes within 2.3e-7 of the f06's 7

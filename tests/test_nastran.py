@@ -202,12 +202,13 @@ def test_unsupported_card_named_with_its_line(capsys, tmp_path):
 
 
 def test_cards_of_other_analyses_are_ignored_and_listed(capsys, tmp_path):
-    """A damper, a load, an aerodynamic panel and MDLPRM's HDF5 output leave the real modes as
-    they are (the spring deck's closed form), each group listed once; a preload (STATSUB) and
-    another MDLPRM (OFFDEF: offsets) are refused."""
+    """A damper, a load, an aerodynamic panel, MDLPRM's HDF5 output and an aeroelastic DMI
+    (W2GJ) leave the real modes as they are (the spring deck's closed form), each group listed
+    once; a preload (STATSUB), another MDLPRM (OFFDEF: offsets) and another DMI are refused."""
     deck = tmp_path / "other.bdf"
+    dmi = "DMI     W2GJ    0       2       1       0               1       1"
     extra = ("CDAMP2  20      1.      1       1\nFORCE   30      1               1.      1.\n"
-             "AERO    0       1.      1.      1.\nMDLPRM  HDF5    1\nENDDATA")  # fmt: skip
+             f"AERO    0       1.      1.      1.\nMDLPRM  HDF5    1\n{dmi}\nENDDATA")  # fmt: skip
     deck.write_text(SPRING_DECK.replace("ENDDATA", extra))
     out = modes_json(capsys, "--model", deck)
     assert out["frequencies_hz"] == pytest.approx(np.sqrt([100.0, 400.0, 900.0]) / (2 * np.pi))
@@ -216,11 +217,13 @@ def test_cards_of_other_analyses_are_ignored_and_listed(capsys, tmp_path):
                  "of the aeroelastic model ignored"):  # fmt: skip
         assert what in notes, notes
     assert "MDLPRM HDF5 output settings ignored" in notes, notes
-    text = deck.read_text().replace("CEND", "CEND\nSTATSUB = 1")
+    assert "DMI W2GJ (aeroelastic corrections) ignored" in notes, notes
+    text = deck.read_text().replace("CEND", "CEND\nSTATSUB = 1").replace("W2GJ", "STIFF")
     deck.write_text(text.replace("MDLPRM  HDF5    1", "MDLPRM  HDF5    1       OFFDEF  1"))
     line = rejected(capsys, "--model", deck)
     assert "other.bdf:3 case control STATSUB" in line, line
     assert "MDLPRM OFFDEF is not supported" in line, line
+    assert "DMI STIFF is not supported" in line, line
 
 
 def test_unreadable_deck_and_massless_deck(capsys, tmp_path):

@@ -72,7 +72,10 @@ IGNORED_CARDS = {
 #: MDLPRM (MSC's model parameters): only the HDF5 output settings (HDF5, H5...) are ignored; any
 #: other MDLPRM may change the model (offsets, shell formulation) and is refused, named
 MDLPRM_OUTPUT = re.compile(r"^(HDF5|H5\w*)$")
-SUPPORTED = (ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS | {"MDLPRM"}
+#: DMI matrices the aeroelastic solutions read by these names (MSC QRG, Aeroelastic Analysis:
+#: downwash, force and pressure corrections): ignored; a DMI of any other name is refused
+AERO_DMI = {"W2GJ", "FA2J", "WKK", "WTFACT"}
+SUPPORTED = (ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS | {"MDLPRM", "DMI"}
              | set().union(*IGNORED_CARDS.values()))  # fmt: skip
 #: PARAMs that shape the model (``reader``)
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
@@ -82,8 +85,8 @@ MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
 #: checks that only print or stop (MAXRATIO, BAILOUT, EPZERO), restart and database control,
 #: SOL 200 print and punch control, residual vectors (RESVEC: responses, not eigenpairs),
 #: LGDISP (nonlinear solutions only), the modes a modal response solution keeps (LMODES), the
-#: unit system's label (UNITSYS), the aeroelastic Mach check and gust (OMACHPR, GUSTAERO),
-#: sparse data recovery (SPARSEDR)
+#: unit system's label (UNITSYS), the aeroelastic Mach check, gust, dynamic pressure and
+#: monitor point units (OMACHPR, GUSTAERO, Q, MPTUNIT), sparse data recovery (SPARSEDR)
 IGNORED_PARAMS = {
     "POST", "POSTEXT", "OGEOM", "GRDPNT", "RESCOMP", "OUGCORD", "PRGPST", "NOCOMPS", "PATVER",
     "MAXRATIO", "SRCOMPS", "OMID", "BAILOUT", "PRTMAXIM", "VREF", "AUNITS", "PRTGPL", "PRTEQXIN",
@@ -92,7 +95,7 @@ IGNORED_PARAMS = {
     "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
     "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY", "LMODES", "UNITSYS",
-    "OMACHPR", "GUSTAERO", "SPARSEDR",
+    "OMACHPR", "GUSTAERO", "SPARSEDR", "Q", "MPTUNIT",
 }  # fmt: skip
 # any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,
 # W4: damping; SNORM: shell normals)
@@ -479,6 +482,14 @@ def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
             refusals.card(c, f"MDLPRM {key} is not supported (it may change the normal modes)")
     if deck.of("MDLPRM"):
         notes.append("MDLPRM HDF5 output settings ignored (no effect on normal modes)")
+    dmi = {c: str(c.raw[0]).strip().upper() for c in deck.of("DMI")}
+    for c, name in dmi.items():
+        if name not in AERO_DMI:
+            refusals.card(c, f"DMI {name} is not supported (only the aeroelastic corrections "
+                             "W2GJ, FA2J, WKK and WTFACT are ignored)")  # fmt: skip
+    aero = sorted(set(dmi.values()) & AERO_DMI)
+    if aero:
+        notes.append(f"DMI {', '.join(aero)} (aeroelastic corrections) ignored")
     for where, command in deck.case.get("changes", ()):
         refusals.add(f"{where} case control {command}: {CASE_REFUSED[command]}")
     objective = sorted({c.name for c in deck.cards if c.name in OBJECTIVE_CARDS})

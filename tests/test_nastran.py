@@ -530,3 +530,27 @@ def test_coupled_cbar_mass_is_translational_as_msc_forms_it(capsys, tmp_path):
                for b in (1.875104069, 4.694091133) for i in (I1, I2)]  # fmt: skip
     twist = np.sqrt(G * J / L / 1.0) / (2 * np.pi)
     np.testing.assert_allclose(f, np.sort([*bending, twist]), rtol=3e-7)
+
+
+def test_grdset_fills_the_grids_blank_fields(capsys, tmp_path):
+    """GRDSET (MSC QRG): its CD, PS fill every GRID's blank ones; a GRID's own field stays.  A
+    cantilever of 10 CBARs held in z and its rotations about x, y (PS 345) by GRDSET gives the
+    modes of the same deck with PS 345 written on each GRID, and not those of the free deck."""
+
+    def deck(name, grdset: bool, each: str, mid: str = ""):
+        lines = ["SOL 103", "CEND", "SPC = 1", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,4",
+                 "PBAR,1,1,1.0E-3,1.0E-6,2.0E-6,2.0E-6", "MAT1,1,2.0E11,7.7E10,,7800.",
+                 "SPC1,1,123456,1"]  # fmt: skip
+        lines += ["GRDSET,,,,,,,345"] if grdset else []
+        lines += [f"GRID,{i + 1},,{i / 10!r},0.,0.,,{mid if i == 5 and mid else each}"
+                  for i in range(11)]  # fmt: skip
+        lines += [f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0." for i in range(10)]
+        path = tmp_path / name
+        path.write_text("\n".join([*lines, "ENDDATA", ""]))
+        return modes_json(capsys, "--model", path)["frequencies_hz"]
+
+    held = deck("each.bdf", False, "345")
+    assert deck("grdset.bdf", True, "") == held
+    assert deck("free.bdf", False, "") != held
+    own = deck("own.bdf", False, "345", mid="3456")  # GRID 6's own PS also holds its rz
+    assert deck("grdset_own.bdf", True, "", mid="3456") == own != held

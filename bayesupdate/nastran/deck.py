@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from bayesupdate.errors import BayesUpdateError
-from bayesupdate.nastran.bulk import Card, CardError, card_name, split_line
+from bayesupdate.nastran.bulk import Card, CardError, card_name, split_line, with_fields
 from bayesupdate.nastran.cards import FAMILIES as FAMILIES_OF_CARDS
 
 #: file suffixes read as Nastran bulk data
@@ -434,12 +434,32 @@ def read_deck(path, refusals: Refusals | None = None) -> Deck:
     sol = next((w.split()[1] for w in map(_words, (t for _, _, t in executive))
                 if w.startswith("SOL ") and len(w.split()) > 1), None)  # fmt: skip
     case, sets = _case_control(case_lines)
-    cards = _cards(bulk, refusals)
+    cards = _grdset(_cards(bulk, refusals), notes)
     deck = Deck(str(path), sol, case, sets, tuple(cards), tuple(notes), tuple(files))
     _check_duplicates(deck, refusals)
     if own:
         refusals.raise_all()
     return deck
+
+
+def _grdset(cards: list[Card], notes: list) -> list[Card]:
+    """The cards with each GRID's blank CP, CD, PS and SEID taken from the GRDSET card (MSC QRG
+    GRDSET: the defaults of those fields; its own fields sit where GRID's do), which is then
+    dropped; without a GRDSET the cards as they are."""
+    grdset = [c for c in cards if c.name == "GRDSET"]
+    if not grdset:
+        return cards
+    defaults = {i: grdset[0].raw[i].strip() for i in (1, 5, 6, 7)
+                if i < len(grdset[0].raw) and grdset[0].raw[i].strip()}  # fmt: skip
+    notes.append(f"GRDSET {grdset[0].where}: its CP, CD, PS, SEID fill the GRIDs' blank ones")
+    out = []
+    for c in cards:
+        if c.name == "GRID":
+            blank = {i: v for i, v in defaults.items() if i >= len(c.raw) or not c.raw[i].strip()}
+            c = with_fields(c, blank) if blank else c
+        if c.name != "GRDSET":
+            out.append(c)
+    return out
 
 
 def _check_duplicates(deck: Deck, refusals: Refusals) -> None:

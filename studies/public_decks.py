@@ -13,13 +13,14 @@ tool library's ``fetch``).  For every ``.bdf`` / ``.dat`` / ``.nas`` under it:
    eigenvalue table.
 
 Measured on pyNastran 1d25a9244 (2026-11-30): 84 decks; 6 read with no refusal before the cards
-of other analyses were ignored (loads, aero, dampers, plot cards, aeroelastic DMI), 29 after;
-23 of those read to a model (the others: include fragments with no elements or no mass, PBEAM
-warping fields, template variables).  The refusals left are solids (CTETRA, CHEXA,
-CPENTA, PSOLID), composites (PCOMP, MAT8), DMI, DMIG, CSHEAR, MPC, CQUADR/CTRIAR,
-CQUAD8/CTRIA6, CTUBE, PBEND, ZONA's cards.  f06: MSC's BAH plane (``aero/bah_plane``, a half
-aircraft of CBARs, CONM2s, RBE2s and RBARs), its 6 elastic modes within 2.3e-7 of the f06's 7
-printed digits (2.454016 ... 22.15915 Hz), its 2 rigid modes; MSC's pt145 (CBARs with I2 = 0,
+of other analyses were ignored (loads, aero, dampers, plot cards, aeroelastic DMI), 30 after
+MPC and GRDSET were read too; 24 of those read to a model (the others: include fragments with
+no elements or no mass, PBEAM warping fields, template variables).  The refusals left are
+solids (CTETRA, CHEXA, CPENTA, PSOLID), composites (PCOMP, MAT8), DMI, DMIG, CSHEAR,
+CQUADR/CTRIAR, CQUAD8/CTRIA6, CTUBE, PBEND, ZONA's cards.  f06: MSC's BAH plane
+(``aero/bah_plane``, a half aircraft of CBARs, CONM2s, RBE2s and RBARs), its 6 elastic modes
+within 2.3e-7 of the f06's 7 printed digits (2.454016 ... 22.15915 Hz), its 2 rigid modes;
+MSC's pt145 (CBARs with I2 = 0,
 coupled mass, CONM2s), its 30 modes within 4.6e-7 (with rotary and torsional inertia in the
 CBARs' coupled mass, as before, modes 1-10 were off by up to -0.048 %);
 ``2_mode_flutter`` 2.6671 / 10.6282 Hz against MSC's 2.66709 / 10.6282 (it was 11.7301 with

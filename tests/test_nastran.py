@@ -194,11 +194,11 @@ def test_the_reader_needs_no_pynastran(capsys, tmp_path, monkeypatch):
 
 
 def test_unsupported_card_named_with_its_line(capsys, tmp_path):
-    deck = tmp_path / "mpc.bdf"
-    mpc = "MPC     20      1       1       1.      2       1       -1."
-    deck.write_text(SPRING_DECK.replace("ENDDATA", f"{mpc}\nENDDATA"))
+    deck = tmp_path / "shear.bdf"
+    panel = "CSHEAR  20      1       1       2       1       2"
+    deck.write_text(SPRING_DECK.replace("ENDDATA", f"{panel}\nENDDATA"))
     line = rejected(capsys, "--model", deck)
-    assert "MPC 20" in line and "mpc.bdf:17" in line
+    assert "CSHEAR 20" in line and "shear.bdf:17" in line
 
 
 def test_cards_of_other_analyses_are_ignored_and_listed(capsys, tmp_path):
@@ -554,3 +554,44 @@ def test_grdset_fills_the_grids_blank_fields(capsys, tmp_path):
     assert deck("free.bdf", False, "") != held
     own = deck("own.bdf", False, "345", mid="3456")  # GRID 6's own PS also holds its rz
     assert deck("grdset_own.bdf", True, "", mid="3456") == own != held
+
+
+MPC_DECK = """SOL 103
+CEND
+SPC = 1
+{mpc}METHOD = 1
+BEGIN BULK
+EIGRL,1,,,2
+GRID,2,,0.,0.,0.
+GRID,3,,1.,0.,0.
+CONM2,20,2,,2.
+CONM2,30,3,,3.
+CELAS2,21,100.,2,1
+CELAS2,31,400.,3,1
+CELAS2,40,50.,2,1,3,1
+SPC1,1,23456,2,3
+MPC,7,2,1,1.,3,1,-0.5
+ENDDATA
+"""
+
+
+def test_mpc_ties_dofs_as_its_equation_says(capsys, tmp_path):
+    """MSC QRG MPC: 1.0 u2 - 0.5 u3 = 0 makes GRID 2's x half of GRID 3's (a lever): one mode,
+    f = sqrt((k3 + k2 / 4 + k23 / 4) / (m3 + m2 / 4)) / 2 pi (k23 the spring between them);
+    without MPC = 7 in the case control the set is left out (a note says so): two modes."""
+    deck = tmp_path / "mpc.bdf"
+    deck.write_text(MPC_DECK.format(mpc="MPC = 7\n"))
+    out = modes_json(capsys, "--model", deck, "--modes", "1")
+    lever = np.sqrt((400.0 + 100.0 / 4 + 50.0 / 4) / (3.0 + 2.0 / 4)) / (2 * np.pi)
+    assert out["frequencies_hz"] == pytest.approx([lever], rel=0, abs=5e-7)  # printed digits
+    deck.write_text(MPC_DECK.format(mpc=""))
+    out = modes_json(capsys, "--model", deck)
+    K = np.array([[150.0, -50.0], [-50.0, 450.0]])
+    apart = np.sqrt(scipy.linalg.eigh(K, np.diag([2.0, 3.0]), eigvals_only=True)) / (2 * np.pi)
+    assert out["frequencies_hz"] == pytest.approx(apart, rel=0, abs=5e-7)
+    assert any("MPC set(s) [7] not selected" in n for n in out["notes"]), out["notes"]
+    # a dependent DOF that a support also holds: the MPC is named with its file:line
+    held = MPC_DECK.format(mpc="MPC = 7\n").replace("23456,2,3", "123456,2\nSPC1,1,23456,3")
+    deck.write_text(held)
+    line = rejected(capsys, "--model", deck, "--modes", "1")
+    assert "mpc.bdf:17 MPC 7" in line and "also fixed by a support" in line, line

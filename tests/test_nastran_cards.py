@@ -350,10 +350,10 @@ def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(caps
     bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
             "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,6,5,1,2,0.,0.,1.\nSPC1,1,123456,1\n"
             "INCLUDE 'Missing.dat'\nDESVAR,1,AREA,2.e-3,1.e-3,4.e-3\n"
-            "DVPREL1,10,PBAR,5,I12\n,1,1.\nMPC,20,1,1,1.,2,1,-1.\n")  # fmt: skip
+            "DVPREL1,10,PBAR,5,I12\n,1,1.\nCSHEAR,20,1,1,2,1,2\n")  # fmt: skip
     line = rejected(capsys, "--model", _write(tmp_path, _deck(bulk), "main.bdf"))
     for where in ("main.bdf:13 INCLUDE 'Missing.dat': no such file", "main.bdf:15 DVPREL1 10",
-                  "main.bdf:17 MPC 20"):  # fmt: skip
+                  "main.bdf:17 CSHEAR 20"):  # fmt: skip
         assert where in line, line
     assert "3 card(s) refused" in line, line
 

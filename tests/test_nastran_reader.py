@@ -167,11 +167,11 @@ def test_every_refusal_of_a_deck_in_one_message(tmp_path, capsys):
     deck.write_text("SOL 103\nCEND\nBEGIN BULK\nPARAM,POST,-1\nPARAM,G,0.02\n"
                     "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
                     "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,6,5,1,2,0.,0.,1.\n"
-                    "MPC,20,1,1,1.,2,1,-1.\nINCLUDE more.dat\nENDDATA\n")  # fmt: skip
+                    "CSHEAR,20,1,1,2,1,2\nINCLUDE more.dat\nENDDATA\n")  # fmt: skip
     assert main(["modes", "--model", str(deck)]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "3 card(s) refused" in err, err
-    for where in ("bad.bdf:11 MPC 20", "bad.bdf:5 PARAM G", "more.dat:2 CBAR 7: GRID 99"):
+    for where in ("bad.bdf:11 CSHEAR 20", "bad.bdf:5 PARAM G", "more.dat:2 CBAR 7: GRID 99"):
         assert where in err, err
     assert "POST" not in err
 

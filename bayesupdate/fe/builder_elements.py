@@ -101,9 +101,10 @@ def _shell_elements(builder) -> ShellElements | None:
 
 def _constraints(builder) -> Constraints | None:
     sup, r2, r3 = builder._supports, builder._rbe2, builder._rbe3  # noqa: SLF001
-    frames = builder._frames  # noqa: SLF001
-    if not (sup or r2 or r3 or frames):
+    frames, mpcs = builder._frames, builder._mpcs  # noqa: SLF001
+    if not (sup or r2 or r3 or frames or mpcs):
         return None
+    terms = [(e, *t) for e, equation in enumerate(mpcs) for t in equation]
     legs2 = [(e, ind, d, c) for e, (ind, deps, c) in enumerate(r2) for d in deps]
     legs3 = [
         (e, n, w, c)
@@ -129,6 +130,10 @@ def _constraints(builder) -> Constraints | None:
         rbe3_um_components=np.array([u[2] for u in um], dtype=bool).reshape(-1, 6),
         frame_node=np.array(list(frames), dtype=int),
         frame_axes=np.array(list(frames.values()), dtype=float).reshape(-1, 3, 3),
+        mpc_equation=np.array([t[0] for t in terms], dtype=int),
+        mpc_node=np.array([t[1] for t in terms], dtype=int),
+        mpc_component=np.array([t[2] for t in terms], dtype=int),
+        mpc_coef=np.array([t[3] for t in terms], dtype=float),
     )
 
 

@@ -84,6 +84,9 @@ class Constraints:
     Node frames: frame_node (Fn,) distinct nodes, frame_axes (Fn, 3, 3) rows = the node's local
     DOF axes in global coordinates; components of supports and rigid elements on these nodes
     are in those axes.
+    Multipoint constraints (Nastran MPC): terms mpc_equation (E,) equation index, mpc_node (E,),
+    mpc_component (E,) 0-5 (in the node's axes), mpc_coef (E,): sum of coef u = 0, the first
+    term of each equation its dependent DOF.
     """
 
     fixed_node: np.ndarray = _empty(0, int)
@@ -103,6 +106,14 @@ class Constraints:
     rbe3_um_components: np.ndarray = _empty((0, 6), bool)
     frame_node: np.ndarray = _empty(0, int)
     frame_axes: np.ndarray = _empty((0, 3, 3))
+    mpc_equation: np.ndarray = _empty(0, int)
+    mpc_node: np.ndarray = _empty(0, int)
+    mpc_component: np.ndarray = _empty(0, int)
+    mpc_coef: np.ndarray = _empty(0)
+
+    @property
+    def n_mpc(self) -> int:
+        return int(self.mpc_equation.max()) + 1 if self.mpc_equation.size else 0
 
     @property
     def n_rbe2(self) -> int:
@@ -115,6 +126,7 @@ class Constraints:
             or self.rbe2_element.size
             or self.rbe3_reference.size
             or self.frame_node.size
+            or self.mpc_equation.size
         )
 
     def fixed_dofs(self) -> np.ndarray:
@@ -126,7 +138,10 @@ class Constraints:
         """(n, 2) node pairs that the rigid elements connect (for connectivity checks)."""
         a = np.stack([self.rbe2_independent, self.rbe2_dependent], axis=1)
         b = np.stack([self.rbe3_reference[self.rbe3_element], self.rbe3_node], axis=1)
-        return np.concatenate([a, b]).reshape(-1, 2).astype(int)
+        first = np.unique(self.mpc_equation, return_index=True)[1]
+        head = self.mpc_node[first][self.mpc_equation] if first.size else self.mpc_node
+        m = np.stack([head, self.mpc_node], axis=1)
+        return np.concatenate([a, b, m]).reshape(-1, 2).astype(int)
 
 
 @dataclass(frozen=True)
@@ -270,13 +285,33 @@ def _pinv_checked(A, ref_mask, Lr=None):
     return P if Lr is None else Lr.transpose(0, 2, 1) @ P
 
 
+def _mpc_rows(c: Constraints):
+    """(rows, cols, vals) of the MPC equations solved for their first terms, u_d = -sum_i
+    (a_i / a_d) u_i (the components in the nodes' own axes: no frame to apply), then each
+    dependent DOF and its equation."""
+    eq = c.mpc_equation
+    first = np.unique(eq, return_index=True)[1]
+    a0 = c.mpc_coef[first][eq]
+    if np.any(c.mpc_coef[first] == 0):
+        e = int(eq[first][np.flatnonzero(c.mpc_coef[first] == 0)[0]])
+        raise BayesUpdateError(f"mpc {e}: its dependent term has coefficient 0")
+    dof = 6 * c.mpc_node + c.mpc_component
+    dep = dof[first][eq]
+    other = np.ones(eq.size, bool)
+    other[first] = False
+    owners = [f"mpc {int(e)}" for e in eq[first]]
+    return dep[other], dof[other], -c.mpc_coef[other] / a0[other], dof[first], owners
+
+
 def _dependencies(nodes, c: Constraints, L=None):
-    """Sparse G (n_dof, n_dof): dependent rows hold their rigid-element coefficients, every other
-    row is the identity.  Checks that each DOF is dependent in at most one element."""
+    """Sparse G (n_dof, n_dof): dependent rows hold their rigid-element (or MPC) coefficients,
+    every other row is the identity.  Checks that each DOF is dependent in at most one
+    element."""
     n_dof = 6 * nodes.shape[0]
     r2 = _rbe2_rows(nodes, c, L)
     r3 = _rbe3_rows(nodes, c, L) if c.rbe3_reference.size else None
     parts = [r2] + ([r3] if r3 is not None else [])
+    parts += [_mpc_rows(c)] if c.mpc_equation.size else []
     dep = np.concatenate([p[3] for p in parts])
     owners = [o for p in parts for o in p[4]]
     uniq, first, counts = np.unique(dep, return_index=True, return_counts=True)
@@ -311,7 +346,7 @@ def constraint_transform(nodes: np.ndarray, c: Constraints) -> ConstraintTransfo
     n_dof = 6 * nodes.shape[0]
     fixed = c.fixed_dofs()
     L, Lam = node_rotations(nodes.shape[0], c)
-    if c.rbe2_element.size == 0 and c.rbe3_reference.size == 0:
+    if c.rbe2_element.size == 0 and c.rbe3_reference.size == 0 and c.mpc_equation.size == 0:
         keep = np.setdiff1d(np.arange(n_dof), fixed)
         T = sp.csr_matrix((np.ones(keep.size), (keep, np.arange(keep.size))), (n_dof, keep.size))
         return _with_frames(ConstraintTransform(T, keep, fixed, np.zeros(0, int)), Lam)
@@ -326,7 +361,7 @@ def constraint_transform(nodes: np.ndarray, c: Constraints) -> ConstraintTransfo
     is_dep = np.zeros(n_dof, bool)
     is_dep[dep] = True
     T = G
-    n_elements = c.n_rbe2 + c.rbe3_reference.size
+    n_elements = c.n_rbe2 + c.rbe3_reference.size + c.n_mpc
     for _ in range(n_elements + 1):
         coo = T.tocoo()
         if not np.any(is_dep[coo.col[coo.data != 0]]):

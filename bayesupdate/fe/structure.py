@@ -206,6 +206,7 @@ class StructureBuilder:
         self._supports: list[tuple[int, np.ndarray]] = []
         self._rbe2: list[tuple[int, list[int], np.ndarray]] = []
         self._rbe3: list[tuple] = []  # (reference, components, nodes, weights, node sets, UM)
+        self._mpcs: list[list[tuple[int, int, float]]] = []  # (node, component 0-5, coef)
         self._general_beams: list = []
         self._rods: list = []
         self._frames: dict[int, np.ndarray] = {}
@@ -468,6 +469,25 @@ class StructureBuilder:
         node = self._check_node(node)
         self._supports.append((node, parse_components(components, f"support at node {node}")))
 
+    def add_mpc(self, terms) -> int:
+        """Multipoint constraint sum_i coef_i u_i = 0 over ``terms`` [(node, component digit
+        1-6 or name, coef)], the first term's DOF dependent (Nastran MPC, exact elimination).
+        Returns the equation's number used in error messages."""
+        from bayesupdate.fe.constraints import parse_components
+
+        i = len(self._mpcs)
+        out = []
+        for node, component, coef in terms:
+            mask = parse_components(component, f"mpc {i}")
+            if mask.sum() != 1 or not np.isfinite(coef):
+                raise BayesUpdateError(f"mpc {i}: each term needs one component and a finite "
+                                       f"coefficient, got {component!r}, {coef!r}")  # fmt: skip
+            out.append((self._check_node(node), int(np.flatnonzero(mask)[0]), float(coef)))
+        if len(out) < 2 or out[0][2] == 0:
+            raise BayesUpdateError(f"mpc {i}: needs two terms or more, the first one not 0")
+        self._mpcs.append(out)
+        return i
+
     def add_rbe2(self, independent, dependents, components="123456") -> int:
         """Rigid element: ``components`` of every dependent node follow ``independent`` rigidly
         (exact elimination).  Returns the RBE2 number used in error messages."""
@@ -604,7 +624,8 @@ class StructureBuilder:
         if self._scalar_masses:
             structure = replace(structure, scalar_masses=_scalar_masses(self._scalar_masses))
         general = (self._general_beams, self._rods, self._frames)
-        if self._shell_blocks or self._supports or self._rbe2 or self._rbe3 or any(general):
+        constraints = (self._supports, self._rbe2, self._rbe3, self._mpcs)
+        if self._shell_blocks or any(constraints) or any(general):
             from bayesupdate.fe.builder_elements import general_parts
 
             structure = replace(structure, **general_parts(self))

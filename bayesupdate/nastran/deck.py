@@ -29,7 +29,7 @@ SUFFIXES = (".bdf", ".dat", ".nas", ".blk")
 ELEMENT_CARDS = {
     "GRID", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CQUAD4", "CTRIA3",
     "PSHELL", "MAT1", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PMASS", "PELAS", "PBUSH",
-    "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM",
+    "SPC", "SPC1", "SPCADD", "MPC", "MPCADD", "EIGRL", "EIGR", "PARAM",
 } | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
 #: design variables and relations: parameters when the study names none (``desvar``)
 DESIGN_CARDS = {"DESVAR", "DVPREL1", "DVMREL1", "DVCREL1", "DVGRID"}
@@ -347,7 +347,7 @@ def _case_control(lines) -> tuple[dict, dict]:
     first = min((k for k in scopes if k > 0), default=0)
     chosen = {**scopes[0], **scopes[first]}
     case = {"changes": tuple(changes)} if changes else {}
-    for key, name in (("METH", "METHOD"), ("SPC", "SPC")):
+    for key, name in (("METH", "METHOD"), ("SPC", "SPC"), ("MPC", "MPC")):
         if key in chosen and chosen[key].isdigit():
             case[name] = int(chosen[key])
     return case, {k: tuple(v) for k, v in sets.items()}

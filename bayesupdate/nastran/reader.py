@@ -43,6 +43,7 @@ def deck_settings(deck) -> dict:
         coupmass=int(deck.param("COUPMASS", -1)),
         autospc=autospc,
         spc_id=deck.case.get("SPC"),
+        mpc_id=deck.case.get("MPC"),
         method_id=method_id,
         n_modes=int(n_modes) if isinstance(n_modes, int) else None,
     )
@@ -241,14 +242,51 @@ def _patch_shells(structure, pids, props, lumped: bool):
     return replace(structure, shells=shells, parts=parts)
 
 
-def _spc_sets(deck, sid, seen=()) -> list:
-    """SPC/SPC1 cards of set ``sid`` (SPCADD resolved)."""
-    out = [c for c in deck.of("SPC", "SPC1") if c.value(0) == sid]
-    for add in deck.of("SPCADD"):
+def _spc_sets(deck, sid, seen=(), kinds=("SPC", "SPC1"), add_card="SPCADD") -> list:
+    """SPC/SPC1 cards of set ``sid`` (SPCADD resolved); with ``kinds`` ("MPC",) and
+    ``add_card`` "MPCADD", the MPC cards of an MPC set."""
+    out = [c for c in deck.of(*kinds) if c.value(0) == sid]
+    for add in deck.of(add_card):
         if add.value(0) == sid and sid not in seen:
             for s in cards.id_list(add, 1):
-                out += _spc_sets(deck, s, (*seen, sid))
+                out += _spc_sets(deck, s, (*seen, sid), kinds, add_card)
     return out
+
+
+def _add_mpcs(ctx, deck, settings) -> None:
+    """The MPC equations of the case control's MPC set (MPCADD resolved; MSC QRG MPC: G1 C1 A1
+    the dependent term, then Gi Ci Ai three to a half line); MPC sets the case control does not
+    select are listed in a note and left out, as Nastran leaves them."""
+    sid = settings["mpc_id"]
+    chosen = _spc_sets(deck, sid, (), ("MPC",), "MPCADD") if sid is not None else []
+    if sid is not None and not chosen:
+        ctx.refusals.add(f"case control MPC = {sid}: no MPC/MPCADD with that id")
+    unused = sorted({c.value(0) for c in deck.of("MPC")} - {c.value(0) for c in chosen})
+    if unused:
+        ctx.notes.append(f"MPC set(s) {unused} not selected by the case control: left out")
+    for c in chosen:
+        ctx.refusals.guard(_add_mpc, ctx, c)
+
+
+def _add_mpc(ctx, c) -> None:
+    n_lines = (len(c.raw) + 7) // 8
+    starts = [1, 4] + [8 * k + s for k in range(1, n_lines) for s in (1, 4)]
+    terms = []
+    for i in starts:
+        if c.value(i) is None:
+            continue
+        gid, comp, coef = c.value(i), c.value(i + 1), c.value(i + 2)
+        if gid in ctx.spoints or not isinstance(comp, int) or not 1 <= comp <= 6:
+            c.fail(f"term G {gid} C {comp}: give a GRID and one component 1-6")
+        row = ctx.grids.index([gid], c)[0]
+        mask = np.zeros(6, bool)
+        mask[comp - 1] = True
+        cards.common.frame_partial(ctx, mask, row)
+        terms.append((int(ctx.node[row]), str(comp), float(coef or 0.0)))
+    try:
+        ctx.rigid[f"mpc {ctx.builder.add_mpc(terms)}"] = c
+    except BayesUpdateError as exc:
+        c.fail(str(exc).split(": ", 1)[-1])
 
 
 def _add_spcs(ctx, deck, settings):
@@ -390,6 +428,7 @@ def read_structure(path, design: bool = False) -> tuple:
     for family in cards.FAMILIES:
         family.add(ctx)
     _add_spcs(ctx, deck, settings)
+    _add_mpcs(ctx, deck, settings)
     refusals.raise_all()
     try:
         structure = _finish(ctx, eids, pids, props)
@@ -417,7 +456,7 @@ def _named(ctx, exc) -> BayesUpdateError:
         c = ctx.rigid.get(m.group(0))
         return m.group(0) if c is None else f"{c.where} {c.label}"
 
-    text = re.sub(r"\brbe[23] \d+", card, str(exc))
+    text = re.sub(r"\b(rbe[23]|mpc) \d+", card, str(exc))
     return BayesUpdateError(f"Nastran model {ctx.refusals.path}: {text}")
 
 

@@ -64,14 +64,22 @@ def _modes(path, capsys) -> np.ndarray:
     return np.array(json.loads(capsys.readouterr().out)["frequencies_hz"])
 
 
+def _as_the_full_shell_held(tmp_path, capsys, partial, full, held) -> np.ndarray:
+    """The strip's modes with the PSHELL line ``partial``, checked equal (quads, then trias)
+    to those with ``full`` and ``held`` components SPC'd at every GRID; the quads' modes."""
+    modes = []
+    for trias in (False, True):
+        name = "t" if trias else "q"
+        part = _modes(_strip(tmp_path / f"{name}p.bdf", partial, trias=trias), capsys)
+        whole = _modes(_strip(tmp_path / f"{name}f.bdf", full, held=held, trias=trias), capsys)
+        np.testing.assert_allclose(part, whole, rtol=1e-9)
+        modes.append(part)
+    return modes[0]
+
+
 def test_membrane_is_the_full_shell_held_out_of_plane_and_mystrans(tmp_path, capsys):
-    membrane = _modes(_strip(tmp_path / "m.bdf", f"PSHELL,1,1,{T}"), capsys)
-    held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,1,{T},1", held="345"), capsys)
-    np.testing.assert_allclose(membrane, held, rtol=1e-9)
-    trias = (_modes(_strip(tmp_path / f"t{i}.bdf", p, held=h, trias=True), capsys)
-             for i, (p, h) in enumerate(((f"PSHELL,1,1,{T}", ""),
-                                         (f"PSHELL,1,1,{T},1", "345"))))  # fmt: skip
-    np.testing.assert_allclose(*trias, rtol=1e-9)
+    membrane = _as_the_full_shell_held(tmp_path, capsys, f"PSHELL,1,1,{T}",
+                                       f"PSHELL,1,1,{T},1", "345")  # fmt: skip
     # MYSTRAN's QUAD4 on the same decks: the two elements converge to one limit (O(h^2))
     gaps = []
     for nx in (40, 80):
@@ -84,13 +92,8 @@ def test_membrane_is_the_full_shell_held_out_of_plane_and_mystrans(tmp_path, cap
 
 
 def test_bending_panel_is_the_full_shell_held_in_plane_with_mid2s_material(tmp_path, capsys):
-    panel = _modes(_strip(tmp_path / "b.bdf", f"PSHELL,1,,{T},2,,2"), capsys)
-    held = _modes(_strip(tmp_path / "f.bdf", f"PSHELL,1,2,{T},2,,2", held="126"), capsys)
-    np.testing.assert_allclose(panel, held, rtol=1e-9)
-    trias = (_modes(_strip(tmp_path / f"t{i}.bdf", p, held=h, trias=True), capsys)
-             for i, (p, h) in enumerate(((f"PSHELL,1,,{T},2", ""),
-                                         (f"PSHELL,1,2,{T},2", "126"))))  # fmt: skip
-    np.testing.assert_allclose(*trias, rtol=1e-9)
+    panel = _as_the_full_shell_held(tmp_path, capsys, f"PSHELL,1,,{T},2,,2",
+                                    f"PSHELL,1,2,{T},2,,2", "126")  # fmt: skip
     steel = _modes(_strip(tmp_path / "s.bdf", f"PSHELL,1,1,{T},1,,1", held="126"), capsys)
     assert np.all(np.abs(panel / steel - 1) > 0.05)  # MID1's material would be far off
 

@@ -139,8 +139,7 @@ class Constraints:
         a = np.stack([self.rbe2_independent, self.rbe2_dependent], axis=1)
         b = np.stack([self.rbe3_reference[self.rbe3_element], self.rbe3_node], axis=1)
         first = np.unique(self.mpc_equation, return_index=True)[1]
-        head = self.mpc_node[first][self.mpc_equation] if first.size else self.mpc_node
-        m = np.stack([head, self.mpc_node], axis=1)
+        m = np.stack([self.mpc_node[first][self.mpc_equation], self.mpc_node], axis=1)
         return np.concatenate([a, b, m]).reshape(-1, 2).astype(int)
 
 

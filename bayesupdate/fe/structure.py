@@ -483,8 +483,8 @@ class StructureBuilder:
                 raise BayesUpdateError(f"mpc {i}: each term needs one component and a finite "
                                        f"coefficient, got {component!r}, {coef!r}")  # fmt: skip
             out.append((self._check_node(node), int(np.flatnonzero(mask)[0]), float(coef)))
-        if len(out) < 2 or out[0][2] == 0:
-            raise BayesUpdateError(f"mpc {i}: needs two terms or more, the first one not 0")
+        if len(out) < 2:  # a zero first coefficient is refused by the elimination itself
+            raise BayesUpdateError(f"mpc {i}: needs two terms or more")
         self._mpcs.append(out)
         return i
 

@@ -511,10 +511,11 @@ def _part_mask(part_of, parts, names) -> np.ndarray:
 
 
 def _pshells_of(deck, f: DeckField) -> list[int]:
-    """PSHELL ids whose shells' material (MID1, or MID2 where MID1 is blank: a bending panel,
-    ``nastran.reader._pshell``) is one of ``f.ids`` (line properties: ``line_elements``)."""
-    table = deck.table("PSHELL").items()
-    return [i for i, p in table if (p["MID2"] if p["MID1"] is None else p["MID1"]) in f.ids]
+    """PSHELL ids whose shells' material (``cards.common.pshell_material``) is one of ``f.ids``
+    (line properties: ``line_elements``)."""
+    from bayesupdate.nastran.cards.common import pshell_material
+
+    return [i for i, p in deck.table("PSHELL").items() if pshell_material(p) in f.ids]
 
 
 def _check_uniform_thickness(f: DeckField, s, mask, cards) -> None:

@@ -491,11 +491,14 @@ def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
             refusals.card(c, f"PARAM {name} is not supported (it may change the normal modes)")
     if ignored:
         notes.append(f"PARAM {', '.join(sorted(ignored))} ignored (no effect on normal modes)")
-    for what, names in IGNORED_CARDS.items():
-        found = [c.name for c in deck.cards if c.name in names]
-        if found:
-            notes.append(f"{len(found)} card(s) of {what} ignored (no effect on the real normal "
-                         f"modes): {', '.join(sorted(set(found)))}")  # fmt: skip
+    group_of = {name: what for what, names in IGNORED_CARDS.items() for name in names}
+    found: dict[str, list[str]] = {}
+    for c in deck.cards:  # one pass over the deck, in the groups' order below
+        if c.name in group_of:
+            found.setdefault(group_of[c.name], []).append(c.name)
+    for what in (w for w in IGNORED_CARDS if w in found):
+        notes.append(f"{len(found[what])} card(s) of {what} ignored (no effect on the real "
+                     f"normal modes): {', '.join(sorted(set(found[what])))}")  # fmt: skip
     for c in deck.of("MDLPRM"):
         keys = [str(k).strip().upper() for k in c.raw[::2] if str(k).strip()]
         for key in (k for k in keys if not MDLPRM_OUTPUT.match(k)):

@@ -123,7 +123,7 @@ def _pshell(ctx, p):
         shear = SHEAR_FACTOR
     if mid3 is None:  # no transverse shear flexibility: the discrete Kirchhoff quadrilateral
         shear = np.inf
-    base = mid2 if mid1 is None else mid1
+    base = cards.common.pshell_material(p)
     m = _shell_mat1(ctx, base, p, "MID1" if mid1 is not None else "MID2")
     bending_nu = m.NU
     if mid2 != base:
@@ -242,14 +242,14 @@ def _patch_shells(structure, pids, props, lumped: bool):
     return replace(structure, shells=shells, parts=parts)
 
 
-def _spc_sets(deck, sid, seen=(), kinds=("SPC", "SPC1"), add_card="SPCADD") -> list:
-    """SPC/SPC1 cards of set ``sid`` (SPCADD resolved); with ``kinds`` ("MPC",) and
-    ``add_card`` "MPCADD", the MPC cards of an MPC set."""
+def _set_cards(deck, sid, kinds, add_card, seen=()) -> list:
+    """The ``kinds`` cards of set ``sid``, its ``add_card`` unions resolved: ("SPC", "SPC1")
+    with "SPCADD", ("MPC",) with "MPCADD"."""
     out = [c for c in deck.of(*kinds) if c.value(0) == sid]
     for add in deck.of(add_card):
         if add.value(0) == sid and sid not in seen:
             for s in cards.id_list(add, 1):
-                out += _spc_sets(deck, s, (*seen, sid), kinds, add_card)
+                out += _set_cards(deck, s, kinds, add_card, (*seen, sid))
     return out
 
 
@@ -258,7 +258,7 @@ def _add_mpcs(ctx, deck, settings) -> None:
     the dependent term, then Gi Ci Ai three to a half line); MPC sets the case control does not
     select are listed in a note and left out, as Nastran leaves them."""
     sid = settings["mpc_id"]
-    chosen = _spc_sets(deck, sid, (), ("MPC",), "MPCADD") if sid is not None else []
+    chosen = _set_cards(deck, sid, ("MPC",), "MPCADD") if sid is not None else []
     if sid is not None and not chosen:
         ctx.refusals.add(f"case control MPC = {sid}: no MPC/MPCADD with that id")
     unused = sorted({c.value(0) for c in deck.of("MPC")} - {c.value(0) for c in chosen})
@@ -269,6 +269,7 @@ def _add_mpcs(ctx, deck, settings) -> None:
 
 
 def _add_mpc(ctx, c) -> None:
+    """One MPC card's equation (its terms' GRIDs with a rotated CD frame get that frame)."""
     n_lines = (len(c.raw) + 7) // 8
     starts = [1, 4] + [8 * k + s for k in range(1, n_lines) for s in (1, 4)]
     terms = []
@@ -294,7 +295,7 @@ def _add_spcs(ctx, deck, settings):
     items = []  # (grid, components, card)
     sid = settings["spc_id"]
     if sid is not None:
-        spcs = _spc_sets(deck, sid)
+        spcs = _set_cards(deck, sid, ("SPC", "SPC1"), "SPCADD")
         if not spcs:
             ctx.refusals.add(f"case control SPC = {sid}: no SPC/SPC1/SPCADD with that id")
         for c in spcs:

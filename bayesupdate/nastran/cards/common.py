@@ -172,6 +172,12 @@ def components(ctx: Context, text, rows, card):
     return "".join(str(i + 1) for i in np.flatnonzero(mask))
 
 
+def pshell_material(p):
+    """The MAT1 id whose E, NU and RHO a PSHELL's shells take: MID1, or MID2 where MID1 is
+    blank (a bending panel; MSC QRG PSHELL remark 2)."""
+    return p["MID2"] if p["MID1"] is None else p["MID1"]
+
+
 def frame_partial(ctx: Context, mask, rows) -> None:
     """Give each grid of ``rows`` with a rotated CD frame that frame in the structure
     (``StructureBuilder.set_frame``) where the component ``mask`` (6,) is a partial set, so

@@ -132,7 +132,7 @@ class Assembler:
             n_el = s.shells.n_elements
             self._groups(np.zeros((n_el, 0)) if shell_keys is None else shell_keys)
         if s.is_general:  # a bad support or rigid element is named when the model is built
-            _ = self.rigid
+            _ = self.transform
 
     @property
     def beams(self) -> "Assembler":
@@ -337,8 +337,29 @@ class Assembler:
 
     @cached_property
     def rigid(self) -> np.ndarray:
-        """(n_ind, r) rigid motions the supports allow (``allowed_rigid``)."""
-        return allowed_rigid(self.structure.nodes, self.transform)
+        """(n_ind, r) rigid motions the supports allow (``allowed_rigid``), the holds of
+        ``idle_dofs`` exempt."""
+        return allowed_rigid(self.structure.nodes, self.transform, self.idle_dofs())
+
+    def idle_dofs(self) -> np.ndarray:
+        """Held DOFs that no stiffness couples (a zero column of K at the default properties)
+        and no rigid element or MPC names, by node and group (the three translations, the
+        three rotations: a group is idle only whole, so that a node frame cannot mix it with
+        another), e.g. the rotations of a GRID that only solids join, which Nastran's AUTOSPC
+        or a GRID's PS field holds.  A rigid motion of the structure need not vanish there:
+        its energy does not depend on them (``allowed_rigid``)."""
+        s = self.structure
+        fixed = self.transform.fixed
+        c = s.constraints if s.constraints is not None else Constraints()
+        named = np.zeros(s.n_nodes, bool)
+        named[np.unique(c.edges())] = True
+        candidates = fixed[~named[fixed // 6]]
+        if not candidates.size:
+            return candidates
+        K = self.assemble(self.default_properties())[0]
+        column = np.asarray(abs(K).max(axis=0).todense()).ravel()
+        zero_group = column.reshape(-1, 2, 3).max(axis=2) == 0  # (nodes, translations / rotations)
+        return candidates[zero_group[candidates // 6, candidates % 6 // 3]]
 
     @cached_property
     def _rigid_origin(self) -> np.ndarray:
@@ -430,15 +451,30 @@ def _block_keys(dofs: np.ndarray, n: int) -> np.ndarray:
     return rows * n + np.tile(dofs, (1, d)).ravel()
 
 
-def allowed_rigid(nodes: np.ndarray, tr) -> np.ndarray:
+def allowed_rigid(nodes: np.ndarray, tr, exempt=()) -> np.ndarray:
     """(n_ind, r) rigid motions that the supports allow, in the independent DOFs of ``tr``
-    (with node frames the fixed DOFs are in the nodes' own axes: w = Lambda^T u)."""
+    (with node frames the fixed DOFs are in the nodes' own axes: w = Lambda^T u); the held DOFs
+    ``exempt`` (``Assembler.idle_dofs``) do not restrict them."""
     n = 6 * nodes.shape[0]
+    fixed = np.setdiff1d(tr.fixed, np.asarray(exempt, dtype=np.int64))
     if tr.rotation is None:
-        return _allowed_rigid(nodes, n, tr.fixed)[tr.independent]
-    R = tr.rotation.T @ rigid_motions(nodes)
-    if tr.fixed.size:
-        s, v = np.linalg.svd(R[tr.fixed], full_matrices=True)[1:]
-        rank = int(np.sum(s > 1e-9 * max(1.0, np.abs(R).max())))
-        R = R @ v[rank:].T
-    return R[tr.independent]
+        R = _allowed_rigid(nodes, n, fixed)
+    else:
+        R = tr.rotation.T @ rigid_motions(nodes)
+        if fixed.size:
+            s, v = np.linalg.svd(R[fixed], full_matrices=True)[1:]
+            rank = int(np.sum(s > 1e-9 * max(1.0, np.abs(R).max())))
+            R = R @ v[rank:].T
+    R_ind = R[tr.independent]
+    return R_ind if len(exempt) == 0 else _moving(R_ind)
+
+
+def _moving(R: np.ndarray) -> np.ndarray:
+    """The columns' span of R (n, r) without the motions that are zero on every column's DOFs
+    (a motion allowed only because it moves exempt DOFs alone: a scalar point's held rotations
+    about itself); R itself where none is."""
+    if R.shape[1] == 0:
+        return R
+    s, v = np.linalg.svd(R, full_matrices=False)[1:]
+    keep = s > 1e-9 * max(1.0, np.abs(R).max())
+    return R if keep.sum() == R.shape[1] else R @ v[keep].T

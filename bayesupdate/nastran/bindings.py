@@ -32,6 +32,8 @@ I11..I33
 CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
+A MAT1 that a PSOLID uses is refused: the solids (``fe.elements.tetra``) take no parameter.
+
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
 these card fields, are written at each solve and only their matrices are computed again, so
@@ -433,6 +435,8 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
     )
     if f.card in LINE_PROPERTIES or FIELDS[f.card][f.field][1] == "card":
         return out
+    if f.card == "MAT1":
+        _refuse_solids(f, deck)
     if f.card == "MAT1" and f.field == "G":
         _refuse_shell_g(f, deck)
         return out
@@ -475,6 +479,18 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
         raise BayesUpdateError(
             f"parameter binds {f.spec!r}: {', '.join(hit)} join(s) unlike DOFs (a scalar "
             "spring), whose K cannot be a parameter; bind the springs along one axis only"
+        )
+
+
+def _refuse_solids(f: DeckField, deck) -> None:
+    """A MAT1 that a PSOLID uses: the solids (``fe.elements.tetra``) take no parameter, so a
+    binding would leave them at the deck's values while the shells and lines change: refused,
+    naming the PSOLIDs."""
+    solids = [i for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
+    if solids:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: PSOLID {', '.join(map(str, solids))} use(s) that MAT1, "
+            "and a solid's material cannot be a parameter; give the solids a MAT1 of their own"
         )
 
 

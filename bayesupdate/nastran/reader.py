@@ -478,9 +478,10 @@ def _finish(ctx, eids, pids, props):
 
     ctx.builder.node_names = grid_name
     structure = ctx.builder.build(check=False)
-    springs, parts = cards.springs.scalar_springs(ctx.scalar_springs, structure.parts)
-    if springs is not None:
-        structure = replace(structure, elements=(*structure.elements, springs), parts=parts)
+    for finish in ctx.finishers:
+        family, parts = finish(structure.parts)
+        if family is not None:
+            structure = replace(structure, elements=(*structure.elements, family), parts=parts)
     check_connected(structure, grid_name)
     if props is not None and eids.size:
         structure = _patch_shells(structure, pids, props, ctx.lumped)

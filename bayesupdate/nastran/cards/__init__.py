@@ -1,14 +1,15 @@
-"""Nastran line, point, spring and rigid cards -> ``StructureBuilder`` calls: one file per card
-family, one registry.
+"""Nastran line, point, spring, rigid and solid cards -> ``StructureBuilder`` calls or element
+families: one file per card family, one registry.
 
-Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``) names its ``CARDS``
-and has ``add(ctx)``, which converts them card by card (``common.Context.each``: a refused card
-is recorded and the next converted).  ``FAMILIES`` is the registry, in the order the reader adds
+Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``, ``solids``) names
+its ``CARDS`` and has ``add(ctx)``, which converts them card by card (``common.Context.each``: a
+refused card is recorded and the next converted); a family the builder has no call for (scalar
+springs, solids) is added to the built structure by a ``Context.finishers`` entry.  ``FAMILIES`` is the registry, in the order the reader adds
 them; a new card family is one new file here and one entry in ``FAMILIES`` (and its names in
 ``deck.ELEMENT_CARDS``).  Shells (thousands) are converted as arrays in ``reader``.
 """
 
-from bayesupdate.nastran.cards import beams, masses, rigid, rods, scalar, springs
+from bayesupdate.nastran.cards import beams, masses, rigid, rods, scalar, solids, springs
 from bayesupdate.nastran.cards.beams import L_DIMS, L_SECTIONS, library_dims, pbeam_layout
 from bayesupdate.nastran.cards.common import (
     ELEMENTS,
@@ -26,7 +27,7 @@ from bayesupdate.nastran.cards.rods import rod_values
 from bayesupdate.nastran.cards.springs import pbush_k, pbush_lines
 
 #: the card families, in the order the reader adds them (scalar points first: elements use them)
-FAMILIES = (scalar, beams, rods, masses, springs, rigid)
+FAMILIES = (scalar, beams, rods, masses, springs, rigid, solids)
 
 # the line families, re-built alone where a binding changes them (``nastran.lines``)
 add_beams, add_rods = beams.add, rods.add
@@ -38,7 +39,7 @@ GRID_FIELDS = {
     "CONM1": ("G",), "CMASS1": ("G1", "G2"), "CMASS2": ("G1", "G2"), "RBAR": ("GA", "GB"),
     "CELAS3": (), "CELAS4": (), "CMASS3": (), "CMASS4": (),
     "RBE2": ("GN",), "RBE3": ("REFGRID",), "CQUAD4": ("G1", "G2", "G3", "G4"),
-    "CTRIA3": ("G1", "G2", "G3"),
+    "CTRIA3": ("G1", "G2", "G3"), "CTETRA": tuple(f"G{i}" for i in range(1, 11)),
 }  # fmt: skip
 
 

@@ -24,8 +24,9 @@ from bayesupdate.nastran.frames import Grids
 #: element, property and material cards by family (``Context`` tables)
 ELEMENTS = ("CBAR", "CBEAM", "CROD", "CONROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3",
             "CMASS4", "CELAS1", "CELAS2", "CELAS3", "CELAS4", "CBUSH", "RBE2", "RBE3", "RBAR",
-            "CQUAD4", "CTRIA3")  # fmt: skip
-PROPERTIES = ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS")
+            "CQUAD4", "CTRIA3", "CTETRA")  # fmt: skip
+PROPERTIES = ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS",
+              "PSOLID")  # fmt: skip
 
 
 @dataclass
@@ -58,6 +59,10 @@ class Context:
     #: CELAS between unlike DOFs: [(part name, k, End, End or None)] (``springs``,
     #: ``fe.elements.scalar_spring``), added to the built structure (``reader``)
     scalar_springs: list = field(default_factory=list)
+    #: functions parts -> (element family or None, parts extended with its part names) that
+    #: add what the builder has no call for (the families held in ``Structure.elements``:
+    #: scalar springs, solids), run in order on the built structure (``reader``)
+    finishers: list = field(default_factory=list)
 
     @cached_property
     def grids_set(self) -> set:

@@ -32,6 +32,7 @@ def add(ctx: Context) -> None:
     PBUSH."""
     ctx.each(("CELAS1", "CELAS2", "CELAS3", "CELAS4"), _add_celas)
     ctx.each(("CBUSH",), _add_cbush)
+    ctx.finishers.append(lambda parts: scalar_springs(ctx.scalar_springs, parts))
 
 
 def _add_celas(ctx: Context, e) -> None:

@@ -4,9 +4,12 @@ families: one file per card family, one registry.
 Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``, ``solids``) names
 its ``CARDS`` and has ``add(ctx)``, which converts them card by card (``common.Context.each``: a
 refused card is recorded and the next converted); a family the builder has no call for (scalar
-springs, solids) is added to the built structure by a ``Context.finishers`` entry.  ``FAMILIES`` is the registry, in the order the reader adds
-them; a new card family is one new file here and one entry in ``FAMILIES`` (and its names in
-``deck.ELEMENT_CARDS``).  Shells (thousands) are converted as arrays in ``reader``.
+springs, solids) is added to the built structure by a ``Context.finishers`` entry.
+``FAMILIES`` is the registry, in the order the reader adds them.  A new card family is one new
+file here plus its registrations: an entry in ``FAMILIES`` (its ``CARDS`` join
+``deck.ELEMENT_CARDS``), its cards' field tables (``bulk.FIELDS``), its element and property
+names (``common.ELEMENTS`` / ``PROPERTIES``, ``deck.FAMILIES``' id spaces) and its GRID fields
+(``GRID_FIELDS``).  Shells (thousands) are converted as arrays in ``reader``.
 """
 
 from bayesupdate.nastran.cards import beams, masses, rigid, rods, scalar, solids, springs

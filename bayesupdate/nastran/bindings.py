@@ -32,7 +32,7 @@ I11..I33
 CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
-A MAT1 that a PSOLID uses is refused: the solids (``fe.elements.tetra``) take no parameter.
+A MAT1 that a PSOLID or a PTUBE uses is refused: solids and tubes take no parameter.
 
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
@@ -436,7 +436,7 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
     if f.card in LINE_PROPERTIES or FIELDS[f.card][f.field][1] == "card":
         return out
     if f.card == "MAT1":
-        _refuse_solids(f, deck)
+        _refuse_unbound_users(f, deck)
     if f.card == "MAT1" and f.field == "G":
         _refuse_shell_g(f, deck)
         return out
@@ -482,15 +482,16 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
         )
 
 
-def _refuse_solids(f: DeckField, deck) -> None:
-    """A MAT1 that a PSOLID uses: the solids (``fe.elements.tetra``) take no parameter, so a
-    binding would leave them at the deck's values while the shells and lines change: refused,
-    naming the PSOLIDs."""
-    solids = [i for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
-    if solids:
+def _refuse_unbound_users(f: DeckField, deck) -> None:
+    """A MAT1 that a PSOLID or a PTUBE uses: their elements (``fe.elements.tetra``, a CTUBE's
+    rod) are not re-built by any binding, so one would leave them at the deck's values while
+    the shells and lines change: refused, naming the properties."""
+    users = [f"{p.name} {i}" for i, p in deck.table("PSOLID", "PTUBE").items()
+             if p["MID"] in f.ids]  # fmt: skip
+    if users:
         raise BayesUpdateError(
-            f"parameter binds {f.spec!r}: PSOLID {', '.join(map(str, solids))} use(s) that MAT1, "
-            "and a solid's material cannot be a parameter; give the solids a MAT1 of their own"
+            f"parameter binds {f.spec!r}: {', '.join(users)} use(s) that MAT1, whose solids and "
+            "tubes cannot take a parameter; give them a MAT1 of their own"
         )
 
 

@@ -86,6 +86,8 @@ FIELDS = {
         "CROD": "EID PID G1 G2",
         "PROD": "PID MID A=0. J=0. C NSM=0.",
         "CONROD": "EID G1 G2 MID A=0. J=0. C NSM=0.",
+        "CTUBE": "EID PID G1 G2",
+        "PTUBE": "PID MID OD T NSM=0. OD2",
         "CONM2": "EID G CID=0 M=0. X1=0. X2=0. X3=0. - I11=0. I21=0. I22=0. I31=0. I32=0. I33=0.",
         "CONM1": "EID G CID=0 M11=0. M21=0. M22=0. M31=0. M32=0. M33=0. M41=0. M42=0. "
         "M43=0. M44=0. M51=0. M52=0. M53=0. M54=0. M55=0. M61=0. M62=0. M63=0. M64=0. M65=0. "

@@ -38,6 +38,7 @@ add_beams, add_rods = beams.add, rods.add
 #: the grid fields of each element card (RBE2 / RBE3 lists: ``element_grids``)
 GRID_FIELDS = {
     "CBAR": ("GA", "GB"), "CBEAM": ("GA", "GB"), "CROD": ("G1", "G2"), "CONROD": ("G1", "G2"),
+    "CTUBE": ("G1", "G2"),
     "CBUSH": ("GA", "GB"), "CELAS1": ("G1", "G2"), "CELAS2": ("G1", "G2"), "CONM2": ("G",),
     "CONM1": ("G",), "CMASS1": ("G1", "G2"), "CMASS2": ("G1", "G2"), "RBAR": ("GA", "GB"),
     "CELAS3": (), "CELAS4": (), "CMASS3": (), "CMASS4": (),

@@ -191,8 +191,8 @@ def test_stiffness_against_mystran(tmp_path):
 
 
 def test_refusals_in_one_message(tmp_path):
-    """A ten-node CTETRA, a fluid PSOLID, a flat CTETRA and a MAT1 with NU = 0.5: each refused
-    with its card, in one message."""
+    """A ten-node CTETRA, a fluid PSOLID, a flat CTETRA, a PSOLID on a MAT1 with NU = 0.5 and a
+    CTETRA naming a missing GRID: each refused once with its card, in one message."""
     extra = [
         "CTETRA,9001,1,1,2,4,5,6,7",
         ",8,9,10,11",
@@ -202,14 +202,17 @@ def test_refusals_in_one_message(tmp_path):
         "MAT1,3,1.+11,,0.5,1000.",
         "PSOLID,3,3",
         "CTETRA,9004,3,1,2,4,5",
+        "CTETRA,9005,1,1,2,4,999999",
     ]
     deck = bar_deck(tmp_path / "bad.bdf", extra=extra)
     with pytest.raises(BayesUpdateError) as err:
         load_nastran_model(str(deck))
     text = str(err.value)
-    for where in ("CTETRA 9001", "PSOLID 2", "CTETRA 9003", "CTETRA 9004"):
+    for where in ("CTETRA 9001", "PSOLID 2", "CTETRA 9003", "PSOLID 3"):
         assert where in text
     assert "ten nodes" in text and "SMECH" in text and "no volume" in text and "NU = 0.5" in text
+    assert "CTETRA 9005: GRID 999999 does not exist" in text
+    assert text.count("PSOLID 3") == 1 and text.count("CTETRA 9005") == 1
 
 
 def test_binding_a_solid_material_is_refused(tmp_path):

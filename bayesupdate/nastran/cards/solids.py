@@ -21,35 +21,76 @@ FLAT = 1e-10
 
 
 def add(ctx: Context) -> None:
-    """Each CTETRA as a record (nodes, E, NU, RHO x WTMASS, part "PSOLID pid"); the
+    """The CTETRA cards as records (nodes, E, NU, RHO x WTMASS, part "PSOLID pid"); the
     ``fe.elements.tetra.Tetrahedra`` of all of them joins the built structure
-    (``Context.finishers``)."""
-    records = []
-    ctx.each(("CTETRA",), lambda ctx, e: records.append(_record(ctx, e)))
+    (``Context.finishers``).  Each card's fields are read once; its GRIDs, volume and material
+    are then found for all cards together (a material once per PSOLID), and a card with a
+    missing GRID or no volume is refused by name."""
+    cards, grid_ids, materials = [], [], {}
+    ctx.each(("CTETRA",), lambda ctx, e: _fields(ctx, e, cards, grid_ids, materials))
+    if not cards:
+        return
+    ids = np.array(grid_ids, dtype=np.int64)
+    rows, found = _rows(ctx, cards, ids)
+    corners = ctx.grids.xyz[rows]
+    edges = corners[:, :, None] - corners[:, None]
+    longest = np.sqrt(np.einsum("eabi,eabi->eab", edges, edges).max(axis=(1, 2)))
+    volume = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / 6.0
+    repeated = np.sort(ids, axis=1)
+    flat = (volume <= FLAT * longest**3) | np.any(repeated[:, 1:] == repeated[:, :-1], axis=1)
+    for i in np.flatnonzero(flat & found):
+        ctx.refusals.guard(lambda i=i: cards[i][0].fail(
+            f"its four corners span no volume ({volume[i]:.3g} for edges up to {longest[i]:.3g})"
+        ))  # fmt: skip
+    keep = np.flatnonzero(found & ~flat)
+    records = [(ctx.node[rows[i]], *materials[cards[i][1]]) for i in keep]
     if records:
         ctx.finishers.append(lambda parts: tetrahedra(records, parts, ctx.lumped))
 
 
-def _record(ctx: Context, e) -> tuple:
+def _fields(ctx: Context, e, cards: list, grid_ids: list, materials: dict) -> None:
+    """A CTETRA's corner GRID ids and PSOLID, its material completed once per PSOLID
+    ((E, NU, RHO x WTMASS, part name) in ``materials``); refused with its card where the card
+    or its PSOLID or MAT1 cannot be used."""
     p = ctx.prop(e, ("PSOLID",))
     if any(not e.is_blank(f"G{i}") for i in range(5, 11)):
         e.fail("a CTETRA with mid-side GRIDs (G5-G10, ten nodes) is not supported; give the "
                "four corners only")  # fmt: skip
-    if str(p["FCTN"]).strip().upper() != "SMECH":
-        p.fail(f"FCTN {p['FCTN']}: only a structural solid (SMECH) is supported")
-    mid = p.int("MID", positive=True)
-    m = mat1(ctx, mid, p)
-    if not -1 < m.NU < 0.5:
-        e.fail(f"MAT1 {mid}: NU = {m.NU:.4g} (given, or from E and G) is outside (-1, 0.5), "
-               "which a solid cannot take")  # fmt: skip
-    rows = ctx.rows(e, ("G1", "G2", "G3", "G4"))
-    corners = ctx.grids.xyz[rows]
-    edges = corners[:, None] - corners[None]
-    longest = np.sqrt(np.max(np.einsum("abi,abi->ab", edges, edges)))
-    volume = abs(np.linalg.det(corners[1:] - corners[0])) / 6.0
-    if len(set(rows.tolist())) < 4 or not volume > FLAT * longest**3:
-        e.fail(f"its four corners span no volume ({volume:.3g} for edges up to {longest:.3g})")
-    return ctx.node[rows], m.E, m.NU, m.RHO * ctx.wtmass, f"PSOLID {p.id()}"
+    pid = p.id()
+    if pid not in materials:
+        materials[pid] = _material(ctx, p)
+    if materials[pid] is None:
+        return
+    grid_ids.append([e.int(f"G{i}", positive=True) for i in range(1, 5)])
+    cards.append((e, pid))
+
+
+def _material(ctx: Context, p):
+    """(E, NU, RHO x WTMASS, part name) of a PSOLID, or None when it is refused (recorded once,
+    with the PSOLID's or the MAT1's card)."""
+
+    def read():
+        if str(p["FCTN"]).strip().upper() != "SMECH":
+            p.fail(f"FCTN {p['FCTN']}: only a structural solid (SMECH) is supported")
+        mid = p.int("MID", positive=True)
+        m = mat1(ctx, mid, p)
+        if not -1 < m.NU < 0.5:
+            p.fail(f"MAT1 {mid}: NU = {m.NU:.4g} (given, or from E and G) is outside (-1, 0.5), "
+                   "which a solid cannot take")  # fmt: skip
+        return m.E, m.NU, m.RHO * ctx.wtmass, f"PSOLID {p.id()}"
+
+    return ctx.refusals.guard(read)
+
+
+def _rows(ctx: Context, cards: list, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((n, 4) grid rows of the cards' corners, (n,) True where all four GRIDs exist); a card
+    naming a missing GRID is refused by name (``Grids.index``)."""
+    known = ctx.grids.ids
+    rows = np.clip(np.searchsorted(known, ids), 0, max(len(known) - 1, 0))
+    found = known[rows] == ids if len(known) else np.zeros(ids.shape, bool)
+    for i in np.flatnonzero(~found.all(axis=1)):
+        ctx.refusals.guard(ctx.grids.index, ids[i], cards[i][0])
+    return rows, found.all(axis=1)
 
 
 def tetrahedra(records: list, parts: tuple, lumped: bool):

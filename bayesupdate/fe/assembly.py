@@ -470,9 +470,9 @@ def allowed_rigid(nodes: np.ndarray, tr, exempt=()) -> np.ndarray:
 
 
 def _moving(R: np.ndarray) -> np.ndarray:
-    """The columns' span of R (n, r) without the motions that are zero on every column's DOFs
-    (a motion allowed only because it moves exempt DOFs alone: a scalar point's held rotations
-    about itself); R itself where none is."""
+    """A basis of the span of R's columns (n, r) without the combinations that vanish on all
+    its rows (motions allowed only because they move exempt DOFs alone, e.g. the rotations of
+    a scalar point about itself); R itself where no combination does."""
     if R.shape[1] == 0:
         return R
     s, v = np.linalg.svd(R, full_matrices=False)[1:]

@@ -1,7 +1,7 @@
 """CROD (with PROD), CONROD and CTUBE (with PTUBE) as ``fe.elements.rod`` elements (MSC Nastran
 QRG).  A CTUBE is the CROD of its tube (QRG PTUBE: outer diameter OD, wall T, T = 0 a solid
 circular rod): A = pi (OD^2 - D_i^2) / 4 and J = pi (OD^4 - D_i^4) / 32 with D_i = OD - 2T.  A
-tapered PTUBE (OD2 other than OD) and a wall T outside (0, OD/2] are refused."""
+tapered PTUBE (OD2 other than OD) and a wall T outside [0, OD/2] are refused."""
 
 import numpy as np
 

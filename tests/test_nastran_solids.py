@@ -235,3 +235,42 @@ def test_reduced_basis_over_a_bound_mass_on_the_solids(tmp_path):
         full = model.predict({"m": m}, n_modes=6).frequencies_hz
         assert rom.predict({"m": m}).frequencies_hz[:6] == pytest.approx(full, rel=1e-6)
         assert model.total_mass({"m": m})[0] == pytest.approx(RHO * L * B * H + m, rel=1e-12)
+
+
+def _turned_deck(path, turn, spc):
+    """The bar in 8 x 2 x 2 cubes turned by ``turn`` (3, 3) with every GRID's CD the turned frame
+    (None: as built, in basic); ``spc``: component 1 (along the bar) held at its x = 0 end."""
+    grids, tets = bar_cards(8, 2, 2)
+    lines = ["SOL 103", "CEND", "METHOD = 1", *(["SPC = 1"] if spc else []), "BEGIN BULK",
+             "EIGRL,1,,,12", f"MAT1,1,{E:.4E},,{NU},{RHO}", "PSOLID,1,1", *tets]  # fmt: skip
+    if turn is not None:
+        z, x = turn @ [0.0, 0.0, 1.0], turn @ [1.0, 0.0, 0.0]
+        lines += [f"CORD2R,5,,0.,0.,0.,{z[0]:.12f},{z[1]:.12f},{z[2]:.12f}",
+                  f",{x[0]:.12f},{x[1]:.12f},{x[2]:.12f}"]  # fmt: skip
+    for line in grids:
+        _, gid, _, *p = line.split(",")
+        q = np.array(p, float) if turn is None else turn @ np.array(p, float)
+        cd = "" if turn is None else ",5"
+        lines.append(f"GRID,{gid},,{q[0]:.12f},{q[1]:.12f},{q[2]:.12f}{cd}")
+        if spc and float(p[0]) == 0.0:
+            lines.append(f"SPC1,1,1,{gid}")
+    path.write_text("\n".join([*lines, "ENDDATA"]) + "\n")
+    return str(path)
+
+
+@pytest.mark.parametrize("spc", [False, True])
+def test_turned_bar_in_its_grids_frames(tmp_path, spc):
+    """The bar turned by 30, -20 and 50 degrees about x, y, z with every GRID in the turned frame
+    (CD): the same modes as the bar in basic (1e-10) and the same rigid modes: six when free,
+    three (along y and z, and the twist) with the end held along the bar in the GRIDs' frames
+    (the AUTOSPC holds of the rotations then lie in those frames too)."""
+    c, s = np.cos(np.radians([30, -20, 50])), np.sin(np.radians([30, -20, 50]))
+    rx = np.array([[1, 0, 0], [0, c[0], -s[0]], [0, s[0], c[0]]])
+    ry = np.array([[c[1], 0, s[1]], [0, 1, 0], [-s[1], 0, c[1]]])
+    rz = np.array([[c[2], -s[2], 0], [s[2], c[2], 0], [0, 0, 1]])
+    plain = load_nastran_model(_turned_deck(tmp_path / "a.bdf", None, spc)).solve(n_modes=8)
+    turned = load_nastran_model(_turned_deck(tmp_path / "b.bdf", rz @ ry @ rx, spc)).solve(
+        n_modes=8
+    )
+    assert plain.modes.n_rigid == turned.modes.n_rigid == (3 if spc else 6)
+    assert turned.modes.frequencies_hz == pytest.approx(plain.modes.frequencies_hz, rel=1e-10)

@@ -274,3 +274,25 @@ def test_turned_bar_in_its_grids_frames(tmp_path, spc):
     )
     assert plain.modes.n_rigid == turned.modes.n_rigid == (3 if spc else 6)
     assert turned.modes.frequencies_hz == pytest.approx(plain.modes.frequencies_hz, rel=1e-10)
+
+
+def test_consistent_mass_carries_the_blocks_exact_inertia(tmp_path):
+    """With COUPMASS 1 the tetrahedra's consistent mass integrates rho x x^T exactly, so the
+    bar's rigid-body inertia about its centre is the block's, m (B^2 + H^2) / 12 about x and so
+    on, with no products (``bayesupdate modes --json``); lumped at the corners it is larger
+    (the corners lie farther out)."""
+    m = RHO * L * B * H
+    exact = {"ixx": m * (B**2 + H**2) / 12, "iyy": m * (L**2 + H**2) / 12,
+             "izz": m * (L**2 + B**2) / 12}  # fmt: skip
+    for coupled in (True, False):
+        deck = bar_deck(tmp_path / f"bar{coupled}.bdf", coupled)
+        command = [sys.executable, "-m", "bayesupdate", "modes", "--model", str(deck), "--json"]
+        out = subprocess.run(command, capture_output=True, text=True, check=True)
+        inertia = json.loads(out.stdout)["inertia"]
+        if coupled:
+            for key, value in exact.items():
+                assert inertia[key] == pytest.approx(value, rel=1e-12)
+            for key in ("ixy", "ixz", "iyz"):
+                assert abs(inertia[key]) < 1e-12 * exact["ixx"]
+        else:
+            assert inertia["ixx"] > 1.2 * exact["ixx"]

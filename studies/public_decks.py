@@ -27,6 +27,12 @@ CBARs' coupled mass, as before, modes 1-10 were off by up to -0.048 %);
 consistent shell mass); the Goland wing (``bugs/msc_dscmcol``, MSC 2018.1, one mode) 1.98144 Hz
 against 1.981382 (+2.9e-5); MSC's beam_modes deck, modes 1-10 to the f06's printed digits.
 
+On every deck of the same commit's ``models`` folder (231, taken file by file with ``git show``;
+one file's object is missing from the mirror), 2026-11-30: 41 read to a model with no refusal,
+39 before the four-node CTETRA (2,929 cards in 42 decks) and CTUBE were read.  The refusals
+are led by CHEXA (4,997 cards in 68 decks), CPENTA (457 in 43), PCOMP (360 in 48) and CSHEAR
+(164 in 21).
+
 Run: PYTHONPATH=. .venv/bin/python studies/public_decks.py /path/to/pyNastran/models
 """
 

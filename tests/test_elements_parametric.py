@@ -11,6 +11,7 @@ masses, springs) under the one assembler loop (``fe.assembly.Assembler``).
 * The line families share n_elements, dofs and has_mass (``base.LineElements``).
 """
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -151,13 +152,15 @@ def test_property_table_is_the_families_declarations():
     (``Bindable``): name, what it acts on, unit and how it enters K and M, row for row."""
     import bayesupdate.fe.model as fe_model
 
-    rows = [
-        r for r in fe_model.__doc__.splitlines() if r and r.split()[0] in fe_model.PROPERTY_TERMS
-    ]
+    lines = fe_model.__doc__.splitlines()
+    rows = [r for r in lines if r and r.split()[0] in fe_model.PROPERTY_TERMS]
     assert len(rows) == len(base.bindable())
+    # the columns are the runs of "=" of the table's rule
+    rule = next(r for r in lines if r.startswith("=="))
+    spans = [m.span() for m in re.finditer(r"=+", rule)]
     for row in rows:
-        name = row[:17].strip()
-        acts_on, unit, enters = row[19:63].strip(), row[63:73].strip(), row[73:].strip()
+        name, acts_on, unit = (row[a:b].strip() for a, b in spans[:3])
+        enters = row[spans[3][0] :].strip()
         family, p = base.bindable()[name]
         assert (acts_on, unit) == (p.acts_on, p.unit)
         # a non-linear one may name the matrix it acts on ("K non-linear": the bend factor)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.assembly import ElementProperties
 from bayesupdate.fe.elements.base import ElementSettings
 from bayesupdate.fe.elements.tetra import Tetrahedra, elasticity
 from bayesupdate.fe.sparse_modal import ModalSettings
@@ -52,13 +53,18 @@ def bar_deck(path, coupled=False, extra=(), material=f"MAT1,1,{E:.4E},,{NU},{RHO
     return path
 
 
-def random_tetra(seed=148):
+def random_tetra(seed=148, lumped=False):
     """A seeded tetrahedron (the unit one, each corner moved up to 0.2) and its element."""
     rng = np.random.default_rng(seed)
     xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]) + rng.uniform(-0.2, 0.2, (4, 3))
     one = np.ones(1)
-    return xyz, Tetrahedra(np.arange(4)[None], E * one, NU * one, RHO * one, np.zeros(1, bool),
-                           np.zeros(1, np.int64))  # fmt: skip
+    return xyz, Tetrahedra(np.arange(4)[None], xyz[None], E * one, NU * one, RHO * one,
+                           np.full(1, lumped), np.zeros(1, np.int64))  # fmt: skip
+
+
+def _unit(tet):
+    """The element's (K, M) at factor 1 on E and rho (``ElementProperties`` of its nominal)."""
+    return tet.matrices(ElementProperties(tet.nominal()), ElementSettings())
 
 
 def test_tetra_stiffness_is_the_exact_strain_energy_of_a_linear_field():
@@ -66,7 +72,7 @@ def test_tetra_stiffness_is_the_exact_strain_energy_of_a_linear_field():
     V/2 eps^T D eps with eps from sym(A) (engineering shears), and a rigid motion (A skew plus a
     translation) must cost nothing: K has exactly six zero eigenvalues."""
     xyz, tet = random_tetra()
-    K = tet.matrices(xyz, ElementSettings())[0][0]
+    K = _unit(tet)[0][0]
     V = abs(np.linalg.det(xyz[1:] - xyz[0])) / 6
     A = np.random.default_rng(148).standard_normal((3, 3))
     u = (xyz @ A.T + [0.3, -0.1, 0.2]).ravel()
@@ -84,13 +90,12 @@ def test_tetra_mass_lumped_and_consistent():
     points at a = 0.5854102, b = 0.1381966 barycentric, weights 1/4)."""
     xyz, tet = random_tetra()
     V = abs(np.linalg.det(xyz[1:] - xyz[0])) / 6
-    lumped = Tetrahedra(tet.nodes, tet.E, tet.nu, tet.rho, np.ones(1, bool), tet.part)
-    M_l = lumped.matrices(xyz, ElementSettings())[1][0]
+    M_l = _unit(random_tetra(lumped=True)[1])[1][0]
     assert np.allclose(M_l, RHO * V / 4 * np.eye(12), rtol=1e-14, atol=0)
     a, b = 0.5854101966249685, 0.1381966011250105
     points = b + (a - b) * np.eye(4)  # barycentric N at the four points
     exact = RHO * V / 4 * sum(np.outer(n, n) for n in points)
-    M_c = tet.matrices(xyz, ElementSettings())[1][0]
+    M_c = _unit(tet)[1][0]
     assert np.allclose(M_c[0::3, 0::3], exact, rtol=1e-12, atol=0)
     assert M_c.sum() / 3 == pytest.approx(RHO * V, rel=1e-14)
 
@@ -215,26 +220,65 @@ def test_refusals_in_one_message(tmp_path):
     assert text.count("PSOLID 3") == 1 and text.count("CTETRA 9005") == 1
 
 
-def test_binding_a_solid_material_is_refused(tmp_path):
-    deck = bar_deck(tmp_path / "bar.bdf")
-    with pytest.raises(BayesUpdateError, match="PSOLID 1 use"):
-        load_nastran_model(str(deck), {"e": {"binds": "MAT1 1 E scale"}})
+def _two_materials(path, factor=1.0, extra=()):
+    """The bar with its far half (x > L/2) on PSOLID 2 and MAT1 2, whose E is ``factor`` x
+    MAT1 1's (typed into the deck)."""
+    deck = bar_deck(path, extra=[f"MAT1,2,{E * factor:.12E},,{NU},{RHO}", "PSOLID,2,2", *extra])
+    grids = {int(g.split(",")[1]): float(g.split(",")[3]) for g in bar_cards()[0]}
+    lines = []
+    for line in deck.read_text().splitlines():
+        if line.startswith("CTETRA,"):
+            eid, pid, *corners = line.split(",")[1:]
+            if all(grids[int(c)] >= L / 2 - 1e-9 for c in corners):
+                line = f"CTETRA,{eid},2,{','.join(corners)}"
+        lines.append(line)
+    path.write_text("\n".join(lines) + "\n")
+    return str(path)
 
 
-def test_reduced_basis_over_a_bound_mass_on_the_solids(tmp_path):
-    """A CONM2 on the bar's end bound as a parameter: the solids enter the reduced basis's
-    constant term (``fe.reduced.affine``) and the certified basis gives the full solve's
-    frequencies at points inside the box (certified to 1e-6)."""
+def test_solid_material_factors_scale_the_modes(tmp_path):
+    """MAT1 E and RHO of the solids as scale factors (or as values): every frequency times
+    sqrt(E factor / RHO factor) and the mass times the RHO factor (1e-12)."""
+    deck = str(bar_deck(tmp_path / "bar.bdf"))
+    f0 = load_nastran_model(deck).predict(n_modes=8).frequencies_hz
+    scaled = load_nastran_model(deck, {"e": {"binds": "MAT1 1 E scale"},
+                                       "r": {"binds": "MAT1 1 RHO scale"}})  # fmt: skip
+    valued = load_nastran_model(deck, {"e": {"binds": "MAT1 1 E"}, "r": {"binds": "MAT1 1 RHO"}})
+    assert valued.default_parameters() == pytest.approx({"e": E, "r": RHO})
+    for e, r in ((1.7, 1.0), (0.6, 2.5)):
+        f = scaled.predict({"e": e, "r": r}, n_modes=8).frequencies_hz
+        assert f == pytest.approx(f0 * np.sqrt(e / r), rel=1e-12)
+        assert scaled.total_mass({"e": e, "r": r})[0] == pytest.approx(RHO * L * B * H * r)
+        g = valued.predict({"e": e * E, "r": r * RHO}, n_modes=8).frequencies_hz
+        assert g == pytest.approx(f, rel=1e-12)
+
+
+def test_one_materials_e_equals_the_deck_edited_by_hand(tmp_path):
+    """The far half's MAT1 2 E as a factor: at 1.35 the modes of the deck with 1.35 E typed in
+    (1e-10); the certified reduced basis over [0.5, 2] gives full solves' modes to 1e-6."""
     from bayesupdate.fe.reduced import ReducedFEModel
     from bayesupdate.fe.reduced.settings import ReducedSettings
 
-    deck = bar_deck(tmp_path / "bar.bdf", extra=["CONM2,99,100,,3.0"])
-    model = load_nastran_model(str(deck), {"m": {"binds": "CONM2 99 M", "bounds": [0.5, 6.0]}})
-    rom = ReducedFEModel(model, settings=ReducedSettings(n_modes=6, tol=1e-6, seed=0)).build()
-    for m in (0.7, 4.2):
-        full = model.predict({"m": m}, n_modes=6).frequencies_hz
-        assert rom.predict({"m": m}).frequencies_hz[:6] == pytest.approx(full, rel=1e-6)
-        assert model.total_mass({"m": m})[0] == pytest.approx(RHO * L * B * H + m, rel=1e-12)
+    model = load_nastran_model(_two_materials(tmp_path / "two.bdf"),
+                               {"e2": {"binds": "MAT1 2 E scale"}})  # fmt: skip
+    edited = load_nastran_model(_two_materials(tmp_path / "edited.bdf", 1.35))
+    f = model.predict({"e2": 1.35}, n_modes=8).frequencies_hz
+    assert f == pytest.approx(edited.predict(n_modes=8).frequencies_hz, rel=1e-10)
+    rom = ReducedFEModel(model, settings=ReducedSettings(n_modes=8, tol=1e-6, seed=0)).build()
+    assert rom.certified
+    for e2 in (0.62, 1.83):
+        full = model.predict({"e2": e2}, n_modes=8).frequencies_hz
+        assert rom.predict({"e2": e2}).frequencies_hz[:8] == pytest.approx(full, rel=1e-6)
+
+
+def test_solid_material_bindings_refused(tmp_path):
+    """A solid's MAT1 G (a solid takes E and NU), and a MAT1 that solids share with shells."""
+    deck = str(bar_deck(tmp_path / "bar.bdf"))
+    with pytest.raises(BayesUpdateError, match="PSOLID 1 use.*bind E"):
+        load_nastran_model(deck, {"g": {"binds": "MAT1 1 G scale"}})
+    shared = bar_deck(tmp_path / "shared.bdf", extra=["PSHELL,7,1,0.002", "CQUAD4,99001,7,1,2,5,4"])
+    with pytest.raises(BayesUpdateError, match="PSOLID 1 and shells or line elements share"):
+        load_nastran_model(str(shared), {"e": {"binds": "MAT1 1 E scale"}})
 
 
 def _turned_deck(path, turn, spc):
@@ -296,3 +340,24 @@ def test_consistent_mass_carries_the_blocks_exact_inertia(tmp_path):
                 assert abs(inertia[key]) < 1e-12 * exact["ixx"]
         else:
             assert inertia["ixx"] > 1.2 * exact["ixx"]
+
+
+def test_calibrate_a_solids_modulus_and_write_the_deck_back(tmp_path, capsys):
+    """``bayesupdate calibrate`` of MAT1 2 E (the far half's, as a factor) against the modes of
+    the deck with 1.35 E typed in: the factor found to 1e-6 and ``--write-bdf`` writes MAT1 2's
+    E as 1.35 x the deck's, whose modes are the target's (1e-8)."""
+    from bayesupdate.cli import main
+
+    deck = _two_materials(tmp_path / "two.bdf")
+    target = load_nastran_model(_two_materials(tmp_path / "edited.bdf", 1.35)).predict(n_modes=6)
+    study = tmp_path / "study.toml"
+    study.write_text(
+        f'[model]\nsource = "{deck}"\n[data]\n'
+        f"frequencies_hz = {list(map(float, target.frequencies_hz))}\n"
+        '[parameters.e2]\nbinds = "MAT1 2 E scale"\nbounds = [0.5, 2.0]\n'
+    )
+    out = tmp_path / "updated.bdf"
+    assert main(["calibrate", str(study), "--json", "--write-bdf", str(out)]) == 0
+    assert json.loads(capsys.readouterr().out)["parameters"]["e2"] == pytest.approx(1.35, rel=1e-6)
+    written = load_nastran_model(str(out)).predict(n_modes=6).frequencies_hz
+    assert written == pytest.approx(target.frequencies_hz, rel=1e-8)

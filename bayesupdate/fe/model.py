@@ -5,18 +5,20 @@ A ``Binding(target, property)`` ties a parameter to every element of a part (or 
 property.  Each parametric element family declares the properties it binds in its own file
 (``elements.base.Bindable``: name, field, how it enters K and M); the built-in ones are:
 
-=================  ==========================================  ========  =====================
-property           acts on                                      unit      enters K / M
-=================  ==========================================  ========  =====================
-thickness          wall of the part's beams                     m         non-linear (re-assembled)
-density            the part's beams                             kg/m^3    M linear
-youngs_modulus     the part's beams                             Pa        K linear
-modulus_factor     factor on the nominal E of the part's beams  -         K linear
-mass               total of the part's point masses (scaled)    kg        M linear
-mass_factor        factor on the part's point masses            -         M linear
-stiffness_factor   factor on the part's springs                 -         K linear
-bend_factor        extra factor dividing EI of a named bend     -         K non-linear
-=================  ==========================================  ========  =====================
+====================  ===========================================  ======  =========================
+property              acts on                                      unit    enters K / M
+====================  ===========================================  ======  =========================
+thickness             wall of the part's beams                     m       non-linear (re-assembled)
+density               the part's beams                             kg/m^3  M linear
+youngs_modulus        the part's beams                             Pa      K linear
+modulus_factor        factor on the nominal E of the part's beams  -       K linear
+mass                  total of the part's point masses (scaled)    kg      M linear
+mass_factor           factor on the part's point masses            -       M linear
+stiffness_factor      factor on the part's springs                 -       K linear
+bend_factor           extra factor dividing EI of a named bend     -       K non-linear
+solid_modulus_factor  factor on the E of the part's solids         -       K linear
+solid_density_factor  factor on the density of the part's solids   -       M linear
+====================  ===========================================  ======  =========================
 
 On a part with shells, thickness, density, youngs_modulus and modulus_factor act on its shells as
 well (shell K and M are exact sums of powers of the thickness, ``fe.assembly``).  A

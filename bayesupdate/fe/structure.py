@@ -16,7 +16,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.constraints import Constraints
-from bayesupdate.fe.elements import families_of
+from bayesupdate.fe.elements.base import held_families
 from bayesupdate.fe.sections import _SHAPE_CODE, Section
 from bayesupdate.fe.shell_model import ShellElements
 
@@ -713,7 +713,7 @@ def check_connected(structure: Structure, node_names=None) -> None:
         pairs.append(structure.shells.edges())
     if structure.constraints is not None:
         pairs.append(structure.constraints.edges())
-    family_nodes = [f.nodes.reshape(f.n_elements, -1) for f in families_of(structure)]
+    family_nodes = [f.nodes.reshape(f.n_elements, -1) for f in held_families(structure)]
     for nodes in family_nodes:
         # an element joins its nodes; one with a grounded end (-1) joins none
         joined = nodes[(nodes >= 0).all(axis=1)]

@@ -56,13 +56,13 @@ def load_nastran_model(
 
 
 def _has_mass(structure) -> bool:
-    from bayesupdate.fe.elements import families_of
+    from bayesupdate.fe.elements.base import held_families
 
     s = structure
     shells = s.shells is not None and bool(
         (s.shells.rho > 1e-200).any() or (s.shells.nsm > 0).any()
     )
-    families = any(f.has_mass() for f in families_of(s))  # general beams, rods, scalar masses
+    families = any(f.has_mass() for f in held_families(s))  # lines, scalar masses, solids
     # 1e-200: the 1e-300 that stands in for a zero RHO (a rod's lumped end masses) is no mass
     points = bool((s.mass_value > 1e-200).any() or (abs(s.mass_inertia) > 1e-200).any())
     return bool(shells or families or points or (s.beam_rho > 1e-200).any())

@@ -32,7 +32,10 @@ I11..I33
 CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
-A MAT1 that a PSOLID or a PTUBE uses is refused: solids and tubes take no parameter.
+A MAT1 that only PSOLIDs use binds their tetrahedra instead: E as ``solid_modulus_factor`` (K
+linear), RHO as ``solid_density_factor`` (M linear), a value as the factor value / the deck's.
+Refused: its G (a solid takes E and NU), a MAT1 that solids share with shells or line elements,
+and a MAT1 that a PTUBE uses (tubes take no parameter).
 
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
@@ -61,6 +64,7 @@ default off the deck, and with it every command's reference design (the pairing)
 relations (``nastran.desvar``) are per-id by design and left to their own defaults.
 """
 
+import dataclasses
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -132,7 +136,8 @@ class DeckBinding:
     """A deck field as an ``fe.model`` binding (the ``Binding`` interface: target, property).
 
     target : the spec text.  property : the FE property (module table).
-    shell, mass, spring : boolean masks over the structure's shells, point masses and springs.
+    shell, mass, spring : boolean masks over the structure's shells, point masses and springs;
+    solid : over its tetrahedra (``fe.elements.tetra``; a MAT1's E or RHO as a factor).
     factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
@@ -158,6 +163,7 @@ class DeckBinding:
     coefficients: tuple[float, ...] = ()
     offsets: tuple[float, ...] = ()
     relations: tuple[tuple[str, int, str, float, float], ...] = ()
+    solid: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, bool))
 
     def value_of(self, k: int, value: float) -> float:
         """The card value of id ``field.ids[k]`` at the parameter ``value``: C0_k + COEF_k x
@@ -287,13 +293,16 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     if not any(m.any() for m in masks.values()) and not lines:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
     wtmass = float(structure.metadata["nastran"]["wtmass"])
-    relative = prop in ("mass_factor", "stiffness_factor")  # the FE value is a factor
+    if masks["solid"].any():  # a solid MAT1 (``_refuse_unbound_users``: solids alone)
+        prop = {"E": "solid_modulus_factor", "RHO": "solid_density_factor"}[f.field]
+    relative = prop in ("mass_factor", "stiffness_factor", "solid_modulus_factor",
+                        "solid_density_factor")  # the FE value is a factor  # fmt: skip
     if prop == "line":  # re-built from the value itself (``lines``)
         factor = 1.0
-    elif f.card == "MAT1" and f.field == "E" and f.scale:
+    elif f.card == "MAT1" and f.field == "E" and f.scale and not relative:
         prop, factor = "modulus_factor", 1.0
-    elif relative == f.scale:
-        factor = wtmass if f.field == "RHO" else 1.0
+    elif relative == f.scale:  # a factor as a factor, or a value as a value
+        factor = wtmass if f.field == "RHO" and not relative else 1.0
     else:
         if np.ptp(nominal) > 1e-12 * np.abs(nominal).max() or not nominal[0] > 0:
             raise BayesUpdateError(
@@ -306,7 +315,7 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     default = 1.0 if f.scale else float(nominal.mean())
     return DeckBinding(
         f.spec, prop, f, masks["shell"], masks["mass"], masks["spring"], float(factor),
-        tuple(nominal.tolist()), default, lines=lines,
+        tuple(nominal.tolist()), default, lines=lines, solid=masks["solid"],
     )  # fmt: skip
 
 
@@ -432,11 +441,13 @@ def _masks(f: DeckField, deck, structure, cards) -> dict:
         shell=np.zeros(n_shell, bool),
         mass=np.zeros(len(s.mass_part), bool),
         spring=np.zeros(len(s.spring_part), bool),
+        solid=np.zeros(n_solids(s), bool),
     )
     if f.card in LINE_PROPERTIES or FIELDS[f.card][f.field][1] == "card":
         return out
     if f.card == "MAT1":
         _refuse_unbound_users(f, deck)
+        out["solid"] = _solid_mask(f, deck, s)
     if f.card == "MAT1" and f.field == "G":
         _refuse_shell_g(f, deck)
         return out
@@ -483,16 +494,43 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
 
 
 def _refuse_unbound_users(f: DeckField, deck) -> None:
-    """A MAT1 that a PSOLID or a PTUBE uses: their elements (``fe.elements.tetra``, a CTUBE's
-    rod) are not re-built by any binding, so one would leave them at the deck's values while
-    the shells and lines change: refused, naming the properties."""
-    users = [f"{p.name} {i}" for i, p in deck.table("PSOLID", "PTUBE").items()
-             if p["MID"] in f.ids]  # fmt: skip
-    if users:
-        raise BayesUpdateError(
-            f"parameter binds {f.spec!r}: {', '.join(users)} use(s) that MAT1, whose solids and "
-            "tubes cannot take a parameter; give them a MAT1 of their own"
-        )
+    """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), or that a PSOLID
+    uses with G bound (a solid takes E and NU) or beside shells or line elements (a solid's E
+    and RHO are factors of their own, ``fe.elements.tetra``, which one binding does not share
+    with the others): refused, naming the properties, rather than leaving them at the deck's
+    values while the rest changes."""
+    tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
+    solids = [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
+    shared = bool(_pshells_of(deck, f) or line_elements(deck, f))
+    why = ""
+    if tubes:
+        why = f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter"
+    elif solids and f.field == "G":
+        why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU; bind E"
+    elif solids and shared:
+        why = (f"{', '.join(solids)} and shells or line elements share that MAT1, which one "
+               "binding cannot scale on both")  # fmt: skip
+    if why:
+        raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}; give them a MAT1 of their own")
+
+
+def n_solids(structure) -> int:
+    """The number of the structure's tetrahedra (``fe.elements.tetra``; 0: none)."""
+    from bayesupdate.fe.elements.tetra import Tetrahedra
+
+    solids = Tetrahedra.of(structure)
+    return 0 if solids is None else solids.n_elements
+
+
+def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
+    """(n_solids,) the tetrahedra of the PSOLIDs whose MAT1 is one of ``f.ids``."""
+    from bayesupdate.fe.elements.tetra import Tetrahedra
+
+    solids = Tetrahedra.of(structure)
+    if solids is None:
+        return np.zeros(0, bool)
+    names = [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
+    return _part_mask(solids.part, list(structure.parts), names)
 
 
 def _refuse_shell_g(f: DeckField, deck) -> None:

@@ -18,6 +18,7 @@ from bayesupdate.fe.model import PROPERTY_TERMS, AffineTerms, FEModel
 from bayesupdate.nastran.bindings import (
     SIGNED_FIELDS,
     DeckBinding,
+    n_solids,
     parse_binding,
     relation_default,
     resolve,
@@ -113,7 +114,8 @@ class NastranModel(FEModel):
         if binding.property == "line":  # re-built elements (``lines``): no FE property
             return beams
         family = PROPERTY_TERMS[binding.property][0]
-        return {"beam": beams, "mass": binding.mass, "spring": binding.spring}[family]
+        return {"beam": beams, "mass": binding.mass, "spring": binding.spring,
+                "tetrahedron": binding.solid}[family]  # fmt: skip
 
     def _solve_general(self, p, props, n_modes, energies, method):
         from bayesupdate.nastran.lines import LineAssembler
@@ -331,6 +333,7 @@ def _pad(binding, structure):
         shell=grow(binding.shell, n_shell),
         mass=grow(binding.mass, len(structure.mass_part)),
         spring=grow(binding.spring, len(structure.spring_part)),
+        solid=grow(binding.solid, n_solids(structure)),
     )
 
 
@@ -405,6 +408,11 @@ def _masses_with_cards(bindings: dict, bdf) -> dict:
     return out
 
 
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two element masks share an element (masks of no elements share none)."""
+    return a.size == b.size and bool((a & b).any())
+
+
 def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
     """Refuse two parameters that set one thing: a property of the same shells, point masses
     or springs, or the same field of one card (the last would win, the other seem insensitive)."""
@@ -417,6 +425,7 @@ def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
                  and (ba.shell & bb.shell).any())
                 or (ba.mass & bb.mass).any()
                 or (ba.spring & bb.spring).any()
+                or (ba.property == bb.property and _overlap(ba.solid, bb.solid))
                 or same_card_field
             )  # fmt: skip
             if same:

@@ -7,8 +7,9 @@ DOF map and its element matrices vectorized over elements.  Two kinds:
 * ``ParametricFamily`` (registry ``PARAMETRIC``, ``register_parametric``): its properties are
   design parameters (tube beams, point masses, springs).  Its element matrices are taken at an
   ``fe.assembly.ElementProperties`` record, of which it reads the arrays named in ``fields``;
-  ``linear`` names the matrix that is linear in its factor (point masses: "M", springs: "K"),
-  or "" when the matrices must be recomputed (tube beams: wall thickness and bend factor).
+  ``linear`` names the matrices that are linear in its factors (point masses: "M", springs:
+  "K", solids: "KM", E in K and rho in M, each property's ``enters`` saying which), or "" when
+  the matrices must be recomputed (tube beams: wall thickness and bend factor).
   It declares the properties a parameter may bind (``properties``: ``Bindable`` records, the
   property name of ``fe.model.Binding``, the field it sets and how it enters K and M), its
   fields' nominal values (``nominal``) and their physical limits (``check``):
@@ -162,8 +163,9 @@ class ParametricFamily(Protocol):
     springs): its element matrices at an ``fe.assembly.ElementProperties`` record, of which it
     reads the (n,) arrays named in ``fields``.
 
-    family : the registry name (``fe.model.ParameterTerm.family``); linear : the matrix ("K" or
-    "M") that is linear in its one field (a factor on every element), or "" when the matrices
+    family : the registry name (``fe.model.ParameterTerm.family``); linear : the matrices ("K",
+    "M" or "KM") that are linear in its fields (factors on the elements; each property's
+    ``enters`` names its matrix), or "" when the matrices
     must be recomputed (``fe.reduced.affine`` interpolates them); properties : the ``Bindable``
     properties a parameter may bind on it.
     """
@@ -290,6 +292,15 @@ def families_of(structure: Any) -> tuple:
             )
     found = (cls.of(structure) for cls in FAMILIES.values())
     return tuple(f for f in found if f is not None and f.n_elements)
+
+
+def held_families(structure: Any) -> tuple:
+    """The family instances a structure holds outside its beam, point-mass and spring columns:
+    the registered ``ElementFamily`` ones (``families_of``) and the parametric ones kept in
+    ``Structure.elements`` (solids), each with elements (for the connectivity and mass checks,
+    which read the columns themselves)."""
+    parametric = (e for e in structure.elements if type(e) is PARAMETRIC.get(e.family))
+    return (*families_of(structure), *(e for e in parametric if e.n_elements))
 
 
 @dataclass(frozen=True)

@@ -13,31 +13,52 @@ of density rho is consistent, rho V / 20 (1 + delta_ab) I_3 between corners a an
 reference), or lumped, rho V / 4 on each corner's translations (PARAM COUPMASS < 1, Nastran's
 default; for this element every lumping rule gives the quarter).  A solid has no rotations: the
 rows of its corners' rotations are empty, and a GRID that only solids use has its rotations held
-by AUTOSPC, as Nastran holds them.  SI units; K [N/m], M [kg], each (n, 12, 12) on the corners'
-translations in global axes (``dofs``).
+by AUTOSPC, as Nastran holds them.  A parametric family: a factor on E scales K and a factor
+on rho scales M, each exactly linearly (the reduced basis takes them as affine terms).  SI
+units; K [N/m], M [kg], each (n, 12, 12) on the corners' translations in global axes
+(``dofs``).
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import ElementSettings, in_elements, register
+from bayesupdate.fe.elements.base import (
+    Bindable,
+    ElementSettings,
+    check_fields,
+    in_elements,
+    register_parametric,
+)
 
 #: d N_a / d (xi, eta, zeta) of the four corners' linear shape functions (3, 4)
 _REFERENCE_GRADIENT = np.hstack([-np.ones((3, 1)), np.eye(3)])
 
 
-@register
+@register_parametric
 @dataclass(frozen=True)
 class Tetrahedra:
-    """n linear tetrahedra: nodes (n, 4) corner node indices; E [Pa], nu [-], rho [kg/m^3]
-    (n,); lumped (n,) bool (mass lumped at the corners, else consistent); part (n,) part
-    indices.  An ``elements.base.ElementFamily`` held in ``Structure.elements``."""
+    """n linear tetrahedra: nodes (n, 4) corner node indices; corners (n, 4, 3) their
+    positions [m]; E [Pa], nu [-], rho [kg/m^3] (n,); lumped (n,) bool (mass lumped at the
+    corners, else consistent); part (n,) part indices.  An ``elements.base.ParametricFamily``
+    held in ``Structure.elements``: K is linear in the factor ``solid_modulus_scale`` on E (the
+    parameter ``solid_modulus_factor``), M in ``solid_density_scale`` on rho
+    (``solid_density_factor``)."""
 
-    #: registry name (a plain class attribute: not a dataclass field)
+    #: registry name; the ``ElementProperties`` fields; the matrices linear in them
     family = "tetrahedron"
+    fields = ("solid_modulus_scale", "solid_density_scale")
+    linear = "KM"
+    #: the properties a parameter binds (``fe.model.Binding``) on a part's solids
+    properties = (
+        Bindable("solid_modulus_factor", "solid_modulus_scale", "K", rule="factor",
+                 acts_on="factor on the E of the part's solids"),
+        Bindable("solid_density_factor", "solid_density_scale", "M", rule="factor",
+                 acts_on="factor on the density of the part's solids"),
+    )  # fmt: skip
 
     nodes: np.ndarray
+    corners: np.ndarray
     E: np.ndarray
     nu: np.ndarray
     rho: np.ndarray
@@ -48,17 +69,37 @@ class Tetrahedra:
     def n_elements(self) -> int:
         return int(self.nodes.shape[0])
 
+    def nominal(self) -> dict[str, np.ndarray]:
+        """Factor 1 on every element's E and rho."""
+        return {f: np.ones(self.n_elements) for f in self.fields}
+
+    def check(self, props, parts: tuple[str, ...]) -> None:
+        """Factors finite and > 0."""
+        check_fields((("solid modulus factor", props.solid_modulus_scale, None, True),
+                      ("solid density factor", props.solid_density_scale, None, True)),
+                     self.part, parts)  # fmt: skip
+
     def dofs(self) -> np.ndarray:
         """(n, 12) global DOF numbers: the three translations of corners 1-4."""
         return (6 * self.nodes[:, :, None] + np.arange(3)).reshape(-1, 12)
 
-    def matrices(self, xyz: np.ndarray, settings: ElementSettings):
-        """(K, M) (n, 12, 12) on nodes xyz (N, 3) [m] (module docstring; a solid has neither
-        beam shear nor rotary inertia to set)."""
-        volume, gradient = shape_gradients(xyz[self.nodes])
+    def matrices(self, props, settings: ElementSettings, elements=None):
+        """(K, M) (n_e, 12, 12) of ``elements`` (default all) at the factors of ``props``
+        (module docstring; a solid has neither beam shear nor rotary inertia to set)."""
+        e = slice(None) if elements is None else elements
+        volume, gradient = shape_gradients(self.corners[e])
         B = strain_matrix(gradient)
-        K = volume[:, None, None] * np.einsum("eji,ejk,ekl->eil", B, elasticity(self.E, self.nu), B)
-        return K, mass_matrix(self.rho * volume, self.lumped)
+        D = elasticity(self.E[e] * props.solid_modulus_scale[e], self.nu[e])
+        K = volume[:, None, None] * np.einsum("eji,ejk,ekl->eil", B, D, B)
+        mass = self.rho[e] * props.solid_density_scale[e] * volume
+        return K, mass_matrix(mass, self.lumped[e])
+
+    def masses(self, props, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) element masses [kg] at ``props`` and (n, 3) their centroids [m] (the nodes
+        xyz (N, 3) [m] give the corners)."""
+        corners = xyz[self.nodes]
+        volume = shape_gradients(corners)[0]
+        return self.rho * props.solid_density_scale * volume, corners.mean(axis=1)
 
     def has_mass(self) -> bool:
         return bool(np.any(self.rho > 1e-200))

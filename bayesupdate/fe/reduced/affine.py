@@ -224,15 +224,17 @@ def _beam_keys(terms: AffineTerms, n_beams: int) -> list[tuple[int, ...]]:
                 "reduced model: two parameters set the same property of one beam; "
                 "use the full model (--full)"
             )
-    for family in (c.family for c in PARAMETRIC.values() if c.linear):
-        idx = np.concatenate(
-            [t.elements for t in terms.parameters if t.family == family] + [np.zeros(0, int)]
-        )
-        if np.unique(idx).size != idx.size:
-            raise BayesUpdateError(
-                "reduced model: two parameters scale the same point mass or spring; "
-                "use the full model (--full)"
-            )
+    for family in (c for c in PARAMETRIC.values() if c.linear):
+        for kind in family.linear:
+            idx = np.concatenate(
+                [t.elements for t in terms.parameters
+                 if t.family == family.family and t.enters == kind] + [np.zeros(0, int)]
+            )  # fmt: skip
+            if np.unique(idx).size != idx.size:
+                raise BayesUpdateError(
+                    f"reduced model: two parameters scale the same {family.family}'s {kind}; "
+                    "use the full model (--full)"
+                )
     return [tuple(k) for k in keys]
 
 
@@ -255,24 +257,26 @@ def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
     k_stacks, m_stacks = [[(dofs, K0)]], [[(dofs, M0)]]
     k_entries, m_entries = [(0, 0, 1.0)], [(0, 0, 1.0)]
     for family in a.parametric.values():
-        if family.linear:
-            k = family.linear == "K"
-            stacks, entries = (k_stacks, k_entries) if k else (m_stacks, m_entries)
-            _linear_family(a, family, terms, stacks, entries)
+        for kind in family.linear:
+            stacks, entries = (k_stacks, k_entries) if kind == "K" else (m_stacks, m_entries)
+            _linear_family(a, family, kind, terms, stacks, entries)
     for f in a.families:
         k_stacks[0].append((f.dofs, f.K))
         m_stacks[0].append((f.dofs, f.M))
     return k_stacks, m_stacks, k_entries, m_entries
 
 
-def _linear_family(a, family, terms: AffineTerms, stacks: list, entries: list) -> None:
-    """Append the linear ``family``'s unscaled elements (at the defaults) to the constant term
-    of ``stacks`` and one term (its elements at factor 1, coefficient theta_j x scale) per
-    parameter j acting on it, in place."""
-    bound = [(j, t) for j, t in enumerate(terms.parameters) if t.family == family.family]
+def _linear_family(a, family, kind: str, terms: AffineTerms, stacks: list, entries: list) -> None:
+    """Append the ``kind`` ("K" or "M") matrices of the linear ``family``'s elements that no
+    parameter scales in that matrix (at the defaults) to the constant term of ``stacks``, and
+    one term (its elements at factor 1, coefficient theta_j x scale) per parameter j entering
+    that matrix on it, in place.  A family linear in both (solids: E in K, rho in M) is called
+    once per matrix."""
+    bound = [(j, t) for j, t in enumerate(terms.parameters)
+             if t.family == family.family and t.enters == kind]  # fmt: skip
     taken = np.concatenate([t.elements for _, t in bound] + [np.zeros(0, int)])
     free = np.setdiff1d(np.arange(family.n_elements), taken)
-    which = 0 if family.linear == "K" else 1
+    which = 0 if kind == "K" else 1
     X0 = a.matrices(family.family, terms.defaults)[which]
     X_unit = a.matrices(family.family, terms.unit)[which]
     dofs = family.dofs()

@@ -43,7 +43,7 @@ def add(ctx: Context) -> None:
             f"its four corners span no volume ({volume[i]:.3g} for edges up to {longest[i]:.3g})"
         ))  # fmt: skip
     keep = np.flatnonzero(found & ~flat)
-    records = [(ctx.node[rows[i]], *materials[cards[i][1]]) for i in keep]
+    records = [(ctx.node[rows[i]], corners[i], *materials[cards[i][1]]) for i in keep]
     if records:
         ctx.finishers.append(lambda parts: tetrahedra(records, parts, ctx.lumped))
 
@@ -94,8 +94,9 @@ def _rows(ctx: Context, cards: list, ids: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def tetrahedra(records: list, parts: tuple, lumped: bool):
-    """(``Tetrahedra``, the parts extended with their names) of (nodes (4,), E, NU, RHO, part
-    name) records; ``lumped``: mass a quarter at each corner (PARAM COUPMASS < 1)."""
+    """(``Tetrahedra``, the parts extended with their names) of (nodes (4,), corners (4, 3),
+    E, NU, RHO, part name) records; ``lumped``: mass a quarter at each corner (PARAM COUPMASS
+    < 1)."""
     from bayesupdate.fe.elements.tetra import Tetrahedra
 
     names = list(parts)
@@ -105,10 +106,11 @@ def tetrahedra(records: list, parts: tuple, lumped: bool):
     n = len(records)
     solids = Tetrahedra(
         nodes=np.array([r[0] for r in records], dtype=np.int64),
-        E=np.array([r[1] for r in records], dtype=float),
-        nu=np.array([r[2] for r in records], dtype=float),
-        rho=np.array([r[3] for r in records], dtype=float),
+        corners=np.array([r[1] for r in records], dtype=float),
+        E=np.array([r[2] for r in records], dtype=float),
+        nu=np.array([r[3] for r in records], dtype=float),
+        rho=np.array([r[4] for r in records], dtype=float),
         lumped=np.full(n, bool(lumped)),
-        part=np.array([names.index(r[4]) for r in records], dtype=np.int64),
+        part=np.array([names.index(r[5]) for r in records], dtype=np.int64),
     )
     return solids, tuple(names)

@@ -502,16 +502,17 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
     tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
     solids = [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
     shared = bool(_pshells_of(deck, f) or line_elements(deck, f))
+    own = "give them a MAT1 of their own"
     why = ""
     if tubes:
-        why = f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter"
+        why = f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter; {own}"
     elif solids and f.field == "G":
-        why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU; bind E"
+        why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU: bind E instead"
     elif solids and shared:
         why = (f"{', '.join(solids)} and shells or line elements share that MAT1, which one "
-               "binding cannot scale on both")  # fmt: skip
+               f"binding cannot scale on both; {own}")  # fmt: skip
     if why:
-        raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}; give them a MAT1 of their own")
+        raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}")
 
 
 def n_solids(structure) -> int:

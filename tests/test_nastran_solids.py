@@ -361,3 +361,19 @@ def test_calibrate_a_solids_modulus_and_write_the_deck_back(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["parameters"]["e2"] == pytest.approx(1.35, rel=1e-6)
     written = load_nastran_model(str(out)).predict(n_modes=6).frequencies_hz
     assert written == pytest.approx(target.frequencies_hz, rel=1e-8)
+
+
+def test_the_decks_design_variables_on_a_solids_material(tmp_path):
+    """DESVAR + DVMREL1 on the solids' MAT1 E and RHO become the parameters (their XINIT and
+    bounds); moved, every frequency is times sqrt(E ratio / RHO ratio) and the mass times the
+    RHO ratio (1e-12)."""
+    design = ["DESVAR,1,EMOD,2.1E+11,1.E+11,4.E+11", "DVMREL1,11,MAT1,1,E", ",1,1.",
+              "DESVAR,2,DENS,7850.,5000.,9000.", "DVMREL1,12,MAT1,1,RHO", ",2,1."]  # fmt: skip
+    model = load_nastran_model(str(bar_deck(tmp_path / "design.bdf", extra=design)))
+    assert model.default_parameters() == pytest.approx({"EMOD": E, "DENS": RHO})
+    assert model.default_bounds() == {"EMOD": (1e11, 4e11), "DENS": (5000.0, 9000.0)}
+    f0 = load_nastran_model(str(bar_deck(tmp_path / "bar.bdf"))).predict(n_modes=6).frequencies_hz
+    moved = {"EMOD": 1.2 * E, "DENS": 0.9 * RHO}
+    f = model.predict(moved, n_modes=6).frequencies_hz
+    assert f == pytest.approx(f0 * np.sqrt(1.2 / 0.9), rel=1e-12)
+    assert model.total_mass(moved)[0] == pytest.approx(0.9 * RHO * L * B * H, rel=1e-12)

@@ -500,7 +500,7 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
     with the others): refused, naming the properties, rather than leaving them at the deck's
     values while the rest changes."""
     tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
-    solids = [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
+    solids = _psolids_of(deck, f)
     shared = bool(_pshells_of(deck, f) or line_elements(deck, f))
     own = "give them a MAT1 of their own"
     why = ""
@@ -530,8 +530,12 @@ def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
     solids = Tetrahedra.of(structure)
     if solids is None:
         return np.zeros(0, bool)
-    names = [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
-    return _part_mask(solids.part, list(structure.parts), names)
+    return _part_mask(solids.part, list(structure.parts), _psolids_of(deck, f))
+
+
+def _psolids_of(deck, f: DeckField) -> list[str]:
+    """The part names ("PSOLID pid") of the PSOLIDs whose MAT1 is one of ``f.ids``."""
+    return [f"PSOLID {i}" for i, p in deck.table("PSOLID").items() if p["MID"] in f.ids]
 
 
 def _refuse_shell_g(f: DeckField, deck) -> None:

@@ -95,11 +95,10 @@ class Tetrahedra:
         return K, mass_matrix(mass, self.lumped[e])
 
     def masses(self, props, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(n,) element masses [kg] at ``props`` and (n, 3) their centroids [m] (the nodes
-        xyz (N, 3) [m] give the corners)."""
-        corners = xyz[self.nodes]
-        volume = shape_gradients(corners)[0]
-        return self.rho * props.solid_density_scale * volume, corners.mean(axis=1)
+        """(n,) element masses [kg] at ``props`` and (n, 3) their centroids [m], on the
+        elements' own ``corners`` as ``matrices`` (the nodes xyz are the same points)."""
+        mass = self.rho * props.solid_density_scale * volumes(self.corners)
+        return mass, self.corners.mean(axis=1)
 
     def has_mass(self) -> bool:
         return bool(np.any(self.rho > 1e-200))
@@ -109,13 +108,19 @@ class Tetrahedra:
         return in_elements(cls, structure)
 
 
+def volumes(corners: np.ndarray) -> np.ndarray:
+    """(n,) volumes [m^3] of tetrahedra with corners (n, 4, 3) [m], |det J| / 6 whatever the
+    corners' order."""
+    return np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / 6.0
+
+
 def shape_gradients(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(V (n,) [m^3], d N_a / d x (n, 3, 4) [1/m]) of tetrahedra with corners (n, 4, 3) [m]; V is
-    the volume whatever the corners' order (a zero volume gives non-finite gradients: the
-    caller refuses such an element)."""
+    """(V (n,) [m^3] (``volumes``), d N_a / d x (n, 3, 4) [1/m]) of tetrahedra with corners
+    (n, 4, 3) [m] (a zero volume gives non-finite gradients: the reader refuses such an
+    element)."""
     jac = np.einsum("ia,eaj->eij", _REFERENCE_GRADIENT, corners)
-    volume = np.abs(np.linalg.det(jac)) / 6.0
-    return volume, np.linalg.solve(jac, np.broadcast_to(_REFERENCE_GRADIENT, (len(jac), 3, 4)))
+    gradient = np.linalg.solve(jac, np.broadcast_to(_REFERENCE_GRADIENT, (len(jac), 3, 4)))
+    return volumes(corners), gradient
 
 
 def strain_matrix(gradient: np.ndarray) -> np.ndarray:

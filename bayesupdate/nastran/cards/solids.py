@@ -12,6 +12,7 @@ effect on an isotropic material.
 
 import numpy as np
 
+from bayesupdate.fe.elements.tetra import Tetrahedra, volumes
 from bayesupdate.nastran.cards.common import Context, mat1
 
 #: the cards this file converts (``cards.FAMILIES``)
@@ -35,7 +36,7 @@ def add(ctx: Context) -> None:
     corners = ctx.grids.xyz[rows]
     edges = corners[:, :, None] - corners[:, None]
     longest = np.sqrt(np.einsum("eabi,eabi->eab", edges, edges).max(axis=(1, 2)))
-    volume = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / 6.0
+    volume = volumes(corners)
     repeated = np.sort(ids, axis=1)
     flat = (volume <= FLAT * longest**3) | np.any(repeated[:, 1:] == repeated[:, :-1], axis=1)
     for i in np.flatnonzero(flat & found):
@@ -97,8 +98,6 @@ def tetrahedra(records: list, parts: tuple, lumped: bool):
     """(``Tetrahedra``, the parts extended with their names) of (nodes (4,), corners (4, 3),
     E, NU, RHO, part name) records; ``lumped``: mass a quarter at each corner (PARAM COUPMASS
     < 1)."""
-    from bayesupdate.fe.elements.tetra import Tetrahedra
-
     names = list(parts)
     for *_, name in records:
         if name not in names:

@@ -18,6 +18,8 @@ stiffness_factor      factor on the part's springs                 -       K lin
 bend_factor           extra factor dividing EI of a named bend     -       K non-linear
 solid_modulus_factor  factor on the E of the part's solids         -       K linear
 solid_density_factor  factor on the density of the part's solids   -       M linear
+hexa_modulus_factor   factor on the E of the part's bricks         -       K linear
+hexa_density_factor   factor on the density of the part's bricks   -       M linear
 ====================  ===========================================  ======  =========================
 
 On a part with shells, thickness, density, youngs_modulus and modulus_factor act on its shells as

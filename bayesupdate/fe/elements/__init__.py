@@ -9,6 +9,8 @@ element matrices vectorized over elements (SI units, global axes).
 * ``point_mass``: rigid point masses with inertia and offset (CONM2);
 * ``scalar_mass``: scalar masses (CMASS1/CMASS2);
 * ``tetra``: linear tetrahedra (CTETRA with four GRIDs);
+* ``hexa``: eight-node bricks (CHEXA with eight GRIDs; Nastran's assumed-strain brick);
+  both solids derive from ``solid.Solids`` (their record and factors);
 * ``damper``: viscous dampers (data: normal modes ignore them).
 
 ``base`` holds the two interfaces: a family whose properties are design parameters
@@ -46,6 +48,6 @@ __all__ = [
     "register_parametric",
 ]
 
-# scalar springs between any two DOFs or to ground (CELAS1/CELAS2) and linear tetrahedra
-# (CTETRA): registered last, held in ``Structure.elements``
-from bayesupdate.fe.elements import scalar_spring, tetra  # noqa: E402, F401, I001
+# scalar springs between any two DOFs or to ground (CELAS1/CELAS2), linear tetrahedra (CTETRA)
+# and bricks (CHEXA): registered last, held in ``Structure.elements``
+from bayesupdate.fe.elements import scalar_spring, tetra, hexa  # noqa: E402, F401, I001

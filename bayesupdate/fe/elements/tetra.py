@@ -23,13 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import (
-    Bindable,
-    ElementSettings,
-    check_fields,
-    in_elements,
-    register_parametric,
-)
+from bayesupdate.fe.elements.base import Bindable, ElementSettings, register_parametric
+from bayesupdate.fe.elements.solid import Solids
 
 #: d N_a / d (xi, eta, zeta) of the four corners' linear shape functions (3, 4)
 _REFERENCE_GRADIENT = np.hstack([-np.ones((3, 1)), np.eye(3)])
@@ -37,7 +32,7 @@ _REFERENCE_GRADIENT = np.hstack([-np.ones((3, 1)), np.eye(3)])
 
 @register_parametric
 @dataclass(frozen=True)
-class Tetrahedra:
+class Tetrahedra(Solids):
     """n linear tetrahedra: nodes (n, 4) corner node indices; corners (n, 4, 3) their
     positions [m]; E [Pa], nu [-], rho [kg/m^3] (n,); lumped (n,) bool (mass lumped at the
     corners, else consistent); part (n,) part indices.  An ``elements.base.ParametricFamily``
@@ -57,32 +52,6 @@ class Tetrahedra:
                  acts_on="factor on the density of the part's solids"),
     )  # fmt: skip
 
-    nodes: np.ndarray
-    corners: np.ndarray
-    E: np.ndarray
-    nu: np.ndarray
-    rho: np.ndarray
-    lumped: np.ndarray
-    part: np.ndarray
-
-    @property
-    def n_elements(self) -> int:
-        return int(self.nodes.shape[0])
-
-    def nominal(self) -> dict[str, np.ndarray]:
-        """Factor 1 on every element's E and rho."""
-        return {f: np.ones(self.n_elements) for f in self.fields}
-
-    def check(self, props, parts: tuple[str, ...]) -> None:
-        """Factors finite and > 0."""
-        check_fields((("solid modulus factor", props.solid_modulus_scale, None, True),
-                      ("solid density factor", props.solid_density_scale, None, True)),
-                     self.part, parts)  # fmt: skip
-
-    def dofs(self) -> np.ndarray:
-        """(n, 12) global DOF numbers: the three translations of corners 1-4."""
-        return (6 * self.nodes[:, :, None] + np.arange(3)).reshape(-1, 12)
-
     def matrices(self, props, settings: ElementSettings, elements=None):
         """(K, M) (n_e, 12, 12) of ``elements`` (default all) at the factors of ``props``
         (module docstring; a solid has neither beam shear nor rotary inertia to set)."""
@@ -99,13 +68,6 @@ class Tetrahedra:
         elements' own ``corners`` as ``matrices`` (the nodes xyz are the same points)."""
         mass = self.rho * props.solid_density_scale * volumes(self.corners)
         return mass, self.corners.mean(axis=1)
-
-    def has_mass(self) -> bool:
-        return bool(np.any(self.rho > 1e-200))
-
-    @classmethod
-    def of(cls, structure) -> "Tetrahedra | None":
-        return in_elements(cls, structure)
 
 
 def volumes(corners: np.ndarray) -> np.ndarray:
@@ -124,10 +86,12 @@ def shape_gradients(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def strain_matrix(gradient: np.ndarray) -> np.ndarray:
-    """(n, 6, 12) B of the constant strain (xx, yy, zz, xy, yz, zx; engineering shears) from the
-    shape-function gradients (n, 3, 4): column 3a + j is corner a's translation j."""
-    B = np.zeros((gradient.shape[0], 6, 12))
-    for a in range(4):
+    """(n, 6, 3k) B of the strain (xx, yy, zz, xy, yz, zx; engineering shears) from the
+    shape-function gradients (n, 3, k) of k corners (4: the constant strain of a tetrahedron):
+    column 3a + j is corner a's translation j."""
+    k = gradient.shape[2]
+    B = np.zeros((gradient.shape[0], 6, 3 * k))
+    for a in range(k):
         gx, gy, gz = gradient[:, 0, a], gradient[:, 1, a], gradient[:, 2, a]
         c = 3 * a
         B[:, 0, c], B[:, 3, c], B[:, 5, c] = gx, gy, gz

@@ -33,9 +33,11 @@ CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
 A MAT1 that only PSOLIDs use binds their tetrahedra instead: E as ``solid_modulus_factor`` (K
-linear), RHO as ``solid_density_factor`` (M linear), a value as the factor value / the deck's.
-Refused: its G (a solid takes E and NU), a MAT1 that solids share with shells or line elements,
-and a MAT1 that a PTUBE uses (tubes take no parameter).
+linear), RHO as ``solid_density_factor`` (M linear), a value as the factor value / the deck's;
+on CHEXA bricks ``hexa_modulus_factor`` and ``hexa_density_factor`` alike.  Refused: its G (a
+solid takes E and NU), a MAT1 that solids share with shells or line elements, a MAT1 that both
+CTETRAs and CHEXAs use (one binding acts on one element family), and a MAT1 that a PTUBE uses
+(tubes take no parameter).
 
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
@@ -137,7 +139,8 @@ class DeckBinding:
 
     target : the spec text.  property : the FE property (module table).
     shell, mass, spring : boolean masks over the structure's shells, point masses and springs;
-    solid : over its tetrahedra (``fe.elements.tetra``; a MAT1's E or RHO as a factor).
+    solid : over its tetrahedra, then its bricks (``solid_counts``; a MAT1's E or RHO as a
+    factor).
     factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
@@ -294,9 +297,10 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
     wtmass = float(structure.metadata["nastran"]["wtmass"])
     if masks["solid"].any():  # a solid MAT1 (``_refuse_unbound_users``: solids alone)
-        prop = {"E": "solid_modulus_factor", "RHO": "solid_density_factor"}[f.field]
+        prop = _solid_property(f, masks["solid"], structure)
     relative = prop in ("mass_factor", "stiffness_factor", "solid_modulus_factor",
-                        "solid_density_factor")  # the FE value is a factor  # fmt: skip
+                        "solid_density_factor", "hexa_modulus_factor",
+                        "hexa_density_factor")  # the FE value is a factor  # fmt: skip
     if prop == "line":  # re-built from the value itself (``lines``)
         factor = 1.0
     elif f.card == "MAT1" and f.field == "E" and f.scale and not relative:
@@ -496,9 +500,9 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
 def _refuse_unbound_users(f: DeckField, deck) -> None:
     """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), or that a PSOLID
     uses with G bound (a solid takes E and NU) or beside shells or line elements (a solid's E
-    and RHO are factors of their own, ``fe.elements.tetra``, which one binding does not share
-    with the others): refused, naming the properties, rather than leaving them at the deck's
-    values while the rest changes."""
+    and RHO are factors of their own, ``fe.elements.tetra`` and ``hexa``, which one binding
+    does not share with the others): refused, naming the properties, rather than leaving them
+    at the deck's values while the rest changes."""
     tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
     solids = _psolids_of(deck, f)
     shared = bool(_pshells_of(deck, f) or line_elements(deck, f))
@@ -515,22 +519,48 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
         raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}")
 
 
-def n_solids(structure) -> int:
-    """The number of the structure's tetrahedra (``fe.elements.tetra``; 0: none)."""
+def solid_counts(structure) -> tuple[int, int]:
+    """(the number of the structure's tetrahedra, of its bricks): ``fe.elements.tetra`` and
+    ``fe.elements.hexa`` (0: none).  A binding's ``solid`` mask runs over the tetrahedra, then
+    the bricks."""
+    from bayesupdate.fe.elements.hexa import Hexahedra
     from bayesupdate.fe.elements.tetra import Tetrahedra
 
-    solids = Tetrahedra.of(structure)
-    return 0 if solids is None else solids.n_elements
+    return tuple(0 if f is None else f.n_elements
+                 for f in (Tetrahedra.of(structure), Hexahedra.of(structure)))  # fmt: skip
+
+
+def n_solids(structure) -> int:
+    """The number of the structure's solids (tetrahedra and bricks, ``solid_counts``)."""
+    return sum(solid_counts(structure))
 
 
 def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
-    """(n_solids,) the tetrahedra of the PSOLIDs whose MAT1 is one of ``f.ids``."""
+    """(n_solids,) the tetrahedra, then the bricks, of the PSOLIDs whose MAT1 is one of
+    ``f.ids``."""
+    from bayesupdate.fe.elements.hexa import Hexahedra
     from bayesupdate.fe.elements.tetra import Tetrahedra
 
-    solids = Tetrahedra.of(structure)
-    if solids is None:
-        return np.zeros(0, bool)
-    return _part_mask(solids.part, list(structure.parts), _psolids_of(deck, f))
+    names = _psolids_of(deck, f)
+    parts = list(structure.parts)
+    found = (family.of(structure) for family in (Tetrahedra, Hexahedra))
+    masks = [_part_mask(e.part, parts, names) for e in found if e is not None]
+    return np.concatenate(masks) if masks else np.zeros(0, bool)
+
+
+def _solid_property(f: DeckField, solid: np.ndarray, structure) -> str:
+    """The factor a solid MAT1's E or RHO binds: on tetrahedra ``solid_*``, on bricks
+    ``hexa_*`` (``solid`` their mask, ``solid_counts``); a MAT1 that both use is refused (one
+    binding acts on one element family)."""
+    n_tetra = solid_counts(structure)[0]
+    tetra, bricks = solid[:n_tetra].any(), solid[n_tetra:].any()
+    if tetra and bricks:
+        raise BayesUpdateError(
+            f"parameter binds {f.spec!r}: CTETRAs and CHEXAs share that MAT1, which one binding "
+            "cannot scale on both; give the CHEXAs' PSOLIDs a MAT1 of their own"
+        )
+    quantity = {"E": "modulus", "RHO": "density"}[f.field]
+    return f"solid_{quantity}_factor" if tetra else f"hexa_{quantity}_factor"
 
 
 def _psolids_of(deck, f: DeckField) -> list[str]:

@@ -105,6 +105,7 @@ FIELDS = {
         "SPOINT": "ID1",
         "CBUSH": "EID PID GA GB X1 X2 X3 CID S=0.5 OCID=-1 S1 S2 S3",
         "CTETRA": "EID PID G1 G2 G3 G4 G5 G6 G7 G8 G9 G10",
+        "CHEXA": "EID PID " + " ".join(f"G{i}" for i in range(1, 21)),
         "PSOLID": "PID MID CORDM=0 IN STRESS ISOP FCTN=SMECH",
         "RBE2": "EID GN CM",
         "RBAR": "EID GA GB CNA CNB CMA CMB ALPHA",

@@ -211,7 +211,7 @@ class Deck:
 #: id families: two cards of one family may not share an id
 FAMILIES = {
     "element": ("CQUAD4", "CTRIA3", "CBAR", "CBEAM", "CROD", "CONROD", "CBUSH", "CELAS1",
-                "CELAS2", "CELAS3", "CELAS4", "CTETRA", "CTUBE"),
+                "CELAS2", "CELAS3", "CELAS4", "CTETRA", "CHEXA", "CTUBE"),
     "mass element": ("CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3", "CMASS4"),
     "rigid element": ("RBE2", "RBE3", "RBAR"),
     "property": ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS",

@@ -22,6 +22,7 @@ from bayesupdate.nastran.bindings import (
     parse_binding,
     relation_default,
     resolve,
+    solid_counts,
 )
 
 #: default bounds of a bound parameter without ``bounds``: this factor range on its default
@@ -114,8 +115,10 @@ class NastranModel(FEModel):
         if binding.property == "line":  # re-built elements (``lines``): no FE property
             return beams
         family = PROPERTY_TERMS[binding.property][0]
+        n_tetra = solid_counts(self.structure)[0]
         return {"beam": beams, "mass": binding.mass, "spring": binding.spring,
-                "tetrahedron": binding.solid}[family]  # fmt: skip
+                "tetrahedron": binding.solid[:n_tetra],
+                "hexahedron": binding.solid[n_tetra:]}[family]  # fmt: skip
 
     def _solve_general(self, p, props, n_modes, energies, method):
         from bayesupdate.nastran.lines import LineAssembler

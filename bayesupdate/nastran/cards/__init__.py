@@ -44,6 +44,7 @@ GRID_FIELDS = {
     "CELAS3": (), "CELAS4": (), "CMASS3": (), "CMASS4": (),
     "RBE2": ("GN",), "RBE3": ("REFGRID",), "CQUAD4": ("G1", "G2", "G3", "G4"),
     "CTRIA3": ("G1", "G2", "G3"), "CTETRA": tuple(f"G{i}" for i in range(1, 11)),
+    "CHEXA": tuple(f"G{i}" for i in range(1, 21)),
 }  # fmt: skip
 
 

@@ -151,16 +151,27 @@ def test_consistent_mass_of_a_parallelepiped_is_exact():
     assert lumped.sum() / 3 == pytest.approx(RHO * volume, rel=1e-12)
 
 
-def bar_deck(path, coupled=False, extra=(), nx=20, ny=2, nz=2, mirror=False, pid=lambda x: 1):
+def bar_deck(
+    path,
+    coupled=False,
+    extra=(),
+    nx=20,
+    ny=2,
+    nz=2,
+    mirror=False,
+    pid=lambda x: 1,
+    psolid="PSOLID,1,1",
+):
     """The bar in nx x ny x nz bricks; ``mirror``: every brick numbered inside out;
-    ``pid(x)``: the PSOLID of the brick whose first corner is at x."""
+    ``pid(x)``: the PSOLID of the brick whose first corner is at x; ``psolid``: PSOLID 1's
+    card."""
     x, y, z = np.linspace(0, L, nx + 1), np.linspace(0, B, ny + 1), np.linspace(0, H, nz + 1)
 
     def grid(i, j, k):
         return (i * (ny + 1) + j) * (nz + 1) + k + 1
 
     lines = ["SOL 103", "CEND", "METHOD = 1", "BEGIN BULK", "EIGRL,1,,,12",
-             f"MAT1,1,{E:.4E},,{NU},{RHO}", "PSOLID,1,1"]  # fmt: skip
+             f"MAT1,1,{E:.4E},,{NU},{RHO}", psolid]  # fmt: skip
     lines += ["PARAM,COUPMASS,1"] if coupled else []
     lines += [f"GRID,{grid(i, j, k)},,{x[i]:.7f},{y[j]:.7f},{z[k]:.7f}"
               for i in range(nx + 1) for j in range(ny + 1) for k in range(nz + 1)]  # fmt: skip
@@ -195,19 +206,53 @@ def test_free_bar_rigid_modes_mass_and_axial_mode(tmp_path):
         assert f / love - 1 == pytest.approx(expected, abs=1e-4)
 
 
+def test_mystrans_hexa8_is_the_assumed_shear_brick_without_enhanced_strains(tmp_path):
+    """MYSTRAN 18 on the bar (PSOLID IN 2, which MYSTRAN needs; its HEXA8 mass is always the
+    consistent one, so COUPMASS 1 here): its HEXA8 averages each shear strain over a face's
+    Gauss points (``Source/EMG/EMG5/HEXA.f90``), which is this package's assumed shear without
+    the enhanced normal strains (``hexa.stiffness(..., enhanced=False)``): with that K beside
+    this package's M, the six lowest elastic frequencies are MYSTRAN's to 3.8e-6 (its f06's
+    seven digits and its Lanczos); Nastran's brick is 1.4 % below it on the five bending
+    modes (the enhanced strains free their Poisson strains) and the same on the torsion mode,
+    which is pure shear (2.5e-5)."""
+    import scipy.sparse as sp
+    from test_nastran_solids import _mystran_hz
+
+    from bayesupdate.fe.elements.hexa import stiffness
+    from bayesupdate.fe.sparse_modal import ModalSettings
+
+    deck = Path(bar_deck(tmp_path / "bar.bdf", coupled=True, psolid="PSOLID,1,1,,2"))
+    peer = _mystran_hz(deck)[6:12]
+    model = load_nastran_model(str(deck))
+    K, M = model.matrices()
+    h = Hexahedra.of(model.structure)
+    D = elasticity(h.E, h.nu)
+    change = stiffness(h.corners, D, enhanced=False) - stiffness(h.corners, D)
+    dofs = h.dofs()
+    rows, cols = np.repeat(dofs, 24, axis=1).ravel(), np.tile(dofs, (1, 24)).ravel()
+    K = K + sp.csr_matrix((change.ravel(), (rows, cols)), shape=K.shape)
+    assumed_shear = model.general.solve(K, M, 6, settings=ModalSettings()).frequencies_hz
+    assert np.max(np.abs(assumed_shear / peer - 1)) < 6e-6
+    nastran = model.predict(n_modes=6).frequencies_hz / peer - 1
+    assert np.all(np.abs(nastran[:5] + 0.014) < 1e-3) and abs(nastran[5]) < 1e-4
+
+
 def test_inside_out_numbering_reads_as_nastran_reads_it(tmp_path):
     """Every brick numbered inside out (G1-G4 clockwise from G5-G8) gives the bar's modes
-    (1e-12): the reader reverses its faces' order."""
+    (1e-12): the reader reverses its faces' order.  PSOLID IN TWO (the eight-node default,
+    given) reads as IN blank."""
     right = load_nastran_model(bar_deck(tmp_path / "right.bdf", nx=6))
     mirrored = load_nastran_model(bar_deck(tmp_path / "mirror.bdf", nx=6, mirror=True))
+    two = load_nastran_model(bar_deck(tmp_path / "two.bdf", nx=6, psolid="PSOLID,1,1,,TWO"))
     f = right.predict(n_modes=8).frequencies_hz
     assert mirrored.predict(n_modes=8).frequencies_hz == pytest.approx(f, rel=1e-12)
+    assert two.predict(n_modes=8).frequencies_hz == pytest.approx(f, rel=1e-12)
 
 
 def test_refusals_in_one_message(tmp_path):
-    """A twenty-node CHEXA, a CHEXA's PSOLID with ISOP FULL, a brick with a repeated corner, a
-    folded brick and one naming a missing GRID: each refused once with its card, in one
-    message."""
+    """A twenty-node CHEXA, a CHEXA's PSOLID with ISOP FULL and one with IN 3, a brick with a
+    repeated corner, a folded brick and one naming a missing GRID: each refused once with its
+    card, in one message."""
     extra = [
         "CHEXA,9001,1,1,2,5,4,10,11", ",14,13,30,31,32,33", ",34,35,36,37,38,39", ",40,41",
         "PSOLID,2,1,,,,FULL",
@@ -215,6 +260,8 @@ def test_refusals_in_one_message(tmp_path):
         "CHEXA,9003,1,1,2,5,5,10,11", ",14,13",  # corner 5 twice
         "CHEXA,9004,1,1,2,5,4,10,11", ",13,14",  # the top face's last two corners swapped
         "CHEXA,9005,1,1,2,5,4,10,11", ",14,999999",
+        "PSOLID,3,1,,3",
+        "CHEXA,9006,3,1,2,5,4,10,11", ",14,13",
     ]  # fmt: skip
     with pytest.raises(BayesUpdateError) as err:
         load_nastran_model(bar_deck(tmp_path / "bad.bdf", nx=6, extra=extra))
@@ -224,6 +271,7 @@ def test_refusals_in_one_message(tmp_path):
     assert "CHEXA 9003: a corner is repeated" in text
     assert "CHEXA 9004" in text and "folded or collapsed brick" in text
     assert "CHEXA 9005: GRID 999999 does not exist" in text
+    assert "PSOLID 3" in text and "IN 3" in text
 
 
 def _halves(path, factor=1.0):

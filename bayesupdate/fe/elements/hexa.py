@@ -150,9 +150,12 @@ def natural_transform(jac0: np.ndarray) -> np.ndarray:
     return T
 
 
-def stiffness(corners: np.ndarray, D: np.ndarray) -> np.ndarray:
+def stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool = True) -> np.ndarray:
     """(n, 24, 24) K [N/m] of hexahedra with corners (n, 8, 3) [m] and elasticity D (n, 6, 6)
-    [Pa] (module docstring: assumed natural shear, nine enhanced normal strains condensed)."""
+    [Pa] (module docstring: assumed natural shear, nine enhanced normal strains condensed).
+    ``enhanced=False``: the assumed shear alone, which is MYSTRAN 18's HEXA8 with PSOLID ISOP
+    blank (its shear strains averaged over each face's Gauss points, ``Source/EMG/EMG5/
+    HEXA.f90``; ``tests/test_nastran_hexa.py`` compares it with MYSTRAN)."""
     n = len(corners)
     jac0 = jacobians(corners, np.zeros((1, 3)))[:, 0]
     det0 = np.linalg.det(jac0)
@@ -165,6 +168,10 @@ def stiffness(corners: np.ndarray, D: np.ndarray) -> np.ndarray:
         line[:, axis] = GAUSS[:, axis]
         B[:, :, row] = np.einsum("ej,epjk->epk", T[:, row], _strain_at(corners, line))
     B = np.einsum("eij,epjk->epik", Tinv, B)
+    DB = np.einsum("eij,epjk->epik", D, B)
+    Kcc = np.einsum("epji,epjk,ep->eik", B, DB, det)
+    if not enhanced:
+        return Kcc
     inv0 = np.linalg.inv(jac0)
     G = np.empty((n, 6, 3))  # physical strain of a unit natural normal strain along each axis
     for a in range(3):
@@ -175,9 +182,7 @@ def stiffness(corners: np.ndarray, D: np.ndarray) -> np.ndarray:
     terms = np.array([[np.prod(pt**powers) for axis, powers in _ENHANCED] for pt in GAUSS])
     axes = np.array([axis for axis, _ in _ENHANCED])
     Ma = G[:, None, :, axes] * (terms[None, :, None, :] * (det0[:, None] / det)[:, :, None, None])
-    DB = np.einsum("eij,epjk->epik", D, B)
     DM = np.einsum("eij,epjk->epik", D, Ma)
-    Kcc = np.einsum("epji,epjk,ep->eik", B, DB, det)
     Kca = np.einsum("epji,epjk,ep->eik", B, DM, det)
     Kaa = np.einsum("epji,epjk,ep->eik", Ma, DM, det)
     return Kcc - Kca @ np.linalg.solve(Kaa, np.swapaxes(Kca, 1, 2))

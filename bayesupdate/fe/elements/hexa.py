@@ -162,14 +162,18 @@ def stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool = True) -> np.n
     T = natural_transform(jac0)
     Tinv = np.linalg.inv(T)
     det = np.linalg.det(jacobians(corners, GAUSS))  # (n, 8)
-    B = np.einsum("eij,epjk->epik", T, _strain_at(corners, GAUSS))  # natural strains
-    for row, axis in _SHEAR_LINES:
-        line = np.zeros_like(GAUSS)
-        line[:, axis] = GAUSS[:, axis]
-        B[:, :, row] = np.einsum("ej,epjk->epk", T[:, row], _strain_at(corners, line))
-    B = np.einsum("eij,epjk->epik", Tinv, B)
-    DB = np.einsum("eij,epjk->epik", D, B)
-    Kcc = np.einsum("epji,epjk,ep->eik", B, DB, det)
+    B = T[:, None] @ _strain_at(corners, GAUSS)  # natural strains (n, 8, 6, 24)
+    # each shear line's two points (+-1/sqrt(3) along its axis), then the Gauss points' side
+    lines = np.zeros((6, 3))
+    for i, (_, axis) in enumerate(_SHEAR_LINES):
+        lines[2 * i : 2 * i + 2, axis] = (-GAUSS.max(), GAUSS.max())
+    on_lines = _strain_at(corners, lines)
+    for i, (row, axis) in enumerate(_SHEAR_LINES):
+        side = 2 * i + (GAUSS[:, axis] > 0)
+        B[:, :, row] = np.einsum("ej,epjk->epk", T[:, row], on_lines[:, side])
+    B = Tinv[:, None] @ B
+    weighted = (B * det[:, :, None, None]).reshape(n, 48, 24).transpose(0, 2, 1)
+    Kcc = weighted @ (D[:, None] @ B).reshape(n, 48, 24)
     if not enhanced:
         return Kcc
     inv0 = np.linalg.inv(jac0)
@@ -182,9 +186,9 @@ def stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool = True) -> np.n
     terms = np.array([[np.prod(pt**powers) for axis, powers in _ENHANCED] for pt in GAUSS])
     axes = np.array([axis for axis, _ in _ENHANCED])
     Ma = G[:, None, :, axes] * (terms[None, :, None, :] * (det0[:, None] / det)[:, :, None, None])
-    DM = np.einsum("eij,epjk->epik", D, Ma)
-    Kca = np.einsum("epji,epjk,ep->eik", B, DM, det)
-    Kaa = np.einsum("epji,epjk,ep->eik", Ma, DM, det)
+    DM = (D[:, None] @ Ma).reshape(n, 48, 9)
+    Kca = weighted @ DM
+    Kaa = (Ma * det[:, :, None, None]).reshape(n, 48, 9).transpose(0, 2, 1) @ DM
     return Kcc - Kca @ np.linalg.solve(Kaa, np.swapaxes(Kca, 1, 2))
 
 

@@ -89,14 +89,12 @@ def strain_matrix(gradient: np.ndarray) -> np.ndarray:
     """(n, 6, 3k) B of the strain (xx, yy, zz, xy, yz, zx; engineering shears) from the
     shape-function gradients (n, 3, k) of k corners (4: the constant strain of a tetrahedron):
     column 3a + j is corner a's translation j."""
-    k = gradient.shape[2]
-    B = np.zeros((gradient.shape[0], 6, 3 * k))
-    for a in range(k):
-        gx, gy, gz = gradient[:, 0, a], gradient[:, 1, a], gradient[:, 2, a]
-        c = 3 * a
-        B[:, 0, c], B[:, 3, c], B[:, 5, c] = gx, gy, gz
-        B[:, 1, c + 1], B[:, 3, c + 1], B[:, 4, c + 1] = gy, gx, gz
-        B[:, 2, c + 2], B[:, 4, c + 2], B[:, 5, c + 2] = gz, gy, gx
+    n, _, k = gradient.shape
+    B = np.zeros((n, 6, 3 * k))
+    gx, gy, gz = gradient[:, 0], gradient[:, 1], gradient[:, 2]  # (n, k) each
+    B[:, 0, 0::3], B[:, 3, 0::3], B[:, 5, 0::3] = gx, gy, gz
+    B[:, 1, 1::3], B[:, 3, 1::3], B[:, 4, 1::3] = gy, gx, gz
+    B[:, 2, 2::3], B[:, 4, 2::3], B[:, 5, 2::3] = gz, gy, gx
     return B
 
 

@@ -1,6 +1,6 @@
 """What MSC Nastran's ten-node CTETRA is: its stiffness rule found, its default mass not.
 
-Data nobody here made: pyNastran's ``models/complex/tet10`` (LGPL-3, read only): two ten-node
+Data nobody here made: pyNastran's ``models/complex/tet10`` (BSD-3-Clause, read only): two ten-node
 CTETRAs (one edge curved: GRID 2534 is 0.008 in off its edge's midpoint), MAT1 E 1.705e7, NU
 0.31, RHO 4.14413e-4, four GRIDs held, SOL 111 by MSC.NASTRAN 2005 with the f06 it printed:
 the ten real eigenvalues before residual-vector augmentation and the response at 0 Hz to a

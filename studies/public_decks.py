@@ -1,9 +1,10 @@
 """Public Nastran decks read as a new user reads them: which cards are refused, and, where a deck
 has its solver's f06 beside it, how its real eigenvalues compare.
 
-Point it at a folder of decks nobody here wrote, e.g. pyNastran's ``models`` folder (LGPL-3: read,
-not copied into this repository; ``git clone https://github.com/SteveDoyle2/pyNastran`` or the
-tool library's ``fetch``).  For every ``.bdf`` / ``.dat`` / ``.nas`` under it:
+Point it at a folder of decks nobody here wrote, e.g. pyNastran's ``models`` folder
+(BSD-3-Clause at the commit below; read, not copied into this repository; ``git clone
+https://github.com/SteveDoyle2/pyNastran`` or the tool library's ``fetch``).  For every
+``.bdf`` / ``.dat`` / ``.nas`` under it:
 
 1. the deck is read and its cards sorted (``nastran.deck.read_deck`` + ``check_cards``, what every
    command does first), then, where no card is refused, read to a model (``reader``); the
@@ -30,8 +31,13 @@ against 1.981382 (+2.9e-5); MSC's beam_modes deck, modes 1-10 to the f06's print
 On every deck of the same commit's ``models`` folder (231, taken file by file with ``git show``;
 one file's object is missing from the mirror), 2026-11-30: 41 read to a model with no refusal,
 39 before the four-node CTETRA (2,929 cards in 42 decks) and CTUBE were read.  The refusals
-are led by CHEXA (4,997 cards in 68 decks), CPENTA (457 in 43), PCOMP (360 in 48) and CSHEAR
-(164 in 21).
+were led by CHEXA (4,997 cards in 68 decks), CPENTA (457 in 43), PCOMP (360 in 48) and CSHEAR
+(164 in 21).  With the eight-node CHEXA read (the same day): 43 read to a model; of the 41
+decks with a CHEXA card, 2 read whole (``ogs/nx_ogstr``, ``unit/pload4/chexa``), the others
+kept out by other cards (PARAMs in 24, CPENTA in 14, CQUAD8 in 10, CTRIA6 and the reader's
+other refusals in 9 each, ...).  The refusals are now led by CPENTA (457 in 43), PCOMP (360 in
+48) and CSHEAR (164 in 21).  pyNastran's ``unit/pload4/cpenta.op2`` holds the CHEXA model's
+displacements (the same numbers as ``chexa.op2``), so no CPENTA check could be made there.
 
 Run: PYTHONPATH=. .venv/bin/python studies/public_decks.py /path/to/pyNastran/models
 """

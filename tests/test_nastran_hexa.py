@@ -296,12 +296,39 @@ def test_a_bricks_material_as_a_parameter(tmp_path):
     assert mass == pytest.approx(1.5 * RHO * L * B * H, rel=1e-12)
 
 
-def test_a_material_shared_by_tetrahedra_and_bricks_is_refused(tmp_path):
-    """One MAT1 under a CTETRA's and a CHEXA's PSOLID: one binding cannot act on both element
-    families, so binding its E is refused by name (the deck itself reads)."""
-    # a tetrahedron on the bar's end face (GRIDs 37, 38, 40 at x = L) and a GRID beyond it
-    extra = ["GRID,90001,,1.1,0.,0.", "CTETRA,99001,1,37,40,38,90001"]
-    deck = bar_deck(tmp_path / "mixed.bdf", nx=4, extra=extra)
-    assert load_nastran_model(deck).structure is not None
-    with pytest.raises(BayesUpdateError, match="CTETRAs and CHEXAs share that MAT1"):
-        load_nastran_model(deck, {"e": {"binds": "MAT1 1 E scale"}})
+def _mixed(path, e_factor=1.0, rho_factor=1.0, rod=True):
+    """The bar in 4 x 2 x 2 bricks, a tetrahedron on its end face, a CQUAD4 on its side and a
+    CROD along its edge, all on MAT1 1, whose E and RHO are the factors x the bar's (typed in)."""
+    extra = ["GRID,90001,,1.1,0.,0.", "CTETRA,99001,1,37,40,38,90001",  # on the end face
+             "PSHELL,5,1,0.002", "CQUAD4,99101,5,1,10,11,2"]  # fmt: skip
+    extra += ["PROD,6,1,1.E-4", "CROD,99201,6,1,10"] if rod else []
+    deck = Path(bar_deck(path, nx=4, extra=extra))
+    material = f"MAT1,1,{E:.4E},,{NU},{RHO}"
+    edited = f"MAT1,1,{E * e_factor:.12E},,{NU},{RHO * rho_factor:.12E}"
+    deck.write_text(deck.read_text().replace(material, edited))
+    return str(deck)
+
+
+def test_one_material_over_bricks_tetrahedra_shells_and_rods_is_one_parameter(tmp_path):
+    """MAT1 1 under the bricks, a tetrahedron, a shell and a rod: its E (as a scale and as a
+    value) and RHO each move all four families as the deck with the new value typed in does
+    (1e-10); the mass follows RHO exactly; without the rod, the certified reduced basis gives
+    the full solves' modes to 1e-6."""
+    deck = _mixed(tmp_path / "mixed.bdf")
+    model = load_nastran_model(deck, {"e": {"binds": "MAT1 1 E scale"},
+                                      "r": {"binds": "MAT1 1 RHO scale"}})  # fmt: skip
+    valued = load_nastran_model(deck, {"E": {"binds": "MAT1 1 E"}})
+    assert dict(model.bindings["e"].companions) == {"solid_modulus_factor": 1.0,
+                                                     "hexa_modulus_factor": 1.0}  # fmt: skip
+    assert model.solve(model.default_parameters(), n_modes=6).modes.n_rigid == 6
+    for e, r in ((1.35, 1.0), (0.7, 1.6)):
+        typed = load_nastran_model(_mixed(tmp_path / f"typed{e}.bdf", e, r))
+        f = model.predict({"e": e, "r": r}, n_modes=8).frequencies_hz
+        assert f == pytest.approx(typed.predict(n_modes=8).frequencies_hz, rel=1e-10)
+        assert model.total_mass({"e": e, "r": r})[0] == pytest.approx(typed.total_mass()[0],
+                                                                      rel=1e-12)  # fmt: skip
+    f = valued.predict({"E": 1.35 * E}, n_modes=8).frequencies_hz
+    assert f == pytest.approx(model.predict({"e": 1.35}, n_modes=8).frequencies_hz, rel=1e-10)
+    plain = load_nastran_model(_mixed(tmp_path / "plain.bdf", rod=False),
+                               {"e": {"binds": "MAT1 1 E scale"}})  # fmt: skip
+    assert_basis_matches_full_solves(plain, "e", (0.62, 1.83))

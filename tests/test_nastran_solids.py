@@ -265,14 +265,30 @@ def test_one_materials_e_equals_the_deck_edited_by_hand(tmp_path):
     assert_basis_matches_full_solves(model, "e2", (0.62, 1.83))
 
 
-def test_solid_material_bindings_refused(tmp_path):
-    """A solid's MAT1 G (a solid takes E and NU), and a MAT1 that solids share with shells."""
+def test_solid_material_g_binding_refused(tmp_path):
+    """A solid's MAT1 G is refused (a solid takes E and NU)."""
     deck = str(bar_deck(tmp_path / "bar.bdf"))
     with pytest.raises(BayesUpdateError, match="PSOLID 1 use.*bind E"):
         load_nastran_model(deck, {"g": {"binds": "MAT1 1 G scale"}})
-    shared = bar_deck(tmp_path / "shared.bdf", extra=["PSHELL,7,1,0.002", "CQUAD4,99001,7,1,2,5,4"])
-    with pytest.raises(BayesUpdateError, match="PSOLID 1 and shells or line elements share"):
-        load_nastran_model(str(shared), {"e": {"binds": "MAT1 1 E scale"}})
+
+
+def test_a_membrane_on_a_solid_keeps_six_rigid_modes(tmp_path):
+    """A CQUAD4 membrane (PSHELL without MID2) on the bar's end face: its GRIDs' bending
+    rotations carry no stiffness and are held by AUTOSPC, while their drilling rotation has
+    the shell's small drilling stiffness.  The held rotations do not restrict the rigid motions
+    (each held DOF's own column of K is zero: ``Assembler.idle_dofs``): six rigid modes, where
+    the whole-group rule before counted four and refused the deck as a mechanism; one MAT1
+    bound on both (E as a scale) moves the modes as the deck with that E typed in (1e-10)."""
+    membrane = ["PSHELL,7,1,0.002", "CQUAD4,99001,7,1,2,5,4"]
+    model = load_nastran_model(str(bar_deck(tmp_path / "shared.bdf", extra=membrane)),
+                               {"e": {"binds": "MAT1 1 E scale"}})  # fmt: skip
+    res = model.solve(model.default_parameters(), n_modes=6)
+    assert res.modes.n_rigid == 6
+    typed = bar_deck(
+        tmp_path / "typed.bdf", extra=membrane, material=f"MAT1,1,{1.3 * E:.12E},,{NU},{RHO}"
+    )
+    expected = load_nastran_model(str(typed)).predict(n_modes=6).frequencies_hz
+    assert model.predict({"e": 1.3}, n_modes=6).frequencies_hz == pytest.approx(expected, rel=1e-10)
 
 
 def _turned_deck(path, turn, spc):

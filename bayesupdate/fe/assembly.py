@@ -339,12 +339,12 @@ class Assembler:
         return allowed_rigid(self.structure.nodes, self.transform, self.idle_dofs())
 
     def idle_dofs(self) -> np.ndarray:
-        """Held DOFs that no stiffness couples (a zero column of K at the default properties)
-        and no rigid element or MPC names, by node and group (the three translations, the
-        three rotations: a group is idle only whole, so that a node frame cannot mix it with
-        another), e.g. the rotations of a GRID that only solids join, which Nastran's AUTOSPC
-        or a GRID's PS field holds.  A rigid motion of the structure need not vanish there:
-        its energy does not depend on them (``allowed_rigid``)."""
+        """Held DOFs that no stiffness couples (a zero column of K at the default properties, in
+        the DOF's own axes: K Lambda e_i = 0 with a node frame Lambda) and no rigid element or
+        MPC names, e.g. the rotations of a GRID that only solids join, or a membrane's bending
+        rotations, which Nastran's AUTOSPC or a GRID's PS field holds.  A rigid motion of the
+        structure need not vanish there: its energy does not depend on them
+        (``allowed_rigid``)."""
         s = self.structure
         fixed = self.transform.fixed
         c = s.constraints if s.constraints is not None else Constraints()
@@ -354,9 +354,10 @@ class Assembler:
         if not candidates.size:
             return candidates
         K = self.assemble(self.default_properties())[0]
-        column = np.asarray(abs(K).max(axis=0).todense()).ravel()
-        zero_group = column.reshape(-1, 2, 3).max(axis=2) == 0  # (nodes, translations / rotations)
-        return candidates[zero_group[candidates // 6, candidates % 6 // 3]]
+        rotation = self.transform.rotation  # global = rotation @ the nodes' own axes
+        column = abs(K if rotation is None else K @ rotation).max(axis=0)
+        column = np.asarray(column.todense()).ravel()
+        return candidates[column[candidates] == 0]
 
     @cached_property
     def _rigid_origin(self) -> np.ndarray:

@@ -139,7 +139,9 @@ class AffineTerms:
     """K(theta), M(theta) of the parametric families (beams, point masses, springs, ...) split
     by parameter.
 
-    parameters : one ``ParameterTerm`` per parameter, in ``parameter_names`` order.
+    parameters : one ``ParameterTerm`` per parameter, in ``parameter_names`` order, then a term
+        per further family a parameter sets too (``FEModel._companions``: a deck material over
+        several element families), which names its parameter (``ParameterTerm.name``).
     defaults : element properties at the default parameters (SI): elements that no parameter
         acts on keep these values for every theta.
     unit : ``defaults`` with every linearly entering parameter at its unit value where it acts
@@ -205,6 +207,8 @@ class FEModel:
         # the parametric families' instances: the elements a binding selects, a total's sum
         self._parametric = {f.family: f for f in parametric_of(structure)}
         self._masks = {p: self._mask(p, b) for p, b in self.bindings.items()}
+        # the further families one parameter sets with the same value (``_companions``)
+        self._companion_masks = {p: self._companions(p, b) for p, b in self.bindings.items()}
         a = self._assembler = Assembler(structure, self._shell_keys())
         # a structure with shells, supports or rigid elements is solved on the sparse path
         self._general = a if structure.is_general else None
@@ -244,6 +248,12 @@ class FEModel:
                 f"parameter {name}: part {binding.target!r} has nothing with a {binding.property}"
             )
         return mask
+
+    def _companions(self, name, binding) -> tuple:
+        """((property, mask, factor), ...): further parametric families that parameter ``name``
+        sets too, each to ``factor`` x its value (one deck material over several element
+        families: ``nastran.model``); none for a plain ``Binding``."""
+        return ()
 
     def shells_of(self, name: str) -> np.ndarray:
         """(n_shell,) bool: the shells parameter ``name`` acts on (all False when it binds no
@@ -335,31 +345,29 @@ class FEModel:
     def affine_terms(self) -> AffineTerms:
         """The parameter-separable form of K(theta), M(theta) (``AffineTerms``): for each
         parameter the elements it acts on and whether it enters K or M linearly."""
-        terms = []
+        terms, masks = [], []
         for name, binding in self.bindings.items():
             family, prop = bindable()[binding.property]
             mask = self._masks[name]
             shells = np.flatnonzero(self._shell_masks.get(name, np.zeros(0, bool)))
-            terms.append(
-                ParameterTerm(
-                    name,
-                    binding.property,
-                    family,
-                    np.flatnonzero(mask),
-                    prop.field,
-                    prop.enters,
-                    prop.scale(mask, self._parametric[family]),
-                    shells,
-                )
-            )
+            scale = prop.scale(mask, self._parametric[family])
+            terms.append(ParameterTerm(name, binding.property, family, np.flatnonzero(mask),
+                                       prop.field, prop.enters, scale, shells))  # fmt: skip
+            masks.append(mask)
+        # a parameter's further families follow, after one term per parameter in their order
+        for name, companions in self._companion_masks.items():
+            for prop_name, mask, factor in companions:
+                family, prop = bindable()[prop_name]
+                scale = prop.scale(mask, self._parametric[family]) * factor
+                terms.append(ParameterTerm(name, prop_name, family, np.flatnonzero(mask),
+                                           prop.field, prop.enters, scale))  # fmt: skip
+                masks.append(mask)
         defaults = self.element_properties(self._defaults)
         fields = {k: v.copy() for k, v in defaults.values.items()}
-        for term in terms:
+        for term, mask in zip(terms, masks, strict=True):
             if term.enters != "nonlinear":
                 prop = bindable()[term.property][1]
-                prop.set_unit(
-                    fields[term.field], self._masks[term.name], self._base.values[term.field]
-                )
+                prop.set_unit(fields[term.field], mask, self._base.values[term.field])
         return AffineTerms(tuple(terms), defaults, ElementProperties(fields))
 
     def default_bounds(self) -> dict[str, tuple[float, float]]:
@@ -394,6 +402,10 @@ class FEModel:
             if spec is not None:
                 f = spec.field
                 spec.set(fields[f], self._masks[name], value, nominal[f], self._parametric[family])
+            for prop_name, mask, factor in self._companion_masks[name]:
+                family, spec = known[prop_name]
+                f = spec.field
+                spec.set(fields[f], mask, value * factor, nominal[f], self._parametric[family])
         return ElementProperties(fields)
 
     def shell_properties(self, params: Mapping[str, float] | None = None):

@@ -32,12 +32,13 @@ I11..I33
 CMASS2 M        line (card re-built)   that scalar mass
 ==============  =====================  ==========================================
 
-A MAT1 that only PSOLIDs use binds their tetrahedra instead: E as ``solid_modulus_factor`` (K
-linear), RHO as ``solid_density_factor`` (M linear), a value as the factor value / the deck's;
-on CHEXA bricks ``hexa_modulus_factor`` and ``hexa_density_factor`` alike.  Refused: its G (a
-solid takes E and NU), a MAT1 that solids share with shells or line elements, a MAT1 that both
-CTETRAs and CHEXAs use (one binding acts on one element family), and a MAT1 that a PTUBE uses
-(tubes take no parameter).
+A MAT1 that PSOLIDs use binds their tetrahedra too: E as ``solid_modulus_factor`` (K linear),
+RHO as ``solid_density_factor`` (M linear), a value as the factor value / the deck's; on CHEXA
+bricks ``hexa_modulus_factor`` and ``hexa_density_factor`` alike.  One MAT1 over several
+families (shells, line elements, tetrahedra, bricks) is one parameter: its main property acts
+on the shells (or is re-built on the lines, or is the first solid family's), and the solid
+factors follow the same value (``DeckBinding.companions``).  Refused: a solid's MAT1 G (a solid
+takes E and NU), and a MAT1 that a PTUBE uses (tubes take no parameter).
 
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
@@ -140,7 +141,9 @@ class DeckBinding:
     target : the spec text.  property : the FE property (module table).
     shell, mass, spring : boolean masks over the structure's shells, point masses and springs;
     solid : over its tetrahedra, then its bricks (``solid_counts``; a MAT1's E or RHO as a
-    factor).
+    factor).  companions : ((property, factor), ...) the solid factors a MAT1 that solids
+    share with other elements (or tetrahedra with bricks) sets beside ``property``, each to
+    factor x its FE value (``nastran.model``).
     factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
@@ -167,6 +170,7 @@ class DeckBinding:
     offsets: tuple[float, ...] = ()
     relations: tuple[tuple[str, int, str, float, float], ...] = ()
     solid: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, bool))
+    companions: tuple[tuple[str, float], ...] = ()
 
     def value_of(self, k: int, value: float) -> float:
         """The card value of id ``field.ids[k]`` at the parameter ``value``: C0_k + COEF_k x
@@ -296,8 +300,9 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     if not any(m.any() for m in masks.values()) and not lines:
         raise BayesUpdateError(f"parameter {name}: binds {f.spec!r}: no element uses it")
     wtmass = float(structure.metadata["nastran"]["wtmass"])
-    if masks["solid"].any():  # a solid MAT1 (``_refuse_unbound_users``: solids alone)
-        prop = _solid_property(f, masks["solid"], structure)
+    solids = _solid_properties(f, masks["solid"], structure)
+    if solids and not masks["shell"].any() and not lines:  # a MAT1 of solids alone
+        prop, solids = solids[0], solids[1:]
     relative = prop in ("mass_factor", "stiffness_factor", "solid_modulus_factor",
                         "solid_density_factor", "hexa_modulus_factor",
                         "hexa_density_factor")  # the FE value is a factor  # fmt: skip
@@ -317,10 +322,28 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
         factor = 1.0 / nominal[0] if relative else nominal[0] * (wtmass if f.field == "RHO" else 1)
     # several ids with different values set to one value: the default is their mean
     default = 1.0 if f.scale else float(nominal.mean())
+    companions = _solid_companions(f, solids, nominal, factor, name)
     return DeckBinding(
         f.spec, prop, f, masks["shell"], masks["mass"], masks["spring"], float(factor),
         tuple(nominal.tolist()), default, lines=lines, solid=masks["solid"],
+        companions=companions,
     )  # fmt: skip
+
+
+def _solid_companions(f: DeckField, props, nominal, factor: float, name: str) -> tuple:
+    """((property, factor), ...) of the solid families a MAT1 binding sets beside its main
+    property: each solid factor is the parameter (a ``scale``) or the parameter / the deck's
+    value, i.e. this factor x the main property's FE value (the parameter x ``factor``)."""
+    if not props:
+        return ()
+    if not f.scale and (np.ptp(nominal) > 1e-12 * np.abs(nominal).max() or not nominal[0] > 0):
+        raise BayesUpdateError(
+            f"parameter {name}: binds {f.spec!r}: the ids' values differ or are 0 "
+            f"({nominal.tolist()}), which the solids' factor cannot follow; bind them "
+            "separately or as a 'scale'"
+        )
+    target = 1.0 if f.scale else 1.0 / nominal[0]
+    return tuple((p, float(target / factor)) for p in props)
 
 
 def _card_binding(f: DeckField, deck, masks, nominal, name: str) -> DeckBinding:
@@ -499,22 +522,16 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
 
 def _refuse_unbound_users(f: DeckField, deck) -> None:
     """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), or that a PSOLID
-    uses with G bound (a solid takes E and NU) or beside shells or line elements (a solid's E
-    and RHO are factors of their own, ``fe.elements.tetra`` and ``hexa``, which one binding
-    does not share with the others): refused, naming the properties, rather than leaving them
-    at the deck's values while the rest changes."""
+    uses with G bound (a solid takes E and NU): refused, naming the properties, rather than
+    leaving them at the deck's values while the rest changes."""
     tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
     solids = _psolids_of(deck, f)
-    shared = bool(_pshells_of(deck, f) or line_elements(deck, f))
-    own = "give them a MAT1 of their own"
     why = ""
     if tubes:
-        why = f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter; {own}"
+        why = (f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter; give "
+               "them a MAT1 of their own")  # fmt: skip
     elif solids and f.field == "G":
         why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU: bind E instead"
-    elif solids and shared:
-        why = (f"{', '.join(solids)} and shells or line elements share that MAT1, which one "
-               f"binding cannot scale on both; {own}")  # fmt: skip
     if why:
         raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}")
 
@@ -548,19 +565,16 @@ def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
     return np.concatenate(masks) if masks else np.zeros(0, bool)
 
 
-def _solid_property(f: DeckField, solid: np.ndarray, structure) -> str:
-    """The factor a solid MAT1's E or RHO binds: on tetrahedra ``solid_*``, on bricks
-    ``hexa_*`` (``solid`` their mask, ``solid_counts``); a MAT1 that both use is refused (one
-    binding acts on one element family)."""
+def _solid_properties(f: DeckField, solid: np.ndarray, structure) -> list[str]:
+    """The factors a MAT1's E or RHO sets on solids (``solid`` their mask, ``solid_counts``):
+    ``solid_*`` where it is on tetrahedra, ``hexa_*`` where it is on bricks (empty: on
+    none)."""
     n_tetra = solid_counts(structure)[0]
-    tetra, bricks = solid[:n_tetra].any(), solid[n_tetra:].any()
-    if tetra and bricks:
-        raise BayesUpdateError(
-            f"parameter binds {f.spec!r}: CTETRAs and CHEXAs share that MAT1, which one binding "
-            "cannot scale on both; give the CHEXAs' PSOLIDs a MAT1 of their own"
-        )
-    quantity = {"E": "modulus", "RHO": "density"}[f.field]
-    return f"solid_{quantity}_factor" if tetra else f"hexa_{quantity}_factor"
+    quantity = {"E": "modulus", "RHO": "density"}.get(f.field)
+    if quantity is None:
+        return []
+    kinds = (("solid", solid[:n_tetra].any()), ("hexa", solid[n_tetra:].any()))
+    return [f"{kind}_{quantity}_factor" for kind, used in kinds if used]
 
 
 def _psolids_of(deck, f: DeckField) -> list[str]:

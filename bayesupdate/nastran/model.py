@@ -120,6 +120,19 @@ class NastranModel(FEModel):
                 "tetrahedron": binding.solid[:n_tetra],
                 "hexahedron": binding.solid[n_tetra:]}[family]  # fmt: skip
 
+    def _companions(self, name, binding):
+        """A deck material's further solid families (``DeckBinding.companions``): the
+        tetrahedra, then the bricks, of its ``solid`` mask, each to its factor x the value."""
+        if not isinstance(binding, DeckBinding) or not binding.companions:
+            return ()
+        n_tetra = solid_counts(self.structure)[0]
+        out = []
+        for prop, factor in binding.companions:
+            tetra = PROPERTY_TERMS[prop][0] == "tetrahedron"
+            mask = binding.solid[:n_tetra] if tetra else binding.solid[n_tetra:]
+            out.append((prop, mask, factor))
+        return tuple(out)
+
     def _solve_general(self, p, props, n_modes, energies, method):
         from bayesupdate.nastran.lines import LineAssembler
 
@@ -219,9 +232,10 @@ class NastranModel(FEModel):
             for n, b in self.bindings.items()
         }
         terms = FEModel.affine_terms(stand_in)
+        # (a line parameter's further solid families keep their terms, scaled as any other)
         scaled = tuple(
             replace(t, property="line", family="line", field="line", enters="linear")
-            if t.name in lines
+            if t.name in lines and t.property == "modulus_factor"
             else replace(t, scale=t.scale * getattr(self.bindings[t.name], "factor", 1.0))
             for t in terms.parameters
         )
@@ -417,8 +431,9 @@ def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
-    """Refuse two parameters that set one thing: a property of the same shells, point masses
-    or springs, or the same field of one card (the last would win, the other seem insensitive)."""
+    """Refuse two parameters that set one thing: a property of the same shells, point masses,
+    springs or solids (their MAT1 E or RHO), or the same field of one card (the last would
+    win, the other seem insensitive)."""
     items = list(bindings.items())
     for i, (a, ba) in enumerate(items):
         for b, bb in items[i + 1 :]:
@@ -428,7 +443,7 @@ def _check_overlaps(bindings: Mapping[str, DeckBinding]) -> None:
                  and (ba.shell & bb.shell).any())
                 or (ba.mass & bb.mass).any()
                 or (ba.spring & bb.spring).any()
-                or (ba.property == bb.property and _overlap(ba.solid, bb.solid))
+                or (ba.field.field == bb.field.field and _overlap(ba.solid, bb.solid))
                 or same_card_field
             )  # fmt: skip
             if same:

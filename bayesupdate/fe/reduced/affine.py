@@ -259,20 +259,22 @@ def _fixed_terms(fe: FEModel, terms: AffineTerms, keys):
     for family in a.parametric.values():
         for kind in family.linear:
             stacks, entries = (k_stacks, k_entries) if kind == "K" else (m_stacks, m_entries)
-            _linear_family(a, family, kind, terms, stacks, entries)
+            _linear_family(a, family, kind, (terms, fe.parameter_names), stacks, entries)
     for f in a.families:
         k_stacks[0].append((f.dofs, f.K))
         m_stacks[0].append((f.dofs, f.M))
     return k_stacks, m_stacks, k_entries, m_entries
 
 
-def _linear_family(a, family, kind: str, terms: AffineTerms, stacks: list, entries: list) -> None:
+def _linear_family(a, family, kind: str, described, stacks: list, entries: list) -> None:
     """Append the ``kind`` ("K" or "M") matrices of the linear ``family``'s elements that no
     parameter scales in that matrix (at the defaults) to the constant term of ``stacks``, and
     one term (its elements at factor 1, coefficient theta_j x scale) per parameter j entering
-    that matrix on it, in place.  A family linear in both (solids: E in K, rho in M) is called
-    once per matrix."""
-    bound = [(j, t) for j, t in enumerate(terms.parameters)
+    that matrix on it, in place; ``described`` = (``AffineTerms``, the parameter names: a
+    term's j is its name's place, a further family's term following the parameters).  A
+    family linear in both (solids: E in K, rho in M) is called once per matrix."""
+    terms, names = described
+    bound = [(names.index(t.name), t) for t in terms.parameters
              if t.family == family.family and t.enters == kind]  # fmt: skip
     taken = np.concatenate([t.elements for _, t in bound] + [np.zeros(0, int)])
     free = np.setdiff1d(np.arange(family.n_elements), taken)

@@ -1,5 +1,6 @@
 """What NX Nastran's tapered CBEAM is: its stiffness and its lumped mass, found on its own static
-solution; and how far this package's reading of a tapered PBEAM (its mean section) is from it.
+solution; and how far the mean section (how this package read a tapered PBEAM before it read it
+as NX does: ``fe.elements.general_beam.tapered_stiffness``) is from it.
 
 Data nobody here made, from pyNastran's ``models`` folder (BSD-3-Clause, commit 1d25a92; read
 with pyNastran's OP2 reader, which this script alone needs): ``sol200/model_200.bdf`` and its
@@ -16,7 +17,7 @@ integral of the section forces' complementary energy along the element (axial, t
 the PBEAM's default K1 = K2 = 1, torsion, two bending moments: I1 about the element's z, I2
 about its y) with the section's A, I1, I2, J linear between the ends, integrated exactly (20
 Gauss points) or by 2 or 3 Gauss points, Simpson's rule or the trapezoid rule; or the mean
-section (what ``nastran.cards.beams`` reads today).  The NSM lumped at each end as half the
+section (what ``nastran.cards.beams`` read before).  The NSM lumped at each end as half the
 element's mean (the mean section's) or by its first moments, L (a/3 + b/6) at end A and
 L (a/6 + b/3) at end B.
 
@@ -27,15 +28,21 @@ displacements (largest relative difference per component, over the GRIDs) are NX
 (its float32 output) only with the properties linear along the element, the flexibility
 integrated by 3 Gauss points and the first-moment lumping; exact integration is 2.4e-4 off,
 2 Gauss points 1.1e-3, Simpson 2.8e-3, the half-mean lumping 3.4e-3 to 4.0e-3 whatever the
-rule, and the mean section (today's reading) 5.2e-3 on the translations and 2.2e-2 on the
-bending rotations.  NX's
+rule, and the mean section (the reading before) 5.2e-3 on the translations and 2.2e-2 on the
+bending rotations.  The package's own path on the deck ``--write`` stores: 1.2e-8 to 7.0e-8
+(``tests/test_nastran_cards.py``).  NX's
 tapered CBEAM is therefore: linear properties, 3-point Gauss flexibility, NSM lumped by its
 first moments.  MSC's (common code with NX before 2003) is not checked here.
 
-Run: PYTHONPATH=. python studies/nx_tapered_cbeam.py <pyNastran>/models
+``--write DIR`` stores what the tests need (``tests/data/nx_tapered_cbeam.bdf``: the deck at the
+initial design, its I1 typed in from the DVPREL2s, without the design cards; and
+``nx_tapered_cbeam.json``: NX's displacements and mass), so that they do not need pyNastran.
+
+Run: PYTHONPATH=. python studies/nx_tapered_cbeam.py <pyNastran>/models [--write tests/data]
 """
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -119,14 +126,39 @@ def displacements(rule, mean: bool, first_moments: bool) -> np.ndarray:
     return u.reshape(5, 6)
 
 
+def initial_deck() -> str:
+    """The cantilever at the initial design as a deck (free field, every value as read above):
+    GRIDs, CBEAMs, PBEAMs with I1 typed in, the CONM2, MAT1 E = G = 1, GRID 1 held, SOL 103."""
+    lines = ["$ pyNastran models/sol200/model_200.bdf (BSD-3-Clause, commit 1d25a92) at its",
+             "$ initial design: I1 from its DVPREL2s; written by studies/nx_tapered_cbeam.py",
+             "SOL 103", "CEND", "METHOD = 1", "SPC = 1", "BEGIN BULK", "EIGRL,1,,,8",
+             "MAT1,1,1.,1.", "SPC1,1,123456,1"]  # fmt: skip
+    lines += [f"GRID,{k + 1},,{x!r},{y!r},{z!r}" for k, (x, y, z) in enumerate(XYZ.tolist())]
+    for e, ((a0, i20, j0, n0), (a1, i21, j1, n1)) in enumerate(SECTIONS):
+        lines += [f"CBEAM,{e + 1},{e + 1},{e + 1},{e + 2},0.,0.,1.",
+                  f"PBEAM,{e + 1},1,{a0!r},{I1[e]!r},{i20!r},,{j0!r},{n0!r}",
+                  f",NO,1.,{a1!r},{I1[e + 1]!r},{i21!r},,{j1!r},{n1!r}"]  # fmt: skip
+    lines += [f"CONM2,10,5,,{TIP_MASS!r},{','.join(map(repr, TIP_OFFSET.tolist()))}", "ENDDATA"]
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     from pyNastran.op2.op2 import read_op2
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("models", type=Path, help="pyNastran's models folder")
+    ap.add_argument("--write", type=Path, help="write the tests' deck and data in this folder")
     args = ap.parse_args()
     op2 = read_op2(str(args.models / "sol200/model_200.op2"), debug=None, build_dataframe=False)
     nx = next(iter(op2.displacements.values())).data[0]
+    if args.write:
+        (args.write / "nx_tapered_cbeam.bdf").write_text(initial_deck())
+        weight = next(iter(op2.grid_point_weight.values()))
+        moments = (weight.MO[1, 5], -weight.MO[0, 5], weight.MO[0, 4])  # m x, m y, m z
+        data = {"displacements": [[float(str(v)) for v in row] for row in nx],
+                "mass": float(str(weight.mass[0])), "gravity": GRAVITY,
+                "first_moments": [float(str(v)) for v in moments]}  # fmt: skip
+        (args.write / "nx_tapered_cbeam.json").write_text(json.dumps(data) + "\n")
     print("lumped mass first moments (m x, m y, m z) against NX's grid point weight generator")
     for first in (True, False):
         m = np.append(lumped_nsm(first), TIP_MASS)
@@ -145,7 +177,8 @@ def main() -> None:
             )
     u = displacements(gauss(1), True, False)
     err = np.abs(u - nx)[1:].max(axis=0) / np.abs(nx).max(axis=0)
-    print("  mean section (today's reading), half the mean: " + " ".join(f"{v:.1e}" for v in err))
+    errors = " ".join(f"{v:.1e}" for v in err)
+    print(f"  mean section (the reading before), half the mean: {errors}")
 
 
 if __name__ == "__main__":

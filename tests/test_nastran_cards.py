@@ -2,6 +2,8 @@
 stations, CBUSH CID / OCID / PBUSH M, CONM1 6x6, CELAS1 + PELAS, CMASS1 + PMASS, RBE3 weight
 groups with their own components and a UM set; bad input in one message with file:line."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -79,17 +81,63 @@ def _wedge(n: int) -> str:
 def test_tapered_pbeams_converge_to_kirchhoffs_wedge(tmp_path):
     """Kirchhoff's wedge cantilever (depth tapering linearly to 0 at the free end, constant
     width): omega_1 = 5.315 sqrt(E I0 / (m0 L^4)) (Timoshenko, Young & Weaver, *Vibration
-    Problems in Engineering*, 4th ed., 1974, sec. 5.11).  Each element's mean section converges
-    at second order: 20 elements within 0.5 %, 40 within 0.15 %, the error / 4 or so."""
+    Problems in Engineering*, 4th ed., 1974, sec. 5.11).  Each element is a linearly tapered
+    CBEAM (its A, I, J linear between its ends: I is cubic in the wedge) but the last, whose end
+    B has no section and which uses its mean section, with a note; they converge at second
+    order: 20 elements -0.22 %, 40 -0.054 % (the mean sections alone were within 0.5 % and
+    0.15 %), the error / 4 or so."""
     E, rho, b, h0 = 2e11, 7800.0, 0.02, 0.01
     exact = 5.315 * np.sqrt(E * b * h0**3 / 12 / (rho * b * h0)) / (2 * np.pi)
     err = {}
     for n in (20, 40):
         model = load_nastran_model(_write(tmp_path, _wedge(n), f"wedge{n}.bdf"))
         err[n] = model.solve(n_modes=1).frequencies_hz[0] / exact - 1
-        assert any("PBEAM 1 is tapered" in s for s in model.structure.metadata["nastran"]["notes"])
-    assert abs(err[20]) < 5e-3 and abs(err[40]) < 1.5e-3, err
+        taper = model.structure.general_beams.taper
+        assert np.all(taper[:-1, 0] != taper[:-1, 1]) and np.all(taper[-1, 0] == taper[-1, 1])
+        notes = model.structure.metadata["nastran"]["notes"]
+        assert any(f"PBEAM {n} is tapered" in s for s in notes), notes
+    assert -2.5e-3 < err[20] < 0 and -6e-4 < err[40] < 0, err
     assert 3.5 < err[20] / err[40] < 4.5, err
+
+
+def test_a_tapered_cbeam_is_nxs_on_its_own_static_solution():
+    """NX Nastran 8.5's static solution of a strongly tapered cantilever of four CBEAMs under
+    gravity (pyNastran's ``sol200/model_200`` at its initial design, ``tests/data/
+    nx_tapered_cbeam.*``, written by ``studies/nx_tapered_cbeam.py``): with the section linear
+    along each element and its flexibility integrated by 3 Gauss points, and the NSM lumped by
+    its first moments, every displacement and rotation is NX's to its float32 output (largest
+    relative difference per component 1.2e-8..7.0e-8; the mean section read before: 5.2e-3 and
+    2.2e-2), and the mass and its first moments are NX's weight generator's (2.4e-8)."""
+    import json
+
+    import scipy.sparse.linalg as spla
+
+    data_dir = Path(__file__).parent / "data"
+    nx = json.loads((data_dir / "nx_tapered_cbeam.json").read_text())
+    model = load_nastran_model(str(data_dir / "nx_tapered_cbeam.bdf"))
+    K, M = model.matrices()
+    tr = model.general.transform
+    down = np.zeros(K.shape[0])
+    down[2::6] = -nx["gravity"]
+    u = tr.T @ spla.spsolve(tr.reduce(K).tocsc(), tr.T.T @ (M @ down))
+    expected = np.array(nx["displacements"])
+    err = np.abs(u.reshape(-1, 6) - expected).max(axis=0) / np.abs(expected).max(axis=0)
+    assert np.all(err < 2e-7), err
+    mass, cg = model.total_mass()
+    assert mass == pytest.approx(nx["mass"], rel=1e-7)
+    assert mass * cg == pytest.approx(np.array(nx["first_moments"]), rel=1e-7)
+
+
+def test_a_tapered_cbeams_material_as_a_parameter(tmp_path):
+    """MAT1 1 E of the tapered cantilever (``tests/data/nx_tapered_cbeam.bdf``) as a scale: at
+    1.5 its modes are those of the deck with E = 1.5 typed in (1e-10; the bound elements are
+    re-computed with their taper)."""
+    deck = Path(__file__).parent / "data" / "nx_tapered_cbeam.bdf"
+    model = load_nastran_model(str(deck), {"e": {"binds": "MAT1 1 E scale"}})
+    typed = tmp_path / "typed.bdf"
+    typed.write_text(deck.read_text().replace("MAT1,1,1.,1.", "MAT1,1,1.5,1."))
+    expected = load_nastran_model(str(typed)).predict(n_modes=6).frequencies_hz
+    assert model.predict({"e": 1.5}, n_modes=6).frequencies_hz == pytest.approx(expected, rel=1e-10)
 
 
 # -- PBEAML tapered stations ----------------------------------------------------------------------

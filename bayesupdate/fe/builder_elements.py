@@ -224,6 +224,7 @@ def add_beams(
     nsm=0.0,
     shear_modulus=None,
     torsion_inertia=None,
+    taper=None,
 ):
     """General beams (``fe.elements.general_beam``) on existing node pairs; returns their indices.
 
@@ -233,7 +234,9 @@ def add_beams(
     element end (global axes); pins : (pa, pb) or n pairs of released element-axis components
     ('456', 'rz', ...); mass : 'consistent', 'lumped', 'none' or 'translational' (consistent,
     no rotary or torsional inertia); nsm [kg/m]; torsion_inertia [kg m] per length (default
-    rho (iy + iz)).
+    rho (iy + iz)); taper : (2, 4) or (n, 2, 4) a tapered element's A [m^2], iy, iz, J [m^4] at
+    its end a and end b, linear between (``section`` is then its mean section, for the mass and
+    the taper's ratios; the section's iyz must be 0); default the section's at both ends.
     """
     from bayesupdate.fe.elements import general_beam as gb
     from bayesupdate.fe.standard_sections import BeamSection
@@ -249,13 +252,8 @@ def add_beams(
     off = _per_element(0.0 if offsets is None else offsets, n, (2, 3), what, "offsets")
     axis = xyz[pairs[:, 1]] + off[:, 1] - xyz[pairs[:, 0]] - off[:, 0]
     values, per = _beam_properties(material, section, shear_modulus, torsion_inertia, what)
-    per = dict(
-        nsm=_per_element(nsm, n, (), what, "nsm"),
-        torsion_inertia=_per_element(per["torsion_inertia"], n, (), what, "torsion_inertia"),
-        up=_default_up(axis) if up is None else _per_element(up, n, (3,), what, "up"),
-    )
-    if min(per["nsm"].min(), per["torsion_inertia"].min()) < 0:
-        raise BayesUpdateError(f"{what}: needs shear modulus > 0, nsm >= 0, torsion_inertia >= 0")
+    per = _per_beam(per["torsion_inertia"], nsm, _default_up(axis) if up is None else up, n, what)
+    per["taper"] = _taper(section, taper, n, what)
     beams = gb.GeneralBeams(
         nodes=pairs,
         part=np.zeros(n, int),
@@ -270,6 +268,35 @@ def add_beams(
     start = sum(b.n_elements for b in builder._general_beams)  # noqa: SLF001
     builder._general_beams.append(beams)  # noqa: SLF001
     return start + np.arange(n)
+
+
+def _per_beam(torsion_inertia, nsm, up, n: int, what: str) -> dict:
+    """{nsm, torsion_inertia, up} per element (``add_beams``), checked >= 0."""
+    per = dict(
+        nsm=_per_element(nsm, n, (), what, "nsm"),
+        torsion_inertia=_per_element(torsion_inertia, n, (), what, "torsion_inertia"),
+        up=_per_element(up, n, (3,), what, "up"),
+    )
+    if min(per["nsm"].min(), per["torsion_inertia"].min()) < 0:
+        raise BayesUpdateError(f"{what}: needs shear modulus > 0, nsm >= 0, torsion_inertia >= 0")
+    return per
+
+
+def _taper(section, taper, n: int, what: str) -> np.ndarray:
+    """(n, 2, 4) ``GeneralBeams.taper``: the elements' A, iy, iz, J at each end (``add_beams``'s
+    ``taper``) over the section's (its mean); ones without ``taper``.  A tapered element needs
+    A, iy, iz, J > 0 at both ends and iyz = 0."""
+    if taper is None:
+        return np.ones((n, 2, 4))
+    ends = _per_element(taper, n, (2, 4), what, "taper")
+    own = np.array([section.area, section.iy, section.iz, section.torsion], dtype=float)
+    varies = np.any(ends[:, 0] != ends[:, 1], axis=1)
+    if not np.any(varies):
+        return np.ones((n, 2, 4))
+    if section.iyz != 0 or not (np.all(ends[varies] > 0) and np.all(own > 0)):
+        raise BayesUpdateError(f"{what}: a tapered element needs A, iy, iz, J > 0 at both ends "
+                               "and no product of inertia (iyz = 0)")  # fmt: skip
+    return np.where(varies[:, None, None], ends / own, 1.0)
 
 
 def _beam_properties(material, section, shear_modulus, torsion_inertia, what: str):

@@ -207,7 +207,7 @@ class LineRebuild:
 BEAM_VALUES = ("E", "G", "rho", "area", "iy", "iz", "iyz", "torsion", "shear_y", "shear_z",
                "nsm", "torsion_inertia")  # fmt: skip
 ROD_VALUES = ("E", "G", "rho", "area", "torsion", "nsm")
-_BEAM_FIXED = ("nodes", "up", "offset", "pins", "mass")
+_BEAM_FIXED = ("nodes", "up", "offset", "pins", "mass", "taper")
 _FAMILIES = ("beam", "rod", "mass")
 
 

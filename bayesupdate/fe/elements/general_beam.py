@@ -18,6 +18,15 @@ Each element is the Timoshenko beam of ``fe.elements.beam`` (Przemieniecki 1968,
    the offset ends, and its end DOFs are u_end = u_node + theta_node x w (exact small-rotation
    link), K_node = G^T K G, G = diag(rigid_link(w_a), rigid_link(w_b)).
 
+A tapered element (``taper``: its section's A, iy, iz and J at end A and end B differ, iyz = 0)
+takes its stiffness from its flexibility as a cantilever, clamped at end A: the complementary
+energy of the section forces that end-B loads cause (axial, two shears, torsion, two bending
+moments), with A, iy, iz, J linear along the element, integrated by 3 Gauss points, inverted
+and spread to both ends by equilibrium, K = D^T F^-1 D (Przemieniecki 1968, sec. 5.6).  That is
+NX Nastran's tapered CBEAM: its static solution of a strongly tapered cantilever to 7e-8
+(``studies/nx_tapered_cbeam.py``); for a constant section it is the Timoshenko beam above.  Its
+mass is that of the mean section (the element's own fields).
+
 Mass per unit length m = rho A + nsm [kg/m]; rotary inertia rho iy, rho iz [kg m] (if the
 structure keeps rotary inertia); torsional inertia per unit length ``torsion_inertia`` [kg m]
 (rho (iy + iz) unless given).  Lumped mass: m L / 2 on each end's translations and
@@ -57,7 +66,10 @@ class GeneralBeams(LineElements):
     shear_y, shear_z (shear-area factors, 0 = rigid in shear); nsm [kg/m]; torsion_inertia
     [kg m]; up (n, 3) local z reference (local y = up x axis normalized); offset (n, 2, 3) [m]
     from each node to the element's end (global axes); pins (n, 2, 6) bool released element-axis
-    DOFs at end a and b; mass (n,) index into ``MASS_KINDS``.  An ``elements.base.ElementFamily``
+    DOFs at end a and b; mass (n,) index into ``MASS_KINDS``; taper (n, 2, 4) the section's A,
+    iy, iz, J at end a and end b as ratios to the fields above (all 1: a constant section;
+    else those fields are the element's mean section, which its mass uses, and a binding that
+    sets them keeps the taper's shape).  An ``elements.base.ElementFamily``
     (``Structure.general_beams``).
     """
 
@@ -82,6 +94,7 @@ class GeneralBeams(LineElements):
     offset: np.ndarray
     pins: np.ndarray
     mass: np.ndarray
+    taper: np.ndarray
 
     def mass_per_length(self) -> np.ndarray:
         """(n,) rho A + nsm [kg/m], 0 where the mass kind is "none"."""
@@ -159,6 +172,45 @@ def local_matrices(L, E, G, A, iy, iz, J, asy, asz, m_line, rot_y, rot_z, ip):
     return K, M
 
 
+#: the 3-point Gauss rule on [0, 1] of a tapered element's flexibility: (points, weights)
+_TAPER_RULE = tuple((x + 1) / 2 if k == 0 else x / 2
+                    for k, x in enumerate(np.polynomial.legendre.leggauss(3)))  # fmt: skip
+
+
+def tapered_stiffness(L, E, G, ends, shear_y, shear_z, shear: bool) -> np.ndarray:
+    """(n, 12, 12) element-axis K of tapered beams (module docstring): L (n,) [m], E, G (n,)
+    [Pa], ends (n, 2, 4) A [m^2], iy, iz, J [m^4] at end a and b (linear between), shear_y,
+    shear_z (n,) shear-area factors (0: rigid in shear; ``shear`` False: all rigid)."""
+    n = L.shape[0]
+    points, weights = _TAPER_RULE
+    F = np.zeros((n, 6, 6))
+    for t, w in zip(points, weights, strict=True):
+        A, iy, iz, J = (ends[:, 0] + (ends[:, 1] - ends[:, 0]) * t).T
+        r = L * (1 - t)  # the arm from the section to end b
+        phi = np.broadcast_to(np.eye(6), (n, 6, 6)).copy()  # section forces of end-b loads
+        phi[:, 4, 2], phi[:, 5, 1] = -r, r  # My = My_b - r Fz, Mz = Mz_b + r Fy
+        with np.errstate(divide="ignore"):
+            c_y = np.where(shear & (shear_y > 0), 1 / (G * shear_y * A), 0.0)
+            c_z = np.where(shear & (shear_z > 0), 1 / (G * shear_z * A), 0.0)
+        c = np.stack([1 / (E * A), c_y, c_z, 1 / (G * J), 1 / (E * iy), 1 / (E * iz)], axis=1)
+        F += np.einsum("eki,ek,ekj->eij", phi, c, phi) * (w * L)[:, None, None]
+    D = np.zeros((n, 6, 12))  # end b's motion relative to the rigid motion of end a
+    D[:, :, 6:] = np.eye(6)
+    D[:, :3, :3] = D[:, 3:, 3:6] = -np.eye(3)
+    D[:, 1, 5], D[:, 2, 4] = -L, L  # theta_a x (L e_x) = L (0, theta_z, -theta_y)
+    return np.swapaxes(D, 1, 2) @ np.linalg.solve(F, D)
+
+
+def is_tapered(b: GeneralBeams) -> np.ndarray:
+    """(n,) True where an element's section differs between its ends (``taper``)."""
+    return np.any(b.taper[:, 0] != b.taper[:, 1], axis=1)
+
+
+def section_ends(b: GeneralBeams) -> np.ndarray:
+    """(n, 2, 4) A [m^2], iy, iz, J [m^4] at each end (``taper`` x the fields)."""
+    return b.taper * np.stack([b.area, b.iy, b.iz, b.torsion], axis=1)[:, None, :]
+
+
 def lumped_mass(L, m_line, ip) -> np.ndarray:
     """(n, 12, 12) lumped mass: m L / 2 per end translation, ip L / 2 per end twist."""
     M = np.zeros((L.shape[0], 12, 12))
@@ -228,6 +280,11 @@ def element_local(L, b: GeneralBeams, idx, shear: bool, rotary: bool):
     )
     M[kind == "lumped"] = lumped_mass(L, m_line, sub.torsion_inertia)[kind == "lumped"]
     M[kind == "none"] = 0.0
+    tapered = is_tapered(sub)
+    if np.any(tapered):  # iyz = 0 there (the builder's check): principal axes are local ones
+        t = tapered
+        K[t] = tapered_stiffness(L[t], sub.E[t], sub.G[t], section_ends(sub)[t], sub.shear_y[t],
+                                 sub.shear_z[t], shear)  # fmt: skip
     turned = alpha != 0
     if np.any(turned):
         c, s = np.cos(alpha[turned]), np.sin(alpha[turned])

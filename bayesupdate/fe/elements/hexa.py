@@ -27,7 +27,7 @@ static solution of 128 near-cubes (``tests/data/msc_chexa8.json``: Nastran's gri
 of each element against K u), within 1.4e-5 (median; float32 output) where the fully integrated
 brick is 6e-2 off and Wilson-Taylor's incompatible modes 5.6e-4; on NX's single 1 x 1 x 2 brick
 under five face pressures within 1.6e-6.  The mass is lumped as Nastran lumps it, rho times the
-integral of N_a on each corner (MSC's gravity load of the same model, 2e-8: on a distorted
+integral of N_a on each corner (MSC's gravity load of the same model, 3.6e-8: on a distorted
 element it is not rho V / 8), or consistent (PARAM COUPMASS 1: rho N_a N_b I_3 on the same
 rule).  A solid has no rotations (``fe.elements.tetra``).  A parametric family: a factor on E
 scales K and a factor on rho scales M, each exactly linearly.  SI units; K [N/m], M [kg], each

@@ -92,37 +92,47 @@ def is_tapered(p) -> bool:
     return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
 
 
-def _pbeam_values(ctx: Context, p, card) -> np.ndarray:
-    """(6,) A, I1, I2, I12, J, NSM of a PBEAM's element: a constant PBEAM's own, a tapered
-    one's mean over the length of the piecewise-linear variation through its stations
-    (``pbeam_stations``; trapezoid rule, exact for that variation), with a note.  NX forms a
-    tapered CBEAM from its flexibility with the section linear along it, integrated by 3 Gauss
-    points, and lumps its NSM by first moments (``studies/nx_tapered_cbeam.py``: 7e-8 of NX's
-    own solution, where the mean section is 5e-3 off); the mean section keeps the element's
-    mass and is exact as the taper goes to 0, so a member meshed in several tapered CBEAMs
-    converges to the tapered beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
+def _pbeam_values(ctx: Context, p, card) -> tuple[np.ndarray, np.ndarray | None]:
+    """((6,) A, I1, I2, I12, J, NSM of a PBEAM's element, (2, 6) its values at end A and end B
+    or None).  A constant PBEAM: its own values, None.  A tapered one whose stations lie on the
+    line from end A to end B, with no I12: the mean and both ends (NX's tapered CBEAM, linear
+    along the element: ``studies/nx_tapered_cbeam.py``).  Another tapered one (an intermediate
+    station off that line, an I12, or an A, I1, I2 or J of 0 somewhere): the mean over the
+    length of the piecewise-linear
+    variation through its stations (``pbeam_stations``; trapezoid rule, exact for that
+    variation), None, with a note: the mean section keeps the element's mass and is exact as
+    the taper goes to 0, so a member meshed in several tapered CBEAMs converges to the tapered
+    beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
     x, v = pbeam_stations(p, card)
     if not is_tapered(p):
-        return v[0]
+        return v[0], None
     if np.any(v[:, :3] < 0) or np.any(v[:, 4] < 0):
         card.fail(f"PBEAM {p.id()}: a station has A, I1, I2 or J < 0")
-    note = (f"PBEAM {p.id()} is tapered: each of its CBEAMs uses the section averaged over its "
-            "length (mesh a tapered member in several elements)")  # fmt: skip
+    mean = np.trapezoid(v, x, axis=0)
+    line = v[0] + np.outer(x, v[-1] - v[0])
+    linear = np.all(np.abs(v - line) <= 1e-12 * np.maximum(np.abs(v).max(axis=0), 1e-300))
+    if linear and not np.any(v[:, 3]) and np.all(v[:, [0, 1, 2, 4]] > 0):
+        return mean, v[[0, -1]]
+    note = (f"PBEAM {p.id()} is tapered with stations off the line from end A to end B, an "
+            "I12, or an A, I1, I2 or J of 0: each of its CBEAMs uses the section averaged over "
+            "its length (mesh a tapered member in several elements)")  # fmt: skip
     if note not in ctx.notes:
         ctx.notes.append(note)
-    return np.trapezoid(v, x, axis=0)
+    return mean, None
 
 
 def _general_section(ctx: Context, prop, card):
-    """(``BeamSection``, nsm) of a PBAR or a PBEAM (tapered: its mean section; I1 -> iz, I2 ->
-    iy)."""
+    """(``BeamSection``, nsm, ends) of a PBAR or a PBEAM (tapered: its mean section; I1 -> iz,
+    I2 -> iy); ends (2, 6) a linearly tapered PBEAM's A, I1, I2, I12, J, NSM at end A and end B
+    (``_pbeam_values``), else None."""
     pid = prop.id()
+    ends = None
     if prop.name == "PBAR":
         a, i1, i2, i12, j, nsm = (prop.real(k) for k in ("A", "I1", "I2", "I12", "J", "NSM"))
         # K1, K2 blank (or ignored because I12 != 0) mean rigid in shear (MSC QRG, PBAR)
         k = [0.0 if (prop.is_blank(n) or i12) else prop.real(n) for n in ("K1", "K2")]
     else:
-        a, i1, i2, i12, j, nsm = _pbeam_values(ctx, prop, card)
+        (a, i1, i2, i12, j, nsm), ends = _pbeam_values(ctx, prop, card)
         _, tail = pbeam_layout(prop)
         used = [n for n in _PBEAM_TAIL[2:] if tail[n]]
         if used:
@@ -134,7 +144,7 @@ def _general_section(ctx: Context, prop, card):
         sec = general_section(a, i2, i1, j, i12, k[0], k[1], name=f"{prop.name} {pid}")
     except BayesUpdateError as exc:
         card.fail(str(exc))
-    return sec, nsm
+    return sec, nsm, ends
 
 
 def library_dims(prop, card) -> tuple[str, np.ndarray, float]:
@@ -347,12 +357,15 @@ def _pins(e):
 
 def add(ctx: Context) -> None:
     """CBAR and CBEAM (``fe.elements.general_beam``) with PBAR, PBEAM, PBARL or PBEAML
-    (``L_SECTIONS``; a tapered PBEAM or PBEAML: its mean section), offsets WA/WB and pin flags
-    PA/PB.  G from
-    MAT1.  Lumped mass (COUPMASS < 1): point masses at the element's ends (rigidly offset),
-    (rho A + NSM) L / 2 each, and for CBEAM also half the torsional inertia rho (I1 + I2) L about
-    the axis (MSC lumps none for CBAR; the beam_modes torsion mode shows it, 3554.909 Hz with
-    against MSC's 3554.923).  Coupled mass (COUPMASS 1): ``_coupled``."""
+    (``L_SECTIONS``; a PBEAM tapered linearly from end A to end B: NX's tapered element, its
+    flexibility with the section linear along it; another tapered PBEAM or a tapered PBEAML:
+    its mean section), offsets WA/WB and pin flags PA/PB.  G from MAT1.  Lumped mass (COUPMASS
+    < 1): point masses at the element's ends (rigidly offset), (rho A + NSM) L / 2 each (a
+    linearly tapered PBEAM: each end the first moment of the linear line mass, L (m_a / 3 +
+    m_b / 6) at end A, NX's: ``studies/nx_tapered_cbeam.py``), and for CBEAM also half the
+    torsional inertia rho (I1 + I2) L about the axis (MSC lumps none for CBAR; the beam_modes
+    torsion mode shows it, 3554.909 Hz with against MSC's 3554.923).  Coupled mass (COUPMASS
+    1): ``_coupled``."""
     ctx.each(("CBAR", "CBEAM"), _add_beam)
 
 
@@ -364,8 +377,9 @@ def _add_beam(ctx: Context, e) -> None:
     prop = ctx.prop(e, kinds)
     mid = prop.int("MID", positive=True)
     mat = material(ctx, mid, e)
+    ends = None
     if prop.name in ("PBAR", "PBEAM"):
-        section, nsm = _general_section(ctx, prop, e)
+        section, nsm, ends = _general_section(ctx, prop, e)
     else:
         section, nsm = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
     offt = _offt(ctx, e)
@@ -374,11 +388,13 @@ def _add_beam(ctx: Context, e) -> None:
     length, axis, up = (x[0] for x in end_geometry(ctx.grids.xyz[rows][None], off[None], v[None]))
     a, b = ctx.node[rows]
     part = f"{prop.name} {prop.id()}"
+    # a linearly tapered PBEAM's (A, I2 -> iy, I1 -> iz, J) at each end (``add_beams``)
+    taper = None if ends is None else ends[:, [0, 2, 1, 4]]
     try:
         ctx.builder.add_beams(
             [[a, b]], section, mat, part, up=up, offsets=off, pins=_pins(e),
             mass="none" if ctx.lumped else _coupled(e), nsm=nsm * ctx.wtmass,
-            shear_modulus=mat1(ctx, mid, e).G,
+            shear_modulus=mat1(ctx, mid, e).G, taper=taper,
         )  # fmt: skip
     except BayesUpdateError as exc:
         e.fail(_builder_message(exc))
@@ -388,7 +404,13 @@ def _add_beam(ctx: Context, e) -> None:
         if e.name == "CBEAM":
             twist = mat.density * (section.iy + section.iz)
             twist = lumped_twist(np.array([twist]), length[None], axis[None])[0]
-        _lumped_mass(ctx, (a, b), line, length, part, twist, off)
+        shares = None
+        m_a, m_b = (
+            (0.0, 0.0) if ends is None else mat.density * ends[:, 0] + ends[:, 5] * ctx.wtmass
+        )
+        if m_a + m_b > 0:  # m(s) linear: each end its first moment (NX's lumping)
+            shares = np.array([m_a / 3 + m_b / 6, m_a / 6 + m_b / 3]) * 4 / (m_a + m_b)
+        _lumped_mass(ctx, (a, b), line, length, part, twist, off, shares)
 
 
 def _coupled(e) -> str:

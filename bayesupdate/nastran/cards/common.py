@@ -151,13 +151,18 @@ def material(ctx: Context, mid: int, user) -> Material:
     return Material(m.E, nu, rho, f"MAT1 {mid}")
 
 
-def _lumped_mass(ctx: Context, nodes, mass_per_length, length, part, inertia=None, offsets=None):
-    """Half the line mass (and of the ``inertia`` (3, 3) tensor) at each end (node + offset)."""
+def _lumped_mass(
+    ctx: Context, nodes, mass_per_length, length, part, inertia=None, offsets=None, shares=None
+):
+    """Half the line mass (and of the ``inertia`` (3, 3) tensor) at each end (node + offset);
+    ``shares`` (2,): each end's share of the line mass x 2 instead (a tapered line's first
+    moments; the inertia stays halved)."""
     if mass_per_length > 0:
         J = None if inertia is None else 0.5 * inertia
         off = np.zeros((2, 3)) if offsets is None else offsets
-        for n, w in zip(nodes, off, strict=True):
-            ctx.builder.add_point_mass(n, 0.5 * mass_per_length * length, part, J, w)
+        shares = np.ones(2) if shares is None else shares
+        for n, w, share in zip(nodes, off, shares, strict=True):
+            ctx.builder.add_point_mass(n, 0.5 * share * mass_per_length * length, part, J, w)
 
 
 def _builder_message(exc) -> str:

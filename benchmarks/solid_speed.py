@@ -6,16 +6,19 @@ Printed, medians over ``--repeats`` runs (BLAS on one thread; the machine's othe
 the wall time):
 * the command's wall time for each deck (read, assemble, 20 elastic modes, mass properties);
 * the element kernels alone on the same corners: ``fe.elements.hexa.stiffness`` and
-  ``mass_matrix`` for the bricks, ``Tetrahedra.matrices`` for the tetrahedra, per element.
+  ``mass_matrix`` for the bricks, ``Tetrahedra.matrices`` for the tetrahedra, per element;
+  the bricks' K and the traced peak memory of forming it.
 
 The bar is 1 x 0.05 x 0.08 m in nx x ny x nz cells (default 120 x 12 x 12: 17,280 bricks or
 103,680 tetrahedra on 20,449 GRIDs, 61,347 DOFs).
 
-Measured (2026-11-30, 2 shared cores, medians of 3): the brick deck 27.8 s, the tetrahedra
+Measured (2026-11-30, 2 shared cores, medians of 3): the brick deck 26.0 s, the tetrahedra
 deck 23.2 s (of which SuperLU's factorization and 53 solves take about 15 s on the bricks, the
-reading's AUTOSPC pass, which assembles K once more, about 7 s); ``hexa.stiffness`` 1.78 s
-(103 us per brick; 3.86 s, 224 us, before its products were batched matrix products and its
-shear lines' points computed once), ``Tetrahedra.matrices`` 1.14 s (11 us per tetrahedron).
+reading's AUTOSPC pass, which assembles K once more, about 7 s); ``hexa.stiffness`` 1.02 s
+(59 us per brick; 3.86 s, 224 us, before its products were batched matrix products, its shear
+lines' points computed once and its elements taken 2,048 at a time), its traced peak memory
+181 MB for an 80 MB K (854 MB before the chunks); ``Tetrahedra.matrices`` 1.1-1.8 s (11-18 us
+per tetrahedron, two runs).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/solid_speed.py [--cells 120 12 12]
         [--repeats 3]
@@ -28,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +117,11 @@ def main() -> None:
     corners = xyz[bricks - 1]
     D = elasticity(np.full(len(corners), E), np.full(len(corners), NU))
     t_k, _ = time_median(lambda: hexa.stiffness(corners, D), args.repeats)
+    tracemalloc.start()
+    K = hexa.stiffness(corners, D)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    print(f"  hexa.stiffness memory: K {K.nbytes / 1e6:.0f} MB, peak {peak / 1e6:.0f} MB (traced)")
     rho, lumped = np.full(len(corners), RHO), np.ones(len(corners), bool)
     t_m, _ = time_median(lambda: hexa.mass_matrix(corners, rho, lumped), args.repeats)
     print(

@@ -47,6 +47,8 @@ CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
                     [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)  # fmt: skip
 #: the 2 x 2 x 2 Gauss points (8, 3) (each weight 1)
 GAUSS = CORNERS / np.sqrt(3.0)
+#: elements whose stiffness is formed at once (``stiffness``: the memory of its temporaries)
+CHUNK = 2048
 #: (natural shear component of the Voigt order, the axis along which it is sampled)
 _SHEAR_LINES = ((3, 2), (4, 0), (5, 1))
 #: the enhanced terms of each natural normal strain: (its axis, the powers of (xi, eta, zeta))
@@ -155,7 +157,18 @@ def stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool = True) -> np.n
     [Pa] (module docstring: assumed natural shear, nine enhanced normal strains condensed).
     ``enhanced=False``: the assumed shear alone, which is MYSTRAN 18's HEXA8 with PSOLID ISOP
     blank (its shear strains averaged over each face's Gauss points, ``Source/EMG/EMG5/
-    HEXA.f90``; ``tests/test_nastran_hexa.py`` compares it with MYSTRAN)."""
+    HEXA.f90``; ``tests/test_nastran_hexa.py`` compares it with MYSTRAN).  Formed ``CHUNK``
+    elements at a time: the strain matrices of all of them at once would take ten times K's
+    memory."""
+    K = np.empty((len(corners), 24, 24))
+    for start in range(0, len(corners), CHUNK):
+        part = slice(start, start + CHUNK)
+        K[part] = _stiffness(corners[part], D[part], enhanced)
+    return K
+
+
+def _stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool) -> np.ndarray:
+    """``stiffness`` of one chunk of elements."""
     n = len(corners)
     jac0 = jacobians(corners, np.zeros((1, 3)))[:, 0]
     det0 = np.linalg.det(jac0)

@@ -80,8 +80,10 @@ def singular_dofs(K, M, independent: np.ndarray, axes=None) -> SingularDofs:
         Mb[full] = A @ Mb[full] @ A.transpose(0, 2, 1)
     floor = ABSOLUTE * max(float(np.abs(K.diagonal()).max(initial=0.0)), 1.0)
     m_floor = ABSOLUTE * max(float(np.abs(M.diagonal()).max(initial=0.0)), 1e-300)
-    held, loose, off_axis = [], [], []
-    for g, comps, N in _null_spaces(Kb, present, floor):
+    whole, partial = _null_spaces(Kb, present, floor)
+    # a block singular in all three directions is held whole (each axis is a null direction)
+    held, loose, off_axis = list((3 * groups[whole][:, None] + np.arange(3)).ravel()), [], []
+    for g, comps, N in partial:
         aligned = np.all(np.linalg.norm(N[comps], axis=1) > 1 - 1e-9)
         massive = np.abs(N.T @ Mb[g] @ N).max() > m_floor
         if aligned or not massive:
@@ -95,15 +97,26 @@ def singular_dofs(K, M, independent: np.ndarray, axes=None) -> SingularDofs:
 
 
 def _null_spaces(Kb: np.ndarray, present: np.ndarray, floor: float):
-    """(group, components to hold, null basis N (3, d) in the block's axes) of each block of Kb
-    (n, 3, 3) with a singular direction among its ``present`` (n, 3) components; eigenvalues
-    below RATIO times the block's largest are singular, and every one where the largest is
-    below ``floor`` (an absolute test on the block, not on each direction: a thin shell's
-    drilling is small beside a stiff spring elsewhere, and it is no singularity).  Full blocks
-    are solved as one batch; blocks with a fixed or dependent component one by one."""
+    """(the groups whose full block is singular in all three directions, the others: (group,
+    components to hold, null basis N (3, d) in the block's axes) of each block of Kb (n, 3, 3)
+    with a singular direction among its ``present`` (n, 3) components); eigenvalues below
+    RATIO times the block's largest are singular, and every one where the largest is below
+    ``floor`` (an absolute test on the block, not on each direction: a thin shell's drilling is
+    small beside a stiff spring elsewhere, and it is no singularity).  Full blocks are solved
+    as one batch; blocks with a fixed or dependent component one by one."""
     full = np.flatnonzero(present.all(axis=1))
     lam, vec = np.linalg.eigh(Kb[full])
     null = (lam <= RATIO * lam[:, -1:]) | (lam[:, -1:] <= floor)
+    whole = null.all(axis=1)
+    batch = (full, null & ~whole[:, None], vec)
+    return full[whole], _partial_null_spaces(Kb, present, floor, batch)
+
+
+def _partial_null_spaces(Kb, present, floor, batch):
+    """The second part of ``_null_spaces``: the full blocks singular in one or two directions
+    (``batch``: their indices, null flags and eigenvectors), then the blocks with a fixed or
+    dependent component."""
+    full, null, vec = batch
     for i in np.flatnonzero(null[:, 0]):
         N = vec[i][:, null[i]]
         yield full[i], _held_components(N, np.arange(3)), N

@@ -354,12 +354,14 @@ def _autospc(ctx, structure):
     axes[ctx.node[rotated]] = ctx.grids.frame[rotated]
     found = singular_dofs(tr.reduce(K), tr.reduce(M), tr.independent, axes)
     row_of_node = dict(zip(ctx.node[rows].tolist(), rows.tolist(), strict=True))
-    for node in np.unique(found.held // 6):
-        mask = np.zeros(6, bool)
-        mask[found.held[found.held // 6 == node] % 6] = True
-        if int(node) in row_of_node:
-            cards.common.frame_partial(ctx, mask, row_of_node[int(node)])
-        ctx.builder.add_support(int(node), "".join(str(i + 1) for i in np.flatnonzero(mask)))
+    # each node's held components, found in one pass (not one scan of them all per node)
+    nodes, at = np.unique(found.held // 6, return_inverse=True)
+    masks = np.zeros((nodes.size, 6), bool)
+    masks[at, found.held % 6] = True
+    for node, mask in zip(nodes.tolist(), masks, strict=True):
+        if node in row_of_node:
+            cards.common.frame_partial(ctx, mask, row_of_node[node])
+        ctx.builder.add_support(node, "".join(str(i + 1) for i in np.flatnonzero(mask)))
     names = ctx.builder.node_names
     if found.off_axis.size:
         ctx.notes.append(

@@ -12,9 +12,11 @@ the wall time):
 The bar is 1 x 0.05 x 0.08 m in nx x ny x nz cells (default 120 x 12 x 12: 17,280 bricks or
 103,680 tetrahedra on 20,449 GRIDs, 61,347 DOFs).
 
-Measured (2026-11-30, 2 shared cores, medians of 3): the brick deck 26.0 s, the tetrahedra
-deck 23.2 s (of which SuperLU's factorization and 53 solves take about 15 s on the bricks, the
-reading's AUTOSPC pass, which assembles K once more, about 7 s); ``hexa.stiffness`` 1.02 s
+Measured (2026-11-30, 2 shared cores, medians of 3): the brick deck 26.0-27.5 s (two runs of
+this script), the tetrahedra deck 23.2-23.8 s (of which SuperLU's factorization and 53 solves
+take about 15 s on the bricks, the reading's AUTOSPC pass, which assembles K once more, 4.6 s;
+7.0 s before its per-node loop was one pass: the brick deck's command 28.3 -> 25.9 s, medians
+of 5 interleaved runs of the two trees, x 0.91); ``hexa.stiffness`` 1.02 s
 (59 us per brick; 3.86 s, 224 us, before its products were batched matrix products, its shear
 lines' points computed once and its elements taken 2,048 at a time), its traced peak memory
 181 MB for an 80 MB K (854 MB before the chunks); ``Tetrahedra.matrices`` 1.1-1.8 s (11-18 us

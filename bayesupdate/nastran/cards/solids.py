@@ -5,9 +5,9 @@ A four-node CTETRA is the constant-strain tetrahedron in every code: its stiffne
 integration or formulation option (PSOLID IN, ISOP and STRESS change nothing for it) and its
 lumped mass is a quarter at each corner.  An eight-node CHEXA is Nastran's default brick
 (``fe.elements.hexa``: checked on MSC's and NX's own solutions), so a PSOLID that its CHEXAs
-use must ask for the default integration (IN blank or 2, ISOP blank).  Refused, each naming
+use must leave IN and ISOP blank (the default integration).  Refused, each naming
 its card: a solid with mid-side GRIDs (CTETRA G5-G10, CHEXA G9-G20), a PSOLID whose FCTN is
-not SMECH (a fluid), a CHEXA's PSOLID with another IN or any ISOP, a MAT1 whose NU (given, or
+not SMECH (a fluid), a CHEXA's PSOLID with IN or ISOP given, a MAT1 whose NU (given, or
 from E and G) is outside (-1, 0.5) or that has no E, a corner repeated, a tetrahedron's four
 corners in one plane, a brick whose volume vanishes or turns inside out within it.  A brick
 numbered inside out (G1-G4 clockwise seen from G5-G8) is read with its faces' order reversed,
@@ -103,15 +103,14 @@ def _fields(ctx: Context, e, out: tuple, materials: dict, integration: dict) -> 
 
 
 def _default_integration(p) -> bool:
-    """True when a CHEXA's PSOLID asks for Nastran's default brick, the one
-    ``fe.elements.hexa`` forms: ISOP blank and IN blank or 2 (TWO, the eight-node default);
-    else its card is refused."""
-    given = [] if p.is_blank("ISOP") else [f"ISOP {p['ISOP']}"]
-    if not p.is_blank("IN") and str(p["IN"]).strip().upper() not in ("2", "TWO"):
-        given.append(f"IN {p['IN']}")
+    """True when a CHEXA's PSOLID leaves IN and ISOP blank, Nastran's default brick, the one
+    ``fe.elements.hexa`` forms (checked on MSC's and NX's solutions with both blank); else its
+    card is refused.  IN names an integration network (0 BUBBLE, 1 GAUSS, 2 TWO, 3 THREE: a
+    given one may drop the bubble functions), ISOP a scheme, neither checked here."""
+    given = [f"{f} {p[f]}" for f in ("IN", "ISOP") if not p.is_blank(f)]
     if given:
-        p.fail(f"{', '.join(given)}: a CHEXA is read with the default integration only (IN blank "
-               "or 2, ISOP blank)")  # fmt: skip
+        p.fail(f"{', '.join(given)}: a CHEXA is read with the default integration only (IN and "
+               "ISOP blank)")  # fmt: skip
     return True
 
 

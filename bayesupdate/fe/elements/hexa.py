@@ -189,13 +189,7 @@ def _stiffness(corners: np.ndarray, D: np.ndarray, enhanced: bool) -> np.ndarray
     Kcc = weighted @ (D[:, None] @ B).reshape(n, 48, 24)
     if not enhanced:
         return Kcc
-    inv0 = np.linalg.inv(jac0)
-    G = np.empty((n, 6, 3))  # physical strain of a unit natural normal strain along each axis
-    for a in range(3):
-        G[:, :3, a] = inv0[:, :, a] ** 2
-        G[:, 3, a] = 2 * inv0[:, 0, a] * inv0[:, 1, a]
-        G[:, 4, a] = 2 * inv0[:, 1, a] * inv0[:, 2, a]
-        G[:, 5, a] = 2 * inv0[:, 0, a] * inv0[:, 2, a]
+    G = Tinv[:, :, :3]  # the physical strain of a unit natural normal strain along each axis
     terms = np.array([[np.prod(pt**powers) for axis, powers in _ENHANCED] for pt in GAUSS])
     axes = np.array([axis for axis, _ in _ENHANCED])
     Ma = G[:, None, :, axes] * (terms[None, :, None, :] * (det0[:, None] / det)[:, :, None, None])

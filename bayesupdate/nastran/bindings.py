@@ -567,14 +567,17 @@ def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
 
 def _solid_properties(f: DeckField, solid: np.ndarray, structure) -> list[str]:
     """The factors a MAT1's E or RHO sets on solids (``solid`` their mask, ``solid_counts``):
-    ``solid_*`` where it is on tetrahedra, ``hexa_*`` where it is on bricks (empty: on
-    none)."""
-    n_tetra = solid_counts(structure)[0]
-    quantity = {"E": "modulus", "RHO": "density"}.get(f.field)
-    if quantity is None:
+    each solid family's own (``fe.elements.solid.factors``) where it has elements in the mask
+    (empty: on none)."""
+    from bayesupdate.fe.elements.hexa import Hexahedra
+    from bayesupdate.fe.elements.tetra import Tetrahedra
+
+    which = {"E": 0, "RHO": 1}.get(f.field)
+    if which is None:
         return []
-    kinds = (("solid", solid[:n_tetra].any()), ("hexa", solid[n_tetra:].any()))
-    return [f"{kind}_{quantity}_factor" for kind, used in kinds if used]
+    n_tetra = solid_counts(structure)[0]
+    used = ((Tetrahedra, solid[:n_tetra].any()), (Hexahedra, solid[n_tetra:].any()))
+    return [family.properties[which].name for family, hit in used if hit]
 
 
 def _psolids_of(deck, f: DeckField) -> list[str]:

@@ -115,23 +115,23 @@ class NastranModel(FEModel):
         if binding.property == "line":  # re-built elements (``lines``): no FE property
             return beams
         family = PROPERTY_TERMS[binding.property][0]
+        if family in ("tetrahedron", "hexahedron"):
+            return self._solid_part(binding, family)
+        return {"beam": beams, "mass": binding.mass, "spring": binding.spring}[family]
+
+    def _solid_part(self, binding, family: str) -> np.ndarray:
+        """The part of a binding's ``solid`` mask (the tetrahedra, then the bricks) over
+        ``family``'s elements."""
         n_tetra = solid_counts(self.structure)[0]
-        return {"beam": beams, "mass": binding.mass, "spring": binding.spring,
-                "tetrahedron": binding.solid[:n_tetra],
-                "hexahedron": binding.solid[n_tetra:]}[family]  # fmt: skip
+        return binding.solid[:n_tetra] if family == "tetrahedron" else binding.solid[n_tetra:]
 
     def _companions(self, name, binding):
-        """A deck material's further solid families (``DeckBinding.companions``): the
-        tetrahedra, then the bricks, of its ``solid`` mask, each to its factor x the value."""
-        if not isinstance(binding, DeckBinding) or not binding.companions:
+        """A deck material's further solid families (``DeckBinding.companions``): each one's
+        part of its ``solid`` mask, to its factor x the value."""
+        if not isinstance(binding, DeckBinding):
             return ()
-        n_tetra = solid_counts(self.structure)[0]
-        out = []
-        for prop, factor in binding.companions:
-            tetra = PROPERTY_TERMS[prop][0] == "tetrahedron"
-            mask = binding.solid[:n_tetra] if tetra else binding.solid[n_tetra:]
-            out.append((prop, mask, factor))
-        return tuple(out)
+        return tuple((prop, self._solid_part(binding, PROPERTY_TERMS[prop][0]), factor)
+                     for prop, factor in binding.companions)  # fmt: skip
 
     def _solve_general(self, p, props, n_modes, energies, method):
         from bayesupdate.nastran.lines import LineAssembler

@@ -38,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import Bindable, ElementSettings, register_parametric
-from bayesupdate.fe.elements.solid import Solids
+from bayesupdate.fe.elements.base import ElementSettings, register_parametric
+from bayesupdate.fe.elements.solid import Solids, factors
 from bayesupdate.fe.elements.tetra import elasticity, strain_matrix
 
 #: the corners' natural coordinates (8, 3), Nastran's CHEXA order
@@ -66,17 +66,10 @@ class Hexahedra(Solids):
     ``Structure.elements``: K is linear in the factor ``hexa_modulus_scale`` on E (the
     parameter ``hexa_modulus_factor``), M in ``hexa_density_scale`` (``hexa_density_factor``)."""
 
-    #: registry name; the ``ElementProperties`` fields; the matrices linear in them
+    #: registry name; the ``ElementProperties`` fields and the properties a parameter binds
+    #: (``fe.model.Binding``) on a part's bricks
     family = "hexahedron"
-    fields = ("hexa_modulus_scale", "hexa_density_scale")
-    linear = "KM"
-    #: the properties a parameter binds (``fe.model.Binding``) on a part's hexahedra
-    properties = (
-        Bindable("hexa_modulus_factor", "hexa_modulus_scale", "K", rule="factor",
-                 acts_on="factor on the E of the part's bricks"),
-        Bindable("hexa_density_factor", "hexa_density_scale", "M", rule="factor",
-                 acts_on="factor on the density of the part's bricks"),
-    )  # fmt: skip
+    fields, properties = factors("hexa", "bricks")
 
     def matrices(self, props, settings: ElementSettings, elements=None):
         """(K, M) (n_e, 24, 24) of ``elements`` (default all) at the factors of ``props``

@@ -2,8 +2,8 @@
 material, lumping, part) and the factors on E and rho that its parameters are.
 
 A solid family (``tetra``, ``hexa``) is a frozen dataclass deriving from ``Solids``; it names its
-registry ``family``, its two ``fields`` (the factor on E first, on rho second), ``linear = "KM"``
-and its ``properties``, and gives ``matrices`` and ``masses``.  SI units: corners [m], E [Pa],
+registry ``family`` and its two ``fields`` and ``properties`` (``factors``: the factor on E
+first, on rho second), and gives ``matrices`` and ``masses``.  SI units: corners [m], E [Pa],
 rho [kg/m^3].
 """
 
@@ -11,7 +11,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import check_fields, in_elements
+from bayesupdate.fe.elements.base import Bindable, check_fields, in_elements
+
+
+def factors(prefix: str, noun: str) -> tuple[tuple[str, str], tuple[Bindable, Bindable]]:
+    """(``fields``, ``properties``) of a solid family: the factor on E, which K is linear in
+    (field ``<prefix>_modulus_scale``, property ``<prefix>_modulus_factor``), then on rho, which
+    M is linear in (``<prefix>_density_*``); ``noun`` names its elements ("bricks")."""
+    fields = (f"{prefix}_modulus_scale", f"{prefix}_density_scale")
+    properties = (
+        Bindable(f"{prefix}_modulus_factor", fields[0], "K", rule="factor",
+                 acts_on=f"factor on the E of the part's {noun}"),
+        Bindable(f"{prefix}_density_factor", fields[1], "M", rule="factor",
+                 acts_on=f"factor on the density of the part's {noun}"),
+    )  # fmt: skip
+    return fields, properties
 
 
 @dataclass(frozen=True)
@@ -19,6 +33,9 @@ class Solids:
     """n solid elements of k corners: nodes (n, k) corner node indices; corners (n, k, 3) their
     positions [m]; E [Pa], nu [-], rho [kg/m^3] (n,); lumped (n,) bool (mass lumped at the
     corners, else consistent); part (n,) part indices."""
+
+    #: K is linear in the factor on E, M in the factor on rho (``factors``)
+    linear = "KM"
 
     nodes: np.ndarray
     corners: np.ndarray

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.elements.base import Bindable, ElementSettings, register_parametric
-from bayesupdate.fe.elements.solid import Solids
+from bayesupdate.fe.elements.base import ElementSettings, register_parametric
+from bayesupdate.fe.elements.solid import Solids, factors
 
 #: d N_a / d (xi, eta, zeta) of the four corners' linear shape functions (3, 4)
 _REFERENCE_GRADIENT = np.hstack([-np.ones((3, 1)), np.eye(3)])
@@ -40,17 +40,10 @@ class Tetrahedra(Solids):
     parameter ``solid_modulus_factor``), M in ``solid_density_scale`` on rho
     (``solid_density_factor``)."""
 
-    #: registry name; the ``ElementProperties`` fields; the matrices linear in them
+    #: registry name; the ``ElementProperties`` fields and the properties a parameter binds
+    #: (``fe.model.Binding``) on a part's solids
     family = "tetrahedron"
-    fields = ("solid_modulus_scale", "solid_density_scale")
-    linear = "KM"
-    #: the properties a parameter binds (``fe.model.Binding``) on a part's solids
-    properties = (
-        Bindable("solid_modulus_factor", "solid_modulus_scale", "K", rule="factor",
-                 acts_on="factor on the E of the part's solids"),
-        Bindable("solid_density_factor", "solid_density_scale", "M", rule="factor",
-                 acts_on="factor on the density of the part's solids"),
-    )  # fmt: skip
+    fields, properties = factors("solid", "solids")
 
     def matrices(self, props, settings: ElementSettings, elements=None):
         """(K, M) (n_e, 12, 12) of ``elements`` (default all) at the factors of ``props``

@@ -404,13 +404,11 @@ def _add_beam(ctx: Context, e) -> None:
         if e.name == "CBEAM":
             twist = mat.density * (section.iy + section.iz)
             twist = lumped_twist(np.array([twist]), length[None], axis[None])[0]
-        shares = None
-        m_a, m_b = (
-            (0.0, 0.0) if ends is None else mat.density * ends[:, 0] + ends[:, 5] * ctx.wtmass
-        )
-        if m_a + m_b > 0:  # m(s) linear: each end its first moment (NX's lumping)
-            shares = np.array([m_a / 3 + m_b / 6, m_a / 6 + m_b / 3]) * 4 / (m_a + m_b)
-        _lumped_mass(ctx, (a, b), line, length, part, twist, off, shares)
+        split = None
+        if ends is not None and line > 0:  # m(s) linear: each end its first moment
+            m_a, m_b = mat.density * ends[:, 0] + ends[:, 5] * ctx.wtmass  # L (m_a / 3 + m_b / 6)
+            split = np.array([2 * m_a + m_b, m_a + 2 * m_b]) / (3 * (m_a + m_b))
+        _lumped_mass(ctx, (a, b), line, length, part, twist, off, split)
 
 
 def _coupled(e) -> str:

@@ -152,17 +152,16 @@ def material(ctx: Context, mid: int, user) -> Material:
 
 
 def _lumped_mass(
-    ctx: Context, nodes, mass_per_length, length, part, inertia=None, offsets=None, shares=None
+    ctx: Context, nodes, mass_per_length, length, part, inertia=None, offsets=None, split=None
 ):
-    """Half the line mass (and of the ``inertia`` (3, 3) tensor) at each end (node + offset);
-    ``shares`` (2,): each end's share of the line mass x 2 instead (a tapered line's first
-    moments; the inertia stays halved)."""
+    """The line mass at each end (node + offset), half each or the fractions ``split`` (2,)
+    (a tapered line's first moments), and half the ``inertia`` (3, 3) tensor at each."""
     if mass_per_length > 0:
         J = None if inertia is None else 0.5 * inertia
         off = np.zeros((2, 3)) if offsets is None else offsets
-        shares = np.ones(2) if shares is None else shares
-        for n, w, share in zip(nodes, off, shares, strict=True):
-            ctx.builder.add_point_mass(n, 0.5 * share * mass_per_length * length, part, J, w)
+        split = (0.5, 0.5) if split is None else split
+        for n, w, share in zip(nodes, off, split, strict=True):
+            ctx.builder.add_point_mass(n, share * mass_per_length * length, part, J, w)
 
 
 def _builder_message(exc) -> str:

@@ -74,10 +74,19 @@ def _finish(ctx: Context, cards: list, ids: np.ndarray, materials: dict) -> None
         reason = "a corner is repeated" if repeated[i] else what.format(*values)
         ctx.refusals.guard(lambda reason=reason, i=i: cards[i][0].fail(reason))
     keep = np.flatnonzero(found & ~flat)
-    records = [(ctx.node[rows[i]], corners[i], *materials[cards[i][1]]) for i in keep]
-    if records:
-        family = SHAPES[name][2]
-        ctx.finishers.append(lambda parts: solids(family, records, parts, ctx.lumped))
+    if not keep.size:
+        return
+    pids = np.array([cards[i][1] for i in keep])
+    # the PSOLIDs in the order their first element comes (the parts' order), each element's one
+    first, which = np.unique(pids, return_index=True, return_inverse=True)[1:]
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    table = [materials[pid] for pid in np.unique(pids)[order]]  # (E, NU, RHO, part name)
+    elements = (ctx.node[rows[keep]], corners[keep], np.array([m[:3] for m in table]),
+                [m[3] for m in table], rank[which])  # fmt: skip
+    family = SHAPES[name][2]
+    ctx.finishers.append(lambda parts: solids(family, elements, parts, ctx.lumped))
 
 
 def _fields(ctx: Context, e, out: tuple, materials: dict, integration: dict) -> None:
@@ -142,22 +151,15 @@ def _rows(ctx: Context, cards: list, ids: np.ndarray) -> tuple[np.ndarray, np.nd
     return rows, found.all(axis=1)
 
 
-def solids(family: type, records: list, parts: tuple, lumped: bool):
-    """(the ``family`` (``Tetrahedra`` or ``Hexahedra``) of the records, the parts extended
-    with their names) of (nodes (k,), corners (k, 3), E, NU, RHO, part name) records;
-    ``lumped``: PARAM COUPMASS < 1 (each family's lumping rule)."""
-    names = list(parts)
-    for *_, name in records:
-        if name not in names:
-            names.append(name)
-    n = len(records)
-    elements = family(
-        nodes=np.array([r[0] for r in records], dtype=np.int64),
-        corners=np.array([r[1] for r in records], dtype=float),
-        E=np.array([r[2] for r in records], dtype=float),
-        nu=np.array([r[3] for r in records], dtype=float),
-        rho=np.array([r[4] for r in records], dtype=float),
-        lumped=np.full(n, bool(lumped)),
-        part=np.array([names.index(r[5]) for r in records], dtype=np.int64),
-    )
-    return elements, tuple(names)
+def solids(family: type, elements: tuple, parts: tuple, lumped: bool):
+    """(the ``family`` (``Tetrahedra`` or ``Hexahedra``) of ``elements``, the parts extended
+    with their names): ``elements`` = (nodes (n, k), corners (n, k, 3), the PSOLIDs' E, NU,
+    RHO (p, 3), their part names (p,), each element's PSOLID (n,)); ``lumped``: PARAM COUPMASS
+    < 1 (each family's lumping rule)."""
+    nodes, corners, values, part_names, which = elements
+    names = list(parts) + [n for n in part_names if n not in parts]
+    part = np.array([names.index(n) for n in part_names], dtype=np.int64)[which]
+    solid = family(nodes=nodes.astype(np.int64), corners=corners.astype(float),
+                   E=values[which, 0], nu=values[which, 1], rho=values[which, 2],
+                   lumped=np.full(len(which), bool(lumped)), part=part)  # fmt: skip
+    return solid, tuple(names)

@@ -303,9 +303,7 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
     solids = _solid_properties(f, masks["solid"], structure)
     if solids and not masks["shell"].any() and not lines:  # a MAT1 of solids alone
         prop, solids = solids[0], solids[1:]
-    relative = prop in ("mass_factor", "stiffness_factor", "solid_modulus_factor",
-                        "solid_density_factor", "hexa_modulus_factor",
-                        "hexa_density_factor")  # the FE value is a factor  # fmt: skip
+    relative = prop in ("mass_factor", "stiffness_factor") or _is_solid_factor(prop)
     if prop == "line":  # re-built from the value itself (``lines``)
         factor = 1.0
     elif f.card == "MAT1" and f.field == "E" and f.scale and not relative:
@@ -328,6 +326,16 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
         tuple(nominal.tolist()), default, lines=lines, solid=masks["solid"],
         companions=companions,
     )  # fmt: skip
+
+
+def _is_solid_factor(prop: str) -> bool:
+    """Whether ``prop`` is a solid family's factor (``fe.elements.solid.factors``): its FE
+    value is a factor, as a point mass's or a spring's."""
+    from bayesupdate.fe.elements.base import PARAMETRIC, bindable
+    from bayesupdate.fe.elements.solid import Solids
+
+    family = bindable().get(prop, (None,))[0]
+    return family in PARAMETRIC and issubclass(PARAMETRIC[family], Solids)
 
 
 def _solid_companions(f: DeckField, props, nominal, factor: float, name: str) -> tuple:

@@ -140,10 +140,10 @@ class DeckBinding:
 
     target : the spec text.  property : the FE property (module table).
     shell, mass, spring : boolean masks over the structure's shells, point masses and springs;
-    solid : over its tetrahedra, then its bricks (``solid_counts``; a MAT1's E or RHO as a
-    factor).  companions : ((property, factor), ...) the solid factors a MAT1 that solids
-    share with other elements (or tetrahedra with bricks) sets beside ``property``, each to
-    factor x its FE value (``nastran.model``).
+    solid : over its solids, each family's in turn (``solid_families``: tetrahedra, then
+    bricks; a MAT1's E or RHO as a factor).  companions : ((property, factor), ...) the solid
+    factors a MAT1 that solids share with other elements (or tetrahedra with bricks) sets
+    beside ``property``, each to factor x its FE value (``nastran.model``).
     factor : FE value = factor x parameter.  nominal : (n_ids,) the deck's values.
     default : the parameter at the deck's values (nominal, or 1 for a scale).
     coefficient, desvar : a DESVAR's parameter (``desvar``): field = coefficient x parameter.
@@ -331,11 +331,7 @@ def resolve(f: DeckField, deck, structure, name: str) -> DeckBinding:
 def _is_solid_factor(prop: str) -> bool:
     """Whether ``prop`` is a solid family's factor (``fe.elements.solid.factors``): its FE
     value is a factor, as a point mass's or a spring's."""
-    from bayesupdate.fe.elements.base import PARAMETRIC, bindable
-    from bayesupdate.fe.elements.solid import Solids
-
-    family = bindable().get(prop, (None,))[0]
-    return family in PARAMETRIC and issubclass(PARAMETRIC[family], Solids)
+    return any(prop in (p.name for p in cls.properties) for cls in solid_families())
 
 
 def _solid_companions(f: DeckField, props, nominal, factor: float, name: str) -> tuple:
@@ -544,48 +540,53 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
         raise BayesUpdateError(f"parameter binds {f.spec!r}: {why}")
 
 
-def solid_counts(structure) -> tuple[int, int]:
-    """(the number of the structure's tetrahedra, of its bricks): ``fe.elements.tetra`` and
-    ``fe.elements.hexa`` (0: none).  A binding's ``solid`` mask runs over the tetrahedra, then
-    the bricks."""
-    from bayesupdate.fe.elements.hexa import Hexahedra
-    from bayesupdate.fe.elements.tetra import Tetrahedra
+def solid_families() -> tuple[type, ...]:
+    """The registered solid families (``fe.elements.solid.Solids``: tetrahedra, bricks), in
+    their registration order, which is the order of a binding's ``solid`` mask."""
+    from bayesupdate.fe.elements.base import PARAMETRIC
+    from bayesupdate.fe.elements.solid import Solids
 
+    return tuple(cls for cls in PARAMETRIC.values() if issubclass(cls, Solids))
+
+
+def solid_counts(structure) -> tuple[int, ...]:
+    """The number of the structure's elements of each solid family (``solid_families``; 0:
+    none)."""
     return tuple(0 if f is None else f.n_elements
-                 for f in (Tetrahedra.of(structure), Hexahedra.of(structure)))  # fmt: skip
+                 for f in (cls.of(structure) for cls in solid_families()))  # fmt: skip
 
 
 def n_solids(structure) -> int:
-    """The number of the structure's solids (tetrahedra and bricks, ``solid_counts``)."""
+    """The number of the structure's solids (all families, ``solid_counts``)."""
     return sum(solid_counts(structure))
 
 
-def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
-    """(n_solids,) the tetrahedra, then the bricks, of the PSOLIDs whose MAT1 is one of
-    ``f.ids``."""
-    from bayesupdate.fe.elements.hexa import Hexahedra
-    from bayesupdate.fe.elements.tetra import Tetrahedra
+def solid_part(structure, family: str) -> slice:
+    """The part of a ``solid`` mask over the registry ``family``'s elements."""
+    names = [cls.family for cls in solid_families()]
+    counts = solid_counts(structure)
+    start = sum(counts[: names.index(family)])
+    return slice(start, start + counts[names.index(family)])
 
+
+def _solid_mask(f: DeckField, deck, structure) -> np.ndarray:
+    """(n_solids,) each solid family's elements in turn (``solid_families``): those of the
+    PSOLIDs whose MAT1 is one of ``f.ids``."""
     names = _psolids_of(deck, f)
     parts = list(structure.parts)
-    found = (family.of(structure) for family in (Tetrahedra, Hexahedra))
+    found = (cls.of(structure) for cls in solid_families())
     masks = [_part_mask(e.part, parts, names) for e in found if e is not None]
     return np.concatenate(masks) if masks else np.zeros(0, bool)
 
 
 def _solid_properties(f: DeckField, solid: np.ndarray, structure) -> list[str]:
-    """The factors a MAT1's E or RHO sets on solids (``solid`` their mask, ``solid_counts``):
-    each solid family's own (``fe.elements.solid.factors``) where it has elements in the mask
-    (empty: on none)."""
-    from bayesupdate.fe.elements.hexa import Hexahedra
-    from bayesupdate.fe.elements.tetra import Tetrahedra
-
+    """The factors a MAT1's E or RHO sets on solids (``solid`` their mask): each solid family's
+    own (``fe.elements.solid.factors``) where it has elements in the mask (empty: on none)."""
     which = {"E": 0, "RHO": 1}.get(f.field)
     if which is None:
         return []
-    n_tetra = solid_counts(structure)[0]
-    used = ((Tetrahedra, solid[:n_tetra].any()), (Hexahedra, solid[n_tetra:].any()))
-    return [family.properties[which].name for family, hit in used if hit]
+    return [cls.properties[which].name for cls in solid_families()
+            if solid[solid_part(structure, cls.family)].any()]  # fmt: skip
 
 
 def _psolids_of(deck, f: DeckField) -> list[str]:

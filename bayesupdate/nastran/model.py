@@ -22,7 +22,8 @@ from bayesupdate.nastran.bindings import (
     parse_binding,
     relation_default,
     resolve,
-    solid_counts,
+    solid_families,
+    solid_part,
 )
 
 #: default bounds of a bound parameter without ``bounds``: this factor range on its default
@@ -115,23 +116,18 @@ class NastranModel(FEModel):
         if binding.property == "line":  # re-built elements (``lines``): no FE property
             return beams
         family = PROPERTY_TERMS[binding.property][0]
-        if family in ("tetrahedron", "hexahedron"):
-            return self._solid_part(binding, family)
+        if family in (cls.family for cls in solid_families()):
+            return binding.solid[solid_part(self.structure, family)]
         return {"beam": beams, "mass": binding.mass, "spring": binding.spring}[family]
-
-    def _solid_part(self, binding, family: str) -> np.ndarray:
-        """The part of a binding's ``solid`` mask (the tetrahedra, then the bricks) over
-        ``family``'s elements."""
-        n_tetra = solid_counts(self.structure)[0]
-        return binding.solid[:n_tetra] if family == "tetrahedron" else binding.solid[n_tetra:]
 
     def _companions(self, name, binding):
         """A deck material's further solid families (``DeckBinding.companions``): each one's
-        part of its ``solid`` mask, to its factor x the value."""
+        part of its ``solid`` mask (``bindings.solid_part``), to its factor x the value."""
         if not isinstance(binding, DeckBinding):
             return ()
-        return tuple((prop, self._solid_part(binding, PROPERTY_TERMS[prop][0]), factor)
-                     for prop, factor in binding.companions)  # fmt: skip
+        parts = ((prop, solid_part(self.structure, PROPERTY_TERMS[prop][0]), factor)
+                 for prop, factor in binding.companions)  # fmt: skip
+        return tuple((prop, binding.solid[part], factor) for prop, part, factor in parts)
 
     def _solve_general(self, p, props, n_modes, energies, method):
         from bayesupdate.nastran.lines import LineAssembler

@@ -173,8 +173,8 @@ def local_matrices(L, E, G, A, iy, iz, J, asy, asz, m_line, rot_y, rot_z, ip):
 
 
 #: the 3-point Gauss rule on [0, 1] of a tapered element's flexibility: (points, weights)
-_TAPER_RULE = tuple((x + 1) / 2 if k == 0 else x / 2
-                    for k, x in enumerate(np.polynomial.legendre.leggauss(3)))  # fmt: skip
+_GAUSS_3 = np.polynomial.legendre.leggauss(3)  # (points, weights) on [-1, 1]
+_TAPER_RULE = ((_GAUSS_3[0] + 1) / 2, _GAUSS_3[1] / 2)
 
 
 def tapered_stiffness(L, E, G, ends, shear_y, shear_z, shear: bool) -> np.ndarray:

@@ -42,7 +42,8 @@ from timing import time_median
 from bayesupdate.fe.assembly import ElementProperties
 from bayesupdate.fe.elements import hexa
 from bayesupdate.fe.elements.base import ElementSettings
-from bayesupdate.fe.elements.tetra import Tetrahedra, elasticity
+from bayesupdate.fe.elements.solid import elasticity
+from bayesupdate.fe.elements.tetra import Tetrahedra
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 SIZE = (1.0, 0.05, 0.08)

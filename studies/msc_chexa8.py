@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate.fe.elements import hexa
-from bayesupdate.fe.elements.tetra import elasticity, strain_matrix
+from bayesupdate.fe.elements.solid import elasticity, strain_matrix
 
 MSC = ("bugs/msc_RBE_tests/rigid_rbe2.bdf", "bugs/msc_RBE_tests/rigid_rbe2--v2021.1.op2")
 NX = ("unit/pload4/chexa.bdf", "unit/pload4/chexa.op2")

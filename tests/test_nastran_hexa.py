@@ -20,7 +20,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import ElementProperties
 from bayesupdate.fe.elements.base import ElementSettings
 from bayesupdate.fe.elements.hexa import CORNERS, Hexahedra
-from bayesupdate.fe.elements.tetra import elasticity
+from bayesupdate.fe.elements.solid import elasticity
 from bayesupdate.nastran import load_nastran_model
 
 DATA = json.loads((Path(__file__).parent / "data" / "msc_chexa8.json").read_text())

@@ -17,7 +17,8 @@ from reduced_check import assert_basis_matches_full_solves
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.assembly import ElementProperties
 from bayesupdate.fe.elements.base import ElementSettings
-from bayesupdate.fe.elements.tetra import Tetrahedra, elasticity
+from bayesupdate.fe.elements.solid import elasticity
+from bayesupdate.fe.elements.tetra import Tetrahedra
 from bayesupdate.fe.sparse_modal import ModalSettings
 from bayesupdate.nastran import load_nastran_model
 

@@ -39,8 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.elements.base import ElementSettings, register_parametric
-from bayesupdate.fe.elements.solid import Solids, factors
-from bayesupdate.fe.elements.tetra import elasticity, strain_matrix
+from bayesupdate.fe.elements.solid import Solids, elasticity, factors, strain_matrix
 
 #: the corners' natural coordinates (8, 3), Nastran's CHEXA order
 CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],

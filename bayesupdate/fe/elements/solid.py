@@ -3,7 +3,8 @@ material, lumping, part) and the factors on E and rho that its parameters are.
 
 A solid family (``tetra``, ``hexa``) is a frozen dataclass deriving from ``Solids``; it names its
 registry ``family`` and its two ``fields`` and ``properties`` (``factors``: the factor on E
-first, on rho second), and gives ``matrices`` and ``masses``.  SI units: corners [m], E [Pa],
+first, on rho second), and gives ``matrices`` and ``masses``; ``strain_matrix`` and
+``elasticity`` are every solid's B and D.  SI units: corners [m], E [Pa],
 rho [kg/m^3].
 """
 
@@ -71,3 +72,29 @@ class Solids:
     def of(cls, structure):
         """The structure's elements of this family (None: none)."""
         return in_elements(cls, structure)
+
+
+def strain_matrix(gradient: np.ndarray) -> np.ndarray:
+    """(n, 6, 3k) B of the strain (xx, yy, zz, xy, yz, zx; engineering shears) from the
+    shape-function gradients (n, 3, k) of k corners (4: the constant strain of a tetrahedron):
+    column 3a + j is corner a's translation j."""
+    n, _, k = gradient.shape
+    B = np.zeros((n, 6, 3 * k))
+    gx, gy, gz = gradient[:, 0], gradient[:, 1], gradient[:, 2]  # (n, k) each
+    B[:, 0, 0::3], B[:, 3, 0::3], B[:, 5, 0::3] = gx, gy, gz
+    B[:, 1, 1::3], B[:, 3, 1::3], B[:, 4, 1::3] = gy, gx, gz
+    B[:, 2, 2::3], B[:, 4, 2::3], B[:, 5, 2::3] = gz, gy, gx
+    return B
+
+
+def elasticity(E: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """(n, 6, 6) isotropic D [Pa] in the Voigt order of ``strain_matrix``: Lame's lambda =
+    E nu / ((1 + nu)(1 - 2 nu)) and mu = E / (2 (1 + nu)) (-1 < nu < 0.5)."""
+    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = E / (2 * (1 + nu))
+    D = np.zeros((len(E), 6, 6))
+    D[:, :3, :3] = lam[:, None, None]
+    idx = np.arange(3)
+    D[:, idx, idx] += 2 * mu[:, None]
+    D[:, idx + 3, idx + 3] = mu[:, None]
+    return D

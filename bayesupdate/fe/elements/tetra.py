@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.fe.elements.base import ElementSettings, register_parametric
-from bayesupdate.fe.elements.solid import Solids, factors
+from bayesupdate.fe.elements.solid import Solids, elasticity, factors, strain_matrix
 
 #: d N_a / d (xi, eta, zeta) of the four corners' linear shape functions (3, 4)
 _REFERENCE_GRADIENT = np.hstack([-np.ones((3, 1)), np.eye(3)])
@@ -76,32 +76,6 @@ def shape_gradients(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     jac = np.einsum("ia,eaj->eij", _REFERENCE_GRADIENT, corners)
     gradient = np.linalg.solve(jac, np.broadcast_to(_REFERENCE_GRADIENT, (len(jac), 3, 4)))
     return volumes(corners), gradient
-
-
-def strain_matrix(gradient: np.ndarray) -> np.ndarray:
-    """(n, 6, 3k) B of the strain (xx, yy, zz, xy, yz, zx; engineering shears) from the
-    shape-function gradients (n, 3, k) of k corners (4: the constant strain of a tetrahedron):
-    column 3a + j is corner a's translation j."""
-    n, _, k = gradient.shape
-    B = np.zeros((n, 6, 3 * k))
-    gx, gy, gz = gradient[:, 0], gradient[:, 1], gradient[:, 2]  # (n, k) each
-    B[:, 0, 0::3], B[:, 3, 0::3], B[:, 5, 0::3] = gx, gy, gz
-    B[:, 1, 1::3], B[:, 3, 1::3], B[:, 4, 1::3] = gy, gx, gz
-    B[:, 2, 2::3], B[:, 4, 2::3], B[:, 5, 2::3] = gz, gy, gx
-    return B
-
-
-def elasticity(E: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """(n, 6, 6) isotropic D [Pa] in the Voigt order of ``strain_matrix``: Lame's lambda =
-    E nu / ((1 + nu)(1 - 2 nu)) and mu = E / (2 (1 + nu)) (-1 < nu < 0.5)."""
-    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
-    mu = E / (2 * (1 + nu))
-    D = np.zeros((len(E), 6, 6))
-    D[:, :3, :3] = lam[:, None, None]
-    idx = np.arange(3)
-    D[:, idx, idx] += 2 * mu[:, None]
-    D[:, idx + 3, idx + 3] = mu[:, None]
-    return D
 
 
 def mass_matrix(mass: np.ndarray, lumped: np.ndarray) -> np.ndarray:

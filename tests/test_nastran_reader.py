@@ -60,6 +60,21 @@ def test_small_large_free_field_and_tabs_read_the_same_card(tmp_path):
         assert len(got) == 1 and got[0][: len(expected)] == expected, (k, got)
 
 
+def test_named_large_field_continuation_and_a_small_one_after_it(tmp_path):
+    """A large-field card whose continuation markers carry a name ('*     FM', as MSC's
+    freedlm deck writes its CORD2R*), then a small-field continuation ('+     FN'): the '*'
+    line holds four 16-character fields, the '+' line eight of 8 (QRG, bulk data format);
+    the '*     FM' line was read as a small-field line."""
+    text = ("CORD2R* " + "".join(f"{x:16}" for x in ("3", "", "25.", "0.")) + "*     FM\n"
+            "*     FM " + "".join(f"{x:16}" for x in ("0.", "50.", "1.092785-6", "4.7-14"))
+            + "*     FN\n" + "+     FN 24.9999 25.     1.092-6\n")  # fmt: skip
+    deck = tmp_path / "cord.bdf"
+    deck.write_text("BEGIN BULK\n" + text + "ENDDATA\n")
+    (card,) = read_deck(deck).of("CORD2R")
+    expected = [3, None, 25.0, 0.0, 0.0, 50.0, 1.092785e-6, 4.7e-14, 24.9999, 25.0, 1.092e-6]
+    assert card.values()[:11] == expected
+
+
 def test_continuations_with_one_reused_marker_and_implicit_ones(tmp_path):
     """Every CBEAM reuses '+cb1' (as the mAEWing1 decks do): each continuation belongs to the
     card right above it."""

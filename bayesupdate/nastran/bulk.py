@@ -234,11 +234,12 @@ def split_line(text: str) -> tuple[str, list[str], bool]:
 
     Free field (a comma in the first 10 columns): up to 8 data fields after the first (a ninth
     is the continuation marker);
-    small field: 8 of 8 characters; large field: 4 of 16 characters (first field ending '*')."""
+    small field: 8 of 8 characters; large field: 4 of 16 characters (a first field ending with
+    '*', or a continuation's starting with it: '*     FM' continues a large-field card)."""
     if "," in text[:10]:
         parts = text.split(",")
         head = parts[0].strip()
-        large = head.endswith("*")
+        large = head.endswith("*") or head.startswith("*")
         n = 4 if large else 8
         data = [p.strip() for p in parts[1 : 1 + n]]
         extra = [p for p in parts[1 + n :] if p.strip()]
@@ -246,7 +247,7 @@ def split_line(text: str) -> tuple[str, list[str], bool]:
             raise ValueError(f"more than {n} data fields on one free-field line")
         return head, data + [""] * (n - len(data)), large
     head = text[:8].strip()
-    large = head.endswith("*")
+    large = head.endswith("*") or head.startswith("*")
     width = 16 if large else 8
     body = text[8:72].ljust(64)
     return head, [body[k : k + width] for k in range(0, 64, width)], large

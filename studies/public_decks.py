@@ -38,6 +38,12 @@ kept out by other cards (PARAMs in 24, CPENTA in 14, CQUAD8 in 10, CTRIA6 and th
 other refusals in 9 each, ...).  The refusals are now led by CPENTA (457 in 43), PCOMP (360 in
 48) and CSHEAR (164 in 21).  pyNastran's ``unit/pload4/cpenta.op2`` holds the CHEXA model's
 displacements (the same numbers as ``chexa.op2``), so no CPENTA check could be made there.
+With PCOMP/PCOMPG and MAT8 read (laminates, unsymmetric ones too) and a large-field
+continuation marker with a name read as large fields (the same day): 49 read to a model; of the
+18 model files with a PCOMP or PCOMPG, 5 read whole (``plate/plate_mixed``, ``nx/laminate``,
+``bugs/flat_plate_pcomp_test``, ``other/v10112``, ``unit/pcomp/pcomp_ctria3``), the others kept
+out by other cards (CSHEAR, PARAM PCOMPRM, thermal and hyperelastic cards, ...).  The refusals
+are now led by CPENTA (457 in 43) and CSHEAR (164 in 21).
 
 Run: PYTHONPATH=. .venv/bin/python studies/public_decks.py /path/to/pyNastran/models
 """

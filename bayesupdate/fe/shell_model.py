@@ -15,6 +15,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.elements import shell
+from bayesupdate.fe.laminate import SectionMatrices
 from bayesupdate.fe.sparse_modal import SparsePattern, element_dofs
 
 #: warp (largest node distance from the mean plane / mean diagonal) above which a quad is reported:
@@ -39,7 +40,10 @@ class ShellMesh:
     quadrilateral, ``shell.quad_operators``); bending_nu (n_el,) or None (nu): the Poisson
     ratio of the bending material (PSHELL MID2, another MAT1 than MID1); membrane_ratio
     (n_el,) or None (1): 0 for a shell with no membrane (PSHELL MID1 blank).  A membrane
-    (PSHELL MID2 blank) has bending_ratio and shear_ratio 0 (``shell.local_pieces``)."""
+    (PSHELL MID2 blank) has bending_ratio and shear_ratio 0 (``shell.local_pieces``).
+    section : ``fe.laminate.SectionMatrices`` (n_el rows, each element's local axes) or None:
+    anisotropic sections (laminates) whose stiffness replaces E, nu and the ratios; E, nu and
+    the ratios stay for the checks, the families and the thickness powers."""
 
     nodes: np.ndarray
     quads: np.ndarray
@@ -55,6 +59,7 @@ class ShellMesh:
     shear_ratio: np.ndarray | None = None
     bending_nu: np.ndarray | None = None
     membrane_ratio: np.ndarray | None = None
+    section: SectionMatrices | None = None
 
     @property
     def n_elements(self) -> int:
@@ -274,6 +279,7 @@ class ShellAssembly:
                 kirchhoff=kind == "kirchhoff quad",
                 bending_nu=n,
                 membrane_ratio=m,
+                section=None if mesh.section is None else mesh.section.rows(idx),
             )
             self.families.append((idx, element_dofs(conn), f, source))
         self.pattern = SparsePattern(mesh.n_dof, [fam[1] for fam in self.families])
@@ -393,7 +399,8 @@ class ShellElements:
     mantle under one design variable; K stays the exact sum of theta^p factor_e^p K_ep);
     bending_ratio, shear_ratio, bending_nu, membrane_ratio (nq + nt,) or None as in
     ``ShellMesh``; lumped : the mass lumped at the nodes by row sums, translational only (no
-    rotary inertia; Nastran's PARAM COUPMASS -1, its default), instead of consistent."""
+    rotary inertia; Nastran's PARAM COUPMASS -1, its default), instead of consistent; section
+    : anisotropic sections or None, as in ``ShellMesh``."""
 
     quads: np.ndarray
     trias: np.ndarray
@@ -411,6 +418,7 @@ class ShellElements:
     bending_nu: np.ndarray | None = None
     membrane_ratio: np.ndarray | None = None
     lumped: bool = False
+    section: SectionMatrices | None = None
 
     @property
     def n_elements(self) -> int:
@@ -426,7 +434,7 @@ class ShellElements:
         """The elements on the structure's nodes (N, 3) as a ``ShellMesh`` (not re-checked: nodes
         used by beams only are allowed here); ``changes`` replace property arrays."""
         names = ("thickness", "E", "nu", "rho", "offset", "offset_ratio", "nsm", "bending_ratio",
-                 "shear_ratio", "bending_nu", "membrane_ratio")  # fmt: skip
+                 "shear_ratio", "bending_nu", "membrane_ratio", "section")  # fmt: skip
         props = {n: getattr(self, n) for n in names} | changes
         return ShellMesh(nodes, self.quads, self.trias, **props)
 

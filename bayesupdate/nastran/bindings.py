@@ -76,6 +76,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.nastran.bulk import CardError, with_fields
+from bayesupdate.nastran.cards.laminates import ply_materials
 
 _BAR = ("A", "I1", "I2", "J", "NSM")
 _W = ("W1A", "W2A", "W3A", "W1B", "W2B", "W3B")
@@ -525,13 +526,19 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
 
 
 def _refuse_unbound_users(f: DeckField, deck) -> None:
-    """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), or that a PSOLID
+    """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), that a PCOMP or
+    PCOMPG takes as a ply (a laminate's section is fixed when the deck is read) or that a PSOLID
     uses with G bound (a solid takes E and NU): refused, naming the properties, rather than
     leaving them at the deck's values while the rest changes."""
     tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
+    laminates = [f"{p.name} {i}" for i, p in deck.table("PCOMP", "PCOMPG").items()
+                 if set(ply_materials(p)) & set(f.ids)]  # fmt: skip
     solids = _psolids_of(deck, f)
     why = ""
-    if tubes:
+    if laminates:
+        why = (f"{', '.join(laminates)} take(s) that MAT1 as a ply, and a laminate's plies "
+               "cannot be parameters; give the other elements a MAT1 of their own")  # fmt: skip
+    elif tubes:
         why = (f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter; give "
                "them a MAT1 of their own")  # fmt: skip
     elif solids and f.field == "G":

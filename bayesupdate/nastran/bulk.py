@@ -62,7 +62,8 @@ def _spec(text: str) -> tuple[tuple[str, object], ...]:
 _W = "W1A=0. W2A=0. W3A=0. W1B=0. W2B=0. W3B=0."
 #: field tables of the cards read (MSC Nastran Quick Reference Guide; positions from field 2,
 #: eight per line).  Repeated groups (RBE2 GMi, SPC1 Gi, PBEAM stations, PBUSH K/B/M lines,
-#: PBARL/PBEAML DIMi, RBE3 weights) are read from ``Card.values`` by their converters.
+#: PBARL/PBEAML DIMi, RBE3 weights, PCOMP/PCOMPG plies) are read from ``Card.values`` by their
+#: converters.
 FIELDS = {
     name: _spec(text)
     for name, text in {
@@ -77,6 +78,9 @@ FIELDS = {
         "CQUAD4": "EID PID G1 G2 G3 G4 THETA ZOFFS=0. - TFLAG=0 T1 T2 T3 T4",
         "CTRIA3": "EID PID G1 G2 G3 THETA ZOFFS=0. - - TFLAG=0 T1 T2 T3",
         "PSHELL": "PID MID1 T MID2 12IT3=1. MID3 TST=0.833333 NSM=0. Z1 Z2 MID4",
+        "PCOMP": "PID Z0 NSM=0. SB FT TREF GE LAM",
+        "PCOMPG": "PID Z0 NSM=0. SB FT TREF GE LAM",
+        "MAT8": "MID E1 E2 NU12=0. G12 G1Z G2Z RHO=0. A1 A2 TREF XT XC YT YC S GE F12 STRN",
         "CBAR": "EID PID GA GB X1 X2 X3 OFFT=GGG PA PB " + _W,
         "CBEAM": "EID PID GA GB X1 X2 X3 OFFT=GGG PA PB " + _W + " SA SB",
         "PBAR": "PID MID A=0. I1=0. I2=0. J=0. NSM=0. - C1 C2 D1 D2 E1 E2 F1 F2 K1 K2 I12=0.",

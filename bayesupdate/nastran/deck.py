@@ -28,7 +28,8 @@ SUFFIXES = (".bdf", ".dat", ".nas", ".blk")
 #: cards turned into the FE model (``reader``; the elements of each ``cards`` family)
 ELEMENT_CARDS = {
     "GRID", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CQUAD4", "CTRIA3",
-    "PSHELL", "MAT1", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PMASS", "PELAS", "PBUSH",
+    "PSHELL", "PCOMP", "PCOMPG", "MAT1", "MAT8", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD",
+    "PMASS", "PELAS", "PBUSH",
     "SPC", "SPC1", "SPCADD", "MPC", "MPCADD", "EIGRL", "EIGR", "PARAM",
 } | {name for family in FAMILIES_OF_CARDS for name in family.CARDS}  # fmt: skip
 #: design variables and relations: parameters when the study names none (``desvar``)
@@ -95,7 +96,7 @@ IGNORED_PARAMS = {
     "DESPCH", "DESPCH1", "OPTEXIT", "PRTRESLT", "SOFTEXIT", "DDRMM", "OG", "CURVPLOT",
     "USETPRT", "USETSEL", "SEMAPPRT", "ERROR", "PRINT", "LGDISP",
     "RESVEC", "RESVINER", "CHECKOUT", "NEWSEQ", "SEQOUT", "TINY", "LMODES", "UNITSYS",
-    "OMACHPR", "GUSTAERO", "SPARSEDR", "Q", "MPTUNIT",
+    "OMACHPR", "GUSTAERO", "SPARSEDR", "Q", "MPTUNIT", "OIBULK",
 }  # fmt: skip
 # any other PARAM may change the normal modes and is not modelled: refused, named (e.g. G, W3,
 # W4: damping; SNORM: shell normals)
@@ -214,9 +215,9 @@ FAMILIES = {
                 "CELAS2", "CELAS3", "CELAS4", "CTETRA", "CHEXA", "CTUBE"),
     "mass element": ("CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3", "CMASS4"),
     "rigid element": ("RBE2", "RBE3", "RBAR"),
-    "property": ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS",
-                 "PSOLID", "PTUBE"),
-    "material": ("MAT1",),
+    "property": ("PSHELL", "PCOMP", "PCOMPG", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH",
+                 "PELAS", "PMASS", "PSOLID", "PTUBE"),
+    "material": ("MAT1", "MAT8"),
     "grid": ("GRID",),
     "coordinate system": ("CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S"),
     "design variable": ("DESVAR",),

@@ -17,12 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+from bayesupdate.fe.elements import shell
 from bayesupdate.fe.elements.shell import SHEAR_FACTOR
+from bayesupdate.fe.elements.shell import _plane_stress as plane_stress
+from bayesupdate.fe.laminate import SectionMatrices
 from bayesupdate.fe.structure import Material, StructureBuilder, check_connected
 from bayesupdate.nastran import cards
 from bayesupdate.nastran.bulk import CardError
 from bayesupdate.nastran.deck import Refusals, check_cards, read_deck
-from bayesupdate.nastran.frames import read_grids
+from bayesupdate.nastran.frames import BASIC, read_grids
 from bayesupdate.nastran.units import unit_system
 
 SHELL_TYPES = ("CQUAD4", "CTRIA3")
@@ -75,16 +78,20 @@ def _shell_cards(ctx):
 
 
 def _pshell_table(ctx, pids, shells):
-    """Per property id: (T, MID1, NSM, 12I/T**3, TS/T); refusals for features the shell element
-    lacks (named at the PSHELL, or at the first shell whose PID is no PSHELL)."""
+    """Per property id: (T, MID1, NSM, 12I/T**3, TS/T, bending NU, membrane ratio) of a PSHELL,
+    or the ``LaminateSection`` of a PCOMP/PCOMPG; refusals for features the shell element lacks
+    (named at the property, or at the first shell whose PID is neither)."""
     table = {}
     for pid in np.unique(pids):
         p = ctx.props.get(int(pid))
         try:
-            if p is None or p.name != "PSHELL":
+            if p is None or p.name not in ("PSHELL", *cards.laminates.CARDS):
                 user = next(e for e in shells if e["PID"] == pid)
-                user.fail(f"shell property {pid}: not a PSHELL (only PSHELL is supported)")
-            table[int(pid)] = _pshell(ctx, p)
+                user.fail(f"shell property {pid}: not a PSHELL, PCOMP or PCOMPG")
+            if p.name == "PSHELL":
+                table[int(pid)] = _pshell(ctx, p)
+            else:
+                table[int(pid)] = cards.laminates.laminate_section(ctx, p)
         except CardError as exc:
             ctx.refusals.add(str(exc))
     return table
@@ -155,21 +162,27 @@ def _shell_mat1(ctx, mid, p, field):
 
 def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
     """Per-element thickness (mean of the corner thicknesses; blank corners take PSHELL T,
-    TFLAG 1 makes them factors of T), E, nu, rho, nsm (WTMASS applied) and offset arrays; None
-    when a PSHELL is refused."""
+    TFLAG 1 makes them factors of T), E, nu, rho, nsm (WTMASS applied) and offset arrays, and
+    the laminates' sections (``_laminate_arrays``); None when a property is refused."""
     table = _pshell_table(ctx, pids, shells)
+    uniq, inv = np.unique(pids, return_inverse=True)
+    kinds = {int(p): getattr(ctx.props.get(int(p)), "name", None) for p in uniq}
+    lam = np.isin(pids, [p for p, k in kinds.items() if k in cards.laminates.CARDS])
+    angle = _material_angles(ctx, nodes, shells, lam)  # its refusals too where a PCOMP is
+    laminates = {p: row for p, row in table.items() if not isinstance(row, tuple)}
+    table = table | {p: _laminate_row(row) for p, row in laminates.items()}
     partial = {p for p, row in table.items() if row[3] == 0 or row[6] == 0}
     for i in np.flatnonzero(np.isin(pids, list(partial)) & (zoffs != 0)):  # QRG remark 3's note
-        ctx.refusals.card(shells[i], "ZOFFS needs both MID1 and MID2 on its PSHELL")
-    uniq, inv = np.unique(pids, return_inverse=True)
+        ctx.refusals.card(
+            shells[i],
+            "ZOFFS needs both MID1 and MID2 on its PSHELL (or a "
+            "PCOMP's membrane and bending: LAM blank or SYM)",
+        )
     if any(int(p) not in table for p in uniq):
         return None
     t_p, mid, nsm, bending, shear, bending_nu, membrane = (
         np.array([table[int(p)][k] for p in uniq]) for k in range(7))  # fmt: skip
-    mats = {int(m): cards.material(ctx, int(m), ctx.props[int(p)])
-            for p, m in zip(uniq, mid, strict=True)}  # fmt: skip
-    E, nu, rho = (np.array([getattr(mats[int(m)], a) for m in mid]) for a in
-                  ("youngs_modulus", "poisson", "density"))  # fmt: skip
+    E, nu, rho = _shell_materials(ctx, uniq, mid, laminates)
     t = t_p[inv][:, None]
     corner_t = np.where(np.isnan(corner), t, np.where(tflag[:, None] == 1, corner * t, corner))
     n_nodes = np.where(nodes[:, 3] >= 0, 4, 3)
@@ -178,10 +191,112 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
         why = "TFLAG 1 scales T" if tflag[i] == 1 else "a corner thickness (T1-T4) is blank"
         ctx.refusals.card(shells[i], f"{why}, and PSHELL {pids[i]} has no T")
     thickness = np.where(valid, corner_t, 0.0).sum(axis=1) / n_nodes
-    return dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
-                nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],
-                shear_ratio=shear[inv], bending_nu=bending_nu[inv],
-                membrane_ratio=membrane[inv])  # fmt: skip
+    props = dict(thickness=thickness, E=E[inv], nu=nu[inv], rho=rho[inv],
+                 nsm=nsm[inv] * ctx.wtmass, offset=zoffs, bending_ratio=bending[inv],
+                 shear_ratio=shear[inv], bending_nu=bending_nu[inv],
+                 membrane_ratio=membrane[inv], section=None,
+                 cards={p: ctx.props[p].name for p in laminates})  # fmt: skip
+    if laminates:
+        _laminate_arrays(props, pids, lam, angle, laminates)
+    return props
+
+
+def _laminate_row(lam) -> tuple:
+    """A ``LaminateSection`` as a PSHELL table row (T, no MID, NSM, ratios, NU 0)."""
+    bending, shear, membrane = lam.ratios
+    return lam.thickness, 0, lam.nsm, bending, shear, 0.0, membrane
+
+
+def _shell_materials(ctx, uniq, mid, laminates):
+    """(E, nu, rho) per property id of ``uniq``: its MAT1's (WTMASS applied), or for a laminate
+    its membrane's A11 / T (the shell's nominal E: the stiffness is the section's), 0 and the
+    plies' mean density."""
+    rows = []
+    for p, m in zip(uniq, mid, strict=True):
+        lam = laminates.get(int(p))
+        if lam is not None:
+            rows.append((lam.section.membrane[0, 0, 0] or lam.section.bending[0, 0, 0], 0.0,
+                         lam.rho_t / lam.thickness))  # fmt: skip
+        else:
+            mat = cards.material(ctx, int(m), ctx.props[int(p)])
+            rows.append((mat.youngs_modulus, mat.poisson, mat.density))
+    return (np.array(col, dtype=float) for col in zip(*rows, strict=True))
+
+
+def _laminate_arrays(props, pids, lam, angle, laminates) -> None:
+    """The laminates' entries of ``props``: each element's section in its local axes (``lam``
+    (n,) the laminate shells, ``angle`` (n,) [rad] their material axes from their local x-axes,
+    ``_material_angles``), the offset of the stack's mid-plane added to ZOFFS, and for the other
+    shells their isotropic sections (``fe.laminate.SectionMatrices``)."""
+    iso = _isotropic_sections(props)
+    rows = [laminates[int(p)].section if k else None for p, k in zip(pids, lam, strict=True)]
+    none = np.zeros((1, 3, 3))
+
+    def row(i, r, name):  # one element's matrix: its laminate's, else its isotropic section's
+        source = iso if r is None else r
+        value = getattr(source, name)
+        return none if value is None else value[[i]] if r is None else value
+
+    membrane, bending, shear, coupling = (
+        np.concatenate([row(i, r, name) for i, r in enumerate(rows)])
+        for name in ("membrane", "bending", "shear", "coupling"))  # fmt: skip
+    coupled = any(r is not None and r.coupling is not None for r in rows)
+    section = SectionMatrices(membrane, bending, shear, coupling if coupled else None)
+    props["section"] = section.rotated(angle)
+    props["offset"] = props["offset"] + np.array(
+        [laminates[int(p)].offset if k else 0.0 for p, k in zip(pids, lam, strict=True)]
+    )
+
+
+def _isotropic_sections(props) -> SectionMatrices:
+    """The PSHELL shells' sections per unit thickness (``shell.local_pieces``'s isotropic
+    pieces as a section): E D(nu) x membrane ratio, E D(bending nu) x bending ratio, kappa G
+    (0 where shear rigid or absent)."""
+    E, nu, bnu = props["E"], props["nu"], props["bending_nu"]
+    G = E / (2 * (1 + nu))
+    shear = np.where(np.isfinite(props["shear_ratio"]), props["shear_ratio"], 0.0)
+    return SectionMatrices(
+        (E * props["membrane_ratio"])[:, None, None] * plane_stress(nu),
+        (E * props["bending_ratio"])[:, None, None] * plane_stress(bnu),
+        (shear * G)[:, None, None] * np.eye(2),
+    )
+
+
+def _material_angles(ctx, nodes, shells, lam) -> np.ndarray:
+    """(n,) angle [rad] of each laminate shell's material x-axis from its local x-axis
+    (``shell.quad_frames`` / ``tria_frames``): THETA [deg] from the G1-G2 side, or MCID's
+    x-axis projected on the element (a rectangular system); 0 for the other shells."""
+    angle = np.zeros(len(nodes))
+    axis, turn = np.zeros((len(nodes), 3)), np.zeros(len(nodes))
+    for i in np.flatnonzero(lam):  # the cards' fields; the geometry below is vectorized
+        e = shells[i]
+        theta = e.value(e.position("THETA"))
+        if isinstance(theta, int):  # MCID
+            found = ctx.refusals.guard(_mcid_axis, ctx, e, theta)
+            axis[i] = np.nan if found is None else found  # a refused deck: never built
+        elif theta is not None:
+            turn[i] = np.radians(theta)
+    known = np.all(np.isin(np.where(nodes >= 0, nodes, nodes[:, :1]), ctx.grids.ids), axis=1)
+    for k, frames in ((4, shell.quad_frames), (3, shell.tria_frames)):
+        rows = np.flatnonzero(lam & known & ((nodes[:, 3] >= 0) == (k == 4)))
+        if not rows.size:
+            continue
+        x = ctx.grids.xyz[ctx.grids.index(nodes[rows, :k], "shell")]
+        R = frames(x).R
+        side = np.where(np.any(axis[rows], axis=1)[:, None], axis[rows], x[:, 1] - x[:, 0])
+        angle[rows] = np.arctan2(np.einsum("ni,ni->n", side, R[:, 1]),
+                                 np.einsum("ni,ni->n", side, R[:, 0])) + turn[rows]  # fmt: skip
+    return angle
+
+
+def _mcid_axis(ctx, e, mcid: int) -> np.ndarray:
+    """The x-axis (3,) in basic of the rectangular system ``mcid`` (0: basic)."""
+    frame = ctx.grids.coords.get(mcid, BASIC if mcid == 0 else None)
+    if frame is None:
+        e.fail(f"MCID {mcid}: the deck has no coordinate system {mcid} it could read")
+    if frame.kind != "rectangular":
+        e.fail(f"MCID {mcid}: give a rectangular coordinate system (CORD1R/CORD2R) or THETA")
+    return frame.axes[0]
 
 
 def _used_rows(ctx, shell_nodes):
@@ -221,11 +336,12 @@ def _add_shells(ctx, shell_rows, pids, nodes, props):
 
 
 def _patch_shells(structure, pids, props, lumped: bool):
-    """Per-element material and part (PSHELL id) on the built structure's shells; ``lumped``:
-    their mass lumped, translational only (PARAM COUPMASS < 1, Nastran's default)."""
-    names = [f"PSHELL {p}" for p in np.unique(pids)]
-    parts = tuple(structure.parts) + tuple(n for n in names if n not in structure.parts)
-    part = np.array([parts.index(f"PSHELL {p}") for p in pids])
+    """Per-element material, laminate sections and part ("PSHELL id", "PCOMP id") on the built
+    structure's shells; ``lumped``: their mass lumped, translational only (PARAM COUPMASS < 1,
+    Nastran's default)."""
+    label = {int(p): f"{props['cards'].get(int(p), 'PSHELL')} {p}" for p in np.unique(pids)}
+    parts = tuple(structure.parts) + tuple(n for n in label.values() if n not in structure.parts)
+    part = np.array([parts.index(label[int(p)]) for p in pids])
     rho = np.maximum(props["rho"], 0.0)
     # None where every shell has the solid section's ratios: the arrays' products are then
     # left out, and decks without 12I/T**3 or TS/T keep their bits
@@ -238,7 +354,7 @@ def _patch_shells(structure, pids, props, lumped: bool):
         membrane_ratio=None if np.all(membrane == 1.0) else membrane,
     )
     shells = replace(structure.shells, E=props["E"], nu=props["nu"], rho=rho, part=part,
-                     lumped=lumped, **ratios)  # fmt: skip
+                     lumped=lumped, section=props["section"], **ratios)  # fmt: skip
     return replace(structure, shells=shells, parts=parts)
 
 
@@ -388,7 +504,7 @@ def context(deck, grids, node, settings, builder, refusals) -> cards.Context:
     """The converters' ``cards.Context`` of a read deck."""
     elements = {(c.name, c.value(0)): c for c in deck.of(*cards.ELEMENTS)}
     return cards.Context(
-        elements, deck.table(*cards.PROPERTIES), deck.table("MAT1"), grids,
+        elements, deck.table(*cards.PROPERTIES), deck.table("MAT1", "MAT8"), grids,
         node, settings["wtmass"], settings["coupmass"] < 1, builder, refusals,
         spoint_cards=tuple(deck.of("SPOINT")),
     )  # fmt: skip
@@ -491,7 +607,7 @@ def _finish(ctx, eids, pids, props):
 
 
 def _info(ctx, settings, deck, grids, structure, n_auto) -> dict:
-    moduli = [cards.mat1(ctx, m, c).E for m, c in ctx.mats.items()]
+    moduli = [cards.mat1(ctx, m, c).E for m, c in ctx.mats.items() if c.name == "MAT1"]
     dropped = int(np.sum(ctx.node < 0))
     notes = list(ctx.notes)
     if dropped:

@@ -44,6 +44,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bayesupdate.fe.elements import shell_dkq, shell_tria
+from bayesupdate.fe.laminate import SectionMatrices
 
 #: drilling penalty as a fraction of the in-plane shear modulus (Hughes & Brezzi 1989 allow
 #: any gamma > 0).  Measured on the free cylinder (48 x 60 quads): alpha 1e-5 -> 1e-3 moves the
@@ -287,7 +288,8 @@ class LocalPieces:
     bending : (bending ratio) E/12 x int Bb^T D Bb
     (per unit t^3); mass_t : translational mass per unit mass-per-area [m^2];
     mass_r : rotary mass of rx, ry per unit (mass-per-area x m^2) [m^2]; offset : (d, d) S with
-    T(e) = I + e S.
+    T(e) = I + e S; coupling : membrane-bending coupling int (Bm^T b Bb + Bb^T b Bm) (per unit
+    t^2; an unsymmetric laminate, ``fe.laminate``) or None.
     """
 
     membrane: np.ndarray
@@ -297,11 +299,12 @@ class LocalPieces:
     mass_t: np.ndarray
     mass_r: np.ndarray
     offset: np.ndarray
+    coupling: np.ndarray | None = None
 
 
 def local_pieces(
     ops: _Operators, E, nu, lumped: bool = False, bending_ratio=None, shear_ratio=None,
-    bending_nu=None, membrane_ratio=None,
+    bending_nu=None, membrane_ratio=None, section=None,
 ) -> LocalPieces:  # fmt: skip
     """Element pieces from operators and (n,) E [Pa], nu.  ``lumped``: row-sum mass.
 
@@ -318,32 +321,51 @@ def local_pieces(
     bending_ratio 0 and shear_ratio 0, and no rotary inertia (it has no bending rotations to
     carry it); otherwise the rotary inertia rho t^3 / 12 stays, and the thickness powers stay
     as they are (MSC Nastran QRG, PSHELL remarks 2-3).
+
+    section : ``fe.laminate.SectionMatrices`` (n rows) in the elements' local axes, or None:
+    an anisotropic section per unit thickness (a laminate, Nastran's PCOMP), which then
+    replaces E, nu and the ratios in the stiffness: membrane int Bm^T Am Bm (incompatible modes
+    condensed with Am), bending int Bb^T Db Bb / 12, shear int Bs^T Hs Bs, drilling alpha Am_66
+    int Bd^T Bd, and where the section has a coupling b = B / h^2 the coupling piece (the
+    incompatible modes then condensed with the coupling too: ``_coupled``); a section with no
+    bending has no rotary inertia.
     """
-    D = _plane_stress(nu)
-    G = E / (2.0 * (1.0 + nu))
+    coupling = None
+    if section is None:
+        Km, Ks, Kd, Kb = _isotropic_stiffness(ops, E, nu, bending_ratio, shear_ratio,
+                                              bending_nu, membrane_ratio)  # fmt: skip
+        bending = bending_ratio
+    else:
+        Km, Ks, Kd, Kb, coupling = _section_stiffness(ops, section)
+        bending = np.abs(section.bending).sum(axis=(1, 2))
+    Mt, Mr, S = _mass_pieces(ops, Km.shape, lumped)
+    if bending is not None and not np.all(bending > 0):
+        Mr *= (bending > 0)[:, None, None]
+    return LocalPieces(
+        membrane=Km, shear=Ks, drilling=Kd, bending=Kb, mass_t=Mt, mass_r=Mr, offset=S,
+        coupling=coupling,
+    )  # fmt: skip
+
+
+def _membrane(ops: _Operators, D):
+    """int Bm^T D Bm with the incompatible modes (quads) condensed, symmetrized; D (n, 3, 3)."""
     Km = _quadrature_form(ops.Bm, D, ops.wdet)
     if ops.Ginc is not None:
         H = _quadrature_form(ops.Ginc, D, ops.wdet)
         C = _quadrature_form(ops.Ginc, D, ops.wdet, ops.Bm)
         Km = Km - np.einsum("nai,naj->nij", C, np.linalg.solve(H, C))
-    Km = 0.5 * (Km + Km.transpose(0, 2, 1))
+    return 0.5 * (Km + Km.transpose(0, 2, 1))
+
+
+def _isotropic_stiffness(ops, E, nu, bending_ratio, shear_ratio, bending_nu, membrane_ratio):
+    """(membrane, shear, drilling, bending) pieces of isotropic sections (``local_pieces``)."""
+    D = _plane_stress(nu)
+    G = E / (2.0 * (1.0 + nu))
+    Km = _membrane(ops, D)
     Ks = _quadrature_form(ops.Bs, None, ops.wdet)
     Kd = _quadrature_form(ops.Bd[:, :, None], None, ops.wdet)
     Kb = _quadrature_form(ops.Bb, D if bending_nu is None else _plane_stress(bending_nu),
                           ops.wdet)  # fmt: skip
-    k = ops.N.shape[1]
-    mass = np.einsum("nq,qi,qj->nij", ops.wdet, ops.N, ops.N)  # (n, k, k)
-    if lumped:
-        mass = np.einsum("nij,ij->nij", mass.sum(axis=2)[:, :, None], np.eye(k))
-    Mt = np.zeros(Km.shape)
-    Mr = np.zeros(Km.shape)
-    for c in (U, V, W):
-        Mt[:, c::6, c::6] = mass
-    for c in (RX, RY):
-        Mr[:, c::6, c::6] = mass
-    S = np.zeros((6 * k, 6 * k))
-    S[np.arange(U, 6 * k, 6), np.arange(RY, 6 * k, 6)] = 1.0
-    S[np.arange(V, 6 * k, 6), np.arange(RX, 6 * k, 6)] = -1.0
     # scaled in place: the same products as X * factor without a second (n, d, d) copy
     Km *= E[:, None, None]
     kappa = SHEAR_FACTOR if shear_ratio is None else shear_ratio
@@ -353,12 +375,69 @@ def local_pieces(
     if membrane_ratio is not None:
         Km *= membrane_ratio[:, None, None]
         Kd *= membrane_ratio[:, None, None]
-    if bending_ratio is not None and not np.all(bending_ratio > 0):
-        Mr *= (bending_ratio > 0)[:, None, None]
     Kb *= (E / 12.0 if bending_ratio is None else bending_ratio * E / 12.0)[:, None, None]
-    return LocalPieces(
-        membrane=Km, shear=Ks, drilling=Kd, bending=Kb, mass_t=Mt, mass_r=Mr, offset=S
-    )
+    return Km, Ks, Kd, Kb
+
+
+def _section_stiffness(ops, section):
+    """(membrane, shear, drilling, bending, coupling or None) pieces of anisotropic sections
+    (``local_pieces``).  A section with no membrane (Nastran's LAM BEND) gets none: its
+    incompatible modes would be singular, so they are condensed with a stand-in and the piece
+    is zeroed (such a section has no coupling)."""
+    none = ~np.any(section.membrane, axis=(1, 2))
+    a = np.where(none[:, None, None], np.eye(3), section.membrane)
+    Km = _membrane(ops, a)
+    Km[none] = 0.0
+    Hs = section.shear if ops.Bs.shape[2] else None  # shear-rigid elements: no shear rows
+    Ks = _quadrature_form(ops.Bs, Hs, ops.wdet)
+    Kd = _quadrature_form(ops.Bd[:, :, None], None, ops.wdet)
+    Kd *= (DRILL_ALPHA * section.membrane[:, 2, 2])[:, None, None]
+    Kb = _quadrature_form(ops.Bb, section.bending, ops.wdet)
+    Kb /= 12.0
+    Kc = None
+    if section.coupling is not None:
+        Kc, Kx = _coupled(ops, a, section.coupling)
+        Kb += Kx
+    return Km, Ks, Kd, Kb, Kc
+
+
+def _coupled(ops: _Operators, a, b):
+    """(coupling piece (n, d, d) per unit t^2, the bending's share per unit t^3) of sections
+    with membrane a and coupling b (n, 3, 3) [Pa]: int (Bm^T b Bb + Bb^T b Bm), and where the
+    element has incompatible modes (quads), their condensation with the coupling: with
+    H = int G^T a G, Cm = int G^T a Bm, Cb = int G^T b Bb the condensed energy of
+    [eps; kappa] [[A, B], [B, D]] [eps; kappa] takes -(Cm^T H^-1 Cb + Cb^T H^-1 Cm) t^2 off the
+    coupling and -Cb^T H^-1 Cb t^3 off the bending (the membrane's -Cm^T H^-1 Cm t is
+    ``_membrane``'s), so that the thickness powers stay exact."""
+    Kc = _quadrature_form(ops.Bm, b, ops.wdet, ops.Bb)
+    Kx = np.zeros(Kc.shape)
+    if ops.Ginc is not None:
+        H = _quadrature_form(ops.Ginc, a, ops.wdet)
+        Cm = _quadrature_form(ops.Ginc, a, ops.wdet, ops.Bm)
+        Cb = _quadrature_form(ops.Ginc, b, ops.wdet, ops.Bb)
+        HinvCb = np.linalg.solve(H, Cb)
+        Kc = Kc - np.einsum("nai,naj->nij", Cm, HinvCb)
+        Kx = -np.einsum("nai,naj->nij", Cb, HinvCb)
+        Kx = 0.5 * (Kx + Kx.transpose(0, 2, 1))
+    return Kc + Kc.transpose(0, 2, 1), Kx
+
+
+def _mass_pieces(ops: _Operators, shape, lumped: bool):
+    """(translational, rotary (rx, ry) mass pieces (n, d, d), offset operator S (d, d))."""
+    k = ops.N.shape[1]
+    mass = np.einsum("nq,qi,qj->nij", ops.wdet, ops.N, ops.N)  # (n, k, k)
+    if lumped:
+        mass = np.einsum("nij,ij->nij", mass.sum(axis=2)[:, :, None], np.eye(k))
+    Mt = np.zeros(shape)
+    Mr = np.zeros(shape)
+    for c in (U, V, W):
+        Mt[:, c::6, c::6] = mass
+    for c in (RX, RY):
+        Mr[:, c::6, c::6] = mass
+    S = np.zeros((6 * k, 6 * k))
+    S[np.arange(U, 6 * k, 6), np.arange(RY, 6 * k, 6)] = 1.0
+    S[np.arange(V, 6 * k, 6), np.arange(RX, 6 * k, 6)] = -1.0
+    return Mt, Mr, S
 
 
 def optional_rows(rows, *arrays) -> tuple:
@@ -385,7 +464,8 @@ class PieceSource:
     (n,); lumped : row-sum mass; rotary_inertia : False zeroes mass_r (for peers without it);
     bending_ratio, shear_ratio, bending_nu, membrane_ratio (n,) or None: ``local_pieces``'s;
     kirchhoff : quadrilaterals without transverse shear flexibility
-    (``quad_operators(kirchhoff=True)``) instead of MITC4.
+    (``quad_operators(kirchhoff=True)``) instead of MITC4; section : ``fe.laminate
+    .SectionMatrices`` (n rows, local axes) or None: anisotropic sections (``local_pieces``).
     """
 
     xy: np.ndarray
@@ -399,6 +479,7 @@ class PieceSource:
     kirchhoff: bool = False
     bending_nu: np.ndarray | None = None
     membrane_ratio: np.ndarray | None = None
+    section: SectionMatrices | None = None
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -409,7 +490,8 @@ class PieceSource:
         ops = quad_operators(xy, self.kirchhoff) if xy.shape[1] == 4 else tria_operators(xy)
         b, s, n, m = optional_rows(rows, self.bending_ratio, self.shear_ratio, self.bending_nu,
                                    self.membrane_ratio)  # fmt: skip
-        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n, m)
+        section = None if self.section is None else self.section.rows(rows)
+        p = local_pieces(ops, self.E[rows], self.nu[rows], self.lumped, b, s, n, m, section)
         if self.height is not None:
             p = warp_link(p, self.height[rows])
         if not self.rotary_inertia:
@@ -451,7 +533,8 @@ def warp_link(p: LocalPieces, height: np.ndarray) -> LocalPieces:
             Y[:, dst, :] += h * Y[:, src, :]
         return Y
 
-    return LocalPieces(*(link(getattr(p, a)) for a in PIECE_NAMES), p.offset)
+    coupling = None if p.coupling is None else link(p.coupling)
+    return LocalPieces(*(link(getattr(p, a)) for a in PIECE_NAMES), p.offset, coupling)
 
 
 def _sandwich(S, X):
@@ -466,7 +549,9 @@ def power_matrices(p: LocalPieces, rho, nsm, offset, offset_ratio):
     rho [kg/m^3], nsm [kg/m^2], offset [m], offset_ratio [-] : (n,).  With
     e = offset + offset_ratio t, t T(e)^T X T(e) expands into powers 1..3 of t.
     Returns (K, M) dicts {power: (n, d, d)}; K has powers 1, 2, 3 and M has 0, 1, 2, 3, where
-    the t^2 powers (present only with an offset) are left out when every offset is zero.
+    the t^2 powers (present only with an offset or a coupling) are left out when every offset
+    is zero and there is no coupling.  A coupling piece (an unsymmetric laminate, whose offset
+    is its own, not a ratio of t) enters power 2 as t^2 T(e0)^T Kc T(e0).
     """
     r = rho[:, None, None]
     if not (np.any(offset) or np.any(offset_ratio)):
@@ -479,6 +564,11 @@ def power_matrices(p: LocalPieces, rho, nsm, offset, offset_ratio):
         2: c * m1 + 2 * e0 * c * m2,
         3: c**2 * m2 + p.bending,
     }
+    if p.coupling is not None:
+        if np.any(c * np.any(p.coupling, axis=(1, 2))[:, None, None]):
+            raise ValueError("a coupled section's offset must not scale with t")
+        k1, k2 = _sandwich(p.offset, p.coupling)
+        K[2] = K[2] + p.coupling + e0 * k1 + e0**2 * k2
     M = {
         0: nsm[:, None, None] * p.mass_t,
         1: r * (p.mass_t + e0 * t1 + e0**2 * t2),
@@ -490,9 +580,11 @@ def power_matrices(p: LocalPieces, rho, nsm, offset, offset_ratio):
 
 def _power_matrices_centred(p: LocalPieces, r, nsm):
     """``power_matrices`` without offsets (e = 0): the same sums with the zero offset terms
-    left out (adding +0.0 is exact, so the values are identical) and no t^2 power; r (n, 1, 1)
-    density [kg/m^3]."""
+    left out (adding +0.0 is exact, so the values are identical) and no t^2 power but the
+    coupling's; r (n, 1, 1) density [kg/m^3]."""
     K = {1: p.membrane + p.shear + p.drilling, 3: p.bending}
+    if p.coupling is not None:
+        K[2] = p.coupling
     M = {0: nsm[:, None, None] * p.mass_t, 1: r * p.mass_t, 3: r * (p.mass_r / 12.0)}
     return K, M
 
@@ -517,6 +609,8 @@ def _direct(p: LocalPieces, t, rho, nsm, offset, offset_ratio):
     tt = t[:, None, None]
     Tt = T.transpose(0, 2, 1)
     K = tt * (Tt @ p.membrane @ T + p.shear + p.drilling) + tt**3 * p.bending
+    if p.coupling is not None:
+        K = K + tt**2 * (Tt @ p.coupling @ T)
     m_area = (rho * t)[:, None, None]
     M = m_area * (Tt @ p.mass_t @ T) + nsm[:, None, None] * p.mass_t
     M = M + (rho * t**3 / 12.0)[:, None, None] * p.mass_r

@@ -12,7 +12,16 @@ names (``common.ELEMENTS`` / ``PROPERTIES``, ``deck.FAMILIES``' id spaces) and i
 (``GRID_FIELDS``).  Shells (thousands) are converted as arrays in ``reader``.
 """
 
-from bayesupdate.nastran.cards import beams, masses, rigid, rods, scalar, solids, springs
+from bayesupdate.nastran.cards import (
+    beams,
+    laminates,
+    masses,
+    rigid,
+    rods,
+    scalar,
+    solids,
+    springs,
+)
 from bayesupdate.nastran.cards.beams import L_DIMS, L_SECTIONS, library_dims, pbeam_layout
 from bayesupdate.nastran.cards.common import (
     ELEMENTS,

@@ -25,8 +25,8 @@ from bayesupdate.nastran.frames import Grids
 ELEMENTS = ("CBAR", "CBEAM", "CROD", "CONROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3",
             "CMASS4", "CELAS1", "CELAS2", "CELAS3", "CELAS4", "CBUSH", "RBE2", "RBE3", "RBAR",
             "CQUAD4", "CTRIA3", "CTETRA", "CHEXA", "CTUBE")  # fmt: skip
-PROPERTIES = ("PSHELL", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH", "PELAS", "PMASS",
-              "PSOLID", "PTUBE")  # fmt: skip
+PROPERTIES = ("PSHELL", "PCOMP", "PCOMPG", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH",
+              "PELAS", "PMASS", "PSOLID", "PTUBE")  # fmt: skip
 
 
 @dataclass
@@ -124,6 +124,9 @@ def mat1(ctx: Context, mid: int, user) -> Mat1:
     card = ctx.mats.get(int(mid)) if mid else None
     if card is None:
         user.fail(f"material {mid} is not a MAT1 (only MAT1 is supported)")
+    if card.name != "MAT1":
+        user.fail(f"material {mid} is a {card.name}, read only as a PCOMP/PCOMPG ply (this "
+                  "card needs a MAT1)")  # fmt: skip
     E, G, nu = (None if card.is_blank(k) else card.real(k) for k in ("E", "G", "NU"))
     if E is None and G is not None and nu is not None:
         E = 2 * (1 + nu) * G

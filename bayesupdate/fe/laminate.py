@@ -1,0 +1,156 @@
+"""Classical lamination theory: a stack of orthotropic plies -> the shell section's stiffness.
+
+A ply k (thickness t_k [m], fibre angle theta_k [rad] from the section's x-axis, counter-
+clockwise about its normal) of an orthotropic material (E1, E2 [Pa], nu12, G12 [Pa], transverse
+shear moduli G1Z, G2Z [Pa]) has the reduced plane-stress stiffness in its own axes (Jones,
+*Mechanics of Composite Materials*, 2nd ed., 1999, eq. 2.61)
+
+    Q11 = E1 / (1 - nu12 nu21), Q22 = E2 / (1 - nu12 nu21), Q12 = nu12 E2 / (1 - nu12 nu21),
+    Q66 = G12, with nu21 = nu12 E2 / E1,
+
+and, in the section's axes, Qbar = T^T Q T with T the engineering-strain rotation
+eps_ply = T eps (Jones eq. 2.80-2.85; the strains are [eps_x, eps_y, gamma_xy]).  Integrated over
+the thickness about the stack's mid-plane z in [-h/2, h/2] (Jones eqs. 4.22-4.24):
+
+    A = sum_k Qbar_k (z_k - z_{k-1}),  B = 1/2 sum_k Qbar_k (z_k^2 - z_{k-1}^2),
+    D = 1/3 sum_k Qbar_k (z_k^3 - z_{k-1}^3),
+
+the membrane, coupling and bending stiffness [N/m, N, N m].  The transverse shear stiffness is
+the first-order (Reissner-Mindlin) one, H = kappa sum_k R_k^T diag(G1Z, G2Z) R_k t_k with
+kappa = 5/6 and R_k the rotation of [gamma_xz, gamma_yz] into the ply's axes (Reddy, *Mechanics
+of Laminated Composite Plates and Shells*, 2nd ed., 2004, eq. 3.4.31): exact for a homogeneous
+stack (the shell's own 5/6), an approximation for mixed plies, where Nastran's PCOMP derives its
+own factor from the stack's bending stress (MSC Nastran Reference Manual, composite elements).
+
+The shell element takes these as a section per unit thickness (``SectionMatrices``), the form
+Nastran gives PCOMP's equivalent PSHELL: membrane A / h (its MID1), bending 12 D / h^3 (its MID2,
+12I/T**3 = 1), transverse shear H / h (its MID3 with TS/T = 1).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Ply",
+    "SectionMatrices",
+    "laminate",
+    "ply_stiffness",
+    "section_per_unit_thickness",
+    "shear_rotation",
+    "strain_rotation",
+]
+
+#: first-order transverse shear correction factor (Reissner)
+SHEAR_FACTOR = 5.0 / 6.0
+
+
+@dataclass(frozen=True)
+class Ply:
+    """One orthotropic ply: E1, E2, G12, G1Z, G2Z [Pa] (G1Z and G2Z inf: no transverse shear
+    flexibility), nu12, rho [kg/m^3], thickness [m], angle [rad] of its fibre from the
+    section's x-axis."""
+
+    E1: float
+    E2: float
+    nu12: float
+    G12: float
+    G1Z: float
+    G2Z: float
+    rho: float
+    thickness: float
+    angle: float
+
+
+@dataclass(frozen=True)
+class SectionMatrices:
+    """A shell section per unit thickness, in some in-plane axes: membrane (n, 3, 3) = A / h,
+    bending (n, 3, 3) = 12 D / h^3, shear (n, 2, 2) = H / h (kappa included), coupling
+    (n, 3, 3) = B / h^2 or None (no membrane-bending coupling), all [Pa], for strains
+    [eps_x, eps_y, gamma_xy], curvatures [kappa_x, kappa_y, kappa_xy] and transverse shears
+    [gamma_xz, gamma_yz], about the section's mid-plane."""
+
+    membrane: np.ndarray
+    bending: np.ndarray
+    shear: np.ndarray
+    coupling: np.ndarray | None = None
+
+    def rows(self, idx) -> "SectionMatrices":
+        """The sections of the elements ``idx``."""
+        coupling = None if self.coupling is None else self.coupling[idx]
+        return SectionMatrices(self.membrane[idx], self.bending[idx], self.shear[idx], coupling)
+
+    def rotated(self, angle) -> "SectionMatrices":
+        """The same sections seen in axes turned by -angle (n,) [rad]: the section's x-axis
+        lies at +angle from the new x-axis (a material axis at ``angle`` from an element's)."""
+        T = strain_rotation(angle)
+        R = shear_rotation(angle)
+        coupling = None if self.coupling is None else _congruent(T, self.coupling)
+        return SectionMatrices(_congruent(T, self.membrane), _congruent(T, self.bending),
+                               _congruent(R, self.shear), coupling)  # fmt: skip
+
+
+def _congruent(T, S):
+    """T^T S T for stacks T (n, k, k), S (n, k, k)."""
+    return np.einsum("nai,nab,nbj->nij", T, S, T)
+
+
+def strain_rotation(angle) -> np.ndarray:
+    """(n, 3, 3) T with eps' = T eps for axes x' at +angle (n,) [rad] from x (engineering shear
+    strain; Jones eq. 2.80 with Reuter's matrix folded in)."""
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.empty(np.shape(angle) + (3, 3))
+    T[..., 0, :] = np.stack([c * c, s * s, c * s], -1)
+    T[..., 1, :] = np.stack([s * s, c * c, -c * s], -1)
+    T[..., 2, :] = np.stack([-2 * c * s, 2 * c * s, c * c - s * s], -1)
+    return T
+
+
+def shear_rotation(angle) -> np.ndarray:
+    """(n, 2, 2) R with [gamma_x'z, gamma_y'z] = R [gamma_xz, gamma_yz] for x' at +angle."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], -2)
+
+
+def ply_stiffness(E1, E2, nu12, G12) -> np.ndarray:
+    """(k, 3, 3) reduced plane-stress stiffness Q [Pa] of plies in their own axes (Jones eq.
+    2.61); E1, E2, nu12, G12 (k,)."""
+    E1, E2, nu12, G12 = (np.asarray(v, dtype=float) for v in (E1, E2, nu12, G12))
+    nu21 = nu12 * E2 / E1
+    d = 1.0 - nu12 * nu21
+    Q = np.zeros(E1.shape + (3, 3))
+    Q[..., 0, 0] = E1 / d
+    Q[..., 1, 1] = E2 / d
+    Q[..., 0, 1] = Q[..., 1, 0] = nu12 * E2 / d
+    Q[..., 2, 2] = G12
+    return Q
+
+
+def laminate(plies: list[Ply]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B, D (3, 3), H (2, 2)) of a stack, plies bottom (z = -h/2) to top, about its
+    mid-plane (module docstring).  H is inf where any ply has no transverse shear flexibility
+    (G1Z or G2Z inf)."""
+    t = np.array([p.thickness for p in plies])
+    angle = np.array([p.angle for p in plies])
+    Q = ply_stiffness(*(np.array([getattr(p, a) for p in plies]) for a in ("E1", "E2", "nu12",
+                                                                            "G12")))  # fmt: skip
+    T = strain_rotation(angle)
+    Qbar = _congruent(T, Q)
+    z = np.concatenate([[0.0], np.cumsum(t)]) - t.sum() / 2
+    A, B, D = (np.einsum("k,kij->ij", (z[1:] ** p - z[:-1] ** p) / p, Qbar) for p in (1, 2, 3))
+    G = np.array([[p.G1Z, p.G2Z] for p in plies])
+    if not np.all(np.isfinite(G)):
+        return A, B, D, np.full((2, 2), np.inf)
+    R = shear_rotation(angle)
+    Gs = np.einsum("kai,ka,kaj->kij", R, G, R)
+    return A, B, D, SHEAR_FACTOR * np.einsum("k,kij->ij", t, Gs)
+
+
+def section_per_unit_thickness(A, B, D, H, h) -> SectionMatrices:
+    """The (1,)-stack ``SectionMatrices`` of a stack of thickness h [m]: A / h, 12 D / h^3,
+    H / h (zeros where H is inf: the shell is then shear rigid, its quads Kirchhoff's), B / h^2
+    (None where the stack is symmetric: B below 1e-12 of A h)."""
+    shear = np.zeros((2, 2)) if not np.all(np.isfinite(H)) else H / h
+    symmetric = np.abs(B).max() <= 1e-12 * np.abs(A).max() * h
+    coupling = None if symmetric else (B / h**2)[None]
+    return SectionMatrices((A / h)[None], (12.0 * D / h**3)[None], shear[None], coupling)

@@ -138,7 +138,7 @@ def _sandwich(tmp_path, pshell: str, mats: str = f"{FACES}\n{CORE}"):
             "MAT1,2,3.2E+11,1.0E+11,,7800.0\n" + CORE,
             "MID2 2: NU = 0.6 (from E and G) is outside (-1, 0.5)",
         ),
-        ("PSHELL,1,1,0.01,1,,1,,,\n,,,3", FACES, "MID4 (membrane-bending coupling)"),
+        ("PSHELL,1,1,0.01,,,,,,\n,,,3", FACES, "MID4 (membrane-bending coupling) needs both"),
         ("PSHELL,1,1,0.01,-1", FACES, "MID2 = -1 (plane strain) is not supported"),
     ],
 )

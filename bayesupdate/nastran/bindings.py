@@ -613,18 +613,20 @@ def _refuse_shell_g(f: DeckField, deck) -> None:
 
 
 def _refuse_mixed_shells(f: DeckField, deck) -> None:
-    """A MAT1 E binding on a PSHELL whose MID2 or MID3 is another MAT1 (a sandwich): its shells
-    take the bending and shear moduli as ratios to MID1's (``nastran.reader._pshell``), so one
-    E would scale all three: refused, naming the PSHELLs."""
+    """A MAT1 E binding on a PSHELL whose MID2, MID3 or MID4 is another MAT1 (a sandwich, a
+    coupled shell): its shells take the bending and shear moduli as ratios to MID1's and the
+    coupling as part of their section (``nastran.reader._pshell``), so one E would scale them
+    all: refused, naming the PSHELLs."""
     mixed = []
     for i, p in deck.table("PSHELL").items():
-        mids = {p["MID1"], p["MID2"], p["MID3"]} - {None}
+        mids = {p["MID1"], p["MID2"], p["MID3"], p["MID4"]} - {None}
         if len(mids) > 1 and mids & set(f.ids):
             mixed.append(i)
     if mixed:
         raise BayesUpdateError(
             f"parameter binds {f.spec!r}: PSHELL {', '.join(map(str, mixed))} take(s) bending or "
-            "transverse shear from another MAT1 than MID1 (MID2/MID3), which one E cannot scale"
+            "transverse shear or coupling from another MAT1 than MID1 (MID2/MID3/MID4), which "
+            "one E cannot scale"
         )
 
 

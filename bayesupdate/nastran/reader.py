@@ -98,7 +98,8 @@ def _pshell_table(ctx, pids, shells):
 
 
 def _pshell(ctx, p):
-    """(T, base MID, NSM, bending ratio, shear ratio, bending NU, membrane ratio) of a PSHELL.
+    """(T, base MID, NSM, bending ratio, shear ratio, bending NU, membrane ratio, coupling) of a
+    PSHELL.
 
     The base material is MID1 (MID2 where MID1 is blank): its E, NU and RHO are the shell's
     (the mass is MID1's RHO, MID2's where MID1 is blank: MSC Nastran QRG PSHELL remark 2).
@@ -109,10 +110,16 @@ def _pshell(ctx, p):
     quadrilaterals, ``shell.quad_operators``; the triangles are Kirchhoff anyway).  A blank
     MID leaves its part out (remark 3): MID1 blank, no membrane (membrane ratio 0, and no
     drilling stiffness); MID2 blank, no bending and no transverse shear (bending and shear
-    ratios 0: a membrane)."""
+    ratios 0: a membrane).  MID4 (a MAT1, with MID1 and MID2 given): the membrane-bending
+    coupling T^2 G4 (QRG PSHELL), as the coupling (3, 3) per unit t^2 E4 D(NU4) of the shell's
+    section (``fe.laminate.SectionMatrices``); None without MID4."""
     mid1, mid2, mid3 = p["MID1"], p["MID2"], p["MID3"]
+    coupling = None
     if p["MID4"]:
-        p.fail("MID4 (membrane-bending coupling) is not supported")
+        if mid1 is None or mid2 is None:
+            p.fail("MID4 (membrane-bending coupling) needs both MID1 and MID2")
+        m4 = _shell_mat1(ctx, p["MID4"], p, "MID4")
+        coupling = m4.E * plane_stress(np.array([m4.NU]))[0]
     if mid2 == -1:
         p.fail("MID2 = -1 (plane strain) is not supported")
     if mid1 is None and mid2 is None:
@@ -121,7 +128,7 @@ def _pshell(ctx, p):
         if mid3 is not None:
             p.fail("MID3 must be blank when MID2 is blank (QRG PSHELL)")
         m = _shell_mat1(ctx, mid1, p, "MID1")
-        return _pshell_t(p), int(mid1), p.real("NSM"), 0.0, 0.0, m.NU, 1.0
+        return _pshell_t(p), int(mid1), p.real("NSM"), 0.0, 0.0, m.NU, 1.0, None
     bending, shear = p.real("12IT3"), p.real("TST")
     for name, v in (("12I/T**3", bending), ("TS/T", shear)):
         if not v > 0:
@@ -143,7 +150,7 @@ def _pshell(ctx, p):
             p.fail(f"MID3 {mid3}: the transverse shear material needs G > 0")
         shear *= m3.G / (m.E / (2 * (1 + m.NU)))
     membrane = 0.0 if mid1 is None else 1.0
-    return _pshell_t(p), int(base), p.real("NSM"), bending, shear, bending_nu, membrane
+    return _pshell_t(p), int(base), p.real("NSM"), bending, shear, bending_nu, membrane, coupling
 
 
 def _pshell_t(p) -> float:
@@ -196,15 +203,16 @@ def _shell_arrays(ctx, pids, nodes, corner, tflag, zoffs, shells):
                  shear_ratio=shear[inv], bending_nu=bending_nu[inv],
                  membrane_ratio=membrane[inv], section=None,
                  cards={p: ctx.props[p].name for p in laminates})  # fmt: skip
-    if laminates:
-        _laminate_arrays(props, pids, lam, angle, laminates)
+    couplings = {p: row[7] for p, row in table.items() if row[7] is not None}
+    if laminates or couplings:
+        _laminate_arrays(props, pids, angle, laminates, couplings)
     return props
 
 
 def _laminate_row(lam) -> tuple:
     """A ``LaminateSection`` as a PSHELL table row (T, no MID, NSM, ratios, NU 0)."""
     bending, shear, membrane = lam.ratios
-    return lam.thickness, 0, lam.nsm, bending, shear, 0.0, membrane
+    return lam.thickness, 0, lam.nsm, bending, shear, 0.0, membrane, None
 
 
 def _shell_materials(ctx, uniq, mid, laminates):
@@ -223,12 +231,16 @@ def _shell_materials(ctx, uniq, mid, laminates):
     return (np.array(col, dtype=float) for col in zip(*rows, strict=True))
 
 
-def _laminate_arrays(props, pids, lam, angle, laminates) -> None:
-    """The laminates' entries of ``props``: each element's section in its local axes (``lam``
-    (n,) the laminate shells, ``angle`` (n,) [rad] their material axes from their local x-axes,
-    ``_material_angles``), the offset of the stack's mid-plane added to ZOFFS, and for the other
-    shells their isotropic sections (``fe.laminate.SectionMatrices``)."""
+def _laminate_arrays(props, pids, angle, laminates, couplings) -> None:
+    """The laminates' entries of ``props``: each element's section in its local axes (``angle``
+    (n,) [rad] their material axes from their local x-axes, ``_material_angles``), the offset
+    of the stack's mid-plane added to ZOFFS, and for the other shells their isotropic sections
+    (``fe.laminate.SectionMatrices``) with the coupling of a PSHELL's MID4 (``couplings``:
+    PSHELL id -> (3, 3) per unit t^2)."""
+    lam = np.isin(pids, list(laminates))
     iso = _isotropic_sections(props)
+    iso_coupling = np.array([couplings.get(int(p), np.zeros((3, 3))) for p in pids])
+    iso = SectionMatrices(iso.membrane, iso.bending, iso.shear, iso_coupling)
     rows = [laminates[int(p)].section if k else None for p, k in zip(pids, lam, strict=True)]
     none = np.zeros((1, 3, 3))
 
@@ -240,7 +252,7 @@ def _laminate_arrays(props, pids, lam, angle, laminates) -> None:
     membrane, bending, shear, coupling = (
         np.concatenate([row(i, r, name) for i, r in enumerate(rows)])
         for name in ("membrane", "bending", "shear", "coupling"))  # fmt: skip
-    coupled = any(r is not None and r.coupling is not None for r in rows)
+    coupled = bool(couplings) or any(r is not None and r.coupling is not None for r in rows)
     section = SectionMatrices(membrane, bending, shear, coupling if coupled else None)
     props["section"] = section.rotated(angle)
     props["offset"] = props["offset"] + np.array(

@@ -15,12 +15,13 @@ the thickness about the stack's mid-plane z in [-h/2, h/2] (Jones eqs. 4.22-4.24
     A = sum_k Qbar_k (z_k - z_{k-1}),  B = 1/2 sum_k Qbar_k (z_k^2 - z_{k-1}^2),
     D = 1/3 sum_k Qbar_k (z_k^3 - z_{k-1}^3),
 
-the membrane, coupling and bending stiffness [N/m, N, N m].  The transverse shear stiffness is
-the first-order (Reissner-Mindlin) one, H = kappa sum_k R_k^T diag(G1Z, G2Z) R_k t_k with
-kappa = 5/6 and R_k the rotation of [gamma_xz, gamma_yz] into the ply's axes (Reddy, *Mechanics
-of Laminated Composite Plates and Shells*, 2nd ed., 2004, eq. 3.4.31): exact for a homogeneous
-stack (the shell's own 5/6), an approximation for mixed plies, where Nastran's PCOMP derives its
-own factor from the stack's bending stress (MSC Nastran Reference Manual, composite elements).
+the membrane, coupling and bending stiffness [N/m, N, N m].  The transverse shear stiffness H is
+found by energy equivalence with the shear stresses that cylindrical bending puts through the
+stack (``transverse_shear``: Whitney 1973; Reddy, *Mechanics of Laminated Composite Plates and
+Shells*, 2nd ed., 2004, sec. 6.4): 5/6 h G for a homogeneous stack (the shell's own factor);
+a ply with no transverse shear flexibility (G1Z, G2Z infinite) adds no compliance, and a soft
+core carries a sandwich's shear, as Nastran's PCOMP derives its shear from the stack's bending
+stress (MSC Nastran Reference Manual, composite elements; its own numbers not checked).
 
 The shell element takes these as a section per unit thickness (``SectionMatrices``), the form
 Nastran gives PCOMP's equivalent PSHELL: membrane A / h (its MID1), bending 12 D / h^3 (its MID2,
@@ -128,8 +129,8 @@ def ply_stiffness(E1, E2, nu12, G12) -> np.ndarray:
 
 def laminate(plies: list[Ply]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(A, B, D (3, 3), H (2, 2)) of a stack, plies bottom (z = -h/2) to top, about its
-    mid-plane (module docstring).  H is inf where any ply has no transverse shear flexibility
-    (G1Z or G2Z inf)."""
+    mid-plane (module docstring; H from ``transverse_shear``: inf where no ply has transverse
+    shear flexibility, NaN where the stack is rigid in one plane only)."""
     t = np.array([p.thickness for p in plies])
     angle = np.array([p.angle for p in plies])
     Q = ply_stiffness(*(np.array([getattr(p, a) for p in plies]) for a in ("E1", "E2", "nu12",
@@ -139,11 +140,47 @@ def laminate(plies: list[Ply]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     z = np.concatenate([[0.0], np.cumsum(t)]) - t.sum() / 2
     A, B, D = (np.einsum("k,kij->ij", (z[1:] ** p - z[:-1] ** p) / p, Qbar) for p in (1, 2, 3))
     G = np.array([[p.G1Z, p.G2Z] for p in plies])
-    if not np.all(np.isfinite(G)):
+    if np.all(np.isinf(G)):
         return A, B, D, np.full((2, 2), np.inf)
     R = shear_rotation(angle)
-    Gs = np.einsum("kai,ka,kaj->kij", R, G, R)
-    return A, B, D, SHEAR_FACTOR * np.einsum("k,kij->ij", t, Gs)
+    compliance = np.einsum("kai,ka,kaj->kij", R, 1.0 / G, R)  # 1 / inf: a rigid plane, 0
+    return A, B, D, transverse_shear(Qbar, z, A, B, D, compliance)
+
+
+#: 3-point Gauss-Legendre rule on [0, 1]: exact for the quartic f(z)^2 within a ply
+_GAUSS3 = (0.5 + np.array([-1.0, 0.0, 1.0]) * np.sqrt(0.15), np.array([5.0, 8.0, 5.0]) / 18.0)
+
+
+def transverse_shear(Qbar, z, A, B, D, compliance) -> np.ndarray:
+    """(2, 2) transverse shear stiffness H [N/m] of a stack by energy equivalence in cylindrical
+    bending (Whitney, J. Compos. Mater. 7 (1973) 403; Vlachoutsis, IJNME 35 (1992) 1537).
+
+    Bending about each in-plane axis i (x: i = 0, y: i = 1) with the other strains zero
+    stresses the plies sigma_i = Qbar_ii (z - z_n) kappa, about the axis's neutral plane
+    z_n = B_ii / A_ii; equilibrium gives the shear stress tau_i(z) = f_i(z) Q_i / D*_ii with
+    f_i(z) = int_-h/2^z Qbar_ii (zeta - z_n) dzeta and D*_ii = D_ii - B_ii^2 / A_ii.  The
+    complementary energy of the resultant Q per unit area is 1/2 Q^T C Q with
+    C = int F(z) S(z) F(z) dz, F = diag(f_0 / D*_00, f_1 / D*_11) and S the ply's shear
+    compliance in the stack's axes (0 for a ply with no shear flexibility), and H = C^-1.  A
+    homogeneous stack gives 5/6 h G (Reissner's factor); a sandwich's soft core carries it.
+
+    Qbar (k, 3, 3) [Pa], z (k + 1,) [m] ply interfaces, A, B, D (3, 3), compliance (k, 2, 2)
+    [1/Pa].  NaN where C is singular (rigid in one plane only)."""
+    zn = np.diag(B)[:2] / np.diag(A)[:2]
+    Dstar = np.diag(D)[:2] - np.diag(B)[:2] ** 2 / np.diag(A)[:2]
+    q = Qbar[:, [0, 1], [0, 1]]  # (k, 2): Qbar_00, Qbar_11 of each ply
+    lo, hi = z[:-1], z[1:]
+    step = q * ((hi**2 - lo**2)[:, None] / 2 - zn * (hi - lo)[:, None])
+    f0 = np.concatenate([np.zeros((1, 2)), np.cumsum(step, axis=0)[:-1]])  # f at each ply's base
+    x, w = _GAUSS3
+    zg = lo[:, None] + np.outer(hi - lo, x)  # (k, 3)
+    f = f0[:, None] + q[:, None] * ((zg**2 - lo[:, None] ** 2)[..., None] / 2
+                                    - zn * (zg - lo[:, None])[..., None])  # fmt: skip
+    F = f / Dstar  # (k, 3, 2): the diagonal of F at each Gauss point
+    C = np.einsum("kg,g,kgi,kij,kgj->ij", (hi - lo)[:, None] * np.ones(3), w, F, compliance, F)
+    if np.linalg.cond(C) > 1e12:
+        return np.full((2, 2), np.nan)
+    return np.linalg.inv(C)
 
 
 def section_per_unit_thickness(A, B, D, H, h) -> SectionMatrices:

@@ -18,8 +18,10 @@ which sits Z0 + T/2 above the reference plane: a shell offset (``fe.elements.she
 mechanism, added to the element's own ZOFFS), which couples membrane and bending as the
 reference plane's A, B, D do.  Refused, each naming the card: LAM SMEAR / SMCORE, a Z0 off the
 centre of a LAM MEM or BEND
-stack (an offset needs both parts, as ZOFFS does on a PSHELL), plies of which only some have
-transverse shear flexibility, a ply material that is neither MAT1 nor MAT8.
+stack (an offset needs both parts, as ZOFFS does on a PSHELL), a ply material that is neither
+MAT1 nor MAT8.  A ply whose MAT8 leaves G1Z or G2Z blank (infinite, QRG MAT8) adds no transverse
+shear compliance (``fe.laminate.transverse_shear``); when no ply has any, the shells are shear
+rigid (Kirchhoff), as a PSHELL without MID3.
 """
 
 from dataclasses import dataclass
@@ -126,9 +128,11 @@ def laminate_section(ctx, p) -> LaminateSection:
         plies = plies + plies[::-1]
     A, B, D, H = laminate(plies)
     h = sum(q.thickness for q in plies)
-    shear = np.array([[q.G1Z, q.G2Z] for q in plies])
-    if np.any(np.isinf(shear)) and not np.all(np.isinf(shear)):
-        p.fail("only some plies have transverse shear moduli (MAT8 G1Z, G2Z): give all or none")
+    if np.isnan(H).any():
+        p.fail(
+            "its plies are rigid in transverse shear in one plane only (MAT8 G1Z or G2Z "
+            "blank on every ply that gives the other): give both or neither"
+        )
     section = per_unit(A, B, D, H, h)
     membrane, bending = lam != "BEND", lam != "MEM"
     coupling = section.coupling if membrane and bending else None  # MEM, BEND: one part alone
@@ -140,5 +144,5 @@ def laminate_section(ctx, p) -> LaminateSection:
     return LaminateSection(
         thickness=h, rho_t=sum(q.rho * q.thickness for q in plies),
         nsm=p.real("NSM"), offset=z0 + h / 2, section=section,
-        membrane=membrane, bending=bending, shear_rigid=bool(np.all(np.isinf(shear))),
+        membrane=membrane, bending=bending, shear_rigid=not np.all(np.isfinite(H)),
     )  # fmt: skip

@@ -42,8 +42,9 @@ With PCOMP/PCOMPG and MAT8 read (laminates, unsymmetric ones too) and a large-fi
 continuation marker with a name read as large fields (the same day): 49 read to a model; of the
 18 model files with a PCOMP or PCOMPG, 5 read whole (``plate/plate_mixed``, ``nx/laminate``,
 ``bugs/flat_plate_pcomp_test``, ``other/v10112``, ``unit/pcomp/pcomp_ctria3``), the others kept
-out by other cards (CSHEAR, PARAM PCOMPRM, thermal and hyperelastic cards, ...).  The refusals
-are now led by CPENTA (457 in 43) and CSHEAR (164 in 21).
+out by other cards (CSHEAR, PARAM PCOMPRM, thermal and hyperelastic cards, ...).  With CSHEAR
+read (PSHEAR F1-F4 refused): 50 read to a model (``msc/64_bit/d173`` joins them).  The refusals
+are now led by CPENTA (457 in 43), CTRIA6 (79 in 23) and CQUADR (78 in 22).
 
 Run: PYTHONPATH=. .venv/bin/python studies/public_decks.py /path/to/pyNastran/models
 """

@@ -526,11 +526,12 @@ def _refuse_scalar_springs(f: DeckField, structure, names) -> None:
 
 
 def _refuse_unbound_users(f: DeckField, deck) -> None:
-    """A MAT1 that a PTUBE uses (a CTUBE's rod is not re-built by any binding), that a PCOMP or
-    PCOMPG takes as a ply (a laminate's section is fixed when the deck is read) or that a PSOLID
-    uses with G bound (a solid takes E and NU): refused, naming the properties, rather than
-    leaving them at the deck's values while the rest changes."""
-    tubes = [f"PTUBE {i}" for i, p in deck.table("PTUBE").items() if p["MID"] in f.ids]
+    """A MAT1 that a PTUBE or PSHEAR uses (no binding re-builds a CTUBE's rod or a CSHEAR),
+    that a PCOMP or PCOMPG takes as a ply (a laminate's section is fixed when the deck is read)
+    or that a PSOLID uses with G bound (a solid takes E and NU): refused, naming the properties,
+    rather than leaving them at the deck's values while the rest changes."""
+    tubes = [f"{p.name} {i}" for i, p in deck.table("PTUBE", "PSHEAR").items()
+             if p["MID"] in f.ids]  # fmt: skip
     laminates = [f"{p.name} {i}" for i, p in deck.table("PCOMP", "PCOMPG").items()
                  if set(ply_materials(p)) & set(f.ids)]  # fmt: skip
     solids = _psolids_of(deck, f)
@@ -539,8 +540,8 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
         why = (f"{', '.join(laminates)} take(s) that MAT1 as a ply, and a laminate's plies "
                "cannot be parameters; give the other elements a MAT1 of their own")  # fmt: skip
     elif tubes:
-        why = (f"{', '.join(tubes)} use(s) that MAT1, whose tubes cannot take a parameter; give "
-               "them a MAT1 of their own")  # fmt: skip
+        why = (f"{', '.join(tubes)} use(s) that MAT1, whose tubes and shear panels cannot take "
+               "a parameter; give them a MAT1 of their own")  # fmt: skip
     elif solids and f.field == "G":
         why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU: bind E instead"
     if why:

@@ -111,6 +111,8 @@ FIELDS = {
         "CTETRA": "EID PID G1 G2 G3 G4 G5 G6 G7 G8 G9 G10",
         "CHEXA": "EID PID " + " ".join(f"G{i}" for i in range(1, 21)),
         "PSOLID": "PID MID CORDM=0 IN STRESS ISOP FCTN=SMECH",
+        "CSHEAR": "EID PID G1 G2 G3 G4",
+        "PSHEAR": "PID MID T NSM=0. F1 F2 F3 F4",
         "RBE2": "EID GN CM",
         "RBAR": "EID GA GB CNA CNB CMA CMB ALPHA",
         "RBE3": "EID - REFGRID REFC",

@@ -212,11 +212,11 @@ class Deck:
 #: id families: two cards of one family may not share an id
 FAMILIES = {
     "element": ("CQUAD4", "CTRIA3", "CBAR", "CBEAM", "CROD", "CONROD", "CBUSH", "CELAS1",
-                "CELAS2", "CELAS3", "CELAS4", "CTETRA", "CHEXA", "CTUBE"),
+                "CELAS2", "CELAS3", "CELAS4", "CTETRA", "CHEXA", "CTUBE", "CSHEAR"),
     "mass element": ("CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3", "CMASS4"),
     "rigid element": ("RBE2", "RBE3", "RBAR"),
     "property": ("PSHELL", "PCOMP", "PCOMPG", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH",
-                 "PELAS", "PMASS", "PSOLID", "PTUBE"),
+                 "PELAS", "PMASS", "PSOLID", "PTUBE", "PSHEAR"),
     "material": ("MAT1", "MAT8"),
     "grid": ("GRID",),
     "coordinate system": ("CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S"),

@@ -1,7 +1,8 @@
 """Nastran line, point, spring, rigid and solid cards -> ``StructureBuilder`` calls or element
 families: one file per card family, one registry.
 
-Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``, ``solids``) names
+Each family module (``beams``, ``rods``, ``masses``, ``springs``, ``rigid``, ``solids``,
+``shear``) names
 its ``CARDS`` and has ``add(ctx)``, which converts them card by card (``common.Context.each``: a
 refused card is recorded and the next converted); a family the builder has no call for (scalar
 springs, solids) is added to the built structure by a ``Context.finishers`` entry.
@@ -19,6 +20,7 @@ from bayesupdate.nastran.cards import (
     rigid,
     rods,
     scalar,
+    shear,
     solids,
     springs,
 )
@@ -39,7 +41,7 @@ from bayesupdate.nastran.cards.rods import rod_values
 from bayesupdate.nastran.cards.springs import pbush_k, pbush_lines
 
 #: the card families, in the order the reader adds them (scalar points first: elements use them)
-FAMILIES = (scalar, beams, rods, masses, springs, rigid, solids)
+FAMILIES = (scalar, beams, rods, masses, springs, rigid, solids, shear)
 
 # the line families, re-built alone where a binding changes them (``nastran.lines``)
 add_beams, add_rods = beams.add, rods.add
@@ -53,7 +55,7 @@ GRID_FIELDS = {
     "CELAS3": (), "CELAS4": (), "CMASS3": (), "CMASS4": (),
     "RBE2": ("GN",), "RBE3": ("REFGRID",), "CQUAD4": ("G1", "G2", "G3", "G4"),
     "CTRIA3": ("G1", "G2", "G3"), "CTETRA": tuple(f"G{i}" for i in range(1, 11)),
-    "CHEXA": tuple(f"G{i}" for i in range(1, 21)),
+    "CHEXA": tuple(f"G{i}" for i in range(1, 21)), "CSHEAR": ("G1", "G2", "G3", "G4"),
 }  # fmt: skip
 
 

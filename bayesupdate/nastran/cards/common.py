@@ -24,9 +24,9 @@ from bayesupdate.nastran.frames import Grids
 #: element, property and material cards by family (``Context`` tables)
 ELEMENTS = ("CBAR", "CBEAM", "CROD", "CONROD", "CONM2", "CONM1", "CMASS1", "CMASS2", "CMASS3",
             "CMASS4", "CELAS1", "CELAS2", "CELAS3", "CELAS4", "CBUSH", "RBE2", "RBE3", "RBAR",
-            "CQUAD4", "CTRIA3", "CTETRA", "CHEXA", "CTUBE")  # fmt: skip
+            "CQUAD4", "CTRIA3", "CTETRA", "CHEXA", "CTUBE", "CSHEAR")  # fmt: skip
 PROPERTIES = ("PSHELL", "PCOMP", "PCOMPG", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PBUSH",
-              "PELAS", "PMASS", "PSOLID", "PTUBE")  # fmt: skip
+              "PELAS", "PMASS", "PSOLID", "PTUBE", "PSHEAR")  # fmt: skip
 
 
 @dataclass

@@ -40,7 +40,7 @@ def _small(*fields) -> str:
 
 
 def test_small_large_free_field_and_tabs_read_the_same_card(tmp_path):
-    """One CONM2 (EID 7, G 3, M 1.5e-3, offset X1-X3, I11 and I33) written five ways."""
+    """One CONM2 (EID 7, G 3, M 1.5e-3, offset X1-X3, I11 and I33) written six ways."""
     small = _small("CONM2", 7, 3, "", "1.-3", ".1", "-.2", "3.+1", "", "+C1") + _small(
         "+C1", "2.+4", "", "0.0", "", "5.-2"
     )
@@ -52,8 +52,9 @@ def test_small_large_free_field_and_tabs_read_the_same_card(tmp_path):
     tabs = "CONM2\t7\t3\t\t1.-3\t.1\t-.2\t3.+1\n\t2.+4\t\t0.\t\t5.-2\n"
     comment = ("$ a comment\n" + _small("CONM2", 7, 3, "", "1.-3", ".1", "-.2", "3.+1")[:-1]
                + "   $ here\n$ between\n" + _small("", "2.+4", "", "0.", "", "5.-2"))  # fmt: skip
+    star8 = "CONM2  *" + large[8:]  # the name's star in column 8 (as some writers place it)
     expected = [7, 3, None, 1e-3, 0.1, -0.2, 30.0, None, 2e4, None, 0.0, None, 0.05]
-    for k, text in enumerate((small, large, free, tabs, comment)):
+    for k, text in enumerate((small, large, free, tabs, comment, star8)):
         deck = tmp_path / f"c{k}.bdf"
         deck.write_text("BEGIN BULK\n" + text + "ENDDATA\n")
         got = _values(deck)

@@ -260,10 +260,11 @@ def split_line(text: str) -> tuple[str, list[str], bool]:
 
 
 def card_name(head: str) -> str:
-    """The card name of a first field ('CONM2*' -> 'CONM2'); '' for a continuation."""
+    """The card name of a first field ('CONM2*' -> 'CONM2', and 'CORD2R *', a large-field
+    name with its star in column 8, -> 'CORD2R'); '' for a continuation."""
     if not head or head[0] in "+*":
         return ""
-    return head.rstrip("*").upper()
+    return head.rstrip("*").rstrip().upper()
 
 
 def real16(value: float) -> str:

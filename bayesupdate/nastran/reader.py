@@ -18,8 +18,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.elements import shell
-from bayesupdate.fe.elements.shell import SHEAR_FACTOR
-from bayesupdate.fe.elements.shell import _plane_stress as plane_stress
+from bayesupdate.fe.elements.shell import SHEAR_FACTOR, plane_stress
 from bayesupdate.fe.laminate import SectionMatrices
 from bayesupdate.fe.structure import Material, StructureBuilder, check_connected
 from bayesupdate.nastran import cards

@@ -117,7 +117,7 @@ def tria_frames(x: np.ndarray) -> ElementFrames:
     return ElementFrames(R, rel[:, :, :2], np.zeros(len(x)), area, np.zeros(x.shape[:2]))
 
 
-def _plane_stress(nu):
+def plane_stress(nu):
     """(n, 3, 3) plane-stress elasticity per unit E: [[1, nu, 0], [nu, 1, 0], [0, 0, (1-nu)/2]]
     / (1 - nu^2)."""
     D = np.zeros(nu.shape + (3, 3))
@@ -359,12 +359,12 @@ def _membrane(ops: _Operators, D):
 
 def _isotropic_stiffness(ops, E, nu, bending_ratio, shear_ratio, bending_nu, membrane_ratio):
     """(membrane, shear, drilling, bending) pieces of isotropic sections (``local_pieces``)."""
-    D = _plane_stress(nu)
+    D = plane_stress(nu)
     G = E / (2.0 * (1.0 + nu))
     Km = _membrane(ops, D)
     Ks = _quadrature_form(ops.Bs, None, ops.wdet)
     Kd = _quadrature_form(ops.Bd[:, :, None], None, ops.wdet)
-    Kb = _quadrature_form(ops.Bb, D if bending_nu is None else _plane_stress(bending_nu),
+    Kb = _quadrature_form(ops.Bb, D if bending_nu is None else plane_stress(bending_nu),
                           ops.wdet)  # fmt: skip
     # scaled in place: the same products as X * factor without a second (n, d, d) copy
     Km *= E[:, None, None]

@@ -11,6 +11,7 @@ element matrices vectorized over elements (SI units, global axes).
 * ``tetra``: linear tetrahedra (CTETRA with four GRIDs);
 * ``hexa``: eight-node bricks (CHEXA with eight GRIDs; Nastran's assumed-strain brick);
   both solids derive from ``solid.Solids`` (their record and factors);
+* ``shear_panel``: Garvey's shear panels (CSHEAR);
 * ``damper``: viscous dampers (data: normal modes ignore them).
 
 ``base`` holds the two interfaces: a family whose properties are design parameters
@@ -48,6 +49,6 @@ __all__ = [
     "register_parametric",
 ]
 
-# scalar springs between any two DOFs or to ground (CELAS1/CELAS2), linear tetrahedra (CTETRA)
-# and bricks (CHEXA): registered last, held in ``Structure.elements``
-from bayesupdate.fe.elements import scalar_spring, tetra, hexa  # noqa: E402, F401, I001
+# scalar springs between any two DOFs or to ground (CELAS1/CELAS2), linear tetrahedra (CTETRA),
+# bricks (CHEXA) and shear panels (CSHEAR): registered last, held in ``Structure.elements``
+from bayesupdate.fe.elements import scalar_spring, tetra, hexa, shear_panel  # noqa: E402, F401, I001

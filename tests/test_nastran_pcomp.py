@@ -167,6 +167,29 @@ def test_pshell_mid4_is_the_two_material_stack_it_stands_for(tmp_path):
                   < 0.996)  # fmt: skip
 
 
+def test_a_sandwichs_rotary_inertia_is_its_faces(tmp_path):
+    """COUPMASS 1: a sandwich of 0.5 mm aluminium faces (RHO 2700) on a 10 mm core (RHO 50)
+    carries sum rho_k (z_k^3 - z_k-1^3) / 3 of rotary inertia per area, 2.437 times its mean
+    density's rho_mean T^3 / 12: the rx, ry entries of M are the homogeneous plate's of the same
+    mean density times that ratio (1e-12), the translational ones the same."""
+    mats = ["MAT1,21,70.e9,,0.3,2700.", "MAT1,22,0.1e9,,0.3,50."]
+    stack = _pcomp(((0.0, 0.5e-3, 21), (0.0, 10e-3, 22), (0.0, 0.5e-3, 21)))
+    M1 = load_nastran_model(plate(tmp_path / "s.bdf", 2, prop=[*mats, *stack])).matrices()[1]
+    z = np.array([-5.5e-3, -5e-3, 5e-3, 5.5e-3])
+    exact = (2700 * (z[1] ** 3 - z[0] ** 3) + 50 * (z[2] ** 3 - z[1] ** 3)
+             + 2700 * (z[3] ** 3 - z[2] ** 3)) / 3  # fmt: skip
+    mean = (2700 * 1e-3 + 50 * 1e-2) / 11e-3
+    ratio = exact / (mean * 11e-3**3 / 12)
+    assert ratio == pytest.approx(2.4372, abs=1e-4)  # 78.64 / 32.27 mm^3 x kg/m^3, by hand
+    uniform = [f"MAT1,21,70.e9,,0.3,{mean!r}", *_pcomp(((0.0, 11e-3, 21),))]
+    M2 = load_nastran_model(plate(tmp_path / "u.bdf", 2, prop=uniform)).matrices()[1]
+    rot = np.zeros(M1.shape[0], bool)
+    rot[3::6] = rot[4::6] = True
+    d1, d2 = M1.diagonal(), M2.diagonal()
+    assert d1[rot] == pytest.approx(ratio * d2[rot], rel=1e-12)
+    assert d1[~rot] == pytest.approx(d2[~rot], rel=1e-12)
+
+
 def test_sym_and_pcompg_read_as_the_full_stack(tmp_path):
     """LAM SYM with the lower half = the full stack listed; PCOMPG (a ply a line) = PCOMP."""
     plies = ((30.0, 0.4e-3), (-45.0, 0.6e-3), (-45.0, 0.6e-3), (30.0, 0.4e-3))

@@ -37,6 +37,7 @@ __all__ = [
     "SectionMatrices",
     "laminate",
     "ply_stiffness",
+    "rotary_ratio",
     "section_per_unit_thickness",
     "shear_rotation",
     "strain_rotation",
@@ -69,17 +70,22 @@ class SectionMatrices:
     bending (n, 3, 3) = 12 D / h^3, shear (n, 2, 2) = H / h (kappa included), coupling
     (n, 3, 3) = B / h^2 or None (no membrane-bending coupling), all [Pa], for strains
     [eps_x, eps_y, gamma_xy], curvatures [kappa_x, kappa_y, kappa_xy] and transverse shears
-    [gamma_xz, gamma_yz], about the section's mid-plane."""
+    [gamma_xz, gamma_yz], about the section's mid-plane; rotary (n,) or None (1): the rotary
+    inertia per area over that of the mean density, sum rho_k (z_k^3 - z_k-1^3) / 3 over
+    rho_mean h^3 / 12 (a sandwich's heavy faces: above 1)."""
 
     membrane: np.ndarray
     bending: np.ndarray
     shear: np.ndarray
     coupling: np.ndarray | None = None
+    rotary: np.ndarray | None = None
 
     def rows(self, idx) -> "SectionMatrices":
         """The sections of the elements ``idx``."""
         coupling = None if self.coupling is None else self.coupling[idx]
-        return SectionMatrices(self.membrane[idx], self.bending[idx], self.shear[idx], coupling)
+        rotary = None if self.rotary is None else self.rotary[idx]
+        return SectionMatrices(self.membrane[idx], self.bending[idx], self.shear[idx], coupling,
+                               rotary)  # fmt: skip
 
     def rotated(self, angle) -> "SectionMatrices":
         """The same sections seen in axes turned by -angle (n,) [rad]: the section's x-axis
@@ -88,7 +94,7 @@ class SectionMatrices:
         R = shear_rotation(angle)
         coupling = None if self.coupling is None else _congruent(T, self.coupling)
         return SectionMatrices(_congruent(T, self.membrane), _congruent(T, self.bending),
-                               _congruent(R, self.shear), coupling)  # fmt: skip
+                               _congruent(R, self.shear), coupling, self.rotary)  # fmt: skip
 
 
 def _congruent(T, S):
@@ -183,11 +189,23 @@ def transverse_shear(Qbar, z, A, B, D, compliance) -> np.ndarray:
     return np.linalg.inv(C)
 
 
-def section_per_unit_thickness(A, B, D, H, h) -> SectionMatrices:
+def section_per_unit_thickness(A, B, D, H, h, rotary: float = 1.0) -> SectionMatrices:
     """The (1,)-stack ``SectionMatrices`` of a stack of thickness h [m]: A / h, 12 D / h^3,
     H / h (zeros where H is inf: the shell is then shear rigid, its quads Kirchhoff's), B / h^2
-    (None where the stack is symmetric: B below 1e-12 of A h)."""
+    (None where the stack is symmetric: B below 1e-12 of A h), the ``rotary_ratio``."""
     shear = np.zeros((2, 2)) if not np.all(np.isfinite(H)) else H / h
     symmetric = np.abs(B).max() <= 1e-12 * np.abs(A).max() * h
     coupling = None if symmetric else (B / h**2)[None]
-    return SectionMatrices((A / h)[None], (12.0 * D / h**3)[None], shear[None], coupling)
+    return SectionMatrices((A / h)[None], (12.0 * D / h**3)[None], shear[None], coupling,
+                           np.array([rotary]))  # fmt: skip
+
+
+def rotary_ratio(plies: list[Ply]) -> float:
+    """sum rho_k (z_k^3 - z_k-1^3) / 3 about the stack's mid-plane over rho_mean h^3 / 12: the
+    rotary inertia of a stack of plies of unequal densities over that of their mean (1 where
+    every ply has one density, or the stack none)."""
+    t = np.array([p.thickness for p in plies])
+    rho = np.array([p.rho for p in plies])
+    z = np.concatenate([[0.0], np.cumsum(t)]) - t.sum() / 2
+    mean = rho @ t / t.sum() * t.sum() ** 3 / 12
+    return float(rho @ (z[1:] ** 3 - z[:-1] ** 3) / 3 / mean) if mean > 0 else 1.0

@@ -252,7 +252,9 @@ def _laminate_arrays(props, pids, angle, laminates, couplings) -> None:
         np.concatenate([row(i, r, name) for i, r in enumerate(rows)])
         for name in ("membrane", "bending", "shear", "coupling"))  # fmt: skip
     coupled = bool(couplings) or any(r is not None and r.coupling is not None for r in rows)
-    section = SectionMatrices(membrane, bending, shear, coupling if coupled else None)
+    rotary = np.array([1.0 if r is None or r.rotary is None else r.rotary[0] for r in rows])
+    section = SectionMatrices(membrane, bending, shear, coupling if coupled else None,
+                              None if np.all(rotary == 1.0) else rotary)  # fmt: skip
     props["section"] = section.rotated(angle)
     props["offset"] = props["offset"] + np.array(
         [laminates[int(p)].offset if k else 0.0 for p, k in zip(pids, lam, strict=True)]

@@ -327,8 +327,8 @@ def local_pieces(
     replaces E, nu and the ratios in the stiffness: membrane int Bm^T Am Bm (incompatible modes
     condensed with Am), bending int Bb^T Db Bb / 12, shear int Bs^T Hs Bs, drilling alpha Am_66
     int Bd^T Bd, and where the section has a coupling b = B / h^2 the coupling piece (the
-    incompatible modes then condensed with the coupling too: ``_coupled``); a section with no
-    bending has no rotary inertia.
+    incompatible modes then condensed with the coupling too: ``_coupled``); its ``rotary``
+    ratio scales the rotary inertia; a section with no bending has no rotary inertia.
     """
     coupling = None
     if section is None:
@@ -339,6 +339,8 @@ def local_pieces(
         Km, Ks, Kd, Kb, coupling = _section_stiffness(ops, section)
         bending = np.abs(section.bending).sum(axis=(1, 2))
     Mt, Mr, S = _mass_pieces(ops, Km.shape, lumped)
+    if section is not None and section.rotary is not None:
+        Mr *= section.rotary[:, None, None]
     if bending is not None and not np.all(bending > 0):
         Mr *= (bending > 0)[:, None, None]
     return LocalPieces(

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bayesupdate.fe.laminate import SHEAR_FACTOR, Ply, SectionMatrices, laminate
+from bayesupdate.fe.laminate import SHEAR_FACTOR, Ply, SectionMatrices, laminate, rotary_ratio
 from bayesupdate.fe.laminate import section_per_unit_thickness as per_unit
 from bayesupdate.nastran.cards.common import mat1
 
@@ -133,11 +133,11 @@ def laminate_section(ctx, p) -> LaminateSection:
             "its plies are rigid in transverse shear in one plane only (MAT8 G1Z or G2Z "
             "blank on every ply that gives the other): give both or neither"
         )
-    section = per_unit(A, B, D, H, h)
+    section = per_unit(A, B, D, H, h, rotary_ratio(plies))
     membrane, bending = lam != "BEND", lam != "MEM"
     coupling = section.coupling if membrane and bending else None  # MEM, BEND: one part alone
     section = SectionMatrices(section.membrane * membrane, section.bending * bending,
-                              section.shear * bending, coupling)  # fmt: skip
+                              section.shear * bending, coupling, section.rotary)  # fmt: skip
     z0 = -h / 2 if p.is_blank("Z0") else p.real("Z0")
     if lam in ("MEM", "BEND") and abs(z0 + h / 2) > 1e-9 * h:
         p.fail(f"Z0 = {z0:g} offsets a LAM {lam} stack: an offset needs both membrane and bending")

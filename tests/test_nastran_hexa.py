@@ -61,6 +61,19 @@ def test_stiffness_is_mscs_on_its_own_static_solution():
     assert np.percentile(err, 90) < 3e-4
 
 
+def test_stiffness_is_mscs_on_a_modal_solution_it_was_not_found_on():
+    """A fresh case (``studies/msc_solid_shell_bar.py``: MSC's SOL 103 of pyNastran's
+    solid_shell_bar tower, not used when the brick was found): its unit-cube CHEXA's K phi in
+    each of the three modes is minus MSC's printed grid point forces (GPFORCE = -K_e phi_e, as
+    on the static solution above) to 5.1e-6 (the f06's seven digits)."""
+    fresh = json.loads((Path(__file__).parent / "data" / "msc_solid_shell_bar_hexa.json")
+                       .read_text())  # fmt: skip
+    K = unit_matrices(bricks([fresh["corners"]], fresh["E"], fresh["nu"]))[0][0]
+    for phi, f in zip(fresh["modes"], fresh["forces"], strict=True):
+        f = np.ravel(f)
+        assert np.linalg.norm(K @ np.ravel(phi) + f) < 1e-5 * np.linalg.norm(f)
+
+
 def test_stiffness_is_nxs_single_brick_under_face_pressures():
     """NX's 1 x 1 x 2 brick, its bottom face held: on the four free GRIDs K u equals the
     pressure's load (a quarter of the face's area on each corner, along its normal) for each of

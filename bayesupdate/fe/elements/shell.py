@@ -349,12 +349,21 @@ def local_pieces(
     )  # fmt: skip
 
 
-def _membrane(ops: _Operators, D):
-    """int Bm^T D Bm with the incompatible modes (quads) condensed, symmetrized; D (n, 3, 3)."""
+def _incompatible(ops: _Operators, D):
+    """(H, C) = (int G^T D G, int G^T D Bm) of the incompatible modes (quads) with membrane
+    D (n, 3, 3), or None for elements without them (triangles)."""
+    if ops.Ginc is None:
+        return None
+    return (_quadrature_form(ops.Ginc, D, ops.wdet),
+            _quadrature_form(ops.Ginc, D, ops.wdet, ops.Bm))  # fmt: skip
+
+
+def _membrane(ops: _Operators, D, modes):
+    """int Bm^T D Bm with the incompatible modes ``modes`` (``_incompatible``) condensed,
+    symmetrized; D (n, 3, 3)."""
     Km = _quadrature_form(ops.Bm, D, ops.wdet)
-    if ops.Ginc is not None:
-        H = _quadrature_form(ops.Ginc, D, ops.wdet)
-        C = _quadrature_form(ops.Ginc, D, ops.wdet, ops.Bm)
+    if modes is not None:
+        H, C = modes
         Km = Km - np.einsum("nai,naj->nij", C, np.linalg.solve(H, C))
     return 0.5 * (Km + Km.transpose(0, 2, 1))
 
@@ -363,7 +372,7 @@ def _isotropic_stiffness(ops, E, nu, bending_ratio, shear_ratio, bending_nu, mem
     """(membrane, shear, drilling, bending) pieces of isotropic sections (``local_pieces``)."""
     D = plane_stress(nu)
     G = E / (2.0 * (1.0 + nu))
-    Km = _membrane(ops, D)
+    Km = _membrane(ops, D, _incompatible(ops, D))
     Ks = _quadrature_form(ops.Bs, None, ops.wdet)
     Kd = _quadrature_form(ops.Bd[:, :, None], None, ops.wdet)
     Kb = _quadrature_form(ops.Bb, D if bending_nu is None else plane_stress(bending_nu),
@@ -388,7 +397,8 @@ def _section_stiffness(ops, section):
     is zeroed (such a section has no coupling)."""
     none = ~np.any(section.membrane, axis=(1, 2))
     a = np.where(none[:, None, None], np.eye(3), section.membrane)
-    Km = _membrane(ops, a)
+    modes = _incompatible(ops, a)
+    Km = _membrane(ops, a, modes)
     Km[none] = 0.0
     Hs = section.shear if ops.Bs.shape[2] else None  # shear-rigid elements: no shear rows
     Ks = _quadrature_form(ops.Bs, Hs, ops.wdet)
@@ -398,24 +408,24 @@ def _section_stiffness(ops, section):
     Kb /= 12.0
     Kc = None
     if section.coupling is not None:
-        Kc, Kx = _coupled(ops, a, section.coupling)
+        Kc, Kx = _coupled(ops, section.coupling, modes)
         Kb += Kx
     return Km, Ks, Kd, Kb, Kc
 
 
-def _coupled(ops: _Operators, a, b):
+def _coupled(ops: _Operators, b, modes):
     """(coupling piece (n, d, d) per unit t^2, the bending's share per unit t^3) of sections
-    with membrane a and coupling b (n, 3, 3) [Pa]: int (Bm^T b Bb + Bb^T b Bm), and where the
-    element has incompatible modes (quads), their condensation with the coupling: with
-    H = int G^T a G, Cm = int G^T a Bm, Cb = int G^T b Bb the condensed energy of
+    with coupling b (n, 3, 3) [Pa]: int (Bm^T b Bb + Bb^T b Bm), and where the element has
+    incompatible modes (quads; ``modes`` = (H, Cm) of the membrane a, ``_incompatible``),
+    their condensation with the coupling: with H = int G^T a G, Cm = int G^T a Bm,
+    Cb = int G^T b Bb the condensed energy of
     [eps; kappa] [[A, B], [B, D]] [eps; kappa] takes -(Cm^T H^-1 Cb + Cb^T H^-1 Cm) t^2 off the
     coupling and -Cb^T H^-1 Cb t^3 off the bending (the membrane's -Cm^T H^-1 Cm t is
     ``_membrane``'s), so that the thickness powers stay exact."""
     Kc = _quadrature_form(ops.Bm, b, ops.wdet, ops.Bb)
     Kx = np.zeros(Kc.shape)
-    if ops.Ginc is not None:
-        H = _quadrature_form(ops.Ginc, a, ops.wdet)
-        Cm = _quadrature_form(ops.Ginc, a, ops.wdet, ops.Bm)
+    if modes is not None:
+        H, Cm = modes
         Cb = _quadrature_form(ops.Ginc, b, ops.wdet, ops.Bb)
         HinvCb = np.linalg.solve(H, Cb)
         Kc = Kc - np.einsum("nai,naj->nij", Cm, HinvCb)

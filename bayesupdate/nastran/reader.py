@@ -236,29 +236,21 @@ def _laminate_arrays(props, pids, angle, laminates, couplings) -> None:
     of the stack's mid-plane added to ZOFFS, and for the other shells their isotropic sections
     (``fe.laminate.SectionMatrices``) with the coupling of a PSHELL's MID4 (``couplings``:
     PSHELL id -> (3, 3) per unit t^2)."""
-    lam = np.isin(pids, list(laminates))
     iso = _isotropic_sections(props)
-    iso_coupling = np.array([couplings.get(int(p), np.zeros((3, 3))) for p in pids])
-    iso = SectionMatrices(iso.membrane, iso.bending, iso.shear, iso_coupling)
-    rows = [laminates[int(p)].section if k else None for p, k in zip(pids, lam, strict=True)]
-    none = np.zeros((1, 3, 3))
-
-    def row(i, r, name):  # one element's matrix: its laminate's, else its isotropic section's
-        source = iso if r is None else r
-        value = getattr(source, name)
-        return none if value is None else value[[i]] if r is None else value
-
-    membrane, bending, shear, coupling = (
-        np.concatenate([row(i, r, name) for i, r in enumerate(rows)])
-        for name in ("membrane", "bending", "shear", "coupling"))  # fmt: skip
-    coupled = bool(couplings) or any(r is not None and r.coupling is not None for r in rows)
-    rotary = np.array([1.0 if r is None or r.rotary is None else r.rotary[0] for r in rows])
+    membrane, bending, shear = iso.membrane, iso.bending, iso.shear
+    coupling = np.array([couplings.get(int(p), np.zeros((3, 3))) for p in pids])
+    rotary = np.ones(len(pids))
+    for pid, lam in laminates.items():  # each laminate's one section on all its shells
+        rows, sec = pids == pid, lam.section
+        membrane[rows], bending[rows], shear[rows] = sec.membrane, sec.bending, sec.shear
+        coupling[rows] = 0.0 if sec.coupling is None else sec.coupling
+        rotary[rows] = 1.0 if sec.rotary is None else sec.rotary
+    coupled = bool(couplings) or any(lam.section.coupling is not None for lam in laminates.values())
     section = SectionMatrices(membrane, bending, shear, coupling if coupled else None,
                               None if np.all(rotary == 1.0) else rotary)  # fmt: skip
     props["section"] = section.rotated(angle)
-    props["offset"] = props["offset"] + np.array(
-        [laminates[int(p)].offset if k else 0.0 for p, k in zip(pids, lam, strict=True)]
-    )
+    props["offset"] = props["offset"] + np.array([getattr(laminates.get(int(p)), "offset", 0.0)
+                                                  for p in pids])  # fmt: skip
 
 
 def _isotropic_sections(props) -> SectionMatrices:

@@ -71,12 +71,8 @@ def msc_panels(models: Path) -> dict:
 def stress_misses(p: dict, parallel: float) -> tuple[np.ndarray, np.ndarray]:
     """(average, largest) |ours - MSC| / median |MSC average| per panel, sides parallel within
     ``parallel``."""
-    saved, shear_panel.PARALLEL = shear_panel.PARALLEL, parallel
-    try:
-        tau = shear_panel.panel_stresses(shear_panel.panel_modes(p["corners"], p["nu"]),
-                                         p["G"], p["u"])  # fmt: skip
-    finally:
-        shear_panel.PARALLEL = saved
+    modes = shear_panel.panel_modes(p["corners"], p["nu"], parallel)
+    tau = shear_panel.panel_stresses(modes, p["G"], p["u"])
     scale = np.median(np.abs(p["tau_avg"]))
     return (np.abs(tau.mean(axis=1) - p["tau_avg"]) / scale,
             np.abs(np.abs(tau).max(axis=1) - p["tau_max"]) / scale)  # fmt: skip

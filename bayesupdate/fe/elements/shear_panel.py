@@ -75,13 +75,14 @@ def convex(x: np.ndarray) -> np.ndarray:
                 & (x4 < x2 - (x2 - x3) * y4 / y3))  # fmt: skip
 
 
-def panel_modes(x: np.ndarray, nu: np.ndarray) -> PanelModes:
-    """``PanelModes`` of panels with corners x (n, 4, 3) [m] and Poisson ratio nu (n,)."""
+def panel_modes(x: np.ndarray, nu: np.ndarray, parallel: float = PARALLEL) -> PanelModes:
+    """``PanelModes`` of panels with corners x (n, 4, 3) [m] and Poisson ratio nu (n,); sides
+    within ``parallel`` of parallel are parallel (MSC's tolerance by default)."""
     k, i, j, area, (x2, x3, y3, x4, y4) = _frames(x)
     X = np.stack([np.zeros_like(x2), x2, x3, x4], 1)
     Y = np.stack([np.zeros_like(x2), np.zeros_like(x2), y3, y4], 1)
-    par34 = np.abs(y3 - y4) < PARALLEL * np.abs(x3 - x4)
-    par23 = np.abs(y4 * (x3 - x2) - y3 * x4) < PARALLEL * np.abs(x4 * (x3 - x2) + y4 * y3)
+    par34 = np.abs(y3 - y4) < parallel * np.abs(x3 - x4)
+    par23 = np.abs(y4 * (x3 - x2) - y3 * x4) < parallel * np.abs(x4 * (x3 - x2) + y4 * y3)
     nuc = 2.0 / 3.0 / (1.0 + nu)
     p = np.ones((len(x2), 4))
     z = np.empty(len(x2))

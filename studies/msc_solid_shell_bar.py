@@ -59,17 +59,19 @@ def grids(folder: Path) -> dict[int, np.ndarray]:
     return out
 
 
-def modes_and_forces(f06: str, kind: str) -> tuple[dict, dict]:
-    """({mode: {GRID: translations (3,)}}, {mode: {(element, GRID): force (3,)}}) of the
-    f06's eigenvectors and its grid point force tables' ``kind`` rows (HEXA, PENTA)."""
+def modes_and_forces(f06: str, kinds: str, dofs: int = 3) -> tuple[dict, dict]:
+    """({mode: {GRID: displacement (dofs,)}}, {mode: {(element, GRID): force (dofs,)}}) of the
+    f06's eigenvectors and its grid point force tables' rows of the element types ``kinds`` (a
+    regular expression: HEXA, PENTA, QUAD4|TRIA3); dofs 3 (translations) or 6."""
+    values = r"\s+(\S+)" * dofs
     vecs = {}
     pattern = r"R E A L   E I G E N V E C T O R   N O \.\s+(\d+)(.*?)(?=1    MSC)"
     for m in re.finditer(pattern, f06, re.S):
-        rows = re.findall(r"^\s+(\d+)\s+G\s+(\S+)\s+(\S+)\s+(\S+)", m.group(2), re.M)
+        rows = re.findall(r"^\s+(\d+)\s+G" + values, m.group(2), re.M)
         vecs[int(m.group(1))] = {int(g): np.array([float(v) for v in r]) for g, *r in rows}
     forces, mode = {}, 0
     for page in f06.split("G R I D   P O I N T   F O R C E   B A L A N C E")[1:]:
-        rows = re.findall(rf"^[0 ]?\s+(\d+)\s+(\d+)\s+{kind}\s+(\S+)\s+(\S+)\s+(\S+)", page, re.M)
+        rows = re.findall(rf"^[0 ]?\s+(\d+)\s+(\d+)\s+(?:{kinds})" + values, page, re.M)
         if re.search(r"^[0 ]?\s+1\s+1\s+HEXA", page, re.M):  # each mode's table starts here
             mode += 1
         for g, e, *f in rows:
@@ -134,18 +136,7 @@ def shell_misses(f06: str, xyz: dict) -> dict:
     forces, its normal forces and its bending moments (the package's shell, 6 DOFs a GRID)."""
     from bayesupdate.fe.shell_model import ShellAssembly, shell_mesh
 
-    vecs, forces, mode = {}, {}, 0
-    pattern = r"R E A L   E I G E N V E C T O R   N O \.\s+(\d+)(.*?)(?=1    MSC)"
-    for m in re.finditer(pattern, f06, re.S):
-        rows = re.findall(r"^\s+(\d+)\s+G" + r"\s+(\S+)" * 6, m.group(2), re.M)
-        vecs[int(m.group(1))] = {int(g): np.array([float(v) for v in r]) for g, *r in rows}
-    for page in f06.split("G R I D   P O I N T   F O R C E   B A L A N C E")[1:]:
-        if re.search(r"^[0 ]?\s+1\s+1\s+HEXA", page, re.M):
-            mode += 1
-        rows = re.findall(r"^[0 ]?\s+(\d+)\s+(\d+)\s+(?:QUAD4|TRIA3)" + r"\s+(\S+)" * 6, page,
-                          re.M)  # fmt: skip
-        for g, e, *f in rows:
-            forces.setdefault(mode, {})[(int(e), int(g))] = np.array([float(v) for v in f])
+    vecs, forces = modes_and_forces(f06, "QUAD4|TRIA3", dofs=6)
     out = {}
     for eid, nodes in SHELLS.items():
         X = np.array([xyz[n] for n in nodes])

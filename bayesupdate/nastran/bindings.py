@@ -38,7 +38,8 @@ bricks ``hexa_modulus_factor`` and ``hexa_density_factor`` alike.  One MAT1 over
 families (shells, line elements, tetrahedra, bricks) is one parameter: its main property acts
 on the shells (or is re-built on the lines, or is the first solid family's), and the solid
 factors follow the same value (``DeckBinding.companions``).  Refused: a solid's MAT1 G (a solid
-takes E and NU), and a MAT1 that a PTUBE uses (tubes take no parameter).
+takes E and NU), and a MAT1 that a PTUBE or PSHEAR uses or a PCOMP/PCOMPG takes as a ply
+(tubes, shear panels and laminates take no parameter).
 
 Line-element fields act on the bound elements as the reading of the edited deck does
 (``lines``): their records (area, I, J, E, G, rho, NSM, lumped end masses), affine in each of
@@ -530,7 +531,7 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
     that a PCOMP or PCOMPG takes as a ply (a laminate's section is fixed when the deck is read)
     or that a PSOLID uses with G bound (a solid takes E and NU): refused, naming the properties,
     rather than leaving them at the deck's values while the rest changes."""
-    tubes = [f"{p.name} {i}" for i, p in deck.table("PTUBE", "PSHEAR").items()
+    unbuilt = [f"{p.name} {i}" for i, p in deck.table("PTUBE", "PSHEAR").items()
              if p["MID"] in f.ids]  # fmt: skip
     laminates = [f"{p.name} {i}" for i, p in deck.table("PCOMP", "PCOMPG").items()
                  if set(ply_materials(p)) & set(f.ids)]  # fmt: skip
@@ -539,8 +540,8 @@ def _refuse_unbound_users(f: DeckField, deck) -> None:
     if laminates:
         why = (f"{', '.join(laminates)} take(s) that MAT1 as a ply, and a laminate's plies "
                "cannot be parameters; give the other elements a MAT1 of their own")  # fmt: skip
-    elif tubes:
-        why = (f"{', '.join(tubes)} use(s) that MAT1, whose tubes and shear panels cannot take "
+    elif unbuilt:
+        why = (f"{', '.join(unbuilt)} use(s) that MAT1, whose tubes and shear panels cannot take "
                "a parameter; give them a MAT1 of their own")  # fmt: skip
     elif solids and f.field == "G":
         why = f"{', '.join(solids)} use(s) that MAT1, and a solid takes E and NU: bind E instead"

@@ -28,6 +28,10 @@ LAPACK (the package's solver before ``fe.eigen_small``), at each point.  Routes:
   layout it finds once per pattern), operator per block, orthonormalization per block, one
   Rayleigh-Ritz step at its converged size, and its residual by basis size (the sum uses the
   solve's factorization).
+* the band solve with the factor of K - sigma M alone, 8 and 20 right-hand sides: LAPACK's
+  dpbtrs (one triangular band solve per column, as the package calls it) and, only where numba
+  is installed beside the package (it is none of its dependencies), a compiled loop with the
+  right-hand sides innermost: what a compiled kernel would buy on the solve's largest part.
 
 Accuracy: every eigenvalue is also compared with the extended-precision (numpy longdouble)
 Rayleigh quotient of the dense route's own vector, which shows the dense answer's round-off.
@@ -47,6 +51,7 @@ import numpy as np  # noqa: E402
 import scipy.linalg as sl  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 import scipy.sparse.linalg as spla  # noqa: E402
+from scipy.linalg.lapack import dpbtrs  # noqa: E402
 
 from bayesupdate.fe import eigen_small as es  # noqa: E402
 from bayesupdate.fe import eigensolve, sparse_modal  # noqa: E402
@@ -232,6 +237,64 @@ def krylov_parts(P: Pencil, repeats: int) -> str:
     )
 
 
+def _compiled_band_solve():
+    """A band Cholesky solve compiled with numba (where it is installed; it is no dependency of
+    the package), the right-hand sides in the innermost loop; None without numba."""
+    try:
+        import numba
+    except ImportError:
+        return None
+
+    @numba.njit(cache=False)
+    def solve(L, B):  # L: dpbtrf's (kd + 1, n) lower band; B (n, k)
+        kd1, n = L.shape
+        k = B.shape[1]
+        X = B.copy()
+        for j in range(n):  # L y = b; explicit loops: no temporary arrays
+            d = 1.0 / L[0, j]
+            for c in range(k):
+                X[j, c] *= d
+            for i in range(1, min(kd1, n - j)):
+                lij = L[i, j]
+                for c in range(k):
+                    X[j + i, c] -= lij * X[j, c]
+        for j in range(n - 1, -1, -1):  # L^T x = y
+            for i in range(1, min(kd1, n - j)):
+                lij = L[i, j]
+                for c in range(k):
+                    X[j, c] -= lij * X[j + i, c]
+            d = 1.0 / L[0, j]
+            for c in range(k):
+                X[j, c] *= d
+        return X
+
+    return solve
+
+
+def band_kernels(P: Pencil, repeats: int) -> str:
+    """Median CPU [ms] of the band solve with 8 and 20 right-hand sides: LAPACK dpbtrs (one
+    dtbsv per column, as ``BandCholesky.solve``) and, where numba is installed, a compiled loop
+    over the right-hand sides (the same factor; its largest difference from dpbtrs relative to
+    the solution's largest entry)."""
+    chol = es.shifted(P.Ks, P.Ms, SIGMA)
+    compiled = _compiled_band_solve()
+    out = []
+    for k in (8, 20):
+        B = np.random.default_rng(k).standard_normal((chol.factor.shape[1], k))
+        ref = dpbtrs(chol.factor, B, lower=1)[0]
+        t_lapack = median_ms(lambda B=B: dpbtrs(chol.factor, B, lower=1), repeats)
+        line = f"{k} columns: dpbtrs {t_lapack:.3f}"
+        if compiled is not None:
+            X = compiled(chol.factor, B)
+            diff = np.abs(X - ref).max() / np.abs(ref).max()
+            t_loop = median_ms(lambda B=B: compiled(chol.factor, B), repeats)
+            line += f", compiled loop {t_loop:.3f} (difference {diff:.0e})"
+        out.append(line)
+    return "; ".join(out) + (
+        "" if compiled is not None else " (numba not installed: no compiled loop)"
+    )
+
+
 def convergence(P: Pencil, blocks: int = 12) -> str:
     """The cold block Krylov's largest relative residual of the 20 wanted modes (its accept
     test) after each block: how many vectors full accuracy needs."""
@@ -326,6 +389,7 @@ def point(fe, factors, r: int) -> None:
               f"{P.error(lam):.1e}{extra}")  # fmt: skip
     print(f"  parts of the cold block Krylov, median CPU: {krylov_parts(P, r)}")
     print(f"  its largest relative residual by basis size: {convergence(P)}")
+    print(f"  band solve of K - sigma M: {band_kernels(P, r)}")
 
 
 if __name__ == "__main__":

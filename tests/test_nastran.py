@@ -595,3 +595,39 @@ def test_mpc_ties_dofs_as_its_equation_says(capsys, tmp_path):
     deck.write_text(held)
     line = rejected(capsys, "--model", deck, "--modes", "1")
     assert "mpc.bdf:17 MPC 7" in line and "also fixed by a support" in line, line
+
+
+TIP_MASS_DECK = """SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,10.,0.,0.
+GRID,3,,20.,0.,0.
+CBAR,1,5,1,2,0.,1.,0.
+CBAR,2,5,2,3,0.,1.,0.
+PBAR,5,7,1.,1.,1.,1.
+MAT1,7,1.e7,,.3
+CONM2,10,3,,1.
+SPC1,1,123456,1
+ENDDATA
+"""
+
+
+def test_more_modes_than_dofs_with_mass_is_refused_by_count_not_as_a_mechanism(tmp_path):
+    """A massless cantilever of two CBARs with a point mass (no inertia) at its tip: 12 free
+    DOFs, 3 with mass, so 3 modes.  Asking for 4 used to return a mode of zero mass, whose
+    rounded infinite eigenvalue was reported as a mechanism naming the beam's rotations (as on
+    MSC's single-CQUAD4 laminate deck v10112 with lumped mass); it is refused by count now."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = tmp_path / "tip_mass.bdf"
+    deck.write_text(TIP_MASS_DECK)
+    model = load_nastran_model(deck)
+    with pytest.raises(BayesUpdateError, match=r"only 3 elastic modes \(9 of its 12 DOFs carry no"):
+        model.solve(n_modes=4)
+    # the three: bending in y and z (k = 3 EI / L^3 of the 20-long cantilever), and axial EA / L
+    f = model.solve(n_modes=3).frequencies_hz
+    k = np.array([3e7 / 20.0**3, 3e7 / 20.0**3, 1e7 / 20.0])
+    assert np.sort(f) == pytest.approx(np.sqrt(k) / (2 * np.pi), rel=2e-3)

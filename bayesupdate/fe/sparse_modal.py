@@ -303,11 +303,7 @@ def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None)
     mechanism."""
     Rm, lam_r = _rigid_modes(Kf, Mf, R, settings.zero_tol, settings.rigid_set)
     Rm = Rm / np.sqrt(np.einsum("ij,ij->j", Rm, Mf @ Rm))
-    n_el = Kf.shape[0] - Rm.shape[1]
-    if settings.n_modes > n_el:
-        raise BayesUpdateError(
-            f"asked for {settings.n_modes} modes but the model has only {n_el} elastic DOFs"
-        )
+    _check_mode_count(settings.n_modes, Mf, Rm.shape[1])
     if Kf.shape[0] < settings.dense_below:
         lam, phi = _small_modes(Kf, Mf, Rm, settings)
     else:
@@ -318,6 +314,29 @@ def solve_reduced_modes(Kf, Mf, R, settings: ModalSettings, dof_ids, solve=None)
     idx = np.argmax(np.abs(phi), axis=0)  # deterministic sign
     phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
     return lam, phi, Rm, lam_r
+
+
+def _check_mode_count(n_modes: int, Mf, n_rigid: int) -> None:
+    """Raise if fewer than ``n_modes`` elastic modes exist: a DOF whose row of M (n, n) is
+    empty carries no mass and so no mode (it follows the others statically), so the pencil has
+    at most n - (massless DOFs) - n_rigid elastic modes.  Asking for more would return
+    eigenvectors of zero mass, whose infinite eigenvalues, rounded, look like zero-energy modes."""
+    Mf = Mf if getattr(Mf, "format", None) == "csr" else sp.csr_matrix(Mf)
+    n = Mf.shape[0]
+    # explicit zeros (K and M may share one pattern, ``general_plan``) and the 1e-300 a deck
+    # reader puts for a zero RHO count as no mass: 1e-100 of the largest entry is none
+    mass = np.abs(Mf.data)
+    has_mass = np.zeros(n, bool)
+    rows = np.repeat(np.arange(n), np.diff(Mf.indptr))
+    has_mass[rows[mass > 1e-100 * mass.max(initial=0.0)]] = True
+    massless = n - int(np.count_nonzero(has_mass))
+    n_el = n - massless - n_rigid
+    if n_modes > n_el:
+        detail = f" ({massless} of its {n} DOFs carry no mass)" if massless else ""
+        raise BayesUpdateError(
+            f"asked for {n_modes} modes but the model has only {n_el} elastic modes{detail}; "
+            f"ask for at most {n_el}"
+        )
 
 
 def _check_mechanism(lam, phi, zero, free):

@@ -631,3 +631,37 @@ def test_more_modes_than_dofs_with_mass_is_refused_by_count_not_as_a_mechanism(t
     f = model.solve(n_modes=3).frequencies_hz
     k = np.array([3e7 / 20.0**3, 3e7 / 20.0**3, 1e7 / 20.0])
     assert np.sort(f) == pytest.approx(np.sqrt(k) / (2 * np.pi), rel=2e-3)
+
+
+HINGE_DECK = """SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,101,,0.,0.,0.
+GRID,102,,10.,0.,0.
+GRID,103,,20.,0.,0.
+CBAR,1,5,101,102,0.,1.,0.
+CBAR,2,5,102,103,0.,1.,0.,,
+,56
+PBAR,5,7,1.,1.,1.,1.
+MAT1,7,1.e7,,.3
+CONM2,10,103,,1.
+CONM2,11,102,,1.
+SPC1,1,123456,101
+ENDDATA
+"""
+
+
+def test_a_mechanism_in_a_deck_is_named_by_its_grid_ids(tmp_path):
+    """A cantilever of two CBARs whose second is pinned to the first in both bending moments
+    (PA 56): the tip swings freely about GRID 102, in y and in z.  The message names the deck's
+    GRIDs (101-103), not the solver's node numbers (0-2)."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.nastran import load_nastran_model
+
+    deck = tmp_path / "hinge.bdf"
+    deck.write_text(HINGE_DECK)
+    with pytest.raises(BayesUpdateError, match=r"mechanism: 2 zero-energy mode\(s\)") as err:
+        load_nastran_model(deck).solve(n_modes=3)
+    moving = str(err.value).split("moves")[1]
+    assert "GRID 103" in moving and "node" not in moving

@@ -224,11 +224,6 @@ class SparseModes:
         return self.rigid_shapes.shape[1]
 
 
-def dof_names(dofs) -> str:
-    """'node 3 uz, node 7 rx' for global DOF numbers (6 per node)."""
-    return ", ".join(f"node {d // 6} {COMPONENTS[d % 6]}" for d in np.asarray(dofs).ravel())
-
-
 def _diagonal_energy(kd, x):
     """(m,) sum_i K_ii x_i^2 of mass-normalized columns x (n, m)."""
     return np.einsum("i,im->m", kd, x**2)
@@ -339,17 +334,34 @@ def _check_mode_count(n_modes: int, Mf, n_rigid: int) -> None:
         )
 
 
+class MechanismError(BayesUpdateError):
+    """The modal solve found ``count`` zero-energy modes beyond the rigid-body modes the
+    supports allow; the first moves the global DOFs ``dofs`` (k,) (6 per node), largest first.
+    The message names nodes by ``node_names`` (node index -> its name, e.g. a deck's "GRID
+    12"; None: "node 3"), so that a model read from a file can name them its own way
+    (``named``)."""
+
+    def __init__(self, count: int, dofs, node_names=None):
+        self.count, self.dofs = int(count), np.asarray(dofs, dtype=np.int64)
+        name = node_names or (lambda node: f"node {node}")
+        moving = ", ".join(f"{name(int(d) // 6)} {COMPONENTS[d % 6]}" for d in self.dofs)
+        super().__init__(
+            f"the model is a mechanism: {self.count} zero-energy mode(s) beyond the rigid-body "
+            f"modes the supports allow; the first moves {moving}; connect or support these DOFs"
+        )
+
+    def named(self, node_names) -> "MechanismError":
+        """The same error with its nodes named by ``node_names`` (node index -> name)."""
+        return MechanismError(self.count, self.dofs, node_names)
+
+
 def _check_mechanism(lam, phi, zero, free):
     bad = np.flatnonzero(np.abs(lam) < zero)
     if bad.size:
         mode = phi[:, bad[0]]
         moving = np.flatnonzero(np.abs(mode) > 0.1 * np.abs(mode).max())
         order = moving[np.argsort(-np.abs(mode[moving]))][:8]
-        raise BayesUpdateError(
-            f"the model is a mechanism: {bad.size} zero-energy mode(s) beyond the rigid-body "
-            f"modes the supports allow; the first moves {dof_names(free[order])}; connect or "
-            "support these DOFs"
-        )
+        raise MechanismError(bad.size, free[order])
 
 
 def _small_modes(Kf, Mf, Rm, settings: ModalSettings):

@@ -15,6 +15,7 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.model import PROPERTY_TERMS, AffineTerms, FEModel
+from bayesupdate.fe.sparse_modal import MechanismError
 from bayesupdate.nastran.bindings import (
     SIGNED_FIELDS,
     DeckBinding,
@@ -134,11 +135,24 @@ class NastranModel(FEModel):
 
         if isinstance(self._general, LineAssembler):
             self._general.values = p
-        result = super()._solve_general(p, props, n_modes, energies, method)
+        try:
+            result = super()._solve_general(p, props, n_modes, energies, method)
+        except MechanismError as exc:  # named by the deck's GRIDs, not the solver's nodes
+            raise exc.named(self.node_name) from None
         if not self._spoint_mass().any():
             return result
         mass, cog = _without(self._spoint_mass(), result.mass_kg, result.centre_of_gravity)
         return replace(result, mass_kg=mass, centre_of_gravity=cog)
+
+    def node_name(self, node: int) -> str:
+        """The deck's name of the solver's node ``node``: "GRID 12", "SPOINT 7", or a CBUSH
+        arm's end (a node of no GRID)."""
+        meta = self.structure.metadata.get("nastran", {})
+        grids = meta.get("grid_ids")
+        if grids is not None and node < len(grids) and grids[node] > 0:
+            return f"GRID {int(grids[node])}"
+        spoint = [s for s, (n, _) in meta.get("spoint_dofs", {}).items() if n == node]
+        return f"SPOINT {spoint[0]}" if spoint else f"(a CBUSH arm end, node {node})"
 
     # -- scalar points carry no rigid-body mass (``cards.scalar``) ---------------------------------
     def _spoint_mass(self) -> np.ndarray:

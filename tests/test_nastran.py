@@ -590,11 +590,13 @@ def test_mpc_ties_dofs_as_its_equation_says(capsys, tmp_path):
     apart = np.sqrt(scipy.linalg.eigh(K, np.diag([2.0, 3.0]), eigvals_only=True)) / (2 * np.pi)
     assert out["frequencies_hz"] == pytest.approx(apart, rel=0, abs=5e-7)
     assert any("MPC set(s) [7] not selected" in n for n in out["notes"]), out["notes"]
-    # a dependent DOF that a support also holds: the MPC is named with its file:line
+    # a dependent DOF that a support also holds: the MPC is named with its file:line, the DOF
+    # by its GRID (the solver's node 0)
     held = MPC_DECK.format(mpc="MPC = 7\n").replace("23456,2,3", "123456,2\nSPC1,1,23456,3")
     deck.write_text(held)
     line = rejected(capsys, "--model", deck, "--modes", "1")
     assert "mpc.bdf:17 MPC 7" in line and "also fixed by a support" in line, line
+    assert "its dependent DOF GRID 2 ux" in line, line
 
 
 TIP_MASS_DECK = """SOL 103

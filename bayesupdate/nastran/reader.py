@@ -574,13 +574,22 @@ def read_structure(path, design: bool = False) -> tuple:
 
 def _named(ctx, exc) -> BayesUpdateError:
     """The structure's error with its rigid elements ('rbe3 0', the builder's index) named by
-    their cards' file:line and label."""
+    their cards' file:line and label, and its DOFs ('node 2 uz', the builder's node index) by
+    their GRIDs ('GRID 103 uz')."""
 
     def card(m):
         c = ctx.rigid.get(m.group(0))
         return m.group(0) if c is None else f"{c.where} {c.label}"
 
+    rows = np.flatnonzero(ctx.node >= 0)
+    grid_of_node = dict(zip(ctx.node[rows].tolist(), ctx.grids.ids[rows].tolist(), strict=True))
+
+    def grid(m):
+        g = grid_of_node.get(int(m.group(1)))
+        return m.group(0) if g is None else f"GRID {g}"
+
     text = re.sub(r"\b(rbe[23]|mpc) \d+", card, str(exc))
+    text = re.sub(r"\bnode (\d+)(?= [ur][xyz]\b)", grid, text)
     return BayesUpdateError(f"Nastran model {ctx.refusals.path}: {text}")
 
 

@@ -68,6 +68,78 @@ def test_uff55_round_trip_with_numpy_int_nodes(tmp_path):
     assert np.max(np.abs(back.shapes - modes.shapes)) < 1e-5 * np.abs(modes.shapes).max()
 
 
+def _complex_mode_55(mode: int, eig: complex, shape) -> str:
+    """The text of one dataset 55 of a complex mode (analysis type 3, data type 5: complex,
+    3 values a node) at nodes 101 and 102 along direction 2, laid out as a modal test
+    program's export (pyuff's ``data/uff55 sample_test record10.uff``; pyuff's own writer
+    produces a layout its reader refuses)."""
+    lines = [
+        "    -1",
+        "    55",
+        f"mode {mode}",
+        "NONE",
+        "NONE",
+        "NONE",
+        "NONE",
+        "         1         3         2         8         5         3",
+        f"         2         6         0{mode:10d}",
+        f"{eig.real:13.6E}{eig.imag:13.6E}{1.0:13.6E}{0.0:13.6E}{0.0:13.6E}{0.0:13.6E}",
+    ]
+    for node, v in zip((101, 102), shape, strict=True):
+        lines += [f"{node:10d}", f"{0.0:13.6E}{0.0:13.6E}{v.real:13.6E}{v.imag:13.6E}"
+                  f"{0.0:13.6E}{0.0:13.6E}"]  # fmt: skip
+    return "\n".join([*lines, "    -1"]) + "\n"
+
+
+def test_uff55_complex_modes_as_test_software_exports_them(tmp_path):
+    """Analysis type 3 (first-order complex modes, the form identified modes leave modal test
+    software in): lambda = -zeta omega_n + i omega_n sqrt(1 - zeta^2) is read as the natural
+    frequency |lambda| / 2 pi and the damping ratio -Re lambda / |lambda|, the shapes complex.
+    (pyuff's sample file of such a mode raised KeyError 'freq' here before.)"""
+    modes = [(12.5, 0.02, np.array([1.0 + 0.2j, -0.4 + 0.1j])),
+             (7.25, 0.005, np.array([0.3 - 0.05j, 1.0 + 0.0j]))]  # fmt: skip
+    text = ""
+    for k, (f, zeta, shape) in enumerate(modes):
+        w = 2 * np.pi * f
+        text += _complex_mode_55(k + 1, complex(-zeta * w, w * np.sqrt(1 - zeta**2)), shape)
+    (tmp_path / "complex.uff").write_text(text)
+    back = read_uff55(tmp_path / "complex.uff")
+    assert back.frequencies_hz == pytest.approx([7.25, 12.5], rel=1e-6)  # ascending
+    assert back.damping_ratio == pytest.approx([0.005, 0.02], rel=1e-5)
+    assert back.dof_labels == ("101H", "102H")
+    assert np.iscomplexobj(back.shapes)
+    assert back.shapes[:, 1] == pytest.approx(modes[0][2], rel=1e-6)
+
+
+def _edited_58(tmp_path, name: str, **fields):
+    """A one-FRF UFF 58 file written by ``write_uff58``, its dataset's ``fields`` changed
+    and written again by pyuff (as another program would label the record)."""
+    import pyuff
+
+    write_uff58(tmp_path / "base.uff", _frfs(1))
+    ds = pyuff.UFF(str(tmp_path / "base.uff")).read_sets()
+    ds = (ds if isinstance(ds, dict) else ds[0]) | fields
+    pyuff.UFF(str(tmp_path / name)).write_sets([ds], mode="add")
+    return tmp_path / name
+
+
+def test_uff58_records_that_are_not_frfs_are_named(tmp_path):
+    """Time responses (function type 1) and PSDs (9) written as dataset 58 (pyuff's sample
+    files; a time record with direction 0): the message says what the file holds and what
+    to do, instead of failing on the record's direction."""
+    for func, held, advice in ((1, "time responses", "bayesupdate frf"),
+                               (9, "power spectral densities", "function type 4")):  # fmt: skip
+        path = _edited_58(tmp_path, f"f{func}.uff", func_type=func, rsp_dir=0, ref_dir=0)
+        with pytest.raises(BayesUpdateError, match=f"hold {held}, not FRFs.*{advice}"):
+            read_uff58(path)
+
+
+def test_uff58_frf_without_a_direction_names_node_and_direction(tmp_path):
+    path = _edited_58(tmp_path, "s.uff", rsp_node=7, rsp_dir=0)
+    with pytest.raises(BayesUpdateError, match=r"UFF node 7 direction 0 \(a scalar"):
+        read_uff58(path)
+
+
 def test_modal_h5_round_trip(tmp_path):
     shapes = np.array([[1.0 + 0.1j, 0.5], [0.2, -1.0 + 0.0j]])
     modes = ModalData(

@@ -212,3 +212,28 @@ def test_csv_with_frames_and_a_skewed_dof(tmp_path):
     np.testing.assert_allclose(back.xyz, g.xyz, rtol=1e-15, atol=1e-15)
     assert back.declared == (DeclaredDof("2S", 2, (1.0, 1.0, 0.0)),)
     assert [f.id for f in back.frames] == [5]
+
+
+GROUPS_2467 = """\
+    -1
+  2467
+         1         0         0         0         0         0         0         2
+Left_Side
+         8         1         0         0         8         2         0         0
+    -1
+"""
+
+
+def test_a_geometry_file_with_groups_prints_nothing(tmp_path, capsys):
+    """Modal test programs write groups (dataset 2467) beside the geometry; pyuff 2.5 prints
+    each group it reads to stdout, which would precede ``correlate --json``'s JSON.  The
+    reader keeps stdout clean and still reads the nodes (``bayesupdate.uff_read``)."""
+    geometry = make_geometry([1, 2], [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    path = tmp_path / "with_groups.uff"
+    write_uff_geometry(path, geometry)
+    path.write_text(path.read_text() + GROUPS_2467)
+    capsys.readouterr()
+    back = read_geometry(path)
+    assert capsys.readouterr().out == ""
+    assert list(back.node_ids) == [1, 2]
+    assert back.xyz == pytest.approx(geometry.xyz)

@@ -6,8 +6,12 @@ the FRF sign.  pyuff pitfalls guarded here: it writes NaN silently as 0 (we refu
 before writing), it chokes on numpy integer node numbers (cast to int), it returns a single set
 as a dict instead of a list (wrapped), and a truncated or corrupt file raises arbitrary errors
 (turned into one BayesUpdateError); pyuff also silently drops a dataset cut off at the end of
-a truncated file, so the ``-1`` delimiters are counted first; and entity names longer than 10
-characters shift its fixed-width fields (we leave them at the default).
+a truncated file, so the ``-1`` delimiters are counted first; entity names longer than 10
+characters shift its fixed-width fields (we leave them at the default); it prints some datasets
+(groups, 2467) to stdout as it reads them (``bayesupdate.uff_read`` drops that); and its writer
+lays out complex modes (dataset 55, analysis type 3) in a form its reader refuses, while it
+reads test programs' exports of them.  Dataset 58 records that are not FRFs (time responses,
+spectra) are refused with what they hold.
 """
 
 import os
@@ -20,6 +24,7 @@ from bayesupdate.atomic import atomic_path
 from bayesupdate.ema.frf_set import FrfSet
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.modal_data import ModalData
+from bayesupdate.uff_read import quiet_read
 
 DIRECTION_OF_LETTER = {"L": 1, "H": 2, "V": 3}
 LETTER_OF_DIRECTION = {v: k for k, v in DIRECTION_OF_LETTER.items()}
@@ -42,7 +47,11 @@ def make_label(node, direction) -> str:
     """(7, 3) -> ``"7V"``; the sign of the direction is dropped."""
     d = abs(int(direction))
     if d not in LETTER_OF_DIRECTION:
-        raise BayesUpdateError(f"UFF direction {direction}: only translations 1..3 are supported")
+        what = "a scalar, no direction" if d == 0 else "a rotation" if d <= 6 else "no axis"
+        raise BayesUpdateError(
+            f"UFF node {int(node)} direction {direction} ({what}): only translations 1..3 "
+            "(+-) are supported"
+        )
     return f"{int(node)}{LETTER_OF_DIRECTION[d]}"
 
 
@@ -58,8 +67,6 @@ def _check_delimiters(path: str | os.PathLike) -> None:
 
 
 def _read_sets(path: str | os.PathLike) -> list[dict]:
-    import pyuff
-
     if not os.path.isfile(path):
         raise BayesUpdateError(f"{path}: file not found")
     _check_delimiters(path)
@@ -67,7 +74,7 @@ def _read_sets(path: str | os.PathLike) -> list[dict]:
         # a non-finite value makes pyuff's numpy complain; read_uff58 reports it as one error
         with warnings.catch_warnings(), np.errstate(invalid="ignore", over="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)
-            sets = pyuff.UFF(str(path)).read_sets()
+            sets = quiet_read(path)
     except Exception as exc:  # pyuff raises anything on a truncated or corrupt file
         raise BayesUpdateError(
             f"{path}: not a readable UFF file ({type(exc).__name__}); is it truncated?"
@@ -138,7 +145,11 @@ def read_uff58(path: str | os.PathLike) -> FrfSet:
     sets = [s for s in _read_sets(path) if s.get("type") == 58]
     if not sets:
         raise BayesUpdateError(f"{path}: holds no dataset 58 (FRF); export the FRFs as UFF 58")
-    frf_sets = [s for s in sets if int(s.get("func_type", 4)) == 4] or sets
+    frf_sets = [s for s in sets if int(s.get("func_type", 4)) == 4]
+    if not frf_sets:  # a writer that leaves the function type general (0): taken as FRFs
+        frf_sets = [s for s in sets if int(s.get("func_type", 4)) == 0]
+    if not frf_sets:
+        raise BayesUpdateError(_not_frfs(path, sets))
     x0 = np.asarray(frf_sets[0]["x"], dtype=float)
     rows, resp, ref = [], [], []
     for s in frf_sets:
@@ -154,8 +165,11 @@ def read_uff58(path: str | os.PathLike) -> FrfSet:
         sign = np.sign(int(s["rsp_dir"])) * np.sign(int(s["ref_dir"]))
         with np.errstate(invalid="ignore"):  # NaN/inf are rejected by FrfSet with one message
             rows.append(sign * data)
-        resp.append(make_label(s["rsp_node"], s["rsp_dir"]))
-        ref.append(make_label(s["ref_node"], s["ref_dir"]))
+        try:
+            resp.append(make_label(s["rsp_node"], s["rsp_dir"]))
+            ref.append(make_label(s["ref_node"], s["ref_dir"]))
+        except BayesUpdateError as exc:
+            raise BayesUpdateError(f"{path}: an FRF's {exc}") from None
     kind = KIND_OF_ORDINATE.get(int(frf_sets[0].get("ordinate_spec_data_type", 12)), "accelerance")
     coherence = _coherence(sets, resp, ref, x0)
     return FrfSet(
@@ -166,6 +180,26 @@ def read_uff58(path: str | os.PathLike) -> FrfSet:
         kind=kind,
         coherence=coherence,
         source=os.path.basename(str(path)),
+    )
+
+
+#: UFF dataset 58 function types (record 6, field 1) other than the FRF (4)
+FUNCTION_TYPES = {1: "time responses", 2: "auto-spectra", 3: "cross-spectra",
+                  5: "transmissibilities", 6: "coherences", 7: "auto-correlations",
+                  8: "cross-correlations", 9: "power spectral densities",
+                  10: "energy spectral densities", 12: "spectra",
+                  18: "mode indicator functions", 24: "shock response spectra"}  # fmt: skip
+
+
+def _not_frfs(path, sets: list[dict]) -> str:
+    """The message for a UFF file whose datasets 58 hold no FRF (function type 4): what they
+    hold instead, and what to do with it."""
+    kinds = sorted({int(s.get("func_type", 0)) for s in sets})
+    held = ", ".join(FUNCTION_TYPES.get(k, f"function type {k}") for k in kinds)
+    advice = ("estimate FRFs from them with 'bayesupdate frf'" if kinds == [1]
+              else "export the FRFs (function type 4)")  # fmt: skip
+    return (
+        f"{path}: its {len(sets)} dataset(s) 58 hold {held}, not FRFs (function type 4); {advice}"
     )
 
 
@@ -242,18 +276,34 @@ def write_uff55(path: str | os.PathLike, modes: ModalData) -> None:
 
 
 def read_uff55(path: str | os.PathLike) -> ModalData:
-    """Read dataset-55 modes into ModalData (labels like ``"7V"``; all-zero DOFs dropped)."""
+    """Read dataset-55 modes into ModalData (labels like ``"7V"``; all-zero DOFs dropped).
+
+    Normal modes (analysis type 2) give their frequency and viscous damping ratio and real
+    shapes; complex modes (analysis type 3, as modal test software exports identified modes)
+    their eigenvalue lambda = -zeta omega_n + i omega_n sqrt(1 - zeta^2), read as the natural
+    frequency |lambda| / 2 pi and the damping ratio -Re(lambda) / |lambda| (the convention of
+    ``ema.lsce``), and complex shapes.  Other analysis types (static, transient, frequency
+    response) hold no modes and are refused by name."""
     sets = [s for s in _read_sets(path) if s.get("type") == 55]
     if not sets:
         raise BayesUpdateError(f"{path}: holds no dataset 55 (modes)")
+    kinds = sorted({int(s.get("analysis_type", 2)) for s in sets} - {2, 3})
+    if kinds:
+        raise BayesUpdateError(
+            f"{path}: its datasets 55 of analysis type {kinds} hold no modes; modes are "
+            "analysis type 2 (normal) or 3 (complex)"
+        )
     nodes = np.asarray(sets[0]["node_nums"]).astype(int)
+    complex_ = any(int(s.get("analysis_type", 2)) == 3 for s in sets)
     cols, freq, damp = [], [], []
     for s in sets:
         if not np.array_equal(np.asarray(s["node_nums"]).astype(int), nodes):
             raise BayesUpdateError(f"{path}: modes are given at different nodes")
-        cols.append(np.stack([np.asarray(s[f"r{d}"], dtype=float) for d in (1, 2, 3)], axis=1))
-        freq.append(float(s["freq"]))
-        damp.append(float(s.get("modal_damp_vis", 0.0)))
+        kind = complex if complex_ else float
+        cols.append(np.stack([np.asarray(s[f"r{d}"], dtype=kind) for d in (1, 2, 3)], axis=1))
+        f, zeta = _frequency_damping(s)
+        freq.append(f)
+        damp.append(zeta)
     stack = np.stack(cols, axis=-1)  # (n_node, 3, m)
     labels, shapes = [], []
     for d in (3, 2, 1):  # V first, then H, then L, node order within each
@@ -269,3 +319,12 @@ def read_uff55(path: str | os.PathLike) -> ModalData:
         dof_labels=tuple(labels),
         source=os.path.basename(str(path)),
     )
+
+
+def _frequency_damping(s: dict) -> tuple[float, float]:
+    """(natural frequency [Hz], viscous damping ratio) of one dataset 55: a normal mode's
+    own, or from a complex mode's eigenvalue lambda [rad/s]: |lambda| / 2 pi, -Re / |lambda|."""
+    if int(s.get("analysis_type", 2)) == 2:
+        return float(s["freq"]), float(s.get("modal_damp_vis", 0.0))
+    lam = complex(s["eig"])
+    return abs(lam) / (2 * np.pi), -lam.real / abs(lam) if lam != 0 else 0.0

@@ -22,6 +22,7 @@ from bayesupdate.errors import BayesUpdateError
 from bayesupdate.testgeom.frames import GLOBAL, KINDS, checked_frame, to_global
 from bayesupdate.testgeom.geometry import TestGeometry, make_geometry
 from bayesupdate.testgeom.units import METRES_PER, UFF_UNITS_CODE, length_unit, unit_of_uff164
+from bayesupdate.uff_read import quiet_read
 
 #: which local coordinates of each frame kind are lengths (the rest are angles in degrees)
 _LENGTHS = {"rectangular": [1, 1, 1], "cylindrical": [1, 0, 1], "spherical": [1, 0, 0]}
@@ -32,12 +33,10 @@ _FORCE = {"m": 1.0, "mm": 1e3, "cm": 1e2, "in": 0.2248089431, "ft": 0.2248089431
 def read_uff_sets(path) -> list[dict]:
     """The datasets of a universal file (pyuff dicts); one-line errors for a missing or
     unreadable file."""
-    import pyuff
-
     if not os.path.isfile(path):
         raise BayesUpdateError(f"{path}: test geometry file not found")
     try:
-        sets = pyuff.UFF(str(path)).read_sets()
+        sets = quiet_read(path)
     except Exception as exc:  # pyuff raises anything on a corrupt file
         raise BayesUpdateError(
             f"{path}: not a readable universal file ({type(exc).__name__}: {exc})"

@@ -24,7 +24,12 @@ import numpy as np
 import pytest
 
 from bayesupdate.cli import main
-from bayesupdate.inference.pairing import PairingRules, screen_pairs, screen_test_modes
+from bayesupdate.inference.pairing import (
+    PairingRules,
+    pair_modes,
+    screen_pairs,
+    screen_test_modes,
+)
 from bayesupdate.modal_data import ModalData
 from bayesupdate.model_protocol import Prediction
 from bayesupdate.pipelines.correlate import CorrelateSettings, correlate
@@ -193,6 +198,35 @@ def test_a_window_on_the_study_or_the_flag_refuses_what_calibrate_refuses(
     ]
     # the flag wins over the study
     assert len(_correlate_json(capsys, [narrow, "--frequency-window", "0.5"])["modes"]) == 6
+
+
+def test_a_test_that_missed_the_lower_modes_still_pairs_in_correlate_and_calibrate(
+    tmp_path, capsys
+):
+    """A test holding only the exhaust's modes 9-12 (a band or a sensor set that missed the
+    lower eight; numbered 1-4 in its file): the model's first 4 + 2 modes stop below the
+    test's highest, so both compute more (``pairing.reach_modes``) and pair each test mode
+    with its own model mode (MAC 1); before, all four were refused at MACs of their best
+    partners among the six."""
+    from bayesupdate.config import load_study
+    from bayesupdate.ema.modal_h5 import write_modal_h5
+    from bayesupdate.models import get_model
+    from bayesupdate.pipelines.study import prepare
+
+    model = get_model("exhaust")
+    truth = model.predict(model.default_parameters(), n_modes=12)
+    upper = ModalData(np.asarray(truth.frequencies_hz[8:12], float),
+                      shapes=np.asarray(truth.shapes)[:, 8:12],
+                      dof_labels=tuple(truth.dof_labels), source="upper")  # fmt: skip
+    write_modal_h5(tmp_path / "upper.h5", upper)
+    study = _exhaust_study(tmp_path, tmp_path / "upper.h5")
+    out = _correlate_json(capsys, [study])
+    assert [(m["test"], m["model"]) for m in out["modes"]] == [(1, 9), (2, 10), (3, 11), (4, 12)]
+    assert min(m["mac"] for m in out["modes"]) > 0.999
+    assert "the model's first 6 modes stop at" in out["notes"][0]
+    problem = prepare(load_study(study)).problem
+    assert problem.pairing.refused == ()
+    assert pair_modes(problem.reference, problem.pairing).model_index.tolist() == [8, 9, 10, 11]
 
 
 @pytest.mark.parametrize(

@@ -24,7 +24,8 @@ table, or the flags): a pair is admissible when its MAC reaches --mac-threshold 
 model modes maximizing the total MAC of the admissible pairs (Hungarian method).  Any other
 test mode is refused, named with its best MAC partner and the rule: mac (below the threshold),
 window (that partner outside the window) or taken (that partner paired with another test
-mode).  The model is solved for --extra-modes (2) modes beyond the test's highest.
+mode).  The model is solved for --extra-modes (2) modes beyond the test's highest, and for
+more where those all lie below the test's highest frequency (a test that missed lower modes).
 
 The test DOFs are mapped to the model as calibrate maps them: a built-in model's sensors, a
 Nastran deck's [model.test_points] (or --test-points FILE; default: test node = GRID id).

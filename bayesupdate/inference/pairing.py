@@ -43,6 +43,10 @@ PAIRING_METHODS = ("auto", "order", "tracked", "mac")
 #: pre-update model, paired with any MAC pair, reached -75 % / +130 % at MACs of 0.07-0.72)
 DEFAULT_FREQUENCY_WINDOW = 0.5
 
+#: the most model modes a MAC pairing computes to reach the test's highest frequency
+#: (``reach_modes``)
+MAX_REACH_MODES = 100
+
 #: score subtracted from the MAC of a pair outside the frequency window when the pairing is
 #: redone: larger than any MAC difference, so a partner inside the window always wins
 _OUTSIDE_WINDOW_PENALTY = 2.0
@@ -147,6 +151,24 @@ class RefusedMode:
             "other": self.other or None,
             "message": self.message(rules),
         }
+
+
+def reach_modes(solve, first, n_first: int, f_reach: float):
+    """(result, n): the model's first ``n_first`` modes (``first``, ``solve(n_first)``'s
+    result, with ``frequencies_hz``) or, where they all lie below ``f_reach`` [Hz] (the test's
+    highest mode with shapes: a test that missed some of the model's lower modes, as a GVT
+    under its band or a sparse sensor set does, pairs beyond them), ``solve(n)`` with n
+    doubled until its modes reach f_reach, the model has no more modes, or n reaches
+    ``MAX_REACH_MODES``.  A test mode number says where a mode sits in the test's own list,
+    not in the model's."""
+    result, n = first, n_first
+    cap = max(n_first, MAX_REACH_MODES)
+    while np.max(result.frequencies_hz, initial=0.0) < f_reach and n < cap:
+        try:
+            result, n = solve(min(2 * n, cap)), min(2 * n, cap)
+        except BayesUpdateError:  # the model has no more modes
+            break
+    return result, n
 
 
 def window_scores(mac: np.ndarray, test_hz: np.ndarray, model_hz: np.ndarray, window) -> np.ndarray:

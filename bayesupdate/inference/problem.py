@@ -20,6 +20,7 @@ from bayesupdate.inference.pairing import (
     PairingRules,
     ResidualTable,
     pair_modes,
+    reach_modes,
     residual_table,
     screen_test_modes,
     shapes_at,
@@ -292,24 +293,30 @@ def _reference_parameters(
     return reference_params
 
 
+def _solved(model, params, n_modes: int, solve: ReferenceSolve | None) -> Prediction:
+    """The model's prediction of ``n_modes`` modes at ``params``, through ``solve`` if given."""
+    if solve is None:
+        return model.predict(params, n_modes=n_modes)
+    return solve(model, params, n_modes)
+
+
 def _reference_prediction(
     model: ParametricModel,
     reference_params: dict[str, float],
     n_test: int,
     extra_modes: int,
     solve: ReferenceSolve | None = None,
+    data: ModalData | None = None,
 ) -> tuple[Prediction, int]:
     """(prediction, n_model): the model at the reference design with ``extra_modes`` modes
-    beyond ``n_test`` (the test's highest mode number) if it can, else exactly ``n_test``;
-    ``solve`` as in ``build_problem``."""
+    beyond ``n_test`` (the test's highest mode number) if it can, else exactly ``n_test``, and
+    where ``data`` has shapes more, up to its highest frequency (``pairing.reach_modes``: a
+    test that missed lower modes); ``solve`` as in ``build_problem``."""
     reference = None
     n_model = n_test
     for n_try in (n_test + max(int(extra_modes), 0), n_test):
         try:
-            if solve is None:
-                reference = model.predict(reference_params, n_modes=n_try)
-            else:
-                reference = solve(model, reference_params, n_try)
+            reference = _solved(model, reference_params, n_try, solve)
         except BayesUpdateError as exc:
             if n_try == n_test:
                 raise BayesUpdateError(
@@ -319,6 +326,11 @@ def _reference_prediction(
             continue
         n_model = n_try
         break
+    if data is not None and data.shapes is not None:
+        reference, n_model = reach_modes(
+            lambda n: _solved(model, reference_params, n, solve), reference, n_model,
+            float(np.max(data.frequencies_hz)),
+        )  # fmt: skip
     freqs = np.asarray(reference.frequencies_hz)
     if freqs.size < n_test:
         raise BayesUpdateError(
@@ -423,7 +435,7 @@ def build_problem(
         raise ValueError(f"build_problem: {len(numbers)} test_modes for {data.n_modes} modes")
     # test mode k of a source is near model mode k: the model computes up to the highest one
     reference, n_model = _reference_prediction(
-        model, reference_params, max(numbers), extra_modes, reference_solve
+        model, reference_params, max(numbers), extra_modes, reference_solve, data
     )
     fixed = {k: v for k, v in reference_params.items() if k not in {p.name for p in parameters}}
     refused: tuple = ()

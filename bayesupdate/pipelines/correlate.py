@@ -41,6 +41,7 @@ from bayesupdate.inference.pairing import (
     RefusedMode,
     ScreenedPairs,
     label_rows,
+    reach_modes,
     screen_pairs,
 )
 from bayesupdate.modal_data import ModalData
@@ -269,16 +270,26 @@ def correlate(
     numbers = tuple(int(n) for n in numbers) or tuple(range(1, data.n_modes + 1))
     if len(numbers) != data.n_modes:
         raise ValueError(f"correlate: {len(numbers)} numbers for {data.n_modes} test modes")
-    modes = model_modes(model, max(numbers) + settings.extra_modes, settings.parameters)
+    n_first = max(numbers) + settings.extra_modes
+    modes = model_modes(model, n_first, settings.parameters)
     if data.shapes is None or modes.shapes is None:
         return _frequencies_only(model, data, modes, name, numbers)
+    first_hz = float(np.max(modes.frequencies_hz))
+    modes, n = reach_modes(lambda k: model_modes(model, k, settings.parameters), modes,
+                           n_first, float(np.max(data.frequencies_hz)))  # fmt: skip
+    reached = () if n == n_first else (
+        f"the model's first {n_first} modes stop at {first_hz:.4g} Hz, below the test's "
+        f"highest ({float(np.max(data.frequencies_hz)):.4g} Hz): {n} computed, up to "
+        f"{float(np.max(modes.frequencies_hz)):.4g} Hz (the test may have missed lower "
+        "modes; calibrate computes as many)",
+    )  # fmt: skip
     rows = _rows(modes, data.dof_labels)
     model_at = modes.shapes[rows]
     mac = mac_matrix(data.shapes, model_at)
     rules = settings.rules
     screened = screen_pairs(mac, data.frequencies_hz, modes.frequencies_hz, rules, numbers)
     pairs = _mode_pairs(screened, numbers, mac.shape[1])
-    notes = _pair_notes(pairs, screened.refused, rules, numbers)
+    notes = [*reached, *_pair_notes(pairs, screened.refused, rules, numbers)]
     base = Correlation(
         model=name,
         data=data.source,

@@ -106,6 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout left (``... --json | head``): no fault
+        _quiet_stdout()
+        return 1
     except Exception as exc:  # an internal fault: one line unless debugging
         if os.environ.get("BAYESUPDATE_DEBUG"):
             raise
@@ -115,6 +118,14 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's final flush of what is left
+    for a closed pipe raises no second BrokenPipeError (Python's documented remedy, ``signal``
+    module notes on SIGPIPE)."""
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _run(args) -> int:

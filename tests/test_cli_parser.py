@@ -38,3 +38,19 @@ def test_the_command_is_the_first_word_that_is_not_an_option():
     assert cli._command_in(["--quiet", "sample", "study.toml", "--steps", "10"]) == "sample"
     assert cli._command_in(["--version"]) is None
     assert cli._command_in([]) is None
+
+
+def test_a_reader_that_leaves_the_pipe_is_no_internal_error():
+    """``bayesupdate modes --json | head -c 1``: the reader closes the pipe before the command
+    writes; the command ends with exit code 1 and says nothing, where it printed 'internal
+    error: BrokenPipeError'.  (The read end is closed before the child has imported the
+    package, so its first write meets the closed pipe.)"""
+    import subprocess
+    import sys
+
+    child = subprocess.Popen([sys.executable, "-m", "bayesupdate", "modes", "--json", "--quiet"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
+    child.stdout.close()
+    err = child.stderr.read().decode()
+    assert child.wait(timeout=120) == 1
+    assert "internal error" not in err and "Traceback" not in err, err

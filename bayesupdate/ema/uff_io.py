@@ -294,12 +294,11 @@ def read_uff55(path: str | os.PathLike) -> ModalData:
             "analysis type 2 (normal) or 3 (complex)"
         )
     nodes = np.asarray(sets[0]["node_nums"]).astype(int)
-    complex_ = any(int(s.get("analysis_type", 2)) == 3 for s in sets)
+    kind = complex if any(int(s.get("analysis_type", 2)) == 3 for s in sets) else float
     cols, freq, damp = [], [], []
     for s in sets:
         if not np.array_equal(np.asarray(s["node_nums"]).astype(int), nodes):
             raise BayesUpdateError(f"{path}: modes are given at different nodes")
-        kind = complex if complex_ else float
         cols.append(np.stack([np.asarray(s[f"r{d}"], dtype=kind) for d in (1, 2, 3)], axis=1))
         f, zeta = _frequency_damping(s)
         freq.append(f)
@@ -327,4 +326,5 @@ def _frequency_damping(s: dict) -> tuple[float, float]:
     if int(s.get("analysis_type", 2)) == 2:
         return float(s["freq"]), float(s.get("modal_damp_vis", 0.0))
     lam = complex(s["eig"])
-    return abs(lam) / (2 * np.pi), -lam.real / abs(lam) if lam != 0 else 0.0
+    zeta = -lam.real / abs(lam) if lam != 0 else 0.0
+    return abs(lam) / (2 * np.pi), zeta

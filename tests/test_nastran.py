@@ -9,6 +9,7 @@ shared-data tests are skipped when the shared data are missing.
 """
 
 import json
+import pickle
 import sys
 from pathlib import Path
 
@@ -667,3 +668,7 @@ def test_a_mechanism_in_a_deck_is_named_by_its_grid_ids(tmp_path):
         load_nastran_model(deck).solve(n_modes=3)
     moving = str(err.value).split("moves")[1]
     assert "GRID 103" in moving and "node" not in moving
+    # raised in a worker process, it crosses back pickled with its wording and its DOFs
+    back = pickle.loads(pickle.dumps(err.value))
+    assert type(back) is type(err.value) and str(back) == str(err.value)
+    assert back.count == 2 and back.dofs.tolist() == err.value.dofs.tolist()

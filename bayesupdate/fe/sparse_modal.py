@@ -354,6 +354,18 @@ class MechanismError(BayesUpdateError):
         """The same error with its nodes named by ``node_names`` (node index -> name)."""
         return MechanismError(self.count, self.dofs, node_names)
 
+    def __reduce__(self):
+        # raised in a worker process: it crosses back pickled, its message as it was worded
+        return _restored_mechanism, (str(self), self.count, self.dofs)
+
+
+def _restored_mechanism(message: str, count: int, dofs) -> MechanismError:
+    """A ``MechanismError`` with its message as worded where it was raised (unpickling)."""
+    err = MechanismError.__new__(MechanismError)
+    BayesUpdateError.__init__(err, message)
+    err.count, err.dofs = count, dofs
+    return err
+
 
 def _check_mechanism(lam, phi, zero, free):
     bad = np.flatnonzero(np.abs(lam) < zero)

@@ -150,3 +150,17 @@ def test_sets_name_test_points(tmp_path):
     structure = _model(_deck(tmp_path / "plate.bdf")).structure
     assert table_points(structure, {"set": 6}) == [2, 3, 5]
     assert table_points(structure, {"set": 4, "40": 3}) == [1, 5, 9, 37, 40, 41, 45]
+
+
+def test_a_test_point_given_twice_in_a_csv_is_refused_with_both_lines(tmp_path):
+    """A CSV row repeating a point (a typo for another number) used to move the point silently
+    to the later row's GRID; it is refused, naming both lines."""
+    from bayesupdate.errors import BayesUpdateError
+    from bayesupdate.nastran.test_points import read_test_points
+
+    path = tmp_path / "points.csv"
+    path.write_text("point,grid\n1,5\n2,6\n1,7\n")
+    with pytest.raises(BayesUpdateError, match=r"points.csv:4: point 1 is given twice \(line 2"):
+        read_test_points(path)
+    path.write_text("point,grid\n1,5\n2,6\n")
+    assert read_test_points(path) == {"1": 5, "2": 6}

@@ -64,7 +64,7 @@ def read_test_points(path) -> dict:
         except tomllib.TOMLDecodeError as exc:
             raise BayesUpdateError(f"--test-points {path}: not valid TOML ({exc})") from exc
         return dict(doc.get("test_points", doc))
-    table = {}
+    table, line_of = {}, {}
     for number, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [c.strip() for c in row]
         if not cells or not cells[0] or cells[0].startswith("#"):
@@ -76,8 +76,14 @@ def read_test_points(path) -> dict:
                 f"--test-points {path}:{number}: give 'point,grid' or 'point,grid,frame' "
                 f"(integers; frame basic|output), got {','.join(row)!r}"
             )
+        if cells[0] in table:  # a typo would silently move the point to the later row's GRID
+            raise BayesUpdateError(
+                f"--test-points {path}:{number}: point {cells[0]} is given twice (line "
+                f"{line_of[cells[0]]} too); give each test point one row"
+            )
         grid = int(cells[1])
         table[cells[0]] = grid if len(cells) == 2 else {"grid": grid, "frame": cells[2]}
+        line_of[cells[0]] = number
     if not table:
         raise BayesUpdateError(f"--test-points {path}: no test points in it")
     return table

@@ -26,6 +26,7 @@ from bayesupdate.nastran.bindings import (
     solid_families,
     solid_part,
 )
+from bayesupdate.nastran.reader import node_namer
 
 #: default bounds of a bound parameter without ``bounds``: this factor range on its default
 DEFAULT_RANGE = (0.5, 2.0)
@@ -145,14 +146,12 @@ class NastranModel(FEModel):
         return replace(result, mass_kg=mass, centre_of_gravity=cog)
 
     def node_name(self, node: int) -> str:
-        """The deck's name of the solver's node ``node``: "GRID 12", "SPOINT 7", or a CBUSH
-        arm's end (a node of no GRID)."""
+        """The deck's name of the solver's node ``node`` (``reader.node_namer``: "GRID 12",
+        "SPOINT 7", or a CBUSH arm's end)."""
         meta = self.structure.metadata.get("nastran", {})
-        grids = meta.get("grid_ids")
-        if grids is not None and node < len(grids) and grids[node] > 0:
-            return f"GRID {int(grids[node])}"
-        spoint = [s for s, (n, _) in meta.get("spoint_dofs", {}).items() if n == node]
-        return f"SPOINT {spoint[0]}" if spoint else f"(a CBUSH arm end, node {node})"
+        grids = {i: int(g) for i, g in enumerate(meta.get("grid_ids", ())) if g > 0}
+        spoints = {n: s for s, (n, _) in meta.get("spoint_dofs", {}).items()}
+        return node_namer(grids, spoints)(node)
 
     # -- scalar points carry no rigid-body mass (``cards.scalar``) ---------------------------------
     def _spoint_mass(self) -> np.ndarray:

@@ -572,42 +572,45 @@ def read_structure(path, design: bool = False) -> tuple:
     return replace(structure, metadata=meta), info, deck
 
 
+def node_namer(grid_of_node: dict, spoint_of_node: dict):
+    """node index -> its name in a deck's messages: "GRID 12", "SPOINT 7", or a CBUSH arm's
+    end (a node of no GRID); grid_of_node, spoint_of_node : {node index: GRID / SPOINT id}."""
+
+    def name(node: int) -> str:
+        if node in grid_of_node:
+            return f"GRID {grid_of_node[node]}"
+        if node in spoint_of_node:
+            return f"SPOINT {spoint_of_node[node]}"
+        return f"(a CBUSH arm end, node {node})"
+
+    return name
+
+
+def _deck_names(ctx):
+    """``node_namer`` of the deck being read."""
+    rows = np.flatnonzero(ctx.node >= 0)
+    grids = dict(zip(ctx.node[rows].tolist(), ctx.grids.ids[rows].tolist(), strict=True))
+    return node_namer(grids, {end.node: s for s, end in ctx.spoints.items()})
+
+
 def _named(ctx, exc) -> BayesUpdateError:
     """The structure's error with its rigid elements ('rbe3 0', the builder's index) named by
     their cards' file:line and label, and its DOFs ('node 2 uz', the builder's node index) by
-    their GRIDs ('GRID 103 uz')."""
+    the deck's names ('GRID 103 uz', ``node_namer``)."""
 
     def card(m):
         c = ctx.rigid.get(m.group(0))
         return m.group(0) if c is None else f"{c.where} {c.label}"
 
-    rows = np.flatnonzero(ctx.node >= 0)
-    grid_of_node = dict(zip(ctx.node[rows].tolist(), ctx.grids.ids[rows].tolist(), strict=True))
-
-    def grid(m):
-        g = grid_of_node.get(int(m.group(1)))
-        return m.group(0) if g is None else f"GRID {g}"
-
+    names = _deck_names(ctx)
     text = re.sub(r"\b(rbe[23]|mpc) \d+", card, str(exc))
-    text = re.sub(r"\bnode (\d+)(?= [ur][xyz]\b)", grid, text)
+    text = re.sub(r"\bnode (\d+)(?= [ur][xyz]\b)", lambda m: names(int(m.group(1))), text)
     return BayesUpdateError(f"Nastran model {ctx.refusals.path}: {text}")
 
 
 def _finish(ctx, eids, pids, props):
     # the connectivity check runs on the whole deck and names its GRIDs, not node indices
-    grid_of_node = dict(zip(ctx.node[ctx.node >= 0].tolist(), ctx.grids.ids[ctx.node >= 0].tolist(),
-                            strict=True))  # fmt: skip
-
-    spoint_of_node = {end.node: s for s, end in ctx.spoints.items()}
-
-    def grid_name(node: int) -> str:
-        grid = grid_of_node.get(node)
-        if grid is not None:
-            return f"GRID {grid}"
-        if node in spoint_of_node:
-            return f"SPOINT {spoint_of_node[node]}"
-        return f"(a CBUSH arm end, node {node})"
-
+    grid_name = _deck_names(ctx)
     ctx.builder.node_names = grid_name
     structure = ctx.builder.build(check=False)
     for finish in ctx.finishers:

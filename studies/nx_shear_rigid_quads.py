@@ -69,18 +69,26 @@ def nx_displacements(f06: Path) -> list[dict[int, np.ndarray]]:
     return out
 
 
+def held_solve(K, held_nodes, loads_z: dict[int, float]) -> np.ndarray:
+    """u (n_dof,) of K u = F with every DOF of the nodes ``held_nodes`` held and F the loads
+    {node index: force along z}."""
+    F = np.zeros(K.shape[0])
+    for node, load in loads_z.items():
+        F[6 * node + 2] = load
+    held = np.concatenate([6 * n + np.arange(6) for n in held_nodes])
+    free = np.setdiff1d(np.arange(K.shape[0]), held)
+    u = np.zeros(K.shape[0])
+    u[free] = spla.spsolve(K.tocsc()[free][:, free], F[free])
+    return u
+
+
 def static_solution(bdf: Path, loads: dict[int, float]) -> dict[int, np.ndarray]:
     """{GRID: displacements (6,)} of the deck's K with ``HELD`` held and ``loads`` along z."""
     structure, info, deck = read_structure(bdf)
     K, _ = NastranModel(structure, {}, {}, {}, name=info["deck"], deck=bdf, bdf=deck).matrices()
     grids = list(info["grid_ids"])
-    F = np.zeros(K.shape[0])
-    for g, load in loads.items():
-        F[6 * grids.index(g) + 2] = load
-    held = np.concatenate([6 * grids.index(g) + np.arange(6) for g in HELD])
-    free = np.setdiff1d(np.arange(K.shape[0]), held)
-    u = np.zeros(K.shape[0])
-    u[free] = spla.spsolve(K.tocsc()[free][:, free], F[free])
+    on = {grids.index(g): load for g, load in loads.items()}
+    u = held_solve(K, [grids.index(g) for g in HELD], on)
     return {g: u[6 * i : 6 * i + 6] for i, g in enumerate(grids)}
 
 
@@ -104,13 +112,9 @@ def tip_deflection(nx_el: int, ny_el: int, shear_ratio: float) -> float:
     mesh = shell_mesh(nodes, quads=quads, thickness=0.1, E=1e7, nu=0.3, rho=1.0,
                       shear_ratio=shear_ratio)  # fmt: skip
     K, _ = ShellAssembly(mesh).assemble()
-    held = np.concatenate([6 * node(0, j) + np.arange(6) for j in range(ny_el + 1)])
-    free = np.setdiff1d(np.arange(K.shape[0]), held)
-    F = np.zeros(K.shape[0])
-    F[6 * node(nx_el, ny_el) + 2] = 1.0
-    u = np.zeros(K.shape[0])
-    u[free] = spla.spsolve(K.tocsc()[free][:, free], F[free])
-    return float(u[6 * node(nx_el, ny_el) + 2])
+    tip = node(nx_el, ny_el)
+    u = held_solve(K, [node(0, j) for j in range(ny_el + 1)], {tip: 1.0})
+    return float(u[6 * tip + 2])
 
 
 def main() -> None:

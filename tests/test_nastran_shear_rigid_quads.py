@@ -55,4 +55,4 @@ def test_deck_as_published_bends_as_nx_and_nearer_than_the_stiff_shear_quad(tmp_
     # the tip force (subcase 2 less subcase 1): NX 0.013610, the DKQ +0.54 %, the MITC4 -1.9 %
     tip = {k: r["2"]["15"] - r["1"]["15"] for k, r in (("ours", ours), ("nx", NX["t3"]))}
     assert abs(tip["ours"] / tip["nx"] - 1) < 6e-3
-    assert _miss(ours["2"], NX["t3"]["2"]) < 1e-2
+    assert _miss(ours["2"], NX["t3"]["2"]) < 7e-3  # 5.9e-3

@@ -194,7 +194,8 @@ def test_discovery_settings_group_the_flat_knobs_of_the_study_file():
     assert stored == s.flat() and "refit" not in stored
     for key, value, message in [
         ("max_nfev", 0, "discovery.max_nfev: must be >= 1"),
-        ("loo_draws", 0, "discovery.loo_draws: must be >= 1"),
+        ("loo_draws", 0, "discovery.loo_draws: must be >= 25"),
+        ("loo_draws", 24, r"discovery.loo_draws: must be >= 25 \(PSIS-LOO.*got 24"),
         ("sigma", float("nan"), "discovery.sigma: must be > 0"),
         ("margin_ln_bf", -1.0, "thresholds on log odds"),
         ("effect_prior", 1.0, "strictly between 0 and 1"),

@@ -12,6 +12,7 @@ from bayesupdate.discovery.evidence import (
     laplace_loo,
 )
 from bayesupdate.discovery.flagging import flag_modes
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import SIGMA_FLOOR, NoiseModel, noise_model
 from bayesupdate.inference.parameter_space import ParameterSpec
 from bayesupdate.inference.priors import prior_from_mapping
@@ -116,6 +117,10 @@ def test_laplace_loo_matches_exact_leave_one_out():
         exact += stats.norm.logpdf(y[i], jac[i] @ mean, np.sqrt(var))
     assert loo["elpd"] == pytest.approx(exact, abs=0.15)
     assert loo["pareto_k_max"] < 0.7
+    # PSIS smooths the largest fifth of the ratios, at least 5: 25 draws is the fewest
+    assert laplace_loo(fit, draws=25, seed=1)["draws"] == 25
+    with pytest.raises(BayesUpdateError, match="draws must be >= 25, got 24"):
+        laplace_loo(fit, draws=24, seed=1)
 
 
 def test_noise_model_sources_and_flags():

@@ -51,6 +51,8 @@ import numpy as np
 from scipy import optimize, special, stats
 
 from bayesupdate.discovery.mass_block import MassBlock, WithMassBlock
+from bayesupdate.discovery.settings import MIN_LOO_DRAWS
+from bayesupdate.errors import BayesUpdateError
 from bayesupdate.inference.likelihood_blocks import (
     LOG_2PI,
     FixedNoiseLikelihood,
@@ -405,6 +407,8 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
     import arviz_base
     import arviz_stats
 
+    if draws < MIN_LOO_DRAWS:
+        raise BayesUpdateError(f"laplace_loo: draws must be >= {MIN_LOO_DRAWS}, got {draws}")
     space, best = fit.space, fit.best
     rng = np.random.default_rng(seed)
     cov = np.linalg.inv(best.hessian)

@@ -20,6 +20,11 @@ import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
 
+#: fewest Laplace draws PSIS-LOO can smooth: it fits a generalized Pareto to the largest fifth
+#: of the importance ratios (below 226 draws), and to no fewer than 5 of them (Vehtari et al.
+#: 2024, "Pareto smoothed importance sampling", JMLR 25(72), sec. 3; ArviZ refuses fewer)
+MIN_LOO_DRAWS = 25
+
 
 def _check_positive_counts(record, names: tuple[str, ...]) -> None:
     for name in names:
@@ -60,7 +65,8 @@ class RefitBudget:
 @dataclass(frozen=True)
 class EvidenceSettings:
     """sigma : fixed relative frequency noise level (None: the data's sd, else inferred).
-    loo_top : fits (after the baseline) given PSIS-LOO, each with ``loo_draws`` draws."""
+    loo_top : fits (after the baseline) given PSIS-LOO, each with ``loo_draws`` draws (at least
+    ``MIN_LOO_DRAWS``)."""
 
     sigma: float | None = None
     loo_top: int = 3
@@ -69,7 +75,11 @@ class EvidenceSettings:
     def __post_init__(self):
         if self.sigma is not None and not (np.isfinite(self.sigma) and self.sigma > 0):
             raise BayesUpdateError(f"discovery.sigma: must be > 0, got {self.sigma}")
-        _check_positive_counts(self, ("loo_draws",))
+        if int(self.loo_draws) < MIN_LOO_DRAWS:
+            raise BayesUpdateError(
+                f"discovery.loo_draws: must be >= {MIN_LOO_DRAWS} (PSIS-LOO smooths the largest "
+                f"fifth of the draws' importance ratios, at least 5 of them), got {self.loo_draws}"
+            )
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,22 @@ Runs, through the CLI in this process (the user's path):
   small discovery);
 - ``sample`` of the exhaust against the same data, 16 walkers, 60 steps, DE moves, 2 starts.
 
-"Enter each room at most twice" is read here as: per run, each pair of rooms (caller room ->
+Issue 38 asks that a run "enter each room at most twice and climb back up at most twice" and
+leaves the counting open.  Three readings are measured:
+
+- **the path reading** (``path_walk``): a walk is the stack from the command down to a call, its
+  rooms in order (consecutive frames of one room merged).  Per path, the times a room occurs and
+  the steps up a layer; the most over every path of the run.  A loop makes one path, however
+  often it runs;
+- **the per-pair reading** (``doors``, below): per run, each pair of rooms is crossed at no more
+  than two call sites;
+- **the sequence reading** (``sequence_walk``): every function of the package in the order of its
+  first call, consecutive ones of a room merged into stays; per room its stays, and the stays in
+  a higher layer than the one before as climbs.  It counts every return to a caller's room that
+  then calls a function it had not called before, so a function that calls a lower room and
+  then a helper of its own climbs once: layered code of any shape climbs often.
+
+The per-pair reading is:  per run, each pair of rooms (caller room ->
 callee room) is crossed at no more than two call sites.  Per pair, not per room: the bottom
 rooms (``compute``, the core's ``modal_data``) are entered from every room above them by design,
 so a per-room total counts clients, while a caller that walks into one room many times to do
@@ -74,7 +89,21 @@ reader (``pipelines.study.study_mass_terms``):
   Worst: models -> fe 31 (the exhaust's ``StructureBuilder`` calls), pipelines -> inference
   32, inference -> fe 15, inference -> compute 14, pipelines -> fe 12 (4 work), fe -> compute 8.
 
-Run: .venv/bin/python studies/room_walks.py [--sites]   (--sites: list every crossing site)
+The three readings, before the rooms of issue 38 (6a78c33, ``--legacy-rooms``: its parallel,
+parallel_executor, parallel_dask and interrupts modules in the compute layer) and now
+(2026-11-30); the package also grew between them (a discover run first-calls 377 functions
+then, 496 now):
+- path: discover, a room at most 3 times on one path (``discovery > parallel_executor >
+  discovery > inference > discovery``) and 2 climbs -> 2 and 1; sample 2 and 1 -> 2 and 1.
+  ``tests/test_room_walks.py`` holds both runs to at most 2 and 2, with every climb a callback;
+- climbing sites over the run: discover 5 -> 2; sample 3 -> 3 (a callback each; one is pickle
+  running ``ElementProperties.__reduce__`` as the split worker's share is written);
+- per pair: discover 10 -> 13 pairs over two sites, sample 10 -> 12;
+- sequence: discover 90 stays in 14 rooms and 40 climbs -> 102 in 12 and 46; sample 100 in 13
+  and 47 -> 135 in 11 and 63.
+
+Run: .venv/bin/python studies/room_walks.py [--sites] [--legacy-rooms]
+(--sites: list every crossing site; for 6a78c33, check it out and put it first on PYTHONPATH)
 """
 
 import argparse
@@ -86,13 +115,23 @@ import linecache
 import sys
 import tempfile
 from collections import Counter
+from itertools import pairwise
 from pathlib import Path
 
 import bayesupdate
 from bayesupdate.cli import main as cli
 
 PACKAGE = Path(bayesupdate.__file__).resolve().parent
-CORE = ("errors", "units", "atomic", "modal_data", "model_protocol", "correlation", "paper")
+CORE = (
+    "errors",
+    "units",
+    "atomic",
+    "modal_data",
+    "model_protocol",
+    "correlation",
+    "uff_read",
+    "paper",
+)
 #: layer of each room, bottom (0) to top (pyproject.toml's [tool.importlinter] comment)
 LAYERS = {
     **dict.fromkeys(("bayesupdate", *CORE), 0),
@@ -104,6 +143,9 @@ LAYERS = {
     "pipelines": 6,
     **dict.fromkeys(("commands", "cli", "report", "plotting", "__main__"), 7),
 }
+
+#: the top-level modules that held the compute room's work before it had one (6a78c33)
+LEGACY_COMPUTE = ("parallel", "parallel_executor", "parallel_dask", "interrupts")
 
 DISCOVERY_STUDY = """
 [model]
@@ -161,6 +203,14 @@ class WalkTracer:
         self.callbacks: set = set()
         #: sites whose callee is a property getter: a record's field read, not work
         self.reads: set = set()
+        #: the path reading: rooms on the stack from the command down to each call
+        #: (consecutive frames of one room merged), with how often each path was called
+        self.paths: Counter = Counter()
+        #: the sequence reading: each function's room, in the order of its first call
+        self.first: list[str] = []
+        self._seen: set = set()
+        #: per running Python frame, its path (None inside an import), kept by call and return
+        self._stack: list[tuple[str, ...] | None] = []
 
     def _room(self, code) -> str | None:
         room = self._rooms.get(code, False)
@@ -169,16 +219,25 @@ class WalkTracer:
         return room
 
     def __call__(self, frame, event, _arg) -> None:
+        if event == "return":
+            if self._stack:  # a frame entered before the tracer was set has no entry
+                self._stack.pop()
+            return
         if event != "call":
             return
         room = self._room(frame.f_code)
-        if room is None or frame.f_code.co_name == "<module>":
+        path = self._push(room, frame.f_code.co_name == "<module>")
+        if room is None or path is None:
             return
         caller = frame.f_back
         while caller is not None and self._room(caller.f_code) is None:
             caller = caller.f_back
         if caller is None or caller.f_code.co_name == "<module>":
             return  # called from outside the package (this script), or at an import
+        self.paths[path] += 1
+        if frame.f_code not in self._seen:
+            self._seen.add(frame.f_code)
+            self.first.append(room)
         source = self._room(caller.f_code)
         if source != room:
             key = (source, room)
@@ -189,6 +248,20 @@ class WalkTracer:
                 self.callbacks.add(site)
             if _is_property(frame):
                 self.reads.add(site)
+
+    def _push(self, room: str | None, module: bool) -> tuple[str, ...] | None:
+        """The path of a frame being called (its caller's path, with its room appended where
+        that differs from the last), kept until it returns; None inside an import (a module
+        body of the package and everything it calls)."""
+        top = self._stack[-1] if self._stack else ()
+        if top is None or (module and room is not None):
+            path = None
+        elif room is None or (top and top[-1] == room):
+            path = top
+        else:
+            path = (*top, room)
+        self._stack.append(path)
+        return path
 
 
 def _handed(caller, code) -> bool:
@@ -291,6 +364,44 @@ def report_doors(tracer: WalkTracer) -> None:
         print(f"  {source:>10} -> {room:<12} sites {found:3d}  work sites {work:3d}")
 
 
+def path_walk(tracer: WalkTracer) -> tuple[dict[str, tuple[int, tuple]], tuple[int, tuple]]:
+    """The path reading: per room, the most times one path enters it, with such a path; and the
+    most climbs (steps to a higher layer) on one path, with such a path."""
+    entries: dict[str, tuple[int, tuple]] = {}
+    climbs_most: tuple[int, tuple] = (0, ())
+    for path in tracer.paths:
+        for room, times in Counter(path).items():
+            if times > entries.get(room, (0, ()))[0]:
+                entries[room] = (times, path)
+        up = sum(climbs(step) for step in pairwise(path))
+        if up > climbs_most[0]:
+            climbs_most = (up, path)
+    return entries, climbs_most
+
+
+def sequence_walk(tracer: WalkTracer) -> tuple[Counter, int]:
+    """The sequence reading: the rooms of the functions in the order of their first call,
+    consecutive ones merged into stays; per room its stays, and the number of stays in a higher
+    layer than the stay before."""
+    stays = [room for i, room in enumerate(tracer.first) if i == 0 or tracer.first[i - 1] != room]
+    return Counter(stays), sum(climbs(step) for step in pairwise(stays))
+
+
+def report_readings(tracer: WalkTracer) -> None:
+    """The path and the sequence readings (module docstring), a line each, rooms over two."""
+    entries, (up, path) = path_walk(tracer)
+    most = max(times for times, _ in entries.values())
+    print(f"path reading: {len(tracer.paths)} paths; most entries of a room on one path {most}; "
+          f"most climbs on one path {up} ({' > '.join(path)})")  # fmt: skip
+    for room, (times, example) in sorted(entries.items()):
+        if times > 2:
+            print(f"  {room} entered {times} times on {' > '.join(example)}")
+    stays, up = sequence_walk(tracer)
+    over = {room: n for room, n in stays.most_common() if n > 2}
+    print(f"sequence reading: {len(tracer.first)} functions, {sum(stays.values())} stays in "
+          f"{len(stays)} rooms, {up} climbs; rooms with more than 2 stays: {over}")  # fmt: skip
+
+
 def report(name: str, tracer: WalkTracer, sites: bool) -> None:
     rows = table(tracer)
     print(f"\n{name}: rooms entered {len(rows)}")
@@ -300,6 +411,7 @@ def report(name: str, tracer: WalkTracer, sites: bool) -> None:
         a, b, c, d, e = counts
         print(f"{room:<12} {a:>11} {b:>13} {c:>11} {d:>13} {e:>12}")
     report_doors(tracer)
+    report_readings(tracer)
     listed = sorted(k for k in tracer.sites if sites or climbs(k))
     print("crossing sites" if sites else "climbing sites (a lower room calls a higher one)")
     for key in listed:
@@ -317,7 +429,15 @@ def report(name: str, tracer: WalkTracer, sites: bool) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sites", action="store_true", help="list every crossing site")
+    parser.add_argument(
+        "--legacy-rooms",
+        action="store_true",
+        help="the package as of 6a78c33 (before issue 38's rooms): its parallel, "
+        "parallel_executor, parallel_dask and interrupts modules in the compute layer",
+    )
     args = parser.parse_args()
+    if args.legacy_rooms:
+        LAYERS.update(dict.fromkeys(LEGACY_COMPUTE, LAYERS["compute"]))
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         (folder / "discover.toml").write_text(DISCOVERY_STUDY)

@@ -159,6 +159,39 @@ def test_uff_time_records_with_disagreeing_rates(tmp_path, capsys):
     argv = ["frf", tmp_path / "t.uff", "--force-channel", "1V", "--response", "2V"]
     code, _, err = run_cli([*argv, "--out", tmp_path / "f.uff"], capsys)
     assert code == 2 and "sample rates differ" in err and len(err.strip().splitlines()) == 1
+    # a UFF time record carries its own step: --time is refused, --fs must agree with it
+    code, _, err = run_cli([*argv, "--time", "t", "--out", tmp_path / "f.uff"], capsys)
+    assert code == 2 and "a UFF time record carries its own time step" in err
+    code, _, err = run_cli([*argv, "--fs", 1000, "--out", tmp_path / "f.uff"], capsys)
+    assert code == 2 and "--fs 1000 Hz disagrees" in err and "1024 Hz from 1V's time step" in err
+
+
+@pytest.mark.parametrize(
+    ("stored", "extra", "needle"),
+    [
+        (None, ["--fs", 2048], "--fs 2048 Hz disagrees with the file's own sample rate, 1024 Hz"),
+        (1024.0, ["--fs", 2048], "1024 Hz from 'fs'; --fs is for a file that has none"),
+        (None, ["--time", "clock"], "no time variable 'clock'"),
+        (1000.0, ["--time", "time"], "time variable 'time' gives 1024 Hz, 'fs' 1000 Hz"),
+    ],
+)
+def test_a_sample_rate_that_contradicts_the_file_is_refused(
+    stored, extra, needle, hammer, capsys, tmp_path
+):
+    """``--fs`` is for a file without a rate, and ``--time`` names a variable that is there and
+    agrees with a stored rate; before, either was silently obeyed or silently ignored."""
+    _, sig, _ = hammer
+    arrays = {k: sig[k][:4096] for k in ("force", "a1", "time")}  # 1024 Hz
+    if stored is not None:
+        arrays["fs"] = np.array(stored)
+    np.savez(tmp_path / "x.npz", **arrays)
+    argv = ["frf", tmp_path / "x.npz", "--force-channel", "force", "--response", "a1=1V"]
+    code, _, err = run_cli([*argv, "--reference", "1V", *extra, "--out", tmp_path / "f"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and needle in err, err
+    # the same --fs as the file's own rate, and --time naming its time vector, are taken
+    agree = ["--fs", 1024] if stored is None else ["--fs", stored]
+    code, _, err = run_cli([*argv, "--reference", "1V", *agree, "--out", tmp_path / "g"], capsys)
+    assert code == 0, err
 
 
 def _sweep_test(folder):

@@ -5,8 +5,11 @@ A channel is named on the command line.  In a UFF file it is the DOF label of a 
 (``"25V"``: node 25, +Z) or its id line; in a ``.mat`` / ``.npz`` / ``.h5`` file it is a 1-D
 variable, ``VAR:j`` (column j, from 0, of a 2-D variable), or a column name listed in a
 string variable as long as one 2-D variable has columns (the ``chanInNameList`` of a MATLAB DAQ
-script).  The sample rate comes from the UFF abscissa step, a time variable (``--time``, or a
-variable named ``t``, ``time...`` or ``timeIn_s``) or ``--fs``.
+script).  The sample rate comes from the UFF abscissa step, a time variable named by
+``--time`` (it must be there, and agree with a stored rate), a stored rate (a scalar named
+``fs``, ``sample_rate``, ...), a variable named ``t``, ``time...`` or ``timeIn_s``, or, for a file
+with none of these, ``--fs``.  An ``--fs`` that disagrees with the file's own rate is refused: a
+wrong rate scales every frequency found.
 """
 
 import os
@@ -15,6 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from bayesupdate.errors import BayesUpdateError
+
+#: names (any case, after the last "/") of a variable holding a file's sample rate [Hz]
+RATE_NAMES = ("fs", "sample_rate", "samplerate", "sampling_rate")
 
 #: a signal that meets its extreme value this many times or more is clipped (flat tops); real
 #: records checked (GVT, plate) meet theirs once or twice
@@ -107,28 +113,63 @@ def _column(arrays: dict, name: str, path: str) -> np.ndarray:
 
 
 def _sample_rate(arrays: dict, time_name: str | None, fs: float | None, path: str) -> float:
-    if fs is not None:
-        if not fs > 0:
-            raise BayesUpdateError(f"--fs {fs}: must be > 0 Hz")
-        return float(fs)
+    """The sample rate [Hz]: the file's own (``_own_rate``), or ``--fs`` for a file that has
+    none; an ``--fs`` that disagrees with the file's own rate is refused, not obeyed."""
+    own = _own_rate(arrays, time_name, path)
+    if fs is None:
+        if own is None:
+            raise BayesUpdateError(f"{path}: no uniform time variable found; give --fs or --time")
+        return own[0]
+    _check_fs(fs, own, path)
+    return float(fs)
+
+
+def _check_fs(fs: float, own: tuple[float, str] | None, path: str) -> None:
+    """Refuse an ``--fs`` [Hz] that differs from the file's own rate (rate [Hz], its source)
+    beyond the rounding of a stored time step (1e-6)."""
+    if own is not None and abs(own[0] - fs) > 1e-6 * own[0]:
+        raise BayesUpdateError(
+            f"{path}: --fs {fs:g} Hz disagrees with the file's own sample rate, {own[0]:g} Hz "
+            f"from {own[1]}; --fs is for a file that has none"
+        )
+
+
+def _own_rate(arrays: dict, time_name: str | None, path: str) -> tuple[float, str] | None:
+    """The rate [Hz] a file states, with where from: the time variable ``time_name`` where given
+    (it must be there and uniform, and agree with a stored rate), else a stored rate (an HDF5
+    DAQ's ``sample_rate``), else the first uniform variable named ``t``, ``time...``; None if
+    none."""
     base = {k: k.rsplit("/", 1)[-1].lower() for k in arrays}
-    for k, b in base.items():  # a stored rate (an HDF5 DAQ's sample_rate) wins
-        if b in ("fs", "sample_rate", "samplerate", "sampling_rate") and arrays[k].size == 1:
-            return float(arrays[k].reshape(-1)[0])
+    stored = next((k for k, b in base.items() if b in RATE_NAMES and arrays[k].size == 1), None)
+    stored_rate = None if stored is None else (float(arrays[stored].reshape(-1)[0]), repr(stored))
     if time_name:
-        candidates = [time_name]
-    else:
-        candidates = [k for k, b in base.items() if b in ("t", "time") or b.startswith("time")]
-    for name in candidates:
-        if name not in arrays:
-            raise BayesUpdateError(f"{path}: no time variable {name!r}")
-        t = np.asarray(arrays[name], dtype=float).reshape(-1)
-        step = np.diff(t)
-        if t.size > 2 and np.all(step > 0) and np.ptp(step) <= 1e-6 * step.mean():
-            return float(1.0 / step.mean())
-        if time_name:
-            raise BayesUpdateError(f"{path}: time variable {name!r} is not uniform")
-    raise BayesUpdateError(f"{path}: no uniform time variable found; give --fs or --time")
+        if time_name not in arrays:
+            raise BayesUpdateError(f"{path}: no time variable {time_name!r}")
+        rate = _uniform_rate(arrays[time_name])
+        if rate is None:
+            raise BayesUpdateError(f"{path}: time variable {time_name!r} is not uniform")
+        if stored_rate is not None and abs(stored_rate[0] - rate) > 1e-6 * rate:
+            raise BayesUpdateError(
+                f"{path}: time variable {time_name!r} gives {rate:g} Hz, {stored_rate[1]} "
+                f"{stored_rate[0]:g} Hz; the file disagrees with itself"
+            )
+        return rate, f"time variable {time_name!r}"
+    if stored_rate is not None:  # a stored rate wins over a time vector found by its name
+        return stored_rate
+    for name in (k for k, b in base.items() if b in ("t", "time") or b.startswith("time")):
+        rate = _uniform_rate(arrays[name])
+        if rate is not None:
+            return rate, f"time variable {name!r}"
+    return None
+
+
+def _uniform_rate(values) -> float | None:
+    """1 / the step [Hz] of a uniform, increasing time vector [s]; None if it is not one."""
+    t = np.asarray(values, dtype=float).reshape(-1)
+    step = np.diff(t)
+    if t.size > 2 and np.all(step > 0) and np.ptp(step) <= 1e-6 * step.mean():
+        return float(1.0 / step.mean())
+    return None
 
 
 def _read_uff_time(path: str) -> list[Channel]:
@@ -164,17 +205,34 @@ def read_channels(
     path = str(path)
     if not os.path.isfile(path):
         raise BayesUpdateError(f"{path}: file not found")
+    if fs is not None and not fs > 0:
+        raise BayesUpdateError(f"--fs {fs}: must be > 0 Hz")
     if path.lower().endswith((".uff", ".unv")):
-        by_name = {c.name: c for c in _read_uff_time(path)}
-        missing = [n for n in names if n not in by_name]
-        if missing:
-            raise BayesUpdateError(
-                f"{path}: no channel {missing[0]!r}; channels there: {', '.join(sorted(by_name))}"
-            )
-        return [by_name[n] for n in names]
+        return _uff_channels(path, names, time_name, fs)
     arrays = _load_arrays(path)
     rate = _sample_rate(arrays, time_name, fs, path)
     return [Channel(n, _column(arrays, n, path), rate) for n in names]
+
+
+def _uff_channels(path: str, names: list[str], time_name: str | None, fs: float | None):
+    """The named time records of a UFF file; its records' abscissa step is their rate, so
+    ``--time`` is refused and ``--fs`` must agree with it."""
+    if time_name:
+        raise BayesUpdateError(
+            f"{path}: --time {time_name!r}: a UFF time record carries its own time step; "
+            "--time is for .mat, .npz and HDF5 files"
+        )
+    by_name = {c.name: c for c in _read_uff_time(path)}
+    missing = [n for n in names if n not in by_name]
+    if missing:
+        raise BayesUpdateError(
+            f"{path}: no channel {missing[0]!r}; channels there: {', '.join(sorted(by_name))}"
+        )
+    chosen = [by_name[n] for n in names]
+    if fs is not None:
+        for channel in chosen:
+            _check_fs(fs, (channel.sample_rate_hz, f"{channel.name}'s time step"), path)
+    return chosen
 
 
 def check_channels(channels: list[Channel], where: str) -> list[str]:

@@ -194,6 +194,22 @@ def test_a_sample_rate_that_contradicts_the_file_is_refused(
     assert code == 0, err
 
 
+@pytest.mark.parametrize(
+    ("df", "needle"),
+    [
+        (1e6, "shorter than 8; the coarsest line spacing is 128 Hz"),
+        (0.01, "longer than the record (4096); the finest line spacing is 0.25 Hz"),
+    ],
+)
+def test_a_line_spacing_outside_the_record_names_the_limit(df, needle, hammer, capsys, tmp_path):
+    _, sig, _ = hammer
+    np.savez(tmp_path / "x.npz", **{k: sig[k][:4096] for k in ("force", "a1", "time")})
+    argv = ["frf", tmp_path / "x.npz", "--force-channel", "force", "--response", "a1=1V"]
+    argv += ["--reference", "1V", "--method", "welch", "--df", df, "--out", tmp_path / "f"]
+    code, _, err = run_cli(argv, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and needle in err, err
+
+
 def _sweep_test(folder):
     """A shaker sweep 2 -> 40 Hz in 60 s (then 4 s of rest) at 512 Hz whose force carries 10 % and
     5 % of 2nd and 3rd harmonic (up to 120 Hz), on 3 modes (8, 17, 31 Hz; 0.3, 0.5, 1 %

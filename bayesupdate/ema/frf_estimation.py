@@ -333,6 +333,11 @@ def _averaged_frf(force, response, sample_rate_hz, method, segment, window, swee
             f"--df: a segment of {segment} samples is longer than the record ({n_t}); "
             f"the finest line spacing is {sample_rate_hz / n_t:g} Hz"
         )
+    if segment < 8:  # a spectrum of fewer lines resolves nothing
+        raise BayesUpdateError(
+            f"--df: a segment of {segment} samples is shorter than 8; "
+            f"the coarsest line spacing is {sample_rate_hz / 8:g} Hz"
+        )
     f, h1, h2, coh = h1_h2_coherence(force, response, sample_rate_hz, segment, window=window)
     taper = np.hanning(segment + 1)[:-1] if window == "hann" else np.ones(segment)
     seg = _segments(force, segment, max(1, segment // 2)) * taper

@@ -227,6 +227,34 @@ def test_cards_of_other_analyses_are_ignored_and_listed(capsys, tmp_path):
     assert "DMI STIFF is not supported" in line, line
 
 
+#: a DMIG's header (symmetric, real) and one column: 50 at GRID 1 component 1
+DMIG = ("DMIG    KAX     0       6       1       0\n"
+        "DMIG    KAX     1       1               1       1       50.")  # fmt: skip
+
+
+def test_a_dmig_counts_only_where_k2gg_or_m2gg_selects_it(capsys, tmp_path):
+    """A DMIG that the case control adds to the dynamic stiffness of extra points (K2PP) or
+    selects nowhere leaves the real modes as they are (the spring deck's closed form), with a
+    note; one that K2GG (here with a scale factor and a second matrix) or M2GG adds to K or M
+    is refused, named with its line."""
+    deck = tmp_path / "dmig.bdf"
+
+    def write(command: str) -> None:
+        text = SPRING_DECK.replace("ENDDATA", f"{DMIG}\nENDDATA")
+        deck.write_text(text.replace("CEND", f"CEND\n{command}"))
+
+    for command in ("K2PP = KAX", "$ no selection"):
+        write(command)
+        out = modes_json(capsys, "--model", deck)
+        freq = np.sqrt([100.0, 400.0, 900.0]) / (2 * np.pi)
+        assert out["frequencies_hz"] == pytest.approx(freq)
+        assert any("DMIG KAX ignored: no K2GG or M2GG selects it" in n for n in out["notes"])
+    for command in ("K2GG = 1.5*KAX, KBX", "M2GG = KAX"):
+        write(command)
+        line = rejected(capsys, "--model", deck)
+        assert "dmig.bdf:18 DMIG KAX: DMIG KAX is not supported: the case control's K2GG" in line
+
+
 def test_unreadable_deck_and_massless_deck(capsys, tmp_path):
     bad = tmp_path / "bad.dat"
     bad.write_text("BEGIN BULK\nGRID    1       x       y\nENDDATA\n")

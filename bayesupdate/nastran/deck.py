@@ -76,7 +76,8 @@ MDLPRM_OUTPUT = re.compile(r"^(HDF5|H5\w*)$")
 #: DMI matrices the aeroelastic solutions read by these names (MSC QRG, Aeroelastic Analysis:
 #: downwash, force and pressure corrections): ignored; a DMI of any other name is refused
 AERO_DMI = {"W2GJ", "FA2J", "WKK", "WTFACT"}
-SUPPORTED = (ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS | {"MDLPRM", "DMI"}
+SUPPORTED = (ELEMENT_CARDS | NO_EFFECT_CARDS | DESIGN_CARDS | OBJECTIVE_CARDS
+             | {"MDLPRM", "DMI", "DMIG"}
              | set().union(*IGNORED_CARDS.values()))  # fmt: skip
 #: PARAMs that shape the model (``reader``)
 MODEL_PARAMS = {"WTMASS", "K6ROT", "COUPMASS", "AUTOSPC"}
@@ -320,7 +321,7 @@ def _case_control(lines) -> tuple[dict, dict]:
     lines (file, line, text); ``changes`` in the selections: (file:line, command) of each
     command in ``CASE_REFUSED``."""
     scopes, current = {0: {}}, 0
-    sets, pending, changes = {}, None, []
+    sets, pending, changes, matrices = {}, None, [], set()
     for file, number, text in lines:
         words = _words(text)
         if not words:
@@ -330,6 +331,9 @@ def _case_control(lines) -> tuple[dict, dict]:
             pending = pending if words.endswith(",") else None
             continue
         refused = [c for c in CASE_REFUSED if words.startswith(c[:4])]
+        m = re.match(r"^(K2GG|M2GG)\s*=\s*(.*)$", words)
+        if m:  # in any subcase, as STATSUB: "K2GG = 1.5*KAX, KBX" names KAX and KBX
+            matrices.update(re.findall(r"(?<![\w.])[A-Z][A-Z0-9_]*", m.group(2)))
         if refused:  # in any subcase: the deck is meant for that solution
             changes.append((f"{Path(file).name}:{number}", refused[0]))
         m = re.match(r"^SUBCASE\s+(\d+)", words)
@@ -349,6 +353,8 @@ def _case_control(lines) -> tuple[dict, dict]:
     first = min((k for k in scopes if k > 0), default=0)
     chosen = {**scopes[0], **scopes[first]}
     case = {"changes": tuple(changes)} if changes else {}
+    if matrices:
+        case["K2GG/M2GG"] = tuple(sorted(matrices))
     for key, name in (("METH", "METHOD"), ("SPC", "SPC"), ("MPC", "MPC")):
         if key in chosen and chosen[key].isdigit():
             case[name] = int(chosen[key])
@@ -478,6 +484,34 @@ def _check_duplicates(deck: Deck, refusals: Refusals) -> None:
                 refusals.card(c, f"{family} id {i} is also {first.label} at {first.where}")
 
 
+def _matrix_notes(deck: Deck, refusals: Refusals) -> list[str]:
+    """Refuse the direct matrix input that changes K or M (into ``refusals``): a DMI other than
+    the aeroelastic corrections, a DMIG that the case control's K2GG or M2GG adds to K or M
+    (MSC QRG, K2GG and M2GG).  Returns notes on those ignored: a DMIG that no K2GG or M2GG
+    selects enters only other solutions (K2PP, M2PP, B2PP: dynamic response, with extra points;
+    B2GG, K42GG: damping; loads), or none."""
+    notes = []
+    dmi = {c: str(c.raw[0]).strip().upper() for c in deck.of("DMI")}
+    for c, name in dmi.items():
+        if name not in AERO_DMI:
+            refusals.card(c, f"DMI {name} is not supported (only the aeroelastic corrections "
+                             "W2GJ, FA2J, WKK and WTFACT are ignored)")  # fmt: skip
+    aero = sorted(set(dmi.values()) & AERO_DMI)
+    if aero:
+        notes.append(f"DMI {', '.join(aero)} (aeroelastic corrections) ignored")
+    selected = set(deck.case.get("K2GG/M2GG", ()))
+    dmig = {c: str(c.raw[0]).strip().upper() for c in deck.of("DMIG")}
+    for c, name in dmig.items():
+        if name in selected:
+            refusals.card(c, f"DMIG {name} is not supported: the case control's K2GG or M2GG "
+                             "adds it to K or M (it would change the model)")  # fmt: skip
+    unused = sorted(set(dmig.values()) - selected)
+    if unused:
+        notes.append(f"DMIG {', '.join(unused)} ignored: no K2GG or M2GG selects it (K2PP, "
+                     "M2PP, B2PP, B2GG and loads enter only other solutions)")  # fmt: skip
+    return notes
+
+
 def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
     """Refuse unsupported cards and PARAMs (into ``refusals``); returns the notes listing
     what is read but ignored (once each)."""
@@ -507,14 +541,7 @@ def check_cards(deck: Deck, refusals: Refusals) -> list[str]:
             refusals.card(c, f"MDLPRM {key} is not supported (it may change the normal modes)")
     if deck.of("MDLPRM"):
         notes.append("MDLPRM HDF5 output settings ignored (no effect on normal modes)")
-    dmi = {c: str(c.raw[0]).strip().upper() for c in deck.of("DMI")}
-    for c, name in dmi.items():
-        if name not in AERO_DMI:
-            refusals.card(c, f"DMI {name} is not supported (only the aeroelastic corrections "
-                             "W2GJ, FA2J, WKK and WTFACT are ignored)")  # fmt: skip
-    aero = sorted(set(dmi.values()) & AERO_DMI)
-    if aero:
-        notes.append(f"DMI {', '.join(aero)} (aeroelastic corrections) ignored")
+    notes += _matrix_notes(deck, refusals)
     for where, command in deck.case.get("changes", ()):
         refusals.add(f"{where} case control {command}: {CASE_REFUSED[command]}")
     objective = sorted({c.name for c in deck.cards if c.name in OBJECTIVE_CARDS})

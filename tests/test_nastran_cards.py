@@ -141,59 +141,90 @@ def test_a_tapered_cbeams_material_as_a_parameter(tmp_path):
 
 
 # -- PBEAML tapered stations ----------------------------------------------------------------------
+def _tapered_bar(tmp_path, stations: str):
+    """The model of one CBEAM, PBEAML BAR b = 0.03, h 0.02 and NSM 0.5 at end A, then
+    ``stations``."""
+    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+            f"PBEAML,5,1,,BAR\n,0.03,0.02,0.5{stations}CBEAM,1,5,1,2,0.,0.,1.\n"
+            "SPC1,1,123456,1\n")  # fmt: skip
+    return load_nastran_model(_write(tmp_path, _deck(bulk)))
+
+
+def test_a_tapered_pbeaml_is_the_pbeam_of_its_end_sections(tmp_path):
+    """A PBEAML BAR, DIM1 b = 0.03 and DIM2 h from 0.02 (end A) to 0.01 (end B), NSM 0.5 to
+    1.5, is read as MSC reads it: the PBEAM of the sections at its ends (MSC's f06 prints that
+    replacement), A, I1, I2 and J linear along the element, so its mean A = b (hA + hB) / 2,
+    I1 = b (hA^3 + hB^3) / 24 (not the mean of the exact section, b (hA^3 + hA^2 hB + hA hB^2
+    + hB^3) / 48), I2 = b^3 (hA + hB) / 24, NSM 1; both ends' sections kept (a tapered
+    element), no note."""
+    model = _tapered_bar(tmp_path, ",NO,1.,0.03,0.01,1.5\n")
+    g = model.structure.general_beams
+    b, ha, hb = 0.03, 0.02, 0.01
+    assert g.area[0] == pytest.approx(b * (ha + hb) / 2, rel=1e-12)
+    assert g.iz[0] == pytest.approx(b * (ha**3 + hb**3) / 24, rel=1e-12)
+    assert g.iy[0] == pytest.approx(b**3 * (ha + hb) / 24, rel=1e-12)
+    assert g.nsm[0] == pytest.approx(1.0, rel=1e-12)
+    ends = g.taper[0] * np.array([g.area[0], g.iy[0], g.iz[0], g.torsion[0]])
+    assert ends[:, 2] == pytest.approx([b * ha**3 / 12, b * hb**3 / 12], rel=1e-12)
+    notes = model.structure.metadata["nastran"]["notes"]
+    assert not any("PBEAML 5 is tapered" in n for n in notes), notes
+
+
 @pytest.mark.parametrize(
     "stations",
     [
-        ",NO,1.,0.03,0.01,1.5\n",  # end B given
         ",NO,0.5,,,\n,NO,1.,0.03,0.01,1.5\n",  # a blank station: linear between A and B
         ",NO,0.5,0.03,0.015,1.\n,NO,1.,0.03,0.01,1.5\n",  # a station on the linear law
     ],
 )  # fmt: skip
-def test_tapered_pbeaml_uses_the_mean_of_its_exact_section(tmp_path, stations):
-    """A PBEAML BAR, DIM1 b = 0.03 constant and DIM2 h from 0.02 (end A) to 0.01 (end B),
-    NSM 0.5 to 1.5: the element's section is the mean over its length of the section of the
-    linearly varying dimensions, in closed form A = b (hA + hB) / 2, I1 = b h^3 / 12 ->
-    b (hA^3 + hA^2 hB + hA hB^2 + hB^3) / 48, I2 = h b^3 / 12 -> b^3 (hA + hB) / 24, NSM 1;
-    the QRG's blank fields (end B: end A's; a station: linear between A and B) give the same."""
-    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
-            f"PBEAML,5,1,,BAR\n,0.03,0.02,0.5{stations}CBEAM,1,5,1,2,0.,0.,1.\n"
-            "SPC1,1,123456,1\n")  # fmt: skip
-    model = load_nastran_model(_write(tmp_path, _deck(bulk)))
+def test_a_pbeaml_station_between_its_ends_is_a_pbeam_station(tmp_path, stations):
+    """With a station at x / L = 0.5 (given, or blank: the QRG's linear interpolation of the
+    dimensions, h = 0.015), the PBEAM of the three stations' sections: I1 at the middle is
+    b 0.015^3 / 12, off the line between the ends' (I1 is cubic in h), so the element uses the
+    mean of the piecewise-linear variation, (I_A + 2 I_M + I_B) / 4, with a note, as a PBEAM
+    with such a station (``test_pbeam_stations_follow_the_qrg_blank_rules``)."""
+    model = _tapered_bar(tmp_path, stations)
     g = model.structure.general_beams
-    b, ha, hb = 0.03, 0.02, 0.01
-    assert g.area[0] == pytest.approx(b * (ha + hb) / 2, rel=1e-12)
-    assert g.iz[0] == pytest.approx(b * (ha**3 + ha**2 * hb + ha * hb**2 + hb**3) / 48, rel=1e-12)
-    assert g.iy[0] == pytest.approx(b**3 * (ha + hb) / 24, rel=1e-12)
-    assert g.nsm[0] == pytest.approx(1.0, rel=1e-12)
+    b = 0.03
+    i_a, i_m, i_b = (b * h**3 / 12 for h in (0.02, 0.015, 0.01))
+    assert g.iz[0] == pytest.approx((i_a + 2 * i_m + i_b) / 4, rel=1e-12)
+    assert g.area[0] == pytest.approx(b * 0.015, rel=1e-12)
     notes = model.structure.metadata["nastran"]["notes"]
-    assert any("PBEAML 5 is tapered" in n for n in notes), notes
+    assert any("PBEAML 5 is tapered with stations off the line" in n for n in notes), notes
 
 
 def _pbeaml_wedge(n: int) -> str:
-    """Kirchhoff's wedge (``_wedge``) with each element a PBEAML BAR from its end depths (the
-    last one to 0: the section is evaluated inside the element only)."""
+    """Kirchhoff's wedge (``_wedge``) with each element a PBEAML BAR from its end depths but the
+    last, whose end B has no section (depth 0: a PBEAML there is refused, as MSC's BAR needs
+    DIM2 > 0), a PBEAM as in ``_wedge``."""
     L, b, h0 = 1.0, 0.02, 0.01
     lines = ["PARAM,COUPMASS,1", "MAT1,1,2.e11,,0.3,7800.", "SPC1,1,123456,1"]
     lines += [f"GRID,{k + 1},,{k * L / n!r},0.,0." for k in range(n + 1)]
-    for k in range(n):
+    for k in range(n - 1):
         ha, hb = h0 * (1 - k / n), h0 * (1 - (k + 1) / n)
         lines += [f"PBEAML,{k + 1},1,,BAR", f",{b!r},{ha!r},0.,NO,1.,{b!r},{hb!r},0.",
                   f"CBEAM,{k + 1},{k + 1},{k + 1},{k + 2},0.,0.,1."]  # fmt: skip
+    h = h0 / n
+    end_a = ",".join(repr(v) for v in (b * h, b * h**3 / 12, h * b**3 / 12, 0.0, h * b**3 / 3))
+    lines += [f"PBEAM,{n},1,{end_a}", ",NO,1.,0.,0.,0.,0.,0.", ",0.,0.",
+              f"CBEAM,{n},{n},{n},{n + 1},0.,0.,1."]  # fmt: skip
     return _deck("\n".join(lines) + "\n", n_modes=1)
 
 
 def test_tapered_pbeamls_converge_to_kirchhoffs_wedge(tmp_path):
     """The wedge of ``test_tapered_pbeams_converge_to_kirchhoffs_wedge`` in tapered PBEAML BARs
-    (Cowper's shear factor: shear flexibility is (h / L)^2 ~ 1e-4 here): second-order
-    convergence to omega_1 = 5.315 sqrt(E I0 / (m0 L^4)), 20 elements within 0.7 %, 40 within
-    0.2 %."""
+    (shear factor 5/6: shear flexibility is (h / L)^2 ~ 1e-4 here), each the linearly tapered
+    PBEAM of its end sections: second-order convergence to omega_1 = 5.315 sqrt(E I0 / (m0
+    L^4)), 20 elements -0.226 %, 40 -0.059 % (the shear-rigid PBEAMs -0.221 %, -0.054 %)."""
     E, rho, b, h0 = 2e11, 7800.0, 0.02, 0.01
     exact = 5.315 * np.sqrt(E * b * h0**3 / 12 / (rho * b * h0)) / (2 * np.pi)
     err = {}
     for n in (20, 40):
         model = load_nastran_model(_write(tmp_path, _pbeaml_wedge(n), f"wedge{n}.bdf"))
         err[n] = model.solve(n_modes=1).frequencies_hz[0] / exact - 1
-    assert abs(err[20]) < 7e-3 and abs(err[40]) < 2e-3, err
+        taper = model.structure.general_beams.taper
+        assert np.all(taper[:-1, 0] != taper[:-1, 1])  # every PBEAML a tapered element
+    assert -2.5e-3 < err[20] < 0 and -7e-4 < err[40] < 0, err
     assert 3.5 < err[20] / err[40] < 4.5, err
 
 

@@ -94,26 +94,32 @@ def is_tapered(p) -> bool:
 
 def _pbeam_values(ctx: Context, p, card) -> tuple[np.ndarray, np.ndarray | None]:
     """((6,) A, I1, I2, I12, J, NSM of a PBEAM's element, (2, 6) its values at end A and end B
-    or None).  A constant PBEAM: its own values, None.  A tapered one whose stations lie on the
-    line from end A to end B, with no I12: the mean and both ends (NX's tapered CBEAM, linear
-    along the element: ``studies/nx_tapered_cbeam.py``).  Another tapered one (an intermediate
-    station off that line, an I12, or an A, I1, I2 or J of 0 somewhere): the mean over the
-    length of the piecewise-linear
-    variation through its stations (``pbeam_stations``; trapezoid rule, exact for that
+    or None): ``station_values`` of its stations (``pbeam_stations``)."""
+    x, v = pbeam_stations(p, card)
+    return station_values(ctx, x, v, f"PBEAM {p.id()}", card)
+
+
+def station_values(ctx: Context, x, v, label: str, card) -> tuple[np.ndarray, np.ndarray | None]:
+    """((6,) A, I1, I2, I12, J, NSM of a beam element, (2, 6) its values at end A and end B or
+    None) from its stations: x (k,) from 0 (end A) to 1 (end B), v (k, 6) the values there.
+    Constant: its own values, None.  Tapered with every station on the line from end A to end
+    B, no I12: the mean and both ends (NX's tapered CBEAM, linear along the element:
+    ``studies/nx_tapered_cbeam.py``).  Another tapered one (an intermediate station off that
+    line, an I12, or an A, I1, I2 or J of 0 somewhere): the mean over the length of the
+    piecewise-linear variation through its stations (trapezoid rule, exact for that
     variation), None, with a note: the mean section keeps the element's mass and is exact as
     the taper goes to 0, so a member meshed in several tapered CBEAMs converges to the tapered
     beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
-    x, v = pbeam_stations(p, card)
-    if not is_tapered(p):
+    if np.all(np.abs(v - v[0]) <= 1e-12 * np.maximum(np.abs(v[0]), 1e-300)):
         return v[0], None
     if np.any(v[:, :3] < 0) or np.any(v[:, 4] < 0):
-        card.fail(f"PBEAM {p.id()}: a station has A, I1, I2 or J < 0")
+        card.fail(f"{label}: a station has A, I1, I2 or J < 0")
     mean = np.trapezoid(v, x, axis=0)
     line = v[0] + np.outer(x, v[-1] - v[0])
     linear = np.all(np.abs(v - line) <= 1e-12 * np.maximum(np.abs(v).max(axis=0), 1e-300))
     if linear and not np.any(v[:, 3]) and np.all(v[:, [0, 1, 2, 4]] > 0):
         return mean, v[[0, -1]]
-    note = (f"PBEAM {p.id()} is tapered with stations off the line from end A to end B, an "
+    note = (f"{label} is tapered with stations off the line from end A to end B, an "
             "I12, or an A, I1, I2 or J of 0: each of its CBEAMs uses the section averaged over "
             "its length (mesh a tapered member in several elements)")  # fmt: skip
     if note not in ctx.notes:
@@ -194,40 +200,28 @@ def library_is_tapered(prop) -> bool:
     return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
 
 
-#: Gauss-Legendre points and weights on [0, 1] (5 points: exact for polynomials of degree 9,
-#: so for A and I of a section whose dimensions vary linearly, degree 4 at most)
-_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(5)
-_GAUSS = ((_NODES + 1) / 2, _WEIGHTS / 2)
-
-
 def _library_section(ctx: Context, prop, card, nu):
-    """(``BeamSection``, nsm) of a PBARL/PBEAML of a shape in ``L_SECTIONS``.  A tapered PBEAML
-    (dimensions varying linearly between its stations, ``library_stations``): the mean over
-    the element of each section property of the section at each point (Gauss-Legendre, 5 points
-    a segment: exact for A, I and J of the ROD, TUBE and BAR's bending), shear factors as the
-    mean shear area over the mean area, with a note; exact as the taper goes to 0, and a
-    member meshed in several elements converges to the tapered beam (``tests``)."""
+    """(``BeamSection``, nsm, ends) of a PBARL/PBEAML of a shape in ``L_SECTIONS``, ends as
+    ``station_values``'.  A tapered PBEAML is read as MSC reads it: MSC replaces it by the
+    PBEAM of its stations' sections (its f06 prints them: "the user supplied PBEAML bulk data
+    entries are replaced by the following PBEAM entries"), whose properties vary linearly
+    between the stations; the shear factors are end A's.  MSC's own modes of pyNastran's
+    ``aero/fmondsp`` (tapered TUBEs): ``tests/test_nastran_fmondsp.py``."""
     kind, _, _ = library_dims(prop, card)
     x, v = library_stations(prop, card)
     if not library_is_tapered(prop):
-        return _shape_section(ctx, prop, card, kind, v[0, :-1], nu), v[0, -1]
-    note = (f"PBEAML {prop.id()} is tapered: each of its CBEAMs uses the mean of its section "
-            "properties over its length (mesh a tapered member in several elements)")  # fmt: skip
-    if note not in ctx.notes:
-        ctx.notes.append(note)
-    points, weights = [], []
-    for k in range(len(x) - 1):
-        length = x[k + 1] - x[k]
-        points += [v[k] + g * (v[k + 1] - v[k]) for g in _GAUSS[0]]
-        weights += list(length * _GAUSS[1])
-    secs = [_shape_section(ctx, prop, card, kind, p[:-1], nu) for p in points]
-    w = np.array(weights)
-    mean = {f: float(w @ [getattr(s, f) for s in secs])
-            for f in ("area", "iy", "iz", "torsion", "iyz")}  # fmt: skip
-    shear = {f: float(w @ [getattr(s, f) * s.area for s in secs]) / mean["area"]
-             for f in ("shear_y", "shear_z")}  # fmt: skip
-    nsm = float(np.trapezoid(v[:, -1], x))
-    return replace(secs[0], **mean, **shear, name=f"PBEAML {prop.id()} (mean)"), nsm
+        return _shape_section(ctx, prop, card, kind, v[0, :-1], nu), v[0, -1], None
+    sections = [_shape_section(ctx, prop, card, kind, row[:-1], nu) for row in v]
+    values = np.array([[s.area, s.iz, s.iy, s.iyz, s.torsion, row[-1]]
+                       for s, row in zip(sections, v, strict=True)])  # fmt: skip
+    (a, i1, i2, i12, j, nsm), ends = station_values(ctx, x, values, f"PBEAML {prop.id()}", card)
+    first = sections[0]
+    name = f"PBEAML {prop.id()}" + (" (tapered)" if ends is not None else " (mean)")
+    try:
+        section = general_section(a, i2, i1, j, i12, first.shear_y, first.shear_z, name=name)
+    except BayesUpdateError as exc:
+        card.fail(str(exc))
+    return section, nsm, ends
 
 
 def _shape_section(ctx: Context, prop, card, kind, d, nu):
@@ -237,7 +231,13 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
     low on the 4th bending pair) and its BAR 5/6 whatever NU (MYSTRAN's PBARL writes the same;
     with it the mAEWing1 decks' 20 modes match their f06 to 1.2e-6, with Cowper's
     10 (1 + nu) / (12 + 11 nu) at their NU = E / 2G - 1 = 1.66 to 8.5e-6:
-    ``tests/test_nastran_maewing1.py``); the others use Cowper's (a note)."""
+    ``tests/test_nastran_maewing1.py``).  A TUBE (or TUBE2) has 0.5 and a BOX the area of the
+    walls along each shear direction over its area, as MSC's own conversion to PBEAM prints
+    them in its f06 (pyNastran's ``aero/fmondsp``, MSC 2005: TUBE K1 = K2 = 0.5, BOX 0.6 x 0.2
+    x 0.0025 K1 = 0.24528 = 2 DIM4 (DIM2 - 2 DIM3) / A, the sides, K2 = 0.74843 = 2 DIM3
+    (DIM1 - 2 DIM4) / A, top and bottom; NX's ``aero/aerobeam`` prints the same); with them
+    that deck's 12 elastic modes match MSC's to 6e-6 (Cowper's put them up to 3.7 % low:
+    ``tests/test_nastran_fmondsp.py``).  The I uses Cowper's (a note: no vendor's value here)."""
     pid = prop.id()
     if kind not in L_SECTIONS:
         card.fail(f"{prop.name} {pid} type {kind}: only {', '.join(L_SECTIONS)}")
@@ -248,14 +248,16 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
             return replace(ss.rod_section(2 * d[0], nu), shear_y=0.9, shear_z=0.9)
         if kind in ("TUBE", "TUBE2"):
             wall = d[0] - d[1] if kind == "TUBE" else d[1]
-            return ss.tube_section(2 * d[0], wall, nu)
+            return replace(ss.tube_section(2 * d[0], wall, nu), shear_y=0.5, shear_z=0.5)
         if kind == "BAR":
             return replace(ss.bar_section(d[0], d[1], nu), shear_y=5 / 6, shear_z=5 / 6).swap_yz()
+        if kind == "BOX":  # DIM1 width (z), DIM2 height (y), DIM3 top and bottom, DIM4 sides
+            box = ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz()
+            walls = (2 * d[3] * (d[1] - 2 * d[2]), 2 * d[2] * (d[0] - 2 * d[3]))
+            return replace(box, shear_y=walls[0] / box.area, shear_z=walls[1] / box.area)
         note = f"{prop.name} {pid} {kind}: shear factors of Cowper (1966); Nastran's own may differ"
         if note not in ctx.notes:
             ctx.notes.append(note)
-        if kind == "BOX":
-            return ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz()
         return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz()
     except BayesUpdateError as exc:
         card.fail(f"{prop.name} {pid}: {exc}")
@@ -377,18 +379,17 @@ def _add_beam(ctx: Context, e) -> None:
     prop = ctx.prop(e, kinds)
     mid = prop.int("MID", positive=True)
     mat = material(ctx, mid, e)
-    ends = None
     if prop.name in ("PBAR", "PBEAM"):
         section, nsm, ends = _general_section(ctx, prop, e)
     else:
-        section, nsm = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
+        section, nsm, ends = _library_section(ctx, prop, e, mat1(ctx, mid, e).NU)
     offt = _offt(ctx, e)
     off = offsets_in_basic(ctx.grids, e, rows, offt)
     v = _orientation(ctx.grids, e, rows[0], offt)
     length, axis, up = (x[0] for x in end_geometry(ctx.grids.xyz[rows][None], off[None], v[None]))
     a, b = ctx.node[rows]
     part = f"{prop.name} {prop.id()}"
-    # a linearly tapered PBEAM's (A, I2 -> iy, I1 -> iz, J) at each end (``add_beams``)
+    # a linearly tapered PBEAM's or PBEAML's (A, I2 -> iy, I1 -> iz, J) at each end
     taper = None if ends is None else ends[:, [0, 2, 1, 4]]
     try:
         ctx.builder.add_beams(

@@ -49,7 +49,11 @@ no K2GG or M2GG selects ignored (2026-11-30): 51 read to a model; MSC's ``aero/f
 glider of tapered PBEAML TUBEs and PBEAML BOXes, its DMIG only in K2PP) joins the f06 decks:
 with each PBEAML the PBEAM of its stations' sections and MSC's TUBE and BOX shear factors, as
 its f06 prints them, its 12 elastic modes within 6.0e-6 of MSC's (they were up to 3.7 % low
-with the mean of the exact section and Cowper's factors).
+with the mean of the exact section and Cowper's factors).  With PBARL/PBEAML T, T2 and CHAN
+read (the same day): 54 (pyNastran's one-shape decks of them; they hold no mass, so ``modes``
+refuses them for that).  The NASA N2A blended wing body (``bwb``: 52 CBARs on a PBARL T2, which
+kept it out) now stops at its connectivity: two GRIDs with a 77.78 CONM2 each and no element
+(MSC's AUTOSPC would hold them; here the deck is refused, naming them).
 
 Run: PYTHONPATH=. .venv/bin/python studies/public_decks.py /path/to/pyNastran/models
 """

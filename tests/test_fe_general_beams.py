@@ -338,6 +338,22 @@ def test_channel_and_box_against_raster():
     assert (bx.area, bx.iy, bx.iz) == pytest.approx((A, iy, iz), rel=1e-9)
 
 
+def test_tee_against_raster_and_thin_wall_torsion():
+    """A T of height 0.2 (z), flange 0.1 x 0.012 at z = 0.2, web 0.008: A and the second
+    moments about the centroid as the raster's; J the thin walls' on their mid-lines, the
+    flange's and the web's shear areas; the flange at z = 0 (Nastran's T2) is the same
+    section."""
+    h, b, tw, tf = 0.2, 0.1, 8e-3, 12e-3
+    s = ss.tee_section(h, b, tw, tf)
+    A, iy, iz, iyz = _raster(lambda y, z: (z > h - tf) | (np.abs(y - b / 2) < tw / 2), b, h)
+    assert (s.area, s.iy, s.iz) == pytest.approx((A, iy, iz), rel=1e-9)
+    assert abs(iyz) < 1e-9 * iy and s.iyz == 0.0
+    A2, iy2, iz2, _ = _raster(lambda y, z: (z < tf) | (np.abs(y - b / 2) < tw / 2), b, h)
+    assert (A2, iy2, iz2) == pytest.approx((A, iy, iz), rel=1e-12)
+    assert s.torsion == pytest.approx((b * tf**3 + (h - tf / 2) * tw**3) / 3, rel=1e-14)
+    assert (s.shear_y, s.shear_z) == pytest.approx((b * tf / A, (h - tf) * tw / A), rel=1e-12)
+
+
 def test_box_shear_factor_and_bar_torsion_closed_forms():
     nu = 0.3
     sq = ss.box_section(0.1, 0.1, 2e-3, 2e-3, nu)

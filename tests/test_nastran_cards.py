@@ -2,6 +2,7 @@
 stations, CBUSH CID / OCID / PBUSH M, CONM1 6x6, CELAS1 + PELAS, CMASS1 + PMASS, RBE3 weight
 groups with their own components and a UM set; bad input in one message with file:line."""
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 import scipy.linalg
 
 from bayesupdate.cli import main
+from bayesupdate.fe import standard_sections as ss
 from bayesupdate.nastran import load_nastran_model
 
 
@@ -228,6 +230,41 @@ def test_tapered_pbeamls_converge_to_kirchhoffs_wedge(tmp_path):
     assert 3.5 < err[20] / err[40] < 4.5, err
 
 
+# -- PBARL open shapes ---------------------------------------------------------------------------
+def _cantilever(prop: str) -> str:
+    """Ten CBARs along x on ``prop`` (PID 7, MID 1), v along y: plane 1 is x-y."""
+    lines = ["MAT1,1,7.e10,,0.33,2700.", "SPC1,1,123456,1", prop]
+    lines += [f"GRID,{k + 1},,{0.5 * k!r},0.,0." for k in range(11)]
+    lines += [f"CBAR,{k + 1},7,{k + 1},{k + 2},0.,1.,0." for k in range(10)]
+    return _deck("\n".join(lines) + "\n", n_modes=6)
+
+
+@pytest.mark.parametrize(
+    "kind, dims, section",
+    [
+        ("T", (0.1, 0.2, 0.012, 0.008), lambda: ss.tee_section(0.2, 0.1, 0.008, 0.012)),
+        ("T2", (0.1, 0.2, 0.012, 0.008), lambda: ss.tee_section(0.2, 0.1, 0.008, 0.012)),
+        ("CHAN", (0.08, 0.2, 0.008, 0.012), lambda: ss.channel_section(0.2, 0.08, 0.008, 0.012)),
+    ],
+)  # fmt: skip
+def test_a_pbarl_open_shape_is_the_pbar_of_its_section(tmp_path, kind, dims, section):
+    """PBARL T, T2 (DIM1 flange width, DIM2 height, DIM3 flange, DIM4 web) and CHAN (DIM1
+    flange width, DIM2 height, DIM3 web, DIM4 flanges), height along y_elem: the cantilever's
+    six modes are those of the PBAR with the section's A, I1 = its moment about the height,
+    I2, J, K1 = the web's share of A and K2 the flanges' (rel 1e-10), with a note that J and
+    the shear factors are the thin walls', not a vendor's."""
+    s = section()
+    pbarl = f"PBARL,7,1,,{kind}\n,{','.join(repr(d) for d in dims)}"
+    pbar = (f"PBAR,7,1,{s.area!r},{s.iy!r},{s.iz!r},{s.torsion!r}\n,,,,,,,,\n"
+            f",{s.shear_z!r},{s.shear_y!r}")  # fmt: skip
+    model = load_nastran_model(_write(tmp_path, _cantilever(pbarl), "pbarl.bdf"))
+    ours = model.solve(n_modes=6).frequencies_hz
+    theirs = load_nastran_model(_write(tmp_path, _cantilever(pbar), "pbar.bdf"))
+    assert ours == pytest.approx(theirs.solve(n_modes=6).frequencies_hz, rel=1e-10)
+    notes = model.structure.metadata["nastran"]["notes"]
+    assert any(f"PBARL 7 {kind}: J and the shear factors of thin walls" in n for n in notes)
+
+
 # -- CBUSH CID, OCID and PBUSH M -----------------------------------------------------------------
 CORD7 = "CORD2R,7,,0.,0.,0.,0.3,0.4,0.866\n,1.,0.2,0.\n"
 
@@ -423,18 +460,41 @@ def test_rbe3_um_with_the_wrong_dofs_is_refused(capsys, tmp_path):
 
 
 # -- bad input: one message, exit 2, every card's file:line ---------------------------------------
-def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(capsys, tmp_path):
+UNBINDABLE = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
+              "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,6,5,1,2,0.,0.,1.\nSPC1,1,123456,1\n"
+              "INCLUDE 'Missing.dat'\nDESVAR,1,AREA,2.e-3,1.e-3,4.e-3\n"
+              "DVPREL1,10,PBAR,5,I12\n,1,1.\nCSHEAR,20,1,1,2,1,2\n")  # fmt: skip
+
+
+def test_bad_include_unbindable_dvprel1_and_unsupported_card_in_one_message(tmp_path):
     """A missing INCLUDE (in any letter case), a DVPREL1 on a field that cannot be bound (PBAR
-    I12) and an unsupported card: one message, exit 2, each with its file:line."""
-    bulk = ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,2.e11,,0.3,7800.\n"
-            "PBAR,5,1,2.e-3,4.e-6,1.e-6,2.e-6\nCBAR,6,5,1,2,0.,0.,1.\nSPC1,1,123456,1\n"
-            "INCLUDE 'Missing.dat'\nDESVAR,1,AREA,2.e-3,1.e-3,4.e-3\n"
-            "DVPREL1,10,PBAR,5,I12\n,1,1.\nCSHEAR,20,1,1,2,1,2\n")  # fmt: skip
-    line = rejected(capsys, "--model", _write(tmp_path, _deck(bulk), "main.bdf"))
+    I12) where the DESVARs are to be the parameters, and an unsupported card: one message, each
+    with its file:line."""
+    from bayesupdate.errors import BayesUpdateError
+
+    with pytest.raises(BayesUpdateError) as err:
+        load_nastran_model(_write(tmp_path, _deck(UNBINDABLE), "main.bdf"))
+    line = str(err.value)
     for where in ("main.bdf:13 INCLUDE 'Missing.dat': no such file", "main.bdf:15 DVPREL1 10",
                   "main.bdf:17 CSHEAR 20"):  # fmt: skip
         assert where in line, line
     assert "3 card(s) refused" in line, line
+
+
+def test_modes_leaves_an_unbindable_desvar_out_with_a_note(capsys, tmp_path):
+    """``modes`` needs no parameters: the deck's DESVAR whose DVPREL1 sets a field no binding
+    acts on (PBAR I12) stays at the card's value, named in the note, and the deck's modes are
+    those of the same deck without it (before, the whole deck was refused)."""
+    bulk = UNBINDABLE.replace("INCLUDE 'Missing.dat'\n", "").replace("CSHEAR,20,1,1,2,1,2\n", "")
+    path = _write(tmp_path, _deck(bulk), "main.bdf")
+    code = main(["modes", "--model", str(path), "--modes", "3", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    notes = " ".join(json.loads(out)["notes"])
+    assert "AREA (1: 0.002 in [0.001, 0.004]): main.bdf:14 DVPREL1 10: PBAR I12 is a field" in notes
+    plain = _write(tmp_path, _deck(bulk.split("DESVAR")[0]), "plain.bdf")
+    expected = load_nastran_model(plain).solve(n_modes=3).frequencies_hz
+    assert json.loads(out)["frequencies_hz"] == pytest.approx(expected, rel=1e-6)
 
 
 def test_a_binding_on_a_tapered_pbeam_is_refused(tmp_path):

@@ -37,6 +37,8 @@ wall mid-lines where stated):
   (8 m + 9 m^2)], m = 2 b t_f / (h t_w), n = b / h (h between the flanges' mid-lines) (Cowper,
   J. Appl. Mech. 33 (1966) 335, Table 1); shear along y (flanges): the flanges as two
   rectangles, k A = 10 (1 + nu) / (12 + 11 nu) x 2 b t_f.
+* ``tee_section`` (height h along z, one flange b along y, t_f thick, web t_w): about the
+  centroid, J = (b t_f^3 + (h - t_f/2) t_w^3) / 3, shear areas web along z, flange along y.
 * ``channel_section`` (height h along z, flange width b along y including the web, web t_w,
   flanges t_f): properties about the centroid (the centroid lies off the web, at y_c from the
   web's outer face); J = (2 (b - t_w/2) t_f^3 + (h - t_f) t_w^3) / 3; shear areas as the usual
@@ -211,6 +213,32 @@ def channel_section(height: float, width: float, web: float, flange: float) -> B
     )
     J = (2 * (width - web / 2) * flange**3 + (height - flange) * web**3) / 3
     return BeamSection(A, iy, iz, J, 0.0, 2 * bf * flange / A, hw * web / A, "channel")
+
+
+def tee_section(height: float, width: float, web: float, flange: float) -> BeamSection:
+    """T: one flange ``width`` (y) x ``flange`` thick at an end of a ``web`` thick web, the whole
+    ``height`` along z [m]; properties about the centroid (the same for the flange at either
+    end: Nastran's T and T2).  J = (b t_f^3 + (h - t_f/2) t_w^3) / 3 (open thin-walled section
+    on the walls' mid-lines, Roark Table 10.7, as ``i_section`` and ``channel_section``); shear
+    areas the web's along z and the flange's along y, the wall rule MSC's PBEAML BOX uses
+    (``nastran.cards.beams``)."""
+    _positive("tee_section", height=height, width=width, web=web, flange=flange)
+    if flange >= height or web >= width:
+        raise BayesUpdateError("tee_section: needs flange < height and web < width")
+    hw = height - flange
+    a_web, a_flange = hw * web, width * flange
+    A = a_web + a_flange
+    # z from the flange's outer face: flange centre at flange/2, web centre at flange + hw/2
+    zc = (a_flange * flange / 2 + a_web * (flange + hw / 2)) / A
+    iy = (
+        width * flange**3 / 12
+        + a_flange * (flange / 2 - zc) ** 2
+        + web * hw**3 / 12
+        + a_web * (flange + hw / 2 - zc) ** 2
+    )
+    iz = (flange * width**3 + hw * web**3) / 12
+    J = (width * flange**3 + (height - flange / 2) * web**3) / 3
+    return BeamSection(A, iy, iz, J, 0.0, a_flange / A, a_web / A, "T")
 
 
 def from_tube(section, poisson: float = 0.3) -> BeamSection:

@@ -11,7 +11,7 @@ __all__ = ["SUFFIXES", "is_nastran_path", "load_nastran_model"]
 
 
 def load_nastran_model(
-    path, parameters=None, test_labels=(), test_points=None, units=None, **options
+    path, parameters=None, test_labels=(), test_points=None, units=None, strict=True, **options
 ):
     """``NastranModel`` of the deck at ``path``.
 
@@ -20,7 +20,10 @@ def load_nastran_model(
     test_labels : test DOF labels the model reads shapes at (``nastran.test_points``);
     test_points : ``[model.test_points]`` {test node: GRID id}; units : the deck's unit system
     by name (``units.NAMED``: "in-lbf-s", "si", ...) instead of the one recognized from WTMASS
-    and the MAT1 moduli."""
+    and the MAT1 moduli; strict : where the DESVARs become the parameters, refuse each DVPREL1
+    on a field that cannot be bound (a command that fits them); False (``modes``,
+    ``correlate``, ``sensitivity``: the model at its own values) leaves such a DESVAR out,
+    named in the note with the others (``desvar.unbound_note``)."""
     from bayesupdate.errors import BayesUpdateError
     from bayesupdate.nastran.bindings import refuse_differing
     from bayesupdate.nastran.model import NastranModel, deck_bindings
@@ -29,7 +32,7 @@ def load_nastran_model(
 
     if options:
         raise BayesUpdateError(f"Nastran model {path}: options {sorted(options)} not accepted")
-    structure, info, deck = read_structure(path, design=not parameters)
+    structure, info, deck = read_structure(path, design=strict and not parameters)
     if units is not None:
         from bayesupdate.nastran.units import named_system
 
@@ -43,7 +46,7 @@ def load_nastran_model(
     if not parameters and deck.of("DESVAR"):
         from bayesupdate.nastran.desvar import desvar_parameters, unbound_note
 
-        parameters = desvar_parameters(deck)
+        parameters = desvar_parameters(deck, strict)
         note = unbound_note(deck, parameters)
         if note:
             info["notes"].append(note)

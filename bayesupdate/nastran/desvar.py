@@ -85,15 +85,15 @@ def design_refusals(deck) -> list[str]:
     return out
 
 
-def desvar_parameters(deck) -> dict:
+def desvar_parameters(deck, strict: bool = True) -> dict:
     """{label: {"binds", "bounds" (optional), "coefficient" or "coefficients" and "offsets",
     "desvar"}} of the DESVARs that are one binding: every relation (DVPREL1, DVMREL1, DVCREL1)
     sets one bindable field as COEF x (C0 = 0, one DESVAR, one COEF), one binding over their
     ids; or every relation sets the same line-element field (PBAR/PBEAM/PROD/... fields, MAT1
-    G: re-built, ``lines``) of distinct cards as C0_i + COEF_i x.  A DVPREL1 to a field that
-    cannot be bound is refused (all of them in one message); the other DESVARs are listed by
-    ``unbound_note``."""
-    refused = design_refusals(deck)
+    G: re-built, ``lines``) of distinct cards as C0_i + COEF_i x.  With ``strict`` a DVPREL1 to
+    a field that cannot be bound is refused (all of them in one message); without, its DESVAR
+    is left out like the other DESVARs, which ``unbound_note`` lists."""
+    refused = design_refusals(deck) if strict else []
     if refused:
         raise BayesUpdateError(f"{len(refused)} design relation(s) refused: " + "; ".join(refused))
     relations = {}

@@ -32,7 +32,8 @@ def resolve_model(
     ``binds`` and reads shapes at ``deck = (test DOF labels, {test node: GRID id})``, in its
     own ``units`` (a name, ``nastran.units``; None: recognized from the deck).  A deck without
     bound parameters is refused unless ``needs_parameters`` is False (``modes``, ``correlate``:
-    a model at its own values)."""
+    a model at its own values; a DESVAR whose relation cannot be bound is then left out with a
+    note, not refused: ``load_nastran_model(strict=)``)."""
     from bayesupdate.inference.user_model import load_user_model
     from bayesupdate.models import BUILTIN_MODELS, get_model
     from bayesupdate.nastran import is_nastran_path, load_nastran_model
@@ -41,7 +42,9 @@ def resolve_model(
         if options:
             raise BayesUpdateError(f"model.options: a Nastran deck takes none ({source})")
         labels, points = deck if deck is not None else ((), None)
-        model = load_nastran_model(str(source), parameters, labels, points, units=units)
+        model = load_nastran_model(
+            str(source), parameters, labels, points, units=units, strict=needs_parameters
+        )
         if needs_parameters and not model.parameter_names:
             raise BayesUpdateError(
                 f"model {source}: a Nastran deck's parameters are deck fields; give them in a "

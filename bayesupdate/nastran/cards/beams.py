@@ -28,7 +28,8 @@ CARDS = ("CBAR", "CBEAM")
 
 #: PBARL/PBEAML shapes read (Nastran DIM order; ``standard_sections`` for the formulas) and
 #: their number of dimensions
-L_SECTIONS = {"ROD": 1, "TUBE": 2, "TUBE2": 2, "BAR": 2, "BOX": 4, "I": 6}
+L_SECTIONS = {"ROD": 1, "TUBE": 2, "TUBE2": 2, "BAR": 2, "BOX": 4, "I": 6, "T": 4, "T2": 4,
+              "CHAN": 4}  # fmt: skip
 #: number of dimensions of the other PBARL shapes (to find NSM after them)
 L_DIMS = {**L_SECTIONS, "CHAN": 4, "T": 4, "L": 4, "H": 4, "T1": 4, "I1": 4, "CHAN1": 4,
           "Z": 4, "CHAN2": 4, "T2": 4, "BOX1": 6, "HEXA": 3, "HAT": 4, "HAT1": 5, "DBOX": 10,
@@ -255,12 +256,29 @@ def _shape_section(ctx: Context, prop, card, kind, d, nu):
             box = ss.box_section(d[0], d[1], d[3], d[2], nu).swap_yz()
             walls = (2 * d[3] * (d[1] - 2 * d[2]), 2 * d[2] * (d[0] - 2 * d[3]))
             return replace(box, shear_y=walls[0] / box.area, shear_z=walls[1] / box.area)
+        if kind in ("T", "T2", "CHAN"):
+            return _open_section(ctx, prop, kind, d)
         note = f"{prop.name} {pid} {kind}: shear factors of Cowper (1966); Nastran's own may differ"
         if note not in ctx.notes:
             ctx.notes.append(note)
         return ss.i_section(d[0], d[1], d[3], d[4], nu).swap_yz()
     except BayesUpdateError as exc:
         card.fail(f"{prop.name} {pid}: {exc}")
+
+
+def _open_section(ctx: Context, prop, kind: str, d):
+    """``BeamSection`` of a T, T2 (DIM1 flange width, DIM2 height, DIM3 flange, DIM4 web; the
+    flange at the top or the bottom: one section about the centroid) or CHAN (DIM1 flange width,
+    DIM2 height, DIM3 web, DIM4 flanges): exact A and I about the centroid, the element's axis
+    through the centroid (a CBEAM's shear-centre offset is not modelled), J and shear areas of
+    thin walls (``standard_sections``), with a note: no vendor's value of these checks them."""
+    note = (f"{prop.name} {prop.id()} {kind}: J and the shear factors of thin walls; Nastran's "
+            "own may differ")  # fmt: skip
+    if note not in ctx.notes:
+        ctx.notes.append(note)
+    if kind == "CHAN":
+        return ss.channel_section(d[1], d[0], d[2], d[3]).swap_yz()
+    return ss.tee_section(d[1], d[0], d[3], d[2]).swap_yz()
 
 
 def _orientation(grids, e, ga_row, offt: str = "GGG"):

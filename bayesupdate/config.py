@@ -92,6 +92,8 @@ Unknown tables and keys, and values of the wrong type, raise ``BayesUpdateError`
 """
 
 import dataclasses
+import math
+import numbers
 import os
 import re
 import tomllib
@@ -119,6 +121,23 @@ class ModelConfig:
     sensors: tuple = ()
     test_points: dict = field(default_factory=dict)
     units: str | None = None
+
+
+def percent_of(value, what: str) -> float | None:
+    """N of a "N %" text (finite, > 0; ``what`` names the key in the message), None for a value
+    that is not a percentage."""
+    text = str(value).strip()
+    if not text.endswith("%"):
+        return None
+    try:
+        number = float(text[:-1])
+    except ValueError:
+        raise BayesUpdateError(
+            f'{what}: give a number before "%", e.g. "1.5 %", got {value!r}'
+        ) from None
+    if not (math.isfinite(number) and number > 0):
+        raise BayesUpdateError(f"{what}: must be > 0, got {value!r}")
+    return number
 
 
 @dataclass(frozen=True)
@@ -171,7 +190,7 @@ class DataConfig:
             value = mass_property_value(self.mass, "mass", "data.mass")[0]
             if not value > 0:
                 raise BayesUpdateError(f"data.mass: must be > 0, got {self.mass!r}")
-        if self.mass_sd is not None and not str(self.mass_sd).strip().endswith("%"):
+        if self.mass_sd is not None and percent_of(self.mass_sd, "data.mass_sd") is None:
             if not mass_property_value(self.mass_sd, "mass", "data.mass_sd")[0] > 0:
                 raise BayesUpdateError(f"data.mass_sd: must be > 0, got {self.mass_sd!r}")
         parse_tables(self.cg, self.inertia, "data")
@@ -334,6 +353,12 @@ class SamplerConfig:
     def __post_init__(self):
         if self.adapt_steps is not None:
             check_adapt_steps(self.adapt_steps)
+        if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
+            raise BayesUpdateError(f"sampler.seed: must be an integer >= 0, got {self.seed}")
+        if not self.min_autocorr_times > 0:  # NaN fails too
+            raise BayesUpdateError(
+                f"sampler.min_autocorr_times: must be > 0, got {self.min_autocorr_times}"
+            )
 
     def walkers_for(self, ndim: int) -> int:
         """The walkers of a run with ``ndim`` sampled dimensions: the given number, else

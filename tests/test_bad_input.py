@@ -355,17 +355,45 @@ STUDY_CASES = {
     "unknown_pairing": (BASE + '[pairing]\nmethod = "magic"\n', None, "pairing"),
     "negative_extra_modes": (BASE + "[pairing]\nextra_modes = -3\n", None, "extra_modes"),
     "mass_term_without_mass": (BASE + "[objective]\nmass_weight = 1.0\n", None, "mass_kg"),
+    # NaN dropped the mass term and inf froze the optimizer at its start, silently
+    "nan_mass_weight": (BASE + "[objective]\nmass_weight = nan\nmass_kg = 1.0\n", None,
+                        "mass_weight and mac_weight must be finite numbers >= 0"),
+    "infinite_mass_target": (BASE + "[objective]\nmass_weight = 1.0\nmass_kg = inf\n", None,
+                             "give the measured mass (finite, > 0)"),
     "unknown_optimizer_method": (
         BASE.replace("starts = 2", 'starts = 2\nmethod = "newton"'),
         None,
         "method",
     ),
     "zero_starts": (BASE.replace("starts = 2", "starts = 0"), None, "starts"),
+    "negative_optimizer_seed": (
+        BASE.replace("starts = 2", "starts = 2\nseed = -1"),
+        None,
+        "optimizer.seed: must be an integer >= 0",
+    ),
     "negative_sigma": (BASE + "[likelihood]\nsigma = -0.05\n", None, "sigma"),
     "sampler_hdi": (BASE.replace("walkers = 8", "walkers = 8\nhdi_prob = 1.5"), None, "hdi_prob"),
     "too_few_walkers": (BASE.replace("walkers = 8", "walkers = 2"), None, "walkers"),
     "zero_steps": (BASE.replace("steps = 20", "steps = 0"), None, "steps"),
-}
+    # the built-in model's options, checked (each was an internal error: a 0 x 0 or
+    # indefinite mass matrix, an IndexError, NaN in eigh)
+    "shear_building_one_mass": (
+        BASE.replace('"shear_building"', '"shear_building"\noptions = { masses_kg = [1.0] }'),
+        None, "shear_building: masses_kg must be 2 finite number(s)",
+    ),
+    "shear_building_zero_mass": (
+        BASE.replace('"shear_building"', '"shear_building"\noptions = { masses_kg = [0.0, 1.0] }'),
+        None, "needs masses_kg > 0",
+    ),
+    "shear_building_nan_stiffness": (
+        BASE.replace('"shear_building"', '"shear_building"\noptions = { k_nominal = nan }'),
+        None, "k_nominal must be 1 finite number(s)",
+    ),
+    "shear_building_no_bounds": (
+        BASE.replace('"shear_building"', '"shear_building"\noptions = { bounds = [] }'),
+        None, "bounds must be 2 finite number(s)",
+    ),
+}  # fmt: skip
 
 
 @pytest.fixture
@@ -431,6 +459,7 @@ def test_bad_frequency_csv(tmp_path, capsys, csv, needle):
         (["calibrate", "--model", "shear_building", "--data", "paper:fea"], "paper:fea"),
         (["calibrate", "--model", "exhaust", "--starts", "-1"], "starts"),
         (["calibrate", "--model", "exhaust", "--seed", "x"], "--seed"),
+        (["calibrate", "--model", "exhaust", "--seed", "-1"], "seed: must be an integer >= 0"),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--walkers", "1"], "walkers"),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--steps", "0"], "steps"),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--resume"], "--out"),
@@ -596,6 +625,8 @@ USER_MODELS = {
     "always_raises": "def f(p):\n    raise ValueError('solver diverged')\n",
     "always_nan": "def f(p):\n    return [float('nan'), float('nan')]\n",
     "wrong_mapping": "def f(p):\n    return {'freqs': [4.3, 10.8]}\n",
+    "text": "def f(p):\n    return 'abc'\n",
+    "table": "def f(p):\n    return [[4.3, 10.8], [4.3, 10.8]]\n",
     "not_callable": "f = 3\n",
 }
 
@@ -634,6 +665,8 @@ def _user_study(source: str, bounds: str = "[0.5, 2.0]") -> str:
         ("{pkg}.always_raises:f", "solver diverged"),
         ("{pkg}.always_nan:f", "failed"),
         ("{pkg}.wrong_mapping:f", "frequencies_hz"),
+        ("{pkg}.text:f", "returned frequencies that are not numbers: 'abc'"),
+        ("{pkg}.table:f", "returned frequencies of shape (2, 2)"),
     ],
 )
 @pytest.mark.parametrize("command", ["calibrate", "sample"])

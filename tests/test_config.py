@@ -84,8 +84,17 @@ def test_parameters_default_from_the_model():
         ({"data": {"source": "paper:ema", "frequencies_hz": [1.0]}}, r"not both"),
         ({"model": {"source": 3}}, r"model\.source: must be a string"),
         ({"optimizer": {"polish": 1}}, r"optimizer\.polish: must be"),
+        # a negative seed, which numpy's generators refuse (was an internal ValueError)
+        ({"sampler": {"seed": -1}}, r"sampler\.seed: must be an integer >= 0, got -1"),
+        ({"discovery": {"seed": -2}}, r"discovery\.seed: must be an integer >= 0, got -2"),
+        ({"sampler": {"min_autocorr_times": -1.0}}, r"sampler\.min_autocorr_times: must be > 0"),
+        # a percentage sd that is no number (was an internal ValueError when the run began)
+        ({"data": {"source": "paper:ema", "mass": "12.29 kg", "mass_sd": "%"}},
+         r'data\.mass_sd: give a number before "%"'),
+        ({"data": {"source": "paper:ema", "mass": "12.29 kg", "mass_sd": "nan %"}},
+         r"data\.mass_sd: must be > 0, got 'nan %'"),
     ],
-)
+)  # fmt: skip
 def test_bad_study_documents_name_the_key(document, match):
     with pytest.raises(BayesUpdateError, match=match):
         parse_study(document, "s.toml")
@@ -196,6 +205,12 @@ def test_discovery_settings_group_the_flat_knobs_of_the_study_file():
         ("max_nfev", 0, "discovery.max_nfev: must be >= 1"),
         ("loo_draws", 0, "discovery.loo_draws: must be >= 25"),
         ("loo_draws", 24, r"discovery.loo_draws: must be >= 25 \(PSIS-LOO.*got 24"),
+        ("loo_top", -1, "discovery.loo_top: must be >= 0"),
+        ("per_kind", -1, "discovery.per_kind: must be >= 0"),
+        ("alpha", 2.0, r"discovery.alpha: must lie in \(0, 1\)"),
+        ("adequacy_p", float("nan"), r"adequacy_p must lie in \(0, 1\)"),
+        ("bound_tolerance", 0.7, r"bound_tolerance in \[0, 0.5\)"),
+        ("max_noise_rel", -1.0, "discovery.max_noise_rel: must be a finite number > 0"),
         ("sigma", float("nan"), "discovery.sigma: must be > 0"),
         ("margin_ln_bf", -1.0, "thresholds on log odds"),
         ("effect_prior", 1.0, "strictly between 0 and 1"),

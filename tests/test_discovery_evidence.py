@@ -1,6 +1,8 @@
 """Evidence maths of discovery against closed forms: Laplace = exact evidence of a linear-Gaussian
 model, the sigma-marginal likelihood = quadrature, PSIS-LOO = exact leave-one-out predictive."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -121,6 +123,13 @@ def test_laplace_loo_matches_exact_leave_one_out():
     assert laplace_loo(fit, draws=25, seed=1)["draws"] == 25
     with pytest.raises(BayesUpdateError, match="draws must be >= 25, got 24"):
         laplace_loo(fit, draws=24, seed=1)
+    # a Laplace covariance 1e16 times too wide: every draw is clipped to a corner of the box,
+    # the importance ratios have no tail, and the LOO is reported as not available (the
+    # discover run goes on; ArviZ's ValueError was an internal error)
+    wide = replace(best, hessian=best.hessian * 1e-16)
+    loo = laplace_loo(replace(fit, optima=[wide]), draws=25, seed=1)
+    assert loo["elpd"] is None and loo["draws"] == 25
+    assert "not available: PSIS found no tail to smooth" in loo["method"]
 
 
 def test_noise_model_sources_and_flags():

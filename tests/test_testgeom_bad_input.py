@@ -46,6 +46,16 @@ def test_a_node_given_twice(tmp_path):
     _raises("node 1 appears twice", read_geometry, path)
 
 
+def test_a_geometry_file_that_is_not_text(tmp_path):
+    """A binary file given as the test geometry: one line naming it (was an internal
+    UnicodeDecodeError)."""
+    path = tmp_path / "bin.csv"
+    path.write_bytes(b"\xff\xfe\x00bin")
+    _raises(
+        "bin.csv: not a text CSV file .* export the test geometry as UTF-8", read_geometry, path
+    )
+
+
 def test_a_point_beyond_the_tolerance_is_named_with_its_distance():
     mesh = _mesh()
     g = make_geometry([1, 2, 3], [[0, 0, 0.001], [1, 0, 0], [0.5, 0.5, 0.3]])

@@ -440,11 +440,17 @@ def laplace_loo(fit: ModelFit, draws: int = 400, seed: int = 0) -> dict:
         {"posterior": {"z": z[None]}, "log_likelihood": {"f": pointwise[None]}},
         dims={"f": ["mode"], "z": ["parameter"]},
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        result = arviz_stats.loo_approximate_posterior(
-            tree, log_p[None], log_q[None], pointwise=True, var_name="f"
-        )
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = arviz_stats.loo_approximate_posterior(
+                tree, log_p[None], log_q[None], pointwise=True, var_name="f"
+            )
+    except ValueError as exc:  # no tail to smooth: draws clipped to the bounds, all alike
+        return dict.fromkeys(("elpd", "se", "p_loo", "pareto_k_max")) | {
+            "draws": int(n),
+            "method": f"{method}; not available: PSIS found no tail to smooth ({exc})",
+        }
     return {
         "elpd": float(result.elpd),
         "se": float(result.se),

@@ -14,6 +14,7 @@ A study file's ``[discovery]`` table and the CLI options name the knobs flat (``
 gives them back in that one namespace (the result file stores them so).
 """
 
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -41,6 +42,10 @@ class LibraryScan:
     locations: dict | None = None
     alpha: float = 0.05
 
+    def __post_init__(self):
+        if not 0 < self.alpha < 1:  # NaN fails too
+            raise BayesUpdateError(f"discovery.alpha: must lie in (0, 1), got {self.alpha}")
+
 
 @dataclass(frozen=True)
 class RefitBudget:
@@ -60,6 +65,8 @@ class RefitBudget:
         _check_positive_counts(
             self, ("baseline_starts", "quick_refits", "quick_nfev", "max_refits", "max_nfev")
         )
+        if int(self.per_kind) < 0:
+            raise BayesUpdateError(f"discovery.per_kind: must be >= 0, got {self.per_kind}")
 
 
 @dataclass(frozen=True)
@@ -75,6 +82,8 @@ class EvidenceSettings:
     def __post_init__(self):
         if self.sigma is not None and not (np.isfinite(self.sigma) and self.sigma > 0):
             raise BayesUpdateError(f"discovery.sigma: must be > 0, got {self.sigma}")
+        if int(self.loo_top) < 0:
+            raise BayesUpdateError(f"discovery.loo_top: must be >= 0, got {self.loo_top}")
         if int(self.loo_draws) < MIN_LOO_DRAWS:
             raise BayesUpdateError(
                 f"discovery.loo_draws: must be >= {MIN_LOO_DRAWS} (PSIS-LOO smooths the largest "
@@ -107,6 +116,15 @@ class VerdictThresholds:
             raise BayesUpdateError(
                 "discovery.effect_prior (--effect-prior): the prior probability that a library "
                 f"effect is present must lie strictly between 0 and 1, got {self.effect_prior}"
+            )
+        if not (0 < self.adequacy_p < 1 and 0 <= self.bound_tolerance < 0.5):
+            raise BayesUpdateError(
+                "discovery: adequacy_p must lie in (0, 1) and bound_tolerance in [0, 0.5), got "
+                f"{self.adequacy_p}, {self.bound_tolerance}"
+            )
+        if not 0 < self.max_noise_rel < np.inf:
+            raise BayesUpdateError(
+                f"discovery.max_noise_rel: must be a finite number > 0, got {self.max_noise_rel}"
             )
 
     def prior_log_odds(self, n_candidates: int) -> float:
@@ -150,6 +168,10 @@ class DiscoverySettings:
     evidence: EvidenceSettings = field(default_factory=EvidenceSettings)
     verdict: VerdictThresholds = field(default_factory=VerdictThresholds)
     seed: int = 0
+
+    def __post_init__(self):
+        if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
+            raise BayesUpdateError(f"discovery.seed: must be an integer >= 0, got {self.seed}")
 
     @classmethod
     def from_flat(cls, **values) -> "DiscoverySettings":

@@ -43,6 +43,7 @@ The starts are independent: each (least squares and polish), and each end's poli
 a pure function of the problem and its start, so the result is the same bits on any executor.
 """
 
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -135,6 +136,8 @@ class CalibrationSettings:
             )
         if self.starts < 1:
             raise BayesUpdateError(f"optimizer.starts: must be >= 1, got {self.starts}")
+        if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
+            raise BayesUpdateError(f"optimizer.seed: must be an integer >= 0, got {self.seed}")
         if self.design not in ("sobol", "lhs"):
             raise BayesUpdateError(f"optimizer.design: {self.design!r}; use 'sobol' or 'lhs'")
         if not self.objective_window >= 0:

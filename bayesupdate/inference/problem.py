@@ -254,10 +254,16 @@ def _checked_objective(
     """The objective (default: eq. 19 alone) after checking its weights, ``extra_modes`` and
     the data's weights."""
     objective = objective or ObjectiveSpec()
-    if objective.mass_weight < 0 or objective.mac_weight < 0:
-        raise BayesUpdateError("objective: mass_weight and mac_weight must be >= 0")
-    if objective.mass_weight > 0 and not (objective.mass_target_kg or 0) > 0:
-        raise BayesUpdateError("objective.mass_kg: give the measured mass (> 0) for the mass term")
+    if not (0 <= objective.mass_weight < np.inf and 0 <= objective.mac_weight < np.inf):
+        raise BayesUpdateError(  # NaN fails the chained comparison too
+            "objective: mass_weight and mac_weight must be finite numbers >= 0, got "
+            f"{objective.mass_weight}, {objective.mac_weight}"
+        )
+    target = objective.mass_target_kg or 0
+    if objective.mass_weight > 0 and not 0 < target < np.inf:
+        raise BayesUpdateError(
+            "objective.mass_kg: give the measured mass (finite, > 0) for the mass term"
+        )
     if int(extra_modes) < 0:
         raise BayesUpdateError(f"pairing.extra_modes: must be >= 0, got {extra_modes}")
     if data.weights is not None and np.all(data.weights == 0):

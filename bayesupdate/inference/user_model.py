@@ -55,13 +55,18 @@ class FunctionModel:
             mass = out.get("mass_kg")
         else:
             freqs = out
-        freqs = np.asarray(freqs, dtype=float).reshape(-1)
+        freqs = self._numbers(freqs, "frequencies")
+        if freqs.ndim != 1:
+            raise BayesUpdateError(
+                f"model {self.label}: returned frequencies of shape {freqs.shape}; give one "
+                "value per mode"
+            )
         if freqs.size < n_modes:
             raise BayesUpdateError(
                 f"model {self.label}: returned {freqs.size} frequencies, {n_modes} requested"
             )
         if shapes is not None:
-            shapes = np.asarray(shapes, dtype=float)
+            shapes = self._numbers(shapes, "shapes")
             if shapes.ndim != 2 or shapes.shape[1] < n_modes:
                 raise BayesUpdateError(
                     f"model {self.label}: shapes must be (n_sensors, >= {n_modes})"
@@ -78,6 +83,16 @@ class FunctionModel:
             dof_labels=self.dof_labels if shapes is not None else (),
             mass_kg=None if mass is None else float(mass),
         )
+
+    def _numbers(self, values, what: str) -> np.ndarray:
+        """``values`` as a float array, or a BayesUpdateError naming the model."""
+        try:
+            return np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            text = repr(values)
+            raise BayesUpdateError(
+                f"model {self.label}: returned {what} that are not numbers: {text[:80]}"
+            ) from None
 
 
 def import_function(spec: str) -> Callable:

@@ -159,9 +159,28 @@ def build_shear_building_model(
     k_nominal: float = NOMINAL_STIFFNESS_N_PER_M,
     bounds: tuple[float, float] = (0.1, 4.0),
 ) -> ShearBuildingModel:
-    """Factory used by ``bayesupdate.models.get_model("shear_building")``."""
-    return ShearBuildingModel(
-        masses_kg=tuple(float(m) for m in masses_kg),
-        k_nominal=float(k_nominal),
-        bounds=(float(bounds[0]), float(bounds[1])),
-    )
+    """Factory used by ``bayesupdate.models.get_model("shear_building")``: two floor masses
+    [kg] > 0, the nominal storey stiffness [N/m] > 0 and the factors' bounds (0 < low < high),
+    each checked (a study's ``[model] options``)."""
+    masses = _finite_numbers(masses_kg, "masses_kg", 2)
+    k = _finite_numbers([k_nominal], "k_nominal", 1)
+    low, high = _finite_numbers(bounds, "bounds", 2)
+    if not (min(masses) > 0 and k[0] > 0 and 0 < low < high):
+        raise BayesUpdateError(
+            "shear_building: needs masses_kg > 0, k_nominal > 0 and bounds 0 < low < high, got "
+            f"masses_kg={list(masses_kg)}, k_nominal={k_nominal}, bounds={list(bounds)}"
+        )
+    return ShearBuildingModel(masses_kg=tuple(masses), k_nominal=k[0], bounds=(low, high))
+
+
+def _finite_numbers(values, name: str, count: int) -> list[float]:
+    """``count`` finite numbers of option ``name``, or a BayesUpdateError naming it."""
+    try:
+        out = [float(v) for v in values]
+    except (TypeError, ValueError):
+        out = []
+    if len(out) != count or not all(np.isfinite(out)):
+        raise BayesUpdateError(
+            f"shear_building: {name} must be {count} finite number(s), got {values!r}"
+        )
+    return out

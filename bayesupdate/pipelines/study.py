@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bayesupdate.config import StudyConfig
+from bayesupdate.config import StudyConfig, percent_of
 from bayesupdate.errors import BayesUpdateError
 from bayesupdate.fe.reference_memo import remembered_solve
 from bayesupdate.inference.data import load_modal_data, select_modes
@@ -83,9 +83,9 @@ def _mass_with_units(study: StudyConfig, data: ModalData, units: ModelUnits) -> 
     mass = data.mass_kg if cfg.mass is None else _mass_value(cfg.mass, units, "data.mass")
     sd = None if cfg.mass is not None else data.mass_sd_kg
     if cfg.mass_sd is not None:
-        text = str(cfg.mass_sd).strip()
-        if text.endswith("%"):
-            sd = mass * float(text[:-1]) / 100.0
+        percent = percent_of(cfg.mass_sd, "data.mass_sd")
+        if percent is not None:
+            sd = mass * percent / 100.0
         else:
             sd = _mass_value(cfg.mass_sd, units, "data.mass_sd")
     return replace(data, mass_kg=mass, mass_sd_kg=sd)

@@ -42,6 +42,10 @@ def _rows(path: Path):
         text = path.read_text()
     except OSError as exc:
         raise BayesUpdateError(f"{path}: cannot read the test geometry ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise BayesUpdateError(
+            f"{path}: not a text CSV file ({exc.reason}); export the test geometry as UTF-8 CSV"
+        ) from None
     first = True
     for number, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [c.strip() for c in row]

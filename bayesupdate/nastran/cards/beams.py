@@ -273,7 +273,8 @@ def _open_section(ctx: Context, prop, kind: str, d):
     through the centroid (a CBEAM's shear-centre offset is not modelled), J and shear areas of
     thin walls (``standard_sections``), with a note: no vendor's value of these checks them."""
     note = (f"{prop.name} {prop.id()} {kind}: J and the shear factors of thin walls; Nastran's "
-            "own may differ")  # fmt: skip
+            "own may differ" + ("; the shear centre's offset from the centroid is not "
+            "modelled" if prop.name == "PBEAML" else ""))  # fmt: skip
     if note not in ctx.notes:
         ctx.notes.append(note)
     if kind == "CHAN":

@@ -808,6 +808,15 @@ def test_console_script_subprocess_one_line(tmp_path):
     assert len(proc.stderr.strip().splitlines()) == 1 and "missing.uff" in proc.stderr
 
 
+@pytest.mark.parametrize("value", ["abc", "nan", "-5"])
+def test_a_cache_cap_that_is_no_size_is_one_error_line(value, monkeypatch, capsys):
+    """``BAYESUPDATE_CACHE_MAX_MB`` that is no number >= 0: one line naming the variable (it was
+    an internal ValueError in ``cache info`` and in every command that caches)."""
+    monkeypatch.setenv("BAYESUPDATE_CACHE_MAX_MB", value)
+    code, _, err = run_cli(["cache", "info"], capsys)
+    assert_clean_rejection(code, err, None, f"BAYESUPDATE_CACHE_MAX_MB='{value}': give the")
+
+
 def test_a_cache_folder_that_cannot_be_written_is_one_warning_line(tmp_path, monkeypatch, capsys):
     """The run goes on without the cache, and the warning is one ``warning:`` line (the CLI
     shows warnings so, ``cli.plain_warnings``; Python's own format adds the package's file,

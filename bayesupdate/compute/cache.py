@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from bayesupdate.errors import BayesUpdateError
+
 __all__ = ["ArrayStore", "CacheInfo", "content_key", "default_directory"]
 
 #: suffix of an entry; temporary files end in ``.tmp``
@@ -68,6 +70,23 @@ class CacheInfo:
         return dataclasses.asdict(self)
 
 
+def _max_mb() -> float:
+    """``BAYESUPDATE_CACHE_MAX_MB`` [MB], a number >= 0 (unset or blank: ``DEFAULT_MAX_MB``)."""
+    text = os.environ.get("BAYESUPDATE_CACHE_MAX_MB", "").strip()
+    if not text:
+        return float(DEFAULT_MAX_MB)
+    try:
+        mb = float(text)
+    except ValueError:
+        mb = float("nan")
+    if not (np.isfinite(mb) and mb >= 0):
+        raise BayesUpdateError(
+            f"BAYESUPDATE_CACHE_MAX_MB={text!r}: give the cache's cap in MB, a number >= 0 "
+            f"(default {DEFAULT_MAX_MB})"
+        )
+    return mb
+
+
 @dataclass(frozen=True)
 class ArrayStore:
     """The store at ``directory`` (None: disabled, every load a miss, every save a no-op),
@@ -83,8 +102,7 @@ class ArrayStore:
         if honour_off and os.environ.get("BAYESUPDATE_NO_CACHE", "").strip() not in ("", "0"):
             return cls(None)
         folder = os.environ.get("BAYESUPDATE_CACHE_DIR") or default_directory()
-        mb = float(os.environ.get("BAYESUPDATE_CACHE_MAX_MB", DEFAULT_MAX_MB))
-        return cls(Path(folder), int(mb * 2**20))
+        return cls(Path(folder), int(_max_mb() * 2**20))
 
     @property
     def enabled(self) -> bool:

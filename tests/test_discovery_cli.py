@@ -77,7 +77,13 @@ def test_simulate_geometry_changes_only_the_true_structure(tmp_path, capsys):
     assert longer["geometry"] == ["tail_length=0.15"]
     shift = np.abs(np.array(longer["true_frequencies_hz"]) / np.array(base) - 1)
     assert 0.005 < shift.max() < 0.05  # a 50 mm longer tail pipe moves a mode by ~0.8 %
-    for bad, words in (("tail_lenth=0.15", "unknown quantities"), ("tail_length=-1", "> 0 m")):
+    for bad, words in (
+        ("tail_lenth=0.15", "unknown quantities"),
+        ("tail_length=-1", "> 0 m"),
+        # a typo of 12 orders of magnitude: refused before any element is made (it exhausted
+        # the memory: a fatal abort)
+        ("tail_length=1e12", "would need more than 100000 elements"),
+    ):
         assert main(["simulate", "--geometry", bad, "--out", str(out), "--force"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err

@@ -742,6 +742,17 @@ def check_connected(structure: Structure, node_names=None) -> None:
         )
 
 
+def _element_count(ratio: float, length: float) -> int:
+    """ceil(``ratio``) elements (at least 1) for a segment ``length`` [m] long, refused above
+    ``MAX_SEGMENT_ELEMENTS``."""
+    if not ratio <= MAX_SEGMENT_ELEMENTS:  # NaN and inf too
+        raise BayesUpdateError(
+            f"a pipe segment {length:.4g} m long would need more than {MAX_SEGMENT_ELEMENTS} "
+            "elements; check the geometry's lengths (metres)"
+        )
+    return max(1, int(np.ceil(ratio - 1e-9)))
+
+
 def _centre_line(pts: np.ndarray, radii: np.ndarray, names: list, outer_radius: float, part: str):
     """A pipe run's centre-line as segments: ("line", a, b) straight from a to b [m], or
     ("arc", centre, u, v, R, angle, name) a circular bend of radius R [m] through ``angle`` [rad]
@@ -786,6 +797,10 @@ def _centre_line(pts: np.ndarray, radii: np.ndarray, names: list, outer_radius: 
     return path
 
 
+#: most beam elements one centre-line segment of a pipe run may take (a longer one is a typo)
+MAX_SEGMENT_ELEMENTS = 100_000
+
+
 def _segment_points(seg, element_length: float, max_bend_angle_deg: float, default_name: str):
     """Element end points of one centre-line segment (``_centre_line``) and (bend name, radius)
     per element: at most ``element_length`` [m] long, arcs also at most ``max_bend_angle_deg``."""
@@ -794,13 +809,13 @@ def _segment_points(seg, element_length: float, max_bend_angle_deg: float, defau
         length = np.linalg.norm(b - a)
         if length < 1e-12:
             return [], []
-        n_el = max(1, int(np.ceil(length / element_length - 1e-9)))
+        n_el = _element_count(length / element_length, length)
         return [a + (b - a) * j / n_el for j in range(1, n_el + 1)], [(None, 0.0)] * n_el
     _, centre, u, v, R, angle, name = seg
     n_el = max(
         2,
         int(np.ceil(np.degrees(angle) / max_bend_angle_deg - 1e-9)),
-        int(np.ceil(R * angle / element_length - 1e-9)),
+        _element_count(R * angle / element_length, R * angle),
     )
     phis = angle * np.arange(1, n_el + 1) / n_el
     new_pts = [centre + R * (np.cos(p) * u + np.sin(p) * v) for p in phis]

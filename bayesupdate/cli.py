@@ -109,6 +109,15 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader of stdout left (``... --json | head``): no fault
         _quiet_stdout()
         return 1
+    except (
+        MemoryError
+    ) as exc:  # a size the user asked for (starts, walkers, ...) that no memory holds
+        print(
+            f"error: not enough memory for this run ({exc}); ask for fewer starts, walkers, "
+            "particles, modes or lines",
+            file=sys.stderr,
+        )
+        return 2
     except Exception as exc:  # an internal fault: one line unless debugging
         if os.environ.get("BAYESUPDATE_DEBUG"):
             raise

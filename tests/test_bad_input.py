@@ -112,6 +112,28 @@ def test_identify_truncated_uff(tmp_path, capsys, good_uff):
     assert_clean_rejection(code, err, out, "trunc.uff")
 
 
+@pytest.mark.parametrize(
+    "flags, needle",
+    [
+        (["--plots", "{file}"], "--plots {file}: is a file; give a folder"),
+        (["--plots", "/proc/x"], "--plots /proc/x: cannot write there"),
+        (["--out", "{uff}", "--force"], "is an input FRF file; give another name"),
+    ],
+)  # fmt: skip
+def test_identify_outputs_checked_before_the_work(tmp_path, capsys, good_uff, flags, needle):
+    """A ``--plots`` folder that is a file or unwritable, and an ``--out`` that is the input:
+    one line before any work (the plots failed after the modes file was written, with an
+    internal FileExistsError / FileNotFoundError; the input was overwritten)."""
+    path, _ = good_uff
+    uff = tmp_path / "frf.uff"
+    uff.write_text(path.read_text())
+    names = {"file": str(write_text(tmp_path / "plain.txt", "x")), "uff": str(uff)}
+    argv = ["identify", uff, "--out", tmp_path / "m.h5", *[f.format(**names) for f in flags]]
+    code, _, err = run_cli(argv, capsys)
+    assert_clean_rejection(code, err, None, needle.format(**names))
+    assert not (tmp_path / "m.h5").exists() and uff.read_text() == path.read_text()
+
+
 def test_identify_corrupt_uff(tmp_path, capsys, good_uff):
     path, _ = good_uff
     lines = path.read_text().splitlines()
@@ -459,7 +481,58 @@ def test_bad_frequency_csv(tmp_path, capsys, csv, needle):
         (["calibrate", "--model", "shear_building", "--data", "paper:fea"], "paper:fea"),
         (["calibrate", "--model", "exhaust", "--starts", "-1"], "starts"),
         (["calibrate", "--model", "exhaust", "--seed", "x"], "--seed"),
-        (["calibrate", "--model", "exhaust", "--seed", "-1"], "seed: must be an integer >= 0"),
+        (["calibrate", "--model", "exhaust", "--seed", "-1"], "--seed: '-1': give an integer >= 0"),
+        # sizes no machine holds: one line (were an internal MemoryError / OverflowError)
+        (
+            ["calibrate", "--model", "exhaust", "--data", "paper:ema", "--starts", "1000000000000"],
+            "not enough memory for this run",
+        ),
+        (
+            [
+                "calibrate",
+                "--model",
+                "exhaust",
+                "--data",
+                "paper:ema",
+                "--workers",
+                "1000000000000",
+            ],
+            "compute.workers: must be in 1..1024",
+        ),
+        (
+            ["simulate", "--model", "exhaust", "--seed", "-1", "--out", "t.uff"],
+            "--seed: '-1': give an integer >= 0",
+        ),
+        (
+            ["simulate", "--model", "shear_building", "--out", "t.uff"],
+            "model 'shear_building' is not an FE model; 'simulate' needs one",
+        ),
+        (
+            [
+                "correlate",
+                "--model",
+                "exhaust",
+                "--data",
+                "m.h5",
+                "--out",
+                "a.h5",
+                "--report",
+                "a.h5",
+            ],
+            "name the same path; give each its own",
+        ),
+        (
+            [
+                "simulate",
+                "--model",
+                str(Path(__file__).parent / "data" / "msc_fmondsp.dat"),
+                "--test-points",
+                "bin.dat",
+                "--out",
+                "t.uff",
+            ],
+            "--test-points bin.dat: not a text file",
+        ),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--walkers", "1"], "walkers"),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--steps", "0"], "steps"),
         (["sample", "--model", "shear_building", "--data", "f.csv", "--resume"], "--out"),
@@ -469,6 +542,7 @@ def test_calibrate_sample_bad_flags(tmp_path, capsys, argv, needle, monkeypatch)
     monkeypatch.chdir(tmp_path)
     write_text(tmp_path / "freqs.xlsx", "not a table")
     write_text(tmp_path / "f.csv", "frequency_hz\n4.3\n10.8\n")
+    (tmp_path / "bin.dat").write_bytes(b"\x8e\x8f\x00bin")
     before = sorted(p.name for p in tmp_path.iterdir())
     code, _, err = run_cli(argv, capsys)
     assert_clean_rejection(code, err, None, needle)

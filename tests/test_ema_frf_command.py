@@ -210,6 +210,35 @@ def test_a_line_spacing_outside_the_record_names_the_limit(df, needle, hammer, c
     assert code == 2 and len(err.strip().splitlines()) == 1 and needle in err, err
 
 
+@pytest.mark.parametrize(
+    ("arrays", "extra", "needle"),
+    [
+        ({"fs": 0.0}, [], "its sample rate 'fs' is 0; give the file's rate in Hz"),
+        ({"fs": np.nan}, [], "its sample rate 'fs' is nan"),
+        ({}, ["--record", "0.001"], "--record 0.001 s: 1 samples at 1024 Hz; give at least"),
+        ({"empty": True}, [], "the channels hold 0 samples; at least 8"),
+        ({"no_time": True}, ["--fs", "inf"], "--fs inf: must be a finite rate > 0 Hz"),
+    ],
+)
+def test_a_rate_or_record_no_spectrum_can_use_is_one_line(
+    arrays, extra, needle, hammer, capsys, tmp_path
+):
+    """A stored rate of 0 or NaN, a record under 8 samples, empty channels, an infinite --fs:
+    one line each (were internal ZeroDivisionError, ValueError and OverflowError)."""
+    _, sig, _ = hammer
+    n = 0 if arrays.get("empty") else 20000
+    data = {k: sig[k][:n] for k in ("force", "a1", "time")}
+    if arrays.get("no_time") or arrays.get("empty"):
+        data.pop("time")
+        data["fs"] = np.array(1024.0) if arrays.get("empty") else None
+    data.update({k: np.array(v) for k, v in arrays.items() if k == "fs"})
+    np.savez(tmp_path / "x.npz", **{k: v for k, v in data.items() if v is not None})
+    argv = ["frf", tmp_path / "x.npz", "--force-channel", "force", "--response", "a1=1V"]
+    argv += ["--reference", "1V", "--method", "impact", *extra, "--out", tmp_path / "f.uff"]
+    code, _, err = run_cli(argv, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and needle in err, err
+
+
 def _sweep_test(folder):
     """A shaker sweep 2 -> 40 Hz in 60 s (then 4 s of rest) at 512 Hz whose force carries 10 % and
     5 % of 2nd and 3rd harmonic (up to 120 Hz), on 3 modes (8, 17, 31 Hz; 0.3, 0.5, 1 %

@@ -8,10 +8,23 @@ resolved in one place, ``pipelines.model_source``.
 import json
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 from bayesupdate.errors import BayesUpdateError
 
+
 # --- arguments -----------------------------------------------------------------------------
+def seed_value(text: str) -> int:
+    """An argparse type: a random seed, an integer >= 0 (numpy's generators take no other)."""
+    import argparse
+
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = -1
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give an integer >= 0")
+    return seed
 
 
 def add_study_arguments(parser, sampling: bool = False) -> None:
@@ -24,7 +37,7 @@ def add_study_arguments(parser, sampling: bool = False) -> None:
     parser.add_argument("--out", help="result file (HDF5)")
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out")
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    parser.add_argument("--seed", type=int, help="random seed (optimizer and sampler)")
+    parser.add_argument("--seed", type=seed_value, help="random seed (optimizer and sampler)")
     parser.add_argument("--starts", type=int, help="number of optimizer starts")
     parser.add_argument(
         "--no-mass",
@@ -137,6 +150,24 @@ def add_correlate_arguments(parser) -> None:
 
 
 # --- values of arguments -------------------------------------------------------------------
+
+
+def plot_folder(folder, flag: str = "--plots"):
+    """The folder a command writes figures (or the demo its files) to, made and write-probed
+    before any work (a file, or a place nothing can be written, is one error line); None for
+    None."""
+    from bayesupdate.atomic import make_writable_folder
+
+    if folder is None:
+        return None
+    path = Path(folder)
+    if path.exists() and not path.is_dir():
+        raise BayesUpdateError(f"{flag} {path}: is a file; give a folder")
+    try:
+        make_writable_folder(path)
+    except OSError:
+        raise BayesUpdateError(f"{flag} {path}: cannot write there; choose another") from None
+    return path
 
 
 def parse_band(text: str | None) -> tuple[float, float] | None:
@@ -319,3 +350,9 @@ def check_outputs(args, resume: bool = False) -> None:
         check_output_path(args.out, args.force or resume)
     if getattr(args, "write_bdf", None):
         check_output_path(args.write_bdf, args.force)
+    outputs = [getattr(args, name, None) for name in ("out", "report", "plots", "write_bdf")]
+    given = [Path(p).resolve() for p in outputs if p]
+    if len(set(given)) < len(given):
+        raise BayesUpdateError(
+            "--out, --report, --plots and --write-bdf name the same path; give each its own"
+        )

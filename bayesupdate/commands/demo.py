@@ -6,7 +6,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from bayesupdate.atomic import make_writable_folder
+from bayesupdate.commands._shared import plot_folder, seed_value
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "demo"
@@ -50,7 +50,7 @@ QUICK_NOTE = (
 def add_arguments(parser):
     parser.add_argument("--out", default="demo_out", help="output folder (default demo_out)")
     parser.add_argument("--quick", action="store_true", help="smaller run for a first look")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=seed_value, default=0, help="random seed (default 0)")
     parser.add_argument("--force", action="store_true", help="write into a non-empty --out")
     parser.add_argument(
         "--workers",
@@ -155,12 +155,6 @@ def say(line: str) -> None:
 def check_out_folder(out: Path, force: bool) -> Path:
     """The demo writes into ``out``; refuse a non-empty folder unless ``force``."""
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise BayesUpdateError(f"--out {out}: is a file; give a folder")
-    if out.exists() and any(out.iterdir()) and not force:
+    if out.is_dir() and any(out.iterdir()) and not force:
         raise BayesUpdateError(f"--out {out}: folder is not empty; use --force to overwrite")
-    try:
-        make_writable_folder(out)
-    except OSError:
-        raise BayesUpdateError(f"--out {out}: cannot write there; choose another folder") from None
-    return out
+    return plot_folder(out, "--out")

@@ -8,6 +8,7 @@ from bayesupdate.commands._shared import (
     add_study_arguments,
     check_outputs,
     compute_from_args,
+    plot_folder,
     study_file,
 )
 from bayesupdate.errors import BayesUpdateError
@@ -93,6 +94,7 @@ def run(args) -> int:
     from bayesupdate.pipelines.study import study_effects
 
     study = study_file(args)  # --no-mass leaves the measured mass properties out, as calibrate
+    plot_folder(args.plots)
     if args.posterior_steps < 0:
         raise BayesUpdateError(f"--posterior-steps must be >= 0, got {args.posterior_steps}")
     specs = study_effects(study, tuple(args.effect))

@@ -2,9 +2,10 @@
 
 import json
 import sys
+from pathlib import Path
 
 from bayesupdate.atomic import check_output_path
-from bayesupdate.commands._shared import parse_band
+from bayesupdate.commands._shared import parse_band, plot_folder
 from bayesupdate.errors import BayesUpdateError
 
 NAME = "identify"
@@ -121,12 +122,15 @@ def run(args) -> int:
     )
 
     out = check_output_path(args.out, args.force)
+    if Path(out).resolve() in {Path(f).resolve() for f in args.frf_file}:
+        raise BayesUpdateError(f"--out {args.out}: is an input FRF file; give another name")
     groups = parse_groups(args.groups, len(args.frf_file))
     request = IdentifyRequest(
         tuple(args.frf_file), parse_band(args.band), args.max_order, args.method, groups
     )
     if args.report:
         check_report_folder(args.report, args.force)
+    plot_folder(args.plots)
     data = read_frf_files(request.files)
     inp = IdentifyInput(
         files=data.files,

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 
-from bayesupdate.commands._shared import deck_set_values
+from bayesupdate.commands._shared import deck_set_values, seed_value
 
 NAME = "simulate"
 HELP = "virtual impact test of a model or deck (optionally with a hidden effect) -> UFF 58"
@@ -77,7 +77,7 @@ def add_arguments(parser):
     parser.add_argument(
         "--noise", type=float, default=0.01, help="relative time-signal noise (default 0.01)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=seed_value, default=0, help="random seed (default 0)")
     parser.add_argument(
         "--modes",
         type=int,
@@ -178,6 +178,8 @@ def tested_model(args):
                 f"--study / --test-points: only for a Nastran deck model, not {source!r}"
             )
         model = resolve_model(source, options=true_geometry(source, args.geometry))
+        if not hasattr(model, "solve"):
+            raise BayesUpdateError(f"model {source!r} is not an FE model; 'simulate' needs one")
         return model, parse_assignments(args.set)
     from bayesupdate.nastran.test_points import read_test_points
 

@@ -12,6 +12,10 @@ from bayesupdate.compute.dask import DaskExecutor
 from bayesupdate.compute.executors import ProcessExecutor, SerialExecutor
 from bayesupdate.errors import BayesUpdateError
 
+#: most local worker processes a run may ask for (a typo beyond it: the OS caps processes far
+#: lower, and a pool of more fails inside the standard library)
+MAX_WORKERS = 1024
+
 
 @dataclass(frozen=True)
 class ComputeSettings:
@@ -24,8 +28,10 @@ class ComputeSettings:
     retries: int = 2
 
     def __post_init__(self):
-        if int(self.workers) < 1:
-            raise BayesUpdateError(f"--workers / compute.workers: must be >= 1, got {self.workers}")
+        if not 1 <= int(self.workers) <= MAX_WORKERS:
+            raise BayesUpdateError(
+                f"--workers / compute.workers: must be in 1..{MAX_WORKERS}, got {self.workers}"
+            )
         if int(self.retries) < 0:
             raise BayesUpdateError(f"compute.retries: must be >= 0, got {self.retries}")
 

@@ -199,6 +199,11 @@ def impact_segments(
     first = np.maximum(starts - pre, 0)
     if record_s is not None:
         n_s = int(round(record_s * sample_rate_hz))
+        if n_s < 8:  # a spectrum of fewer lines resolves nothing
+            raise BayesUpdateError(
+                f"--record {record_s:g} s: {n_s} samples at {sample_rate_hz:g} Hz; give at least "
+                f"{8 / sample_rate_hz:.3g} s"
+            )
     elif starts.size > 1:
         n_s = int(np.min(np.diff(first)))
     else:

@@ -142,6 +142,11 @@ def _own_rate(arrays: dict, time_name: str | None, path: str) -> tuple[float, st
     base = {k: k.rsplit("/", 1)[-1].lower() for k in arrays}
     stored = next((k for k, b in base.items() if b in RATE_NAMES and arrays[k].size == 1), None)
     stored_rate = None if stored is None else (float(arrays[stored].reshape(-1)[0]), repr(stored))
+    if stored_rate is not None and not 0 < stored_rate[0] < np.inf:
+        raise BayesUpdateError(
+            f"{path}: its sample rate {stored!r} is {stored_rate[0]:g}; give the file's rate in "
+            "Hz (a finite number > 0)"
+        )
     if time_name:
         if time_name not in arrays:
             raise BayesUpdateError(f"{path}: no time variable {time_name!r}")
@@ -205,8 +210,8 @@ def read_channels(
     path = str(path)
     if not os.path.isfile(path):
         raise BayesUpdateError(f"{path}: file not found")
-    if fs is not None and not fs > 0:
-        raise BayesUpdateError(f"--fs {fs}: must be > 0 Hz")
+    if fs is not None and not 0 < fs < np.inf:
+        raise BayesUpdateError(f"--fs {fs}: must be a finite rate > 0 Hz")
     if path.lower().endswith((".uff", ".unv")):
         return _uff_channels(path, names, time_name, fs)
     arrays = _load_arrays(path)
@@ -246,6 +251,8 @@ def check_channels(channels: list[Channel], where: str) -> list[str]:
     if len(sizes) > 1:
         text = ", ".join(f"{c.name} {c.data.size}" for c in channels)
         raise BayesUpdateError(f"{where}: channels have unequal lengths ({text} samples)")
+    if min(sizes) < 8:
+        raise BayesUpdateError(f"{where}: the channels hold {min(sizes)} samples; at least 8")
     notes = []
     for c in channels:
         if not np.all(np.isfinite(c.data)):

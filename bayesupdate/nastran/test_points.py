@@ -58,6 +58,10 @@ def read_test_points(path) -> dict:
         text = path.read_text()
     except OSError as exc:
         raise BayesUpdateError(f"--test-points {path}: cannot read ({exc.strerror})") from exc
+    except UnicodeDecodeError as exc:
+        raise BayesUpdateError(
+            f"--test-points {path}: not a text file ({exc.reason}); give CSV rows point,grid"
+        ) from None
     if path.suffix.lower() == ".toml":
         try:
             doc = tomllib.loads(text)

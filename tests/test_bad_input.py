@@ -522,6 +522,10 @@ def test_bad_frequency_csv(tmp_path, capsys, csv, needle):
             "name the same path; give each its own",
         ),
         (
+            ["sample", "--model", "shear_building", "--data", "f.csv", "--out", ""],
+            "--out: give a path, not an empty text",
+        ),
+        (
             [
                 "simulate",
                 "--model",

@@ -346,6 +346,10 @@ def check_outputs(args, resume: bool = False) -> None:
     once (``atomic.check_output_path``)."""
     from bayesupdate.atomic import check_output_path
 
+    for name in ("out", "report", "plots", "write_bdf"):
+        value = getattr(args, name, None)
+        if value is not None and not str(value).strip():  # "" is no path, not "no output"
+            raise BayesUpdateError(f"--{name.replace('_', '-')}: give a path, not an empty text")
     if args.out:
         check_output_path(args.out, args.force or resume)
     if getattr(args, "write_bdf", None):

@@ -109,9 +109,8 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader of stdout left (``... --json | head``): no fault
         _quiet_stdout()
         return 1
-    except (
-        MemoryError
-    ) as exc:  # a size the user asked for (starts, walkers, ...) that no memory holds
+    except MemoryError as exc:
+        # a size the user asked for (starts, walkers, particles) that no memory holds
         print(
             f"error: not enough memory for this run ({exc}); ask for fewer starts, walkers, "
             "particles, modes or lines",

@@ -346,16 +346,16 @@ def check_outputs(args, resume: bool = False) -> None:
     once (``atomic.check_output_path``)."""
     from bayesupdate.atomic import check_output_path
 
-    for name in ("out", "report", "plots", "write_bdf"):
-        value = getattr(args, name, None)
+    names = ("out", "report", "plots", "write_bdf")
+    values = [getattr(args, name, None) for name in names]
+    for name, value in zip(names, values, strict=True):
         if value is not None and not str(value).strip():  # "" is no path, not "no output"
             raise BayesUpdateError(f"--{name.replace('_', '-')}: give a path, not an empty text")
     if args.out:
         check_output_path(args.out, args.force or resume)
     if getattr(args, "write_bdf", None):
         check_output_path(args.write_bdf, args.force)
-    outputs = [getattr(args, name, None) for name in ("out", "report", "plots", "write_bdf")]
-    given = [Path(p).resolve() for p in outputs if p]
+    given = [Path(value).resolve() for value in values if value]
     if len(set(given)) < len(given):
         raise BayesUpdateError(
             "--out, --report, --plots and --write-bdf name the same path; give each its own"

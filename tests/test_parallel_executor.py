@@ -172,7 +172,8 @@ def test_bad_compute_options_are_one_line_errors(kwargs, words):
 @pytest.mark.parametrize(
     "table, words",
     [
-        ({"workers": 0}, "must be >= 1"),
+        ({"workers": 0}, r"compute.workers: must be in 1\.\.1024, got 0"),
+        ({"workers": 2000}, r"compute.workers: must be in 1\.\.1024, got 2000"),
         ({"workers": "2"}, "compute.workers: must be an integer"),
         ({"workers": 2, "scheduler": "tcp://h:1"}, "not both"),
         ({"scheduler": "h"}, "compute.scheduler"),

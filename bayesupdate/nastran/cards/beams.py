@@ -87,10 +87,14 @@ def pbeam_stations(p, card) -> tuple[np.ndarray, np.ndarray]:
     return np.array(x), np.array(vals)
 
 
+def _varies(v: np.ndarray) -> bool:
+    """True if the station values v (k, n) differ from the first row beyond rounding."""
+    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+
+
 def is_tapered(p) -> bool:
     """True if the PBEAM ``p``'s A, I1, I2, I12, J or NSM vary along it (``pbeam_stations``)."""
-    _, v = pbeam_stations(p, p)
-    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+    return _varies(pbeam_stations(p, p)[1])
 
 
 def _pbeam_values(ctx: Context, p, card) -> tuple[np.ndarray, np.ndarray | None]:
@@ -111,7 +115,7 @@ def station_values(ctx: Context, x, v, label: str, card) -> tuple[np.ndarray, np
     variation), None, with a note: the mean section keeps the element's mass and is exact as
     the taper goes to 0, so a member meshed in several tapered CBEAMs converges to the tapered
     beam (Kirchhoff's wedge, ``tests/test_nastran_cards``)."""
-    if np.all(np.abs(v - v[0]) <= 1e-12 * np.maximum(np.abs(v[0]), 1e-300)):
+    if not _varies(v):
         return v[0], None
     if np.any(v[:, :3] < 0) or np.any(v[:, 4] < 0):
         card.fail(f"{label}: a station has A, I1, I2 or J < 0")
@@ -197,8 +201,7 @@ def library_stations(prop, card) -> tuple[np.ndarray, np.ndarray]:
 
 def library_is_tapered(prop) -> bool:
     """True if a PBEAML's dimensions or NSM vary along it (``library_stations``)."""
-    _, v = library_stations(prop, prop)
-    return bool(np.any(np.abs(v - v[0]) > 1e-12 * np.maximum(np.abs(v[0]), 1e-300)))
+    return _varies(library_stations(prop, prop)[1])
 
 
 def _library_section(ctx: Context, prop, card, nu):
@@ -210,7 +213,7 @@ def _library_section(ctx: Context, prop, card, nu):
     ``aero/fmondsp`` (tapered TUBEs): ``tests/test_nastran_fmondsp.py``."""
     kind, _, _ = library_dims(prop, card)
     x, v = library_stations(prop, card)
-    if not library_is_tapered(prop):
+    if not _varies(v):
         return _shape_section(ctx, prop, card, kind, v[0, :-1], nu), v[0, -1], None
     sections = [_shape_section(ctx, prop, card, kind, row[:-1], nu) for row in v]
     values = np.array([[s.area, s.iz, s.iy, s.iyz, s.torsion, row[-1]]
